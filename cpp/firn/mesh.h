@@ -1,0 +1,33 @@
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace firn {
+
+// World-space triangles (m). Built only through makeTriangleMesh, so every mesh in the core is valid:
+// finite vertices, indices in range, no degenerate triangles.
+struct TriangleMesh {
+    std::vector<glm::vec3> positions;   // m, world space
+    std::vector<glm::uvec3> triangles;  // indices into positions
+    std::size_t droppedDegenerate = 0;  // zero-area triangles removed while building
+
+    std::size_t triangleCount() const { return triangles.size(); }
+    bool empty() const { return triangles.empty(); }
+    glm::vec3 vertex(std::size_t triangle, int corner) const { return positions[triangles[triangle][corner]]; }
+    // Unnormalized geometric normal (length = 2 * area, m^2), counter-clockwise winding.
+    glm::vec3 crossNormal(std::size_t triangle) const;
+    double area(std::size_t triangle) const;  // m^2
+};
+
+// Validates and copies. Throws InvalidArgument for non-finite coordinates or out-of-range indices;
+// drops (and counts) triangles whose area is below a relative epsilon of the mesh's extent.
+TriangleMesh makeTriangleMesh(const float *positions, std::size_t vertexCount, const unsigned *indices,
+                              std::size_t triangleCount);
+
+// Joins meshes (targets of one snow layer, or every occluder) into one.
+TriangleMesh merge(const std::vector<TriangleMesh> &meshes);
+
+}  // namespace firn

@@ -1,0 +1,8 @@
+#pragma once
+
+// One binding function per concept; firncore.cpp calls them in order.
+#include <pybind11/pybind11.h>
+
+namespace firncore {
+void bindBasics(pybind11::module_ &m);  // errors, Progress, threads
+}  // namespace firncore
