@@ -2,7 +2,6 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <mutex>
 
 #include <unistd.h>
 
@@ -23,8 +22,9 @@ void shiftHalfVoxel(const openvdb::GridPtrVec &grids, double sign) {
 }  // namespace
 
 void initializeOpenVdb() {
-    static std::once_flag once;
-    std::call_once(once, [] { openvdb::initialize(); });
+    // Idempotent and thread-safe by itself. Not wrapped in std::call_once: OpenVDB calls call_once inside,
+    // and libstdc++'s call_once state is one per thread, so nesting them breaks the inner one.
+    openvdb::initialize();
 }
 
 void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids) {

@@ -4,5 +4,6 @@
 #include <pybind11/pybind11.h>
 
 namespace firncore {
-void bindBasics(pybind11::module_ &m);  // errors, Progress, threads
+void bindBasics(pybind11::module_ &m);     // errors, Progress, threads
+void bindSnowLayer(pybind11::module_ &m);  // Add Snow Layer
 }  // namespace firncore
