@@ -138,6 +138,7 @@ openvdb::FloatGrid::Ptr signedDistanceBand(const openvdb::FloatGrid &field, doub
     auto sdf = field.deepCopy();
     sdf->setName("surface");
     sdf->setGridClass(openvdb::GRID_LEVEL_SET);
+    sdf->tree().root().setBackground(float(band), true);  // voxels no ball reaches: outside
     openvdb::tree::LeafManager<FloatTree> manager(sdf->tree());
     manager.foreach([&](FloatLeaf &leaf, std::size_t) {
         auto f = field.getConstAccessor();
@@ -155,7 +156,6 @@ openvdb::FloatGrid::Ptr signedDistanceBand(const openvdb::FloatGrid &field, doub
             if (std::abs(distance) >= band) it.setValueOff();
         }
     });
-    sdf->tree().root().setBackground(float(band), false);
     openvdb::tools::pruneLevelSet(sdf->tree());
     return sdf;
 }
