@@ -38,10 +38,20 @@ class FIRN_AddonPreferences(bpy.types.AddonPreferences):
         update=_apply_thread_count,
     )
 
+    voxel_budget_millions: bpy.props.FloatProperty(
+        name="Voxel Budget (millions)",
+        description="Largest snow volume Firn builds, in millions of voxels (about 16 bytes each while building); "
+        "a larger snow asks for a larger voxel size",
+        min=0.1,
+        max=10000.0,
+        default=50.0,
+    )
+
     def draw(self, _context):
         layout = self.layout
         layout.prop(self, "cache_folder")
         layout.prop(self, "thread_count")
+        layout.prop(self, "voxel_budget_millions")
         layout.label(text=f"Core version {firncore.__version__}, {firncore.hardware_threads()} hardware threads")
 
 

@@ -2,10 +2,10 @@
 
 import bpy
 
-from . import preferences, properties, ui
+from . import cache, preferences, properties, snow_layer, ui
 
 # In dependency order: property groups before the types that point to them.
-_modules = (preferences, properties, ui)
+_modules = (preferences, properties, cache, snow_layer, ui)
 
 
 def register():

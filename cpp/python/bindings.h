@@ -6,4 +6,5 @@
 namespace firncore {
 void bindBasics(pybind11::module_ &m);     // errors, Progress, threads
 void bindSnowLayer(pybind11::module_ &m);  // Add Snow Layer
+void bindVdb(pybind11::module_ &m);        // reading grids back
 }  // namespace firncore

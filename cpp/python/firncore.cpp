@@ -8,4 +8,5 @@ PYBIND11_MODULE(firncore, m) {
     m.attr("__version__") = firn::kVersion;
     firncore::bindBasics(m);
     firncore::bindSnowLayer(m);
+    firncore::bindVdb(m);
 }

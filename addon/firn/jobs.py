@@ -1,0 +1,117 @@
+"""Long core calls without freezing Blender: a worker thread that never touches bpy, a modal timer that
+shows its progress and cancels it with Esc.
+
+An operator using FirnJobMixin splits its work in three:
+    prepare(context) -> inputs         main thread: reads bpy, raises UserError for bad input
+    compute(inputs, progress) -> out   worker thread: core calls only (they release the GIL), no bpy
+    apply(context, inputs, out)        main thread: writes the results into Blender
+execute() runs the three in a row (scripts, redo, background mode); invoke() runs compute in a worker.
+"""
+
+import threading
+
+import bpy
+
+from .core import firncore
+from .errors import UserError
+
+_TIMER_INTERVAL = 0.1  # s
+
+
+class Job:
+    """compute(inputs, progress) on a worker thread; the main thread polls `done`, `fraction`, `stage`."""
+
+    def __init__(self, compute, inputs):
+        self.progress = firncore.Progress()
+        self.result = None
+        self.error = None
+        self._thread = threading.Thread(target=self._run, args=(compute, inputs), daemon=True)
+
+    def _run(self, compute, inputs):
+        try:
+            self.result = compute(inputs, self.progress)
+        except BaseException as error:  # handed to the main thread, which reports it
+            self.error = error
+
+    def start(self):
+        self._thread.start()
+
+    @property
+    def done(self):
+        return not self._thread.is_alive()
+
+    def cancel(self):
+        self.progress.cancel()
+
+    def wait(self):
+        self._thread.join()
+
+
+class FirnJobMixin:
+    """Operator mixin: see the module docstring. Subclasses set `job_label` and the three methods."""
+
+    job_label = "Firn"
+
+    def execute(self, context):
+        try:
+            inputs = self.prepare(context)
+            result = self.compute(inputs, firncore.Progress())
+            return self._finish(context, inputs, result)
+        except UserError as error:
+            self.report({"ERROR"}, str(error))
+        except (ValueError, OSError, firncore.Cancelled) as error:
+            self.report({"ERROR"}, f"{self.job_label}: {error}")
+        return {"CANCELLED"}
+
+    def invoke(self, context, _event):
+        if bpy.app.background:
+            return self.execute(context)
+        try:
+            inputs = self.prepare(context)
+        except UserError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self._inputs = inputs
+        self._job = Job(self.compute, inputs)
+        self._job.start()
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(_TIMER_INTERVAL, window=context.window)
+        wm.progress_begin(0, 100)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        if event.type == "ESC" and event.value == "PRESS":
+            self._job.cancel()
+        if event.type != "TIMER":
+            return {"RUNNING_MODAL"}
+        job = self._job
+        percent = int(100 * job.progress.fraction)
+        context.window_manager.progress_update(percent)
+        context.workspace.status_text_set(f"{self.job_label}: {job.progress.stage} {percent}%   (Esc to cancel)")
+        if not job.done:
+            return {"PASS_THROUGH"}
+        self._end_modal(context)
+        if isinstance(job.error, firncore.Cancelled):
+            self.report({"INFO"}, f"{self.job_label} cancelled: nothing changed")
+            return {"CANCELLED"}
+        if job.error is not None:
+            if not isinstance(job.error, (ValueError, OSError, UserError)):
+                raise job.error
+            self.report({"ERROR"}, f"{self.job_label}: {job.error}")
+            return {"CANCELLED"}
+        try:
+            return self._finish(context, self._inputs, job.result)
+        except UserError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+
+    def _end_modal(self, context):
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        context.workspace.status_text_set(None)
+
+    def _finish(self, context, inputs, result):
+        self.apply(context, inputs, result)
+        return {"FINISHED"}

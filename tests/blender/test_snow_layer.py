@@ -1,0 +1,207 @@
+"""Add Snow Layer in blender -b: the operator, its objects and files, and its errors."""
+
+import math
+import os
+
+import bpy
+import numpy as np
+import pytest
+
+from firn.core import firncore
+
+
+def select_only(*objects):
+    bpy.ops.object.select_all(action="DESELECT")
+    for obj in objects:
+        obj.select_set(True)
+    bpy.context.view_layer.objects.active = objects[0] if objects else None
+
+
+def density_at(snow, *points):
+    path = bpy.path.abspath(snow.data.filepath)
+    return firncore.sample_grid(path, "density", np.array(points, np.float32))
+
+
+def add_plane(size=2.0, **kwargs):
+    bpy.ops.mesh.primitive_plane_add(size=size, **kwargs)
+    return bpy.context.object
+
+
+def test_snow_object_with_grids_and_material(clean_scene):
+    ground = add_plane()
+    select_only(ground)
+    assert bpy.ops.firn.add_snow_layer(depth=0.1) == {"FINISHED"}
+    snow = bpy.context.object
+    assert snow.name == "Snow" and snow.type == "VOLUME" and snow.firn.is_snow
+    assert tuple(snow.matrix_world.to_translation()) == (0, 0, 0) and tuple(snow.scale) == (1, 1, 1)
+    path = bpy.path.abspath(snow.data.filepath)
+    assert os.path.exists(path)
+    assert {"density", "surface"} <= set(firncore.grid_names(path))
+    snow.data.grids.load()
+    assert {grid.name for grid in snow.data.grids} >= {"density", "surface"}
+    assert snow.data.render.precision == "FULL" and snow.data.render.clipping == 0.0
+    assert snow.active_material is not None and snow.active_material.node_tree is not None
+    assert snow.firn.layer.depth == pytest.approx(0.1)
+    assert [item.object for item in snow.firn.targets] == [ground]
+    assert snow.firn.metaballs is not None and len(snow.firn.metaballs.data.vertices) > 100
+    inside, above = density_at(snow, (0, 0, 0.05), (0, 0, 0.3))
+    assert inside > 100.0 and above == 0.0
+
+
+def test_table_shelters_the_floor(clean_scene):
+    ground = add_plane(size=4.0)
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0, 0, 0.8), scale=(1.0, 1.0, 0.05))
+    select_only(ground)
+    bpy.ops.firn.add_snow_layer(depth=0.1)
+    under, beside = density_at(bpy.context.object, (0, 0, 0.04), (1.6, 0, 0.04))
+    assert under == 0.0 and beside > 100.0
+
+
+def test_steep_roof_stays_bare_gentle_roof_gets_snow(clean_scene):
+    steep = add_plane(rotation=(math.radians(75), 0, 0))
+    select_only(steep)
+    with pytest.raises(RuntimeError, match="no snow lands"):
+        bpy.ops.firn.add_snow_layer(max_slope=math.radians(60))
+    gentle = add_plane(location=(5, 0, 0), rotation=(math.radians(30), 0, 0))
+    select_only(gentle)
+    assert bpy.ops.firn.add_snow_layer(max_slope=math.radians(60)) == {"FINISHED"}
+
+
+def test_nurbs_surface_and_bevelled_curve_get_snow(clean_scene):
+    bpy.ops.surface.primitive_nurbs_surface_surface_add(radius=1.0)
+    surface = bpy.context.object
+    bpy.ops.curve.primitive_bezier_curve_add(location=(4, 0, 0))
+    curve = bpy.context.object
+    curve.data.bevel_depth = 0.2
+    for obj in (surface, curve):
+        select_only(obj)
+        assert bpy.ops.firn.add_snow_layer(depth=0.05) == {"FINISHED"}, obj.type
+        stats = firncore.grid_statistics(bpy.path.abspath(bpy.context.object.data.filepath), "density")
+        assert stats["active_voxels"] > 1000, obj.type
+
+
+def test_mirrored_plane_still_gets_snow_on_top(clean_scene):
+    ground = add_plane()
+    ground.scale = (-1.0, 1.0, 1.0)  # negative determinant: winding flips, the face still points up
+    select_only(ground)
+    assert bpy.ops.firn.add_snow_layer(depth=0.1) == {"FINISHED"}
+    assert density_at(bpy.context.object, (0, 0, 0.05))[0] > 100.0
+
+
+def test_same_seed_same_volume(clean_scene):
+    ground = add_plane()
+    select_only(ground)
+    bpy.ops.firn.add_snow_layer(seed=3)
+    first = bpy.context.object
+    select_only(ground)
+    bpy.ops.firn.add_snow_layer(seed=3)
+    second = bpy.context.object
+    points = np.random.default_rng(1).uniform([-1, -1, 0], [1, 1, 0.15], (400, 3))
+    assert np.array_equal(density_at(first, *points), density_at(second, *points))
+
+
+def _select_nothing():
+    select_only()
+
+
+def _select_an_empty():
+    bpy.ops.object.empty_add()
+
+
+def _select_a_flat_curve():
+    curve = bpy.data.objects.new("Bare", bpy.data.curves.new("Bare", "CURVE"))
+    bpy.context.collection.objects.link(curve)
+    spline = curve.data.splines.new("POLY")
+    spline.points.add(1)
+    spline.points[1].co = (1, 0, 0, 1)
+    select_only(curve)
+
+
+@pytest.mark.parametrize(
+    "setup, message",
+    [(_select_nothing, "Select the objects"), (_select_an_empty, "Select the objects"),
+     (_select_a_flat_curve, "no faces")],
+)
+def test_bad_selection_is_reported_and_changes_nothing(clean_scene, setup, message):
+    setup()
+    objects_before = set(bpy.data.objects)
+    with pytest.raises(RuntimeError, match=message):
+        bpy.ops.firn.add_snow_layer()
+    assert set(bpy.data.objects) == objects_before
+
+
+def test_unit_scale_other_than_one_is_refused(clean_scene):
+    ground = add_plane()
+    clean_scene.unit_settings.scale_length = 0.01
+    select_only(ground)
+    with pytest.raises(RuntimeError, match="Unit Scale 1.0"):
+        bpy.ops.firn.add_snow_layer()
+
+
+def test_over_budget_is_reported(clean_scene):
+    ground = add_plane(size=20.0)
+    select_only(ground)
+    with pytest.raises(RuntimeError, match="voxel size of at least"):
+        bpy.ops.firn.add_snow_layer(voxel_size=0.001)
+    assert not any(obj.firn.is_snow for obj in bpy.data.objects)
+
+
+def test_regenerate_follows_a_moved_occluder(clean_scene):
+    ground = add_plane(size=4.0)
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0, 0, 0.8), scale=(1.0, 1.0, 0.05))
+    board = bpy.context.object
+    select_only(ground)
+    bpy.ops.firn.add_snow_layer()
+    snow = bpy.context.object
+    assert density_at(snow, (0, 0, 0.04))[0] == 0.0
+    board.location.x = 3.0
+    bpy.context.view_layer.update()
+    select_only(snow)
+    assert bpy.ops.firn.regenerate_snow() == {"FINISHED"}
+    assert density_at(snow, (0, 0, 0.04))[0] > 100.0
+
+
+def test_rebuild_from_edited_metaballs(clean_scene):
+    ground = add_plane()
+    select_only(ground)
+    bpy.ops.firn.add_snow_layer()
+    snow = bpy.context.object
+    holder = snow.firn.metaballs
+    mesh = holder.data
+    import bmesh
+
+    edit = bmesh.new()
+    edit.from_mesh(mesh)
+    bmesh.ops.delete(edit, geom=[v for v in edit.verts if v.co.x > 0.0], context="VERTS")
+    edit.to_mesh(mesh)
+    edit.free()
+    select_only(snow)
+    assert bpy.ops.firn.rebuild_from_metaballs() == {"FINISHED"}
+    left, right = density_at(snow, (-0.5, 0, 0.04), (0.6, 0, 0.04))
+    assert left > 100.0 and right == 0.0
+
+
+def test_surface_mesh_option(clean_scene):
+    ground = add_plane()
+    select_only(ground)
+    bpy.ops.firn.add_snow_layer(surface_mesh=True)
+    snow = bpy.context.object
+    meshes = [child for child in snow.children if child.type == "MESH" and child != snow.firn.metaballs]
+    assert len(meshes) == 1 and len(meshes[0].data.polygons) > 100
+
+
+def test_unsaved_snow_moves_next_to_the_blend_on_save(clean_scene, tmp_path):
+    ground = add_plane()
+    select_only(ground)
+    bpy.ops.firn.add_snow_layer()
+    snow = bpy.context.object
+    before = bpy.path.abspath(snow.data.filepath)
+    assert os.path.exists(before)
+    blend = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    assert snow.data.filepath == "//firn_cache/scene/Snow.vdb"
+    assert os.path.exists(tmp_path / "firn_cache" / "scene" / "Snow.vdb")
+    assert not os.path.exists(before)
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    snow = bpy.data.objects["Snow"]
+    assert os.path.exists(bpy.path.abspath(snow.data.filepath))

@@ -1,0 +1,141 @@
+"""Add Snow Layer through firncore, under /usr/bin/python3 without Blender."""
+
+import os
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import firncore
+
+
+def plane(size=2.0, z=0.0):
+    h = size / 2
+    vertices = np.array([[-h, -h, z], [h, -h, z], [h, h, z], [-h, h, z]], np.float32)
+    return vertices, np.array([[0, 1, 2], [0, 2, 3]], np.uint32)
+
+
+def test_writes_density_and_surface_grids(tmp_vdb):
+    result = firncore.generate_snow_layer(*plane(), settings=firncore.SnowLayerSettings(depth=0.1), path=tmp_vdb)
+    assert sorted(firncore.grid_names(tmp_vdb)) == ["density", "surface"]
+    density = firncore.grid_statistics(tmp_vdb, "density")
+    assert density["active_voxels"] == result["active_voxels"] > 0
+    assert 0.0 <= density["min"] and density["max"] <= 350.0  # never above the bottom density (kg/m^3)
+    assert 120.0 < result["mean_density"] < 350.0
+    balls = result["metaballs"]
+    n = len(balls["radii"])
+    assert balls["centres"].shape == (n, 3) and balls["normals"].shape == (n, 3)
+    assert n >= result["site_count"] > 0
+    inside, outside = firncore.sample_grid(tmp_vdb, "density", np.array([[0, 0, 0.05], [0, 0, 0.2]], np.float32))
+    assert inside > 100.0 and outside == 0.0
+
+
+def test_kept_metaballs_rebuild_the_same_file(tmp_path):
+    settings = firncore.SnowLayerSettings(depth=0.1, seed=4)
+    first, second = os.fspath(tmp_path / "a.vdb"), os.fspath(tmp_path / "b.vdb")
+    result = firncore.generate_snow_layer(*plane(1.0), settings=settings, path=first)
+    again = firncore.rasterize_metaballs(result["metaballs"], settings, second)
+    assert again["active_voxels"] == result["active_voxels"]
+    points = np.random.default_rng(0).uniform([-0.5, -0.5, 0], [0.5, 0.5, 0.15], (500, 3)).astype(np.float32)
+    assert np.array_equal(firncore.sample_grid(first, "density", points), firncore.sample_grid(second, "density", points))
+
+
+def test_surface_mesh_is_closed_and_above_the_ground(tmp_vdb):
+    firncore.generate_snow_layer(*plane(1.0), settings=firncore.SnowLayerSettings(depth=0.1), path=tmp_vdb)
+    vertices, triangles = firncore.snow_surface_mesh(tmp_vdb)
+    assert len(triangles) > 100
+    assert vertices[:, 2].max() == pytest.approx(0.1, abs=0.02)
+    # Closed: every edge is shared by exactly two triangles.
+    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    assert np.all(counts == 2)
+
+
+def test_releases_the_gil_and_reports_progress(tmp_vdb):
+    ticks = []
+    stop = threading.Event()
+
+    def ticker():
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.005)
+
+    thread = threading.Thread(target=ticker)
+    seen = []
+    progress = firncore.Progress(lambda fraction, stage: seen.append((fraction, stage)))
+    thread.start()
+    firncore.generate_snow_layer(*plane(3.0), settings=firncore.SnowLayerSettings(depth=0.1), path=tmp_vdb,
+                                 progress=progress)
+    stop.set()
+    thread.join()
+    assert len(ticks) > 5, "another Python thread could not run during generation"
+    assert seen[-1][0] == 1.0
+    assert progress.fraction == 1.0
+
+
+def test_cancel_stops_and_writes_nothing(tmp_vdb):
+    progress = firncore.Progress()
+    timer = threading.Timer(0.05, progress.cancel)
+    timer.start()
+    with pytest.raises(firncore.Cancelled):
+        firncore.generate_snow_layer(*plane(8.0), settings=firncore.SnowLayerSettings(depth=0.1, spacing=0.02),
+                                     path=tmp_vdb, progress=progress)
+    timer.join()
+    assert not os.path.exists(tmp_vdb)
+
+
+@pytest.mark.parametrize(
+    "vertices, triangles, message",
+    [
+        (np.zeros((3, 2), np.float32), np.array([[0, 1, 2]], np.uint32), "vertices must be an \\(N, 3\\)"),
+        (np.array([[0, 0, 0], [1, 0, np.nan], [0, 1, 0]], np.float32), np.array([[0, 1, 2]], np.uint32), "non-finite"),
+        (np.eye(3, dtype=np.float32), np.array([[0, 1, 5]], np.uint32), "refers to vertex 5"),
+        (np.eye(3, dtype=np.float32), np.zeros((0, 3), np.uint32), "no target triangles"),
+    ],
+)
+def test_bad_geometry_raises_value_error(tmp_vdb, vertices, triangles, message):
+    with pytest.raises(ValueError, match=message):
+        firncore.generate_snow_layer(vertices, triangles, settings=firncore.SnowLayerSettings(), path=tmp_vdb)
+    assert not os.path.exists(tmp_vdb)
+
+
+def test_bad_settings_name_the_setting():
+    with pytest.raises(ValueError, match="depth"):
+        firncore.SnowLayerSettings(depth=-0.1).validate()
+    with pytest.raises(ValueError, match="direction"):
+        firncore.SnowLayerSettings(direction=(0, 0, 1)).validate()
+    with pytest.raises(TypeError, match="no 'deepth'"):
+        firncore.SnowLayerSettings(deepth=0.1)
+
+
+def test_over_budget_suggests_a_voxel_size(tmp_vdb):
+    settings = firncore.SnowLayerSettings(depth=0.1, voxel_size=0.002, max_voxels=2e6)
+    with pytest.raises(firncore.BudgetError, match=r"voxel size of at least [0-9.]+ m"):
+        firncore.generate_snow_layer(*plane(10.0), settings=settings, path=tmp_vdb)
+
+
+def test_occluders_shelter_the_targets(tmp_vdb):
+    box_v = np.array([[x, y, z] for z in (1.0, 1.1) for y in (-0.5, 0.5) for x in (-0.5, 0.5)], np.float32)
+    box_t = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
+                      [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]], np.uint32)
+    firncore.generate_snow_layer(*plane(4.0), occluders=(box_v, box_t), settings=firncore.SnowLayerSettings(),
+                                 path=tmp_vdb)
+    under, beside = firncore.sample_grid(tmp_vdb, "density", np.array([[0, 0, 0.03], [1.5, 0, 0.03]], np.float32))
+    assert under == 0.0 and beside > 100.0
+
+
+def test_pyopenvdb_still_imports_after_firncore_used_openvdb(tmp_path):
+    # Regression: exported OpenVDB template statics in the module crashed openvdb::initialize() in pyopenvdb.
+    script = (
+        "import numpy as np, firncore\n"
+        "v = np.array([[0,0,0],[1,0,0],[0,1,0]], np.float32); t = np.array([[0,1,2]], np.uint32)\n"
+        f"firncore.generate_snow_layer(v, t, settings=firncore.SnowLayerSettings(), path={str(tmp_path / 'x.vdb')!r})\n"
+        "import pyopenvdb\n"
+        f"print(pyopenvdb.read({str(tmp_path / 'x.vdb')!r}, 'density').activeVoxelCount())\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=os.environ)
+    assert done.returncode == 0, done.stderr
+    assert int(done.stdout) > 0
