@@ -52,8 +52,8 @@ void SnowLayerSettings::validate() const {
 
 double SnowLayerSettings::effectiveVoxelSize() const {
     if (voxelSize > 0.0) return voxelSize;
-    // 12 voxels through the full depth, and at least 2.5 across a ball's radius so balls don't alias.
-    return std::min(depth / 12.0, metaballRadius(layout()) / 2.5);
+    // 10 voxels through the full depth, and at least 2.5 across a ball's radius so balls don't alias.
+    return std::min(depth / 10.0, metaballRadius(layout()) / 2.5);
 }
 
 SnowfallSettings SnowLayerSettings::snowfall() const {

@@ -98,30 +98,45 @@ struct LeafField {
 void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std::size_t count,
                 const std::vector<Metaball> &balls, double h, LeafField &out) {
     std::array<double, kLeafVoxels> field{}, weightedDepth{};
+    const float hf = float(h);
+    const int zLeafLo = origin.z(), zLeafHi = origin.z() + kLeafDim - 1;
     for (std::size_t n = 0; n < count; ++n) {
         const Metaball &b = balls[ballIds[n]];
-        const glm::dvec3 c(b.centre), normal(b.normal);
-        const double r2 = double(b.radius) * b.radius;
-        // Voxel range of the ball's box inside this leaf.
-        openvdb::Coord lo, hi;
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::max(origin[a], int(std::ceil((c[a] - b.radius) / h)));
-            hi[a] = std::min(origin[a] + kLeafDim - 1, int(std::floor((c[a] + b.radius) / h)));
-        }
-        for (int x = lo.x(); x <= hi.x(); ++x)
-            for (int y = lo.y(); y <= hi.y(); ++y)
-                for (int z = lo.z(); z <= hi.z(); ++z) {
-                    const glm::dvec3 offset = glm::dvec3(x, y, z) * h - c;
-                    const double d2 = glm::dot(offset, offset);
+        const glm::vec3 c = b.centre, normal = b.normal;
+        const float r2 = b.radius * b.radius, invR2 = 1.0f / r2;
+        const float clipHeight = -b.base - 2.0f * hf;  // below this, no field; keep a 2-voxel exterior band
+        const int xLo = std::max(origin.x(), int(std::ceil((c.x - b.radius) / hf)));
+        const int xHi = std::min(origin.x() + kLeafDim - 1, int(std::floor((c.x + b.radius) / hf)));
+        const int yLo = std::max(origin.y(), int(std::ceil((c.y - b.radius) / hf)));
+        const int yHi = std::min(origin.y() + kLeafDim - 1, int(std::floor((c.y + b.radius) / hf)));
+        for (int x = xLo; x <= xHi; ++x) {
+            const float dx = x * hf - c.x;
+            for (int y = yLo; y <= yHi; ++y) {
+                const float dy = y * hf - c.y;
+                const float rest = r2 - dx * dx - dy * dy;
+                if (rest <= 0.0f) continue;
+                // The z-range inside the sphere and above the clip plane (when the plane is not vertical).
+                const float half = std::sqrt(rest);
+                float zLo = c.z - half;
+                const float lateral = normal.x * dx + normal.y * dy;
+                if (normal.z > 0.05f) zLo = std::max(zLo, c.z + (clipHeight - lateral) / normal.z);
+                const int kLo = std::max(zLeafLo, int(std::ceil(zLo / hf)));
+                const int kHi = std::min(zLeafHi, int(std::floor((c.z + half) / hf)));
+                const int row = ((x - origin.x()) << 6) | ((y - origin.y()) << 3);
+                for (int z = kLo; z <= kHi; ++z) {
+                    const float dz = z * hf - c.z;
+                    const float d2 = dx * dx + dy * dy + dz * dz;
                     if (d2 >= r2) continue;
-                    const int i = ((x - origin.x()) << 6) | ((y - origin.y()) << 3) | (z - origin.z());
+                    const int i = row + (z - zLeafLo);
                     out.inside[i] = true;
-                    const double height = glm::dot(offset, normal);  // m above the centre
-                    if (height < -b.base) continue;                  // below the surface the ball stands on
-                    const double f = wyvillField(d2 / r2);
+                    const float height = lateral + normal.z * dz;  // m above the centre along the normal
+                    if (height < -b.base) continue;                // below the surface the ball stands on
+                    const double f = wyvillField(d2 * invR2);
                     field[i] += f;
                     weightedDepth[i] += f * (b.depth - height);
                 }
+            }
+        }
     }
     for (int i = 0; i < kLeafVoxels; ++i) {
         out.field[i] = float(field[i]);
