@@ -25,7 +25,7 @@ class Job:
         self.progress = firncore.Progress()
         self.result = None
         self.error = None
-        self._thread = threading.Thread(target=self._run, args=(compute, inputs), daemon=True)
+        self._thread = threading.Thread(target=self._run, args=(compute, inputs), name="firn-job", daemon=True)
 
     def _run(self, compute, inputs):
         try:

@@ -1,0 +1,102 @@
+"""Blender with a window (under xvfb-run): Add Snow Layer started as a user would (INVOKE_DEFAULT) runs in a
+worker thread, the UI keeps running meanwhile, Esc-style cancel leaves the scene unchanged.
+
+xvfb-run blender --factory-startup --enable-event-simulate --python modal_job.py   (exit code 0 = pass)
+"""
+
+import os
+import sys
+import threading
+import time
+import traceback
+
+import addon_utils
+import bpy
+
+state = {"ticks": 0, "phase": "start", "started": 0.0}
+
+
+def job_running():
+    return any(thread.name == "firn-job" and thread.is_alive() for thread in threading.enumerate())
+
+
+def fail(message):
+    print("FAIL:", message, file=sys.stderr, flush=True)
+    os._exit(1)  # from a timer, sys.exit would only end the callback
+
+
+def window_context():
+    window = bpy.context.window_manager.windows[0]
+    area = next(a for a in window.screen.areas if a.type == "VIEW_3D")
+    return {"window": window, "screen": window.screen, "area": area,
+            "region": next(r for r in area.regions if r.type == "WINDOW")}
+
+
+def setup():
+    addon_utils.enable("firn", default_set=True)
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    bpy.ops.mesh.primitive_plane_add(size=4.0)
+    ground = bpy.context.object
+    ground.select_set(True)
+    bpy.context.view_layer.objects.active = ground
+
+
+def start_job():
+    with bpy.context.temp_override(**window_context()):
+        result = bpy.ops.firn.add_snow_layer("INVOKE_DEFAULT", depth=0.1, spacing=0.02)
+    if result != {"RUNNING_MODAL"}:
+        fail(f"expected RUNNING_MODAL, got {result}")
+    state["started"] = time.perf_counter()
+
+
+def snow_objects():
+    return [obj for obj in bpy.data.objects if obj.firn.is_snow]
+
+
+def tick():
+    try:
+        state["ticks"] += 1
+        if state["phase"] == "start":
+            setup()
+            start_job()
+            state["phase"] = "running"
+            state["ticks"] = 0
+        elif state["phase"] == "running":
+            if snow_objects():
+                elapsed = time.perf_counter() - state["started"]
+                # The UI (this timer) kept running while the worker computed.
+                if state["ticks"] < 3 and elapsed > 0.5:
+                    fail(f"UI froze: {state['ticks']} timer ticks in {elapsed:.2f} s")
+                print(f"modal job finished after {elapsed:.2f} s with {state['ticks']} UI ticks meanwhile")
+                state["phase"] = "cancel"
+                bpy.ops.mesh.primitive_plane_add(size=12.0, location=(50, 0, 0))
+                start_job()
+                state["ticks"] = 0
+            elif time.perf_counter() - state["started"] > 60:
+                fail("modal job did not finish in 60 s")
+        elif state["phase"] == "cancel":
+            if state["ticks"] == 4:  # the job is under way: press Esc as a user would
+                if not job_running():
+                    fail("the second job ended before Esc could be tested")
+                bpy.context.window_manager.windows[0].event_simulate(type="ESC", value="PRESS")
+                bpy.context.window_manager.windows[0].event_simulate(type="ESC", value="RELEASE")
+                state["phase"] = "cancelled"
+                state["started"] = time.perf_counter()
+        elif state["phase"] == "cancelled":
+            if not job_running():
+                print(f"Esc stopped the job in {time.perf_counter() - state['started']:.2f} s")
+                if len(snow_objects()) != 1:
+                    fail(f"Esc left {len(snow_objects())} snow objects, expected the first one only")
+                print("PASS")
+                bpy.ops.wm.quit_blender()
+                return None
+            if time.perf_counter() - state["started"] > 20.0:
+                fail("Esc did not stop the job within 20 s")
+    except Exception:
+        traceback.print_exc()
+        fail("exception")
+    return 0.05
+
+
+bpy.app.timers.register(tick, first_interval=0.5)
