@@ -5,4 +5,5 @@
 
 namespace firncore {
 void bindBasics(pybind11::module_ &m);  // errors, Progress, threads
+void bindOptics(pybind11::module_ &m);  // snow optics, KZ04 albedos, ice and water absorption
 }  // namespace firncore
