@@ -2,10 +2,10 @@
 
 import bpy
 
-from . import preferences, properties, ui
+from . import preferences, properties, snow_material, snow_material_ui, ui
 
 # In dependency order: property groups before the types that point to them.
-_modules = (preferences, properties, ui)
+_modules = (preferences, properties, ui, snow_material, snow_material_ui)
 
 
 def register():
