@@ -16,9 +16,12 @@ def _refresh_material(self, _context):
     materials.refresh_snow_material(self.id_data)
 
 
-def _white_sky_albedo(self):
-    derived = optics.derived(self)
-    return derived.white_sky_albedo if derived.error is None else (0.0, 0.0, 0.0)
+def _get_grain_radius_um(self):
+    return self.grain_radius * 1e6
+
+
+def _set_grain_radius_um(self, value):
+    self.grain_radius = value * 1e-6
 
 
 class FIRN_ObjectSettings(bpy.types.PropertyGroup):
@@ -108,6 +111,7 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
         min=-0.99,
         max=0.99,
         soft_min=0.0,
+        precision=3,
         update=_refresh_material,
     )
     extinction_per_density: bpy.props.FloatProperty(
@@ -144,14 +148,17 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
         update=_refresh_material,
     )
 
-    # --- derived, read-only ---
-    derived_white_sky_albedo: bpy.props.FloatVectorProperty(
-        name="White-Sky Albedo",
-        description="How white a deep layer of this snow looks under an overcast sky (KZ04 spherical albedo per "
-        "channel)",
-        subtype="COLOR",
-        size=3,
-        get=_white_sky_albedo,
+    # --- views for the panel ---
+    grain_radius_um: bpy.props.FloatProperty(
+        name="Grain Radius (µm)",
+        description="The grain radius in micrometres: fresh powder 50, settled 100-150, old or wet snow 500-1000",
+        get=_get_grain_radius_um,
+        set=_set_grain_radius_um,
+        min=1.0,
+        max=10000.0,
+        soft_min=20.0,
+        soft_max=3000.0,
+        precision=1,
     )
 
 

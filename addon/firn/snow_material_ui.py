@@ -9,14 +9,14 @@ from . import materials, optics
 from .snow_material import FIRN_MT_snow_material_presets, snow_object
 
 
-def _triple(values, scale=1.0, fmt="{:.3g}"):
-    return "   ".join("∞" if math.isinf(v) else fmt.format(v * scale) for v in values)
+def _format(value, fmt):
+    return "∞" if math.isinf(value) else fmt.format(value)
 
 
-def _value_row(layout, label, text):
-    split = layout.split(factor=0.45)
-    split.label(text=label)
-    split.label(text=text)
+def _channel_row(grid, label, values, fmt):
+    grid.label(text=label)
+    for value in values:
+        grid.label(text=_format(value, fmt))
 
 
 def _draw_presets(layout):
@@ -28,46 +28,44 @@ def _draw_presets(layout):
 
 def _draw_parameters(layout, settings):
     layout.row().prop(settings, "optics_mode", expand=True)
-    col = layout.column()
-    col.use_property_split = True
-    col.use_property_decorate = False
+    col = layout.column(align=True)
     if settings.optics_mode == "PHYSICAL":
-        col.prop(settings, "grain_radius")
+        col.prop(settings, "grain_radius_um")
         col.prop(settings, "impurity_black_carbon")
         col.prop(settings, "impurity_dust")
         col.prop(settings, "liquid_water")
         col.prop(settings, "absorption_enhancement")
     else:
-        col.prop(settings, "extinction_per_density")
-        col.prop(settings, "albedo")
+        col.prop(settings, "extinction_per_density", text="σt/ρ (m²/kg)")
         row = col.row(align=True)
+        row.prop(settings, "albedo", text="")
         for index, channel in enumerate("RGB"):
             row.prop(settings, "albedo", index=index, text=channel)
     col.prop(settings, "anisotropy")
-    col.prop(settings, "mean_density")
+    layout.prop(settings, "mean_density")
 
 
 def _draw_derived(layout, settings):
     box = layout.box()
-    box.label(text="Derived at Mean Density (R, G, B)")
+    box.label(text="At Mean Density")
     derived = optics.derived(settings)
     if derived.error:
         col = box.column(align=True)
         col.alert = True
-        for line in textwrap.wrap(derived.error, 48):
+        for line in textwrap.wrap(derived.error, 38):
             col.label(text=line)
+        col.label(text="The material keeps its last valid optics.")
         return
-    col = box.column(align=True)
-    _value_row(col, "Extinction σt", f"{derived.sigma_t:.4g} 1/m")
-    _value_row(col, "Albedo ω", _triple(derived.albedo, fmt="{:.7f}"))
-    _value_row(col, "Absorbed 1 − ω", _triple(derived.co_albedo, fmt="{:.2e}"))
-    _value_row(col, "Diffusion Length", _triple(derived.diffusion_length, 100.0) + " cm")
-    _value_row(col, "Transport Free Path", f"{derived.transport_mean_free_path * 1000.0:.3g} mm")
-    split = col.split(factor=0.45)
-    split.label(text="White-Sky Albedo")
-    row = split.row()
-    row.prop(settings, "derived_white_sky_albedo", text="")
-    row.label(text=_triple(derived.white_sky_albedo))
+    row = box.row()
+    row.label(text=f"σt  {derived.sigma_t:.4g} 1/m")
+    row.label(text=f"ℓ*  {derived.transport_mean_free_path * 1000.0:.3g} mm")
+    grid = box.grid_flow(row_major=True, columns=4, even_columns=True, align=True)
+    for text in ("", "R", "G", "B"):
+        grid.label(text=text)
+    _channel_row(grid, "Albedo ω", derived.albedo, "{:.5f}")
+    _channel_row(grid, "1 − ω", derived.co_albedo, "{:.1e}")
+    _channel_row(grid, "White-sky", derived.white_sky_albedo, "{:.3f}")
+    _channel_row(grid, "Diffusion cm", [length * 100.0 for length in derived.diffusion_length], "{:.3g}")
 
 
 def draw_snow_material(layout, obj):

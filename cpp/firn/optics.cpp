@@ -64,12 +64,12 @@ void validate(const SnowParameters &snow) {
             "dust must be a mass fraction within [0, 1) (1 ug/g = 1e-6)", snow.dust, "");
     require(std::isfinite(snow.liquidWater) && snow.liquidWater >= 0.0 && snow.liquidWater < 1.0,
             "liquid water must be a volume fraction within [0, 1)", snow.liquidWater, "");
-    {
-        std::ostringstream what;
-        what << "liquid water volume fraction " << snow.liquidWater << " weighs "
-             << kWaterDensity * snow.liquidWater << " kg/m^3, leaving no ice in snow of density " << snow.density
-             << " kg/m^3 (need liquid water < density / 1000)";
-        require(iceVolumeFraction(snow) > 0.0, what.str(), snow.liquidWater, "");
+    if (!(iceVolumeFraction(snow) > 0.0)) {
+        std::ostringstream message;
+        message << "liquid water fraction " << snow.liquidWater << " weighs " << kWaterDensity * snow.liquidWater
+                << " kg/m^3, leaving no ice in snow of density " << snow.density
+                << " kg/m^3 (need liquid water < density / 1000)";
+        throw InvalidArgument(message.str());
     }
     require(std::isfinite(snow.B) && snow.B > 0.0 && snow.B <= 5.0,
             "absorption enhancement B must be within (0, 5] (1.25 spheres, 1.6 irregular grains)", snow.B, "");

@@ -96,8 +96,8 @@ def test_settings_have_the_documented_names(clean_scene, tmp_path):
     default = firncore.optics(grain_radius=100e-6, density=250.0)
     assert settings.extinction_per_density == pytest.approx(default.extinction_per_density, rel=1e-6)
     assert tuple(settings.albedo) == pytest.approx(default.albedo, abs=1e-7)
-    with pytest.raises(AttributeError):
-        settings.derived_white_sky_albedo = (1.0, 1.0, 1.0)
+    settings.grain_radius_um = 250.0  # the panel's view in micrometres
+    assert settings.grain_radius == pytest.approx(250e-6)
 
 
 def test_material_is_the_optics(clean_scene, tmp_path):
@@ -298,12 +298,12 @@ def test_panel_draws_parameters_and_derived_values(clean_scene, tmp_path):
     log = draw_log(obj)
     assert "FIRN_MT_snow_material_presets" in log["menus"]
     assert {"firn.snow_material_preset_add", "firn.snow_optics_to_custom"} <= set(log["operators"])
-    assert {"optics_mode", "grain_radius", "impurity_black_carbon", "impurity_dust", "liquid_water", "anisotropy",
-            "mean_density", "derived_white_sky_albedo"} <= set(log["props"])
+    assert {"optics_mode", "grain_radius_um", "impurity_black_carbon", "impurity_dust", "liquid_water",
+            "absorption_enhancement", "anisotropy", "mean_density"} <= set(log["props"])
     labels = " | ".join(log["labels"])
     sigma_t = 3 * 250.0 / (2 * RHO_ICE * 100e-6)
     assert f"{sigma_t:.4g} 1/m" in labels
-    assert " cm" in labels and " mm" in labels
+    assert re.search(r"Diffusion cm", labels) and re.search(r"ℓ\*  [0-9.]+ mm", labels)
 
     obj.firn.optics_mode = "CUSTOM"
     assert {"extinction_per_density", "albedo"} <= set(draw_log(obj)["props"])
