@@ -85,8 +85,9 @@ double extinctionPerDensity(const SnowParameters &snow) {
 
 double coAlbedo(const SnowParameters &snow, double wavelength) {
     validate(snow);
-    const double beta = coAlbedoFrom(snow, iceAbsorption(wavelength), waterAbsorption(wavelength),
-                                     massAbsorption(kBlackCarbon, wavelength), massAbsorption(kMineralDust, wavelength));
+    const double beta =
+        coAlbedoFrom(snow, iceAbsorption(wavelength), waterAbsorption(wavelength),
+                     massAbsorption(kBlackCarbon, wavelength), massAbsorption(kMineralDust, wavelength));
     requireWeakAbsorption(beta, wavelength);
     return beta;
 }

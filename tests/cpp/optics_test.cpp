@@ -62,7 +62,8 @@ TEST(Kz04, AgreesWithExactSemiInfiniteMedium) {
 
 TEST(Kz04, CoAlbedoInvertsSphericalAlbedo) {
     for (double beta : {1e-8, 1e-6, 1e-4, 1e-2, 0.3})
-        for (double g : {0.0, 0.845, 0.93}) EXPECT_NEAR(kz04CoAlbedo(kz04SphericalAlbedo(beta, g), g) / beta, 1.0, 1e-9);
+        for (double g : {0.0, 0.845, 0.93})
+            EXPECT_NEAR(kz04CoAlbedo(kz04SphericalAlbedo(beta, g), g) / beta, 1.0, 1e-9);
 }
 
 TEST(Kz04, RejectsImpossibleInputs) {

@@ -163,3 +163,30 @@ def test_bad_wavelength_and_geometry():
         firncore.VolumeOptics(10.0, (0.5, 0.5, 0.5), 1.0)
     with pytest.raises(ValueError, match="extinction"):
         firncore.VolumeOptics(-1.0, (0.5, 0.5, 0.5), 0.0)
+
+
+def test_docs_preset_tables_match_the_core():
+    """docs/optics.md lists each preset's parameters and what they give: the numbers must be the core's."""
+    import pathlib
+    import re
+
+    text = (pathlib.Path(__file__).resolve().parents[2] / "docs" / "optics.md").read_text(encoding="utf-8")
+
+    def table(header):
+        rows = text[text.index(header):].split("\n\n")[0].splitlines()[2:]
+        return [[cell.strip() for cell in row.strip("|").split("|")] for row in rows]
+
+    parameters = {row[0]: [float(cell) for cell in row[1:5]] for row in table("| Preset | Grain radius")}
+    results = table("| Preset | σt (1/m)")
+    assert len(results) == len(parameters) >= 6
+    for name_and_density, sigma_t, white_sky, diffusion, mfp in results:
+        name, density = re.fullmatch(r"(.+) \((\d+)(?: kg/m³)?\)", name_and_density).groups()
+        radius_um, black_carbon, dust, water = parameters[name]
+        density = float(density)
+        optics = firncore.optics(grain_radius=radius_um * 1e-6, density=density, black_carbon=black_carbon * 1e-9,
+                                 dust=dust * 1e-6, liquid_water=water)
+        assert float(sigma_t) == pytest.approx(optics.sigma_t(density), abs=0.5), name
+        assert [float(v) for v in white_sky.split(",")] == pytest.approx(optics.white_sky_albedo, abs=5e-4), name
+        assert [float(v) for v in diffusion.split(",")] == pytest.approx(
+            [100 * d for d in optics.diffusion_length(density)], abs=0.05), name
+        assert float(mfp) == pytest.approx(1000 * optics.transport_mean_free_path(density)[1], abs=0.005), name
