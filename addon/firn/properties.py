@@ -4,6 +4,8 @@ import math
 
 import bpy
 
+from . import materials, optics
+
 # Defined once, used by the operator (redo panel) and by the settings kept on each snow object.
 SNOW_LAYER_PROPERTIES = {
     "depth": bpy.props.FloatProperty(
@@ -60,6 +62,25 @@ class FIRN_SnowLayerSettings(bpy.types.PropertyGroup):
 class FIRN_SnowTarget(bpy.types.PropertyGroup):
     object: bpy.props.PointerProperty(type=bpy.types.Object, name="Target")
 
+# The CUSTOM fields start where the PHYSICAL defaults lead (clean snow, 100 um grains, 250 kg/m^3).
+_DEFAULT_GRAIN_RADIUS = 100e-6  # m
+_DEFAULT_DENSITY = 250.0  # kg/m^3
+_DEFAULT_G = 0.845  # Kokhanovsky & Zege (2004), irregular grains
+_DEFAULT_OPTICS = optics.physical_default(_DEFAULT_GRAIN_RADIUS, _DEFAULT_DENSITY, _DEFAULT_G)
+
+
+def _refresh_material(self, _context):
+    """Every optics setting updates the snow's material live."""
+    materials.refresh_snow_material(self.id_data)
+
+
+def _get_grain_radius_um(self):
+    return self.grain_radius * 1e6
+
+
+def _set_grain_radius_um(self, value):
+    self.grain_radius = value * 1e-6
+
 
 class FIRN_ObjectSettings(bpy.types.PropertyGroup):
     is_snow: bpy.props.BoolProperty(
@@ -71,11 +92,139 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
     targets: bpy.props.CollectionProperty(type=FIRN_SnowTarget, name="Targets")
     metaballs: bpy.props.PointerProperty(
         type=bpy.types.Object, name="Metaballs", description="Point mesh of the snow's metaballs (edit, then rebuild)")
-    mean_density: bpy.props.FloatProperty(
-        name="Mean Density", description="Mean snow density inside the volume, kg/m³", default=250.0, min=0.0)
     voxel_size: bpy.props.FloatProperty(
         name="Voxel Size", description="Voxel size of the snow volume", subtype="DISTANCE", unit="LENGTH",
         default=0.0, min=0.0)
+
+    # --- optics: how the snow's density grid becomes light transport (docs/optics.md) ---
+    optics_mode: bpy.props.EnumProperty(
+        name="Optics",
+        description="Where the snow's optical coefficients come from",
+        items=(
+            ("PHYSICAL", "Physical", "From grain size, impurities and liquid water (Kokhanovsky & Zege 2004, "
+             "Warren & Brandt 2008 ice)"),
+            ("CUSTOM", "Custom", "Extinction per density, single-scattering albedo and anisotropy given directly"),
+        ),
+        default="PHYSICAL",
+        update=_refresh_material,
+    )
+    grain_radius: bpy.props.FloatProperty(
+        name="Grain Radius",
+        description="Optical (effective) radius of the ice grains, 3 / (917 kg/m³ × specific surface area): "
+        "fresh powder 0.05 mm, settled 0.1-0.15 mm, old or wet snow 0.5-1 mm",
+        subtype="DISTANCE",
+        unit="LENGTH",
+        default=_DEFAULT_GRAIN_RADIUS,
+        min=1e-6,
+        max=0.01,
+        soft_min=20e-6,
+        soft_max=3e-3,
+        step=0.001,
+        precision=6,
+        update=_refresh_material,
+    )
+    impurity_black_carbon: bpy.props.FloatProperty(
+        name="Black Carbon (ng/g)",
+        description="Soot in the snow, nanograms per gram of snow: Antarctic < 1, remote 2-20, "
+        "rural 20-100, urban and roadside 100-10000",
+        default=0.0,
+        min=0.0,
+        max=100000.0,
+        soft_max=5000.0,
+        precision=1,
+        update=_refresh_material,
+    )
+    impurity_dust: bpy.props.FloatProperty(
+        name="Dust (µg/g)",
+        description="Mineral dust in the snow, micrograms per gram of snow: clean < 10, "
+        "after dust events 100-5000 (orange-brown snow)",
+        default=0.0,
+        min=0.0,
+        max=100000.0,
+        soft_max=5000.0,
+        precision=1,
+        update=_refresh_material,
+    )
+    liquid_water: bpy.props.FloatProperty(
+        name="Liquid Water",
+        description="Volume fraction of the snow that is liquid water: dry 0, moist < 0.03, wet 0.03-0.08, "
+        "very wet 0.08-0.15 (ICSSG). It must weigh less than the snow's mean density",
+        subtype="FACTOR",
+        default=0.0,
+        min=0.0,
+        max=0.5,
+        soft_max=0.15,
+        precision=3,
+        update=_refresh_material,
+    )
+    absorption_enhancement: bpy.props.FloatProperty(
+        name="Absorption Enhancement B",
+        description="How much the grains' shape lengthens light paths inside ice (Kokhanovsky & Zege 2004): "
+        "1.6 irregular grains (measured in snow, Libois et al. 2014), about 1.25 spheres",
+        default=1.6,
+        min=0.5,
+        max=5.0,
+        soft_min=1.0,
+        soft_max=2.0,
+        update=_refresh_material,
+    )
+    anisotropy: bpy.props.FloatProperty(
+        name="Anisotropy g",
+        description="Asymmetry of the phase function (Henyey-Greenstein g): 0.845 irregular grains "
+        "(Kokhanovsky & Zege 2004), 0.87-0.89 spheres; Nishita et al. 1997 used 0.93",
+        default=_DEFAULT_G,
+        min=-0.99,
+        max=0.99,
+        soft_min=0.0,
+        precision=3,
+        update=_refresh_material,
+    )
+    extinction_per_density: bpy.props.FloatProperty(
+        name="Extinction per Density (m²/kg)",
+        description="Custom optics: extinction coefficient per unit density, sigma_t (1/m) = this × density "
+        "grid (kg/m³). Snow: 3 / (2 × 917 × grain radius), 1.5-30 m²/kg",
+        default=_DEFAULT_OPTICS.extinction_per_density,
+        min=0.0,
+        soft_max=100.0,
+        precision=4,
+        update=_refresh_material,
+    )
+    albedo: bpy.props.FloatVectorProperty(
+        name="Albedo",
+        description="Custom optics: single-scattering albedo per channel (linear Rec.709). Real snow is "
+        "0.9999-0.9999999: 0.99 already renders grey",
+        subtype="COLOR",
+        size=3,
+        default=_DEFAULT_OPTICS.albedo,
+        min=0.0,
+        max=1.0,
+        precision=6,
+        update=_refresh_material,
+    )
+    mean_density: bpy.props.FloatProperty(
+        name="Mean Density (kg/m³)",
+        description="Mean density of the snow's density grid, set by the snow layer generator: the density at "
+        "which derived values are shown and liquid water is converted",
+        default=_DEFAULT_DENSITY,
+        min=1.0,
+        max=917.0,
+        soft_min=30.0,
+        soft_max=600.0,
+        update=_refresh_material,
+    )
+
+    # --- views for the panel ---
+    grain_radius_um: bpy.props.FloatProperty(
+        name="Grain Radius (µm)",
+        description="The grain radius in micrometres: fresh powder 50, settled 100-150, old or wet snow 500-1000",
+        get=_get_grain_radius_um,
+        set=_set_grain_radius_um,
+        min=1.0,
+        max=10000.0,
+        soft_min=20.0,
+        soft_max=3000.0,
+        precision=1,
+    )
 
 
 classes = (FIRN_SnowLayerSettings, FIRN_SnowTarget, FIRN_ObjectSettings)

@@ -2,10 +2,10 @@
 
 import bpy
 
-from . import cache, preferences, properties, snow_layer, ui
+from . import cache, preferences, properties, snow_layer, snow_material, snow_material_ui, ui
 
-# In dependency order: property groups before the types that point to them.
-_modules = (preferences, properties, cache, snow_layer, ui)
+# In dependency order: property groups before the types that point to them; the sidebar before its sub-panels.
+_modules = (preferences, properties, cache, snow_layer, ui, snow_material, snow_material_ui)
 
 
 def register():

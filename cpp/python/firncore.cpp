@@ -7,6 +7,7 @@ PYBIND11_MODULE(firncore, m) {
     m.doc() = "Firn's core: physically based snow, independent of Blender.";
     m.attr("__version__") = firn::kVersion;
     firncore::bindBasics(m);
+    firncore::bindOptics(m);
     firncore::bindSnowLayer(m);
     firncore::bindVdb(m);
 }

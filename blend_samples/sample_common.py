@@ -1,0 +1,127 @@
+"""Shared pieces of the sample scenes: a fresh scene with Firn, sky and sun, camera, snow, render, timings.
+
+Run inside Blender; the sample scripts put this folder on sys.path.
+"""
+
+import argparse
+import math
+import os
+import sys
+import time
+
+import addon_utils
+import bpy
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+class Stages:
+    """Times named stages and prints them: the demo's report."""
+
+    def __init__(self):
+        self.rows = []
+
+    def run(self, name, fn, *args, **kwargs):
+        start = time.perf_counter()
+        result = fn(*args, **kwargs)
+        self.rows.append((name, time.perf_counter() - start))
+        print(f"firn sample: {name:<22} {self.rows[-1][1]:7.2f} s", flush=True)
+        return result
+
+    def total(self):
+        return sum(seconds for _, seconds in self.rows)
+
+
+def parse_args(description, default_output):
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--output", default=default_output, help="PNG to render")
+    parser.add_argument("--width", type=int, default=500)
+    parser.add_argument("--samples", type=int, default=32)
+    parser.add_argument("--no-save", action="store_true", help="do not save the .blend next to the script")
+    return parser.parse_args(argv)
+
+
+def new_scene():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon_utils.enable("firn", default_set=True)
+    return bpy.context.scene
+
+
+def nishita_sky(scene, sun_elevation_deg, sun_rotation_deg, strength=0.3):
+    """Blender's physical sky; a matching sun lamp is added by `sun`."""
+    world = bpy.data.worlds.new("Sky")
+    world.use_nodes = True
+    nodes = world.node_tree.nodes
+    sky = nodes.new("ShaderNodeTexSky")
+    sky.sky_type = "NISHITA"
+    sky.sun_disc = False  # the sun lamp gives the direct light
+    sky.sun_elevation = math.radians(sun_elevation_deg)
+    sky.sun_rotation = math.radians(sun_rotation_deg)
+    background = nodes["Background"]
+    background.inputs["Strength"].default_value = strength
+    world.node_tree.links.new(sky.outputs["Color"], background.inputs["Color"])
+    scene.world = world
+
+
+def sun(elevation_deg, rotation_deg, irradiance=4.0):
+    """A sun lamp (irradiance in W/m², Blender's Strength) from the same direction as the Nishita sky's sun."""
+    # Blender's sun points along its local -Z; tilt it down from the zenith by (90 - elevation).
+    bpy.ops.object.light_add(type="SUN", rotation=(math.radians(90 - elevation_deg), 0.0,
+                                                   math.radians(rotation_deg + 90)))
+    lamp = bpy.context.object
+    lamp.data.energy = irradiance
+    lamp.data.angle = math.radians(0.53)
+    return lamp
+
+
+def camera(location, look_at, lens=50.0):
+    from mathutils import Vector
+
+    bpy.ops.object.camera_add(location=location)
+    cam = bpy.context.object
+    cam.data.lens = lens
+    cam.rotation_euler = (Vector(look_at) - Vector(location)).to_track_quat("-Z", "Y").to_euler()
+    bpy.context.scene.camera = cam
+    return cam
+
+
+def material(name, rgb, roughness=0.5, metallic=0.0):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (*rgb, 1.0)
+    bsdf.inputs["Roughness"].default_value = roughness
+    bsdf.inputs["Metallic"].default_value = metallic
+    mat.diffuse_color = (*rgb, 1.0)
+    return mat
+
+
+def add_snow(targets, **settings):
+    bpy.ops.object.select_all(action="DESELECT")
+    for obj in targets:
+        obj.select_set(True)
+    bpy.context.view_layer.objects.active = targets[0]
+    if bpy.ops.firn.add_snow_layer(**settings) != {"FINISHED"}:
+        raise RuntimeError("Add Snow Layer failed")
+    return bpy.context.object
+
+
+def render(scene, output, width, samples, aspect=(16, 9)):
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = False  # Debian's Blender has no OpenImageDenoise
+    scene.render.resolution_x = width
+    scene.render.resolution_y = width * aspect[1] // aspect[0]
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.filepath = os.path.abspath(output)
+    os.makedirs(os.path.dirname(scene.render.filepath), exist_ok=True)
+    bpy.ops.render.render(write_still=True)
+
+
+def save_next_to(script_file):
+    path = os.path.splitext(os.path.abspath(script_file))[0] + ".blend"
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    return path

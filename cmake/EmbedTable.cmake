@@ -1,0 +1,52 @@
+# Turns a numeric CSV table into a C++ header, so the data travels inside the compiled core (no data files to
+# install on farm nodes). Run at build time:
+#   cmake -DINPUT=table.csv -DOUTPUT=table.h -DNAME=kTable -P EmbedTable.cmake
+# CSV layout: '#' comment lines (kept as the header's comment), one line of column names, then rows of numbers.
+# The header declares `inline constexpr double NAME[rows][columns]` in namespace firn::data.
+foreach(var INPUT OUTPUT NAME)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "EmbedTable.cmake needs -D${var}=...")
+  endif()
+endforeach()
+
+file(STRINGS "${INPUT}" lines)
+get_filename_component(source_name "${INPUT}" NAME)
+set(comments "")
+set(columns "")
+set(rows "")
+set(column_count 0)
+foreach(line IN LISTS lines)
+  string(STRIP "${line}" line)
+  if(line STREQUAL "")
+    continue()
+  elseif(line MATCHES "^#(.*)$")
+    string(APPEND comments "//${CMAKE_MATCH_1}\n")
+  elseif(columns STREQUAL "")
+    set(columns "${line}")
+    string(REPLACE "," ";" column_list "${line}")
+    list(LENGTH column_list column_count)
+  else()
+    string(REPLACE "," ";" values "${line}")
+    list(LENGTH values count)
+    if(NOT count EQUAL column_count)
+      message(FATAL_ERROR "${INPUT}: row '${line}' has ${count} values, the header ${column_count}")
+    endif()
+    foreach(value IN LISTS values)
+      if(NOT value MATCHES "^[-+]?[0-9]*\\.?[0-9]+([eE][-+]?[0-9]+)?$")
+        message(FATAL_ERROR "${INPUT}: '${value}' in row '${line}' is not a number")
+      endif()
+    endforeach()
+    string(REPLACE "," ", " line "${line}")
+    string(APPEND rows "    {${line}},\n")
+  endif()
+endforeach()
+
+set(text "// Generated at build time from cpp/data/${source_name} by cmake/EmbedTable.cmake: edit the CSV.\n")
+string(APPEND text "${comments}#pragma once\n\nnamespace firn::data {\n\n")
+string(APPEND text "// Columns: ${columns}\n")
+string(APPEND text "inline constexpr double ${NAME}[][${column_count}] = {\n${rows}};\n\n}  // namespace firn::data\n")
+
+# Rewrite only on change, so a re-run does not trigger recompilation.
+file(WRITE "${OUTPUT}.tmp" "${text}")
+file(COPY_FILE "${OUTPUT}.tmp" "${OUTPUT}" ONLY_IF_DIFFERENT)
+file(REMOVE "${OUTPUT}.tmp")
