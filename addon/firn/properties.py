@@ -82,6 +82,12 @@ def _set_grain_radius_um(self, value):
     self.grain_radius = value * 1e-6
 
 
+def active_snow(context):
+    """The context's object (the active one, or the one the Properties editor shows) if it is Firn snow."""
+    obj = context.object
+    return obj if obj is not None and obj.type == "VOLUME" and obj.firn.is_snow else None
+
+
 class FIRN_ObjectSettings(bpy.types.PropertyGroup):
     is_snow: bpy.props.BoolProperty(
         name="Is Snow",

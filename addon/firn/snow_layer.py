@@ -7,7 +7,8 @@ from . import cache, materials, preferences, scene_geometry
 from .core import firncore
 from .errors import UserError
 from .jobs import FirnJobMixin
-from .properties import SNOW_LAYER_PROPERTIES
+from .properties import SNOW_LAYER_PROPERTIES, active_snow
+from .ui import draw_layer_settings
 
 def copy_settings(source, target):
     for name in SNOW_LAYER_PROPERTIES:
@@ -188,15 +189,8 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
             return False
         return True
 
-    def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        for name in ("depth", "max_slope", "spacing", "randomness", "smoothness", "direction", "spread",
-                     "compaction", "density_top", "density_bottom", "seed", "voxel_size", "occluders"):
-            layout.prop(self, name)
-        if self.occluders == "COLLECTION":
-            layout.prop_search(self, "occluder_collection", bpy.data, "collections")
-        layout.prop(self, "surface_mesh")
+    def draw(self, _context):
+        draw_layer_settings(self.layout, self)
 
     def prepare(self, context):
         targets = [obj for obj in context.selected_objects if scene_geometry.is_mesh_like(obj)]
@@ -221,11 +215,6 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
                               f"{result['active_voxels']:,} voxels of {result['voxel_size'] * 1000:.1f} mm{note}")
 
 
-def _active_snow(context):
-    obj = context.active_object
-    return obj if obj is not None and obj.type == "VOLUME" and obj.firn.is_snow else None
-
-
 class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
     """Rebuild the active snow from its targets and settings, after the scene changed"""
 
@@ -236,13 +225,13 @@ class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if _active_snow(context) is None:
+        if active_snow(context) is None:
             cls.poll_message_set("Select a snow object made by Add Snow Layer")
             return False
         return True
 
     def prepare(self, context):
-        snow = _active_snow(context)
+        snow = active_snow(context)
         targets = [item.object for item in snow.firn.targets if item.object is not None]
         if not targets:
             raise UserError(f"'{snow.name}' has no target objects left: use Add Snow Layer instead")
@@ -264,14 +253,14 @@ class FIRN_OT_rebuild_from_metaballs(FirnJobMixin, bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        snow = _active_snow(context)
+        snow = active_snow(context)
         if snow is None or snow.firn.metaballs is None:
             cls.poll_message_set("Select a snow object that kept its metaballs")
             return False
         return True
 
     def prepare(self, context):
-        snow = _active_snow(context)
+        snow = active_snow(context)
         settings = core_settings(snow.firn.layer, _max_voxels())
         path, stored_path = cache.snow_file(snow.name)
         return {"name": snow.name, "metaballs": read_metaballs(snow.firn.metaballs), "settings": settings,

@@ -12,6 +12,7 @@ import bpy
 from bl_operators.presets import AddPresetBase
 
 from . import materials, optics
+from .properties import active_snow
 
 PRESET_SUBDIR = os.path.join("firn", "snow_material")
 SHIPPED_PRESET_DIR = os.path.join(os.path.dirname(__file__), "presets", "snow_material")
@@ -25,12 +26,6 @@ SHIPPED_PRESETS = (
     "Dirty_Snow",
     "Dusty_Snow",
 )
-
-
-def snow_object(context):
-    """The context's object if it is Firn snow, else None."""
-    obj = context.object
-    return obj if obj is not None and obj.firn.is_snow else None
 
 
 def preset_files():
@@ -87,7 +82,7 @@ class FIRN_OT_snow_material_preset_add(AddPresetBase, bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if snow_object(context) is None:
+        if active_snow(context) is None:
             cls.poll_message_set("Select a Firn snow object")
             return False
         return True
@@ -110,7 +105,7 @@ class FIRN_OT_snow_optics_to_custom(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        obj = snow_object(context)
+        obj = active_snow(context)
         if obj is None or obj.firn.optics_mode != "PHYSICAL":
             cls.poll_message_set("Select a Firn snow object with physical optics")
             return False
@@ -138,7 +133,7 @@ class FIRN_OT_snow_material_assign(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        obj = snow_object(context)
+        obj = active_snow(context)
         if obj is None or obj.type != "VOLUME":
             cls.poll_message_set("Select a Firn snow (volume) object")
             return False

@@ -6,7 +6,8 @@ import textwrap
 import bpy
 
 from . import materials, optics
-from .snow_material import FIRN_MT_snow_material_presets, snow_object
+from .properties import active_snow
+from .snow_material import FIRN_MT_snow_material_presets
 
 
 def _format(value, fmt):
@@ -91,7 +92,7 @@ class FIRN_PT_snow_material(bpy.types.Panel):
 
     @classmethod
     def poll(cls, context):
-        return snow_object(context) is not None
+        return active_snow(context) is not None
 
     def draw(self, context):
         draw_snow_material(self.layout, context.object)
@@ -107,7 +108,7 @@ class FIRN_PT_sidebar_snow_material(bpy.types.Panel):
 
     @classmethod
     def poll(cls, context):
-        return snow_object(context) is not None
+        return active_snow(context) is not None
 
     def draw(self, context):
         draw_snow_material(self.layout, context.object)

@@ -2,24 +2,25 @@
 
 import bpy
 
+from .properties import SNOW_LAYER_PROPERTIES, active_snow
 
-def _active_snow(context):
-    obj = context.active_object
-    return obj if obj is not None and obj.type == "VOLUME" and obj.firn.is_snow else None
+
+def draw_layer_settings(layout, holder):
+    """Add Snow Layer's settings, of the operator (redo panel) or kept on a snow object."""
+    col = layout.column()
+    col.use_property_split = True
+    col.use_property_decorate = False
+    for name in SNOW_LAYER_PROPERTIES:
+        if name == "occluder_collection":
+            if holder.occluders == "COLLECTION":
+                col.prop_search(holder, name, bpy.data, "collections")
+        else:
+            col.prop(holder, name)
 
 
 def draw_snow_layer(layout, snow):
     """The snow's generation settings and what can be done with them."""
-    layer = snow.firn.layer
-    col = layout.column()
-    col.use_property_split = True
-    col.use_property_decorate = False
-    for name in ("depth", "max_slope", "spacing", "randomness", "smoothness", "direction", "spread",
-                 "compaction", "density_top", "density_bottom", "seed", "voxel_size", "occluders"):
-        col.prop(layer, name)
-    if layer.occluders == "COLLECTION":
-        col.prop_search(layer, "occluder_collection", bpy.data, "collections")
-    col.prop(layer, "surface_mesh")
+    draw_layer_settings(layout, snow.firn.layer)
     targets = ", ".join(item.object.name for item in snow.firn.targets if item.object) or "none"
     layout.label(text=f"Targets: {targets}")
     layout.label(text=f"Mean density {snow.firn.mean_density:.0f} kg/m³, voxels {snow.firn.voxel_size * 1000:.1f} mm")
@@ -38,7 +39,7 @@ class FIRN_PT_sidebar(bpy.types.Panel):
     def draw(self, context):
         layout = self.layout
         layout.operator("firn.add_snow_layer", icon="FREEZE")
-        snow = _active_snow(context)
+        snow = active_snow(context)
         if snow is None:
             layout.label(text="Select objects, then Add Snow Layer")
             return
@@ -55,10 +56,10 @@ class FIRN_PT_object_snow_layer(bpy.types.Panel):
 
     @classmethod
     def poll(cls, context):
-        return _active_snow(context) is not None
+        return active_snow(context) is not None
 
     def draw(self, context):
-        draw_snow_layer(self.layout, _active_snow(context))
+        draw_snow_layer(self.layout, active_snow(context))
 
 
 classes = (FIRN_PT_sidebar, FIRN_PT_object_snow_layer)
