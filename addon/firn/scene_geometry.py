@@ -42,11 +42,10 @@ def world_triangles(obj, depsgraph):
     return vertices, triangles
 
 
-def merged_triangles(objects, depsgraph):
-    """All objects' world triangles joined into one (vertices, triangles) pair; None when there are none."""
+def concatenate(meshes):
+    """(vertices, triangles) pairs joined into one; None when none has a triangle."""
     vertex_parts, triangle_parts, offset = [], [], 0
-    for obj in objects:
-        vertices, triangles = world_triangles(obj, depsgraph)
+    for vertices, triangles in meshes:
         if len(triangles) == 0:
             continue
         vertex_parts.append(vertices)
@@ -55,6 +54,11 @@ def merged_triangles(objects, depsgraph):
     if not triangle_parts:
         return None
     return np.concatenate(vertex_parts), np.concatenate(triangle_parts)
+
+
+def merged_triangles(objects, depsgraph):
+    """All objects' world triangles joined into one (vertices, triangles) pair; None when there are none."""
+    return concatenate(world_triangles(obj, depsgraph) for obj in objects)
 
 
 def is_mesh_like(obj):

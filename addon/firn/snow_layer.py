@@ -1,4 +1,9 @@
-"""Add Snow Layer: snow on the selected objects, as a Volume object of OpenVDB grids made by the core."""
+"""Add Snow Layer: snow on the selected objects, as a Volume object of OpenVDB grids made by the core.
+
+Selected snow objects are targets too: a new layer lies on their surface (layers stack).
+"""
+
+import os
 
 import bpy
 import numpy as np
@@ -29,6 +34,24 @@ def _max_voxels():
     return prefs.voxel_budget_millions * 1e6 if prefs else 50e6
 
 
+def is_snow_target(obj):
+    """Objects snow can lie on: anything that evaluates to a mesh, and earlier snow (layers stack)."""
+    return scene_geometry.is_mesh_like(obj) or (obj.type == "VOLUME" and obj.firn.is_snow)
+
+
+def _triangles(objects, depsgraph):
+    """World triangles of mesh-like objects and of the surface of snow objects."""
+    meshes = []
+    for obj in objects:
+        if obj.type == "VOLUME":
+            path = bpy.path.abspath(obj.data.filepath)
+            if os.path.exists(path):
+                meshes.append(firncore.snow_surface_mesh(path))
+        else:
+            meshes.append(scene_geometry.world_triangles(obj, depsgraph))
+    return scene_geometry.concatenate(meshes)
+
+
 def _occluder_objects(context, props, targets):
     if props.occluders == "COLLECTION":
         collection = bpy.data.collections.get(props.occluder_collection)
@@ -37,6 +60,8 @@ def _occluder_objects(context, props, targets):
         candidates = collection.all_objects
     else:
         candidates = [obj for obj in context.view_layer.objects if obj.visible_get()]
+    # Earlier snow shelters nothing: a second layer on the same objects overlaps the first; to stack a layer on
+    # earlier snow, select the snow as a target.
     return [obj for obj in candidates if scene_geometry.is_mesh_like(obj) and obj not in targets]
 
 
@@ -44,12 +69,13 @@ def gather_inputs(context, props, targets, object_name):
     """Everything the core needs, read from Blender on the main thread."""
     scene_geometry.check_unit_scale(context.scene)
     if not targets:
-        raise UserError("Select the objects to cover with snow (meshes, curves, surfaces, text or metaballs)")
+        raise UserError("Select the objects to cover with snow (meshes, curves, surfaces, text, metaballs "
+                        "or earlier snow)")
     depsgraph = context.evaluated_depsgraph_get()
-    target_arrays = scene_geometry.merged_triangles(targets, depsgraph)
+    target_arrays = _triangles(targets, depsgraph)
     if target_arrays is None:
         raise UserError("The selected objects have no faces to hold snow (a curve needs a bevel or extrusion)")
-    occluders = scene_geometry.merged_triangles(_occluder_objects(context, props, targets), depsgraph)
+    occluders = _triangles(_occluder_objects(context, props, targets), depsgraph)
     path, stored_path = cache.snow_file(object_name)
     settings = core_settings(props, _max_voxels())
     try:
@@ -193,7 +219,7 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
         draw_layer_settings(self.layout, self)
 
     def prepare(self, context):
-        targets = [obj for obj in context.selected_objects if scene_geometry.is_mesh_like(obj)]
+        targets = [obj for obj in context.selected_objects if is_snow_target(obj)]
         name = free_object_name("Snow")
         return dict(gather_inputs(context, self, targets, name), name=name, targets_objects=targets)
 

@@ -205,3 +205,21 @@ def test_unsaved_snow_moves_next_to_the_blend_on_save(clean_scene, tmp_path):
     bpy.ops.wm.open_mainfile(filepath=str(blend))
     snow = bpy.data.objects["Snow"]
     assert os.path.exists(bpy.path.abspath(snow.data.filepath))
+
+
+def test_layers_stack_on_earlier_snow(clean_scene):
+    ground = add_plane()
+    select_only(ground)
+    bpy.ops.firn.add_snow_layer(depth=0.1, seed=1)
+    first = bpy.context.object
+    select_only(first)
+    assert bpy.ops.firn.add_snow_layer(depth=0.05, seed=2) == {"FINISHED"}
+    second = bpy.context.object
+    assert second != first and [item.object for item in second.firn.targets] == [first]
+    # The second layer lies on the first: nothing of it below the first's top, snow up to about 0.15 m.
+    column = [(0.1, 0.2, z) for z in np.arange(0.0, 0.25, 0.005)]
+    lower, upper = density_at(first, *column), density_at(second, *column)
+    top_first = max(z for (_, _, z), rho in zip(column, lower) if rho > 0.0)
+    top_second = max(z for (_, _, z), rho in zip(column, upper) if rho > 0.0)
+    assert top_second == pytest.approx(0.15, abs=0.02)
+    assert min(z for (_, _, z), rho in zip(column, upper) if rho > 0.0) >= top_first - 0.02
