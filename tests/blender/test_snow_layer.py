@@ -223,3 +223,18 @@ def test_layers_stack_on_earlier_snow(clean_scene):
     top_second = max(z for (_, _, z), rho in zip(column, upper) if rho > 0.0)
     assert top_second == pytest.approx(0.15, abs=0.02)
     assert min(z for (_, _, z), rho in zip(column, upper) if rho > 0.0) >= top_first - 0.02
+
+
+def test_nan_vertices_and_absurd_voxel_size_are_reported(clean_scene):
+    mesh = bpy.data.meshes.new("Broken")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, float("nan"))], [], [(0, 1, 2)])
+    broken = bpy.data.objects.new("Broken", mesh)
+    clean_scene.collection.objects.link(broken)
+    select_only(broken)
+    with pytest.raises(RuntimeError, match="non-finite"):
+        bpy.ops.firn.add_snow_layer()
+    ground = add_plane(location=(5, 0, 0))
+    select_only(ground)
+    with pytest.raises(RuntimeError, match="voxel size"):
+        bpy.ops.firn.add_snow_layer(depth=0.05, voxel_size=0.5)
+    assert not any(obj.firn.is_snow for obj in bpy.data.objects)
