@@ -125,3 +125,37 @@ def save_next_to(script_file):
     path = os.path.splitext(os.path.abspath(script_file))[0] + ".blend"
     bpy.ops.wm.save_as_mainfile(filepath=path)
     return path
+
+
+def bake(snows, quality="FINAL"):
+    """Bake Scattering on the given snow objects (synchronous in background mode)."""
+    bpy.ops.object.select_all(action="DESELECT")
+    for snow in snows:
+        snow.select_set(True)
+    bpy.context.view_layer.objects.active = snows[0]
+    if bpy.ops.firn.bake_scattering(quality=quality) != {"FINISHED"}:
+        raise RuntimeError("Bake Scattering failed")
+
+
+def side_by_side(paths, output, labels=None):
+    """Joins PNGs of equal height left to right into one PNG (Blender's image API, no other dependency)."""
+    import numpy as np
+
+    images = [bpy.data.images.load(os.path.abspath(path)) for path in paths]
+    height = images[0].size[1]
+    parts = []
+    for image in images:
+        width, h = image.size
+        if h != height:
+            raise ValueError("side_by_side needs images of one height")
+        pixels = np.empty(width * h * 4, np.float32)
+        image.pixels.foreach_get(pixels)
+        parts.append(pixels.reshape(h, width, 4))
+    joined = np.concatenate(parts, axis=1)
+    result = bpy.data.images.new("joined", joined.shape[1], height, alpha=True)
+    result.pixels.foreach_set(joined.ravel())
+    result.filepath_raw = os.path.abspath(output)
+    result.file_format = "PNG"
+    result.save()
+    for image in images + [result]:
+        bpy.data.images.remove(image)
