@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Runs every benchmark and writes a markdown report (default out/bench_report.md).
+# Timings vary with the machine's load; each benchmark prints ratios against a baseline of the same run.
+set -euo pipefail
+FIRN_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+FIRN_BUILD="${FIRN_BUILD:-$FIRN_ROOT/build}"
+report="${1:-$FIRN_ROOT/out/bench_report.md}"
+mkdir -p "$(dirname "$report")"
+{
+  echo "# Firn benchmark report"
+  echo
+  echo "$(date -u '+%Y-%m-%d %H:%M UTC'), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)."
+  echo
+  echo "## Add Snow Layer against Blender's Real Snow (same scene, same run)"
+  echo
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/snow_layer_bench.py" -- --triangles 1000000
+} | tee "$report"
+echo "firn: wrote $report"
