@@ -13,6 +13,13 @@ inline double wyvillField(double uSquared) {
     return 1.0 - (22.0 / 9.0) * u2 + (17.0 / 9.0) * u4 - (4.0 / 9.0) * u6;
 }
 
+// df/d(u^2): the gradient of the field of a ball at offset d from its centre is 2 slope(u^2) d / R^2.
+inline double wyvillFieldSlope(double uSquared) {
+    if (uSquared >= 1.0) return 0.0;
+    const double u2 = uSquared;
+    return -(22.0 / 9.0) + (34.0 / 9.0) * u2 - (12.0 / 9.0) * u2 * u2;
+}
+
 // Field of an infinite plane layer of balls (radius R, one per area a, m^2), at height z above it,
 // averaged over the plane: (2 pi R^2 / a) * integral_{|z|/R}^1 f(u) u du. Used to place layers so that
 // the snow's iso-surface sits at the requested depth.

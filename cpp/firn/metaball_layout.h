@@ -9,8 +9,9 @@
 
 namespace firn {
 
-// One soft ball of snow (Nishita 1997). Balls stand in columns on landing sites; every ball is clipped
-// by its site's tangent plane, so snow never reaches below or inside the surface it lies on.
+// One soft ball of snow (Nishita 1997). Balls stand in columns on landing sites. Snow is kept above the
+// balls' own surface (the sites' tangent planes, averaged by field weight), so it never reaches below or
+// inside the object it lies on.
 struct Metaball {
     glm::vec3 centre;  // m
     float radius;      // m, where the field reaches zero

@@ -8,7 +8,6 @@
 
 #include <glm/geometric.hpp>
 #include <openvdb/tools/Prune.h>
-#include <openvdb/tree/LeafManager.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -88,91 +87,82 @@ std::vector<std::pair<std::uint64_t, std::uint32_t>> binBallsByLeaf(const std::v
     return pairs;
 }
 
-// Field and field-weighted depth of one leaf's voxels, from the balls that reach it.
+// What the balls that reach one leaf add up to at its voxels: the field F and its gradient (analytic, so the
+// distance to the iso-surface needs no neighbour lookups), and field-weighted averages of the depth below the
+// snow's top and of the signed distance to the surface the balls stand on (their tangent planes).
 struct LeafField {
-    std::array<float, kLeafVoxels> field{};      // sum of clipped ball fields
-    std::array<float, kLeafVoxels> depth{};      // m below the snow top, field-weighted
-    std::array<bool, kLeafVoxels> inside{};      // within some ball's sphere (active)
+    std::array<float, kLeafVoxels> field{};
+    std::array<glm::vec3, kLeafVoxels> gradient{};       // 1/m
+    std::array<float, kLeafVoxels> weightedDepth{};      // m x field
+    std::array<float, kLeafVoxels> weightedBelowBase{};  // m x field, positive below the surface
 };
 
 void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std::size_t count,
-                const std::vector<Metaball> &balls, double h, LeafField &out) {
-    std::array<double, kLeafVoxels> field{}, weightedDepth{};
-    const float hf = float(h);
+                const std::vector<Metaball> &balls, float h, LeafField &out) {
     const int zLeafLo = origin.z(), zLeafHi = origin.z() + kLeafDim - 1;
     for (std::size_t n = 0; n < count; ++n) {
         const Metaball &b = balls[ballIds[n]];
         const glm::vec3 c = b.centre, normal = b.normal;
         const float r2 = b.radius * b.radius, invR2 = 1.0f / r2;
-        const float clipHeight = -b.base - 2.0f * hf;  // below this, no field; keep a 2-voxel exterior band
-        const int xLo = std::max(origin.x(), int(std::ceil((c.x - b.radius) / hf)));
-        const int xHi = std::min(origin.x() + kLeafDim - 1, int(std::floor((c.x + b.radius) / hf)));
-        const int yLo = std::max(origin.y(), int(std::ceil((c.y - b.radius) / hf)));
-        const int yHi = std::min(origin.y() + kLeafDim - 1, int(std::floor((c.y + b.radius) / hf)));
+        // m along the normal: 1.5 voxels below the ball's surface the snow has ended (its level set is +band).
+        const float lowest = -b.base - 1.5f * h;
+        const int xLo = std::max(origin.x(), int(std::ceil((c.x - b.radius) / h)));
+        const int xHi = std::min(origin.x() + kLeafDim - 1, int(std::floor((c.x + b.radius) / h)));
+        const int yLo = std::max(origin.y(), int(std::ceil((c.y - b.radius) / h)));
+        const int yHi = std::min(origin.y() + kLeafDim - 1, int(std::floor((c.y + b.radius) / h)));
         for (int x = xLo; x <= xHi; ++x) {
-            const float dx = x * hf - c.x;
+            const float dx = x * h - c.x;
             for (int y = yLo; y <= yHi; ++y) {
-                const float dy = y * hf - c.y;
+                const float dy = y * h - c.y;
                 const float rest = r2 - dx * dx - dy * dy;
                 if (rest <= 0.0f) continue;
-                // The z-range inside the sphere and above the clip plane (when the plane is not vertical).
+                // The z-range inside the sphere and not far below the ball's surface (unless that is steep).
                 const float half = std::sqrt(rest);
                 float zLo = c.z - half;
                 const float lateral = normal.x * dx + normal.y * dy;
-                if (normal.z > 0.05f) zLo = std::max(zLo, c.z + (clipHeight - lateral) / normal.z);
-                const int kLo = std::max(zLeafLo, int(std::ceil(zLo / hf)));
-                const int kHi = std::min(zLeafHi, int(std::floor((c.z + half) / hf)));
+                if (normal.z > 0.05f) zLo = std::max(zLo, c.z + (lowest - lateral) / normal.z);
+                const int kLo = std::max(zLeafLo, int(std::ceil(zLo / h)));
+                const int kHi = std::min(zLeafHi, int(std::floor((c.z + half) / h)));
                 const int row = ((x - origin.x()) << 6) | ((y - origin.y()) << 3);
                 for (int z = kLo; z <= kHi; ++z) {
-                    const float dz = z * hf - c.z;
-                    const float d2 = dx * dx + dy * dy + dz * dz;
-                    if (d2 >= r2) continue;
+                    const glm::vec3 offset(dx, dy, z * h - c.z);
+                    const float u2 = glm::dot(offset, offset) * invR2;
+                    const float height = lateral + normal.z * offset.z;  // m above the centre along the normal
+                    if (u2 >= 1.0f || height < lowest) continue;
                     const int i = row + (z - zLeafLo);
-                    out.inside[i] = true;
-                    const float height = lateral + normal.z * dz;  // m above the centre along the normal
-                    if (height < -b.base) continue;                // below the surface the ball stands on
-                    const double f = wyvillField(d2 * invR2);
-                    field[i] += f;
-                    weightedDepth[i] += f * (b.depth - height);
+                    const float f = float(wyvillField(u2));
+                    out.field[i] += f;
+                    out.gradient[i] += float(2.0 * wyvillFieldSlope(u2)) * invR2 * offset;
+                    out.weightedDepth[i] += f * (b.depth - height);
+                    out.weightedBelowBase[i] += f * (-b.base - height);
                 }
             }
         }
     }
-    for (int i = 0; i < kLeafVoxels; ++i) {
-        out.field[i] = float(field[i]);
-        out.depth[i] = field[i] > 0.0 ? float(std::max(0.0, weightedDepth[i] / field[i])) : 0.0f;
-    }
 }
 
-// Narrow-band level set of the iso-surface field = iso, by the first-order distance (iso - F) / |grad F|
-// (central differences), clamped to +-band: exact for a planar field, within a fraction of a voxel near the
-// surface, and a single parallel pass (OpenVDB's fast sweeping costs ten times more here for nothing
-// the density or the mesh needs).
-openvdb::FloatGrid::Ptr signedDistanceBand(const openvdb::FloatGrid &field, double iso, double band) {
-    const double h = field.voxelSize()[0];
-    auto sdf = field.deepCopy();
-    sdf->setName("surface");
-    sdf->setGridClass(openvdb::GRID_LEVEL_SET);
-    sdf->tree().root().setBackground(float(band), true);  // voxels no ball reaches: outside
-    openvdb::tree::LeafManager<FloatTree> manager(sdf->tree());
-    manager.foreach([&](FloatLeaf &leaf, std::size_t) {
-        auto f = field.getConstAccessor();
-        for (auto it = leaf.beginValueOn(); it; ++it) {
-            const openvdb::Coord c = it.getCoord();
-            double g2 = 0.0;
-            for (int a = 0; a < 3; ++a) {
-                openvdb::Coord step(0);
-                step[a] = 1;
-                const double g = (f.getValue(c + step) - f.getValue(c - step)) / (2.0 * h);
-                g2 += g * g;
-            }
-            const double distance = (iso - f.getValue(c)) / std::max(std::sqrt(g2), 1e-12);
-            it.setValue(float(std::clamp(distance, -band, band)));
-            if (std::abs(distance) >= band) it.setValueOff();
-        }
-    });
-    openvdb::tools::pruneLevelSet(sdf->tree());
-    return sdf;
+// Turns one leaf's gathered field into its two output leaves. Snow is where the field exceeds the iso-value
+// AND which lies above the surface the balls stand on, so its signed distance is the larger of two: the
+// first-order distance to the iso-surface, (iso - F) / |grad F| (exact for a planar field, within a fraction of
+// a voxel near the surface), and the distance below the balls' surface (moved half a voxel into the object).
+// Clamped to +-band. The density follows
+// the compaction profile at the field-weighted depth, times the voxel's coverage by snow: a one-voxel ramp
+// centred on the surface, so that Cycles' trilinear density crosses half at the snow's surface.
+void finishLeaf(const LeafField &in, const RasterSettings &s, FloatLeaf &surface, FloatLeaf &density) {
+    const double h = s.voxelSize, band = kSurfaceBandVoxels * h;
+    for (int i = 0; i < kLeafVoxels; ++i) {
+        const double field = in.field[i];
+        const double toIso = (kSnowIsoValue - field) / std::max(double(glm::length(in.gradient[i])), 1e-12);
+        // Half a voxel into the object, so that the voxel on its surface is whole snow: no thin gap below.
+        const double belowBase = field > 0.0 ? in.weightedBelowBase[i] / field - 0.5 * h : band;
+        const double distance = std::clamp(std::max(toIso, belowBase), -band, band);
+        surface.setValueOnly(i, float(distance));
+        surface.setActiveState(i, std::abs(distance) < band);
+        const double coverage = std::clamp(0.5 - distance / h, 0.0, 1.0);
+        if (coverage < 1e-4) continue;  // rounding at the ramp's foot: no snow
+        const double depth = field > 0.0 ? std::max(0.0, in.weightedDepth[i] / field) : 0.0;
+        density.setValueOn(i, float(coverage * s.compaction.density(depth)));
+    }
 }
 
 openvdb::FloatGrid::Ptr makeGrid(const std::string &name, double h) {
@@ -207,64 +197,34 @@ SnowGrids rasterizeSnow(const std::vector<Metaball> &balls, const RasterSettings
     progress.report(0.1);
     progress.throwIfCancelled();
 
-    auto field = makeGrid("field", h);
-    auto depth = makeGrid("depth", h);
+    SnowGrids grids{makeGrid("density", h), makeGrid("surface", h)};
+    grids.density->setGridClass(openvdb::GRID_FOG_VOLUME);
+    grids.surface->setGridClass(openvdb::GRID_LEVEL_SET);
+    grids.surface->tree().root().setBackground(float(kSurfaceBandVoxels * h), false);  // outside every ball
     const std::size_t leafCount = starts.size() - 1;
-    std::vector<FloatLeaf *> fieldLeaves(leafCount), depthLeaves(leafCount);
+    std::vector<FloatLeaf *> densityLeaves(leafCount), surfaceLeaves(leafCount);
     for (std::size_t l = 0; l < leafCount; ++l) {
         const openvdb::Coord origin = leafOrigin(pairs[starts[l]].first);
-        fieldLeaves[l] = field->tree().touchLeaf(origin);
-        depthLeaves[l] = depth->tree().touchLeaf(origin);
+        densityLeaves[l] = grids.density->tree().touchLeaf(origin);
+        surfaceLeaves[l] = grids.surface->tree().touchLeaf(origin);
     }
     std::atomic<std::size_t> done{0};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leafCount, 64), [&](const tbb::blocked_range<std::size_t> &r) {
         progress.throwIfCancelled();
         std::vector<std::uint32_t> ids;
-        LeafField leafField;
+        auto leafField = std::make_unique<LeafField>();
         for (std::size_t l = r.begin(); l != r.end(); ++l) {
             ids.clear();
             for (std::size_t p = starts[l]; p < starts[l + 1]; ++p) ids.push_back(pairs[p].second);
-            leafField = LeafField{};
-            const openvdb::Coord origin = fieldLeaves[l]->origin();
-            gatherLeaf(origin, ids.data(), ids.size(), balls, h, leafField);
-            for (int i = 0; i < kLeafVoxels; ++i) {
-                fieldLeaves[l]->setValueOnly(i, leafField.field[i]);
-                fieldLeaves[l]->setActiveState(i, leafField.inside[i]);
-                depthLeaves[l]->setValueOnly(i, leafField.depth[i]);
-                depthLeaves[l]->setActiveState(i, leafField.inside[i]);
-            }
+            *leafField = LeafField{};
+            gatherLeaf(densityLeaves[l]->origin(), ids.data(), ids.size(), balls, float(h), *leafField);
+            finishLeaf(*leafField, s, *surfaceLeaves[l], *densityLeaves[l]);
         }
-        progress.report(0.1 + 0.5 * double(done += r.size()) / double(leafCount));
+        progress.report(0.1 + 0.85 * double(done += r.size()) / double(leafCount));
     });
-    const double activeVoxels = double(field->activeVoxelCount());
-    checkVoxelBudget(activeVoxels, s);
     progress.throwIfCancelled();
-
-    SnowGrids grids;
-    grids.surface = signedDistanceBand(*field, kSnowIsoValue, kSurfaceBandVoxels * h);
-    progress.report(0.85);
-    progress.throwIfCancelled();
-
-    grids.density = field->deepCopy();
-    grids.density->setName("density");
-    grids.density->setGridClass(openvdb::GRID_FOG_VOLUME);
-    openvdb::tree::LeafManager<FloatTree> manager(grids.density->tree());
-    manager.foreach([&](FloatLeaf &leaf, std::size_t) {
-        const FloatLeaf *sdf = grids.surface->tree().probeConstLeaf(leaf.origin());
-        const FloatLeaf *below = depth->tree().probeConstLeaf(leaf.origin());
-        for (auto it = leaf.beginValueOn(); it; ++it) {
-            const float d = sdf ? sdf->getValue(it.pos()) : float(kSurfaceBandVoxels * h);
-            // Coverage of the voxel by snow: 1 inside, 0 outside, a one-voxel ramp centred on the surface,
-            // so that Cycles' trilinear density crosses half at the iso-surface.
-            const double coverage = std::clamp(0.5 - double(d) / h, 0.0, 1.0);
-            if (coverage <= 0.0) {
-                it.setValue(0.0f);
-                it.setValueOff();
-                continue;
-            }
-            it.setValue(float(coverage * s.compaction.density(below->getValue(it.pos()))));
-        }
-    });
+    // Inactive voxels of the level set take +-band by their side: tiles deep inside the snow become -band.
+    openvdb::tools::pruneLevelSet(grids.surface->tree());
     openvdb::tools::pruneInactive(grids.density->tree());
     grids.density->insertMeta("units", openvdb::StringMetadata("kg/m^3"));
     grids.surface->insertMeta("units", openvdb::StringMetadata("m"));

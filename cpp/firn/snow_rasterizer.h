@@ -29,10 +29,11 @@ double estimateVoxelCount(const std::vector<Metaball> &balls, double spacing, do
 // Throws BudgetExceeded, with the voxel size that would fit, when `voxels` exceeds settings.maxVoxels.
 void checkVoxelBudget(double voxels, const RasterSettings &settings);
 
-// Sums the balls' clipped fields on a sparse grid (each 8^3 leaf gathers the balls that reach it:
-// parallel and deterministic), turns the iso-surface into a signed distance (OpenVDB fast sweeping), and
-// fills the density: compaction by depth below the top, antialiased over one voxel at the surface.
-// Throws BudgetExceeded when the leaves would hold more than maxVoxels.
+// Sums the balls' fields on a sparse grid in one parallel, deterministic pass (each 8^3 leaf gathers the
+// balls that reach it). Snow is where the field exceeds the iso-value and which lies above the surface the
+// balls stand on; the level set is its signed distance, the density follows compaction by depth below the
+// top, antialiased over one voxel at the surface. Throws BudgetExceeded, before allocating, when the leaves
+// would hold more than maxVoxels.
 SnowGrids rasterizeSnow(const std::vector<Metaball> &balls, const RasterSettings &settings,
                         const SubProgress &progress);
 
