@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Regenerates the docs' pictures (docs/images/): the panels, the samples, Firn next to Real Snow.
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
+images="$FIRN_ROOT/docs/images"
+mkdir -p "$images"
+run_blender() {
+  BLENDER_USER_SCRIPTS="$FIRN_BUILD/blender_scripts" BLENDER_USER_CONFIG="$FIRN_BUILD/docs_config" \
+    blender -noaudio --python-exit-code 1 "$@"
+}
+empty="$(mktemp -d)/empty.blend"
+run_blender -b --factory-startup --python-expr "import bpy; bpy.ops.wm.save_as_mainfile(filepath='$empty')"
+xvfb-run -a -s "-screen 0 1400x1000x24" \
+  env BLENDER_USER_SCRIPTS="$FIRN_BUILD/blender_scripts" BLENDER_USER_CONFIG="$FIRN_BUILD/docs_config" \
+  blender --factory-startup -noaudio "$empty" --python "$FIRN_ROOT/scripts/screenshot_panels.py" -- "$images/panels.png"
+for sample in car_under_snow teapot_and_ball nishita_comparison; do
+  run_blender -b --factory-startup --python "$FIRN_ROOT/blend_samples/$sample.py" -- --output "$images/$sample.png" --no-save
+done
+echo "firn: pictures in $images"
