@@ -37,14 +37,14 @@ def baking():
 
 def core_bake(path, volume_optics, inputs, quality, seed, progress):
     """The one call into the core's bake (cpp/python/bind_bake.cpp): it reads `density` from `path`, writes the
-    file back atomically with the baked grids added and returns its statistics."""
+    file back atomically with the baked grids added."""
     sky = inputs.sky
     if sky.map is None:
         sky_argument = tuple(sky.radiance)
     else:
         height, width = sky.map.shape[:2]
         sky_argument = (tuple(sky.radiance), width, height, sky.map.reshape(-1))  # rows bottom to top
-    return firncore.bake(
+    firncore.bake(
         path, volume_optics,
         suns=[(sun.direction, sun.irradiance, sun.angular_diameter) for sun in inputs.suns],
         sky=sky_argument,
@@ -108,6 +108,20 @@ def _remove(path):
         pass
 
 
+def adopt_bake(obj, extinction_per_density, signature, summary):
+    """After the baked grids arrived in obj's file: reload them, remember what the bake was made from (the scene
+    `signature` taken before baking, the file as it is now) and render the snow from the bake."""
+    volume = obj.data
+    volume.grids.unload()
+    volume.grids.load()
+    settings = obj.firn
+    settings.is_snow = True  # any baked Volume is Firn snow from now on: its optics are in Snow Material
+    settings.bake_extinction_per_density = extinction_per_density
+    settings.bake_summary = summary
+    bake_state.store(obj, dict(signature, snow=bake_state.snow_digest(obj)))
+    materials.ensure_snow_material(obj)
+
+
 class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
     """Compute the light scattered inside the selected snow from the scene's Sun lamps, world and objects,
     and render the snow from it"""
@@ -162,8 +176,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
                     raise firncore.Cancelled("cancelled")
                 started = time.perf_counter()
                 shutil.copyfile(job["path"], job["staged"])
-                job["stats"] = core_bake(job["staged"], job["optics"], job["inputs"], inputs["quality"],
-                                         inputs["seed"], progress)
+                core_bake(job["staged"], job["optics"], job["inputs"], inputs["quality"], inputs["seed"], progress)
                 seconds.append(time.perf_counter() - started)
         except BaseException:
             for job in inputs["jobs"]:
@@ -181,7 +194,8 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
                     self.report({"WARNING"}, f"'{job['name']}' or its volume changed during the bake: bake it again")
                     continue
                 os.replace(job["staged"], job["path"])
-                self._adopt_bake(obj, job, inputs["quality"], duration)
+                adopt_bake(obj, job["optics"].extinction_per_density, job["signature"],
+                           _summary(inputs["quality"], job["inputs"], duration))
                 changed_settings.extend(_render_settings(obj))
                 baked.append(obj.name)
         finally:
@@ -195,18 +209,6 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
             total = sum(seconds)
             self.report({"INFO"}, f"Baked {', '.join(baked)} ({inputs['quality'].title()}) in {total:.1f} s")
 
-    @staticmethod
-    def _adopt_bake(obj, job, quality, seconds):
-        volume = obj.data
-        volume.grids.unload()
-        volume.grids.load()
-        settings = obj.firn
-        settings.is_snow = True  # any baked Volume is Firn snow from now on: its optics are in Snow Material
-        settings.bake_extinction_per_density = job["optics"].extinction_per_density
-        settings.bake_summary = _summary(quality, job["inputs"], seconds)
-        parts = dict(job["signature"], snow=bake_state.snow_digest(obj))
-        bake_state.store(obj, parts)
-        materials.ensure_snow_material(obj)
 
 
 class FIRN_OT_clear_bake(bpy.types.Operator):
