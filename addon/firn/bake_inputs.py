@@ -188,6 +188,25 @@ def sky_sun_direction(node):
     return Vector((math.sin(r) * math.cos(e), math.cos(r) * math.cos(e), math.sin(e)))
 
 
+# What a Light Path node in the world reads for light that reaches snow: a volume-scattered or light-sampled ray
+# (every "Is ... Ray" false; Cycles 3.4 has no "Is Volume Scatter Ray" output), one bounce in, infinitely long.
+_SCATTERED_RAY = {"Ray Length": 1e30, "Ray Depth": 1.0}
+
+
+def _as_seen_by_scattered_light(tree):
+    """Replaces the Light Path nodes of a world tree with the values a scattered ray reads, so a world that
+    shows one thing to the camera and lights with another (Is Camera Ray) is probed for its lighting."""
+    for node in [node for node in tree.nodes if node.type == "LIGHT_PATH"]:
+        for output in node.outputs:
+            if not output.is_linked:
+                continue
+            value = tree.nodes.new("ShaderNodeValue")
+            value.outputs[0].default_value = _SCATTERED_RAY.get(output.name, 0.0)
+            for link in list(output.links):
+                tree.links.new(value.outputs[0], link.to_socket)
+        tree.nodes.remove(node)
+
+
 class WorldProbe:
     """Renders a copy of a world with Cycles in a scene of its own: equirect maps and close-ups of the sun.
 
@@ -198,7 +217,9 @@ class WorldProbe:
     def __init__(self, world, frame_current):
         self._folder = tempfile.mkdtemp(prefix="firn_world_")
         self.world = world.copy()
-        self.world.cycles_visibility.camera = True  # the map is what lights the scene, seen by camera rays
+        self.world.cycles_visibility.camera = True  # the probe's camera rays stand for the light reaching snow
+        if self.world.use_nodes and self.world.node_tree is not None:
+            _as_seen_by_scattered_light(self.world.node_tree)
         self.scene = bpy.data.scenes.new("Firn World Probe")
         self.scene.world = self.world
         self.scene.frame_current = frame_current

@@ -7,11 +7,31 @@ import bpy
 import numpy as np
 import pytest
 
-from firn import materials
+from firn import bake, bake_inputs, bake_state, materials
 from firn.core import firncore
 
 needs_core_bake = pytest.mark.skipif(
     not hasattr(firncore, "bake"), reason="needs firncore.bake (the core's Bake Scattering, branch 'bake')")
+
+K = 10.0  # m^2/kg
+RHO = 300.0  # kg/m^3: sigma_t = 3000 /m, real snow's range (snow-optics.md); 1 cm voxels are 30 optical depths
+S = (0.3, 0.5, 0.7)  # W/m^2/sr per unit extinction
+S_X, S_Y, S_Z = (0.2, 0.1, 0.0), (0.05, 0.1, 0.15), (0.1, 0.2, 0.05)
+
+
+def baked_slab(directory, source, voxel=0.01, half=20, depth=5, z_top=0, name="Snow", **placement):
+    """A uniform slab (top voxels at z index `z_top`) with constant baked grids, taken up by the add-on's own
+    post-bake step (bake.adopt_bake) as if the core had just written them."""
+    lo, hi = (-half, -half, z_top - depth + 1), (half - 1, half - 1, z_top)
+    path = write_volume(f"{directory}/{name}.vdb", voxel, lo, hi, RHO, source)
+    obj = volume_object(path, name, **placement)
+    bpy.context.view_layer.update()
+    obj.firn.is_snow = True
+    obj.firn.optics_mode = "CUSTOM"
+    obj.firn.extinction_per_density = K
+    signature = dict(bake_inputs.signature(bpy.context, obj), optics=bake_state.optics_digest(obj))
+    bake.adopt_bake(obj, K, signature, "test grids")
+    return obj
 
 
 def write_volume(path, voxel, lo, hi, density, source=None):

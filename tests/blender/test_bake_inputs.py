@@ -222,6 +222,29 @@ def test_world_hidden_from_scattering_does_not_light(clean_scene):
     assert sky.radiance == (0.0, 0.0, 0.0) and sky.map is None and "volume scattering" in warnings[0]
 
 
+@pytest.mark.parametrize("camera_sees, lights_with", [((1.0, 1.0, 1.0), (0.0, 0.0, 0.0)),
+                                                     ((0.0, 0.0, 0.0), (0.2, 0.4, 0.6))])
+def test_world_is_read_for_what_lights_not_what_the_camera_sees(clean_scene, camera_sees, lights_with):
+    """A world behind Light Path > Is Camera Ray shows one colour to the camera and lights with another: the
+    bake takes the light."""
+    world = bpy.data.worlds.new("Backdrop")
+    world.use_nodes = True
+    nodes, links = world.node_tree.nodes, world.node_tree.links
+    backdrop, light = nodes["Background"], nodes.new("ShaderNodeBackground")
+    backdrop.inputs["Color"].default_value = (*camera_sees, 1.0)
+    light.inputs["Color"].default_value = (*lights_with, 1.0)
+    mix = nodes.new("ShaderNodeMixShader")
+    links.new(nodes.new("ShaderNodeLightPath").outputs["Is Camera Ray"], mix.inputs["Fac"])
+    links.new(light.outputs["Background"], mix.inputs[1])
+    links.new(backdrop.outputs["Background"], mix.inputs[2])
+    links.new(mix.outputs["Shader"], nodes["World Output"].inputs["Surface"])
+    bpy.context.scene.world = world
+    sky, _, _ = bake_inputs.gather_sky(bpy.context.scene, identity_frame())
+    assert sky.map.reshape(-1, 3).min(axis=0) == pytest.approx(lights_with, abs=1e-6)
+    assert sky.map.reshape(-1, 3).max(axis=0) == pytest.approx(lights_with, abs=1e-6)
+    assert nodes.get("Light Path") is not None  # the user's world keeps its nodes
+
+
 def test_render_result_of_the_user_is_kept(clean_scene, tmp_path):
     """Rendering the world for the bake goes into a render slot of Firn's own, made once and reused."""
     bpy.context.scene.cycles.use_denoising = False
