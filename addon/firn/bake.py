@@ -7,6 +7,7 @@ the files only once every bake has finished (apply, main thread). Cancel: the st
 or material is touched.
 """
 
+import math
 import os
 import shutil
 import time
@@ -94,6 +95,24 @@ def _render_settings(obj):
     return [f"'{obj.name}' volume {change}" for change in changed]
 
 
+def _clamp_warning(scene, jobs):
+    """Baked snow lights its neighbours through their indirect rays, which Cycles' Clamp Indirect limits: say so
+    when the snow may be brighter than the clamp (white snow sends back at most (E_sun + pi L_sky) / pi)."""
+    clamp = getattr(getattr(scene, "cycles", None), "sample_clamp_indirect", 0.0)
+    if clamp <= 0.0:
+        return None
+    brightest = 0.0
+    for job in jobs:
+        inputs = job["inputs"]
+        sky = max(inputs.sky.radiance) * (float(inputs.sky.map.max()) if inputs.sky.map is not None else 1.0)
+        brightest = max(brightest, sum(max(sun.irradiance) for sun in inputs.suns) / math.pi + sky)
+    if brightest <= clamp:
+        return None
+    return (f"Snow up to about {brightest:.3g} W/m²/sr bright lights nearby objects through indirect rays, which "
+            f"Clamp Indirect ({clamp:g}) cuts: raise it or set 0 (Render Properties > Light Paths > Clamping) for "
+            "full bounce light")
+
+
 def _summary(quality, inputs, seconds):
     suns = len(inputs.suns)
     parts = [quality.title(), f"{suns} sun{'s' if suns != 1 else ''}", f"sky {inputs.sky.description}",
@@ -164,6 +183,9 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
                          "signature": signature})
         if all(not job["inputs"].suns and max(job["inputs"].sky.radiance) <= 0.0 for job in jobs):
             warnings.append("Nothing lights the snow (no Sun lamp, black world): the bake is black")
+        clamp = _clamp_warning(context.scene, jobs)
+        if clamp:
+            warnings.append(clamp)
         return {"jobs": jobs, "warnings": warnings, "quality": self.quality, "seed": self.seed}
 
     @staticmethod

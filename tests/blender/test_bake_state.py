@@ -158,3 +158,16 @@ def test_cancel_before_the_core_runs_changes_nothing(clean_scene, tmp_path):
     assert not os.path.exists(staged)
     with open(path, "rb") as file:
         assert file.read() == before
+
+
+def test_clamp_indirect_that_would_cut_bounce_light_is_reported(clean_scene):
+    from firn.bake_inputs import BakeInputs, Sky, Sun
+
+    scene = bpy.context.scene
+    bright = {"inputs": BakeInputs([Sun("Sun", (0, 0, 1), (1000.0, 1000.0, 900.0), 0.01)], Sky((1.0,) * 3), [])}
+    dim = {"inputs": BakeInputs([Sun("Sun", (0, 0, 1), (3.0, 3.0, 3.0), 0.01)], Sky((0.5,) * 3), [])}
+    scene.cycles.sample_clamp_indirect = 10.0  # Cycles' default
+    assert "Clamp Indirect (10)" in bake._clamp_warning(scene, [dim, bright])
+    assert bake._clamp_warning(scene, [dim]) is None  # 3 / pi + 0.5 < 10
+    scene.cycles.sample_clamp_indirect = 0.0  # no clamping
+    assert bake._clamp_warning(scene, [bright]) is None
