@@ -139,7 +139,7 @@ def test_snow_layer_bakes_with_its_ground_and_is_repeatable(clean_scene, tmp_pat
         import pyopenvdb
         grid = pyopenvdb.read(path, "firn_source")
         accessor = grid.getConstAccessor()
-        return [accessor.getValue(grid.transform.worldToIndexCellCentered(tuple(p))) for p in points]
+        return [accessor.getValue(grid.transform.worldToIndexCellCentered([float(x) for x in p])) for p in points]
 
     first = baked_values()
     assert any(max(value) > 0.0 for value in first)
@@ -174,8 +174,9 @@ def test_cancel_leaves_the_previous_bake_untouched(clean_scene, tmp_path):
 
     worker = threading.Thread(target=run)
     worker.start()
-    while progress.fraction <= 0.0 and worker.is_alive():
-        time.sleep(0.01)
+    started = time.perf_counter()
+    while progress.fraction <= 0.0 and time.perf_counter() - started < 0.5 and worker.is_alive():
+        time.sleep(0.01)  # until the core is under way
     progress.cancel()
     worker.join(timeout=60)
     assert outcome == {"cancelled": True}
