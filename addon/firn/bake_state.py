@@ -47,7 +47,8 @@ def snow_path(obj):
 
 
 def snow_digest(obj):
-    return bake_inputs.digest((file_stamp(snow_path(obj)), bake_inputs.rounded(v for row in obj.matrix_world for v in row)))
+    matrix = bake_inputs.rounded(v for row in obj.matrix_world for v in row)
+    return bake_inputs.digest((file_stamp(snow_path(obj)), matrix))
 
 
 def fingerprint(context, obj, scene_signature=None):

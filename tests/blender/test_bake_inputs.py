@@ -2,14 +2,12 @@
 Nishita sun discs), occluders with their albedo, and the snow's frame. No core bake needed."""
 
 import math
-import os
 
 import bpy
 import numpy as np
 import pytest
-from mathutils import Euler, Vector
 
-from bake_helpers import uniform_world, volume_object, write_volume
+from bake_helpers import uniform_world, volume_object
 from firn import bake_inputs
 from firn.errors import UserError
 

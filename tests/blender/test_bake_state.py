@@ -2,7 +2,6 @@
 that shows it, and cancelling before the core runs. The baked grids are written here (bake_helpers), so these
 tests need no core bake."""
 
-import math
 import os
 
 import bpy
