@@ -108,9 +108,8 @@ def _clamp_warning(scene, jobs):
         brightest = max(brightest, sum(max(sun.irradiance) for sun in inputs.suns) / math.pi + sky)
     if brightest <= clamp:
         return None
-    return (f"Snow up to about {brightest:.3g} W/m²/sr bright lights nearby objects through indirect rays, which "
-            f"Clamp Indirect ({clamp:g}) cuts: raise it or set 0 (Render Properties > Light Paths > Clamping) for "
-            "full bounce light")
+    return (f"The snow may be up to about {brightest:.3g} W/m²/sr bright, and Clamp Indirect ({clamp:g}) cuts the "
+            "light it throws on nearby objects: raise it or set 0 (Render Properties > Light Paths > Clamping)")
 
 
 def _summary(quality, inputs, seconds):
