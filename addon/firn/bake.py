@@ -185,14 +185,20 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
         clamp = _clamp_warning(context.scene, jobs)
         if clamp:
             warnings.append(clamp)
-        return {"jobs": jobs, "warnings": warnings, "quality": self.quality, "seed": self.seed}
+        return {"jobs": jobs, "warnings": warnings, "quality": self.quality, "seed": self.seed, "current": 0}
+
+    def job_status(self, inputs, progress):
+        jobs = inputs["jobs"]
+        part = f"{jobs[inputs['current']]['name']} ({inputs['current'] + 1}/{len(jobs)}) " if len(jobs) > 1 else ""
+        return part + progress.stage
 
     @staticmethod
     def compute(inputs, progress):
         """Worker thread: bake every object into its staged copy; on any failure or cancel, delete them all."""
         seconds = []
         try:
-            for job in inputs["jobs"]:
+            for index, job in enumerate(inputs["jobs"]):
+                inputs["current"] = index
                 if progress.cancelled:
                     raise firncore.Cancelled("cancelled")
                 started = time.perf_counter()

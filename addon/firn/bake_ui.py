@@ -38,8 +38,7 @@ def draw_bake(layout, obj):
     jobs = [job for job in running_jobs() if job.label == BAKE_LABEL]
     row = col.row(align=True)
     if jobs:
-        progress = jobs[0].progress
-        row.label(text=f"{progress.stage or 'Baking'} {int(100 * progress.fraction)}%", icon="SORTTIME")
+        row.label(text=jobs[0].status or "Baking", icon="SORTTIME")
         row.operator("firn.cancel_jobs", icon="CANCEL")
     else:
         row.scale_y = 1.4

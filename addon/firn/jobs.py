@@ -27,10 +27,12 @@ def running_jobs():
 
 
 class Job:
-    """compute(inputs, progress) on a worker thread; the main thread polls `done`, `fraction`, `stage`."""
+    """compute(inputs, progress) on a worker thread; the main thread polls `done` and `progress`, and keeps
+    `status` (what the status bar and panels show) up to date."""
 
     def __init__(self, compute, inputs, label="Firn"):
         self.label = label
+        self.status = ""
         self.progress = firncore.Progress()
         self.result = None
         self.error = None
@@ -61,6 +63,10 @@ class FirnJobMixin:
 
     job_label = "Firn"
     job_passes_events = False
+
+    def job_status(self, inputs, progress):
+        """What the job is doing, for the status bar; jobs of several parts say which one."""
+        return progress.stage
 
     def execute(self, context):
         try:
@@ -99,8 +105,9 @@ class FirnJobMixin:
             return {"PASS_THROUGH"} if passes else {"RUNNING_MODAL"}
         job = self._job
         percent = int(100 * job.progress.fraction)
+        job.status = f"{self.job_status(self._inputs, job.progress)} {percent}%"
         context.window_manager.progress_update(percent)
-        context.workspace.status_text_set(f"{self.job_label}: {job.progress.stage} {percent}%   (Esc to cancel)")
+        context.workspace.status_text_set(f"{self.job_label}: {job.status}   (Esc to cancel)")
         _redraw_panels(context)
         if not job.done:
             return {"PASS_THROUGH"}

@@ -170,3 +170,10 @@ def test_clamp_indirect_that_would_cut_bounce_light_is_reported(clean_scene):
     assert bake._clamp_warning(scene, [dim]) is None  # 3 / pi + 0.5 < 10
     scene.cycles.sample_clamp_indirect = 0.0  # no clamping
     assert bake._clamp_warning(scene, [bright]) is None
+
+
+def test_status_names_the_object_being_baked(clean_scene):
+    status = bake.FIRN_OT_bake_scattering.job_status
+    progress = firncore.Progress()
+    assert status(None, {"jobs": [{"name": "Snow"}, {"name": "Roof"}], "current": 1}, progress) == "Roof (2/2) "
+    assert status(None, {"jobs": [{"name": "Snow"}], "current": 0}, progress) == ""
