@@ -18,11 +18,13 @@ def _draw_state(layout, obj):
     state, changed = bake_state.changes(obj)
     col = layout.column(align=True)
     if state == bake_state.NONE:
-        col.label(text="Not baked: rendered by path tracing", icon=_STATE_ICONS[state])
+        col.label(text="Not baked", icon=_STATE_ICONS[state])
         return
     if state == bake_state.OUTDATED:
-        col.alert = True
-        col.label(text="Needs re-bake: " + ", ".join(changed) + " changed", icon=_STATE_ICONS[state])
+        alert = col.column(align=True)
+        alert.alert = True
+        alert.label(text="Needs re-bake", icon=_STATE_ICONS[state])
+        alert.label(text="Changed: " + ", ".join(changed))
     else:
         col.label(text="Baked", icon=_STATE_ICONS[state])
     if obj.firn.bake_summary:

@@ -136,7 +136,8 @@ def test_panel_shows_quality_buttons_and_state(clean_scene, tmp_path):
     assert "Baked" in log["labels"] and "test grids" in log["labels"]
     sun.rotation_euler = (1.0, 0.0, 0.0)
     bpy.context.view_layer.update()
-    assert "Needs re-bake: lamps changed" in draw_log(obj)["labels"]
+    labels = draw_log(obj)["labels"]
+    assert "Needs re-bake" in labels and "Changed: lamps" in labels
     for panel in (bpy.types.FIRN_PT_object_bake, bpy.types.FIRN_PT_sidebar_bake):
         assert panel.poll(type("Context", (), {"object": obj}))
         assert not panel.poll(type("Context", (), {"object": sun}))
