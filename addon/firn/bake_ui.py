@@ -1,5 +1,7 @@
 """The Bake panels, in the 3D view's Firn sidebar and in Properties > Object. They only draw."""
 
+import textwrap
+
 import bpy
 
 from . import bake_state
@@ -27,8 +29,8 @@ def _draw_state(layout, obj):
         alert.label(text="Changed: " + ", ".join(changed))
     else:
         col.label(text="Baked", icon=_STATE_ICONS[state])
-    if obj.firn.bake_summary:
-        col.label(text=obj.firn.bake_summary)
+    for line in textwrap.wrap(obj.firn.bake_summary, 38):
+        col.label(text=line)
 
 
 def draw_bake(layout, obj):
