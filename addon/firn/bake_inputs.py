@@ -452,7 +452,7 @@ def _rna_values(struct, depth=0, seen=None):
                            else value))
         elif prop.type == "POINTER" and value is not None:
             if isinstance(value, bpy.types.Image):
-                values.append((key, value.filepath, value.source, tuple(value.size)))
+                values.append((key, value.filepath, value.source))  # not .size: 0 x 0 until loaded
             elif isinstance(value, bpy.types.NodeTree) and value.name not in seen:
                 seen.add(value.name)
                 values.append((key, _tree_signature(value, seen)))

@@ -178,3 +178,35 @@ def test_status_names_the_object_being_baked(clean_scene):
     progress = firncore.Progress()
     assert status(None, {"jobs": [{"name": "Snow"}, {"name": "Roof"}], "current": 1}, progress) == "Roof (2/2) "
     assert status(None, {"jobs": [{"name": "Snow"}], "current": 0}, progress) == ""
+
+
+def test_a_bake_is_still_baked_after_saving_and_reopening(clean_scene, tmp_path):
+    """The fingerprint reads only what a .blend keeps: the first save (which moves the snow's file next to the
+    .blend) and reopening leave the bake as it was."""
+    world = bpy.data.worlds.new("Sky")
+    world.use_nodes = True
+    tree = world.node_tree
+    sky = tree.nodes.new("ShaderNodeTexSky")
+    environment = tree.nodes.new("ShaderNodeTexEnvironment")
+    environment.image = bpy.data.images.new("Studio", 8, 4, float_buffer=True)
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = "RGBA"
+    tree.links.new(sky.outputs["Color"], mix.inputs["A"])
+    tree.links.new(environment.outputs["Color"], mix.inputs["B"])
+    tree.links.new(mix.outputs["Result"], tree.nodes["Background"].inputs["Color"])
+    bpy.context.scene.world = world
+    add_sun()
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    bpy.ops.firn.add_snow_layer(depth=0.05, spacing=0.05)  # into the session's cache folder
+    snow = bpy.context.object
+    add_contract_grids(bake_state.snow_path(snow), uniform_source(S))
+    bake.adopt_bake(snow, 12.0, dict(bake.bake_inputs.signature(bpy.context, snow),
+                                     optics=bake_state.optics_digest(snow)), "test grids")
+    assert state(snow) == ("BAKED", [])
+    blend = str(tmp_path / "scene.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=blend)
+    assert snow.data.filepath.startswith("//firn_cache/")  # moved next to the .blend
+    assert state(snow) == ("BAKED", [])
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    snow = bpy.data.objects["Snow"]
+    assert state(snow) == ("BAKED", []) and materials.is_baked_material(materials.snow_material(snow))
