@@ -348,3 +348,12 @@ def test_non_uniform_scale_is_refused(clean_scene, tmp_path):
     bpy.context.view_layer.update()
     with pytest.raises(UserError, match="non-uniform"):
         bake_inputs.Frame(obj)
+
+
+def test_a_snow_layer_and_its_helper_meshes_are_not_occluders(clean_scene):
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    ground = bpy.context.object
+    bpy.ops.firn.add_snow_layer(depth=0.05, spacing=0.05, surface_mesh=True)
+    snow = bpy.context.object
+    assert len(snow.children) == 2  # the metaball points and the surface mesh, both hidden from renders
+    assert bake_inputs.occluder_objects(bpy.context.view_layer) == [ground]  # the ground under the snow stays
