@@ -37,18 +37,13 @@ def baking():
 
 
 def core_bake(path, volume_optics, inputs, quality, seed, progress):
-    """The one call into the core's bake (cpp/python/bind_bake.cpp): it reads `density` from `path`, writes the
-    file back atomically with the baked grids added."""
+    """The one call into the core's bake (cpp/python/bind_bake.cpp): it reads `density` from `path` and writes the
+    file back, atomically, with the baked grids added."""
     sky = inputs.sky
-    if sky.map is None:
-        sky_argument = tuple(sky.radiance)
-    else:
-        height, width = sky.map.shape[:2]
-        sky_argument = (tuple(sky.radiance), width, height, sky.map.reshape(-1))  # rows bottom to top
     firncore.bake(
         path, volume_optics,
-        suns=[(sun.direction, sun.irradiance, sun.angular_diameter) for sun in inputs.suns],
-        sky=sky_argument,
+        suns=[firncore.SunLight(sun.direction, sun.irradiance, sun.angular_diameter) for sun in inputs.suns],
+        sky=firncore.Sky(radiance=tuple(sky.radiance), map=sky.map),  # map: (H, W, 3), rows bottom to top
         occluders=[(o.vertices, o.triangles, o.albedo) for o in inputs.occluders],
         quality=quality, seed=seed, progress=progress)
 

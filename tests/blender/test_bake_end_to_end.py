@@ -63,31 +63,53 @@ def test_uniform_white_sky_gives_the_plane_albedo(clean_scene, tmp_path):
     assert set(materials.BAKED_GRIDS) <= set(firncore.grid_names(bake_state.snow_path(slab)))
     assert materials.is_baked_material(materials.snow_material(slab))
     looking_down_from(1.0)
-    assert mean_pixel(render(str(tmp_path), size=(8, 8))) == pytest.approx((A_1,) * 3, rel=0.03)
+    assert mean_pixel(render(str(tmp_path), size=(8, 8))) == pytest.approx((A_1,) * 3, rel=0.03)  # measured -0.1 %
+
+
+def footprint_rays(towards_camera, scale, count=4, distance=1.0):
+    """Rays like the orthographic camera's: a count x count grid over its square view, pointing down along -w."""
+    w = np.array(towards_camera, float)
+    a = np.cross((0.0, 0.0, 1.0), w) if abs(w[2]) < 0.999 else np.array((1.0, 0.0, 0.0))
+    a /= np.linalg.norm(a)
+    b = np.cross(w, a)
+    offsets = (np.arange(count) + 0.5) / count * scale - scale / 2
+    origins = np.array([distance * w + u * a + v * b for u in offsets for v in offsets])
+    return origins, np.tile(-w, (len(origins), 1))
 
 
 def test_sunlit_slab_matches_the_core_reference(clean_scene, tmp_path):
-    """Sun 60 degrees from the zenith, black sky: the Final bake renders within 10 % of the Reference bake
-    (brute-force Monte Carlo at the surface), seen from above and from 45 degrees."""
+    """Sun 60 degrees from the zenith, black sky: the Final bake as Cycles renders it is within 10 % of the core's
+    brute-force volumetric path tracing of the same scene along the same rays (firncore.monte_carlo_radiance),
+    seen from above and from 45 degrees (measured +3 %), and within 1 % of what the core computes the baked
+    material draws."""
     black_world()
-    add_sun(math.radians(60), strength=3.0)
+    sun = add_sun(math.radians(60), strength=3.0)
     slab = snow_slab(str(tmp_path), half=20, depth=30)
-    views = (1.0, math.cos(math.radians(45)))
-    looks = {}
-    for quality in ("FINAL", "REFERENCE"):
-        assert bpy.ops.firn.bake_scattering(quality=quality) == {"FINISHED"}
-        for mu in views:
-            looking_down_from(mu)
-            looks[quality, mu] = mean_pixel(render(str(tmp_path), size=(8, 8)))
-            bpy.data.objects.remove(bpy.context.scene.camera)
-    assert slab.firn.bake_state == "BAKED"
-    for mu in views:
-        assert looks["FINAL", mu] == pytest.approx(looks["REFERENCE", mu], rel=0.10), mu
+    assert bpy.ops.firn.bake_scattering(quality="FINAL") == {"FINISHED"}
+    bpy.context.view_layer.update()
+    volume_optics = firncore.VolumeOptics(K, (OMEGA,) * 3, G)
+    core_sun = firncore.SunLight(tuple(sun.matrix_world.col[2][:3]), (3.0,) * 3, 0.0)
+    for mu in (1.0, math.cos(math.radians(45))):
+        theta = math.acos(mu)
+        w = (math.sin(theta), 0.0, math.cos(theta))
+        looking_down_from(mu)
+        rendered = mean_pixel(render(str(tmp_path), size=(8, 8)))
+        bpy.data.objects.remove(bpy.context.scene.camera)
+        origins, directions = footprint_rays(w, 0.04)
+        mean, error = firncore.monte_carlo_radiance(bake_state.snow_path(slab), volume_optics, origins, directions,
+                                                    suns=[core_sun], samples=2048, seed=1)
+        # The material draws exactly what the core says the contract's material draws (firncore.render_baked).
+        drawn = firncore.render_baked(bake_state.snow_path(slab), volume_optics, origins, directions).mean(axis=0)
+        assert rendered == pytest.approx(drawn, rel=0.01), mu
+        reference, noise = mean.mean(axis=0), np.sqrt((error ** 2).sum(axis=0)) / len(error)
+        assert np.all(noise < 0.03 * reference), (mu, reference, noise)  # measured 2 %
+        print("MU", mu, rendered, reference, noise)
+        assert rendered == pytest.approx(reference, rel=0.10), mu
 
 
 def test_sunlit_slab_reflects_the_plane_albedo(clean_scene, tmp_path):
     """Sun at the zenith: the flux the render shows leaving the slab, 2 pi integral of L(mu) mu dmu by
-    3-point Gauss-Legendre over mu, is A(1) times the sun's irradiance (energy, not just shape)."""
+    3-point Gauss-Legendre over mu, is A(1) times the sun's irradiance: energy, not just shape."""
     black_world()
     irradiance = 2.0
     add_sun(0.0, strength=irradiance)
@@ -101,7 +123,7 @@ def test_sunlit_slab_reflects_the_plane_albedo(clean_scene, tmp_path):
         radiance = mean_pixel(render(str(tmp_path), size=(8, 8)))
         flux += 2 * math.pi * 0.5 * weight * mu * radiance
         bpy.data.objects.remove(bpy.context.scene.camera)
-    assert flux / irradiance == pytest.approx((A_1,) * 3, rel=0.10)
+    assert flux / irradiance == pytest.approx((A_1,) * 3, rel=0.03)  # measured +0.4 %
 
 
 def test_state_through_the_operators_and_reports(clean_scene, tmp_path, capfd):
