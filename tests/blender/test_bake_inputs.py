@@ -182,25 +182,32 @@ def test_nishita_sun_disc_becomes_a_sun(clean_scene):
     assert sun.angular_diameter == pytest.approx(node.sun_size)
     assert node.sun_disc  # the user's world is untouched
 
-    # Independently: a fine equirect render of the sky with and without its disc (0.25 degree pixels, the
-    # disc 0.545 degrees). The brightest pixel gives the direction; the difference summed over solid angle
-    # (pixel solid angle = cos(latitude) dlon dlat) gives the irradiance.
-    size = (1440, 720)
+    # Independently: a panorama of a 4 x 4 degree window around the expected sun, with and without its disc,
+    # in 0.125 degree pixels (the disc is 0.545 degrees across). The brightest pixel gives the direction; the
+    # difference summed over the pixels' solid angles, dlon (sin lat1 - sin lat0), gives the irradiance.
+    expected = bake_inputs.sky_sun_direction(node)
+    longitude, latitude = math.atan2(expected.y, expected.x), math.asin(expected.z)
+    half, pixels = math.radians(2.0), 32
     with bake_inputs.WorldProbe(world, 1) as probe:
-        with_disc = probe.equirect(np.eye(3), size, samples=16)
+        probe.equirect(np.eye(3), (1, 1), samples=1)  # sets up the panoramic camera
+        cycles = probe.camera.data.cycles
+        # Cycles turns the longitude range the other way: azimuth = -(longitude_min + u (max - min)).
+        cycles.longitude_min, cycles.longitude_max = -longitude - half, -longitude + half
+        cycles.latitude_min, cycles.latitude_max = latitude - half, latitude + half
+        with_disc = probe._render((pixels, pixels), 64)
         probe.world.node_tree.nodes[node.name].sun_disc = False
-        without_disc = probe.equirect(np.eye(3), size, samples=16)
-    height, width = with_disc.shape[:2]
-    row, column = np.unravel_index(np.argmax(with_disc.sum(axis=2)), (height, width))
-    peak = direction_from_uv((column + 0.5) / width, (row + 0.5) / height)
-    assert np.degrees(math.acos(np.clip(np.dot(peak, sun.direction), -1, 1))) < 0.3
-    latitude = math.pi * ((np.arange(height) + 0.5) / height - 0.5)
-    solid_angle = np.cos(latitude)[:, None] * (2 * math.pi / width) * (math.pi / height)
-    difference = with_disc - without_disc
-    # This quadrature reads ~2 % low at 0.25 degree pixels and converges towards the close-up's value at finer ones
-    # (-1 % at 0.125 degrees); the close-up agrees with itself to 0.05 % over 2-4 disc widths and 32-64 pixels.
-    irradiance = (difference * solid_angle[:, :, None]).sum(axis=(0, 1))
-    assert sun.irradiance == pytest.approx(tuple(irradiance), rel=0.03)
+        without_disc = probe._render((pixels, pixels), 64)
+    row, column = np.unravel_index(np.argmax(with_disc.sum(axis=2)), (pixels, pixels))
+    step = 2 * half / pixels
+    peak_latitude = latitude - half + (row + 0.5) * step  # rows from the bottom
+    peak_longitude = longitude + half - (column + 0.5) * step  # longitude falls to the right (u = 0.5 - lon / 2 pi)
+    peak = (math.cos(peak_latitude) * math.cos(peak_longitude), math.cos(peak_latitude) * math.sin(peak_longitude),
+            math.sin(peak_latitude))
+    assert np.degrees(math.acos(np.clip(np.dot(peak, sun.direction), -1, 1))) < 0.15
+    edges = latitude - half + step * np.arange(pixels + 1)
+    solid_angle = step * (np.sin(edges[1:]) - np.sin(edges[:-1]))
+    irradiance = ((with_disc - without_disc) * solid_angle[:, None, None]).sum(axis=(0, 1))
+    assert sun.irradiance == pytest.approx(tuple(irradiance), rel=0.01)  # measured 0.5 %
     # The map keeps the sky without the disc.
     assert sky.map.max() < 0.01 * max(sun.irradiance) / (math.pi * (node.sun_size / 2) ** 2)
 
