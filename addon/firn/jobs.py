@@ -108,7 +108,8 @@ class FirnJobMixin:
         job.status = f"{self.job_status(self._inputs, job.progress)} {percent}%"
         context.window_manager.progress_update(percent)
         context.workspace.status_text_set(f"{self.job_label}: {job.status}   (Esc to cancel)")
-        _redraw_panels(context)
+        if self.job_passes_events:  # the user is looking around: the panels show the progress too
+            _redraw_panels(context)
         if not job.done:
             return {"PASS_THROUGH"}
         self._end_modal(context)
@@ -132,7 +133,8 @@ class FirnJobMixin:
         wm.progress_end()
         context.workspace.status_text_set(None)
         _running.remove(self._job)
-        _redraw_panels(context)
+        if self.job_passes_events:
+            _redraw_panels(context)
 
     def _finish(self, context, inputs, result):
         self.apply(context, inputs, result)
@@ -140,7 +142,7 @@ class FirnJobMixin:
 
 
 def _redraw_panels(context):
-    """Panels that show a job's progress (the Firn sidebar, Properties) follow it."""
+    """The panels that show a long job's progress (Firn sidebar, Properties) follow it."""
     for area in context.screen.areas if context.screen else ():
         if area.type in {"VIEW_3D", "PROPERTIES"}:
             for region in area.regions:
