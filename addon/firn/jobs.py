@@ -6,6 +6,8 @@ An operator using FirnJobMixin splits its work in three:
     compute(inputs, progress) -> out   worker thread: core calls only (they release the GIL), no bpy
     apply(context, inputs, out)        main thread: writes the results into Blender
 execute() runs the three in a row (scripts, redo, background mode); invoke() runs compute in a worker.
+While a job runs, the status bar shows its progress and a Cancel button (as does Esc). Long jobs set
+`job_passes_events` so the user keeps working meanwhile; short ones hold the input until they end.
 """
 
 import threading
@@ -16,12 +18,21 @@ from .core import firncore
 from .errors import UserError
 
 _TIMER_INTERVAL = 0.1  # s
+_running = []  # jobs started from the UI, until their operator ends
+
+
+def running_jobs():
+    """Jobs still computing (a file load can drop a modal operator without ending it: its job is done)."""
+    return [job for job in _running if not job.done]
 
 
 class Job:
-    """compute(inputs, progress) on a worker thread; the main thread polls `done`, `fraction`, `stage`."""
+    """compute(inputs, progress) on a worker thread; the main thread polls `done` and `progress`, and keeps
+    `status` (what the status bar and panels show) up to date."""
 
-    def __init__(self, compute, inputs):
+    def __init__(self, compute, inputs, label="Firn"):
+        self.label = label
+        self.status = ""
         self.progress = firncore.Progress()
         self.result = None
         self.error = None
@@ -51,6 +62,11 @@ class FirnJobMixin:
     """Operator mixin: see the module docstring. Subclasses set `job_label` and the three methods."""
 
     job_label = "Firn"
+    job_passes_events = False
+
+    def job_status(self, inputs, progress):
+        """What the job is doing, for the status bar; jobs of several parts say which one."""
+        return progress.stage
 
     def execute(self, context):
         try:
@@ -72,8 +88,9 @@ class FirnJobMixin:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         self._inputs = inputs
-        self._job = Job(self.compute, inputs)
+        self._job = Job(self.compute, inputs, self.job_label)
         self._job.start()
+        _running.append(self._job)
         wm = context.window_manager
         self._timer = wm.event_timer_add(_TIMER_INTERVAL, window=context.window)
         wm.progress_begin(0, 100)
@@ -84,11 +101,15 @@ class FirnJobMixin:
         if event.type == "ESC" and event.value == "PRESS":
             self._job.cancel()
         if event.type != "TIMER":
-            return {"RUNNING_MODAL"}
+            passes = self.job_passes_events and not (event.type == "ESC" and event.value == "PRESS")
+            return {"PASS_THROUGH"} if passes else {"RUNNING_MODAL"}
         job = self._job
         percent = int(100 * job.progress.fraction)
+        job.status = f"{self.job_status(self._inputs, job.progress)} {percent}%"
         context.window_manager.progress_update(percent)
-        context.workspace.status_text_set(f"{self.job_label}: {job.progress.stage} {percent}%   (Esc to cancel)")
+        context.workspace.status_text_set(f"{self.job_label}: {job.status}   (Esc to cancel)")
+        if self.job_passes_events:  # the user is looking around: the panels show the progress too
+            _redraw_panels(context)
         if not job.done:
             return {"PASS_THROUGH"}
         self._end_modal(context)
@@ -111,7 +132,56 @@ class FirnJobMixin:
         wm.event_timer_remove(self._timer)
         wm.progress_end()
         context.workspace.status_text_set(None)
+        _running.remove(self._job)
+        if self.job_passes_events:
+            _redraw_panels(context)
 
     def _finish(self, context, inputs, result):
         self.apply(context, inputs, result)
         return {"FINISHED"}
+
+
+def _redraw_panels(context):
+    """The panels that show a long job's progress (Firn sidebar, Properties) follow it."""
+    for area in context.screen.areas if context.screen else ():
+        if area.type in {"VIEW_3D", "PROPERTIES"}:
+            for region in area.regions:
+                if region.type in {"UI", "WINDOW"} and not (area.type == "VIEW_3D" and region.type == "WINDOW"):
+                    region.tag_redraw()
+
+
+class FIRN_OT_cancel_jobs(bpy.types.Operator):
+    """Stop Firn's running jobs: what they would have changed stays as it was"""
+
+    bl_idname = "firn.cancel_jobs"
+    bl_label = "Cancel"
+
+    @classmethod
+    def poll(cls, _context):
+        if not running_jobs():
+            cls.poll_message_set("No Firn job is running")
+            return False
+        return True
+
+    def execute(self, _context):
+        for job in running_jobs():
+            job.cancel()
+        return {"FINISHED"}
+
+
+def _draw_status(self, _context):
+    """The status bar's Cancel button while a job runs (its progress is the status text)."""
+    jobs = running_jobs()
+    if jobs:
+        self.layout.operator(FIRN_OT_cancel_jobs.bl_idname, text=f"Cancel {jobs[0].label}", icon="CANCEL")
+
+
+classes = (FIRN_OT_cancel_jobs,)
+
+
+def register_extras():
+    bpy.types.STATUSBAR_HT_header.prepend(_draw_status)
+
+
+def unregister_extras():
+    bpy.types.STATUSBAR_HT_header.remove(_draw_status)

@@ -1,10 +1,18 @@
-"""The snow's material: Cycles' Principled Volume driven by the density grid and the object's optics.
+"""The snow's material, in two forms that share one Firn material per snow object.
 
-The unbaked material renders snow straight from its optics: sigma_t = density grid × extinction per density
-into Density, the single-scattering albedo into Color and g into Anisotropy. With Absorption Color black,
-Cycles' Principled Volume has extinction = Density and scattering = Density × Color, so Color is exactly the
-single-scattering albedo (intern/cycles/kernel/svm/closure.h, svm_node_principled_volume). Baking replaces it
-(issue "Bake Scattering").
+Optics (before baking): Cycles' Principled Volume driven by the density grid and the object's optics:
+sigma_t = density grid × extinction per density into Density, the single-scattering albedo into Color and g
+into Anisotropy. With Absorption Color black, Cycles' Principled Volume has extinction = Density and scattering
+= Density × Color, so Color is exactly the single-scattering albedo (intern/cycles/kernel/svm/closure.h,
+svm_node_principled_volume). Rendering it is brute-force volume path tracing: slow and biased for real snow.
+
+Baked (after Bake Scattering, docs/vdb-contract.md "Rendering baked snow"): no scattering at all. Volume
+Absorption with sigma_t = k × density (Color black: Cycles absorbs (1 - Color) × Density) plus Emission
+sigma_t × S(w), S(w) = firn_source + firn_source_x w.x + firn_source_y w.y + firn_source_z w.z, w = Geometry >
+Incoming turned into the object's frame (the grids' space; identity for Firn snow). An absorbing, emitting
+volume renders its emission exactly in Cycles at any step size, and every ray sees it: camera rays (the snow's
+look) and the indirect rays of nearby surfaces (bounce light from the snow). The bake fixes the optics it was
+made with: k is the baked one (obj.firn.bake_extinction_per_density) until the next bake.
 """
 
 import bpy
@@ -12,11 +20,19 @@ import bpy
 from . import optics
 
 _TAG = "firn_snow"  # ID property marking the materials Firn manages
-_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Output")
+_BAKED_TAG = "firn_baked"  # ... and those showing a bake
+_OPTICS_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Output")
+_BAKED_NODES = ("Firn Density", "Firn Extinction", "Firn Absorption", "Firn Emission", "Firn Source",
+                "Firn Source X", "Firn Source Y", "Firn Source Z", "Firn Incoming", "Firn Output")
+BAKED_GRIDS = ("firn_source", "firn_source_x", "firn_source_y", "firn_source_z")  # docs/vdb-contract.md
 
 
 def is_snow_material(material):
     return material is not None and material.get(_TAG) == 1
+
+
+def is_baked_material(material):
+    return is_snow_material(material) and material.get(_BAKED_TAG) == 1
 
 
 def snow_material(obj):
@@ -25,8 +41,16 @@ def snow_material(obj):
     return slot.material if slot else None
 
 
+def has_baked_grids(volume):
+    """Whether the Volume's file holds the baked grids (loads the grid list if Blender has not yet)."""
+    if not volume.grids.is_loaded:
+        volume.grids.load()
+    return set(BAKED_GRIDS) <= {grid.name for grid in volume.grids}
+
+
 def ensure_snow_material(obj):
-    """Gives a snow object its Firn material (created in the first slot if it has none) and returns it."""
+    """Gives a snow object its Firn material (created in the first slot if it has none), in the form that fits
+    it: baked while it has a bake whose grids are in its file, else the live optics. Returns the material."""
     if _snow_slot(obj) is None:
         material = bpy.data.materials.new(f"Firn Snow ({obj.name})")
         material[_TAG] = 1
@@ -36,28 +60,45 @@ def ensure_snow_material(obj):
         # Linked to the object, not its data: optics belong to the object, and linked duplicates share data.
         slot.link = "OBJECT"
         slot.material = material
-    refresh_snow_material(obj)
+    if obj.firn.bake_fingerprint and obj.type == "VOLUME" and has_baked_grids(obj.data):
+        _show_bake(obj)
+    else:
+        _show_optics(obj)
     return snow_material(obj)
 
 
 def refresh_snow_material(obj):
-    """Writes the object's current optics into its Firn material; invalid settings leave it unchanged."""
+    """Writes the object's current optics into its Firn material; invalid settings leave it unchanged, and so
+    does a bake (it keeps the optics it was made with until the next bake)."""
     slot = _snow_slot(obj)
-    if slot is None:
+    if slot is None or is_baked_material(slot.material):
         return
     try:
         volume = optics.volume_optics(obj.firn)
     except ValueError:
         return  # the Snow Material panel shows why
-    material = slot.material
-    if material.users > 1 + int(material.use_fake_user):
-        # Another object uses it too (a duplicate): its optics are this object's own from now on.
-        material = material.copy()
-        slot.material = material
-    nodes = _nodes(material)
+    nodes = _nodes(_own_material(slot), _OPTICS_NODES, _build_optics)
     nodes["Firn Extinction"].inputs[1].default_value = volume.extinction_per_density
     nodes["Firn Volume"].inputs["Color"].default_value = (*volume.albedo, 1.0)
     nodes["Firn Volume"].inputs["Anisotropy"].default_value = volume.g
+
+
+def _show_optics(obj):
+    material = _own_material(_snow_slot(obj))
+    if is_baked_material(material):
+        del material[_BAKED_TAG]
+        _build_optics(material.node_tree)
+    refresh_snow_material(obj)
+
+
+def _show_bake(obj):
+    material = _own_material(_snow_slot(obj))
+    if not is_baked_material(material):
+        material.use_nodes = True
+        _build_baked(material.node_tree)
+        material[_BAKED_TAG] = 1
+    nodes = _nodes(material, _BAKED_NODES, _build_baked)
+    nodes["Firn Extinction"].inputs[1].default_value = obj.firn.bake_extinction_per_density
 
 
 def _snow_slot(obj):
@@ -67,43 +108,99 @@ def _snow_slot(obj):
     return None
 
 
-def _nodes(material):
+def _own_material(slot):
+    """The slot's material, copied first when another object uses it too (a duplicate): optics and bakes
+    belong to one object."""
+    material = slot.material
+    if material.users > 1 + int(material.use_fake_user):
+        material = material.copy()
+        slot.material = material
+    return material
+
+
+def _nodes(material, names, build):
     """The material's Firn nodes, rebuilt if any is missing (a user edited the tree)."""
     material.use_nodes = True
     nodes = material.node_tree.nodes
-    if not all(name in nodes for name in _NODES):
-        _build(material.node_tree)
+    if not all(name in nodes for name in names):
+        build(material.node_tree)
     return nodes
 
 
-def _build(tree):
-    nodes, links = tree.nodes, tree.links
-    nodes.clear()
+def _new_node(nodes, kind, name, label, location):
+    node = nodes.new(kind)
+    node.name, node.label, node.location = name, label, location
+    return node
 
-    density = nodes.new("ShaderNodeAttribute")
-    density.name = "Firn Density"
-    density.label = "Density (kg/m³)"
+
+def _density_extinction(nodes, links, y):
+    """Attribute 'density' (kg/m³) × k (m²/kg) = sigma_t (1/m): the 'Firn Extinction' node's output."""
+    density = _new_node(nodes, "ShaderNodeAttribute", "Firn Density", "Density (kg/m³)", (-600, y))
     density.attribute_type = "GEOMETRY"
     density.attribute_name = "density"
-    density.location = (-600, 0)
-
-    extinction = nodes.new("ShaderNodeMath")
-    extinction.name = "Firn Extinction"
-    extinction.label = "σt (1/m) = density × m²/kg"
+    extinction = _new_node(nodes, "ShaderNodeMath", "Firn Extinction", "σt (1/m) = density × m²/kg", (-350, y))
     extinction.operation = "MULTIPLY"
-    extinction.location = (-350, 0)
+    links.new(density.outputs["Fac"], extinction.inputs[0])
+    return extinction
 
-    volume = nodes.new("ShaderNodeVolumePrincipled")
-    volume.name = "Firn Volume"
-    volume.label = "Snow"
+
+def _build_optics(tree):
+    nodes, links = tree.nodes, tree.links
+    nodes.clear()
+    extinction = _density_extinction(nodes, links, 0)
+    volume = _new_node(nodes, "ShaderNodeVolumePrincipled", "Firn Volume", "Snow", (-100, 0))
     volume.inputs["Density Attribute"].default_value = ""  # the density arrives through the link only
     volume.inputs["Absorption Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # Color = single-scattering albedo
-    volume.location = (-100, 0)
-
-    output = nodes.new("ShaderNodeOutputMaterial")
-    output.name = "Firn Output"
-    output.location = (200, 0)
-
-    links.new(density.outputs["Fac"], extinction.inputs[0])
+    output = _new_node(nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (200, 0))
     links.new(extinction.outputs["Value"], volume.inputs["Density"])
     links.new(volume.outputs["Volume"], output.inputs["Volume"])
+
+
+def _build_baked(tree):
+    nodes, links = tree.nodes, tree.links
+    nodes.clear()
+    extinction = _density_extinction(nodes, links, 300)
+
+    absorption = _new_node(nodes, "ShaderNodeVolumeAbsorption", "Firn Absorption", "Absorption σt", (-100, 300))
+    absorption.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # absorbs (1 - Color) × Density = σt
+    links.new(extinction.outputs["Value"], absorption.inputs["Density"])
+
+    # w: the direction towards the viewer, in the grids' frame (World → Object, unit length).
+    incoming = _new_node(nodes, "ShaderNodeNewGeometry", "Firn Incoming", "w (world)", (-1400, -300))
+    to_object = _new_node(nodes, "ShaderNodeVectorTransform", "Firn Incoming Object", "w (object)", (-1200, -300))
+    to_object.vector_type, to_object.convert_from, to_object.convert_to = "VECTOR", "WORLD", "OBJECT"
+    unit = _new_node(nodes, "ShaderNodeVectorMath", "Firn Incoming Unit", "", (-1000, -300))
+    unit.operation = "NORMALIZE"
+    components = _new_node(nodes, "ShaderNodeSeparateXYZ", "Firn Incoming XYZ", "", (-800, -300))
+    links.new(incoming.outputs["Incoming"], to_object.inputs["Vector"])
+    links.new(to_object.outputs["Vector"], unit.inputs[0])
+    links.new(unit.outputs["Vector"], components.inputs["Vector"])
+
+    # S(w) = source + source_x w.x + source_y w.y + source_z w.z (W/m²/sr per unit extinction)
+    source = _new_node(nodes, "ShaderNodeAttribute", "Firn Source", "firn_source", (-600, 0))
+    source.attribute_type, source.attribute_name = "GEOMETRY", "firn_source"
+    total = source.outputs["Vector"]
+    for index, axis in enumerate("XYZ"):
+        y = -200 - 200 * index
+        term = _new_node(nodes, "ShaderNodeAttribute", f"Firn Source {axis}", f"firn_source_{axis.lower()}",
+                         (-600, y))
+        term.attribute_type, term.attribute_name = "GEOMETRY", f"firn_source_{axis.lower()}"
+        scaled = _new_node(nodes, "ShaderNodeVectorMath", f"Firn Term {axis}", f"× w.{axis.lower()}", (-400, y))
+        scaled.operation = "SCALE"
+        links.new(term.outputs["Vector"], scaled.inputs[0])
+        links.new(components.outputs[axis], scaled.inputs["Scale"])
+        added = _new_node(nodes, "ShaderNodeVectorMath", f"Firn Sum {axis}", "", (-200, y))
+        added.operation = "ADD"
+        links.new(total, added.inputs[0])
+        links.new(scaled.outputs["Vector"], added.inputs[1])
+        total = added.outputs["Vector"]
+
+    emission = _new_node(nodes, "ShaderNodeEmission", "Firn Emission", "Emission σt S(w)", (-100, 0))
+    links.new(total, emission.inputs["Color"])
+    links.new(extinction.outputs["Value"], emission.inputs["Strength"])
+
+    shader = _new_node(nodes, "ShaderNodeAddShader", "Firn Shader", "", (100, 150))
+    links.new(absorption.outputs["Volume"], shader.inputs[0])
+    links.new(emission.outputs["Emission"], shader.inputs[1])
+    output = _new_node(nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (300, 150))
+    links.new(shader.outputs["Shader"], output.inputs["Volume"])

@@ -4,7 +4,7 @@ import math
 
 import bpy
 
-from . import materials, optics
+from . import bake_state, materials, optics
 
 # Defined once, used by the operator (redo panel) and by the settings kept on each snow object.
 SNOW_LAYER_PROPERTIES = {
@@ -72,6 +72,17 @@ _DEFAULT_OPTICS = optics.physical_default(_DEFAULT_GRAIN_RADIUS, _DEFAULT_DENSIT
 def _refresh_material(self, _context):
     """Every optics setting updates the snow's material live."""
     materials.refresh_snow_material(self.id_data)
+
+
+def _get_bake_state(self):
+    return next(number for key, *_rest, number in bake_state.STATES if key == bake_state.state(self.id_data))
+
+
+BAKE_QUALITY_ITEMS = (
+    ("DRAFT", "Draft", "Fewer sky and shadow rays, a looser solve: quick previews"),
+    ("FINAL", "Final", "The full-accuracy solve: for renders"),
+    ("REFERENCE", "Reference", "Surface voxels by brute-force Monte Carlo: slow, for checking and small scenes"),
+)
 
 
 def _get_grain_radius_um(self):
@@ -218,6 +229,23 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
         soft_max=600.0,
         update=_refresh_material,
     )
+
+    # --- bake (issue "Bake Scattering"; docs/user-guide.md) ---
+    bake_quality: bpy.props.EnumProperty(
+        name="Quality", description="How carefully Bake Scattering computes the light in the snow",
+        items=BAKE_QUALITY_ITEMS, default="FINAL")
+    bake_seed: bpy.props.IntProperty(
+        name="Seed", description="Seed of the bake's random rays: same scene and seed, same bake", default=0, min=0)
+    bake_fingerprint: bpy.props.StringProperty(
+        name="Bake Fingerprint", description="What the last bake was made from (set by Bake Scattering)")
+    bake_extinction_per_density: bpy.props.FloatProperty(
+        name="Baked Extinction per Density (m²/kg)",
+        description="The extinction per density the bake was made with; the baked material uses it until the next "
+        "bake", default=0.0, min=0.0)
+    bake_summary: bpy.props.StringProperty(name="Bake Summary", description="What the last bake used")
+    bake_state: bpy.props.EnumProperty(
+        name="Bake", description="Whether the snow is baked and the bake still matches the scene",
+        items=bake_state.STATES, get=_get_bake_state)
 
     # --- views for the panel ---
     grain_radius_um: bpy.props.FloatProperty(

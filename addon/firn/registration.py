@@ -2,10 +2,11 @@
 
 import bpy
 
-from . import cache, preferences, properties, snow_layer, snow_material, snow_material_ui, ui
+from . import (bake, bake_ui, cache, jobs, preferences, properties, snow_layer, snow_material, snow_material_ui,
+               ui)
 
 # In dependency order: property groups before the types that point to them; the sidebar before its sub-panels.
-_modules = (preferences, properties, cache, snow_layer, ui, snow_material, snow_material_ui)
+_modules = (preferences, properties, cache, jobs, snow_layer, ui, snow_material, snow_material_ui, bake, bake_ui)
 
 
 def register():

@@ -16,21 +16,22 @@ def check_unit_scale(scene):
         )
 
 
-def world_triangles(obj, depsgraph):
-    """(vertices (N, 3) float32 m, triangles (M, 3) uint32) of the evaluated object, in world space.
-
-    A negative-determinant transform (mirroring) keeps faces pointing outward: their winding is flipped.
-    """
+def _evaluated_triangles(obj, depsgraph):
+    """(vertices (N, 3) float32 world m, triangles (M, 3) uint32, material slot per triangle (M,) int32,
+    materials by slot) of the evaluated object. Mirroring transforms flip the winding (faces keep pointing out)."""
     evaluated = obj.evaluated_get(depsgraph)
+    materials = [slot.material for slot in evaluated.material_slots]
     mesh = evaluated.to_mesh()
     try:
         if mesh is None:
-            return np.empty((0, 3), np.float32), np.empty((0, 3), np.uint32)
+            return np.empty((0, 3), np.float32), np.empty((0, 3), np.uint32), np.empty(0, np.int32), materials
         mesh.calc_loop_triangles()
         local = np.empty(len(mesh.vertices) * 3, np.float32)
         mesh.vertices.foreach_get("co", local)
         corners = np.empty(len(mesh.loop_triangles) * 3, np.int32)
         mesh.loop_triangles.foreach_get("vertices", corners)
+        slots = np.empty(len(mesh.loop_triangles), np.int32)
+        mesh.loop_triangles.foreach_get("material_index", slots)
     finally:
         evaluated.to_mesh_clear()
     matrix = np.array(evaluated.matrix_world, np.float64)
@@ -39,7 +40,29 @@ def world_triangles(obj, depsgraph):
     triangles = corners.reshape(-1, 3).astype(np.uint32)
     if np.linalg.det(linear) < 0.0:
         triangles = triangles[:, ::-1].copy()
+    return vertices, triangles, slots, materials
+
+
+def world_triangles(obj, depsgraph):
+    """(vertices (N, 3) float32 m, triangles (M, 3) uint32) of the evaluated object, in world space.
+
+    A negative-determinant transform (mirroring) keeps faces pointing outward: their winding is flipped.
+    """
+    vertices, triangles, _slots, _materials = _evaluated_triangles(obj, depsgraph)
     return vertices, triangles
+
+
+def world_triangles_by_material(obj, depsgraph):
+    """[(vertices, triangles, material or None)]: the evaluated object's world triangles, one part per
+    material slot that has faces, each with only the vertices its triangles use."""
+    vertices, triangles, slots, materials = _evaluated_triangles(obj, depsgraph)
+    parts = []
+    for slot in np.unique(slots):
+        used = triangles[slots == slot]
+        kept, remapped = np.unique(used, return_inverse=True)
+        material = materials[slot] if 0 <= slot < len(materials) else None
+        parts.append((vertices[kept], remapped.reshape(-1, 3).astype(np.uint32), material))
+    return parts
 
 
 def concatenate(meshes):

@@ -76,6 +76,8 @@ def draw_snow_material(layout, obj):
         row = layout.row()
         row.label(text="Not using Firn's snow material", icon="ERROR")
         row.operator("firn.snow_material_assign", text="Use It")
+    if materials.is_baked_material(materials.snow_material(obj)):
+        layout.label(text="Baked: re-bake to see changes", icon="INFO")
     _draw_presets(layout)
     _draw_parameters(layout, settings)
     _draw_derived(layout, settings)

@@ -14,4 +14,4 @@ addon_utils.enable("firn", default_set=True, handle_error=None)
 if "firn" not in {m.__name__ for m in addon_utils.modules() if addon_utils.check(m.__name__)[1]}:
     print("firn add-on could not be enabled", file=sys.stderr)
     sys.exit(2)
-sys.exit(int(pytest.main(["-q", "-p", "no:cacheprovider", *argv])))
+sys.exit(int(pytest.main(["-q", "-rs", "-p", "no:cacheprovider", *argv])))

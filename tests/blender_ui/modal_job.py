@@ -66,7 +66,7 @@ def tick():
             if snow_objects():
                 elapsed = time.perf_counter() - state["started"]
                 # The UI (this timer) kept running while the worker computed.
-                if state["ticks"] < 3 and elapsed > 0.5:
+                if state["ticks"] < 2 and elapsed > 1.0:
                     fail(f"UI froze: {state['ticks']} timer ticks in {elapsed:.2f} s")
                 print(f"modal job finished after {elapsed:.2f} s with {state['ticks']} UI ticks meanwhile")
                 state["phase"] = "cancel"

@@ -1,0 +1,162 @@
+"""Blender with a window (under xvfb-run): the controls every long Firn job has, on a job that runs until it is
+cancelled. While it runs, input passes on to the rest of Blender (a listener started before the job still sees
+key presses), the status bar carries a Cancel button, and the Cancel button's operator or Esc stop it.
+
+xvfb-run blender --factory-startup --enable-event-simulate --python job_controls.py   (exit code 0 = pass)
+"""
+
+import os
+import sys
+import threading
+import time
+import traceback
+
+import addon_utils
+import bpy
+
+state = {"phase": "start", "ticks": 0, "since": 0.0, "heard": 0}
+
+
+def fail(message):
+    print("FAIL:", message, file=sys.stderr, flush=True)
+    os._exit(1)  # from a timer, sys.exit would only end the callback
+
+
+def job_running():
+    return any(thread.name == "firn-job" and thread.is_alive() for thread in threading.enumerate())
+
+
+def window():
+    return bpy.context.window_manager.windows[0]
+
+
+def view3d():
+    area = next(a for a in window().screen.areas if a.type == "VIEW_3D")
+    return area, next(r for r in area.regions if r.type == "WINDOW")
+
+
+class FIRN_OT_test_listen(bpy.types.Operator):
+    """Counts the K key presses that reach it; its handler sits behind the job's, which must pass them on"""
+
+    bl_idname = "firn.test_listen"
+    bl_label = "Listen"
+
+    def invoke(self, context, _event):
+        context.window_manager.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, _context, event):
+        if event.type == "K" and event.value == "PRESS":
+            state["heard"] += 1
+        return {"PASS_THROUGH"}
+
+
+def register_waiting_job():
+    from firn.core import firncore
+    from firn.jobs import FirnJobMixin
+
+    class FIRN_OT_test_wait(FirnJobMixin, bpy.types.Operator):
+        """A job that computes nothing and ends only when cancelled"""
+
+        bl_idname = "firn.test_wait"
+        bl_label = "Wait"
+        job_label = "Waiting"
+        job_passes_events = True
+
+        def prepare(self, _context):
+            return {}
+
+        @staticmethod
+        def compute(_inputs, progress):
+            started = time.perf_counter()
+            while not progress.cancelled:
+                if time.perf_counter() - started > 30.0:
+                    return "not cancelled"
+                time.sleep(0.01)
+            raise firncore.Cancelled("cancelled")
+
+        def apply(self, _context, _inputs, result):
+            fail(f"the job ended by itself: {result}")
+
+    bpy.utils.register_class(FIRN_OT_test_wait)
+    bpy.utils.register_class(FIRN_OT_test_listen)
+
+
+def invoke(operator):
+    area, region = view3d()
+    with bpy.context.temp_override(window=window(), screen=window().screen, area=area, region=region):
+        result = operator("INVOKE_DEFAULT")
+    if result != {"RUNNING_MODAL"}:
+        fail(f"expected RUNNING_MODAL, got {result}")
+
+
+def start_job():
+    invoke(bpy.ops.firn.test_wait)
+    state["since"] = time.perf_counter()
+
+
+def press(key):
+    window().event_simulate(type=key, value="PRESS")
+    window().event_simulate(type=key, value="RELEASE")
+
+
+def status_bar_entries():
+    """What Firn adds to the status bar now (drawn into a recording stand-in for the layout)."""
+    from firn import jobs
+
+    entries = []
+
+    class Layout:
+        def operator(self, idname, text="", **_kwargs):
+            entries.append((idname, text))
+
+    jobs._draw_status(type("Header", (), {"layout": Layout()})(), bpy.context)
+    return entries
+
+
+def tick():
+    try:
+        state["ticks"] += 1
+        phase = state["phase"]
+        if phase == "start":
+            addon_utils.enable("firn", default_set=True)
+            register_waiting_job()
+            invoke(bpy.ops.firn.test_listen)
+            start_job()
+            state["phase"], state["ticks"] = "typing", 0
+        elif phase == "typing" and state["ticks"] == 3:
+            if not job_running():
+                fail("the job is not running")
+            if status_bar_entries() != [("firn.cancel_jobs", "Cancel Waiting")]:
+                fail(f"status bar shows {status_bar_entries()}")
+            press("K")
+            state["phase"], state["ticks"] = "typed", 0
+        elif phase == "typed" and state["ticks"] == 3:
+            if state["heard"] != 1:
+                fail(f"the listener heard {state['heard']} key presses while the job ran, expected 1")
+            bpy.ops.firn.cancel_jobs()  # what the status bar's and the panel's Cancel buttons run
+            state["phase"], state["since"] = "cancel button", time.perf_counter()
+        elif phase == "cancel button" and not job_running():
+            print(f"Cancel stopped the job in {time.perf_counter() - state['since']:.2f} s")
+            if status_bar_entries() != []:
+                fail("the status bar still shows a Cancel button")
+            start_job()
+            state["phase"], state["ticks"] = "esc", 0
+        elif phase == "esc" and state["ticks"] == 3:
+            window().event_simulate(type="ESC", value="PRESS")
+            window().event_simulate(type="ESC", value="RELEASE")
+            state["phase"], state["since"] = "escaped", time.perf_counter()
+        elif phase == "escaped" and not job_running():
+            print(f"Esc stopped the job in {time.perf_counter() - state['since']:.2f} s")
+            print("PASS")
+            bpy.ops.wm.quit_blender()
+            return None
+        if phase in {"cancel button", "escaped"} and time.perf_counter() - state["since"] > 10.0:
+            fail(f"{phase}: the job did not stop within 10 s")
+    except Exception:
+        traceback.print_exc()
+        fail("exception")
+    return 0.05
+
+
+bpy.app.timers.register(tick, first_interval=0.5)

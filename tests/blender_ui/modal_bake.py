@@ -1,0 +1,120 @@
+"""Blender with a window (under xvfb-run): Bake Scattering as a user starts it. It runs in a worker thread while
+the UI keeps running; Esc during a second bake leaves the first bake's file, material and fingerprint intact.
+Needs the core's bake (firncore.bake): without it the script exits with 77, which CTest reports as skipped.
+
+xvfb-run blender --factory-startup --enable-event-simulate --python modal_bake.py   (exit code 0 = pass)
+"""
+
+import os
+import sys
+import threading
+import time
+import traceback
+
+import addon_utils
+import bpy
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "blender"))
+
+state = {"phase": "start", "ticks": 0, "since": 0.0}
+FOLDER = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"firn_modal_bake_{os.getpid()}")
+
+
+def fail(message):
+    print("FAIL:", message, file=sys.stderr, flush=True)
+    os._exit(1)  # from a timer, sys.exit would only end the callback
+
+
+def job_running():
+    return any(thread.name == "firn-job" and thread.is_alive() for thread in threading.enumerate())
+
+
+def window_context():
+    window = bpy.context.window_manager.windows[0]
+    area = next(a for a in window.screen.areas if a.type == "VIEW_3D")
+    return {"window": window, "screen": window.screen, "area": area,
+            "region": next(r for r in area.regions if r.type == "WINDOW")}
+
+
+def setup():
+    from bake_helpers import uniform_world, volume_object, write_volume
+    from firn.core import firncore
+
+    if not hasattr(firncore, "bake"):
+        print("SKIP: needs firncore.bake (the core's Bake Scattering)", flush=True)
+        os._exit(77)
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    os.makedirs(FOLDER, exist_ok=True)
+    uniform_world((1.0, 1.0, 1.0))
+    path = write_volume(os.path.join(FOLDER, "slab.vdb"), 0.01, (-40, -40, -29), (39, 39, 0), 300.0)
+    slab = volume_object(path, "Slab")
+    slab.select_set(True)
+    return slab
+
+
+def start_bake(quality):
+    with bpy.context.temp_override(**window_context()):
+        result = bpy.ops.firn.bake_scattering("INVOKE_DEFAULT", quality=quality)
+    if result != {"RUNNING_MODAL"}:
+        fail(f"expected RUNNING_MODAL, got {result}")
+    state["since"], state["ticks"] = time.perf_counter(), 0
+
+
+def file_bytes(obj):
+    with open(bpy.path.abspath(obj.data.filepath), "rb") as file:
+        return file.read()
+
+
+def tick():
+    from firn import materials
+
+    try:
+        state["ticks"] += 1
+        phase = state["phase"]
+        slab = bpy.data.objects.get("Slab")
+        if phase == "start":
+            addon_utils.enable("firn", default_set=True)
+            setup()
+            start_bake("DRAFT")
+            state["phase"] = "baking"
+        elif phase == "baking" and not job_running():
+            elapsed = time.perf_counter() - state["since"]
+            if state["ticks"] < 3 and elapsed > 0.5:
+                fail(f"UI froze: {state['ticks']} timer ticks in {elapsed:.2f} s")
+            if slab.firn.bake_state != "BAKED":
+                fail(f"after the bake the state is {slab.firn.bake_state}")
+            print(f"bake finished after {elapsed:.2f} s with {state['ticks']} UI ticks meanwhile")
+            state["before"] = (file_bytes(slab), slab.firn.bake_fingerprint)
+            bpy.context.scene.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 2.0
+            start_bake("REFERENCE")
+            state["phase"] = "second"
+        elif phase == "second" and state["ticks"] == 4:
+            if not job_running():
+                fail("the second bake ended before Esc could be tested")
+            window = bpy.context.window_manager.windows[0]
+            window.event_simulate(type="ESC", value="PRESS")
+            window.event_simulate(type="ESC", value="RELEASE")
+            state["phase"], state["since"] = "cancelled", time.perf_counter()
+        elif phase == "cancelled" and not job_running():
+            print(f"Esc stopped the bake in {time.perf_counter() - state['since']:.2f} s")
+            if (file_bytes(slab), slab.firn.bake_fingerprint) != state["before"]:
+                fail("Esc changed the previous bake's file or fingerprint")
+            if not materials.is_baked_material(materials.snow_material(slab)):
+                fail("Esc changed the material")
+            if os.path.exists(bpy.path.abspath(slab.data.filepath) + ".firn-bake.vdb"):
+                fail("a staged file was left behind")
+            if slab.firn.bake_state != "OUTDATED":  # the world changed since the kept bake
+                fail(f"state {slab.firn.bake_state} after the cancelled re-bake")
+            print("PASS")
+            bpy.ops.wm.quit_blender()
+            return None
+        elif phase in {"baking", "cancelled"} and time.perf_counter() - state["since"] > 300:
+            fail(f"{phase}: no end after 300 s")
+    except Exception:
+        traceback.print_exc()
+        fail("exception")
+    return 0.05
+
+
+bpy.app.timers.register(tick, first_interval=0.5)
