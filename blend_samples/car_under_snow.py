@@ -62,7 +62,7 @@ def tree(location, height, bark, needles):
 def build_scene():
     scene = common.new_scene()
     ground_mat = common.material("Frozen Ground", (0.25, 0.22, 0.18), roughness=0.9)
-    bpy.ops.mesh.primitive_plane_add(size=16.0)
+    bpy.ops.mesh.primitive_plane_add(size=13.0)
     ground = bpy.context.object
     ground.name = "Ground"
     ground.data.materials.append(ground_mat)
@@ -72,7 +72,7 @@ def build_scene():
     bark = common.material("Bark", (0.12, 0.07, 0.04), roughness=0.9)
     needles = common.material("Needles", (0.03, 0.12, 0.05), roughness=0.8)
     targets = [ground] + car(paint, glass, rubber)
-    for location, height in (((-5.5, 4.0), 5.0), ((4.5, 5.0), 6.0), ((-1.0, 7.5), 4.5)):
+    for location, height in (((-4.5, 3.5), 5.0), ((3.8, 4.2), 6.0), ((-0.8, 5.5), 4.5)):
         targets += tree(location, height, bark, needles)
     common.nishita_sky(scene, sun_elevation_deg=25.0, sun_rotation_deg=200.0)
     common.sun(elevation_deg=25.0, rotation_deg=200.0, irradiance=4.0)
@@ -84,7 +84,7 @@ def main():
     args = common.parse_args(__doc__, "out/car_under_snow.png")
     stages = common.Stages()
     scene, targets = stages.run("build scene", build_scene)
-    snow = stages.run("add snow layer", common.add_snow, targets, depth=0.12, spacing=0.06, voxel_size=0.02)
+    snow = stages.run("add snow layer", common.add_snow, targets, depth=0.12, spacing=0.06, voxel_size=0.03)
     stages.run("bake scattering", common.bake, [snow])
     stages.run("render (Cycles)", common.render, scene, args.output, args.width, args.samples)
     if not args.no_save:
