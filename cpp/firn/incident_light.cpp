@@ -1,0 +1,135 @@
+#include "firn/incident_light.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "firn/random.h"
+#include "firn/sampling.h"
+
+namespace firn {
+
+namespace {
+
+constexpr double kMinTransmittance = 1e-5;  // beams fainter than this are dropped
+
+// Mass column (kg/m^2) beyond which every channel's reduced transmittance is below kMinTransmittance.
+double columnLimit(const glm::dvec3 &reduced) {
+    return std::log(1.0 / kMinTransmittance) / std::max(1e-12, std::min({reduced.x, reduced.y, reduced.z}));
+}
+
+
+// Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders.
+glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, int samples,
+                          std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher) {
+    const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
+    const double limit = columnLimit(reduced);
+    const int strata = std::max(1, int(std::lround(std::sqrt(double(samples)))));
+    Rng rng(seed, stream);
+    glm::dvec3 sum(0.0);
+    for (int i = 0; i < strata; ++i)
+        for (int j = 0; j < strata; ++j) {
+            const glm::dvec3 w = sampleCosineHemisphere(n, (i + rng.uniform()) / strata, (j + rng.uniform()) / strata);
+            if (scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) continue;
+            const double column = marcher.column(p, w, std::numeric_limits<double>::infinity(), limit);
+            if (column >= limit) continue;
+            sum += kPi * scene.sky.radianceFrom(w) * glm::exp(-reduced * column);
+        }
+    return glm::vec3(sum / double(strata * strata));
+}
+
+template <typename Body>
+void parallelChunks(std::size_t n, const SubProgress &progress, const Body &body) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto &range) {
+        progress.throwIfCancelled();
+        body(range);
+    });
+}
+
+}  // namespace
+
+glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics) {
+    return optics.extinctionPerDensity * (glm::dvec3(1.0) - optics.albedo * optics.g);
+}
+
+glm::vec3 sunBeamAt(const Scene &scene, const SunLight &sun, const glm::dvec3 &point, int sunSamples,
+                    std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher) {
+    const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
+    const double limit = columnLimit(reduced);
+    const double column = marcher.column(point, sun.direction, std::numeric_limits<double>::infinity(), limit);
+    if (column >= limit) return glm::vec3(0.0f);
+    int visible = sunSamples;
+    if (!scene.occluders->empty()) {
+        Rng rng(seed, stream);
+        visible = 0;
+        for (int s = 0; s < sunSamples; ++s) {
+            const glm::dvec3 w = sunSamples == 1 ? sun.direction : sampleSunDirection(sun, rng.uniform(), rng.uniform());
+            visible += !scene.occluders->caster().occluded(glm::vec3(point), glm::vec3(w), 1e-5f);
+        }
+    }
+    return glm::vec3(glm::exp(-reduced * column)) * (float(visible) / float(sunSamples));
+}
+
+IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
+                                   const IncidentLightSettings &settings, const SubProgress &progress) {
+    const Medium &medium = *scene.medium;
+    const double h = medium.voxelSize();
+    IncidentLight light;
+    const std::size_t jobs = scene.suns.size() + (scene.sky.isBlack() ? 0 : 1);
+    std::size_t job = 0;
+
+    for (std::size_t s = 0; s < scene.suns.size(); ++s, ++job) {
+        const SunLight &sun = scene.suns[s];
+        IncidentLight::Beam beam;
+        beam.atVoxel.assign(topo.size(), glm::vec3(0.0f));
+        beam.atFace.assign(topo.faces.size(), glm::vec3(0.0f));
+        const std::uint64_t seed = settings.seed ^ (0x5A17ull + s);
+        parallelChunks(topo.size(), progress, [&](const auto &range) {
+            Medium::ColumnMarcher marcher(medium);
+            for (std::size_t i = range.begin(); i != range.end(); ++i)
+                beam.atVoxel[i] = sunBeamAt(scene, sun, medium.voxelCentre(topo.coord[i]), settings.sunSamples, seed,
+                                            i, marcher);
+        });
+        parallelChunks(topo.faces.size(), progress, [&](const auto &range) {
+            Medium::ColumnMarcher marcher(medium);
+            for (std::size_t f = range.begin(); f != range.end(); ++f) {
+                const BoundaryFace &face = topo.faces[f];
+                if (face.occluder || glm::dot(faceNormal(face.face), sun.direction) <= 0.0) continue;
+                const glm::dvec3 outside = medium.voxelCentre(topo.coord[face.voxel]) + h * faceNormal(face.face);
+                beam.atFace[f] = sunBeamAt(scene, sun, outside, settings.sunSamples, seed, topo.size() + f, marcher);
+            }
+        });
+        light.beams.push_back(std::move(beam));
+        progress.report(double(job + 1) / jobs);
+    }
+
+    light.skyIrradiance.assign(topo.faces.size(), glm::vec3(0.0f));
+    if (scene.sky.isBlack()) return light;
+    const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
+    const std::uint64_t seed = settings.seed ^ 0x5C1Eull;
+    parallelChunks(topo.faces.size(), progress, [&](const auto &range) {
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t f = range.begin(); f != range.end(); ++f) {
+            const BoundaryFace &face = topo.faces[f];
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[face.voxel]);
+            const glm::dvec3 n = faceNormal(face.face);
+            if (!face.occluder) {
+                light.skyIrradiance[f] = skyIrradianceAt(scene, centre + h * n, n, settings.skySamples, seed, f, marcher);
+                continue;
+            }
+            // Sky light reaching the surface under the snow without scattering: only under thin snow.
+            const glm::dvec3 normal = glm::normalize(glm::dvec3(scene.occluders->mesh().crossNormal(face.triangle)));
+            const glm::dvec3 up = glm::dot(normal, n) > 0.0 ? -normal : normal;  // towards the snow
+            const glm::dvec3 ground = centre + double(face.distance) * n;
+            if (marcher.column(ground, up, std::numeric_limits<double>::infinity(), limit) >= limit) continue;
+            light.skyIrradiance[f] = skyIrradianceAt(scene, ground, up, settings.skySamples, seed, f, marcher);
+        }
+    });
+    return light;
+}
+
+}  // namespace firn

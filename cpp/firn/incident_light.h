@@ -1,0 +1,45 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "firn/progress.h"
+#include "firn/scene.h"
+#include "firn/snow_topology.h"
+
+namespace firn {
+
+// Light reaching the snow from outside, per colour channel, before it scatters.
+struct IncidentLight {
+    // One per sun: the sun's beam as a fraction of its irradiance, after the snow in front of the point
+    // (transmittance with the similarity-reduced extinction sigma_tr = (1 - omega g) sigma_t: light that
+    // scattered forwards still travels with the beam) and occluders (averaged over the sun's disc).
+    struct Beam {
+        std::vector<glm::vec3> atVoxel;  // at each unknown's centre
+        std::vector<glm::vec3> atFace;   // at the centre of the air voxel beyond each air face (0 for others)
+    };
+    std::vector<Beam> beams;
+    // W/m^2 per boundary face: for air faces the sky's irradiance onto the face (occluders and snow
+    // shadowing); for occluder faces the sky irradiance reaching the surface under the snow uncollided.
+    std::vector<glm::vec3> skyIrradiance;
+};
+
+struct IncidentLightSettings {
+    int skySamples = 16;  // rays per face, cosine-weighted, stratified
+    int sunSamples = 4;   // points on each sun's disc per shadow test
+    std::uint64_t seed = 0;
+};
+
+IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topology,
+                                   const IncidentLightSettings &settings, const SubProgress &progress);
+
+// Reduced extinction per unit density, per channel: k (1 - omega g) (m^2/kg).
+glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
+
+// The beam fraction at a point towards one sun: snow transmittance times occluder visibility.
+glm::vec3 sunBeamAt(const Scene &scene, const SunLight &sun, const glm::dvec3 &point, int sunSamples,
+                    std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher);
+
+}  // namespace firn

@@ -1,0 +1,29 @@
+#pragma once
+
+#include <cstdint>
+
+namespace firn {
+
+// Counter-based random numbers: the value depends only on (seed, stream, index), never on thread
+// scheduling, so parallel loops stay deterministic. SplitMix64 finalizer (Steele et al. 2014).
+inline std::uint64_t mix64(std::uint64_t x) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+}
+
+class Rng {
+  public:
+    Rng(std::uint64_t seed, std::uint64_t stream) : state_(mix64(seed ^ mix64(stream + 0x632BE59BD9B4E019ull))) {}
+
+    std::uint64_t nextBits() { return mix64(state_++); }
+    // Uniform in [0, 1).
+    double uniform() { return static_cast<double>(nextBits() >> 11) * 0x1.0p-53; }
+    float uniformFloat() { return static_cast<float>(nextBits() >> 40) * 0x1.0p-24f; }
+
+  private:
+    std::uint64_t state_;
+};
+
+}  // namespace firn

@@ -1,0 +1,131 @@
+#include "firn/snow_topology.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <memory>
+#include <unordered_map>
+
+#include <glm/geometric.hpp>
+#include <openvdb/tools/PoissonSolver.h>
+#include <openvdb/tree/LeafManager.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace firn {
+
+namespace {
+
+using IndexLeaf = openvdb::Int32Tree::LeafNodeType;
+
+std::uint64_t leafKey(const openvdb::Coord &c) {
+    auto part = [](int v) { return std::uint64_t(std::uint32_t((v >> 3) + (1 << 20)) & 0x1FFFFF); };
+    return part(c.x()) | part(c.y()) << 21 | part(c.z()) << 42;
+}
+
+// Flags the leaves an occluder triangle may cut (bounding box, then plane against the leaf's box grown by
+// one voxel): only their voxels need ray tests along their links.
+std::unique_ptr<std::atomic<bool>[]> leavesNearOccluders(const Medium &medium, const Occluders &occluders,
+                                                         const openvdb::tree::LeafManager<openvdb::Int32Tree> &leaves) {
+    auto near = std::make_unique<std::atomic<bool>[]>(leaves.leafCount());
+    for (std::size_t i = 0; i < leaves.leafCount(); ++i) near[i] = false;
+    if (occluders.empty()) return near;
+    std::unordered_map<std::uint64_t, std::size_t> leafIndex;
+    for (std::size_t i = 0; i < leaves.leafCount(); ++i) leafIndex[leafKey(leaves.leaf(i).origin())] = i;
+    const TriangleMesh &mesh = occluders.mesh();
+    const double h = medium.voxelSize();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.triangleCount(), 64), [&](const auto &range) {
+        for (std::size_t t = range.begin(); t != range.end(); ++t) {
+            glm::dvec3 lo(1e300), hi(-1e300);
+            for (int k = 0; k < 3; ++k) {
+                const glm::dvec3 ijk = medium.worldToIndex(glm::dvec3(mesh.vertex(t, k)));
+                lo = glm::min(lo, ijk), hi = glm::max(hi, ijk);
+            }
+            const glm::dvec3 p0(mesh.vertex(t, 0));
+            const glm::dvec3 n = glm::normalize(glm::dvec3(mesh.crossNormal(t)));
+            const double reach = 4.5 * h * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+            auto leafOf = [](double v) { return int(std::floor(v)) & ~7; };
+            for (int x = leafOf(lo.x - 1); x <= leafOf(hi.x + 1); x += 8)
+                for (int y = leafOf(lo.y - 1); y <= leafOf(hi.y + 1); y += 8)
+                    for (int z = leafOf(lo.z - 1); z <= leafOf(hi.z + 1); z += 8) {
+                        const auto found = leafIndex.find(leafKey(openvdb::Coord(x, y, z)));
+                        if (found == leafIndex.end()) continue;
+                        const glm::dvec3 centre = medium.indexToWorld(glm::dvec3(x + 3.5, y + 3.5, z + 3.5));
+                        if (std::abs(glm::dot(n, centre - p0)) <= reach) near[found->second] = true;
+                    }
+        }
+    });
+    return near;
+}
+
+}  // namespace
+
+SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress) {
+    const double h = medium.voxelSize();
+    const float minDensity = float(kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h));
+    const openvdb::FloatTree &densityTree = medium.density().tree();
+
+    openvdb::BoolTree mask(densityTree, false, openvdb::TopologyCopy());
+    openvdb::tree::LeafManager<openvdb::BoolTree>(mask).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
+        const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
+        for (auto it = leaf.beginValueOn(); it; ++it)
+            if (!densityLeaf || densityLeaf->getValue(it.pos()) < minDensity) it.setValueOff();
+    });
+    SnowTopology topo;
+    topo.index = openvdb::tools::poisson::createIndexTree(mask);
+    const std::size_t n = std::size_t(topo.index->activeVoxelCount());
+    topo.coord.resize(n), topo.density.resize(n), topo.link.resize(n);
+    progress.report(0.2);
+
+    openvdb::tree::LeafManager<openvdb::Int32Tree> leaves(*topo.index);
+    const auto near = leavesNearOccluders(medium, occluders, leaves);
+    progress.report(0.4);
+    progress.throwIfCancelled();
+
+    // Links and boundary faces, leaf by leaf; faces are numbered in leaf order afterwards.
+    std::vector<std::vector<BoundaryFace>> leafFaces(leaves.leafCount());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        progress.throwIfCancelled();
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        for (std::size_t l = range.begin(); l != range.end(); ++l) {
+            const IndexLeaf &leaf = leaves.leaf(l);
+            const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
+            for (auto it = leaf.cbeginValueOn(); it; ++it) {
+                const std::uint32_t i = std::uint32_t(*it);
+                const openvdb::Coord c = it.getCoord();
+                topo.coord[i] = c;
+                topo.density[i] = densityLeaf->getValue(it.pos());
+                const glm::dvec3 centre = medium.voxelCentre(c);
+                for (int f = 0; f < 6; ++f) {
+                    BoundaryFace face{i, std::uint8_t(f), false, 0.0f, 0};
+                    if (near[l]) {
+                        const auto hit = occluders.caster().intersect(glm::vec3(centre), glm::vec3(faceNormal(f)),
+                                                                      0.0f, float(h));
+                        if (hit) face.occluder = true, face.distance = hit->distance, face.triangle = hit->triangle;
+                    }
+                    const std::int32_t neighbour = index.getValue(c + faceStep(f));
+                    if (!face.occluder && neighbour >= 0) {
+                        topo.link[i][f] = neighbour;
+                    } else {
+                        topo.link[i][f] = -1 - std::int32_t(leafFaces[l].size());
+                        leafFaces[l].push_back(face);
+                    }
+                }
+            }
+        }
+    });
+    std::vector<std::size_t> offset(leaves.leafCount() + 1, 0);
+    for (std::size_t l = 0; l < leaves.leafCount(); ++l) offset[l + 1] = offset[l] + leafFaces[l].size();
+    topo.faces.resize(offset.back());
+    tbb::parallel_for(std::size_t(0), leaves.leafCount(), [&](std::size_t l) {
+        std::copy(leafFaces[l].begin(), leafFaces[l].end(), topo.faces.begin() + offset[l]);
+        for (const BoundaryFace &face : leafFaces[l]) {
+            std::int32_t &link = topo.link[face.voxel][face.face];
+            link = -1 - std::int32_t(offset[l] + SnowTopology::faceIndex(link));
+        }
+    });
+    progress.report(1.0);
+    return topo;
+}
+
+}  // namespace firn
