@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <queue>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_inverse.hpp>
@@ -66,46 +67,6 @@ struct Source {
     glm::dmat3 l1{0.0};  // column c: the vector for channel c
 };
 
-// The smooth surface through a surface voxel: outward normal from the density gradient (Sobel), and the
-// area of that surface inside the voxel (its air faces projected onto it).
-struct SurfacePatch {
-    glm::dvec3 normal{0.0, 0.0, 1.0};
-    double area = 0.0;  // m^2
-};
-
-std::vector<SurfacePatch> surfacePatches(const Medium &medium, const SnowTopology &topo) {
-    std::vector<SurfacePatch> patches(topo.size());
-    const double h = medium.voxelSize();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        Medium::Accessor density = medium.accessor();
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            glm::dvec3 faces(0.0);
-            bool surface = false;
-            for (int f = 0; f < 6; ++f)
-                if (SnowTopology::isFace(topo.link[i][f]) && !topo.faces[SnowTopology::faceIndex(topo.link[i][f])].occluder)
-                    faces += faceNormal(f), surface = true;
-            if (!surface) continue;
-            glm::dvec3 gradient(0.0);
-            const openvdb::Coord &c = topo.coord[i];
-            for (int dx = -1; dx <= 1; ++dx)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dz = -1; dz <= 1; ++dz) {
-                        const double w = (2 - std::abs(dx)) * (2 - std::abs(dy)) * (2 - std::abs(dz));
-                        gradient += w * double(density.getValue(c.offsetBy(dx, dy, dz))) * glm::dvec3(dx, dy, dz);
-                    }
-            glm::dvec3 n = -gradient;
-            if (glm::length(n) < 1e-9 * (1.0 + topo.density[i]) || glm::dot(n, faces) <= 0.0) n = faces;
-            n = glm::length(n) > 0.0 ? glm::normalize(n) : glm::dvec3(0.0, 0.0, 1.0);
-            double area = 0.0;
-            for (int f = 0; f < 6; ++f)
-                if (SnowTopology::isFace(topo.link[i][f]) && !topo.faces[SnowTopology::faceIndex(topo.link[i][f])].occluder)
-                    area += std::max(0.0, glm::dot(n, faceNormal(f)));
-            patches[i] = {n, h * h * std::max(area, 0.3)};
-        }
-    });
-    return patches;
-}
-
 // The diffusion system of one channel plus what the surface needs afterwards.
 struct ChannelSystem {
     StencilOperator A;
@@ -164,6 +125,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
         Medium::Accessor density = medium.accessor();
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const double sigmaTr = ch.sigmaTr(topo.density[i]);
+            const SurfacePatch &patch = topo.patches[i];
             double diag = 0.0, source = 0.0;  // W scattered at the node
             std::array<double, 6> mass{};     // absorption each side lends the node
             std::array<std::optional<BoundaryLink>, 6> boundary;
@@ -183,15 +145,16 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 const std::size_t fi = SnowTopology::faceIndex(link);
                 const BoundaryFace &face = topo.faces[fi];
                 const double beyond = ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f)));
-                const double sky = light.skyIrradiance[fi][c];
                 if (!face.occluder) {
-                    // Air: the density ramps to zero at the neighbour's centre; diffuse sky light enters
-                    // through the Marshak condition.
-                    const BoundaryLink &b = boundary[f].emplace(beta, 2.0, 1.5 * h * (sigmaTr + beyond));
+                    // Air: the density ramps down to zero through any fringe; diffuse sky light (its share
+                    // of what falls on the voxel's surface patch) enters through the Marshak condition.
+                    const BoundaryLink &b = boundary[f].emplace(
+                        beta, 2.0, airFaceResistance(medium, density, topo.coord[i], f, ch.sigmaTr(1.0)));
+                    const double sky = light.skyOnSurface[i][c] * patch.area * patch.share[f];  // W
                     sys.outConductance[i] += h2 * b.conductance();
-                    source += 4.0 * sky * h2 * b.conductance();
-                    sys.escaped[i] += sky * h2 * b.diffuseReturned();
-                    sys.skyIn[i] += sky * h2;
+                    source += 4.0 * sky * b.conductance();
+                    sys.escaped[i] += sky * b.diffuseReturned();
+                    sys.skyIn[i] += sky;
                 } else {
                     // Occluder: a Lambertian surface at `distance` from the node.
                     albedo[f] = std::min(scene.occluders->albedo(face.triangle)[c], 0.99);
@@ -213,43 +176,46 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             // Sun beams: the power each face lets in or out; the difference is scattered in this voxel.
             std::array<double, 6> groundLight{};  // W/m^2 occluders under the snow send back in
             for (int f = 0; f < 6; ++f)
-                if (boundary[f] && albedo[f] > 0.0) groundLight[f] = albedo[f] * light.skyIrradiance[SnowTopology::faceIndex(topo.link[i][f])][c];
+                if (boundary[f] && albedo[f] > 0.0) groundLight[f] = albedo[f] * light.skyUnderSnow[SnowTopology::faceIndex(topo.link[i][f])][c];
             for (std::size_t s = 0; s < scene.suns.size(); ++s) {
                 const SunLight &sun = scene.suns[s];
                 const double E = sun.irradiance[c], Bv = light.beams[s].atVoxel[i][c];
                 if (E <= 0.0) continue;
-                std::array<double, 6> flow{};  // W through each face, positive inwards
-                double in = 0.0, out = 0.0;
+                // Through the surface patch (facing the sun: in, else out) and through the voxel's other faces.
+                const double muPatch = glm::dot(patch.normal, sun.direction);
+                const double patchFlow = !patch.isSurface() ? 0.0
+                                         : muPatch > 0.0  ? E * muPatch * patch.area * light.beams[s].atSurface[i][c]
+                                                          : E * muPatch * patch.area * Bv;
+                double in = std::max(patchFlow, 0.0), out = std::max(-patchFlow, 0.0);
+                std::array<double, 6> flow{};  // W through each link and occluder face, positive inwards
                 for (int f = 0; f < 6; ++f) {
                     const double mu = glm::dot(faceNormal(f), sun.direction);
                     const std::int32_t link = topo.link[i][f];
-                    double B = 0.0;  // beam fraction on the face
                     if (!SnowTopology::isFace(link)) {
-                        B = std::sqrt(Bv * double(light.beams[s].atVoxel[link][c]));
-                    } else if (!topo.faces[SnowTopology::faceIndex(link)].occluder) {
-                        B = light.beams[s].atFace[SnowTopology::faceIndex(link)][c];
-                    } else if (mu < 0.0) {  // the beam reaches the surface under the snow
-                        B = Bv * std::exp(-sigmaTr * topo.faces[SnowTopology::faceIndex(link)].distance / std::max(-mu, 0.05));
+                        flow[f] = E * h2 * mu * std::sqrt(Bv * double(light.beams[s].atVoxel[link][c]));
+                    } else if (topo.faces[SnowTopology::faceIndex(link)].occluder && mu < 0.0) {
+                        // The beam reaches the surface under the snow.
+                        const double B = Bv * std::exp(-sigmaTr * topo.faces[SnowTopology::faceIndex(link)].distance / std::max(-mu, 0.05));
+                        flow[f] = E * h2 * mu * B;
                         groundLight[f] += albedo[f] * E * -mu * B;
                     }
-                    flow[f] = E * h2 * mu * B;
                     (flow[f] > 0.0 ? in : out) += std::abs(flow[f]);
                 }
                 if (in <= 0.0) continue;
                 const double scattered = aPrime * std::max(0.0, in - out) / in;
+                for (int f = 0; f < 6; ++f)
+                    if (flow[f] > 0.0) source += scattered * flow[f];
+                if (patchFlow <= 0.0) continue;
+                // Into a surface voxel through its air faces: the beam scatters at mean resistance 3 mu
+                // (reduced depth mu below the surface), cut at the node; what scatters above the node
+                // partly escapes at once.
+                sys.sunIn[s][i] += patchFlow;
                 for (int f = 0; f < 6; ++f) {
-                    if (flow[f] <= 0.0) continue;
-                    if (!boundary[f]) {
-                        source += scattered * flow[f];
-                        continue;
-                    }
-                    // Through an air face into a thick voxel: the beam scatters at mean resistance 3 mu
-                    // (reduced depth mu), cut at the node; what scatters above the node partly escapes.
-                    const double mu = glm::dot(faceNormal(f), sun.direction), L = boundary[f]->L;
-                    const double R = 3.0 * mu * (1.0 - std::exp(-L / (3.0 * mu)));
-                    source += boundary[f]->toNode(R) * scattered * flow[f];
-                    sys.escaped[i] += boundary[f]->toBoundary(R) * scattered * flow[f];
-                    sys.sunIn[s][i] += flow[f];
+                    if (!topo.isAirFace(i, f) || patch.share[f] <= 0.0f) continue;
+                    const double P = scattered * patchFlow * patch.share[f], L = boundary[f]->L;
+                    const double R = 3.0 * muPatch * (1.0 - std::exp(-L / (3.0 * muPatch)));
+                    source += boundary[f]->toNode(R) * P;
+                    sys.escaped[i] += boundary[f]->toBoundary(R) * P;
                 }
             }
             // Light reflected by occluders under the snow enters diffusely through their faces.
@@ -263,18 +229,21 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     return sys;
 }
 
-// The source function from the solved fluence phi (W/m^2) of one channel.
-void sourceFunction(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                    const std::vector<SurfacePatch> &patches, const ChannelSystem &sys,
-                    const std::vector<double> &phi, int c, std::vector<Source> &out) {
+// What the solve yields per unknown, per channel: the source function inside, and for surface voxels the
+// light leaving through their patch, as power times angular shape (W; radiance after dividing by pi A).
+struct SolvedVoxel {
+    Source inside;   // S = omega / (4 pi) (phi + 3 g F . w) plus the beams, F = -D grad phi
+    Source leaving;  // surface voxels only
+};
+
+void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                  const ChannelSystem &sys, const std::vector<double> &phi, int c, std::vector<SolvedVoxel> &out) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
     const double h = medium.voxelSize();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        Medium::Accessor density = medium.accessor();
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            // Inside: S = omega/(4 pi) (phi + 3 g F . w) for the diffuse light, F = -D grad phi, plus the beams.
             glm::dvec3 gradient(0.0);
             for (int axis = 0; axis < 3; ++axis) {
                 const std::int32_t lo = topo.link[i][2 * axis], hi = topo.link[i][2 * axis + 1];
@@ -290,56 +259,121 @@ void sourceFunction(const Scene &scene, const SnowTopology &topo, const Incident
                 j0 += beam;
                 j1 -= 3.0 * ch.g * beam * scene.suns[s].direction;
             }
-            double l0 = ch.omega * kInvFourPi * j0;
-            glm::dvec3 l1 = ch.omega * kInvFourPi * j1;
+            out[i].inside.l0[c] = ch.omega * kInvFourPi * j0;
+            out[i].inside.l1[c] = ch.omega * kInvFourPi * j1;
+            if (!topo.patches[i].isSurface()) continue;
 
-            if (patches[i].area > 0.0) {
-                // A surface voxel: the radiance leaving thick snow, from the fluxes through its air faces.
-                // Light that entered returns with its incidence's shape (the sun lobe; sky light,
-                // isotropic, as a non-absorbing half-space returns it); the deficit (absorbed, or gone
-                // elsewhere) and any surplus from deep inside have the escape function's shape.
-                const SurfacePatch &patch = patches[i];
-                const double out = sys.escaped[i] + sys.outConductance[i] * phi[i];
-                double deficit = sys.skyIn[i] - out, s0 = sys.skyIn[i];
-                glm::dvec3 s1(0.0);
-                for (std::size_t s = 0; s < scene.suns.size(); ++s) {
-                    const double P = sys.sunIn[s][i];
-                    if (P <= 0.0) continue;
-                    const glm::dvec3 d = -scene.suns[s].direction;  // where the sun's light travels
-                    const double mu0 = std::clamp(-glm::dot(d, patch.normal), 0.05, 1.0);
-                    const SunLobe lobe = sunLobe(ch.g, mu0);
-                    glm::dvec3 t = d - glm::dot(d, patch.normal) * patch.normal;
-                    t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
-                    deficit += P;
-                    s0 += P * lobe.a;
-                    s1 += P * (lobe.b * patch.normal + lobe.c * t);
-                }
-                s0 -= deficit * 3.0 / 7.0;
-                s1 -= deficit * 6.0 / 7.0 * patch.normal;
-                // Thin surface voxels (density ramp optical depth ~1) blend towards the inside formula.
-                double ramp = std::numeric_limits<double>::infinity();
-                for (int f = 0; f < 6; ++f)
-                    if (SnowTopology::isFace(topo.link[i][f]) && !topo.faces[SnowTopology::faceIndex(topo.link[i][f])].occluder)
-                        ramp = std::min(ramp, 0.5 * h * ch.sigmaT(topo.density[i] + density.getValue(topo.coord[i] + faceStep(f))));
-                const double w = 1.0 - std::exp(-ramp);
-                l0 = w * s0 / (kPi * patch.area) + (1.0 - w) * l0;
-                l1 = w * s1 / (kPi * patch.area) + (1.0 - w) * l1;
+            // Light that entered returns with the shape of its incidence (the sun lobe; sky light
+            // isotropically, as a non-absorbing half-space returns uniform sky light); the deficit
+            // (absorbed, or gone elsewhere) and any surplus from deep inside take the escape function's.
+            const SurfacePatch &patch = topo.patches[i];
+            const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
+            double deficit = sys.skyIn[i] - leaving, s0 = sys.skyIn[i];
+            glm::dvec3 s1(0.0);
+            for (std::size_t s = 0; s < scene.suns.size(); ++s) {
+                const double P = sys.sunIn[s][i];
+                if (P <= 0.0) continue;
+                const glm::dvec3 d = -scene.suns[s].direction;  // where the sun's light travels
+                const SunLobe lobe = sunLobe(ch.g, std::clamp(-glm::dot(d, patch.normal), 0.05, 1.0));
+                glm::dvec3 t = d - glm::dot(d, patch.normal) * patch.normal;
+                t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
+                deficit += P;
+                s0 += P * lobe.a;
+                s1 += P * (lobe.b * patch.normal + lobe.c * t);
             }
-            out[i].l0[c] = l0;
-            for (int a = 0; a < 3; ++a) out[i].l1[c][a] = l1[a];
+            out[i].leaving.l0[c] = s0 - deficit * 3.0 / 7.0;
+            out[i].leaving.l1[c] = s1 - deficit * 6.0 / 7.0 * patch.normal;
         }
     });
 }
 
+// Radiance leaving each surface voxel: the light leaving its neighbourhood (surface voxels in its 3^3
+// block) over that neighbourhood's area, so a voxel staircase's uneven share of the flux averages out
+// over about a voxel, less than the diffusion's own blur of a few transport mean free paths.
+std::vector<Source> surfaceRadiance(const SnowTopology &topo, const std::vector<SolvedVoxel> &solved) {
+    std::vector<Source> out(topo.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface()) continue;
+            Source sum;
+            double area = 0.0;
+            for (int dx = -1; dx <= 1; ++dx)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dz = -1; dz <= 1; ++dz) {
+                        const std::int32_t j = index.getValue(topo.coord[i].offsetBy(dx, dy, dz));
+                        if (j < 0 || !topo.patches[j].isSurface()) continue;
+                        sum.l0 += solved[j].leaving.l0, sum.l1 += solved[j].leaving.l1;
+                        area += topo.patches[j].area;
+                    }
+            out[i].l0 = sum.l0 / (kPi * area);
+            out[i].l1 = sum.l1 / (kPi * area);
+        }
+    });
+    return out;
+}
+
+// Inside the snow, within a few mean free paths of the surface, a camera ray still sees its surface
+// voxel's radiance: those voxels take it over (wholly up to optical depth 3 below the surface, fading
+// out by 6), so where the ray reaches optical depth 1 does not matter; deeper voxels keep their own
+// source function, which only thin snow lets a camera see.
+std::vector<Source> composeSource(const Scene &scene, const SnowTopology &topo, const std::vector<SolvedVoxel> &solved,
+                                  const std::vector<Source> &surface) {
+    constexpr double kShellStart = 3.0, kShellEnd = 6.0;  // optical depth below the surface
+    const Medium &medium = *scene.medium;
+    const double k = medium.optics().extinctionPerDensity, h = medium.voxelSize();
+    // Optical depth from outside to each voxel centre, and the surface voxel it is nearest to (Dijkstra
+    // from the surface voxels inwards, over the shell only).
+    std::vector<double> depth(topo.size(), std::numeric_limits<double>::infinity());
+    std::vector<std::int32_t> owner(topo.size(), -1);
+    using Entry = std::pair<double, std::int32_t>;
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+    {
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t i = 0; i < topo.size(); ++i)
+            if (topo.patches[i].isSurface()) {
+                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+                depth[i] = k * marcher.column(centre, topo.patches[i].normal, 3.0 * h, kShellEnd / k);
+                owner[i] = std::int32_t(i);
+                queue.emplace(depth[i], std::int32_t(i));
+            }
+    }
+    while (!queue.empty()) {
+        const auto [d, i] = queue.top();
+        queue.pop();
+        if (d > depth[i] || d >= kShellEnd) continue;
+        for (int f = 0; f < 6; ++f) {
+            const std::int32_t j = topo.link[i][f];
+            if (j < 0 || topo.patches[j].isSurface()) continue;
+            const double next = d + 0.5 * k * h * (topo.density[i] + topo.density[j]);
+            if (next < depth[j]) depth[j] = next, owner[j] = owner[i], queue.emplace(next, j);
+        }
+    }
+    std::vector<Source> out(topo.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (topo.patches[i].isSurface()) {
+                out[i] = surface[i];
+                continue;
+            }
+            const double w = owner[i] < 0 ? 0.0 : std::clamp((kShellEnd - depth[i]) / (kShellEnd - kShellStart), 0.0, 1.0);
+            const Source &inside = solved[i].inside;
+            out[i].l0 = w * surface[owner[i] < 0 ? i : owner[i]].l0 + (1.0 - w) * inside.l0;
+            out[i].l1 = w * surface[owner[i] < 0 ? i : owner[i]].l1 + (1.0 - w) * inside.l1;
+        }
+    });
+    return out;
+}
+
 // REFERENCE quality: the radiance leaving each surface voxel, path traced from 12 directions around
 // its normal, fitted by least squares with the stored linear form.
-void referenceSurface(const Scene &scene, const SnowTopology &topo, const std::vector<SurfacePatch> &patches,
-                      int samples, std::uint64_t seed, std::vector<Source> &out, const SubProgress &progress) {
+void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples, std::uint64_t seed,
+                      std::vector<Source> &out, const SubProgress &progress) {
     const MonteCarloReference reference(scene);
     const double h = scene.medium->voxelSize();
     std::vector<std::size_t> surface;
     for (std::size_t i = 0; i < topo.size(); ++i)
-        if (patches[i].area > 0.0) surface.push_back(i);
+        if (topo.patches[i].isSurface()) surface.push_back(i);
     std::atomic<std::size_t> done{0};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, surface.size(), 1), [&](const auto &range) {
         for (std::size_t k = range.begin(); k != range.end(); ++k) {
@@ -351,7 +385,7 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, const std::v
             int d = 0;
             for (double mu : {0.95, 0.7, 0.35})
                 for (int a = 0; a < 4; ++a, ++d) {
-                    const glm::dvec3 w = directionAround(patches[i].normal, mu, kPi * (0.5 * a + 0.25 * (mu < 0.5)));
+                    const glm::dvec3 w = directionAround(topo.patches[i].normal, mu, kPi * (0.5 * a + 0.25 * (mu < 0.5)));
                     const Ray ray{centre + 3.0 * h * w, -w};
                     const Rgb L = reference.estimate(ray, samples, seed, i * 12 + d).mean;
                     const glm::dvec4 basis(1.0, w.x, w.y, w.z);
@@ -371,61 +405,101 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, const std::v
     });
 }
 
-// The four source grids over the snow's voxels and a margin of two: unknowns hold their source function;
-// the voxels around surface voxels (where the density ramps to zero) hold their neighbours' average, so
-// the renderer's trilinear ramp sees a constant ratio of emission to extinction; voxels too thin for the
-// solve hold their single scattering; the outermost ring holds zeros (Cycles reads Vec3 edges wrongly).
-BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::vector<SurfacePatch> &patches,
+// The four source grids over the snow's voxels and a margin of three. Unknowns hold their source
+// function. Outside them (the density ramp and surface fringes) the radiance of the nearest surface
+// voxels is carried out two voxels, so the renderer's trilinear ramp sees a constant ratio of emission
+// to extinction; voxels too thin for the solve, away from any surface, hold their single scattering; the
+// outermost ring holds zeros (Cycles reads Vec3 grids' edges wrongly).
+BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo,
                      const std::vector<Source> &source, const Preset &preset, const BakeSettings &settings) {
     const Medium &medium = *scene.medium;
+    const VolumeOptics &optics = medium.optics();
     openvdb::BoolTree topology(medium.density().tree(), false, openvdb::TopologyCopy());
-    openvdb::tools::dilateActiveValues(topology, 2, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    openvdb::tools::dilateActiveValues(topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
     std::array<openvdb::Vec3fTree::Ptr, 4> trees;
     for (auto &tree : trees)
         tree = std::make_shared<openvdb::Vec3fTree>(topology, openvdb::Vec3f(0.0f), openvdb::TopologyCopy());
+    openvdb::BoolTree carried(topology, false, openvdb::TopologyCopy());  // voxels holding a surface's radiance
     openvdb::tree::LeafManager<openvdb::Vec3fTree> leaves(*trees[0]);
-    const VolumeOptics &optics = medium.optics();
+
+    auto write = [&](std::size_t l, openvdb::Index pos, const Source &S) {
+        const openvdb::Coord origin = leaves.leaf(l).origin();
+        leaves.leaf(l).setValueOnly(pos, openvdb::Vec3f(float(S.l0.x), float(S.l0.y), float(S.l0.z)));
+        for (int a = 0; a < 3; ++a)
+            trees[1 + a]->probeLeaf(origin)->setValueOnly(
+                pos, openvdb::Vec3f(float(S.l1[0][a]), float(S.l1[1][a]), float(S.l1[2][a])));
+    };
+    // Average of the 26 neighbours accepted by `take`, read by `value`; false if none.
+    auto average = [](const openvdb::Coord &c, const auto &take, const auto &value, Source &S) {
+        int count = 0;
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) {
+                    const openvdb::Coord n = c.offsetBy(dx, dy, dz);
+                    if (!take(n)) continue;
+                    const Source v = value(n);
+                    S.l0 += v.l0, S.l1 += v.l1, ++count;
+                }
+        if (count) S.l0 /= double(count), S.l1 /= double(count);
+        return count > 0;
+    };
+    // First: unknowns, and the voxels next to surface voxels.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
-        Medium::Accessor density = medium.accessor();
-        Medium::ColumnMarcher marcher(medium);
-        for (std::size_t l = range.begin(); l != range.end(); ++l) {
-            std::array<openvdb::Vec3fTree::LeafNodeType *, 4> leaf{&leaves.leaf(l), nullptr, nullptr, nullptr};
-            for (int k = 1; k < 4; ++k) leaf[k] = trees[k]->probeLeaf(leaf[0]->origin());
-            for (auto it = leaf[0]->beginValueOn(); it; ++it) {
+        openvdb::tree::ValueAccessor<openvdb::BoolTree> mark(carried);
+        for (std::size_t l = range.begin(); l != range.end(); ++l)
+            for (auto it = leaves.leaf(l).beginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
-                Source S;
                 const std::int32_t i = index.getValue(c);
+                Source S;
                 if (i >= 0) {
                     S = source[i];
+                } else if (average(c, [&](const openvdb::Coord &n) { const std::int32_t j = index.getValue(n); return j >= 0 && topo.patches[j].isSurface(); },
+                                   [&](const openvdb::Coord &n) { return source[index.getValue(n)]; }, S)) {
+                    mark.setValueOnly(c, true);
                 } else {
-                    int count = 0;
-                    for (int dx = -1; dx <= 1; ++dx)
-                        for (int dy = -1; dy <= 1; ++dy)
-                            for (int dz = -1; dz <= 1; ++dz) {
-                                const std::int32_t j = index.getValue(c.offsetBy(dx, dy, dz));
-                                if (j < 0 || patches[j].area <= 0.0) continue;
-                                S.l0 += source[j].l0, S.l1 += source[j].l1, ++count;
-                            }
-                    if (count) {
-                        S.l0 /= double(count), S.l1 /= double(count);
-                    } else if (density.getValue(c) > 0.0f) {
-                        const glm::dvec3 centre = medium.voxelCentre(c);
-                        for (const SunLight &sun : scene.suns) {
-                            const glm::dvec3 beam = glm::dvec3(sunBeamAt(scene, sun, centre, preset.sunSamples,
-                                                                         settings.seed, std::uint64_t(l), marcher)) *
-                                                    sun.irradiance * optics.albedo * kInvFourPi;
-                            S.l0 += beam;
-                            for (int ch = 0; ch < 3; ++ch) S.l1[ch] -= 3.0 * optics.g * beam[ch] * sun.direction;
-                        }
+                    continue;
+                }
+                write(l, it.pos(), S);
+            }
+    });
+    // Then: one voxel further out, and thin snow on its own.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> mark(carried);
+        using Reader = openvdb::tree::ValueAccessor<const openvdb::Vec3fTree>;
+        std::array<Reader, 4> read{Reader(*trees[0]), Reader(*trees[1]), Reader(*trees[2]), Reader(*trees[3])};
+        Medium::Accessor density = medium.accessor();
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t l = range.begin(); l != range.end(); ++l)
+            for (auto it = leaves.leaf(l).beginValueOn(); it; ++it) {
+                const openvdb::Coord c = it.getCoord();
+                if (index.getValue(c) >= 0 || mark.getValue(c)) continue;
+                Source S;
+                const bool near = average(c, [&](const openvdb::Coord &n) { return mark.getValue(n) && index.getValue(n) < 0; },
+                                          [&](const openvdb::Coord &n) {
+                                              Source v;
+                                              const openvdb::Vec3f l0 = read[0].getValue(n);
+                                              v.l0 = glm::dvec3(l0.x(), l0.y(), l0.z());
+                                              for (int a = 0; a < 3; ++a) {
+                                                  const openvdb::Vec3f l1 = read[1 + a].getValue(n);
+                                                  for (int ch = 0; ch < 3; ++ch) v.l1[ch][a] = l1[ch];
+                                              }
+                                              return v;
+                                          },
+                                          S);
+                if (!near && density.getValue(c) > 0.0f) {
+                    const glm::dvec3 centre = medium.voxelCentre(c);
+                    for (const SunLight &sun : scene.suns) {
+                        const glm::dvec3 beam = glm::dvec3(sunBeamAt(scene, sun, centre, preset.sunSamples, settings.seed,
+                                                                     std::uint64_t(l), marcher)) *
+                                                sun.irradiance * optics.albedo * kInvFourPi;
+                        S.l0 += beam;
+                        for (int ch = 0; ch < 3; ++ch) S.l1[ch] -= 3.0 * optics.g * beam[ch] * sun.direction;
                     }
                 }
-                const auto pos = it.pos();
-                leaf[0]->setValueOnly(pos, openvdb::Vec3f(float(S.l0.x), float(S.l0.y), float(S.l0.z)));
-                for (int a = 0; a < 3; ++a)
-                    leaf[1 + a]->setValueOnly(pos, openvdb::Vec3f(float(S.l1[0][a]), float(S.l1[1][a]), float(S.l1[2][a])));
+                if (near || density.getValue(c) > 0.0f) write(l, it.pos(), S);
             }
-        }
     });
     BakedGrids out;
     for (std::size_t k = 0; k < 4; ++k) {
@@ -461,14 +535,13 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     p.report(0.05, "Tracing sun and sky light");
     const IncidentLight light = computeIncidentLight(
         scene, topo, {preset.skySamples, preset.sunSamples, settings.seed}, SubProgress(&p, 0.05, 0.4));
-    const std::vector<SurfacePatch> patches = surfacePatches(*scene.medium, topo);
 
     BakeStats local;
     local.unknowns = topo.size();
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
-    for (const SurfacePatch &patch : patches) local.surfaceVoxels += patch.area > 0.0;
+    for (const SurfacePatch &patch : topo.patches) local.surfaceVoxels += patch.isSurface();
 
-    std::vector<Source> source(topo.size());
+    std::vector<SolvedVoxel> solvedVoxel(topo.size());
     std::vector<double> phi(topo.size(), 0.0);  // each channel starts from the previous one's solution
     for (int c = 0; c < 3; ++c) {
         const SubProgress sub(&p, 0.4 + (solved - 0.4) * c / 3.0, 0.4 + (solved - 0.4) * (c + 1) / 3.0);
@@ -480,14 +553,16 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
             local.iterations[c] = result.iterations;
             local.relativeResidual[c] = result.relativeResidual;
         }
-        sourceFunction(scene, topo, light, patches, sys, phi, c, source);
+        solvedVoxels(scene, topo, light, sys, phi, c, solvedVoxel);
     }
+    std::vector<Source> surface = surfaceRadiance(topo, solvedVoxel);
     if (reference) {
         p.report(solved, "Path tracing the surface (reference)");
-        referenceSurface(scene, topo, patches, preset.referenceSamples, settings.seed, source, SubProgress(&p, solved, 0.95));
+        referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
     }
+    const std::vector<Source> source = composeSource(scene, topo, solvedVoxel, surface);
     p.report(reference ? 0.95 : solved, "Writing the grids");
-    BakedGrids grids = makeGrids(scene, topo, patches, source, preset, settings);
+    BakedGrids grids = makeGrids(scene, topo, source, preset, settings);
     p.report(1.0, "Done");
     if (stats) *stats = local;
     return grids;

@@ -1,5 +1,6 @@
 #include "firn/baked_grids.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <openvdb/tools/Interpolation.h>
@@ -20,9 +21,12 @@ BakedGrids BakedGrids::find(const openvdb::GridPtrVec &grids) {
     return out;
 }
 
-Rgb renderBaked(const Medium &medium, const BakedGrids &baked, const Ray &ray) {
+Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray) {
+    const Medium &medium = *scene.medium;
     double t0, t1;
     if (!medium.clipToBounds(ray.origin, ray.direction, t0, t1)) return Rgb(0.0);
+    if (const auto hit = scene.occluders->caster().intersect(glm::vec3(ray.origin), glm::vec3(ray.direction)))
+        t1 = std::min(t1, double(hit->distance));
     const double h = medium.voxelSize(), k = medium.optics().extinctionPerDensity;
     const double dt = h / 32.0;  // fine enough for the steepest ramp of one voxel to be integrated exactly
     Medium::Accessor density = medium.accessor();

@@ -8,6 +8,7 @@
 #include "firn/color.h"
 #include "firn/medium.h"
 #include "firn/monte_carlo.h"
+#include "firn/scene.h"
 
 namespace firn {
 
@@ -27,8 +28,9 @@ struct BakedGrids {
 };
 
 // What Cycles draws for the snow along a camera ray with the contract's material: the integral of
-// sigma_t S(-direction) exp(-tau) along the ray, through the trilinear density and source grids (the sky
-// and surfaces behind the snow are not included: the renderer adds them, attenuated by exp(-tau)).
-Rgb renderBaked(const Medium &medium, const BakedGrids &baked, const Ray &ray);
+// sigma_t S(-direction) exp(-tau) along the ray, through the trilinear density and source grids, up to
+// the first occluder (the sky and surfaces behind the snow are not included: the renderer adds them,
+// attenuated by exp(-tau)).
+Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray);
 
 }  // namespace firn

@@ -23,8 +23,29 @@ double columnLimit(const glm::dvec3 &reduced) {
 }
 
 
-// Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders.
-glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, int samples,
+// Radiance (W/m^2/sr) an occluder sends from point q (unit normal n facing the viewer) after one
+// reflection of sun and sky light, each estimated with one ray.
+glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
+                               Rng &rng, Medium::ColumnMarcher &marcher) {
+    const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
+    const double limit = columnLimit(reduced);
+    const glm::dvec3 p = q + 1e-5 * n;
+    glm::dvec3 irradiance(0.0);
+    for (const SunLight &sun : scene.suns) {
+        const double cosine = glm::dot(n, sun.direction);
+        if (cosine > 0.0) irradiance += sun.irradiance * cosine * glm::dvec3(sunBeamAt(scene, sun, p, 1, 0, 0, marcher));
+    }
+    const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
+    if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
+        const double column = marcher.column(p, w, std::numeric_limits<double>::infinity(), limit);
+        if (column < limit) irradiance += kPi * scene.sky.radianceFrom(w) * glm::exp(-reduced * column);
+    }
+    return albedo * irradiance / kPi;
+}
+
+// Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
+// occluders in the way send what they reflect once (when `bounce`).
+glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, int samples, bool bounce,
                           std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher) {
     const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
     const double limit = columnLimit(reduced);
@@ -34,10 +55,21 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
     for (int i = 0; i < strata; ++i)
         for (int j = 0; j < strata; ++j) {
             const glm::dvec3 w = sampleCosineHemisphere(n, (i + rng.uniform()) / strata, (j + rng.uniform()) / strata);
-            if (scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) continue;
-            const double column = marcher.column(p, w, std::numeric_limits<double>::infinity(), limit);
+            const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+            const double column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
             if (column >= limit) continue;
-            sum += kPi * scene.sky.radianceFrom(w) * glm::exp(-reduced * column);
+            glm::dvec3 radiance;
+            if (!hit) {
+                radiance = scene.sky.radianceFrom(w);
+            } else if (bounce) {
+                const glm::dvec3 normal(hit->normal);
+                radiance = reflectedByOccluder(scene, p + double(hit->distance) * w,
+                                               glm::dot(normal, w) < 0.0 ? normal : -normal,
+                                               scene.occluders->albedo(hit->triangle), rng, marcher);
+            } else {
+                continue;
+            }
+            sum += kPi * radiance * glm::exp(-reduced * column);
         }
     return glm::vec3(sum / double(strata * strata));
 }
@@ -78,55 +110,63 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                                    const IncidentLightSettings &settings, const SubProgress &progress) {
     const Medium &medium = *scene.medium;
     const double h = medium.voxelSize();
+    // Where light meets a surface voxel's patch: out along its normal, past the density ramp and fringe.
+    const double fringe = kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h);
+    auto outside = [&](std::size_t i) {
+        Medium::Accessor density = medium.accessor();
+        glm::dvec3 p = medium.voxelCentre(topo.coord[i]) + h * topo.patches[i].normal;
+        for (int k = 0; k < 6 && medium.densityAt(p, density) >= fringe; ++k) p += 0.5 * h * topo.patches[i].normal;
+        return p;
+    };
     IncidentLight light;
-    const std::size_t jobs = scene.suns.size() + (scene.sky.isBlack() ? 0 : 1);
-    std::size_t job = 0;
+    const double jobs = double(scene.suns.size() + 1);
 
-    for (std::size_t s = 0; s < scene.suns.size(); ++s, ++job) {
+    for (std::size_t s = 0; s < scene.suns.size(); ++s) {
         const SunLight &sun = scene.suns[s];
         IncidentLight::Beam beam;
         beam.atVoxel.assign(topo.size(), glm::vec3(0.0f));
-        beam.atFace.assign(topo.faces.size(), glm::vec3(0.0f));
+        beam.atSurface.assign(topo.size(), glm::vec3(0.0f));
         const std::uint64_t seed = settings.seed ^ (0x5A17ull + s);
         parallelChunks(topo.size(), progress, [&](const auto &range) {
             Medium::ColumnMarcher marcher(medium);
-            for (std::size_t i = range.begin(); i != range.end(); ++i)
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 beam.atVoxel[i] = sunBeamAt(scene, sun, medium.voxelCentre(topo.coord[i]), settings.sunSamples, seed,
-                                            i, marcher);
-        });
-        parallelChunks(topo.faces.size(), progress, [&](const auto &range) {
-            Medium::ColumnMarcher marcher(medium);
-            for (std::size_t f = range.begin(); f != range.end(); ++f) {
-                const BoundaryFace &face = topo.faces[f];
-                if (face.occluder || glm::dot(faceNormal(face.face), sun.direction) <= 0.0) continue;
-                const glm::dvec3 outside = medium.voxelCentre(topo.coord[face.voxel]) + h * faceNormal(face.face);
-                beam.atFace[f] = sunBeamAt(scene, sun, outside, settings.sunSamples, seed, topo.size() + f, marcher);
+                                            2 * i, marcher);
+                if (topo.patches[i].isSurface() && glm::dot(topo.patches[i].normal, sun.direction) > 0.0)
+                    beam.atSurface[i] = sunBeamAt(scene, sun, outside(i), settings.sunSamples, seed, 2 * i + 1, marcher);
             }
         });
         light.beams.push_back(std::move(beam));
-        progress.report(double(job + 1) / jobs);
+        progress.report((s + 1) / jobs);
     }
 
-    light.skyIrradiance.assign(topo.faces.size(), glm::vec3(0.0f));
-    if (scene.sky.isBlack()) return light;
+    light.skyOnSurface.assign(topo.size(), glm::vec3(0.0f));
+    light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
+    const bool bounce = !scene.occluders->empty();
+    if (scene.sky.isBlack() && (scene.suns.empty() || !bounce)) return light;
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
     const std::uint64_t seed = settings.seed ^ 0x5C1Eull;
+    parallelChunks(topo.size(), progress, [&](const auto &range) {
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t i = range.begin(); i != range.end(); ++i)
+            if (topo.patches[i].isSurface())
+                light.skyOnSurface[i] = skyIrradianceAt(scene, outside(i), topo.patches[i].normal, settings.skySamples,
+                                                        bounce, seed, i, marcher);
+    });
+    if (scene.sky.isBlack()) return light;
     parallelChunks(topo.faces.size(), progress, [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t f = range.begin(); f != range.end(); ++f) {
             const BoundaryFace &face = topo.faces[f];
-            const glm::dvec3 centre = medium.voxelCentre(topo.coord[face.voxel]);
-            const glm::dvec3 n = faceNormal(face.face);
-            if (!face.occluder) {
-                light.skyIrradiance[f] = skyIrradianceAt(scene, centre + h * n, n, settings.skySamples, seed, f, marcher);
-                continue;
-            }
+            if (!face.occluder) continue;
             // Sky light reaching the surface under the snow without scattering: only under thin snow.
+            const glm::dvec3 n = faceNormal(face.face);
             const glm::dvec3 normal = glm::normalize(glm::dvec3(scene.occluders->mesh().crossNormal(face.triangle)));
             const glm::dvec3 up = glm::dot(normal, n) > 0.0 ? -normal : normal;  // towards the snow
-            const glm::dvec3 ground = centre + double(face.distance) * n;
+            const glm::dvec3 ground = medium.voxelCentre(topo.coord[face.voxel]) + double(face.distance) * n;
             if (marcher.column(ground, up, std::numeric_limits<double>::infinity(), limit) >= limit) continue;
-            light.skyIrradiance[f] = skyIrradianceAt(scene, ground, up, settings.skySamples, seed, f, marcher);
+            light.skyUnderSnow[f] = skyIrradianceAt(scene, ground, up, settings.skySamples, false, seed,
+                                                    topo.size() + f, marcher);
         }
     });
     return light;

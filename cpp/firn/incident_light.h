@@ -11,19 +11,23 @@
 
 namespace firn {
 
-// Light reaching the snow from outside, per colour channel, before it scatters.
+// Light reaching the snow from outside, per colour channel, before it scatters. Sun and sky light enter
+// through the smooth surface patches of surface voxels (not through the voxels' staircase faces, which
+// would shade each other).
 struct IncidentLight {
     // One per sun: the sun's beam as a fraction of its irradiance, after the snow in front of the point
     // (transmittance with the similarity-reduced extinction sigma_tr = (1 - omega g) sigma_t: light that
     // scattered forwards still travels with the beam) and occluders (averaged over the sun's disc).
     struct Beam {
-        std::vector<glm::vec3> atVoxel;  // at each unknown's centre
-        std::vector<glm::vec3> atFace;   // at the centre of the air voxel beyond each air face (0 for others)
+        std::vector<glm::vec3> atVoxel;    // at each unknown's centre
+        std::vector<glm::vec3> atSurface;  // just outside each surface voxel's patch (0 inside the snow)
     };
     std::vector<Beam> beams;
-    // W/m^2 per boundary face: for air faces the sky's irradiance onto the face (occluders and snow
-    // shadowing); for occluder faces the sky irradiance reaching the surface under the snow uncollided.
-    std::vector<glm::vec3> skyIrradiance;
+    // W/m^2 onto each surface voxel's patch from the sky, past occluders and snow, plus sun and sky light
+    // that occluders reflect once towards the snow (0 inside the snow).
+    std::vector<glm::vec3> skyOnSurface;
+    // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
+    std::vector<glm::vec3> skyUnderSnow;
 };
 
 struct IncidentLightSettings {

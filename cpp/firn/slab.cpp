@@ -25,7 +25,7 @@ openvdb::FloatGrid::Ptr makeSlabDensity(double voxelSize, int width, int layers,
     return grid;
 }
 
-double renderedExitance(const Medium &medium, const BakedGrids &baked, const glm::dvec3 &point,
+double renderedExitance(const Scene &scene, const BakedGrids &baked, const glm::dvec3 &point,
                         const glm::dvec3 &normal, int channel, int muNodes, int phiNodes) {
     // Gauss-Legendre nodes on [-1, 1] by Newton iteration on P_n.
     double sum = 0.0;
@@ -46,7 +46,7 @@ double renderedExitance(const Medium &medium, const BakedGrids &baked, const glm
         const double mu = 0.5 * (x + 1.0);
         for (int p = 0; p < phiNodes; ++p) {
             const glm::dvec3 w = directionAround(normal, mu, 2.0 * kPi * (p + 0.5) / phiNodes);
-            const Rgb L = renderBaked(medium, baked, Ray{point + 10.0 * medium.voxelSize() * w / std::max(mu, 0.05), -w});
+            const Rgb L = renderBaked(scene, baked, Ray{point + 10.0 * scene.medium->voxelSize() * w / std::max(mu, 0.05), -w});
             sum += weight * (2.0 * kPi / phiNodes) * mu * L[channel];
         }
     }

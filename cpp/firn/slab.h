@@ -16,7 +16,7 @@ openvdb::FloatGrid::Ptr makeSlabDensity(double voxelSize, int width, int layers,
 // Radiance flux (W/m^2) leaving a surface point through the hemisphere around `normal`, from the
 // rendered baked radiance (renderBaked) on camera rays aimed at the point: Gauss-Legendre in cos(zenith),
 // uniform in azimuth.
-double renderedExitance(const Medium &medium, const BakedGrids &baked, const glm::dvec3 &point,
+double renderedExitance(const Scene &scene, const BakedGrids &baked, const glm::dvec3 &point,
                         const glm::dvec3 &normal, int channel, int muNodes = 8, int phiNodes = 8);
 
 }  // namespace firn

@@ -58,18 +58,85 @@ std::unique_ptr<std::atomic<bool>[]> leavesNearOccluders(const Medium &medium, c
     return near;
 }
 
+// Outward normal from the density gradient (a 3x3x3 Sobel stencil), or from the air faces where the
+// gradient is flat or points the wrong way.
+void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
+    topo.patches.assign(topo.size(), SurfacePatch{});
+    const double h = medium.voxelSize();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        Medium::Accessor density = medium.accessor();
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            glm::dvec3 faces(0.0);
+            int airFaces = 0;
+            for (int f = 0; f < 6; ++f)
+                if (topo.isAirFace(i, f)) faces += faceNormal(f), ++airFaces;
+            if (airFaces == 0) continue;
+            glm::dvec3 gradient(0.0);
+            const openvdb::Coord &c = topo.coord[i];
+            for (int dx = -1; dx <= 1; ++dx)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dz = -1; dz <= 1; ++dz) {
+                        const double w = (2 - std::abs(dx)) * (2 - std::abs(dy)) * (2 - std::abs(dz));
+                        gradient += w * double(density.getValue(c.offsetBy(dx, dy, dz))) * glm::dvec3(dx, dy, dz);
+                    }
+            glm::dvec3 n = -gradient;
+            if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
+            SurfacePatch &patch = topo.patches[i];
+            patch.normal = glm::length(n) > 0.0 ? glm::normalize(n) : glm::dvec3(0.0, 0.0, 1.0);
+            double projected = 0.0;
+            for (int f = 0; f < 6; ++f)
+                if (topo.isAirFace(i, f)) projected += std::max(0.0, glm::dot(patch.normal, faceNormal(f)));
+            for (int f = 0; f < 6; ++f)
+                if (topo.isAirFace(i, f))
+                    patch.share[f] = float(projected > 1e-6 ? std::max(0.0, glm::dot(patch.normal, faceNormal(f))) / projected
+                                                           : 1.0 / airFaces);
+            patch.area = h * h * std::max(projected, 0.3);
+        }
+    });
+}
+
 }  // namespace
+
+double airFaceResistance(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &c, int face,
+                         double reduced) {
+    const double h = medium.voxelSize();
+    double R = 0.0, inner = density.getValue(c);
+    openvdb::Coord next = c;
+    for (int k = 0; k < 4 && inner > 0.0; ++k) {  // the centre, then fringe voxels, to the first empty one
+        next += faceStep(face);
+        const double outer = density.getValue(next);
+        R += 1.5 * h * reduced * (inner + outer);  // 3 x the trapezoid of the linear ramp
+        inner = outer;
+    }
+    return R;
+}
 
 SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress) {
     const double h = medium.voxelSize();
     const float minDensity = float(kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h));
     const openvdb::FloatTree &densityTree = medium.density().tree();
 
-    openvdb::BoolTree mask(densityTree, false, openvdb::TopologyCopy());
-    openvdb::tree::LeafManager<openvdb::BoolTree>(mask).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
+    openvdb::BoolTree dense(densityTree, false, openvdb::TopologyCopy());
+    openvdb::tree::LeafManager<openvdb::BoolTree>(dense).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
         const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
         for (auto it = leaf.beginValueOn(); it; ++it)
             if (!densityLeaf || densityLeaf->getValue(it.pos()) < minDensity) it.setValueOff();
+    });
+    // Peel surface fringes: thin voxels with air on one side and a thick voxel on the other.
+    const float fringeDensity = float(kFringeOpticalDepth / (medium.optics().extinctionPerDensity * h));
+    openvdb::BoolTree mask(dense);
+    openvdb::tree::LeafManager<openvdb::BoolTree>(mask).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> isDense(dense);
+        openvdb::tree::ValueAccessor<const openvdb::FloatTree> density(densityTree);
+        for (auto it = leaf.beginValueOn(); it; ++it) {
+            const openvdb::Coord c = it.getCoord();
+            if (density.getValue(c) >= fringeDensity) continue;
+            for (int f = 0; f < 6; ++f)
+                if (!isDense.isValueOn(c + faceStep(f)) && density.getValue(c - faceStep(f)) >= fringeDensity) {
+                    it.setValueOff();
+                    break;
+                }
+        }
     });
     SnowTopology topo;
     topo.index = openvdb::tools::poisson::createIndexTree(mask);
@@ -95,13 +162,21 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
                 const openvdb::Coord c = it.getCoord();
                 topo.coord[i] = c;
                 topo.density[i] = densityLeaf->getValue(it.pos());
-                const glm::dvec3 centre = medium.voxelCentre(c);
                 for (int f = 0; f < 6; ++f) {
                     BoundaryFace face{i, std::uint8_t(f), false, 0.0f, 0};
                     if (near[l]) {
-                        const auto hit = occluders.caster().intersect(glm::vec3(centre), glm::vec3(faceNormal(f)),
-                                                                      0.0f, float(h));
-                        if (hit) face.occluder = true, face.distance = hit->distance, face.triangle = hit->triangle;
+                        // Both voxels of a link test the same segment, from the lower centre (nudged along
+                        // the axis so that a surface through voxel centres cuts the link below them).
+                        const bool up = f & 1;
+                        const openvdb::Coord lower = up ? c : c + faceStep(f);
+                        const glm::dvec3 axis = faceNormal(f | 1);
+                        const double nudge = 1e-4 * h;
+                        const auto hit = occluders.caster().intersect(glm::vec3(medium.voxelCentre(lower) + nudge * axis),
+                                                                      glm::vec3(axis), 0.0f, float(h));
+                        if (hit) {
+                            face.occluder = true, face.triangle = hit->triangle;
+                            face.distance = float(std::clamp(up ? hit->distance + nudge : h - hit->distance - nudge, 0.0, h));
+                        }
                     }
                     const std::int32_t neighbour = index.getValue(c + faceStep(f));
                     if (!face.occluder && neighbour >= 0) {
@@ -124,6 +199,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
             link = -1 - std::int32_t(offset[l] + SnowTopology::faceIndex(link));
         }
     });
+    computeSurfacePatches(medium, topo);
     progress.report(1.0);
     return topo;
 }

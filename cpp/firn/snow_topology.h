@@ -36,23 +36,47 @@ struct BoundaryFace {
     std::uint32_t triangle = 0;
 };
 
-// The unknowns of the diffusion solve: voxels optically thick enough for diffusion (sigma_t h >= 0.1),
-// indexed 0..n-1 in OpenVDB leaf order, each linked to its six neighbours or to a boundary face.
+// The smooth surface through a surface voxel (one with air faces): outward normal from the density
+// gradient, and the area of that surface inside the voxel (its air faces projected onto it, m^2).
+// Light enters and leaves the snow through these patches rather than through the voxels' staircase.
+struct SurfacePatch {
+    glm::dvec3 normal{0.0, 0.0, 1.0};
+    double area = 0.0;  // 0 for voxels inside the snow
+    std::array<float, 6> share{};  // of the patch's light crossing each air face (sums to 1)
+    bool isSurface() const { return area > 0.0; }
+};
+
+// The unknowns of the diffusion solve: voxels optically thick enough for diffusion (sigma_t h >= 0.1) and
+// not a surface's fringe, indexed 0..n-1 in OpenVDB leaf order, each linked to its six neighbours or to a
+// boundary face.
 struct SnowTopology {
     openvdb::Int32Tree::Ptr index;  // voxel -> unknown, -1 elsewhere
     std::vector<openvdb::Coord> coord;
     std::vector<float> density;                     // kg/m^3
     std::vector<std::array<std::int32_t, 6>> link;  // >= 0: neighbour unknown; < 0: face -1 - link
     std::vector<BoundaryFace> faces;
+    std::vector<SurfacePatch> patches;  // per unknown
 
     std::size_t size() const { return coord.size(); }
     static bool isFace(std::int32_t link) { return link < 0; }
     static std::size_t faceIndex(std::int32_t link) { return std::size_t(-1 - link); }
+    bool isAirFace(std::size_t voxel, int face) const {
+        return isFace(link[voxel][face]) && !faces[faceIndex(link[voxel][face])].occluder;
+    }
 };
 
 // Voxels with sigma_t h below this are too thin for diffusion: light crosses them (single scattering).
 constexpr double kMinVoxelOpticalDepth = 0.1;
+// A voxel thinner than this lying on a thicker one, under open air, is the fringe of a surface (a partly
+// filled voxel of an antialiased surface): it belongs to the density ramp in front of the thick voxel,
+// not to the unknowns, so the thick voxel carries the surface's radiance.
+constexpr double kFringeOpticalDepth = 5.0;
 
 SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress);
+
+// Resistance (3 x reduced optical depth, sigma_tr per unit density `reduced`) from where the density
+// ramps up to zero outside air face `face` of voxel `c` to the voxel's centre, through any fringe voxels.
+double airFaceResistance(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &c, int face,
+                         double reduced);
 
 }  // namespace firn

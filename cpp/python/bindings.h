@@ -5,4 +5,5 @@
 
 namespace firncore {
 void bindBasics(pybind11::module_ &m);  // errors, Progress, threads
+void bindBake(pybind11::module_ &m);    // optics, lights, bake, reference tools
 }  // namespace firncore

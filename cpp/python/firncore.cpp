@@ -7,4 +7,5 @@ PYBIND11_MODULE(firncore, m) {
     m.doc() = "Firn's core: physically based snow, independent of Blender.";
     m.attr("__version__") = firn::kVersion;
     firncore::bindBasics(m);
+    firncore::bindBake(m);
 }
