@@ -36,12 +36,13 @@ struct Preset {
     int skySamples, sunSamples;
     double tolerance;
     int referenceSamples;
+    int snowBounces;  // passes gathering light between snow surfaces
 };
 
 Preset resolve(const BakeSettings &s) {
-    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0}
-               : s.quality == BakeQuality::Final ? Preset{32, 4, 1e-6, 0}
-                                                 : Preset{64, 8, 1e-7, 64};
+    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1}
+               : s.quality == BakeQuality::Final ? Preset{32, 4, 1e-6, 0, 2}
+                                                 : Preset{64, 8, 1e-7, 64, 2};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
     if (s.skySamples) p.skySamples = s.skySamples;
@@ -145,13 +146,18 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 const std::size_t fi = SnowTopology::faceIndex(link);
                 const BoundaryFace &face = topo.faces[fi];
                 const double beyond = ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f)));
+                double area = h2;  // m^2 of boundary the face stands for
                 if (!face.occluder) {
                     // Air: the density ramps down to zero through any fringe; diffuse sky light (its share
                     // of what falls on the voxel's surface patch) enters through the Marshak condition.
+                    // A face on the patch's side counts with its projection on the smooth surface: a
+                    // staircase has more face than the surface has area.
+                    const double facing = glm::dot(patch.normal, faceNormal(f));
+                    if (facing > 0.0) area = h2 * facing;
                     const BoundaryLink &b = boundary[f].emplace(
                         beta, 2.0, airFaceResistance(medium, density, topo.coord[i], f, ch.sigmaTr(1.0)));
                     const double sky = light.skyOnSurface[i][c] * patch.area * patch.share[f];  // W
-                    sys.outConductance[i] += h2 * b.conductance();
+                    sys.outConductance[i] += area * b.conductance();
                     source += 4.0 * sky * b.conductance();
                     sys.escaped[i] += sky * b.diffuseReturned();
                     sys.skyIn[i] += sky;
@@ -162,8 +168,8 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     boundary[f].emplace(beta, 2.0 * (1.0 + albedo[f]) / (1.0 - albedo[f]),
                                         3.0 * (d * sigmaTr + 0.5 * d * d / h * (beyond - sigmaTr)));
                 }
-                diag += h2 * boundary[f]->conductance();
-                mass[f] = h2 * boundary[f]->mass();
+                diag += area * boundary[f]->conductance();
+                mass[f] = area * boundary[f]->mass();
             }
             // Absorption: the voxel's own, taken along the axes that meet a boundary (where the fluence
             // varies; exact for a flat surface), or along all three alike inside.
@@ -232,8 +238,13 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
 // What the solve yields per unknown, per channel: the source function inside, and for surface voxels the
 // light leaving through their patch, as power times angular shape (W; radiance after dividing by pi A).
 struct SolvedVoxel {
-    Source inside;   // S = omega / (4 pi) (phi + 3 g F . w) plus the beams, F = -D grad phi
-    Source leaving;  // surface voxels only
+    Source inside;  // S = omega / (4 pi) (phi + 3 g F . w) plus the beams, F = -D grad phi
+    // Surface voxels only: what returns of the light that entered there, over and above the escape
+    // function's share of it (sharp: it follows shadows) ...
+    Source returned;
+    // ... and all light leaving, in the escape function's shape (smooth, but spread unevenly over a
+    // voxel staircase).
+    Source diffuse;
 };
 
 void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
@@ -265,11 +276,13 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
 
             // Light that entered returns with the shape of its incidence (the sun lobe; sky light
             // isotropically, as a non-absorbing half-space returns uniform sky light); the deficit
-            // (absorbed, or gone elsewhere) and any surplus from deep inside take the escape function's.
+            // (absorbed, or gone elsewhere) and any surplus from deep inside take the escape function's
+            // u(mu) = 3/7 + 6/7 mu. So: leaving = sum in (shape - u) + out u.
             const SurfacePatch &patch = topo.patches[i];
+            const glm::dvec3 escape1 = 6.0 / 7.0 * patch.normal;
             const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
-            double deficit = sys.skyIn[i] - leaving, s0 = sys.skyIn[i];
-            glm::dvec3 s1(0.0);
+            double r0 = sys.skyIn[i] * (1.0 - 3.0 / 7.0);
+            glm::dvec3 r1 = -sys.skyIn[i] * escape1;
             for (std::size_t s = 0; s < scene.suns.size(); ++s) {
                 const double P = sys.sunIn[s][i];
                 if (P <= 0.0) continue;
@@ -277,37 +290,40 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 const SunLobe lobe = sunLobe(ch.g, std::clamp(-glm::dot(d, patch.normal), 0.05, 1.0));
                 glm::dvec3 t = d - glm::dot(d, patch.normal) * patch.normal;
                 t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
-                deficit += P;
-                s0 += P * lobe.a;
-                s1 += P * (lobe.b * patch.normal + lobe.c * t);
+                r0 += P * (lobe.a - 3.0 / 7.0);
+                r1 += P * (lobe.b * patch.normal + lobe.c * t - escape1);
             }
-            out[i].leaving.l0[c] = s0 - deficit * 3.0 / 7.0;
-            out[i].leaving.l1[c] = s1 - deficit * 6.0 / 7.0 * patch.normal;
+            out[i].returned.l0[c] = r0;
+            out[i].returned.l1[c] = r1;
+            out[i].diffuse.l0[c] = leaving * 3.0 / 7.0;
+            out[i].diffuse.l1[c] = leaving * escape1;
         }
     });
 }
 
-// Radiance leaving each surface voxel: the light leaving its neighbourhood (surface voxels in its 3^3
-// block) over that neighbourhood's area, so a voxel staircase's uneven share of the flux averages out
-// over about a voxel, less than the diffusion's own blur of a few transport mean free paths.
+// Radiance leaving each surface voxel. The returned part is the voxel's own (over its patch's area); the
+// diffuse part is averaged over its neighbourhood (surface voxels in its 3^3 block, by area): a voxel
+// staircase spreads the diffusion's outflow unevenly between steps, though the light itself varies
+// only over a few transport mean free paths.
 std::vector<Source> surfaceRadiance(const SnowTopology &topo, const std::vector<SolvedVoxel> &solved) {
     std::vector<Source> out(topo.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
-            Source sum;
+            Source diffuse;
             double area = 0.0;
             for (int dx = -1; dx <= 1; ++dx)
                 for (int dy = -1; dy <= 1; ++dy)
                     for (int dz = -1; dz <= 1; ++dz) {
                         const std::int32_t j = index.getValue(topo.coord[i].offsetBy(dx, dy, dz));
                         if (j < 0 || !topo.patches[j].isSurface()) continue;
-                        sum.l0 += solved[j].leaving.l0, sum.l1 += solved[j].leaving.l1;
+                        diffuse.l0 += solved[j].diffuse.l0, diffuse.l1 += solved[j].diffuse.l1;
                         area += topo.patches[j].area;
                     }
-            out[i].l0 = sum.l0 / (kPi * area);
-            out[i].l1 = sum.l1 / (kPi * area);
+            const double own = kPi * topo.patches[i].area;
+            out[i].l0 = solved[i].returned.l0 / own + diffuse.l0 / (kPi * area);
+            out[i].l1 = solved[i].returned.l1 / own + diffuse.l1 / (kPi * area);
         }
     });
     return out;
@@ -522,45 +538,92 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo,
 
 }  // namespace
 
+// Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
+// of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch).
+// Voxels with an open sky are skipped.
+std::vector<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                                      const BakedGrids &baked, int samples, std::uint64_t seed,
+                                      const SubProgress &progress) {
+    constexpr float kOpenSky = 0.005f;  // snow hides less than this of the sky: nothing to gather
+    std::vector<glm::vec3> out(topo.size(), glm::vec3(0.0f));
+    const int strata = std::max(1, int(std::lround(std::sqrt(double(samples)))));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
+        progress.throwIfCancelled();
+        BakedRadiance radiance(scene, baked);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface() || light.snowCover[i] < kOpenSky) continue;
+            const glm::dvec3 p = patchOutside(*scene.medium, topo, i);
+            Rng rng(seed ^ 0x1A7E5ull, i);
+            glm::dvec3 sum(0.0);
+            for (int a = 0; a < strata; ++a)
+                for (int b = 0; b < strata; ++b) {
+                    const glm::dvec3 w = sampleCosineHemisphere(topo.patches[i].normal, (a + rng.uniform()) / strata,
+                                                                (b + rng.uniform()) / strata);
+                    const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+                    sum += radiance.along(Ray{p, w}, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), 0.25);
+                }
+            out[i] = glm::vec3(kPi * sum / double(strata * strata));
+        }
+    });
+    return out;
+}
+
 BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
     validate(scene);
     const Preset preset = resolve(settings);
     Progress quiet;
     Progress &p = progress ? *progress : quiet;
     const bool reference = settings.quality == BakeQuality::Reference;
-    const double solved = reference ? 0.5 : 0.9;  // progress when the diffusion solve is done
+    const double solved = reference ? 0.5 : 0.9;  // progress when the diffusion solves are done
 
     p.report(0.0, "Finding the snow's voxels");
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05));
     p.report(0.05, "Tracing sun and sky light");
-    const IncidentLight light = computeIncidentLight(
-        scene, topo, {preset.skySamples, preset.sunSamples, settings.seed}, SubProgress(&p, 0.05, 0.4));
+    IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
+                                               SubProgress(&p, 0.05, 0.4));
+    const std::vector<glm::vec3> sky = light.skyOnSurface;
 
     BakeStats local;
     local.unknowns = topo.size();
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
     for (const SurfacePatch &patch : topo.patches) local.surfaceVoxels += patch.isSurface();
+    const bool hidden = std::any_of(light.snowCover.begin(), light.snowCover.end(), [](float f) { return f > 0.005f; });
+    const int passes = hidden ? 1 + preset.snowBounces : 1;
 
-    std::vector<SolvedVoxel> solvedVoxel(topo.size());
-    std::vector<double> phi(topo.size(), 0.0);  // each channel starts from the previous one's solution
-    for (int c = 0; c < 3; ++c) {
-        const SubProgress sub(&p, 0.4 + (solved - 0.4) * c / 3.0, 0.4 + (solved - 0.4) * (c + 1) / 3.0);
-        p.report(0.4 + (solved - 0.4) * c / 3.0, "Solving multiple scattering");
-        ChannelSystem sys = assemble(scene, topo, light, c, sub);
-        if (topo.size() > 0) {
-            const MultigridSolver solver(std::move(sys.A));
-            const MultigridSolver::Result result = solver.solve(sys.b, phi, preset.tolerance, 500, sub);
-            local.iterations[c] = result.iterations;
-            local.relativeResidual[c] = result.relativeResidual;
+    std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
+    for (auto &channel : phi) channel.assign(topo.size(), 0.0);
+    std::vector<Source> source;
+    for (int pass = 0; pass < passes; ++pass) {
+        const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
+        if (pass > 0) {
+            // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
+            p.report(begin, "Gathering light between snow surfaces");
+            const BakedGrids previous = makeGrids(scene, topo, source, preset, settings);
+            const std::vector<glm::vec3> fromSnow = snowIrradiance(scene, topo, light, previous, preset.skySamples,
+                                                                   settings.seed + pass, SubProgress(&p, begin, begin));
+            for (std::size_t i = 0; i < topo.size(); ++i) light.skyOnSurface[i] = sky[i] + fromSnow[i];
         }
-        solvedVoxels(scene, topo, light, sys, phi, c, solvedVoxel);
+        std::vector<SolvedVoxel> solvedVoxel(topo.size());
+        for (int c = 0; c < 3; ++c) {
+            const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
+            p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
+            ChannelSystem sys = assemble(scene, topo, light, c, sub);
+            if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
+            if (topo.size() > 0) {
+                const MultigridSolver solver(std::move(sys.A));
+                const MultigridSolver::Result result = solver.solve(sys.b, phi[c], preset.tolerance, 500, sub);
+                local.iterations[c] += result.iterations;
+                local.relativeResidual[c] = result.relativeResidual;
+            }
+            solvedVoxels(scene, topo, light, sys, phi[c], c, solvedVoxel);
+        }
+        std::vector<Source> surface = surfaceRadiance(topo, solvedVoxel);
+        if (reference && pass + 1 == passes) {
+            p.report(solved, "Path tracing the surface (reference)");
+            referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
+        }
+        source = composeSource(scene, topo, solvedVoxel, surface);
     }
-    std::vector<Source> surface = surfaceRadiance(topo, solvedVoxel);
-    if (reference) {
-        p.report(solved, "Path tracing the surface (reference)");
-        referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
-    }
-    const std::vector<Source> source = composeSource(scene, topo, solvedVoxel, surface);
     p.report(reference ? 0.95 : solved, "Writing the grids");
     BakedGrids grids = makeGrids(scene, topo, source, preset, settings);
     p.report(1.0, "Done");

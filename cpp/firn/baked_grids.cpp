@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <openvdb/tools/Interpolation.h>
 
@@ -21,34 +22,37 @@ BakedGrids BakedGrids::find(const openvdb::GridPtrVec &grids) {
     return out;
 }
 
-Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray) {
-    const Medium &medium = *scene.medium;
-    double t0, t1;
-    if (!medium.clipToBounds(ray.origin, ray.direction, t0, t1)) return Rgb(0.0);
-    if (const auto hit = scene.occluders->caster().intersect(glm::vec3(ray.origin), glm::vec3(ray.direction)))
-        t1 = std::min(t1, double(hit->distance));
-    const double h = medium.voxelSize(), k = medium.optics().extinctionPerDensity;
-    const double dt = h / 32.0;  // fine enough for the steepest ramp of one voxel to be integrated exactly
-    Medium::Accessor density = medium.accessor();
-    std::array<openvdb::Vec3fGrid::ConstAccessor, 4> source{
-        baked.source[0]->getConstAccessor(), baked.source[1]->getConstAccessor(),
-        baked.source[2]->getConstAccessor(), baked.source[3]->getConstAccessor()};
+BakedRadiance::BakedRadiance(const Scene &scene, const BakedGrids &baked)
+    : scene_(scene),
+      marcher_(*scene.medium),
+      density_(scene.medium->accessor()),
+      source_{Reader(baked.source[0]->tree()), Reader(baked.source[1]->tree()), Reader(baked.source[2]->tree()),
+              Reader(baked.source[3]->tree())} {}
+
+Rgb BakedRadiance::along(const Ray &ray, double tMax, double step) {
+    const double k = scene_.medium->optics().extinctionPerDensity;
     const glm::dvec3 w = -ray.direction;  // towards the viewer
     Rgb radiance(0.0);
     double transmittance = 1.0;
-    for (double t = t0; t < t1 && transmittance > 1e-6; t += dt) {
-        const glm::dvec3 p = ray.origin + (t + 0.5 * dt) * ray.direction;
-        const double sigmaT = k * medium.densityAt(p, density);
-        if (sigmaT <= 0.0) continue;
-        const glm::dvec3 ijk = medium.worldToIndex(p);
-        const openvdb::Vec3d xyz(ijk.x, ijk.y, ijk.z);
-        openvdb::Vec3f S = openvdb::tools::BoxSampler::sample(source[0], xyz);
-        for (int a = 0; a < 3; ++a) S += float(w[a]) * openvdb::tools::BoxSampler::sample(source[1 + a], xyz);
+    marcher_.march(ray.origin, ray.direction, tMax, step, [&](const openvdb::Vec3d &ijk, double dt) {
+        const double sigmaT = k * openvdb::tools::BoxSampler::sample(density_, ijk);
+        if (sigmaT <= 0.0) return true;
+        openvdb::Vec3f S = openvdb::tools::BoxSampler::sample(source_[0], ijk);
+        for (int a = 0; a < 3; ++a) S += float(w[a]) * openvdb::tools::BoxSampler::sample(source_[1 + a], ijk);
         const double opacity = 1.0 - std::exp(-sigmaT * dt);
         radiance += transmittance * opacity * Rgb(S.x(), S.y(), S.z());
         transmittance *= 1.0 - opacity;
-    }
+        return transmittance > 1e-6;
+    });
     return radiance;
+}
+
+Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray) {
+    double tMax = std::numeric_limits<double>::infinity();
+    if (const auto hit = scene.occluders->caster().intersect(glm::vec3(ray.origin), glm::vec3(ray.direction)))
+        tMax = hit->distance;
+    // Steps of 1/32 voxel resolve the steepest density ramp (one voxel) to well under 1 %.
+    return BakedRadiance(scene, baked).along(ray, tMax, 1.0 / 32.0);
 }
 
 }  // namespace firn

@@ -27,6 +27,22 @@ struct BakedGrids {
     static BakedGrids find(const openvdb::GridPtrVec &grids);
 };
 
+// Integrates the baked emission along rays, as the renderer does; one per thread.
+class BakedRadiance {
+  public:
+    BakedRadiance(const Scene &scene, const BakedGrids &baked);
+    // Radiance the baked snow sends back along the ray (towards its origin) from t = 0 to tMax (m),
+    // integrated in steps of at most `step` voxels with the exact exponential of each step.
+    Rgb along(const Ray &ray, double tMax, double step);
+
+  private:
+    using Reader = openvdb::tree::ValueAccessor<const openvdb::Vec3fTree>;
+    const Scene &scene_;
+    Medium::ColumnMarcher marcher_;
+    Medium::Accessor density_;
+    std::array<Reader, 4> source_;
+};
+
 // What Cycles draws for the snow along a camera ray with the contract's material: the integral of
 // sigma_t S(-direction) exp(-tau) along the ray, through the trilinear density and source grids, up to
 // the first occluder (the sky and surfaces behind the snow are not included: the renderer adds them,

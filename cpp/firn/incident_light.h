@@ -26,6 +26,9 @@ struct IncidentLight {
     // W/m^2 onto each surface voxel's patch from the sky, past occluders and snow, plus sun and sky light
     // that occluders reflect once towards the snow (0 inside the snow).
     std::vector<glm::vec3> skyOnSurface;
+    // Per surface voxel: the cosine-weighted share of its sky hidden by snow (whose own light it receives
+    // instead: snowIrradiance in bake.cpp).
+    std::vector<float> snowCover;
     // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
     std::vector<glm::vec3> skyUnderSnow;
 };
@@ -39,11 +42,21 @@ struct IncidentLightSettings {
 IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topology,
                                    const IncidentLightSettings &settings, const SubProgress &progress);
 
+// Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe.
+glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i);
+
 // Reduced extinction per unit density, per channel: k (1 - omega g) (m^2/kg).
 glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
 
-// The beam fraction at a point towards one sun: snow transmittance times occluder visibility.
+// How light crossing snow is attenuated: inside the snow, as the similarity beam (forward-scattered light
+// travels on, sigma_tr); on its way to a surface from outside, uncollided (sigma_t: what other snow
+// scatters towards the surface arrives as that snow's own radiance, gathered separately).
+enum class Crossing { Beam, Uncollided };
+
+// The beam fraction at a point towards one sun: snow transmittance from `point` times occluder
+// visibility from `shadowPoint` (default: the same point).
 glm::vec3 sunBeamAt(const Scene &scene, const SunLight &sun, const glm::dvec3 &point, int sunSamples,
-                    std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher);
+                    std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher,
+                    const glm::dvec3 *shadowPoint = nullptr, Crossing crossing = Crossing::Beam);
 
 }  // namespace firn

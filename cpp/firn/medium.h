@@ -1,5 +1,7 @@
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 
 #include <glm/vec3.hpp>
@@ -48,6 +50,24 @@ class Medium {
         // Mass column between t = 0 and tMax (m) along origin + t * direction (unit), midpoint rule on
         // half-voxel steps; stops once the column exceeds `limit` (kg/m^2) and returns what it has.
         double column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double limit);
+
+        // Walks the ray from t = 0 to tMax (m) where the density may be non-zero, in steps of at most
+        // `step` voxels, calling visit(midpoint in index space, step length in m); stops when it returns false.
+        template <typename Visit>
+        void march(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double step, Visit &&visit) {
+            const glm::dvec3 start = medium_.worldToIndex(origin);
+            const openvdb::math::Ray<double> ray(openvdb::Vec3d(start.x, start.y, start.z),
+                                                 openvdb::Vec3d(direction.x, direction.y, direction.z), 0.0,
+                                                 tMax / medium_.voxelSize());
+            if (!intersector_.setIndexRay(ray)) return;
+            double t0 = 0.0, t1 = 0.0;
+            while (intersector_.march(t0, t1)) {
+                const int steps = std::max(1, int(std::ceil((t1 - t0) / step)));
+                const double dt = (t1 - t0) / steps;
+                for (int i = 0; i < steps; ++i)
+                    if (!visit(ray(t0 + (i + 0.5) * dt), dt * medium_.voxelSize())) return;
+            }
+        }
 
       private:
         const Medium &medium_;
