@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
@@ -38,10 +39,17 @@ class PathTracer {
         Rgb throughput(1.0), radiance(0.0);
         bool first = true;
         for (long event = 0; event < kMaxEvents; ++event) {
-            const auto hit = scene_.occluders->caster().intersect(glm::vec3(p), glm::vec3(d),
-                                                                  first ? 0.0f : float(kSurfaceEpsilon));
+            // The next collision ignoring surfaces, then the first surface before it: the same as tracking
+            // up to the surface (free flights are memoryless), and most flights in snow are short.
+            const float tNear = first ? 0.0f : float(kSurfaceEpsilon);
+            double tCollision = sampleCollision(p, d, kInfinity, rng);
+            std::optional<RayCaster::Hit> hit;
+            if (tCollision == kInfinity || scene_.occluders->caster().occluded(glm::vec3(p), glm::vec3(d), tNear, float(tCollision))) {
+                hit = scene_.occluders->caster().intersect(glm::vec3(p), glm::vec3(d), tNear,
+                                                           tCollision == kInfinity ? std::numeric_limits<float>::infinity() : float(tCollision));
+                if (hit) tCollision = kInfinity;
+            }
             const double tSurface = hit ? double(hit->distance) : kInfinity;
-            const double tCollision = sampleCollision(p, d, tSurface, rng);
             if (tCollision < kInfinity) {
                 p += tCollision * d;
                 throughput *= medium_.optics().albedo;

@@ -45,7 +45,7 @@ TEST(RayCaster, ConcurrentQueriesAgree) {
     const RayCaster caster(square());
     std::atomic<int> hits{0};
     tbb::parallel_for(0, 10000, [&](int i) {
-        const float x = (i % 100) / 50.0f - 0.5f;  // half the rays miss the square
+        const float x = (i % 100 + 0.5f) / 50.0f - 0.5f;  // half the rays miss the square
         hits += caster.occluded({x, 0.5f, 0.0f}, {0.0f, 0.0f, 1.0f});
     });
     EXPECT_EQ(hits.load(), 5000);
