@@ -15,9 +15,9 @@ namespace {
 
 void bindErrors(py::module_ &m) {
     // Raised by long calls when their Progress was cancelled.
-    static py::exception<firn::Cancelled> cancelled(m, "Cancelled");
+    py::register_exception<firn::Cancelled>(m, "Cancelled");
     // A request over a resource limit (e.g. too many voxels): the message says what to change.
-    static py::exception<firn::BudgetExceeded> budget(m, "BudgetError", PyExc_ValueError);
+    py::register_exception<firn::BudgetExceeded>(m, "BudgetError", PyExc_ValueError);
     py::register_exception_translator([](std::exception_ptr p) {
         try {
             if (p) std::rethrow_exception(p);
