@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <queue>
 
@@ -41,7 +43,7 @@ struct Preset {
 
 Preset resolve(const BakeSettings &s) {
     Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1}
-               : s.quality == BakeQuality::Final ? Preset{32, 4, 1e-6, 0, 2}
+               : s.quality == BakeQuality::Final ? Preset{16, 4, 1e-5, 0, 1}
                                                  : Preset{64, 8, 1e-7, 64, 2};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
@@ -51,6 +53,20 @@ Preset resolve(const BakeSettings &s) {
     if (s.referenceSamples) p.referenceSamples = s.referenceSamples;
     return p;
 }
+
+// Wall-clock time between laps (s).
+class Stopwatch {
+  public:
+    double lap() {
+        const auto now = std::chrono::steady_clock::now();
+        const double seconds = std::chrono::duration<double>(now - last_).count();
+        last_ = now;
+        return seconds;
+    }
+
+  private:
+    std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
 
 // One colour channel of the optics. Lengths below are "resistances": 3 times the reduced optical depth,
 // the diffusion distance in units of D (the Marshak boundary sits 2 beyond the last scattering).
@@ -76,6 +92,18 @@ struct ChannelSystem {
     std::vector<double> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
     std::vector<std::vector<double>> sunIn;  // per sun, W entering through air faces
     std::vector<double> skyIn;               // W entering through air faces
+    // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
+    // returned at once (m^2), so later passes can add light from other snow without assembling again.
+    std::vector<double> skyToNode, skyReturned;
+
+    // Adds diffuse irradiance (W/m^2) on the surface patches.
+    void addDiffuse(const std::vector<glm::vec3> &irradiance, int c) {
+        for (std::size_t i = 0; i < b.size(); ++i) {
+            const double E = irradiance[i][c];
+            b[i] += E * skyToNode[i], escaped[i] += E * skyReturned[i], skyIn[i] += E * area[i];
+        }
+    }
+    std::vector<double> area;  // m^2, surface patch
 };
 
 // Finite volumes with exponential fitting: every link between two unknowns, and between an unknown and
@@ -86,25 +114,38 @@ struct ChannelSystem {
 struct Link {
     double conductance, halfMass;  // per unit face area
 };
+// sinh(x) / x and tanh(x) / x, by series where x is small (snow: x ~ 0.1 per voxel), where they are
+// exact to double precision and cost no exponentials.
+double sinhOverX(double x) {
+    const double x2 = x * x;
+    return x < 0.3 ? 1.0 + x2 / 6.0 * (1.0 + x2 / 20.0 * (1.0 + x2 / 42.0 * (1.0 + x2 / 72.0))) : std::sinh(x) / x;
+}
+double tanhOverX(double x) {
+    const double x2 = x * x;
+    return x < 0.1 ? 1.0 - x2 / 3.0 * (1.0 - 0.4 * x2 * (1.0 - 17.0 / 42.0 * x2)) : std::tanh(x) / x;
+}
+
 Link interiorLink(double beta, double R) {
-    return {beta / std::sinh(beta * R), beta * std::tanh(0.5 * beta * R)};
+    const double x = beta * R;
+    return {1.0 / (R * sinhOverX(x)), 0.5 * beta * x * tanhOverX(0.5 * x)};
 }
 
 // The stretch from a boundary to the unknown's node, L in resistance, with the boundary condition
 // phi = Rb dphi/dR + Phi (Marshak: Rb = 2 for air, 2 (1 + a) / (1 - a) for a Lambertian surface of
 // albedo a, Phi = 4 x the diffuse light it sends in / (1 - a)). Exact solution of the stretch.
 struct BoundaryLink {
-    double beta, Rb, L, delta;
+    double beta, Rb, L, sh, ch, delta;  // sh, ch: sinh, cosh of beta L
     BoundaryLink(double beta_, double Rb_, double L_)
-        : beta(beta_), Rb(Rb_), L(L_), delta(Rb_ * beta_ * std::cosh(beta_ * L_) + std::sinh(beta_ * L_)) {}
+        : beta(beta_), Rb(Rb_), L(L_), sh(beta_ * L_ * sinhOverX(beta_ * L_)), ch(std::sqrt(1.0 + sh * sh)),
+          delta(Rb_ * beta_ * ch + sh) {}
     double conductance() const { return beta / delta; }  // flux out through the boundary per node fluence
-    double mass() const { return beta * (Rb * beta * std::sinh(beta * L) + std::cosh(beta * L) - 1.0) / delta; }
+    double mass() const { return beta * (Rb * beta * sh + sh * sh / (ch + 1.0)) / delta; }  // cosh - 1 = sinh^2 / (cosh + 1)
     // A diffuse source at depth R (in resistance) scattering unit power: share reaching the node, and
     // share leaving through the boundary at once.
     double toNode(double R) const { return (Rb * beta * std::cosh(beta * R) + std::sinh(beta * R)) / delta; }
     double toBoundary(double R) const { return std::sinh(beta * (L - R)) / delta; }
     // Diffuse light (irradiance J) arriving through an air boundary: share leaving again at once.
-    double diffuseReturned() const { return (std::sinh(beta * L) - 2.0 * beta * std::cosh(beta * L)) / delta; }
+    double diffuseReturned() const { return (sh - 2.0 * beta * ch) / delta; }
 };
 
 ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, int c,
@@ -119,6 +160,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     sys.A.coord = topo.coord;
     sys.A.neighbour.resize(n), sys.A.conductance.resize(n), sys.A.diag.resize(n);
     sys.b.assign(n, 0.0), sys.escaped.assign(n, 0.0), sys.outConductance.assign(n, 0.0), sys.skyIn.assign(n, 0.0);
+    sys.skyToNode.assign(n, 0.0), sys.skyReturned.assign(n, 0.0), sys.area.assign(n, 0.0);
     sys.sunIn.assign(scene.suns.size(), std::vector<double>(n, 0.0));
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
@@ -154,13 +196,11 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     // staircase has more face than the surface has area.
                     const double facing = glm::dot(patch.normal, faceNormal(f));
                     if (facing > 0.0) area = h2 * facing;
-                    const BoundaryLink &b = boundary[f].emplace(
-                        beta, 2.0, airFaceResistance(medium, density, topo.coord[i], f, ch.sigmaTr(1.0)));
-                    const double sky = light.skyOnSurface[i][c] * patch.area * patch.share[f];  // W
+                    const BoundaryLink &b = boundary[f].emplace(beta, 2.0, 3.0 * ch.sigmaTr(face.rampMass));
+                    const double shareOfPatch = patch.area * patch.share[f];  // m^2
                     sys.outConductance[i] += area * b.conductance();
-                    source += 4.0 * sky * b.conductance();
-                    sys.escaped[i] += sky * b.diffuseReturned();
-                    sys.skyIn[i] += sky;
+                    sys.skyToNode[i] += 4.0 * shareOfPatch * b.conductance();
+                    sys.skyReturned[i] += shareOfPatch * b.diffuseReturned();
                 } else {
                     // Occluder: a Lambertian surface at `distance` from the node.
                     albedo[f] = std::min(scene.occluders->albedo(face.triangle)[c], 0.99);
@@ -228,8 +268,12 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             for (int f = 0; f < 6; ++f)
                 if (groundLight[f] > 0.0)
                     source += 4.0 * groundLight[f] / (1.0 - albedo[f]) * h2 * boundary[f]->conductance();
+            const double sky = light.skyOnSurface[i][c];
             sys.A.diag[i] = diag;
-            sys.b[i] = source;
+            sys.b[i] = source + sky * sys.skyToNode[i];
+            sys.escaped[i] += sky * sys.skyReturned[i];
+            sys.area[i] = patch.isSurface() ? patch.area : 0.0;
+            sys.skyIn[i] = sky * sys.area[i];
         }
     });
     return sys;
@@ -308,19 +352,15 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
 std::vector<Source> surfaceRadiance(const SnowTopology &topo, const std::vector<SolvedVoxel> &solved) {
     std::vector<Source> out(topo.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
             Source diffuse;
             double area = 0.0;
-            for (int dx = -1; dx <= 1; ++dx)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dz = -1; dz <= 1; ++dz) {
-                        const std::int32_t j = index.getValue(topo.coord[i].offsetBy(dx, dy, dz));
-                        if (j < 0 || !topo.patches[j].isSurface()) continue;
-                        diffuse.l0 += solved[j].diffuse.l0, diffuse.l1 += solved[j].diffuse.l1;
-                        area += topo.patches[j].area;
-                    }
+            for (std::size_t n = topo.neighbourhoodStart[i]; n < topo.neighbourhoodStart[i + 1]; ++n) {
+                const std::uint32_t j = topo.neighbourhood[n];
+                diffuse.l0 += solved[j].diffuse.l0, diffuse.l1 += solved[j].diffuse.l1;
+                area += topo.patches[j].area;
+            }
             const double own = kPi * topo.patches[i].area;
             out[i].l0 = solved[i].returned.l0 / own + diffuse.l0 / (kPi * area);
             out[i].l1 = solved[i].returned.l1 / own + diffuse.l1 / (kPi * area);
@@ -330,52 +370,21 @@ std::vector<Source> surfaceRadiance(const SnowTopology &topo, const std::vector<
 }
 
 // Inside the snow, within a few mean free paths of the surface, a camera ray still sees its surface
-// voxel's radiance: those voxels take it over (wholly up to optical depth 3 below the surface, fading
-// out by 6), so where the ray reaches optical depth 1 does not matter; deeper voxels keep their own
-// source function, which only thin snow lets a camera see.
-std::vector<Source> composeSource(const Scene &scene, const SnowTopology &topo, const std::vector<SolvedVoxel> &solved,
+// voxel's radiance: those voxels take it over (SnowTopology's shell), so where the ray reaches optical
+// depth 1 does not matter; deeper voxels keep their own source function, which only thin snow shows.
+std::vector<Source> composeSource(const SnowTopology &topo, const std::vector<SolvedVoxel> &solved,
                                   const std::vector<Source> &surface) {
-    constexpr double kShellStart = 3.0, kShellEnd = 6.0;  // optical depth below the surface
-    const Medium &medium = *scene.medium;
-    const double k = medium.optics().extinctionPerDensity, h = medium.voxelSize();
-    // Optical depth from outside to each voxel centre, and the surface voxel it is nearest to (Dijkstra
-    // from the surface voxels inwards, over the shell only).
-    std::vector<double> depth(topo.size(), std::numeric_limits<double>::infinity());
-    std::vector<std::int32_t> owner(topo.size(), -1);
-    using Entry = std::pair<double, std::int32_t>;
-    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-    {
-        Medium::ColumnMarcher marcher(medium);
-        for (std::size_t i = 0; i < topo.size(); ++i)
-            if (topo.patches[i].isSurface()) {
-                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
-                depth[i] = k * marcher.column(centre, topo.patches[i].normal, 3.0 * h, kShellEnd / k);
-                owner[i] = std::int32_t(i);
-                queue.emplace(depth[i], std::int32_t(i));
-            }
-    }
-    while (!queue.empty()) {
-        const auto [d, i] = queue.top();
-        queue.pop();
-        if (d > depth[i] || d >= kShellEnd) continue;
-        for (int f = 0; f < 6; ++f) {
-            const std::int32_t j = topo.link[i][f];
-            if (j < 0 || topo.patches[j].isSurface()) continue;
-            const double next = d + 0.5 * k * h * (topo.density[i] + topo.density[j]);
-            if (next < depth[j]) depth[j] = next, owner[j] = owner[i], queue.emplace(next, j);
-        }
-    }
     std::vector<Source> out(topo.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (topo.patches[i].isSurface()) {
-                out[i] = surface[i];
-                continue;
+            const std::int32_t owner = topo.shellOwner[i];
+            const double w = topo.shellWeight[i];
+            if (owner < 0) {
+                out[i] = solved[i].inside;
+            } else {
+                out[i].l0 = w * surface[owner].l0 + (1.0 - w) * solved[i].inside.l0;
+                out[i].l1 = w * surface[owner].l1 + (1.0 - w) * solved[i].inside.l1;
             }
-            const double w = owner[i] < 0 ? 0.0 : std::clamp((kShellEnd - depth[i]) / (kShellEnd - kShellStart), 0.0, 1.0);
-            const Source &inside = solved[i].inside;
-            out[i].l0 = w * surface[owner[i] < 0 ? i : owner[i]].l0 + (1.0 - w) * inside.l0;
-            out[i].l1 = w * surface[owner[i] < 0 ? i : owner[i]].l1 + (1.0 - w) * inside.l1;
         }
     });
     return out;
@@ -540,29 +549,24 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo,
 
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
 // of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch).
-// Voxels with an open sky are skipped.
 std::vector<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                                      const BakedGrids &baked, int samples, std::uint64_t seed,
+                                      const BakedGrids &baked, const SkyRays &rays, std::uint64_t seed,
                                       const SubProgress &progress) {
-    constexpr float kOpenSky = 0.005f;  // snow hides less than this of the sky: nothing to gather
     std::vector<glm::vec3> out(topo.size(), glm::vec3(0.0f));
-    const int strata = std::max(1, int(std::lround(std::sqrt(double(samples)))));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         BakedRadiance radiance(scene, baked);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!topo.patches[i].isSurface() || light.snowCover[i] < kOpenSky) continue;
+            if (!light.snowRays[i]) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i);
-            Rng rng(seed ^ 0x1A7E5ull, i);
             glm::dvec3 sum(0.0);
-            for (int a = 0; a < strata; ++a)
-                for (int b = 0; b < strata; ++b) {
-                    const glm::dvec3 w = sampleCosineHemisphere(topo.patches[i].normal, (a + rng.uniform()) / strata,
-                                                                (b + rng.uniform()) / strata);
-                    const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
-                    sum += radiance.along(Ray{p, w}, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), 0.25);
-                }
-            out[i] = glm::vec3(kPi * sum / double(strata * strata));
+            for (int k = 0; k < rays.count(); ++k) {
+                if (!(light.snowRays[i] >> k & 1)) continue;
+                const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
+                const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+                sum += radiance.along(Ray{p, w}, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), 0.5);
+            }
+            out[i] = glm::vec3(kPi * sum / double(rays.count()));
         }
     });
     return out;
@@ -576,56 +580,72 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     const bool reference = settings.quality == BakeQuality::Reference;
     const double solved = reference ? 0.5 : 0.9;  // progress when the diffusion solves are done
 
+    BakeStats local;
+    Stopwatch clock;
     p.report(0.0, "Finding the snow's voxels");
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05));
+    local.topologySeconds = clock.lap();
     p.report(0.05, "Tracing sun and sky light");
-    IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
+    const IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
                                                SubProgress(&p, 0.05, 0.4));
-    const std::vector<glm::vec3> sky = light.skyOnSurface;
+    local.lightSeconds = clock.lap();
 
-    BakeStats local;
     local.unknowns = topo.size();
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
     for (const SurfacePatch &patch : topo.patches) local.surfaceVoxels += patch.isSurface();
-    const bool hidden = std::any_of(light.snowCover.begin(), light.snowCover.end(), [](float f) { return f > 0.005f; });
-    const int passes = hidden ? 1 + preset.snowBounces : 1;
+    const bool hidden = std::any_of(light.snowRays.begin(), light.snowRays.end(), [](std::uint64_t r) { return r != 0; });
+    const int passes = local.passes = hidden ? 1 + preset.snowBounces : 1;
 
     std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
     for (auto &channel : phi) channel.assign(topo.size(), 0.0);
+    std::array<ChannelSystem, 3> systems;
+    std::array<std::unique_ptr<MultigridSolver>, 3> solvers;  // the operator stays, only sources change
+    std::vector<glm::vec3> fromSnow(topo.size(), glm::vec3(0.0f));  // W/m^2 gathered so far
     std::vector<Source> source;
     for (int pass = 0; pass < passes; ++pass) {
         const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
+        std::vector<glm::vec3> more(topo.size(), glm::vec3(0.0f));  // light from other snow new this pass
         if (pass > 0) {
             // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
             p.report(begin, "Gathering light between snow surfaces");
             const BakedGrids previous = makeGrids(scene, topo, source, preset, settings);
-            const std::vector<glm::vec3> fromSnow = snowIrradiance(scene, topo, light, previous, preset.skySamples,
-                                                                   settings.seed + pass, SubProgress(&p, begin, begin));
-            for (std::size_t i = 0; i < topo.size(); ++i) light.skyOnSurface[i] = sky[i] + fromSnow[i];
+            const std::vector<glm::vec3> gathered = snowIrradiance(scene, topo, light, previous, SkyRays(preset.skySamples),
+                                                                   settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
+            for (std::size_t i = 0; i < topo.size(); ++i) more[i] = gathered[i] - fromSnow[i];
+            fromSnow = gathered;
+            local.gatherSeconds += clock.lap();
         }
         std::vector<SolvedVoxel> solvedVoxel(topo.size());
         for (int c = 0; c < 3; ++c) {
             const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
             p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
-            ChannelSystem sys = assemble(scene, topo, light, c, sub);
-            if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
-            if (topo.size() > 0) {
-                const MultigridSolver solver(std::move(sys.A));
-                const MultigridSolver::Result result = solver.solve(sys.b, phi[c], preset.tolerance, 500, sub);
+            if (pass == 0) {
+                systems[c] = assemble(scene, topo, light, c, sub);
+                if (c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
+                if (topo.size() > 0) solvers[c] = std::make_unique<MultigridSolver>(std::move(systems[c].A));
+            } else {
+                systems[c].addDiffuse(more, c);
+            }
+            if (solvers[c]) {
+                // Passes before the last only feed the gathering between surfaces: 0.1 % will do.
+                const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, 1e-3) : preset.tolerance;
+                const MultigridSolver::Result result = solvers[c]->solve(systems[c].b, phi[c], tolerance, 500, sub);
                 local.iterations[c] += result.iterations;
                 local.relativeResidual[c] = result.relativeResidual;
             }
-            solvedVoxels(scene, topo, light, sys, phi[c], c, solvedVoxel);
+            solvedVoxels(scene, topo, light, systems[c], phi[c], c, solvedVoxel);
         }
         std::vector<Source> surface = surfaceRadiance(topo, solvedVoxel);
         if (reference && pass + 1 == passes) {
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
         }
-        source = composeSource(scene, topo, solvedVoxel, surface);
+        source = composeSource(topo, solvedVoxel, surface);
+        local.solveSeconds += clock.lap();
     }
     p.report(reference ? 0.95 : solved, "Writing the grids");
     BakedGrids grids = makeGrids(scene, topo, source, preset, settings);
+    local.gridSeconds = clock.lap();
     p.report(1.0, "Done");
     if (stats) *stats = local;
     return grids;

@@ -49,38 +49,48 @@ glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const gl
 
 // Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
 // occluders in the way send what they reflect once (when `bounce`).
-glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, int samples, bool bounce,
+glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays, bool bounce,
                           Crossing crossing, std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher,
-                          float *snowCover = nullptr) {
+                          std::uint64_t *snowRays = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
-    const int strata = std::max(1, int(std::lround(std::sqrt(double(samples)))));
-    Rng rng(seed, stream);
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
+    Rng rng(seed ^ 0xB0B0ull, stream);  // for the occluders' reflections
     glm::dvec3 sum(0.0);
-    double covered = 0.0;
-    for (int i = 0; i < strata; ++i)
-        for (int j = 0; j < strata; ++j) {
-            const glm::dvec3 w = sampleCosineHemisphere(n, (i + rng.uniform()) / strata, (j + rng.uniform()) / strata);
-            const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
-            const double column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
-            covered += 1.0 - std::exp(-thinnest * column);
-            if (column >= limit) continue;
-            glm::dvec3 radiance;
-            if (!hit) {
-                radiance = scene.sky.radianceFrom(w);
-            } else if (bounce) {
-                const glm::dvec3 normal(hit->normal);
-                radiance = reflectedByOccluder(scene, p + double(hit->distance) * w,
-                                               glm::dot(normal, w) < 0.0 ? normal : -normal,
-                                               scene.occluders->albedo(hit->triangle), rng, marcher);
-            } else {
-                continue;
-            }
-            sum += kPi * radiance * glm::exp(-reduced * column);
+    std::uint64_t hidden = 0;
+    for (int k = 0; k < rays.count(); ++k) {
+        const glm::dvec3 w = rays.direction(n, k, seed, stream);
+        const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+        const double column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
+        if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
+        if (column >= limit) continue;
+        glm::dvec3 radiance;
+        if (!hit) {
+            radiance = scene.sky.radianceFrom(w);
+        } else if (bounce) {
+            const glm::dvec3 normal(hit->normal);
+            radiance = reflectedByOccluder(scene, p + double(hit->distance) * w, glm::dot(normal, w) < 0.0 ? normal : -normal,
+                                           scene.occluders->albedo(hit->triangle), rng, marcher);
+        } else {
+            continue;
         }
-    if (snowCover) *snowCover = float(covered / double(strata * strata));
-    return glm::vec3(sum / double(strata * strata));
+        sum += kPi * radiance * glm::exp(-reduced * column);
+    }
+    if (snowRays) *snowRays = hidden;
+    return glm::vec3(sum / double(rays.count()));
+}
+
+constexpr float kDark = 1e-6f;  // beam fractions below this are darkness
+
+// Unknowns grouped by their coordinate along `axis`, ordered so that `step` leads from one group to the next.
+std::vector<std::vector<std::uint32_t>> slicesAlong(const SnowTopology &topo, int axis, int step) {
+    if (topo.size() == 0) return {};
+    int lo = topo.coord[0][axis], hi = lo;
+    for (const openvdb::Coord &c : topo.coord) lo = std::min(lo, c[axis]), hi = std::max(hi, c[axis]);
+    std::vector<std::vector<std::uint32_t>> slices(std::size_t(hi - lo + 1));
+    for (std::size_t i = 0; i < topo.size(); ++i) slices[std::size_t(topo.coord[i][axis] - lo)].push_back(std::uint32_t(i));
+    if (step < 0) std::reverse(slices.begin(), slices.end());
+    return slices;
 }
 
 template <typename Body>
@@ -117,6 +127,13 @@ glm::vec3 sunBeamAt(const Scene &scene, const SunLight &sun, const glm::dvec3 &p
     return glm::vec3(glm::exp(-reduced * column)) * (float(visible) / float(sunSamples));
 }
 
+SkyRays::SkyRays(int samples) : strata_(std::clamp(int(std::lround(std::sqrt(double(samples)))), 1, 8)) {}
+
+glm::dvec3 SkyRays::direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const {
+    Rng rng(seed, stream * 64 + std::uint64_t(k));
+    return sampleCosineHemisphere(normal, (k / strata_ + rng.uniform()) / strata_, (k % strata_ + rng.uniform()) / strata_);
+}
+
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::size_t i) {
     const double h = medium.voxelSize();
     const double thin = kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h);
@@ -139,11 +156,43 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         beam.atVoxel.assign(topo.size(), glm::vec3(0.0f));
         beam.atSurface.assign(topo.size(), glm::vec3(0.0f));
         const std::uint64_t seed = settings.seed ^ (0x5A17ull + s);
+        // Voxel centres slice by slice across the sun's main axis, sunward slice first: a voxel inside the
+        // snow whose sunward neighbours all lie in darkness is dark too, and needs no ray.
+        const int axis = int(std::max_element(&sun.direction.x, &sun.direction.x + 3,
+                                              [](double a, double b) { return std::abs(a) < std::abs(b); }) -
+                             &sun.direction.x);
+        const int toward = sun.direction[axis] > 0.0 ? 1 : -1;
+        std::vector<openvdb::Coord> upstream;  // offsets to the sunward neighbours in the previous slice
+        for (int b = 0; b < 2; ++b)
+            for (int c = 0; c < 2; ++c) {
+                openvdb::Coord o(0);
+                o[axis] = toward;
+                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+                if (b) o[u] = sun.direction[u] > 0.0 ? 1 : -1;
+                if (c) o[v] = sun.direction[v] > 0.0 ? 1 : -1;
+                if ((b && std::abs(sun.direction[u]) < 1e-3) || (c && std::abs(sun.direction[v]) < 1e-3)) continue;
+                upstream.push_back(o);
+            }
+        const std::vector<std::vector<std::uint32_t>> slices = slicesAlong(topo, axis, -toward);
+        for (const std::vector<std::uint32_t> &slice : slices)
+            parallelChunks(slice.size(), progress, [&](const auto &range) {
+                Medium::ColumnMarcher marcher(medium);
+                openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+                for (std::size_t n = range.begin(); n != range.end(); ++n) {
+                    const std::uint32_t i = slice[n];
+                    bool dark = !topo.patches[i].isSurface();
+                    for (std::size_t k = 0; k < upstream.size() && dark; ++k) {
+                        const std::int32_t j = index.getValue(topo.coord[i] + upstream[k]);
+                        dark = j >= 0 && std::max({beam.atVoxel[j].x, beam.atVoxel[j].y, beam.atVoxel[j].z}) < kDark;
+                    }
+                    if (!dark)
+                        beam.atVoxel[i] = sunBeamAt(scene, sun, medium.voxelCentre(topo.coord[i]), settings.sunSamples,
+                                                    seed, 2 * i, marcher);
+                }
+            });
         parallelChunks(topo.size(), progress, [&](const auto &range) {
             Medium::ColumnMarcher marcher(medium);
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                beam.atVoxel[i] = sunBeamAt(scene, sun, medium.voxelCentre(topo.coord[i]), settings.sunSamples, seed,
-                                            2 * i, marcher);
                 if (topo.patches[i].isSurface() && glm::dot(topo.patches[i].normal, sun.direction) > 0.0) {
                     // Snow in the way from outside the density ramp; occluders' shadow on the surface itself
                     // (half a voxel out), so shadow edges fall where they do on the snow.
@@ -158,7 +207,8 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     }
 
     light.skyOnSurface.assign(topo.size(), glm::vec3(0.0f));
-    light.snowCover.assign(topo.size(), 0.0f);
+    light.snowRays.assign(topo.size(), 0);
+    const SkyRays rays(settings.skySamples);
     light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
     const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
@@ -167,9 +217,8 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
-                light.skyOnSurface[i] = skyIrradianceAt(scene, outside(i), topo.patches[i].normal, settings.skySamples,
-                                                        bounce, Crossing::Uncollided, seed, i, marcher,
-                                                        &light.snowCover[i]);
+                light.skyOnSurface[i] = skyIrradianceAt(scene, outside(i), topo.patches[i].normal, rays, bounce,
+                                                        Crossing::Uncollided, seed, i, marcher, &light.snowRays[i]);
     });
     if (scene.sky.isBlack()) return light;
     parallelChunks(topo.faces.size(), progress, [&](const auto &range) {
@@ -183,7 +232,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             const glm::dvec3 up = glm::dot(normal, n) > 0.0 ? -normal : normal;  // towards the snow
             const glm::dvec3 ground = medium.voxelCentre(topo.coord[face.voxel]) + double(face.distance) * n;
             if (marcher.column(ground, up, std::numeric_limits<double>::infinity(), limit) >= limit) continue;
-            light.skyUnderSnow[f] = skyIrradianceAt(scene, ground, up, settings.skySamples, false, Crossing::Beam, seed,
+            light.skyUnderSnow[f] = skyIrradianceAt(scene, ground, up, rays, false, Crossing::Beam, seed,
                                                     topo.size() + f, marcher);
         }
     });

@@ -26,11 +26,23 @@ struct IncidentLight {
     // W/m^2 onto each surface voxel's patch from the sky, past occluders and snow, plus sun and sky light
     // that occluders reflect once towards the snow (0 inside the snow).
     std::vector<glm::vec3> skyOnSurface;
-    // Per surface voxel: the cosine-weighted share of its sky hidden by snow (whose own light it receives
-    // instead: snowIrradiance in bake.cpp).
-    std::vector<float> snowCover;
+    // Per surface voxel: which of its sky rays (SkyRays, bit k for ray k) snow hides; the snow's own light
+    // arrives along them instead (gathered after a first solve, bake.cpp).
+    std::vector<std::uint64_t> snowRays;
     // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
     std::vector<glm::vec3> skyUnderSnow;
+};
+
+// The rays a surface patch gathers its sky along: stratified, cosine-weighted around its normal, the k-th
+// depending only on (seed, stream, k), so a later pass can trace the same ones. At most 64.
+class SkyRays {
+  public:
+    explicit SkyRays(int samples);
+    int count() const { return strata_ * strata_; }
+    glm::dvec3 direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const;
+
+  private:
+    int strata_;
 };
 
 struct IncidentLightSettings {

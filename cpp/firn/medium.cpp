@@ -51,8 +51,11 @@ Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
     if (density_->background() != 0.0f) throw InvalidArgument("the density grid's background must be 0");
     h_ = axisAlignedVoxelSize(density_->transform());
     if (!(h_ > 0.0)) throw InvalidArgument("the density grid needs cubic voxels aligned with the world axes");
-    if (density_->tree().activeTileCount() > 0)
-        throw InvalidArgument("the density grid has active tiles; voxelize them first");
+    if (density_->tree().activeTileCount() > 0) {  // Cycles draws tiles as nothing; light sees voxels only
+        auto voxels = density_->deepCopy();
+        voxels->tree().voxelizeActiveTiles();
+        density_ = voxels;
+    }
     if (density_->activeVoxelCount() == 0) throw InvalidArgument("the density grid has no active voxels");
     const Vec3d o = density_->transform().indexToWorld(Vec3d(0.0));
     origin_ = glm::dvec3(o.x(), o.y(), o.z());
@@ -111,21 +114,27 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
     const double sumLimit = limit / h, tEnd = tMax / h;
     // Most rays start in snow and reach the limit within a few voxels: plain steps first; the hierarchical
     // walk over occupied 8^3 blocks only for rays that get further.
+    // A ray that meets empty space (it started outside, or left the snow) goes over to the walk at once.
     constexpr int kPlainSteps = 16;
     double sum = 0.0;  // kg/m^3 * voxels
-    for (int i = 0; i < kPlainSteps; ++i) {
+    int i = 0;
+    for (; i < kPlainSteps; ++i) {
         const double t = (i + 0.5) * kStep;
         if (t >= tEnd) return sum * h;
-        sum += openvdb::tools::BoxSampler::sample(accessor_, eye + t * dir) * kStep;
+        const double rho = openvdb::tools::BoxSampler::sample(accessor_, eye + t * dir);
+        if (rho <= 0.0) break;
+        sum += rho * kStep;
         if (sum > sumLimit) return sum * h;
     }
-    const double tStart = kPlainSteps * kStep;
+    const double tStart = i * kStep;
     const openvdb::math::Ray<double> ray(eye, dir, tStart, tEnd);
     if (!intersector_.setIndexRay(ray)) return sum * h;
+    // Beyond the first voxels a ray mostly crosses air near the surface: whole-voxel steps.
+    constexpr double kLongStep = 1.0;  // voxels
     double t0 = 0.0, t1 = 0.0;
     while (intersector_.march(t0, t1)) {
         const double span = t1 - t0;
-        const int steps = std::max(1, static_cast<int>(std::ceil(span / kStep)));
+        const int steps = std::max(1, static_cast<int>(std::ceil(span / kLongStep)));
         const double dt = span / steps;
         for (int i = 0; i < steps; ++i) sum += openvdb::tools::BoxSampler::sample(accessor_, eye + (t0 + (i + 0.5) * dt) * dir) * dt;
         if (sum > sumLimit) break;

@@ -20,6 +20,7 @@ class Medium {
     using Accessor = openvdb::FloatGrid::ConstAccessor;
 
     // Validates: uniform, axis-aligned voxels; background 0; finite, non-negative densities; optics sane.
+    // Active tiles are voxelized (on a copy).
     Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics);
     ~Medium();
 

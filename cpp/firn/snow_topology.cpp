@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <memory>
+#include <queue>
 #include <unordered_map>
 
 #include <glm/geometric.hpp>
@@ -95,21 +97,78 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
     });
 }
 
-}  // namespace
-
-double airFaceResistance(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &c, int face,
-                         double reduced) {
-    const double h = medium.voxelSize();
-    double R = 0.0, inner = density.getValue(c);
+// Snow (kg/m^2) from voxel c's centre out through face `face` to where the density ramps to zero, through
+// any fringe voxels: the trapezoid rule is exact for the linear ramps between voxel centres.
+float rampMass(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &c, int face) {
+    double mass = 0.0, inner = density.getValue(c);
     openvdb::Coord next = c;
-    for (int k = 0; k < 4 && inner > 0.0; ++k) {  // the centre, then fringe voxels, to the first empty one
+    for (int k = 0; k < 4 && inner > 0.0; ++k) {
         next += faceStep(face);
         const double outer = density.getValue(next);
-        R += 1.5 * h * reduced * (inner + outer);  // 3 x the trapezoid of the linear ramp
+        mass += 0.5 * medium.voxelSize() * (inner + outer);
         inner = outer;
     }
-    return R;
+    return float(mass);
 }
+
+void computeNeighbourhoods(SnowTopology &topo) {
+    topo.neighbourhoodStart.assign(topo.size() + 1, 0);
+    std::vector<std::vector<std::uint32_t>> lists(topo.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface()) continue;
+            for (int dx = -1; dx <= 1; ++dx)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dz = -1; dz <= 1; ++dz) {
+                        const std::int32_t j = index.getValue(topo.coord[i].offsetBy(dx, dy, dz));
+                        if (j >= 0 && topo.patches[j].isSurface()) lists[i].push_back(std::uint32_t(j));
+                    }
+        }
+    });
+    for (std::size_t i = 0; i < topo.size(); ++i) topo.neighbourhoodStart[i + 1] = topo.neighbourhoodStart[i] + lists[i].size();
+    topo.neighbourhood.reserve(topo.neighbourhoodStart.back());
+    for (const auto &list : lists) topo.neighbourhood.insert(topo.neighbourhood.end(), list.begin(), list.end());
+}
+
+// Optical depth (sigma_t) from outside to each voxel centre near the surface by Dijkstra from the surface
+// voxels inwards, over the shell only.
+void computeShell(const Medium &medium, SnowTopology &topo) {
+    constexpr double kShellStart = 3.0, kShellEnd = 6.0;
+    const double k = medium.optics().extinctionPerDensity, h = medium.voxelSize();
+    std::vector<double> depth(topo.size(), std::numeric_limits<double>::infinity());
+    topo.shellOwner.assign(topo.size(), -1);
+    topo.shellWeight.assign(topo.size(), 0.0f);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t i = range.begin(); i != range.end(); ++i)
+            if (topo.patches[i].isSurface()) {
+                depth[i] = k * marcher.column(medium.voxelCentre(topo.coord[i]), topo.patches[i].normal, 3.0 * h, kShellEnd / k);
+                topo.shellOwner[i] = std::int32_t(i);
+                topo.shellWeight[i] = 1.0f;
+            }
+    });
+    using Entry = std::pair<double, std::int32_t>;
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+    for (std::size_t i = 0; i < topo.size(); ++i)  // only shallow surface voxels have a shell to fill
+        if (topo.patches[i].isSurface() && depth[i] < kShellEnd) queue.emplace(depth[i], std::int32_t(i));
+    while (!queue.empty()) {
+        const auto [d, i] = queue.top();
+        queue.pop();
+        if (d > depth[i]) continue;
+        for (int f = 0; f < 6; ++f) {
+            const std::int32_t j = topo.link[i][f];
+            if (j < 0 || topo.patches[j].isSurface()) continue;
+            const double next = d + 0.5 * k * h * (topo.density[i] + topo.density[j]);
+            if (next >= kShellEnd || next >= depth[j]) continue;
+            depth[j] = next, topo.shellOwner[j] = topo.shellOwner[i];
+            topo.shellWeight[j] = float(std::clamp((kShellEnd - next) / (kShellEnd - kShellStart), 0.0, 1.0));
+            queue.emplace(next, j);
+        }
+    }
+}
+
+}  // namespace
 
 SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress) {
     const double h = medium.voxelSize();
@@ -154,6 +213,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         progress.throwIfCancelled();
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        Medium::Accessor density = medium.accessor();
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             const IndexLeaf &leaf = leaves.leaf(l);
             const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
@@ -182,6 +242,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
                     if (!face.occluder && neighbour >= 0) {
                         topo.link[i][f] = neighbour;
                     } else {
+                        if (!face.occluder) face.rampMass = rampMass(medium, density, c, f);
                         topo.link[i][f] = -1 - std::int32_t(leafFaces[l].size());
                         leafFaces[l].push_back(face);
                     }
@@ -200,6 +261,8 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
         }
     });
     computeSurfacePatches(medium, topo);
+    computeNeighbourhoods(topo);
+    computeShell(medium, topo);
     progress.report(1.0);
     return topo;
 }

@@ -34,6 +34,7 @@ struct BoundaryFace {
     bool occluder = false;
     float distance = 0.0f;    // occluder faces: m from the voxel centre to the surface
     std::uint32_t triangle = 0;
+    float rampMass = 0.0f;    // air faces: kg/m^2 of snow from the voxel centre out to where the density ramps to 0
 };
 
 // The smooth surface through a surface voxel (one with air faces): outward normal from the density
@@ -56,6 +57,12 @@ struct SnowTopology {
     std::vector<std::array<std::int32_t, 6>> link;  // >= 0: neighbour unknown; < 0: face -1 - link
     std::vector<BoundaryFace> faces;
     std::vector<SurfacePatch> patches;  // per unknown
+    // Surface voxels: the surface voxels of their 3^3 block, themselves included (CSR over unknowns).
+    std::vector<std::uint32_t> neighbourhoodStart, neighbourhood;
+    // Voxels just under the surface, within a few mean free paths: the surface voxel nearest to them (-1
+    // for the others) and how much of its radiance they carry (1 down to optical depth 3, 0 from 6).
+    std::vector<std::int32_t> shellOwner;
+    std::vector<float> shellWeight;
 
     std::size_t size() const { return coord.size(); }
     static bool isFace(std::int32_t link) { return link < 0; }
@@ -73,10 +80,5 @@ constexpr double kMinVoxelOpticalDepth = 0.1;
 constexpr double kFringeOpticalDepth = 5.0;
 
 SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress);
-
-// Resistance (3 x reduced optical depth, sigma_tr per unit density `reduced`) from where the density
-// ramps up to zero outside air face `face` of voxel `c` to the voxel's centre, through any fringe voxels.
-double airFaceResistance(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &c, int face,
-                         double reduced);
 
 }  // namespace firn

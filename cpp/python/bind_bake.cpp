@@ -156,6 +156,11 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["occluder_faces"] = stats.occluderFaces;
     d["iterations"] = stats.iterations;
     d["relative_residual"] = stats.relativeResidual;
+    d["passes"] = stats.passes;
+    py::dict seconds;
+    seconds["topology"] = stats.topologySeconds, seconds["light"] = stats.lightSeconds;
+    seconds["solve"] = stats.solveSeconds, seconds["gather"] = stats.gatherSeconds, seconds["grids"] = stats.gridSeconds;
+    d["seconds"] = seconds;
     return d;
 }
 
