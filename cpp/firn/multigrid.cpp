@@ -30,34 +30,37 @@ void parallelRows(std::size_t n, const Body &body) {
 
 }  // namespace
 
-void StencilOperator::apply(const double *x, double *y) const {
+template <typename T>
+void Stencil<T>::apply(const T *x, T *y) const {
     parallelRows(size(), [&](std::size_t i) {
-        double sum = diag[i] * x[i];
+        T sum = diag[i] * x[i];
         for (int k = 0; k < 6; ++k)
             if (neighbour[i][k] != kNone) sum -= conductance[i][k] * x[neighbour[i][k]];
         y[i] = sum;
     });
 }
+template struct Stencil<double>;
+template struct Stencil<float>;
 
 struct MultigridSolver::Hierarchy {
     struct Level {
-        StencilOperator A;
+        Stencil<float> A;
         std::vector<std::uint32_t> rowsByColour[2];  // voxel parity (i + j + k) & 1
         std::vector<std::uint32_t> aggregate;        // row -> row of the next level
         std::vector<std::uint32_t> membersStart, members;  // next level's rows -> rows here (CSR)
-        mutable std::vector<double> b, x, r;
+        mutable std::vector<float> b, x, r;
     };
     std::vector<Level> levels;
     std::vector<double> cholesky;  // lower factor of the bottom level, dense row-major
     std::unique_ptr<Matrix> matrix;
 
     void sweep(const Level &level, int colour) const {
-        const StencilOperator &A = level.A;
+        const Stencil<float> &A = level.A;
         const auto &rows = level.rowsByColour[colour];
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size(), 4096), [&](const auto &range) {
             for (std::size_t n = range.begin(); n != range.end(); ++n) {
                 const std::uint32_t i = rows[n];
-                double sum = level.b[i];
+                float sum = level.b[i];
                 for (int k = 0; k < 6; ++k)
                     if (A.neighbour[i][k] != StencilOperator::kNone)
                         sum += A.conductance[i][k] * level.x[A.neighbour[i][k]];
@@ -68,7 +71,7 @@ struct MultigridSolver::Hierarchy {
 
     void solveDense(const Level &level) const {
         const std::size_t n = level.A.size();
-        std::vector<double> &x = level.x;
+        std::vector<double> x(n);
         for (std::size_t i = 0; i < n; ++i) {  // L y = b
             double s = level.b[i];
             for (std::size_t k = 0; k < i; ++k) s -= cholesky[i * n + k] * x[k];
@@ -79,6 +82,7 @@ struct MultigridSolver::Hierarchy {
             for (std::size_t k = i + 1; k < n; ++k) s -= cholesky[k * n + i] * x[k];
             x[i] = s / cholesky[i * n + i];
         }
+        std::copy(x.begin(), x.end(), level.x.begin());
     }
 
     // One V-cycle on level l for level.b, from x = 0; symmetric (post-smoothing is the adjoint).
@@ -122,12 +126,12 @@ void prepare(Level &level) {
 
 // The next level: 2x2x2 blocks of this one; returns false when that would barely shrink it.
 bool coarsen(Level &fine, Level &coarse) {
-    const StencilOperator &A = fine.A;
+    const Stencil<float> &A = fine.A;
     const std::size_t n = A.size();
     openvdb::Int32Tree index(-1);
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> access(index);
     fine.aggregate.resize(n);
-    StencilOperator &C = coarse.A;
+    Stencil<float> &C = coarse.A;
     for (std::size_t i = 0; i < n; ++i) {
         const openvdb::Coord &c = A.coord[i];
         const openvdb::Coord cc(floorHalf(c.x()), floorHalf(c.y()), floorHalf(c.z()));
@@ -141,6 +145,7 @@ bool coarsen(Level &fine, Level &coarse) {
     }
     const std::size_t nc = C.coord.size();
     if (nc > n * 3 / 4) return false;
+    using StencilOperator = Stencil<float>;
 
     // Members of each block, in fine order (CSR).
     fine.membersStart.assign(nc + 1, 0);
@@ -159,7 +164,7 @@ bool coarsen(Level &fine, Level &coarse) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nc, 1024), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> look(index);
         for (std::size_t I = range.begin(); I != range.end(); ++I) {
-            double remainder = 0.0;
+            double remainder = 0.0;  // sums in double, stored in float
             std::array<double, 6> crossing{};
             for (std::uint32_t m = fine.membersStart[I]; m < fine.membersStart[I + 1]; ++m) {
                 const std::uint32_t i = fine.members[m];
@@ -175,16 +180,16 @@ bool coarsen(Level &fine, Level &coarse) {
             for (int k = 0; k < 6; ++k) {
                 const int id = look.getValue(C.coord[I] + kStep[k]);
                 C.neighbour[I][k] = id < 0 ? StencilOperator::kNone : std::uint32_t(id);
-                C.conductance[I][k] = id < 0 ? 0.0 : 0.5 * crossing[k];
+                C.conductance[I][k] = float(id < 0 ? 0.0 : 0.5 * crossing[k]);
                 diag += C.conductance[I][k];
             }
-            C.diag[I] = diag;
+            C.diag[I] = float(diag);
         }
     });
     return true;
 }
 
-std::vector<double> denseCholesky(const StencilOperator &A) {
+std::vector<double> denseCholesky(const Stencil<float> &A) {
     const std::size_t n = A.size();
     std::vector<double> L(n * n, 0.0);
     for (std::size_t i = 0; i < n; ++i) {
@@ -214,9 +219,13 @@ class VCycle : public openvdb::math::pcg::Preconditioner<double> {
         : openvdb::math::pcg::Preconditioner<double>(matrix), hierarchy_(hierarchy) {}
     void apply(const PcgVector &r, PcgVector &z) override {
         const auto &top = hierarchy_.levels.front();
-        std::copy(r.data(), r.data() + r.size(), top.b.begin());
+        // Scaled into float's range (the bake's sources span many decades between scenes).
+        const double scale = std::max(r.infNorm(), 1e-300);
+        const double *in = r.data();
+        double *out = z.data();
+        parallelRows(top.b.size(), [&](std::size_t i) { top.b[i] = float(in[i] / scale); });
         hierarchy_.vcycle(0);
-        std::copy(top.x.begin(), top.x.end(), z.data());
+        parallelRows(top.x.size(), [&](std::size_t i) { out[i] = double(top.x[i]) * scale; });
     }
 
   private:
@@ -251,7 +260,15 @@ MultigridSolver::MultigridSolver(StencilOperator fine) : hierarchy_(std::make_un
                 row.setValue(fine.neighbour[i][k], -fine.conductance[i][k]);
     });
     h.levels.emplace_back();
-    h.levels.back().A = std::move(fine);
+    Stencil<float> &top = h.levels.back().A;
+    top.coord = std::move(fine.coord);
+    top.neighbour = std::move(fine.neighbour);
+    top.conductance.resize(n), top.diag.resize(n);
+    parallelRows(n, [&](std::size_t i) {
+        for (int k = 0; k < 6; ++k) top.conductance[i][k] = float(fine.conductance[i][k]);
+        top.diag[i] = float(fine.diag[i]);
+    });
+    fine = StencilOperator{};  // the matrix holds the double copy
     while (h.levels.back().A.size() > kDenseLimit) {
         Level next;
         if (!coarsen(h.levels.back(), next)) break;

@@ -15,21 +15,24 @@ namespace firn {
 // A symmetric positive-definite 7-point operator on voxels: the finite-volume form of
 //   -div(D grad phi) + sigma_a phi = source
 // with row i reading  diag_i x_i - sum_k conductance_ik x_neighbour(i,k)  (conductance >= 0, diag >= sum).
-struct StencilOperator {
+template <typename T>
+struct Stencil {
     static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
     std::vector<openvdb::Coord> coord;                     // voxel per row (axis neighbours differ by 1)
     std::vector<std::array<std::uint32_t, 6>> neighbour;  // -x, +x, -y, +y, -z, +z, or kNone
-    std::vector<std::array<double, 6>> conductance;
-    std::vector<double> diag;
+    std::vector<std::array<T, 6>> conductance;
+    std::vector<T> diag;
 
     std::size_t size() const { return diag.size(); }
-    void apply(const double *x, double *y) const;  // y = A x, parallel
+    void apply(const T *x, T *y) const;  // y = A x, parallel
 };
+using StencilOperator = Stencil<double>;
 
 // Solves A x = b by conjugate gradients (OpenVDB's pcg) preconditioned with one symmetric V-cycle of
 // aggregation multigrid: 2x2x2 voxel blocks per coarser level, coarse operators summed from the fine one
 // (conductances halved, as rediscretizing at twice the spacing would give), red-black Gauss-Seidel
-// smoothing, a dense Cholesky solve at the bottom. Work per iteration is linear in the voxel count and
+// smoothing, a dense Cholesky solve at the bottom. The V-cycle works in single precision (it only has to
+// precondition; the iteration itself is double), halving its memory traffic. Work per iteration is linear in the voxel count and
 // the iteration count does not grow with the domain.
 class MultigridSolver {
   public:
