@@ -80,21 +80,21 @@ struct Channel {
 
 // The source function in one voxel: S(w) = l0 + l1 . w per channel (W/m^2/sr).
 struct Source {
-    glm::dvec3 l0{0.0};
-    glm::dmat3 l1{0.0};  // column c: the vector for channel c
+    glm::vec3 l0{0.0f};
+    glm::mat3 l1{0.0f};  // column c: the vector for channel c
 };
 
 // The diffusion system of one channel plus what the surface needs afterwards.
 struct ChannelSystem {
     StencilOperator A;
-    std::vector<double> b;                   // W: diffuse sources at the voxel nodes
-    std::vector<double> escaped;             // W: light leaving through air faces without reaching the node
-    std::vector<double> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
-    std::vector<std::vector<double>> sunIn;  // per sun, W entering through air faces
-    std::vector<double> skyIn;               // W entering through air faces
+    std::vector<double> b;                  // W: diffuse sources at the voxel nodes
+    std::vector<float> escaped;             // W: light leaving through air faces without reaching the node
+    std::vector<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
+    std::vector<std::vector<float>> sunIn;  // per sun, W entering through air faces
+    std::vector<float> skyIn;               // W entering through air faces
     // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
     // returned at once (m^2), so later passes can add light from other snow without assembling again.
-    std::vector<double> skyToNode, skyReturned;
+    std::vector<float> skyToNode, skyReturned;
 
     // Adds diffuse irradiance (W/m^2) on the surface patches.
     void addDiffuse(const std::vector<glm::vec3> &irradiance, int c) {
@@ -103,7 +103,7 @@ struct ChannelSystem {
             b[i] += E * skyToNode[i], escaped[i] += E * skyReturned[i], skyIn[i] += E * area[i];
         }
     }
-    std::vector<double> area;  // m^2, surface patch
+    std::vector<float> area;  // m^2, surface patch
 };
 
 // Finite volumes with exponential fitting: every link between two unknowns, and between an unknown and
@@ -159,9 +159,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     ChannelSystem sys;
     sys.A.coord = topo.coord;
     sys.A.neighbour.resize(n), sys.A.conductance.resize(n), sys.A.diag.resize(n);
-    sys.b.assign(n, 0.0), sys.escaped.assign(n, 0.0), sys.outConductance.assign(n, 0.0), sys.skyIn.assign(n, 0.0);
-    sys.skyToNode.assign(n, 0.0), sys.skyReturned.assign(n, 0.0), sys.area.assign(n, 0.0);
-    sys.sunIn.assign(scene.suns.size(), std::vector<double>(n, 0.0));
+    sys.b.assign(n, 0.0), sys.escaped.assign(n, 0.0f), sys.outConductance.assign(n, 0.0f), sys.skyIn.assign(n, 0.0f);
+    sys.skyToNode.assign(n, 0.0f), sys.skyReturned.assign(n, 0.0f), sys.area.assign(n, 0.0f);
+    sys.sunIn.assign(scene.suns.size(), std::vector<float>(n, 0.0f));
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         progress.throwIfCancelled();
@@ -326,7 +326,7 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const glm::dvec3 escape1 = 6.0 / 7.0 * patch.normal;
             const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
             double r0 = sys.skyIn[i] * (1.0 - 3.0 / 7.0);
-            glm::dvec3 r1 = -sys.skyIn[i] * escape1;
+            glm::dvec3 r1 = -double(sys.skyIn[i]) * escape1;
             for (std::size_t s = 0; s < scene.suns.size(); ++s) {
                 const double P = sys.sunIn[s][i];
                 if (P <= 0.0) continue;
@@ -361,9 +361,9 @@ std::vector<Source> surfaceRadiance(const SnowTopology &topo, const std::vector<
                 diffuse.l0 += solved[j].diffuse.l0, diffuse.l1 += solved[j].diffuse.l1;
                 area += topo.patches[j].area;
             }
-            const double own = kPi * topo.patches[i].area;
-            out[i].l0 = solved[i].returned.l0 / own + diffuse.l0 / (kPi * area);
-            out[i].l1 = solved[i].returned.l1 / own + diffuse.l1 / (kPi * area);
+            const float own = float(kPi * topo.patches[i].area), all = float(kPi * area);
+            out[i].l0 = solved[i].returned.l0 / own + diffuse.l0 / all;
+            out[i].l1 = solved[i].returned.l1 / own + diffuse.l1 / all;
         }
     });
     return out;
@@ -378,12 +378,12 @@ std::vector<Source> composeSource(const SnowTopology &topo, const std::vector<So
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const std::int32_t owner = topo.shellOwner[i];
-            const double w = topo.shellWeight[i];
+            const float w = topo.shellWeight[i];
             if (owner < 0) {
                 out[i] = solved[i].inside;
             } else {
-                out[i].l0 = w * surface[owner].l0 + (1.0 - w) * solved[i].inside.l0;
-                out[i].l1 = w * surface[owner].l1 + (1.0 - w) * solved[i].inside.l1;
+                out[i].l0 = w * surface[owner].l0 + (1.0f - w) * solved[i].inside.l0;
+                out[i].l1 = w * surface[owner].l1 + (1.0f - w) * solved[i].inside.l1;
             }
         }
     });
@@ -602,6 +602,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     std::array<std::unique_ptr<MultigridSolver>, 3> solvers;  // the operator stays, only sources change
     std::vector<glm::vec3> fromSnow(topo.size(), glm::vec3(0.0f));  // W/m^2 gathered so far
     std::vector<Source> source;
+    std::vector<SolvedVoxel> solvedVoxel(topo.size());
     for (int pass = 0; pass < passes; ++pass) {
         const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
         std::vector<glm::vec3> more(topo.size(), glm::vec3(0.0f));  // light from other snow new this pass
@@ -615,7 +616,6 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
             fromSnow = gathered;
             local.gatherSeconds += clock.lap();
         }
-        std::vector<SolvedVoxel> solvedVoxel(topo.size());
         for (int c = 0; c < 3; ++c) {
             const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
             p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");

@@ -52,7 +52,7 @@ struct MultigridSolver::Hierarchy {
     };
     std::vector<Level> levels;
     std::vector<double> cholesky;  // lower factor of the bottom level, dense row-major
-    std::unique_ptr<Matrix> matrix;
+    std::vector<float> remainder;  // finest level: diag minus the conductances
 
     void sweep(const Level &level, int colour) const {
         const Stencil<float> &A = level.A;
@@ -213,10 +213,31 @@ std::vector<double> denseCholesky(const Stencil<float> &A) {
     return L;
 }
 
+// The operator for OpenVDB's conjugate gradients: the finest level's single-precision coefficients,
+// applied in double precision (the coefficients' rounding perturbs the system by 1e-7, far below the
+// solve's tolerance; one copy of the operator serves both the iteration and its preconditioner).
+struct FineOperator {
+    using ValueType = double;
+    const Stencil<float> &A;
+    const std::vector<float> &remainder;  // diag - sum of conductances: the absorption and boundary terms
+    openvdb::math::pcg::SizeType numRows() const { return openvdb::math::pcg::SizeType(A.size()); }
+    // remainder x_i + sum_k c_ik (x_i - x_k): the same operator, without the rounding of a large diagonal
+    // swamping a small absorption (clean snow's blue: 1e-5 of the diagonal).
+    void vectorMultiply(const double *x, double *y) const {
+        parallelRows(A.size(), [&](std::size_t i) {
+            double sum = double(remainder[i]) * x[i];
+            for (int k = 0; k < 6; ++k)
+                if (A.neighbour[i][k] != StencilOperator::kNone) sum += double(A.conductance[i][k]) * (x[i] - x[A.neighbour[i][k]]);
+            y[i] = sum;
+        });
+    }
+    void vectorMultiply(const PcgVector &x, PcgVector &y) const { vectorMultiply(x.data(), y.data()); }
+};
+
 class VCycle : public openvdb::math::pcg::Preconditioner<double> {
   public:
-    VCycle(const Matrix &matrix, const MultigridSolver::Hierarchy &hierarchy)
-        : openvdb::math::pcg::Preconditioner<double>(matrix), hierarchy_(hierarchy) {}
+    explicit VCycle(const MultigridSolver::Hierarchy &hierarchy)
+        : openvdb::math::pcg::Preconditioner<double>(Matrix(1)), hierarchy_(hierarchy) {}
     void apply(const PcgVector &r, PcgVector &z) override {
         const auto &top = hierarchy_.levels.front();
         // Scaled into float's range (the bake's sources span many decades between scenes).
@@ -251,24 +272,22 @@ struct Interrupter {
 MultigridSolver::MultigridSolver(StencilOperator fine) : hierarchy_(std::make_unique<Hierarchy>()) {
     Hierarchy &h = *hierarchy_;
     const std::size_t n = fine.size();
-    h.matrix = std::make_unique<Matrix>(openvdb::math::pcg::SizeType(n));
-    parallelRows(n, [&](std::size_t i) {
-        Matrix::RowEditor row = h.matrix->getRowEditor(openvdb::math::pcg::SizeType(i));
-        row.setValue(openvdb::math::pcg::SizeType(i), fine.diag[i]);
-        for (int k = 0; k < 6; ++k)
-            if (fine.neighbour[i][k] != StencilOperator::kNone)
-                row.setValue(fine.neighbour[i][k], -fine.conductance[i][k]);
-    });
     h.levels.emplace_back();
     Stencil<float> &top = h.levels.back().A;
     top.coord = std::move(fine.coord);
     top.neighbour = std::move(fine.neighbour);
     top.conductance.resize(n), top.diag.resize(n);
+    h.remainder.resize(n);
     parallelRows(n, [&](std::size_t i) {
-        for (int k = 0; k < 6; ++k) top.conductance[i][k] = float(fine.conductance[i][k]);
+        double rest = fine.diag[i];
+        for (int k = 0; k < 6; ++k) {
+            top.conductance[i][k] = float(fine.conductance[i][k]);
+            if (top.neighbour[i][k] != StencilOperator::kNone) rest -= fine.conductance[i][k];
+        }
         top.diag[i] = float(fine.diag[i]);
+        h.remainder[i] = float(rest);
     });
-    fine = StencilOperator{};  // the matrix holds the double copy
+    fine = StencilOperator{};
     while (h.levels.back().A.size() > kDenseLimit) {
         Level next;
         if (!coarsen(h.levels.back(), next)) break;
@@ -289,7 +308,8 @@ MultigridSolver::Result MultigridSolver::solve(const std::vector<double> &b, std
     PcgVector bv{openvdb::math::pcg::SizeType(n)}, xv{openvdb::math::pcg::SizeType(n)};
     std::copy(b.begin(), b.end(), bv.data());
     std::copy(x.begin(), x.end(), xv.data());
-    VCycle preconditioner(*hierarchy_->matrix, *hierarchy_);
+    VCycle preconditioner(*hierarchy_);
+    const FineOperator A{hierarchy_->levels.front().A, hierarchy_->remainder};
     openvdb::math::pcg::State termination = openvdb::math::pcg::terminationDefaults<double>();
     termination.iterations = maxIterations;
     termination.relativeError = relativeTolerance;
@@ -297,7 +317,7 @@ MultigridSolver::Result MultigridSolver::solve(const std::vector<double> &b, std
     Interrupter interrupter{&progress};
     openvdb::math::pcg::State state;
     try {
-        state = openvdb::math::pcg::solve(*hierarchy_->matrix, bv, xv, preconditioner, interrupter, termination);
+        state = openvdb::math::pcg::solve(A, bv, xv, preconditioner, interrupter, termination);
     } catch (const openvdb::RuntimeError &) {
         progress.throwIfCancelled();
         throw;
