@@ -286,9 +286,9 @@ struct SolvedVoxel {
     // Surface voxels only: what returns of the light that entered there, over and above the escape
     // function's share of it (sharp: it follows shadows) ...
     Source returned;
-    // ... and all light leaving, in the escape function's shape (smooth, but spread unevenly over a
-    // voxel staircase).
-    Source diffuse;
+    // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
+    // but spread unevenly over a voxel staircase).
+    glm::vec3 leaving{0.0f};
 };
 
 void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
@@ -339,31 +339,35 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
             }
             out[i].returned.l0[c] = r0;
             out[i].returned.l1[c] = r1;
-            out[i].diffuse.l0[c] = leaving * 3.0 / 7.0;
-            out[i].diffuse.l1[c] = leaving * escape1;
+            out[i].leaving[c] = float(leaving);
         }
     });
 }
 
 // Radiance leaving each surface voxel. The returned part is the voxel's own (over its patch's area); the
-// diffuse part is averaged over its neighbourhood (surface voxels in its 3^3 block, by area): a voxel
-// staircase spreads the diffusion's outflow unevenly between steps, though the light itself varies
-// only over a few transport mean free paths.
+// light leaving in the escape function's shape is averaged over the voxel's neighbourhood (surface voxels
+// of its 3^3 block facing the same way, weighted by the cosine between the normals, by area): a voxel
+// staircase spreads the diffusion's outflow unevenly between steps, though the light itself varies only
+// over a few transport mean free paths. The shape follows the voxel's own normal.
 std::vector<Source> surfaceRadiance(const SnowTopology &topo, const std::vector<SolvedVoxel> &solved) {
     std::vector<Source> out(topo.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
-            Source diffuse;
+            const glm::dvec3 &n = topo.patches[i].normal;
+            glm::dvec3 leaving(0.0);
             double area = 0.0;
-            for (std::size_t n = topo.neighbourhoodStart[i]; n < topo.neighbourhoodStart[i + 1]; ++n) {
-                const std::uint32_t j = topo.neighbourhood[n];
-                diffuse.l0 += solved[j].diffuse.l0, diffuse.l1 += solved[j].diffuse.l1;
-                area += topo.patches[j].area;
+            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
+                const std::uint32_t j = topo.neighbourhood[k];
+                const double w = std::max(0.0, glm::dot(n, topo.patches[j].normal));
+                leaving += w * glm::dvec3(solved[j].leaving);
+                area += w * topo.patches[j].area;
             }
-            const float own = float(kPi * topo.patches[i].area), all = float(kPi * area);
-            out[i].l0 = solved[i].returned.l0 / own + diffuse.l0 / all;
-            out[i].l1 = solved[i].returned.l1 / own + diffuse.l1 / all;
+            const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
+            const float own = float(kPi * topo.patches[i].area);
+            out[i].l0 = solved[i].returned.l0 / own + glm::vec3(exitance * (3.0 / 7.0 / kPi));
+            for (int c = 0; c < 3; ++c)
+                out[i].l1[c] = solved[i].returned.l1[c] / own + glm::vec3(exitance[c] * 6.0 / 7.0 / kPi * n);
         }
     });
     return out;
@@ -430,6 +434,40 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
     });
 }
 
+// The radiance the surface voxels around voxel c (outside the snow) show towards it: their values
+// weighted by how much their surface faces c (a voxel beside an edge takes the side's, one above it the
+// top's). False if no surface voxel is near.
+bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
+                   openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const std::vector<Source> &source,
+                   Source &S) {
+    double total = 0.0;
+    int count = 0;
+    glm::dvec3 l0(0.0);
+    glm::dmat3 l1(0.0);
+    for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dz = -1; dz <= 1; ++dz) {
+                const std::int32_t j = index.getValue(c.offsetBy(-dx, -dy, -dz));
+                if (j < 0 || !topo.patches[j].isSurface()) continue;
+                const double w = std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
+                l0 += w * glm::dvec3(source[j].l0), l1 += w * glm::dmat3(source[j].l1);
+                total += w, ++count;
+            }
+    if (count == 0) return false;
+    if (total <= 0.0) {  // nothing faces c: plain average
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) {
+                    const std::int32_t j = index.getValue(c.offsetBy(dx, dy, dz));
+                    if (j < 0 || !topo.patches[j].isSurface()) continue;
+                    l0 += glm::dvec3(source[j].l0), l1 += glm::dmat3(source[j].l1), total += 1.0;
+                }
+    }
+    S.l0 = glm::vec3(l0 / total);
+    S.l1 = glm::mat3(l1 / total);
+    return true;
+}
+
 // The four source grids over the snow's voxels and a margin of three. Unknowns hold their source
 // function. Outside them (the density ramp and surface fringes) the radiance of the nearest surface
 // voxels is carried out two voxels, so the renderer's trilinear ramp sees a constant ratio of emission
@@ -479,8 +517,7 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo,
                 Source S;
                 if (i >= 0) {
                     S = source[i];
-                } else if (average(c, [&](const openvdb::Coord &n) { const std::int32_t j = index.getValue(n); return j >= 0 && topo.patches[j].isSurface(); },
-                                   [&](const openvdb::Coord &n) { return source[index.getValue(n)]; }, S)) {
+                } else if (facingAverage(topo, c, index, source, S)) {
                     mark.setValueOnly(c, true);
                 } else {
                     continue;

@@ -67,6 +67,16 @@ def test_half_space_helpers_match_exact_table():
     assert firncore.art_spherical_albedo(0.999, 0.0) == pytest.approx(0.92971, rel=0.005)
 
 
+def test_reference_quality_path_traces_the_surface(tmp_vdb):
+    # REFERENCE replaces the surface's radiance by Monte Carlo: under a white sky it too shows A(1)
+    # (g 0, omega 0.999: exact 0.91285). 32 paths in each of 12 directions per voxel: ~2 % noise.
+    optics = firncore.VolumeOptics(2000.0 / 300.0, (0.999, 0.999, 0.999), 0.0)
+    firncore.write_slab_vdb(tmp_vdb, voxel_size=0.01, width=8, layers=8, density=300.0)
+    firncore.bake(tmp_vdb, optics, sky=firncore.Sky(), quality="REFERENCE", reference_samples=32, seed=4)
+    radiance = firncore.render_baked(tmp_vdb, optics, *down([(0.0, 0.0)]))[0, 1]
+    assert radiance == pytest.approx(0.91285, rel=0.06)
+
+
 def test_sun_irradiance_and_colour_scale_the_result(slab):
     sun = firncore.SunLight(direction=(0.0, 0.3, 1.0), irradiance=(1.0, 2.0, 4.0), angular_diameter=0.0093)
     firncore.bake(slab, SNOW, suns=[sun], quality="DRAFT")
