@@ -89,7 +89,10 @@ DoubleArray rgbRows(const std::vector<firn::Rgb> &values) {
     return out;
 }
 
-void bindLights(py::module_ &m) {
+// The optics binding (bind_optics.cpp, when present) registers VolumeOptics with more to it; the bake
+// needs only this constructor and these fields, so it defers to it (bind that one first).
+void bindVolumeOptics(py::module_ &m) {
+    if (py::detail::get_type_info(typeid(firn::VolumeOptics))) return;
     py::class_<firn::VolumeOptics>(m, "VolumeOptics", R"doc(
 What light transport needs to know about snow per unit density: extinction_per_density (m^2/kg, so
 sigma_t = k * density), the single-scattering albedo per RGB channel, and the Henyey-Greenstein g.)doc")
@@ -102,7 +105,9 @@ sigma_t = k * density), the single-scattering albedo per RGB channel, and the He
         .def_readonly("extinction_per_density", &firn::VolumeOptics::extinctionPerDensity)
         .def_property_readonly("albedo", [](const firn::VolumeOptics &o) { return tuple(o.albedo); })
         .def_readonly("g", &firn::VolumeOptics::g);
+}
 
+void bindLights(py::module_ &m) {
     py::class_<firn::SunLight>(m, "SunLight", R"doc(
 A distant disc light (Blender's Sun): direction towards the sun (world, normalized here), irradiance in
 W/m^2 per RGB channel on a plane facing it, angular_diameter in radians.)doc")
@@ -167,6 +172,7 @@ py::dict statsDict(const firn::BakeStats &stats) {
 }  // namespace
 
 void bindBake(py::module_ &m) {
+    bindVolumeOptics(m);
     bindLights(m);
     m.attr("BAKED_GRID_NAMES") = py::make_tuple(firn::BakedGrids::kNames[0], firn::BakedGrids::kNames[1],
                                                 firn::BakedGrids::kNames[2], firn::BakedGrids::kNames[3]);
