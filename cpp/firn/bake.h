@@ -36,7 +36,8 @@ struct BakeStats {
 };
 
 // Computes the light scattered inside the snow, all orders, from the scene's suns and sky, with the
-// occluders' shadows and the diffuse light they reflect back into snow lying on them.
+// occluders' shadows, the light they reflect into the snow (once, and exactly for the surface the snow
+// lies on) and the light snow surfaces send each other across the air.
 //
 // Method (docs/bake.md): exact attenuation of the suns' beams and the sky's light through the snow and
 // past occluders; a similarity-scaled diffusion solve (D = 1 / (3 sigma_tr), sigma_tr = sigma_a +
@@ -44,7 +45,8 @@ struct BakeStats {
 // (Marshak) to air and albedo boundaries to occluders, sources placed at their true depth inside the
 // (optically thick) surface voxels; multigrid-preconditioned CG per colour channel. The radiance leaving
 // each surface voxel is rebuilt from its fluxes with the angular shapes of thick snow (sun lobe, escape
-// function); inside, the source function follows from the fluence and its gradient.
+// function); inside, the source function follows from the fluence and its gradient. Where snow hides part
+// of a surface's sky, its light is gathered from the first solution and the solve repeated.
 BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress = nullptr,
                           BakeStats *stats = nullptr);
 
