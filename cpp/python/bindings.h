@@ -7,5 +7,6 @@ namespace firncore {
 void bindBasics(pybind11::module_ &m);     // errors, Progress, threads
 void bindOptics(pybind11::module_ &m);     // snow optics, KZ04 albedos, ice and water absorption
 void bindSnowLayer(pybind11::module_ &m);  // Add Snow Layer
+void bindBake(pybind11::module_ &m);       // lights, bake, reference tools
 void bindVdb(pybind11::module_ &m);        // reading grids back
 }  // namespace firncore

@@ -9,5 +9,6 @@ PYBIND11_MODULE(firncore, m) {
     firncore::bindBasics(m);
     firncore::bindOptics(m);
     firncore::bindSnowLayer(m);
+    firncore::bindBake(m);
     firncore::bindVdb(m);
 }

@@ -13,7 +13,7 @@ import traceback
 import addon_utils
 import bpy
 
-state = {"ticks": 0, "phase": "start", "started": 0.0}
+state = {"ticks": 0, "phase": "start", "started": 0.0, "last": 0.0, "gap": 0.0}
 
 
 def job_running():
@@ -47,7 +47,8 @@ def start_job():
         result = bpy.ops.firn.add_snow_layer("INVOKE_DEFAULT", depth=0.1, spacing=0.02)
     if result != {"RUNNING_MODAL"}:
         fail(f"expected RUNNING_MODAL, got {result}")
-    state["started"] = time.perf_counter()
+    state["started"] = state["last"] = time.perf_counter()
+    state["gap"] = 0.0
 
 
 def snow_objects():
@@ -57,6 +58,8 @@ def snow_objects():
 def tick():
     try:
         state["ticks"] += 1
+        now = time.perf_counter()
+        state["gap"], state["last"] = max(state["gap"], now - state["last"]), now
         if state["phase"] == "start":
             setup()
             start_job()
@@ -65,9 +68,10 @@ def tick():
         elif state["phase"] == "running":
             if snow_objects():
                 elapsed = time.perf_counter() - state["started"]
-                # The UI (this timer) kept running while the worker computed.
-                if state["ticks"] < 2 and elapsed > 1.0:
-                    fail(f"UI froze: {state['ticks']} timer ticks in {elapsed:.2f} s")
+                # The UI (this timer) kept running while the worker computed: frozen means no tick for most
+                # of the job (slow ticks on 2 busy cores are fine).
+                if elapsed > 1.0 and state["gap"] > 0.8 * elapsed:
+                    fail(f"UI froze: no timer tick for {state['gap']:.2f} s of a {elapsed:.2f} s job")
                 print(f"modal job finished after {elapsed:.2f} s with {state['ticks']} UI ticks meanwhile")
                 state["phase"] = "cancel"
                 bpy.ops.mesh.primitive_plane_add(size=12.0, location=(50, 0, 0))

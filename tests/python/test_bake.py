@@ -1,0 +1,190 @@
+"""Bake Scattering through the Python API, without Blender.
+
+Oracles: the exact semi-infinite plane albedo A(mu) (adding-doubling / Chandrasekhar H-functions, table in
+/work/shared/notes/snow-optics.md) and energy conservation."""
+
+import math
+import os
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import firncore
+
+# g 0.87, omega 0.9999: A(1) = 0.92182, A(0.5) = 0.94594 (notes' exact table).
+EXACT_A1 = 0.92182
+SNOW = firncore.VolumeOptics(5000.0 / 300.0, (0.9999, 0.9999, 0.9999), 0.87)  # sigma_t 5000 /m at 300 kg/m^3
+
+
+@pytest.fixture
+def slab(tmp_vdb):
+    firncore.write_slab_vdb(tmp_vdb, voxel_size=0.01, width=32, layers=30, density=300.0)
+    return tmp_vdb
+
+
+def grid_names(path):
+    import pyopenvdb
+
+    return sorted(grid.name for grid in pyopenvdb.readAll(path)[0])
+
+
+def down(points):
+    """Camera rays from 0.5 m above each (x, y) point, looking straight down."""
+    origins = np.array([[x, y, 0.5] for x, y in points], dtype=float)
+    return origins, np.tile([0.0, 0.0, -1.0], (len(points), 1))
+
+
+def test_bake_adds_the_contract_grids(slab):
+    stats = firncore.bake(slab, SNOW, sky=firncore.Sky((1.0, 1.0, 1.0)), quality="DRAFT")
+    assert grid_names(slab) == sorted(("density",) + firncore.BAKED_GRID_NAMES)
+    assert stats["unknowns"] == 32 * 32 * 30
+    assert stats["surface_voxels"] > 32 * 32
+    firncore.bake(slab, SNOW, sky=firncore.Sky((1.0, 1.0, 1.0)), quality="DRAFT")  # again: replaced, not doubled
+    assert grid_names(slab) == sorted(("density",) + firncore.BAKED_GRID_NAMES)
+
+
+def test_slab_under_white_sky_shows_exact_albedo(slab):
+    # By reciprocity A(mu) is the radiance seen at cos(view) mu under a uniform sky of unit radiance.
+    firncore.bake(slab, SNOW, sky=firncore.Sky((1.0, 1.0, 1.0)))
+    radiance = firncore.render_baked(slab, SNOW, *down([(0.0, 0.0)]))
+    assert radiance[0] == pytest.approx([EXACT_A1] * 3, rel=0.01)
+
+
+def test_monte_carlo_reference_shows_exact_albedo(slab):
+    mean, error = firncore.monte_carlo_radiance(
+        slab, SNOW, *down([(0.0, 0.0)]), sky=firncore.Sky((1.0, 1.0, 1.0)), samples=3000, seed=1)
+    assert abs(mean[0, 1] - EXACT_A1) < 4.0 * error[0, 1] + 0.002  # the slab's finite width: 0.2 %
+
+
+def test_half_space_helpers_match_exact_table():
+    r = firncore.slab_monte_carlo(omega=0.999, g=0.0, tau=float("inf"), mu0=0.5, photons=40000, seed=2)
+    assert abs(r["reflectance"] - 0.93806) < 4.0 * r["reflectance_error"]
+    conservative = firncore.slab_monte_carlo(omega=1.0, g=0.85, tau=5.0, mu0=1.0, photons=5000)
+    assert conservative["reflectance"] + conservative["transmittance"] == pytest.approx(1.0)
+    assert firncore.art_plane_albedo(0.9999, 0.87, 1.0) == pytest.approx(EXACT_A1, rel=0.005)
+    assert firncore.art_spherical_albedo(0.999, 0.0) == pytest.approx(0.92971, rel=0.005)
+
+
+def test_reference_quality_path_traces_the_surface(tmp_vdb):
+    # REFERENCE replaces the surface's radiance by Monte Carlo: under a white sky it too shows A(1)
+    # (g 0, omega 0.999: exact 0.91285). 32 paths in each of 12 directions per voxel: ~2 % noise.
+    optics = firncore.VolumeOptics(2000.0 / 300.0, (0.999, 0.999, 0.999), 0.0)
+    firncore.write_slab_vdb(tmp_vdb, voxel_size=0.01, width=8, layers=8, density=300.0)
+    firncore.bake(tmp_vdb, optics, sky=firncore.Sky(), quality="REFERENCE", reference_samples=32, seed=4)
+    radiance = firncore.render_baked(tmp_vdb, optics, *down([(0.0, 0.0)]))[0, 1]
+    assert radiance == pytest.approx(0.91285, rel=0.06)
+
+
+def test_sun_irradiance_and_colour_scale_the_result(slab):
+    sun = firncore.SunLight(direction=(0.0, 0.3, 1.0), irradiance=(1.0, 2.0, 4.0), angular_diameter=0.0093)
+    firncore.bake(slab, SNOW, suns=[sun], quality="DRAFT")
+    r, g, b = firncore.render_baked(slab, SNOW, *down([(0.0, 0.0)]))[0]
+    assert g == pytest.approx(2.0 * r, rel=1e-3) and b == pytest.approx(4.0 * r, rel=1e-3)
+    assert 0.2 < r < 0.35  # a white snow, mu0 0.96: about A mu0 / pi
+
+
+def test_occluder_casts_a_shadow(slab):
+    plate = (np.array([[-0.2, -0.2, 0.3], [0.0, -0.2, 0.3], [0.0, 0.2, 0.3], [-0.2, 0.2, 0.3]], dtype=np.float32),
+             np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32), (0.0, 0.0, 0.0))
+    sun = firncore.SunLight((0.0, 0.0, 1.0), (1.0, 1.0, 1.0))
+    firncore.bake(slab, SNOW, suns=[sun], occluders=[plate], quality="DRAFT")
+    shade, light = firncore.render_baked(slab, SNOW, *down([(-0.1, 0.0), (0.1, 0.0)]))[:, 0]
+    assert shade < 0.3 * light
+
+
+def test_sky_map_in_blenders_convention(slab):
+    # Only the upper half of the map is lit: the slab's top sees exactly what a uniform sky gives it.
+    pixels = np.zeros((8, 16, 4), dtype=np.float32)
+    pixels[4:, :, :3] = 1.0
+    firncore.bake(slab, SNOW, sky=firncore.Sky((1.0, 1.0, 1.0), pixels), quality="DRAFT")
+    top = firncore.render_baked(slab, SNOW, *down([(0.0, 0.0)]))[0, 0]
+    assert top == pytest.approx(EXACT_A1, rel=0.02)
+    sky = firncore.Sky((0.5, 0.5, 0.5), pixels)
+    assert sky.radiance_from((0.0, 0.0, 1.0))[0] == pytest.approx(0.5)
+    assert sky.radiance_from((0.0, 0.0, -1.0))[0] == pytest.approx(0.0)
+
+
+def test_progress_is_reported(slab):
+    seen = []
+    progress = firncore.Progress(lambda fraction, stage: seen.append((fraction, stage)))
+    firncore.bake(slab, SNOW, sky=firncore.Sky(), quality="DRAFT", progress=progress)
+    assert progress.fraction == 1.0
+    assert seen[-1][0] == 1.0
+    assert all(a[0] <= b[0] for a, b in zip(seen, seen[1:]))
+
+
+def test_cancel_raises_and_leaves_the_file(slab):
+    before = os.path.getmtime(slab), grid_names(slab)
+    progress = firncore.Progress()
+    progress.cancel()
+    with pytest.raises(firncore.Cancelled):
+        firncore.bake(slab, SNOW, sky=firncore.Sky(), progress=progress)
+    assert (os.path.getmtime(slab), grid_names(slab)) == before
+
+
+def test_bake_releases_the_gil(tmp_vdb):
+    firncore.write_slab_vdb(tmp_vdb, voxel_size=0.01, width=64, layers=24, density=300.0)
+    ticks = 0
+    worker = threading.Thread(target=firncore.bake, args=(tmp_vdb, SNOW), kwargs={"sky": firncore.Sky()})
+    worker.start()
+    while worker.is_alive():
+        ticks += 1
+        time.sleep(0.001)
+    worker.join()
+    assert ticks > 20  # Python kept running while the core baked
+
+
+def test_same_seed_same_file(slab, tmp_path):
+    other = os.fspath(tmp_path / "other.vdb")
+    firncore.write_slab_vdb(other, voxel_size=0.01, width=32, layers=30, density=300.0)
+    sun = firncore.SunLight((0.2, 0.1, 1.0), (1.0, 1.0, 1.0), 0.0093)
+    for path in (slab, other):
+        firncore.bake(path, SNOW, suns=[sun], sky=firncore.Sky(), quality="DRAFT", seed=3)
+    rays = down([(0.01 * i, -0.02 * i) for i in range(5)])
+    assert np.array_equal(firncore.render_baked(slab, SNOW, *rays), firncore.render_baked(other, SNOW, *rays))
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"quality": "ULTRA"}, "quality"),
+        ({"sky_samples": -1}, "sample"),
+        ({"occluders": [(np.zeros((3, 2), np.float32), np.zeros((1, 3), np.uint32), (0, 0, 0))]}, "vertices"),
+        ({"occluders": [(np.zeros((3, 3), np.float32), np.array([[0, 1, 5]], np.uint32), (0, 0, 0))]}, "vertex"),
+        ({"occluders": [(np.eye(3, dtype=np.float32), np.array([[0, 1, 2]], np.uint32), (2, 0, 0))]}, "albedo"),
+    ],
+)
+def test_bad_input_is_a_value_error(slab, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        firncore.bake(slab, SNOW, **kwargs)
+
+
+def test_bad_optics_and_lights_are_value_errors():
+    with pytest.raises(ValueError, match="albedo"):
+        firncore.VolumeOptics(10.0, (1.2, 1.0, 1.0), 0.85)
+    with pytest.raises(ValueError, match="g"):
+        firncore.VolumeOptics(10.0, (0.9, 0.9, 0.9), 1.0)
+    with pytest.raises(ValueError, match="extinction"):
+        firncore.VolumeOptics(-1.0, (0.9, 0.9, 0.9), 0.5)
+    with pytest.raises(ValueError, match="direction"):
+        firncore.SunLight((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="irradiance"):
+        firncore.SunLight((0.0, 0.0, 1.0), (math.nan, 1.0, 1.0))
+    with pytest.raises(ValueError, match="sky map"):
+        firncore.Sky((1.0, 1.0, 1.0), np.zeros((4, 4), np.float32))
+
+
+def test_file_problems(tmp_path):
+    with pytest.raises(OSError):
+        firncore.bake(os.fspath(tmp_path / "missing.vdb"), SNOW)
+    import pyopenvdb
+
+    grid = pyopenvdb.FloatGrid()
+    grid.name = "not_density"
+    grid.fill((0, 0, 0), (3, 3, 3), 300.0)
+    path = os.fspath(tmp_path / "other.vdb")
+    pyopenvdb.write(path, grids=[grid])
+    with pytest.raises(ValueError, match="density"):
+        firncore.bake(path, SNOW)
