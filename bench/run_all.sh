@@ -14,5 +14,18 @@ mkdir -p "$(dirname "$report")"
   echo "## Add Snow Layer against Blender's Real Snow (same scene, same run)"
   echo
   "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/snow_layer_bench.py" -- --triangles 1000000
+  echo
+  echo "## Bake time against active voxels (FINAL quality)"
+  echo
+  echo '```'
+  PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/bench/bake_scaling.py"
+  echo '```'
+  echo
+  echo "## Baked render against Cycles brute force (same volume, same run)"
+  echo
+  for bounces in 256 1024; do
+    "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/baked_vs_brute_force.py" -- --samples 64 --pixels 32 --bounces "$bounces"
+    echo
+  done
 } | tee "$report"
 echo "firn: wrote $report"

@@ -84,7 +84,7 @@ def main():
     args = common.parse_args(__doc__, "out/car_under_snow.png")
     stages = common.Stages()
     scene, targets = stages.run("build scene", build_scene)
-    snow = stages.run("add snow layer", common.add_snow, targets, depth=0.12, spacing=0.06, voxel_size=0.03)
+    snow = stages.run("add snow layer", common.add_snow, targets, depth=0.12, spacing=0.06, voxel_size=0.02)
     stages.run("bake scattering", common.bake, [snow])
     stages.run("render (Cycles)", common.render, scene, args.output, args.width, args.samples)
     if not args.no_save:

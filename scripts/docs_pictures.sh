@@ -13,7 +13,7 @@ run_blender -b --factory-startup --python-expr "import bpy; bpy.ops.wm.save_as_m
 xvfb-run -a -s "-screen 0 1400x1000x24" \
   env BLENDER_USER_SCRIPTS="$FIRN_BUILD/blender_scripts" BLENDER_USER_CONFIG="$FIRN_BUILD/docs_config" \
   blender --factory-startup -noaudio "$empty" --python "$FIRN_ROOT/scripts/screenshot_panels.py" -- "$images/panels.png"
-for sample in car_under_snow teapot_and_ball nishita_comparison; do
+for sample in car_under_snow teapot_and_ball nishita_comparison firn_vs_real_snow; do
   run_blender -b --factory-startup --python "$FIRN_ROOT/blend_samples/$sample.py" -- --output "$images/$sample.png" --no-save
 done
 echo "firn: pictures in $images"
