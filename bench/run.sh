@@ -7,4 +7,4 @@ script="$1"
 shift
 BLENDER_USER_SCRIPTS="$FIRN_BUILD/blender_scripts" BLENDER_USER_CONFIG="$FIRN_BUILD/bench_config" \
   blender -b --factory-startup -noaudio --python-exit-code 1 --python "$script" "$@" 2>&1 |
-  grep -vE "^(Blender|Read|Info:|Saved)" || true
+  grep -vE "^(Blender|Read|Info:|Saved|Fra:| Time:|Warning:|module changed|.* reloading)" || true

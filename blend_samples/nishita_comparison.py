@@ -16,7 +16,7 @@ import sample_common as common  # noqa: E402
 
 def build_scene():
     scene = common.new_scene()
-    bpy.ops.mesh.primitive_plane_add(size=6.0)
+    bpy.ops.mesh.primitive_plane_add(size=4.0)
     ground = bpy.context.object
     ground.data.materials.append(common.material("Soil", (0.2, 0.15, 0.1), roughness=0.9))
     stone = common.material("Stone", (0.35, 0.33, 0.3), roughness=0.8)

@@ -14,13 +14,13 @@ import bpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sample_common as common  # noqa: E402
 
-DEPTHS = (("thin", 0.008), ("thick", 0.05))  # m
+DEPTHS = (("thin", 0.015, 0.003), ("thick", 0.06, 0.006))  # depth and voxel size, m
 
 
 def build_scene():
     scene = common.new_scene()
     addon_utils.enable("add_mesh_extra_objects", default_set=True)
-    bpy.ops.mesh.primitive_plane_add(size=3.0)
+    bpy.ops.mesh.primitive_plane_add(size=1.4)
     table = bpy.context.object
     table.name = "Table"
     table.data.materials.append(common.material("Wood", (0.35, 0.22, 0.12), roughness=0.7))
@@ -38,14 +38,14 @@ def build_scene():
     ball.data.materials.append(common.material("Red", (0.7, 0.03, 0.02), roughness=0.4))
     common.nishita_sky(scene, sun_elevation_deg=40.0, sun_rotation_deg=160.0)
     common.sun(elevation_deg=40.0, rotation_deg=160.0, irradiance=3.0)
-    common.camera(location=(1.6, -1.9, 1.0), look_at=(0.0, 0.0, 0.15), lens=50)
+    common.camera(location=(1.3, -1.5, 0.8), look_at=(0.0, 0.0, 0.15), lens=50)
     return scene, [table, teapot, ball]
 
 
-def snow_version(name, depth, args, stages):
+def snow_version(name, depth, voxel_size, args, stages):
     scene, targets = stages.run(f"build scene ({name})", build_scene)
     snow = stages.run(f"add snow ({name})", common.add_snow, targets, depth=depth, spacing=max(0.01, depth / 2),
-                      smoothness=0.8)
+                      smoothness=0.8, voxel_size=voxel_size)
     stages.run(f"bake ({name})", common.bake, [snow])
     path = os.path.join(os.path.dirname(os.path.abspath(args.output)), f"teapot_and_ball_{name}.png")
     stages.run(f"render ({name})", common.render, scene, path, args.width // 2, args.samples, aspect=(1, 1))
@@ -55,7 +55,7 @@ def snow_version(name, depth, args, stages):
 def main():
     args = common.parse_args(__doc__, "out/teapot_and_ball.png")
     stages = common.Stages()
-    paths = [snow_version(name, depth, args, stages) for name, depth in DEPTHS]
+    paths = [snow_version(name, depth, voxel, args, stages) for name, depth, voxel in DEPTHS]
     common.side_by_side(paths, args.output)
     if not args.no_save:
         stages.run("save .blend", common.save_next_to, __file__)

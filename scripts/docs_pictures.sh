@@ -10,7 +10,7 @@ run_blender() {
 }
 empty="$(mktemp -d)/empty.blend"
 run_blender -b --factory-startup --python-expr "import bpy; bpy.ops.wm.save_as_mainfile(filepath='$empty')"
-xvfb-run -a -s "-screen 0 1400x1000x24" \
+xvfb-run -a -s "-screen 0 1200x2400x24" \
   env BLENDER_USER_SCRIPTS="$FIRN_BUILD/blender_scripts" BLENDER_USER_CONFIG="$FIRN_BUILD/docs_config" \
   blender --factory-startup -noaudio "$empty" --python "$FIRN_ROOT/scripts/screenshot_panels.py" -- "$images/panels.png"
 for sample in car_under_snow teapot_and_ball nishita_comparison firn_vs_real_snow; do

@@ -1,6 +1,6 @@
 """Screenshot of Firn's panels for the docs: Blender with a window under Xvfb.
 
-xvfb-run -s "-screen 0 1400x1000x24" blender --factory-startup EMPTY.blend --python scripts/screenshot_panels.py -- OUT.png
+xvfb-run -s "-screen 0 1200x2400x24" blender --factory-startup EMPTY.blend --python scripts/screenshot_panels.py -- OUT.png
 (scripts/docs_pictures.sh runs it with the add-on from the build tree; opening a .blend skips the splash.)
 The 3D viewport's area shows a Properties editor on the snow object, with Firn's panels.
 """
@@ -38,11 +38,6 @@ def object_tab():
     for area in window.screen.areas:
         if area.type == "PROPERTIES":
             area.spaces.active.context = "OBJECT"
-    # Scroll the big editor past Transform to Firn's panels.
-    area = max((a for a in window.screen.areas if a.type == "PROPERTIES"), key=lambda a: a.width * a.height)
-    region = next(r for r in area.regions if r.type == "WINDOW")
-    with bpy.context.temp_override(window=window, area=area, region=region):
-        bpy.ops.view2d.scroll_down(deltay=4000)
 
 
 def shoot():
