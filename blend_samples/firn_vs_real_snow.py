@@ -7,6 +7,7 @@ blender -b --factory-startup --python blend_samples/firn_vs_real_snow.py -- [--o
 
 import os
 import sys
+import tempfile
 
 import addon_utils
 import bpy
@@ -54,7 +55,7 @@ def real_snow(targets):
 def main():
     args = common.parse_args(__doc__, "out/firn_vs_real_snow.png")
     stages = common.Stages()
-    folder = os.path.dirname(os.path.abspath(args.output))
+    folder = tempfile.mkdtemp(prefix="firn_panels_")  # the parts; only the joined picture is kept
     panels = [os.path.join(folder, "real_snow.png"), os.path.join(folder, "firn.png")]
     scene, targets = stages.run("build scene", build_scene)
     stages.run("Real Snow", real_snow, targets)

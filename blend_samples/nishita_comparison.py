@@ -7,6 +7,7 @@ blender -b --factory-startup --python blend_samples/nishita_comparison.py -- [--
 
 import os
 import sys
+import tempfile
 
 import bpy
 
@@ -40,7 +41,7 @@ def main():
     snow = stages.run("add snow layer", common.add_snow, targets, depth=0.1, spacing=0.04, surface_mesh=True)
     surface = next(child for child in snow.children if child.type == "MESH" and child != snow.firn.metaballs)
     surface.data.materials.append(common.material("Opaque Snow", (0.9, 0.9, 0.9), roughness=0.6))
-    folder = os.path.dirname(os.path.abspath(args.output))
+    folder = tempfile.mkdtemp(prefix="firn_panels_")  # the parts; only the joined picture is kept
     panels = [os.path.join(folder, f"nishita_{name}.png") for name in ("opaque", "single", "multiple")]
     width = args.width // 3
 

@@ -7,6 +7,7 @@ blender -b --factory-startup --python blend_samples/teapot_and_ball.py -- [--out
 
 import os
 import sys
+import tempfile
 
 import addon_utils
 import bpy
@@ -47,7 +48,7 @@ def snow_version(name, depth, voxel_size, args, stages):
     snow = stages.run(f"add snow ({name})", common.add_snow, targets, depth=depth, spacing=max(0.01, depth / 2),
                       smoothness=0.8, voxel_size=voxel_size)
     stages.run(f"bake ({name})", common.bake, [snow])
-    path = os.path.join(os.path.dirname(os.path.abspath(args.output)), f"teapot_and_ball_{name}.png")
+    path = os.path.join(tempfile.mkdtemp(prefix="firn_panels_"), f"teapot_and_ball_{name}.png")
     stages.run(f"render ({name})", common.render, scene, path, args.width // 2, args.samples, aspect=(1, 1))
     return path
 
