@@ -7,6 +7,7 @@ import bpy
 from . import bake_state
 from .bake import BAKE_LABEL
 from .jobs import running_jobs
+from .ui import panel_pair
 
 _STATE_ICONS = {key: icon for key, _name, _description, icon, _number in bake_state.STATES}
 
@@ -54,35 +55,4 @@ def draw_bake(layout, obj):
         col.label(text="Its 'density' grid is read as kg/m³ with Firn's snow optics", icon="INFO")
 
 
-class FIRN_PT_object_bake(bpy.types.Panel):
-    bl_label = "Firn Bake"
-    bl_idname = "FIRN_PT_object_bake"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "object"
-
-    @classmethod
-    def poll(cls, context):
-        return _volume(context) is not None
-
-    def draw(self, context):
-        draw_bake(self.layout, context.object)
-
-
-class FIRN_PT_sidebar_bake(bpy.types.Panel):
-    bl_label = "Bake"
-    bl_idname = "FIRN_PT_sidebar_bake"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Firn"
-    bl_parent_id = "FIRN_PT_sidebar"
-
-    @classmethod
-    def poll(cls, context):
-        return _volume(context) is not None
-
-    def draw(self, context):
-        draw_bake(self.layout, context.object)
-
-
-classes = (FIRN_PT_object_bake, FIRN_PT_sidebar_bake)
+classes = panel_pair("bake", "Firn Bake", lambda context: _volume(context) is not None, draw_bake)

@@ -8,6 +8,7 @@ import bpy
 from . import materials, optics
 from .properties import active_snow
 from .snow_material import FIRN_MT_snow_material_presets
+from .ui import panel_pair
 
 
 def _format(value, fmt):
@@ -85,35 +86,5 @@ def draw_snow_material(layout, obj):
         layout.operator("firn.snow_optics_to_custom", icon="COPYDOWN")
 
 
-class FIRN_PT_snow_material(bpy.types.Panel):
-    bl_label = "Snow Material"
-    bl_idname = "FIRN_PT_snow_material"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "object"
-
-    @classmethod
-    def poll(cls, context):
-        return active_snow(context) is not None
-
-    def draw(self, context):
-        draw_snow_material(self.layout, context.object)
-
-
-class FIRN_PT_sidebar_snow_material(bpy.types.Panel):
-    bl_label = "Snow Material"
-    bl_idname = "FIRN_PT_sidebar_snow_material"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "Firn"
-    bl_parent_id = "FIRN_PT_sidebar"
-
-    @classmethod
-    def poll(cls, context):
-        return active_snow(context) is not None
-
-    def draw(self, context):
-        draw_snow_material(self.layout, context.object)
-
-
-classes = (FIRN_PT_snow_material, FIRN_PT_sidebar_snow_material)
+classes = panel_pair("snow_material", "Snow Material", lambda context: active_snow(context) is not None,
+                     draw_snow_material)

@@ -138,7 +138,7 @@ def test_panel_shows_quality_buttons_and_state(clean_scene, tmp_path):
     bpy.context.view_layer.update()
     labels = draw_log(obj)["labels"]
     assert "Needs re-bake" in labels and "Changed: lamps" in labels
-    for panel in (bpy.types.FIRN_PT_object_bake, bpy.types.FIRN_PT_sidebar_bake):
+    for panel in (bpy.types.FIRN_PT_bake, bpy.types.FIRN_PT_sidebar_bake):
         assert panel.poll(type("Context", (), {"object": obj}))
         assert not panel.poll(type("Context", (), {"object": sun}))
     assert bpy.types.FIRN_PT_sidebar_bake.bl_parent_id == "FIRN_PT_sidebar"
