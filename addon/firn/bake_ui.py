@@ -2,8 +2,6 @@
 
 import textwrap
 
-import bpy
-
 from . import bake_state
 from .bake import BAKE_LABEL
 from .jobs import running_jobs

@@ -3,8 +3,6 @@
 import math
 import textwrap
 
-import bpy
-
 from . import materials, optics
 from .properties import active_snow
 from .snow_material import FIRN_MT_snow_material_presets

@@ -7,23 +7,16 @@ xvfb-run blender --factory-startup --enable-event-simulate --python job_controls
 
 import os
 import sys
-import threading
 import time
 import traceback
 
 import addon_utils
 import bpy
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ui_test import fail, job_running  # noqa: E402
+
 state = {"phase": "start", "ticks": 0, "since": 0.0, "heard": 0}
-
-
-def fail(message):
-    print("FAIL:", message, file=sys.stderr, flush=True)
-    os._exit(1)  # from a timer, sys.exit would only end the callback
-
-
-def job_running():
-    return any(thread.name == "firn-job" and thread.is_alive() for thread in threading.enumerate())
 
 
 def window():

@@ -7,33 +7,19 @@ xvfb-run blender --factory-startup --enable-event-simulate --python modal_bake.p
 
 import os
 import sys
-import threading
 import time
 import traceback
 
 import addon_utils
 import bpy
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ui_test import fail, job_running, window_context  # noqa: E402
+
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "blender"))
 
 state = {"phase": "start", "ticks": 0, "since": 0.0, "last": 0.0, "gap": 0.0}
 FOLDER = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"firn_modal_bake_{os.getpid()}")
-
-
-def fail(message):
-    print("FAIL:", message, file=sys.stderr, flush=True)
-    os._exit(1)  # from a timer, sys.exit would only end the callback
-
-
-def job_running():
-    return any(thread.name == "firn-job" and thread.is_alive() for thread in threading.enumerate())
-
-
-def window_context():
-    window = bpy.context.window_manager.windows[0]
-    area = next(a for a in window.screen.areas if a.type == "VIEW_3D")
-    return {"window": window, "screen": window.screen, "area": area,
-            "region": next(r for r in area.regions if r.type == "WINDOW")}
 
 
 def setup():

@@ -6,30 +6,16 @@ xvfb-run blender --factory-startup --enable-event-simulate --python modal_job.py
 
 import os
 import sys
-import threading
 import time
 import traceback
 
 import addon_utils
 import bpy
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ui_test import fail, job_running, window_context  # noqa: E402
+
 state = {"ticks": 0, "phase": "start", "started": 0.0, "last": 0.0, "gap": 0.0}
-
-
-def job_running():
-    return any(thread.name == "firn-job" and thread.is_alive() for thread in threading.enumerate())
-
-
-def fail(message):
-    print("FAIL:", message, file=sys.stderr, flush=True)
-    os._exit(1)  # from a timer, sys.exit would only end the callback
-
-
-def window_context():
-    window = bpy.context.window_manager.windows[0]
-    area = next(a for a in window.screen.areas if a.type == "VIEW_3D")
-    return {"window": window, "screen": window.screen, "area": area,
-            "region": next(r for r in area.regions if r.type == "WINDOW")}
 
 
 def setup():

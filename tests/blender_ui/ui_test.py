@@ -1,0 +1,25 @@
+"""Shared by the UI tests (Blender with a window under Xvfb, driven from a timer)."""
+
+import os
+import sys
+import threading
+
+import bpy
+
+
+def fail(message):
+    print("FAIL:", message, file=sys.stderr, flush=True)
+    os._exit(1)  # from a timer, sys.exit would only end the callback
+
+
+def job_running():
+    """A Firn worker thread (addon/firn/jobs.py names them) is computing."""
+    return any(thread.name == "firn-job" and thread.is_alive() for thread in threading.enumerate())
+
+
+def window_context():
+    """Context override for the first window's 3D viewport, as a user's click would have."""
+    window = bpy.context.window_manager.windows[0]
+    area = next(a for a in window.screen.areas if a.type == "VIEW_3D")
+    return {"window": window, "screen": window.screen, "area": area,
+            "region": next(r for r in area.regions if r.type == "WINDOW")}
