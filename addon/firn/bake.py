@@ -232,7 +232,6 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
             self.report({"INFO"}, f"Baked {', '.join(baked)} ({inputs['quality'].title()}) in {total:.1f} s")
 
 
-
 class FIRN_OT_clear_bake(bpy.types.Operator):
     """Forget the bake of the selected snow: it renders from its optics again"""
 
