@@ -1,6 +1,5 @@
 #include "firn/vdb_io.h"
 
-#include <cstdio>
 #include <filesystem>
 
 #include <unistd.h>
