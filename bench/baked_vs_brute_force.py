@@ -61,7 +61,7 @@ def main():
     args = parse_args()
     directory = tempfile.mkdtemp(prefix="firn_bench_")
     slab = scene(directory)
-    from firn import materials
+    from firn.material import nodes as materials
 
     materials.ensure_snow_material(slab)  # the unbaked material: Cycles traces the scattering itself
     cycles = bpy.context.scene.cycles

@@ -1,13 +1,13 @@
-// Regenerates cpp/firn/sun_lobe_table.inc: the sun lobe (sun_lobe.h) fitted to Monte Carlo of a
+// Regenerates cpp/firn/transport/sun_lobe_table.inc: the sun lobe (sun_lobe.h) fitted to Monte Carlo of a
 // non-absorbing half-space, on a grid of Henyey-Greenstein g and sun incidence cosines.
-//   build/tools/sun_lobe_table [photons] > cpp/firn/sun_lobe_table.inc
+//   build/tools/sun_lobe_table [photons] > cpp/firn/transport/sun_lobe_table.inc
 #include <cstdio>
 #include <cstdlib>
 #include <vector>
 
 #include <tbb/parallel_for.h>
 
-#include "firn/sun_lobe.h"
+#include "firn/transport/sun_lobe.h"
 
 int main(int argc, char **argv) {
     const long photons = argc > 1 ? std::atol(argv[1]) : 40000;

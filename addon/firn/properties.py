@@ -4,7 +4,8 @@ import math
 
 import bpy
 
-from . import bake_state, materials, optics
+from .bake import state as bake_state
+from .material import nodes as materials, optics
 
 # Defined once, used by the operator (redo panel) and by the settings kept on each snow object.
 SNOW_LAYER_PROPERTIES = {

@@ -7,13 +7,13 @@
 #include <pybind11/stl.h>
 
 #include "bindings.h"
-#include "firn/color_matching.h"
-#include "firn/error.h"
-#include "firn/ice_optics.h"
-#include "firn/kz04.h"
-#include "firn/optics.h"
-#include "firn/transport_scales.h"
-#include "firn/water_absorption.h"
+#include "firn/optics/color_matching.h"
+#include "firn/optics/ice_optics.h"
+#include "firn/optics/kz04.h"
+#include "firn/optics/snow_optics.h"
+#include "firn/optics/transport_scales.h"
+#include "firn/optics/water_absorption.h"
+#include "firn/util/error.h"
 
 namespace py = pybind11;
 
@@ -111,7 +111,7 @@ physical parameters, or directly: VolumeOptics(extinction_per_density, albedo, g
         });
 }
 
-void bindSnow(py::module_ &m) {
+void bindSnowOptics(py::module_ &m) {
     m.attr("ICE_DENSITY") = firn::kIceDensity;
     m.attr("WATER_DENSITY") = firn::kWaterDensity;
 
@@ -218,7 +218,7 @@ void bindTables(py::module_ &m) {
 
 void bindOptics(py::module_ &m) {
     bindVolumeOptics(m);
-    bindSnow(m);
+    bindSnowOptics(m);
     bindTables(m);
 }
 

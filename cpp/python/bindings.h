@@ -1,12 +1,13 @@
 #pragma once
 
-// One binding function per concept; firncore.cpp calls them in order.
+// One binding function per core folder (cpp/firn/<folder>/ -> bind_<folder>.cpp); firncore.cpp calls them
+// in layer order.
 #include <pybind11/pybind11.h>
 
 namespace firncore {
-void bindBasics(pybind11::module_ &m);     // errors, Progress, threads
+void bindUtil(pybind11::module_ &m);       // errors, Progress, threads
 void bindOptics(pybind11::module_ &m);     // snow optics, KZ04 albedos, ice and water absorption
-void bindSnowLayer(pybind11::module_ &m);  // Add Snow Layer
-void bindBake(pybind11::module_ &m);       // lights, bake, reference tools
-void bindVdb(pybind11::module_ &m);        // reading grids back
+void bindSnow(pybind11::module_ &m);       // Add Snow Layer
+void bindTransport(pybind11::module_ &m);  // lights, bake, reference tools
+void bindIo(pybind11::module_ &m);         // reading grids back
 }  // namespace firncore

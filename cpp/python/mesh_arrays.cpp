@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "firn/error.h"
+#include "firn/util/error.h"
 
 namespace py = pybind11;
 

@@ -4,7 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
-#include "firn/mesh.h"
+#include "firn/geometry/mesh.h"
 
 namespace firncore {
 

@@ -7,8 +7,9 @@ import bpy
 import numpy as np
 import pytest
 
-from firn import bake, bake_inputs, bake_state, materials
-from firn.core import firncore
+from firn.bake import inputs as bake_inputs, operators as bake, state as bake_state
+from firn.material import nodes as materials
+from firn.common.core import firncore
 
 needs_core_bake = pytest.mark.skipif(
     not hasattr(firncore, "bake"), reason="needs firncore.bake (the core's Bake Scattering, branch 'bake')")

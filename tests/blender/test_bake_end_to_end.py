@@ -12,8 +12,9 @@ import pytest
 
 from bake_helpers import (black_world, mean_pixel, needs_core_bake, ortho_camera, render, uniform_world,
                           volume_object, write_volume)
-from firn import bake, bake_state, materials
-from firn.core import firncore
+from firn.bake import operators as bake, state as bake_state
+from firn.material import nodes as materials
+from firn.common.core import firncore
 
 pytestmark = needs_core_bake
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from bake_helpers import uniform_world, volume_object
-from firn import bake_inputs
-from firn.errors import UserError
+from firn.bake import inputs as bake_inputs
+from firn.common.errors import UserError
 
 
 def identity_frame():
@@ -27,7 +27,7 @@ def add_lamp(kind, name, **settings):
 
 
 def direction_from_uv(u, v):
-    """cpp/firn/lights.h EnvironmentMap::directionFromUv: u = 0.5 looks along +X, u = 0.25 along +Y, v = 1 up."""
+    """cpp/firn/transport/lights.h EnvironmentMap::directionFromUv: u = 0.5 looks along +X, u = 0.25 along +Y, v = 1 up."""
     phi = 2 * math.pi * (0.5 - u)
     elevation = math.pi * (v - 0.5)
     return np.array([math.cos(elevation) * math.cos(phi), math.cos(elevation) * math.sin(phi), math.sin(elevation)])

@@ -10,7 +10,8 @@ import pytest
 
 from bake_helpers import (K, RHO, S, S_X, S_Y, S_Z, baked_slab, black_world, mean_pixel, ortho_camera, render,
                           uniform_source, write_volume)
-from firn import bake, bake_state, materials
+from firn.bake import operators as bake, state as bake_state
+from firn.material import nodes as materials
 
 def linked_from(socket):
     assert socket.is_linked, socket.name

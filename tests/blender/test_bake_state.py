@@ -8,8 +8,9 @@ import bpy
 import pytest
 
 from bake_helpers import S, add_contract_grids, baked_slab, uniform_source, uniform_world, write_volume
-from firn import bake, bake_state, bake_ui, materials
-from firn.core import firncore
+from firn.bake import operators as bake, state as bake_state, ui as bake_ui
+from firn.material import nodes as materials
+from firn.common.core import firncore
 from test_snow_material import RecordingLayout
 
 
@@ -161,7 +162,7 @@ def test_cancel_before_the_core_runs_changes_nothing(clean_scene, tmp_path):
 
 
 def test_clamp_indirect_that_would_cut_bounce_light_is_reported(clean_scene):
-    from firn.bake_inputs import BakeInputs, Sky, Sun
+    from firn.bake.inputs import BakeInputs, Sky, Sun
 
     scene = bpy.context.scene
     bright = {"inputs": BakeInputs([Sun("Sun", (0, 0, 1), (1000.0, 1000.0, 900.0), 0.01)], Sky((1.0,) * 3), [])}

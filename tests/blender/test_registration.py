@@ -29,7 +29,7 @@ def test_enable_disable_enable():
 
 
 def test_version_agrees_everywhere():
-    from firn.core import firncore
+    from firn.common.core import firncore
 
     assert firncore.__version__ == ".".join(map(str, firn.bl_info["version"]))
 
@@ -43,7 +43,7 @@ def test_naming_conventions():
 def test_stale_module_is_refused():
     import pytest
 
-    from firn import core
+    from firn.common import core
 
     with pytest.raises(ImportError, match="compiled module is version"):
         core.check_version((99, 0, 0))

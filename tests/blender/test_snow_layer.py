@@ -7,7 +7,7 @@ import bpy
 import numpy as np
 import pytest
 
-from firn.core import firncore
+from firn.common.core import firncore
 
 
 def select_only(*objects):

@@ -11,8 +11,8 @@ import bpy
 import numpy as np
 import pytest
 
-from firn import materials, optics, snow_material, snow_material_ui
-from firn.core import firncore
+from firn.material import nodes as materials, operators as snow_material, optics, ui as snow_material_ui
+from firn.common.core import firncore
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 RHO_ICE = 917.0  # kg/m^3

@@ -45,8 +45,8 @@ class FIRN_OT_test_listen(bpy.types.Operator):
 
 
 def register_waiting_job():
-    from firn.core import firncore
-    from firn.jobs import FirnJobMixin
+    from firn.common.core import firncore
+    from firn.common.jobs import FirnJobMixin
 
     class FIRN_OT_test_wait(FirnJobMixin, bpy.types.Operator):
         """A job that computes nothing and ends only when cancelled"""
@@ -95,7 +95,7 @@ def press(key):
 
 def status_bar_entries():
     """What Firn adds to the status bar now (drawn into a recording stand-in for the layout)."""
-    from firn import jobs
+    from firn.common import jobs
 
     entries = []
 

@@ -24,7 +24,7 @@ FOLDER = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"firn_modal_bake_{os.ge
 
 def setup():
     from bake_helpers import uniform_world, volume_object, write_volume
-    from firn.core import firncore
+    from firn.common.core import firncore
 
     if not hasattr(firncore, "bake"):
         print("SKIP: needs firncore.bake (the core's Bake Scattering)", flush=True)
@@ -54,7 +54,7 @@ def file_bytes(obj):
 
 
 def tick():
-    from firn import materials
+    from firn.material import nodes as materials
 
     try:
         state["ticks"] += 1

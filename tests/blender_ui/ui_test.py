@@ -13,7 +13,7 @@ def fail(message):
 
 
 def job_running():
-    """A Firn worker thread (addon/firn/jobs.py names them) is computing."""
+    """A Firn worker thread (addon/firn/common/jobs.py names them) is computing."""
     return any(thread.name == "firn-job" and thread.is_alive() for thread in threading.enumerate())
 
 

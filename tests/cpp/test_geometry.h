@@ -6,7 +6,7 @@
 
 #include <glm/vec3.hpp>
 
-#include "firn/mesh.h"
+#include "firn/geometry/mesh.h"
 
 namespace firn::test {
 

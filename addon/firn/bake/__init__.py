@@ -1,0 +1,1 @@
+"""Bake Scattering: the scene's light gathered for the core, the bake operators, its state, panels."""

@@ -1,0 +1,506 @@
+"""What lights and shadows a snow object, read from Blender for the bake (main thread only). No physics here.
+
+- Suns: Blender Sun lamps (direction towards the sun, irradiance = Strength × Color in W/m², Angle). Other lamp
+  types do not light the bake: they are listed so the operator can say so.
+- Sky: the scene's World. A plain Background colour × strength is read directly; anything else (Nishita sky,
+  HDRI, any node world) is rendered by Cycles into a small equirectangular radiance map (W/m²/sr) in the
+  convention of cpp/firn/lights.h. The sun disc of a Nishita Sky Texture is measured apart and becomes a sun:
+  a half-degree disc is far smaller than a map pixel.
+- Occluders: every rendered mesh-like object that casts shadows (not snow), split by material, each part with
+  its diffuse albedo.
+
+Everything is given in the snow object's own frame, the space of its grids: Cycles renders a VDB volume in
+object space (a uniform scale leaves the optical path unchanged), so the core bakes there. Firn snow keeps an
+identity transform, so for it this is world space.
+"""
+
+import hashlib
+import math
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+
+import bpy
+import numpy as np
+from mathutils import Euler, Matrix, Vector
+
+from ..common import scene_geometry
+from ..common.errors import UserError
+
+DEFAULT_ALBEDO = (0.8, 0.8, 0.8)  # surfaces without a material: Blender's default grey
+SKY_MAP_SIZE = (128, 64)  # equirectangular pixels (2.8 degrees each)
+SKY_MAP_SAMPLES = 16  # per pixel; a camera ray straight to the world has no noise but the pixel footprint
+SUN_VIEW_SIZE = 32  # pixels across the close-up that measures a sky texture's sun disc
+SUN_VIEW_SAMPLES = 64
+# A camera at the origin looking along +X with +Z up renders an equirect image in Blender's Environment
+# Texture convention (u = 0.5 looks along +X, u = 0.25 along +Y); checked by test_bake_inputs.py.
+_EQUIRECT_CAMERA = Euler((math.pi / 2, 0.0, -math.pi / 2)).to_matrix()
+
+
+@dataclass(frozen=True)
+class Sun:
+    name: str
+    direction: tuple  # unit vector towards the sun, in the snow's frame
+    irradiance: tuple  # W/m² per RGB channel on a plane facing the sun
+    angular_diameter: float  # rad
+
+
+@dataclass
+class Sky:
+    radiance: tuple = (0.0, 0.0, 0.0)  # W/m²/sr per channel; scales `map` when there is one
+    map: np.ndarray = None  # (height, width, 3) float32 W/m²/sr, rows bottom (nadir) to top (zenith)
+    description: str = "black"
+
+
+@dataclass
+class Occluder:
+    name: str
+    vertices: np.ndarray  # (N, 3) float32, m, in the snow's frame
+    triangles: np.ndarray  # (M, 3) uint32
+    albedo: tuple  # diffuse, linear RGB in [0, 1]
+
+
+@dataclass
+class BakeInputs:
+    suns: list
+    sky: Sky
+    occluders: list
+    warnings: list = field(default_factory=list)
+
+
+class Frame:
+    """The snow object's frame: world → object space for points and directions."""
+
+    def __init__(self, obj):
+        matrix = np.array(obj.matrix_world, np.float64)
+        linear = matrix[:3, :3]
+        scale = np.cbrt(np.linalg.det(linear))
+        rotation = linear / scale if scale > 0.0 else linear
+        if scale <= 0.0 or not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-5):
+            raise UserError(
+                f"'{obj.name}' has a non-uniform, negative or zero scale: Cycles stretches the optics of such "
+                "volumes. Baking needs rotation, uniform scale and translation only (Firn snow keeps an identity "
+                "transform)")
+        self.rotation = rotation  # object → world, for directions
+        self.world_to_object = np.linalg.inv(matrix)
+        self.is_identity = np.allclose(matrix, np.eye(4), atol=1e-9)
+
+    def direction(self, world_direction):
+        local = self.rotation.T @ np.asarray(world_direction, np.float64)
+        return tuple(local / np.linalg.norm(local))
+
+    def points(self, world_points):
+        if self.is_identity:
+            return world_points
+        m = self.world_to_object
+        return (world_points.astype(np.float64) @ m[:3, :3].T + m[:3, 3]).astype(np.float32)
+
+
+# --- which objects take part ---------------------------------------------------------------------------------
+
+def rendered_objects(view_layer):
+    """Objects the view layer renders: in an included, rendering collection and not hidden from renders."""
+    found = {}
+
+    def visit(layer_collection):
+        if layer_collection.exclude or layer_collection.collection.hide_render:
+            return
+        for obj in layer_collection.collection.objects:
+            if not obj.hide_render:
+                found[obj.name] = obj
+        for child in layer_collection.children:
+            visit(child)
+
+    visit(view_layer.layer_collection)
+    return list(found.values())
+
+
+def lamp_objects(view_layer):
+    return [obj for obj in rendered_objects(view_layer) if obj.type == "LIGHT"]
+
+
+def occluder_objects(view_layer):
+    """Rendered mesh-like objects that cast shadows in Cycles; snow volumes are never occluders."""
+    return [obj for obj in rendered_objects(view_layer) if scene_geometry.is_mesh_like(obj) and obj.visible_shadow]
+
+
+# --- suns -----------------------------------------------------------------------------------------------------
+
+def gather_suns(lamps, frame):
+    """([Sun], [ignored lamp description]) for the given lamp objects."""
+    suns, ignored = [], []
+    for obj in lamps:
+        light = obj.data
+        if light.type != "SUN":
+            ignored.append(f"{obj.name} ({light.type.title()})")
+            continue
+        # A lamp shines along its local -Z axis; the core wants the direction towards the sun.
+        towards = obj.matrix_world.to_3x3() @ Vector((0.0, 0.0, 1.0))
+        if towards.length < 1e-12 or light.energy <= 0.0:
+            continue  # a zero-scaled or dark lamp lights nothing
+        if light.angle > math.pi / 2:
+            raise UserError(f"Sun '{obj.name}' has an Angle of {math.degrees(light.angle):.0f}°: "
+                            "Firn bakes suns of up to 90°")
+        suns.append(Sun(obj.name, frame.direction(towards.normalized()),
+                        tuple(light.energy * c for c in light.color), light.angle))
+    return suns, ignored
+
+
+# --- sky ------------------------------------------------------------------------------------------------------
+
+def _world_surface_link(world):
+    output = world.node_tree.get_output_node("CYCLES")
+    if output is None or not output.inputs["Surface"].is_linked:
+        return None
+    return output.inputs["Surface"].links[0]
+
+
+def uniform_world_radiance(world):
+    """RGB radiance (W/m²/sr) of a world that is the same in every direction, read from its settings;
+    None when it has to be rendered."""
+    if world is None:
+        return (0.0, 0.0, 0.0)
+    if not world.use_nodes or world.node_tree is None:
+        return tuple(world.color)
+    link = _world_surface_link(world)
+    if link is None:
+        return (0.0, 0.0, 0.0)  # a node world without a surface renders black
+    node = link.from_node
+    if (node.type != "BACKGROUND" or node.mute or link.is_muted
+            or node.inputs["Color"].is_linked or node.inputs["Strength"].is_linked):
+        return None
+    strength = node.inputs["Strength"].default_value
+    return tuple(strength * c for c in node.inputs["Color"].default_value[:3])
+
+
+def _sky_sun_nodes(world):
+    """Nishita Sky Textures of the world's own tree that draw a sun disc."""
+    if world is None or not world.use_nodes or world.node_tree is None:
+        return []
+    return [node for node in world.node_tree.nodes
+            if node.type == "TEX_SKY" and node.sky_type == "NISHITA" and node.sun_disc and not node.mute]
+
+
+def sky_sun_direction(node):
+    """World direction towards a Nishita sky's sun (Cycles: rotation 0 puts it at +Y, turning towards +X)."""
+    e, r = node.sun_elevation, node.sun_rotation
+    return Vector((math.sin(r) * math.cos(e), math.cos(r) * math.cos(e), math.sin(e)))
+
+
+# What a Light Path node in the world reads for light that reaches snow: a volume-scattered or light-sampled ray
+# (every "Is ... Ray" false; Cycles 3.4 has no "Is Volume Scatter Ray" output), one bounce in, infinitely long.
+_SCATTERED_RAY = {"Ray Length": 1e30, "Ray Depth": 1.0}
+
+
+def _as_seen_by_scattered_light(tree):
+    """Replaces the Light Path nodes of a world tree with the values a scattered ray reads, so a world that
+    shows one thing to the camera and lights with another (Is Camera Ray) is probed for its lighting."""
+    for node in [node for node in tree.nodes if node.type == "LIGHT_PATH"]:
+        for output in node.outputs:
+            if not output.is_linked:
+                continue
+            value = tree.nodes.new("ShaderNodeValue")
+            value.outputs[0].default_value = _SCATTERED_RAY.get(output.name, 0.0)
+            for link in list(output.links):
+                tree.links.new(value.outputs[0], link.to_socket)
+        tree.nodes.remove(node)
+
+
+class WorldProbe:
+    """Renders a copy of a world with Cycles in a scene of its own: equirect maps and close-ups of the sun.
+
+    The user's scenes, world and last render are left alone; everything made here is removed on close() but a
+    render slot "Firn World Probe", reused by every bake.
+    """
+
+    def __init__(self, world, frame_current):
+        self._folder = tempfile.mkdtemp(prefix="firn_world_")
+        self.world = world.copy()
+        self.world.cycles_visibility.camera = True  # the probe's camera rays stand for the light reaching snow
+        if self.world.use_nodes and self.world.node_tree is not None:
+            _as_seen_by_scattered_light(self.world.node_tree)
+        self.scene = bpy.data.scenes.new("Firn World Probe")
+        self.scene.world = self.world
+        self.scene.frame_current = frame_current
+        self.scene.render.engine = "CYCLES"
+        cycles = self.scene.cycles
+        cycles.device = "CPU"
+        cycles.use_denoising = False
+        cycles.use_adaptive_sampling = False
+        cycles.pixel_filter_type = "BOX"  # a pixel is the mean radiance over its footprint
+        self.scene.render.filter_size = 1.0
+        self.scene.render.resolution_percentage = 100
+        self.scene.render.film_transparent = False
+        settings = self.scene.render.image_settings
+        settings.file_format, settings.color_depth, settings.exr_codec = "OPEN_EXR", "32", "ZIP"
+        self._camera_data = bpy.data.cameras.new("Firn World Probe")
+        self.camera = bpy.data.objects.new("Firn World Probe", self._camera_data)
+        self.scene.collection.objects.link(self.camera)
+        self.scene.camera = self.camera
+
+    def close(self):
+        bpy.data.objects.remove(self.camera)
+        bpy.data.cameras.remove(self._camera_data)
+        bpy.data.scenes.remove(self.scene)
+        bpy.data.worlds.remove(self.world)
+        shutil.rmtree(self._folder, ignore_errors=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *_exc):
+        self.close()
+
+    def equirect(self, rotation, size=SKY_MAP_SIZE, samples=SKY_MAP_SAMPLES):
+        """(height, width, 3) radiance map; `rotation` (3 × 3, object → world) turns it into an object's frame."""
+        camera = self._camera_data
+        camera.type = "PANO"
+        camera.cycles.panorama_type = "EQUIRECTANGULAR"
+        camera.cycles.latitude_min, camera.cycles.latitude_max = -math.pi / 2, math.pi / 2
+        camera.cycles.longitude_min, camera.cycles.longitude_max = -math.pi, math.pi
+        self.camera.matrix_world = (Matrix(np.asarray(rotation).tolist()) @ _EQUIRECT_CAMERA).to_4x4()
+        return self._render(size, samples)
+
+    def close_up(self, direction, field_of_view, size=SUN_VIEW_SIZE, samples=SUN_VIEW_SAMPLES):
+        """(size, size, 3) radiance seen by a square pinhole camera looking along `direction` (world)."""
+        camera = self._camera_data
+        camera.type = "PERSP"
+        camera.sensor_fit = "HORIZONTAL"
+        camera.angle = field_of_view
+        self.camera.matrix_world = Vector(direction).to_track_quat("-Z", "Y").to_matrix().to_4x4()
+        return self._render((size, size), samples)
+
+    def _render(self, size, samples):
+        render = self.scene.render
+        render.resolution_x, render.resolution_y = size
+        self.scene.cycles.samples = samples
+        path = os.path.join(self._folder, "probe.exr")
+        render.filepath = path
+        with _spare_render_slot():
+            try:
+                bpy.ops.render.render(write_still=True, scene=self.scene.name)
+            except RuntimeError as error:
+                raise UserError(f"Could not render the world for the bake: {error}") from error
+        image = bpy.data.images.load(path, check_existing=False)
+        try:
+            width, height = image.size
+            pixels = np.empty(width * height * 4, np.float32)
+            image.pixels.foreach_get(pixels)  # scene-linear floats, rows bottom to top
+        finally:
+            bpy.data.images.remove(image)
+        return pixels.reshape(height, width, 4)[:, :, :3].copy()
+
+
+class _spare_render_slot:
+    """Renders into a render slot of Firn's own, so the user's last render stays on view in its slot (Blender's
+    Python cannot remove slots: the one slot is made once and reused)."""
+
+    name = "Firn World Probe"
+
+    def __enter__(self):
+        self.image = bpy.data.images.get("Render Result")
+        if self.image is not None:
+            slots = self.image.render_slots
+            self.previous = slots.active_index
+            slot = next((slot for slot in slots if slot.name == self.name), None) or slots.new(name=self.name)
+            slots.active = slot
+
+    def __exit__(self, *_exc):
+        if self.image is not None:
+            self.image.render_slots.active_index = self.previous
+
+
+def sun_irradiance(radiance, field_of_view):
+    """Irradiance (W/m², per channel) on a plane facing the view from a square pinhole image of radiance:
+    E = sum L cos(theta) dOmega, with dOmega cos(theta) = dA / (1 + x² + y²)² on the image plane at distance 1."""
+    n = radiance.shape[0]
+    half = math.tan(field_of_view / 2.0)
+    centres = (np.arange(n) + 0.5) / n * 2.0 * half - half
+    x, y = np.meshgrid(centres, centres)
+    weight = (2.0 * half / n) ** 2 / (1.0 + x * x + y * y) ** 2
+    return (radiance * weight[:, :, None]).sum(axis=(0, 1))
+
+
+def _separate_sky_suns(probe, world, frame):
+    """Measures each Nishita sun disc (radiance with it minus without it) and switches it off in the probe's
+    world, so the map holds the sky alone. Returns ([Sun], warnings)."""
+    suns, warnings = [], []
+    for node in _sky_sun_nodes(world):
+        if node.inputs["Vector"].is_linked:
+            warnings.append(f"The sun disc of the mapped sky texture '{node.name}' stays in the sky map (blurred): "
+                            "unlink its Vector input or use a Sun lamp for sharp sunlight")
+            continue
+        direction = sky_sun_direction(node)
+        field_of_view = max(2.0 * node.sun_size, math.radians(0.5))
+        with_disc = probe.close_up(direction, field_of_view)
+        probe.world.node_tree.nodes[node.name].sun_disc = False
+        without_disc = probe.close_up(direction, field_of_view)
+        irradiance = np.maximum(sun_irradiance(with_disc - without_disc, field_of_view), 0.0)
+        if irradiance.max() > 0.0:
+            suns.append(Sun(f"{world.name}: {node.name}", frame.direction(direction),
+                            tuple(float(e) for e in irradiance), node.sun_size))
+    return suns, warnings
+
+
+def gather_sky(scene, frame, cache=None):
+    """(Sky, [Sun] from sky textures, warnings) of the scene's world, in the snow's frame. `cache` (a dict) keeps
+    rendered worlds for further snow objects in the same orientation."""
+    world = scene.world
+    if world is not None and not world.cycles_visibility.scatter:
+        return Sky(description="world hidden from volume scattering"), [], [
+            f"World '{world.name}' is hidden from volume scattering rays (Ray Visibility): it does not light the snow"]
+    radiance = uniform_world_radiance(world)
+    if radiance is not None:
+        return Sky(radiance=tuple(radiance), description="uniform"), [], []
+    key = tuple(np.round(frame.rotation, 6).ravel())
+    if cache is None or key not in cache:
+        with WorldProbe(world, scene.frame_current) as probe:
+            suns, warnings = _separate_sky_suns(probe, world, frame)
+            sky_map = probe.equirect(frame.rotation)
+        if not np.all(np.isfinite(sky_map)):
+            raise UserError(f"World '{world.name}' renders non-finite radiance")
+        sky_map = np.maximum(sky_map, 0.0)  # node worlds can go negative; radiance cannot
+        height, width = sky_map.shape[:2]
+        found = Sky(radiance=(1.0, 1.0, 1.0), map=sky_map, description=f"map {width}×{height}"), suns, warnings
+        if cache is None:
+            return found
+        cache[key] = found
+    return cache[key]
+
+
+# --- occluders ------------------------------------------------------------------------------------------------
+
+def _surface_node(material):
+    if not material.use_nodes or material.node_tree is None:
+        return None
+    output = material.node_tree.get_output_node("CYCLES")
+    if output is None or not output.inputs["Surface"].is_linked:
+        return None
+    return output.inputs["Surface"].links[0].from_node
+
+
+def diffuse_albedo(material):
+    """Diffuse albedo (linear RGB): a plain Principled Base Color or Diffuse BSDF Color, else the material's
+    viewport colour; Blender's 0.8 grey without a material."""
+    if material is None:
+        return DEFAULT_ALBEDO
+    node = _surface_node(material)
+    sockets = {"BSDF_PRINCIPLED": "Base Color", "BSDF_DIFFUSE": "Color"}
+    if node is not None and node.type in sockets and not node.mute:
+        socket = node.inputs[sockets[node.type]]
+        if not socket.is_linked:
+            return tuple(min(max(c, 0.0), 1.0) for c in socket.default_value[:3])
+    return tuple(min(max(c, 0.0), 1.0) for c in material.diffuse_color[:3])
+
+
+def gather_occluders(objects, depsgraph, frame):
+    occluders = []
+    for obj in objects:
+        for vertices, triangles, material in scene_geometry.world_triangles_by_material(obj, depsgraph):
+            name = obj.name if material is None else f"{obj.name} [{material.name}]"
+            occluders.append(Occluder(name, frame.points(vertices), triangles, diffuse_albedo(material)))
+    return occluders
+
+
+# --- everything -----------------------------------------------------------------------------------------------
+
+def gather(context, snow, sky_cache=None):
+    """BakeInputs of one snow object. Renders the world when it is not a plain colour (a second or two)."""
+    scene_geometry.check_unit_scale(context.scene)
+    depsgraph = context.evaluated_depsgraph_get()  # first: it also brings every matrix_world up to date
+    frame = Frame(snow)
+    view_layer = context.view_layer
+    suns, ignored = gather_suns(lamp_objects(view_layer), frame)
+    sky, sky_suns, sky_warnings = gather_sky(context.scene, frame, sky_cache)
+    warnings = list(sky_warnings)
+    if ignored:
+        warnings.insert(0, "Only Sun lamps light the bake; ignored: " + ", ".join(ignored))
+    occluders = gather_occluders(occluder_objects(view_layer), depsgraph, frame)
+    return BakeInputs(suns + sky_suns, sky, occluders, warnings)
+
+
+# --- what the bake depends on, cheap enough to check at every redraw ------------------------------------------
+
+def digest(*parts):
+    return hashlib.sha1(repr(parts).encode()).hexdigest()[:16]
+
+
+def rounded(values):
+    return tuple(float(f"{v:.7g}") for v in values)
+
+
+_UI_ONLY = {"rna_type", "name", "label", "location", "width", "width_hidden", "height", "dimensions", "select",
+            "hide", "show_options", "show_preview", "show_texture", "use_custom_color", "color", "parent",
+            "bl_idname", "bl_label", "bl_description", "bl_icon", "bl_static_type", "bl_width_default",
+            "bl_width_min", "bl_width_max", "bl_height_default", "bl_height_min", "bl_height_max", "type",
+            "is_active_output", "internal_links", "inputs", "outputs"}
+
+
+def _rna_values(struct, depth=0, seen=None):
+    """The settings of a node (or any RNA struct) as plain values, recursing into node groups and
+    texture-mapping structs; images by file path."""
+    seen = set() if seen is None else seen
+    values = []
+    for prop in struct.bl_rna.properties:
+        key = prop.identifier
+        if key in _UI_ONLY:
+            continue
+        value = getattr(struct, key, None)
+        if prop.type in {"BOOLEAN", "INT", "FLOAT", "ENUM", "STRING"}:
+            values.append((key, tuple(value) if hasattr(value, "__len__") and not isinstance(value, str)
+                           else value))
+        elif prop.type == "POINTER" and value is not None:
+            if isinstance(value, bpy.types.Image):
+                values.append((key, value.filepath, value.source))  # not .size: 0 x 0 until loaded
+            elif isinstance(value, bpy.types.NodeTree) and value.name not in seen:
+                seen.add(value.name)
+                values.append((key, _tree_signature(value, seen)))
+            elif not isinstance(value, bpy.types.ID) and depth < 2:
+                values.append((key, _rna_values(value, depth + 1, seen)))
+    return tuple(values)
+
+
+def _tree_signature(tree, seen):
+    nodes = []
+    for node in sorted(tree.nodes, key=lambda n: n.name):
+        inputs = tuple((s.identifier, s.is_linked, tuple(s.default_value) if hasattr(s, "default_value")
+                        and hasattr(s.default_value, "__len__") else getattr(s, "default_value", None))
+                       for s in node.inputs)
+        nodes.append((node.name, node.bl_idname, node.mute, inputs, _rna_values(node, seen=seen)))
+    links = sorted((l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier,
+                    l.is_muted) for l in tree.links)
+    return tuple(nodes), tuple(links)
+
+
+def world_signature(world):
+    if world is None:
+        return None
+    tree = _tree_signature(world.node_tree, set()) if world.use_nodes and world.node_tree else None
+    return world.name, tuple(world.color), world.use_nodes, world.cycles_visibility.scatter, tree
+
+
+def _occluder_record(obj):
+    data = obj.data
+    counts = (len(data.vertices), len(data.polygons)) if obj.type == "MESH" else ()
+    modifiers = tuple((m.name, m.type, m.show_render) for m in getattr(obj, "modifiers", ()))
+    albedo = tuple(diffuse_albedo(slot.material) for slot in obj.material_slots)
+    return (obj.name, rounded(v for row in obj.matrix_world for v in row), data.name if data else None, counts,
+            modifiers, albedo)
+
+
+def signature(context, snow):
+    """{component: digest} of what lights and shadows `snow`, without rendering anything. A changed digest
+    means the bake no longer matches the scene."""
+    view_layer = context.view_layer
+    try:
+        suns, ignored = gather_suns(lamp_objects(view_layer), Frame(snow))
+        lights = tuple((s.name, rounded(s.direction), rounded(s.irradiance), round(s.angular_diameter, 7))
+                       for s in suns), tuple(ignored)
+    except UserError as error:
+        lights = str(error)
+    return {
+        "lights": digest(lights),
+        "sky": digest(world_signature(context.scene.world)),
+        "occluders": digest(tuple(_occluder_record(obj) for obj in occluder_objects(view_layer))),
+    }

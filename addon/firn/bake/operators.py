@@ -1,0 +1,262 @@
+"""Bake Scattering and Clear Bake: the light inside the snow, computed by the core from the scene's suns, sky and
+occluders, and the snow's material switched to render it (docs/user-guide.md "Bake Scattering").
+
+The core rewrites a snow file atomically; to keep the previous bake intact when a bake of several objects is
+cancelled or fails half way, each object is baked into a staged copy beside its file, and the copies replace
+the files only once every bake has finished (apply, main thread). Cancel: the staged copies are deleted, no file
+or material is touched.
+"""
+
+import math
+import os
+import shutil
+import time
+
+import bpy
+
+from ..common.core import firncore
+from ..common.errors import UserError
+from ..common.jobs import FirnJobMixin, running_jobs
+from ..material import nodes as materials, optics
+from ..properties import BAKE_QUALITY_ITEMS
+from . import inputs as bake_inputs, state as bake_state
+
+BAKE_LABEL = "Bake Scattering"
+_STAGED_SUFFIX = ".firn-bake.vdb"
+
+
+def bake_targets(context):
+    """Volume objects to bake: the selected ones and the active one."""
+    objects = list(context.selected_objects)
+    if context.active_object is not None and context.active_object not in objects:
+        objects.append(context.active_object)
+    return [obj for obj in objects if obj.type == "VOLUME"]
+
+
+def baking():
+    return any(job.label == BAKE_LABEL for job in running_jobs())
+
+
+def core_bake(path, volume_optics, inputs, quality, seed, progress):
+    """The one call into the core's bake (cpp/python/bind_transport.cpp): it reads `density` from `path` and writes the
+    file back, atomically, with the baked grids added."""
+    sky = inputs.sky
+    firncore.bake(
+        path, volume_optics,
+        suns=[firncore.SunLight(sun.direction, sun.irradiance, sun.angular_diameter) for sun in inputs.suns],
+        sky=firncore.Sky(radiance=tuple(sky.radiance), map=sky.map),  # map: (H, W, 3), rows bottom to top
+        occluders=[(o.vertices, o.triangles, o.albedo) for o in inputs.occluders],
+        quality=quality, seed=seed, progress=progress)
+
+
+def _check_volume(obj):
+    """The absolute path of a Volume's file that Firn can bake, or UserError saying why not."""
+    volume = obj.data
+    if obj.library or volume.library:
+        raise UserError(f"'{obj.name}' is linked from a library: bake it in its own file")
+    if volume.packed_file is not None:
+        raise UserError(f"'{obj.name}' has its volume packed into the .blend: unpack it to bake")
+    if volume.is_sequence:
+        raise UserError(f"'{obj.name}' is a volume sequence: Firn bakes single volumes")
+    path = bake_state.snow_path(obj)
+    if not os.path.isfile(path):
+        raise UserError(f"The volume file of '{obj.name}' is missing: {path}")
+    try:
+        names = firncore.grid_names(path)
+    except (OSError, ValueError) as error:
+        raise UserError(f"Cannot read the volume of '{obj.name}': {error}") from error
+    if "density" not in names:
+        raise UserError(f"'{obj.name}' has no 'density' grid to bake")
+    return path
+
+
+def _volume_optics(obj):
+    try:
+        return optics.volume_optics(obj.firn)
+    except ValueError as error:
+        raise UserError(f"'{obj.name}': {error} (Snow Material panel)") from error
+
+
+def _render_settings(obj):
+    """Sets the Volume data settings baked snow needs and returns what changed, to be reported: full precision
+    (half floats round values to 3 digits) and no clipping (it cuts thin, low-density fringes)."""
+    render = obj.data.render
+    changed = []
+    if render.precision != "FULL":
+        changed.append(f"precision {render.precision.title()} → Full")
+        render.precision = "FULL"
+    if render.clipping != 0.0:
+        changed.append(f"clipping {render.clipping:g} → 0")
+        render.clipping = 0.0
+    return [f"'{obj.name}' volume {change}" for change in changed]
+
+
+def _clamp_warning(scene, jobs):
+    """Baked snow lights its neighbours through their indirect rays, which Cycles' Clamp Indirect limits: say so
+    when the snow may be brighter than the clamp (white snow sends back at most (E_sun + pi L_sky) / pi)."""
+    clamp = getattr(getattr(scene, "cycles", None), "sample_clamp_indirect", 0.0)
+    if clamp <= 0.0:
+        return None
+    brightest = 0.0
+    for job in jobs:
+        inputs = job["inputs"]
+        sky = max(inputs.sky.radiance) * (float(inputs.sky.map.max()) if inputs.sky.map is not None else 1.0)
+        brightest = max(brightest, sum(max(sun.irradiance) for sun in inputs.suns) / math.pi + sky)
+    if brightest <= clamp:
+        return None
+    return (f"The snow may be up to about {brightest:.3g} W/m²/sr bright, and Clamp Indirect ({clamp:g}) cuts the "
+            "light it throws on nearby objects: raise it or set 0 (Render Properties > Light Paths > Clamping)")
+
+
+def _summary(quality, inputs, seconds):
+    suns = len(inputs.suns)
+    parts = [quality.title(), f"{suns} sun{'s' if suns != 1 else ''}", f"sky {inputs.sky.description}",
+             f"{len(inputs.occluders)} occluder parts", f"{seconds:.1f} s"]
+    return ", ".join(parts)
+
+
+def _remove(path):
+    try:
+        os.remove(path)
+    except FileNotFoundError:
+        pass
+
+
+def adopt_bake(obj, extinction_per_density, signature, summary):
+    """After the baked grids arrived in obj's file: reload them, remember what the bake was made from (the scene
+    `signature` taken before baking, the file as it is now) and render the snow from the bake."""
+    volume = obj.data
+    volume.grids.unload()
+    volume.grids.load()
+    settings = obj.firn
+    settings.is_snow = True  # any baked Volume is Firn snow from now on: its optics are in Snow Material
+    settings.bake_extinction_per_density = extinction_per_density
+    settings.bake_summary = summary
+    bake_state.store(obj, dict(signature, snow=bake_state.snow_digest(obj)))
+    materials.ensure_snow_material(obj)
+
+
+class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
+    """Compute the light scattered inside the selected snow from the scene's Sun lamps, world and objects,
+    and render the snow from it"""
+
+    bl_idname = "firn.bake_scattering"
+    bl_label = "Bake Scattering"
+    bl_options = {"UNDO"}
+    job_label = BAKE_LABEL
+    job_passes_events = True
+
+    quality: bpy.props.EnumProperty(name="Quality", items=BAKE_QUALITY_ITEMS, default="FINAL")
+    seed: bpy.props.IntProperty(name="Seed", description="Same scene and seed, same bake", default=0, min=0)
+
+    @classmethod
+    def poll(cls, context):
+        if context.mode != "OBJECT":
+            cls.poll_message_set("Switch to Object Mode")
+            return False
+        if baking():
+            cls.poll_message_set("A bake is running: wait for it or cancel it")
+            return False
+        if not bake_targets(context):
+            cls.poll_message_set("Select snow, or Volume objects with a 'density' grid")
+            return False
+        return True
+
+    def prepare(self, context):
+        if not hasattr(firncore, "bake"):
+            raise UserError("This build of Firn's core cannot bake (firncore.bake is missing): update Firn")
+        jobs, warnings, sky_cache = [], [], {}
+        for obj in bake_targets(context):
+            path = _check_volume(obj)
+            volume_optics = _volume_optics(obj)
+            signature = bake_inputs.signature(context, obj)
+            signature["optics"] = bake_state.optics_digest(obj)
+            inputs = bake_inputs.gather(context, obj, sky_cache)
+            warnings.extend(w for w in inputs.warnings if w not in warnings)
+            jobs.append({"name": obj.name, "path": path, "staged": path + _STAGED_SUFFIX,
+                         "stamp": bake_state.file_stamp(path), "optics": volume_optics, "inputs": inputs,
+                         "signature": signature})
+        if all(not job["inputs"].suns and max(job["inputs"].sky.radiance) <= 0.0 for job in jobs):
+            warnings.append("Nothing lights the snow (no Sun lamp, black world): the bake is black")
+        clamp = _clamp_warning(context.scene, jobs)
+        if clamp:
+            warnings.append(clamp)
+        return {"jobs": jobs, "warnings": warnings, "quality": self.quality, "seed": self.seed, "current": 0}
+
+    def job_status(self, inputs, progress):
+        jobs = inputs["jobs"]
+        part = f"{jobs[inputs['current']]['name']} ({inputs['current'] + 1}/{len(jobs)}) " if len(jobs) > 1 else ""
+        return part + progress.stage
+
+    @staticmethod
+    def compute(inputs, progress):
+        """Worker thread: bake every object into its staged copy; on any failure or cancel, delete them all."""
+        seconds = []
+        try:
+            for index, job in enumerate(inputs["jobs"]):
+                inputs["current"] = index
+                if progress.cancelled:
+                    raise firncore.Cancelled("cancelled")
+                started = time.perf_counter()
+                shutil.copyfile(job["path"], job["staged"])
+                core_bake(job["staged"], job["optics"], job["inputs"], inputs["quality"], inputs["seed"], progress)
+                seconds.append(time.perf_counter() - started)
+        except BaseException:
+            for job in inputs["jobs"]:
+                _remove(job["staged"])
+            raise
+        return seconds
+
+    def apply(self, context, inputs, seconds):
+        baked, changed_settings = [], []
+        try:
+            for job, duration in zip(inputs["jobs"], seconds):
+                obj = bpy.data.objects.get(job["name"])
+                if obj is None or obj.type != "VOLUME" or bake_state.snow_path(obj) != job["path"] \
+                        or bake_state.file_stamp(job["path"]) != job["stamp"]:
+                    self.report({"WARNING"}, f"'{job['name']}' or its volume changed during the bake: bake it again")
+                    continue
+                os.replace(job["staged"], job["path"])
+                adopt_bake(obj, job["optics"].extinction_per_density, job["signature"],
+                           _summary(inputs["quality"], job["inputs"], duration))
+                changed_settings.extend(_render_settings(obj))
+                baked.append(obj.name)
+        finally:
+            for job in inputs["jobs"]:
+                _remove(job["staged"])
+        for warning in inputs["warnings"]:
+            self.report({"WARNING"}, warning)
+        if changed_settings:
+            self.report({"WARNING"}, "Changed for baked snow: " + "; ".join(changed_settings))
+        if baked:
+            total = sum(seconds)
+            self.report({"INFO"}, f"Baked {', '.join(baked)} ({inputs['quality'].title()}) in {total:.1f} s")
+
+
+class FIRN_OT_clear_bake(bpy.types.Operator):
+    """Forget the bake of the selected snow: it renders from its optics again"""
+
+    bl_idname = "firn.clear_bake"
+    bl_label = "Clear Bake"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if not any(obj.firn.bake_fingerprint for obj in bake_targets(context)):
+            cls.poll_message_set("Select baked snow")
+            return False
+        return True
+
+    def execute(self, context):
+        cleared = []
+        for obj in bake_targets(context):
+            if obj.firn.bake_fingerprint:
+                obj.firn.bake_fingerprint = ""
+                obj.firn.bake_summary = ""
+                materials.ensure_snow_material(obj)
+                cleared.append(obj.name)
+        self.report({"INFO"}, f"Cleared the bake of {', '.join(cleared)}")
+        return {"FINISHED"}
+
+
+classes = (FIRN_OT_bake_scattering, FIRN_OT_clear_bake)

@@ -1,0 +1,93 @@
+"""Whether a snow object's bake still matches the scene.
+
+At bake time a fingerprint of everything the bake depends on is stored on the object (obj.firn.bake_fingerprint,
+JSON {component: digest}); the panel compares it with the live scene at every redraw. Components: the sun lamps
+(and lamps ignored), the world, the occluders (transforms, mesh sizes, modifiers, albedo), the optics, and the
+snow itself (its file's size and modification time, and its transform). Nothing here renders or reads grids.
+"""
+
+import json
+import os
+
+import bpy
+
+from ..material import optics
+from . import inputs as bake_inputs
+
+NONE, BAKED, OUTDATED = "NONE", "BAKED", "OUTDATED"
+STATES = (
+    (NONE, "Not Baked", "Rendered from its optics by brute-force path tracing", "RADIOBUT_OFF", 0),
+    (BAKED, "Baked", "Rendered from its bake, which matches the scene", "CHECKMARK", 1),
+    (OUTDATED, "Needs Re-bake", "The lights, the world, the objects around, the optics or the snow changed since "
+     "the bake", "ERROR", 2),
+)
+# What each component is called in the panel's "needs re-bake" line.
+LABELS = {"lights": "lamps", "sky": "world", "occluders": "objects", "optics": "optics", "snow": "snow"}
+
+
+def optics_digest(obj):
+    try:
+        volume = optics.volume_optics(obj.firn)
+    except ValueError as error:
+        return bake_inputs.digest(str(error))
+    return bake_inputs.digest((round(volume.extinction_per_density, 9), tuple(round(a, 9) for a in volume.albedo),
+                    round(volume.g, 9)))
+
+
+def file_stamp(path):
+    """(modification time ns, size) of a file, or None when it is missing."""
+    try:
+        stat = os.stat(path)
+    except OSError:
+        return None
+    return stat.st_mtime_ns, stat.st_size
+
+
+def snow_path(obj):
+    return bpy.path.abspath(obj.data.filepath, library=obj.data.library)
+
+
+def snow_digest(obj):
+    matrix = bake_inputs.rounded(v for row in obj.matrix_world for v in row)
+    return bake_inputs.digest((file_stamp(snow_path(obj)), matrix))
+
+
+def fingerprint(context, obj, scene_signature=None):
+    """{component: digest} of the bake's inputs now; `scene_signature` reuses one taken earlier."""
+    parts = dict(scene_signature or bake_inputs.signature(context, obj))
+    parts["optics"] = optics_digest(obj)
+    parts["snow"] = snow_digest(obj)
+    return parts
+
+
+def store(obj, parts):
+    obj.firn.bake_fingerprint = json.dumps(parts, sort_keys=True)
+
+
+def stored(obj):
+    text = obj.firn.bake_fingerprint
+    if not text:
+        return None
+    try:
+        return json.loads(text)
+    except ValueError:
+        return {}  # damaged: anything differs
+
+
+def changes(obj, context=None):
+    """(state, [labels of what changed]) of a snow object against the live scene."""
+    then = stored(obj)
+    if then is None:
+        return NONE, []
+    context = context or bpy.context
+    if context.view_layer is None or context.scene is None:  # no scene to compare with (e.g. while loading)
+        now = {"optics": optics_digest(obj), "snow": snow_digest(obj)}
+    else:
+        now = fingerprint(context, obj)
+    changed = [LABELS.get(key, key) for key in sorted(set(then) | set(now))
+               if key in now and then.get(key) != now[key]]
+    return (OUTDATED if changed else BAKED), changed
+
+
+def state(obj):
+    return changes(obj)[0]

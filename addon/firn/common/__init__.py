@@ -1,0 +1,1 @@
+"""What every feature shares: the compiled core, errors, long jobs, the cache, preferences, scene geometry, panel helpers."""

@@ -1,0 +1,1 @@
+"""Snow Material: optics from physical parameters, the snow's shader nodes, presets, panels."""

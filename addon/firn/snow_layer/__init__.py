@@ -1,0 +1,1 @@
+"""Add Snow Layer: the operators that make and remake snow, and their panels."""

@@ -1,0 +1,322 @@
+"""Add Snow Layer: snow on the selected objects, as a Volume object of OpenVDB grids made by the core.
+
+Selected snow objects are targets too: a new layer lies on their surface (layers stack).
+"""
+
+import os
+
+import bpy
+import numpy as np
+
+from ..common import cache, preferences, scene_geometry
+from ..common.core import firncore
+from ..common.errors import UserError
+from ..common.jobs import FirnJobMixin
+from ..material import nodes as materials
+from ..properties import SNOW_LAYER_PROPERTIES, active_snow
+from .ui import draw_layer_settings
+
+def copy_settings(source, target):
+    for name in SNOW_LAYER_PROPERTIES:
+        setattr(target, name, getattr(source, name))
+
+
+def core_settings(props, max_voxels):
+    """firncore.SnowLayerSettings from any holder of SNOW_LAYER_PROPERTIES."""
+    return firncore.SnowLayerSettings(
+        depth=props.depth, max_slope=props.max_slope, spacing=props.spacing, randomness=props.randomness,
+        smoothness=props.smoothness, direction=tuple(props.direction), spread=props.spread,
+        compaction=props.compaction, density_top=props.density_top, density_bottom=props.density_bottom,
+        seed=props.seed, voxel_size=props.voxel_size, max_voxels=max_voxels)
+
+
+def _max_voxels():
+    prefs = preferences.get()
+    return prefs.voxel_budget_millions * 1e6 if prefs else 50e6
+
+
+def is_snow_target(obj):
+    """Objects snow can lie on: anything that evaluates to a mesh, and earlier snow (layers stack)."""
+    return scene_geometry.is_mesh_like(obj) or (obj.type == "VOLUME" and obj.firn.is_snow)
+
+
+def _triangles(objects, depsgraph):
+    """World triangles of mesh-like objects and of the surface of snow objects."""
+    meshes = []
+    for obj in objects:
+        if obj.type == "VOLUME":
+            path = bpy.path.abspath(obj.data.filepath)
+            if os.path.exists(path):
+                meshes.append(firncore.snow_surface_mesh(path))
+        else:
+            meshes.append(scene_geometry.world_triangles(obj, depsgraph))
+    return scene_geometry.concatenate(meshes)
+
+
+def _occluder_objects(context, props, targets):
+    if props.occluders == "COLLECTION":
+        collection = bpy.data.collections.get(props.occluder_collection)
+        if collection is None:
+            raise UserError(f"Occluder collection '{props.occluder_collection}' does not exist")
+        candidates = collection.all_objects
+    else:
+        candidates = [obj for obj in context.view_layer.objects if obj.visible_get()]
+    # Earlier snow shelters nothing: a second layer on the same objects overlaps the first; to stack a layer on
+    # earlier snow, select the snow as a target.
+    return [obj for obj in candidates if scene_geometry.is_mesh_like(obj) and obj not in targets]
+
+
+def gather_inputs(context, props, targets, object_name):
+    """Everything the core needs, read from Blender on the main thread."""
+    scene_geometry.check_unit_scale(context.scene)
+    if not targets:
+        raise UserError("Select the objects to cover with snow (meshes, curves, surfaces, text, metaballs "
+                        "or earlier snow)")
+    depsgraph = context.evaluated_depsgraph_get()
+    target_arrays = _triangles(targets, depsgraph)
+    if target_arrays is None:
+        raise UserError("The selected objects have no faces to hold snow (a curve needs a bevel or extrusion)")
+    occluders = _triangles(_occluder_objects(context, props, targets), depsgraph)
+    path, stored_path = cache.snow_file(object_name)
+    settings = core_settings(props, _max_voxels())
+    try:
+        settings.validate()
+    except ValueError as error:
+        raise UserError(f"Add Snow Layer: {error}") from error
+    return {
+        "targets": target_arrays, "occluders": occluders, "settings": settings, "path": path,
+        "stored_path": stored_path, "surface_mesh": props.surface_mesh,
+    }
+
+
+def compute_snow(inputs, progress):
+    """Worker thread: the core generates the grids and writes the VDB; no bpy here."""
+    vertices, triangles = inputs["targets"]
+    result = firncore.generate_snow_layer(vertices, triangles, inputs["occluders"], inputs["settings"],
+                                          inputs["path"], progress)
+    if inputs["surface_mesh"]:
+        result["surface"] = firncore.snow_surface_mesh(inputs["path"])
+    return result
+
+
+def _store_metaballs(snow, metaballs):
+    """The metaballs as a point mesh child of the snow (hidden): edit it, then Rebuild from Metaballs."""
+    name = f"{snow.name} Metaballs"
+    mesh = bpy.data.meshes.new(name)
+    centres = metaballs["centres"]
+    mesh.vertices.add(len(centres))
+    mesh.vertices.foreach_set("co", centres.ravel())
+    for key in ("radii", "bases", "depths"):
+        mesh.attributes.new(key, "FLOAT", "POINT").data.foreach_set("value", metaballs[key])
+    mesh.attributes.new("normals", "FLOAT_VECTOR", "POINT").data.foreach_set("vector", metaballs["normals"].ravel())
+    holder = bpy.data.objects.new(name, mesh)
+    holder.parent = snow
+    holder.hide_viewport = holder.hide_render = True
+    for collection in snow.users_collection:
+        collection.objects.link(holder)
+    snow.firn.metaballs = holder
+
+
+def read_metaballs(holder):
+    """The metaball arrays back from the point mesh (after the user edited it)."""
+    mesh = holder.data
+    n = len(mesh.vertices)
+    centres = np.empty(n * 3, np.float32)
+    mesh.vertices.foreach_get("co", centres)
+    matrix = np.array(holder.matrix_world, np.float64)
+    centres = (centres.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]).astype(np.float32)
+    arrays = {"centres": centres}
+    for key in ("radii", "bases", "depths"):
+        if key not in mesh.attributes:
+            raise UserError(f"'{holder.name}' lost its '{key}' attribute: regenerate the snow")
+        values = np.empty(n, np.float32)
+        mesh.attributes[key].data.foreach_get("value", values)
+        arrays[key] = values
+    normals = np.empty(n * 3, np.float32)
+    mesh.attributes["normals"].data.foreach_get("vector", normals)
+    arrays["normals"] = normals.reshape(-1, 3)
+    return arrays
+
+
+def _store_surface_mesh(snow, surface):
+    vertices, triangles = surface
+    mesh = bpy.data.meshes.new(f"{snow.name} Surface")
+    mesh.vertices.add(len(vertices))
+    mesh.vertices.foreach_set("co", vertices.ravel())
+    mesh.loops.add(triangles.size)
+    mesh.loops.foreach_set("vertex_index", triangles.ravel().astype(np.int32))
+    mesh.polygons.add(len(triangles))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, triangles.size, 3, dtype=np.int32))
+    mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, np.int32))
+    mesh.update()
+    surface_object = bpy.data.objects.new(mesh.name, mesh)
+    surface_object.parent = snow
+    surface_object.hide_render = True  # the volume renders the snow; the mesh is for the viewport and modelling
+    for collection in snow.users_collection:
+        collection.objects.link(surface_object)
+
+
+def _remove_children(snow):
+    for child in list(snow.children):
+        data = child.data
+        bpy.data.objects.remove(child)
+        if data is not None and data.users == 0:
+            bpy.data.meshes.remove(data)
+
+
+def write_snow(snow, inputs, result):
+    """Points the snow Volume at its new file and refreshes everything derived from it."""
+    volume = snow.data
+    volume.filepath = inputs["stored_path"]
+    volume.grids.unload()
+    volume.grids.load()
+    snow.firn.mean_density = result["mean_density"]
+    snow.firn.voxel_size = result["voxel_size"]
+    _remove_children(snow)
+    _store_metaballs(snow, result["metaballs"])
+    if "surface" in result:
+        _store_surface_mesh(snow, result["surface"])
+    materials.ensure_snow_material(snow)
+
+
+def new_snow_object(context, name):
+    volume = bpy.data.volumes.new(name)
+    volume.render.precision = "FULL"  # half floats cut thin snow (cycles-volumes notes)
+    volume.render.clipping = 0.0
+    volume.display.density = 0.02
+    snow = bpy.data.objects.new(name, volume)
+    context.collection.objects.link(snow)
+    snow.firn.is_snow = True
+    return snow
+
+
+def free_object_name(base):
+    if base not in bpy.data.objects:
+        return base
+    for i in range(1, 10000):
+        name = f"{base}.{i:03d}"
+        if name not in bpy.data.objects:
+            return name
+    raise UserError("Too many objects named Snow")
+
+
+class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
+    """Cover the selected objects with a layer of snow where falling snow lands"""
+
+    bl_idname = "firn.add_snow_layer"
+    bl_label = "Add Snow Layer"
+    bl_options = {"REGISTER", "UNDO"}
+    __annotations__ = dict(SNOW_LAYER_PROPERTIES)
+    job_label = "Add Snow Layer"
+
+    @classmethod
+    def poll(cls, context):
+        if context.mode != "OBJECT":
+            cls.poll_message_set("Switch to Object Mode")
+            return False
+        return True
+
+    def draw(self, _context):
+        draw_layer_settings(self.layout, self)
+
+    def prepare(self, context):
+        targets = [obj for obj in context.selected_objects if is_snow_target(obj)]
+        name = free_object_name("Snow")
+        return dict(gather_inputs(context, self, targets, name), name=name, targets_objects=targets)
+
+    compute = staticmethod(compute_snow)
+
+    def apply(self, context, inputs, result):
+        snow = new_snow_object(context, inputs["name"])
+        copy_settings(self, snow.firn.layer)
+        for obj in inputs["targets_objects"]:
+            snow.firn.targets.add().object = obj
+        write_snow(snow, inputs, result)
+        for obj in context.selected_objects:
+            obj.select_set(False)
+        snow.select_set(True)
+        context.view_layer.objects.active = snow
+        dropped = result["dropped_triangles"]
+        note = f", {dropped} degenerate faces skipped" if dropped else ""
+        self.report({"INFO"}, f"Snow on {len(inputs['targets_objects'])} objects: "
+                              f"{result['active_voxels']:,} voxels of {result['voxel_size'] * 1000:.1f} mm{note}")
+
+
+class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
+    """Rebuild the active snow from its targets and settings, after the scene changed"""
+
+    bl_idname = "firn.regenerate_snow"
+    bl_label = "Regenerate Snow"
+    bl_options = {"REGISTER", "UNDO"}
+    job_label = "Regenerate Snow"
+
+    @classmethod
+    def poll(cls, context):
+        if active_snow(context) is None:
+            cls.poll_message_set("Select a snow object made by Add Snow Layer")
+            return False
+        return True
+
+    def prepare(self, context):
+        snow = active_snow(context)
+        targets = [item.object for item in snow.firn.targets if item.object is not None]
+        if not targets:
+            raise UserError(f"'{snow.name}' has no target objects left: use Add Snow Layer instead")
+        return dict(gather_inputs(context, snow.firn.layer, targets, snow.name), name=snow.name)
+
+    compute = staticmethod(compute_snow)
+
+    def apply(self, context, inputs, result):
+        write_snow(bpy.data.objects[inputs["name"]], inputs, result)
+
+
+class FIRN_OT_rebuild_from_metaballs(FirnJobMixin, bpy.types.Operator):
+    """Rebuild the snow volume from its (edited) metaballs"""
+
+    bl_idname = "firn.rebuild_from_metaballs"
+    bl_label = "Rebuild from Metaballs"
+    bl_options = {"REGISTER", "UNDO"}
+    job_label = "Rebuild from Metaballs"
+
+    @classmethod
+    def poll(cls, context):
+        snow = active_snow(context)
+        if snow is None or snow.firn.metaballs is None:
+            cls.poll_message_set("Select a snow object that kept its metaballs")
+            return False
+        return True
+
+    def prepare(self, context):
+        snow = active_snow(context)
+        settings = core_settings(snow.firn.layer, _max_voxels())
+        path, stored_path = cache.snow_file(snow.name)
+        return {"name": snow.name, "metaballs": read_metaballs(snow.firn.metaballs), "settings": settings,
+                "path": path, "stored_path": stored_path, "surface_mesh": snow.firn.layer.surface_mesh}
+
+    @staticmethod
+    def compute(inputs, progress):
+        result = firncore.rasterize_metaballs(inputs["metaballs"], inputs["settings"], inputs["path"], progress)
+        if inputs["surface_mesh"]:
+            result["surface"] = firncore.snow_surface_mesh(inputs["path"])
+        return result
+
+    def apply(self, context, inputs, result):
+        write_snow(bpy.data.objects[inputs["name"]], inputs, result)
+
+
+def _menu_entry(self, _context):
+    self.layout.operator(FIRN_OT_add_snow_layer.bl_idname, icon="FREEZE")
+
+
+classes = (FIRN_OT_add_snow_layer, FIRN_OT_regenerate_snow,
+           FIRN_OT_rebuild_from_metaballs)
+
+
+def register_extras():
+    bpy.types.VIEW3D_MT_add.append(_menu_entry)
+    bpy.types.VIEW3D_MT_object.append(_menu_entry)
+
+
+def unregister_extras():
+    bpy.types.VIEW3D_MT_add.remove(_menu_entry)
+    bpy.types.VIEW3D_MT_object.remove(_menu_entry)

@@ -1,0 +1,43 @@
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <optional>
+
+#include <glm/vec3.hpp>
+
+#include "firn/geometry/mesh.h"
+
+namespace firn {
+
+// Ray queries against world-space triangles, through Embree. Built once, then const and safe to query
+// from any number of threads (TBB loops).
+class RayCaster {
+  public:
+    struct Hit {
+        float distance;       // m along the (normalized) ray direction
+        unsigned triangle;    // index into the mesh's triangles
+        glm::vec3 normal;     // unit geometric normal, counter-clockwise winding
+    };
+
+    explicit RayCaster(const TriangleMesh &mesh);
+    ~RayCaster();
+    RayCaster(const RayCaster &) = delete;
+    RayCaster &operator=(const RayCaster &) = delete;
+
+    // True if anything lies on the segment origin + t * direction, t in [tNear, tFar] (m, direction normalized).
+    bool occluded(const glm::vec3 &origin, const glm::vec3 &direction, float tNear = 0.0f,
+                  float tFar = std::numeric_limits<float>::infinity()) const;
+
+    std::optional<Hit> intersect(const glm::vec3 &origin, const glm::vec3 &direction, float tNear = 0.0f,
+                                 float tFar = std::numeric_limits<float>::infinity()) const;
+
+    bool empty() const { return empty_; }
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+    bool empty_;
+};
+
+}  // namespace firn

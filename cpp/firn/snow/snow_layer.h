@@ -1,0 +1,59 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "firn/geometry/mesh.h"
+#include "firn/snow/metaball_layout.h"
+#include "firn/snow/snow_rasterizer.h"
+#include "firn/snow/snowfall.h"
+#include "firn/util/progress.h"
+
+namespace firn {
+
+// Everything Add Snow Layer asks for. Angles in radians, lengths in metres, densities in kg/m^3.
+struct SnowLayerSettings {
+    double depth = 0.1;        // m of snow on open level ground
+    double maxSlope = 1.047;   // rad from horizontal (60 deg)
+    double spacing = 0.05;     // m between landing sites: small is smooth, large is uneven
+    double randomness = 0.25;  // 0..1
+    double smoothness = 0.5;   // 0..1
+    glm::vec3 direction{0.0f, 0.0f, -1.0f};  // the way snow falls
+    double spread = 0.26;      // rad, half-angle of the snowfall cone (15 deg)
+    int exposureRays = 16;
+    double densityTop = 120.0;     // kg/m^3
+    double densityBottom = 350.0;  // kg/m^3
+    double compaction = 0.5;       // 0..1
+    double voxelSize = 0.0;        // m; 0 picks it from the depth and spacing
+    double maxVoxels = 50e6;
+    std::uint64_t seed = 0;
+
+    // Throws InvalidArgument naming the first setting out of range.
+    void validate() const;
+    // The voxel size used: the override, or enough voxels through the depth and across a ball.
+    double effectiveVoxelSize() const;
+
+    SnowfallSettings snowfall() const;
+    MetaballLayoutSettings layout() const;
+    RasterSettings raster() const;
+};
+
+struct SnowLayer {
+    std::vector<Metaball> metaballs;  // kept, so edited balls can be rasterized again
+    SnowGrids grids;
+    std::size_t siteCount = 0;
+    double voxelSize = 0.0;           // m
+};
+
+// Add Snow Layer's whole computation: landing sites on `targets`, sheltered by `occluders` and by the
+// targets themselves; metaball columns; the density and surface grids. Checks the voxel budget before
+// allocating. Reports to and can be cancelled through `progress` (may be null).
+SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occluders,
+                            const SnowLayerSettings &settings, Progress *progress);
+
+// Mean density (kg/m^3) of the voxels wholly inside the snow; 0 for no snow.
+double meanInteriorDensity(const SnowGrids &grids);
+
+}  // namespace firn

@@ -1,0 +1,235 @@
+#include "firn/snow/snow_rasterizer.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include <glm/geometric.hpp>
+#include <openvdb/tools/Prune.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "firn/geometry/metaball.h"
+#include "firn/util/error.h"
+#include "firn/util/openvdb_library.h"
+
+namespace firn {
+
+namespace {
+
+using FloatTree = openvdb::FloatTree;
+using FloatLeaf = FloatTree::LeafNodeType;
+constexpr int kLeafDim = FloatLeaf::DIM;  // 8
+constexpr int kLeafVoxels = FloatLeaf::SIZE;
+constexpr double kSurfaceBandVoxels = 3.0;  // half-width of the surface level set
+
+// Leaf coordinates (index / 8) packed into 64 bits, 21 bits per axis.
+constexpr std::int64_t kKeyBias = 1 << 20;
+std::uint64_t leafKey(const openvdb::Coord &leaf) {
+    return (std::uint64_t(leaf.x() + kKeyBias) << 42) | (std::uint64_t(leaf.y() + kKeyBias) << 21) |
+           std::uint64_t(leaf.z() + kKeyBias);
+}
+openvdb::Coord leafOrigin(std::uint64_t key) {
+    const auto axis = [&](int shift) { return int(std::int64_t((key >> shift) & ((1u << 21) - 1)) - kKeyBias); };
+    return openvdb::Coord(axis(42) * kLeafDim, axis(21) * kLeafDim, axis(0) * kLeafDim);
+}
+
+struct LeafRange {
+    openvdb::CoordBBox leaves;  // in leaf coordinates
+};
+
+LeafRange leavesOf(const Metaball &b, double h) {
+    const glm::dvec3 lo = (glm::dvec3(b.centre) - double(b.radius)) / h;
+    const glm::dvec3 hi = (glm::dvec3(b.centre) + double(b.radius)) / h;
+    const auto toLeaf = [](double x) { return int(std::floor(std::floor(x) / kLeafDim)); };
+    return {openvdb::CoordBBox(openvdb::Coord(toLeaf(lo.x), toLeaf(lo.y), toLeaf(lo.z)),
+                               openvdb::Coord(toLeaf(hi.x + 1), toLeaf(hi.y + 1), toLeaf(hi.z + 1)))};
+}
+
+std::string millions(double n) {
+    std::ostringstream s;
+    s.precision(3);
+    s << n / 1e6 << " million";
+    return s.str();
+}
+
+}  // namespace
+
+void checkVoxelBudget(double voxels, const RasterSettings &s) {
+    if (voxels <= s.maxVoxels) return;
+    const double suggested = s.voxelSize * std::cbrt(voxels / s.maxVoxels) * 1.1;
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "this snow needs about " << millions(voxels) << " voxels at voxel size " << s.voxelSize
+        << " m, over the budget of " << millions(s.maxVoxels) << ": use a voxel size of at least " << suggested
+        << " m (or raise the voxel budget in Firn's preferences)";
+    throw BudgetExceeded(msg.str());
+}
+
+namespace {
+
+// (leaf key, ball index) pairs, sorted: each leaf's balls in a fixed order, whatever the thread count.
+std::vector<std::pair<std::uint64_t, std::uint32_t>> binBallsByLeaf(const std::vector<Metaball> &balls, double h) {
+    std::vector<std::size_t> offsets(balls.size() + 1, 0);
+    tbb::parallel_for(std::size_t(0), balls.size(),
+                      [&](std::size_t i) { offsets[i + 1] = leavesOf(balls[i], h).leaves.volume(); });
+    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs(offsets.back());
+    tbb::parallel_for(std::size_t(0), balls.size(), [&](std::size_t i) {
+        std::size_t at = offsets[i];
+        const openvdb::CoordBBox box = leavesOf(balls[i], h).leaves;
+        for (auto it = box.begin(); it; ++it) pairs[at++] = {leafKey(*it), std::uint32_t(i)};
+    });
+    tbb::parallel_sort(pairs.begin(), pairs.end());
+    return pairs;
+}
+
+// What the balls that reach one leaf add up to at its voxels: the field F and its gradient (analytic, so the
+// distance to the iso-surface needs no neighbour lookups), and field-weighted averages of the depth below the
+// snow's top and of the signed distance to the surface the balls stand on (their tangent planes).
+struct LeafField {
+    std::array<float, kLeafVoxels> field{};
+    std::array<glm::vec3, kLeafVoxels> gradient{};       // 1/m
+    std::array<float, kLeafVoxels> weightedDepth{};      // m x field
+    std::array<float, kLeafVoxels> weightedBelowBase{};  // m x field, positive below the surface
+};
+
+void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std::size_t count,
+                const std::vector<Metaball> &balls, float h, LeafField &out) {
+    const int zLeafLo = origin.z(), zLeafHi = origin.z() + kLeafDim - 1;
+    for (std::size_t n = 0; n < count; ++n) {
+        const Metaball &b = balls[ballIds[n]];
+        const glm::vec3 c = b.centre, normal = b.normal;
+        const float r2 = b.radius * b.radius, invR2 = 1.0f / r2;
+        // m along the normal: 1.5 voxels below the ball's surface the snow has ended (its level set is +band).
+        const float lowest = -b.base - 1.5f * h;
+        const int xLo = std::max(origin.x(), int(std::ceil((c.x - b.radius) / h)));
+        const int xHi = std::min(origin.x() + kLeafDim - 1, int(std::floor((c.x + b.radius) / h)));
+        const int yLo = std::max(origin.y(), int(std::ceil((c.y - b.radius) / h)));
+        const int yHi = std::min(origin.y() + kLeafDim - 1, int(std::floor((c.y + b.radius) / h)));
+        for (int x = xLo; x <= xHi; ++x) {
+            const float dx = x * h - c.x;
+            for (int y = yLo; y <= yHi; ++y) {
+                const float dy = y * h - c.y;
+                const float rest = r2 - dx * dx - dy * dy;
+                if (rest <= 0.0f) continue;
+                // The z-range inside the sphere and not far below the ball's surface (unless that is steep).
+                const float half = std::sqrt(rest);
+                float zLo = c.z - half;
+                const float lateral = normal.x * dx + normal.y * dy;
+                if (normal.z > 0.05f) zLo = std::max(zLo, c.z + (lowest - lateral) / normal.z);
+                const int kLo = std::max(zLeafLo, int(std::ceil(zLo / h)));
+                const int kHi = std::min(zLeafHi, int(std::floor((c.z + half) / h)));
+                const int row = ((x - origin.x()) << 6) | ((y - origin.y()) << 3);
+                for (int z = kLo; z <= kHi; ++z) {
+                    const glm::vec3 offset(dx, dy, z * h - c.z);
+                    const float u2 = glm::dot(offset, offset) * invR2;
+                    const float height = lateral + normal.z * offset.z;  // m above the centre along the normal
+                    if (u2 >= 1.0f || height < lowest) continue;
+                    const int i = row + (z - zLeafLo);
+                    const float f = float(wyvillField(u2));
+                    out.field[i] += f;
+                    out.gradient[i] += float(2.0 * wyvillFieldSlope(u2)) * invR2 * offset;
+                    out.weightedDepth[i] += f * (b.depth - height);
+                    out.weightedBelowBase[i] += f * (-b.base - height);
+                }
+            }
+        }
+    }
+}
+
+// Turns one leaf's gathered field into its two output leaves. Snow is where the field exceeds the iso-value
+// AND which lies above the surface the balls stand on, so its signed distance is the larger of two: the
+// first-order distance to the iso-surface, (iso - F) / |grad F| (exact for a planar field, within a fraction of
+// a voxel near the surface), and the distance below the balls' surface (moved half a voxel into the object).
+// Clamped to +-band. The density follows
+// the compaction profile at the field-weighted depth, times the voxel's coverage by snow: a one-voxel ramp
+// centred on the surface, so that Cycles' trilinear density crosses half at the snow's surface.
+void finishLeaf(const LeafField &in, const RasterSettings &s, FloatLeaf &surface, FloatLeaf &density) {
+    const double h = s.voxelSize, band = kSurfaceBandVoxels * h;
+    for (int i = 0; i < kLeafVoxels; ++i) {
+        const double field = in.field[i];
+        const double toIso = (kSnowIsoValue - field) / std::max(double(glm::length(in.gradient[i])), 1e-12);
+        // Half a voxel into the object, so that the voxel on its surface is whole snow: no thin gap below.
+        const double belowBase = field > 0.0 ? in.weightedBelowBase[i] / field - 0.5 * h : band;
+        const double distance = std::clamp(std::max(toIso, belowBase), -band, band);
+        surface.setValueOnly(i, float(distance));
+        surface.setActiveState(i, std::abs(distance) < band);
+        const double coverage = std::clamp(0.5 - distance / h, 0.0, 1.0);
+        if (coverage < 1e-4) continue;  // rounding at the ramp's foot: no snow
+        const double depth = field > 0.0 ? std::max(0.0, in.weightedDepth[i] / field) : 0.0;
+        density.setValueOn(i, float(coverage * s.compaction.density(depth)));
+    }
+}
+
+openvdb::FloatGrid::Ptr makeGrid(const std::string &name, double h) {
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName(name);
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    return grid;
+}
+
+}  // namespace
+
+double estimateVoxelCount(const std::vector<Metaball> &balls, double spacing, double voxelSize) {
+    // Each ball adds one layer step (about half its radius) of snow over spacing^2 of surface, plus the
+    // exterior shell of the top ball; 1.5x for edges, where balls overlap less.
+    double volume = 0.0;  // m^3
+    for (const Metaball &b : balls) volume += spacing * spacing * double(b.radius);
+    return 1.5 * volume / std::pow(voxelSize, 3);
+}
+
+SnowGrids rasterizeSnow(const std::vector<Metaball> &balls, const RasterSettings &s, const SubProgress &progress) {
+    initializeOpenVdb();
+    const double h = s.voxelSize;
+    if (!(h > 0.0) || !std::isfinite(h)) throw InvalidArgument("voxel size must be a positive number of metres");
+
+    const auto pairs = binBallsByLeaf(balls, h);
+    std::vector<std::size_t> starts;  // first pair of each leaf
+    for (std::size_t i = 0; i < pairs.size(); ++i)
+        if (i == 0 || pairs[i].first != pairs[i - 1].first) starts.push_back(i);
+    const double leafVoxels = double(starts.size()) * kLeafVoxels;
+    checkVoxelBudget(leafVoxels / 4.0, s);  // leaves are rarely less than a quarter full
+    starts.push_back(pairs.size());
+    progress.report(0.1);
+    progress.throwIfCancelled();
+
+    SnowGrids grids{makeGrid("density", h), makeGrid("surface", h)};
+    grids.density->setGridClass(openvdb::GRID_FOG_VOLUME);
+    grids.surface->setGridClass(openvdb::GRID_LEVEL_SET);
+    grids.surface->tree().root().setBackground(float(kSurfaceBandVoxels * h), false);  // outside every ball
+    const std::size_t leafCount = starts.size() - 1;
+    std::vector<FloatLeaf *> densityLeaves(leafCount), surfaceLeaves(leafCount);
+    for (std::size_t l = 0; l < leafCount; ++l) {
+        const openvdb::Coord origin = leafOrigin(pairs[starts[l]].first);
+        densityLeaves[l] = grids.density->tree().touchLeaf(origin);
+        surfaceLeaves[l] = grids.surface->tree().touchLeaf(origin);
+    }
+    std::atomic<std::size_t> done{0};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leafCount, 64), [&](const tbb::blocked_range<std::size_t> &r) {
+        progress.throwIfCancelled();
+        std::vector<std::uint32_t> ids;
+        auto leafField = std::make_unique<LeafField>();
+        for (std::size_t l = r.begin(); l != r.end(); ++l) {
+            ids.clear();
+            for (std::size_t p = starts[l]; p < starts[l + 1]; ++p) ids.push_back(pairs[p].second);
+            *leafField = LeafField{};
+            gatherLeaf(densityLeaves[l]->origin(), ids.data(), ids.size(), balls, float(h), *leafField);
+            finishLeaf(*leafField, s, *surfaceLeaves[l], *densityLeaves[l]);
+        }
+        progress.report(0.1 + 0.85 * double(done += r.size()) / double(leafCount));
+    });
+    progress.throwIfCancelled();
+    // Inactive voxels of the level set take +-band by their side: tiles deep inside the snow become -band.
+    openvdb::tools::pruneLevelSet(grids.surface->tree());
+    openvdb::tools::pruneInactive(grids.density->tree());
+    grids.density->insertMeta("units", openvdb::StringMetadata("kg/m^3"));
+    grids.surface->insertMeta("units", openvdb::StringMetadata("m"));
+    progress.report(1.0);
+    return grids;
+}
+
+}  // namespace firn

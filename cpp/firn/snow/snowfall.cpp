@@ -1,0 +1,128 @@
+#include "firn/snow/snowfall.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "firn/util/error.h"
+#include "firn/util/random.h"
+
+namespace firn {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kSlideBand = 15.0 * kPi / 180.0;  // rad: snow thins to nothing over this much slope
+constexpr float kMinCover = 0.01f;
+const glm::vec3 kUp(0.0f, 0.0f, 1.0f);
+
+// The plastic-number Kronecker sequence (Roberts 2018): low-discrepancy for any count.
+constexpr double kR2a = 0.7548776662466927, kR2b = 0.5698402909980532;
+
+double fract(double x) { return x - std::floor(x); }
+
+// Orthonormal frame around a unit axis (Duff et al. 2017).
+void basis(const glm::vec3 &n, glm::vec3 &t, glm::vec3 &b) {
+    const float sign = std::copysign(1.0f, n.z);
+    const float a = -1.0f / (sign + n.z);
+    const float c = n.x * n.y * a;
+    t = glm::vec3(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    b = glm::vec3(c, sign + n.y * n.y * a, -n.y);
+}
+
+// Number of sites on a triangle of `area` m^2: the expectation area/spacing^2, rounded at random.
+std::size_t siteCount(double area, double spacing, Rng &rng) {
+    const double expected = area / (spacing * spacing);
+    const double whole = std::floor(expected);
+    return static_cast<std::size_t>(whole) + (rng.uniform() < expected - whole ? 1 : 0);
+}
+
+struct TriangleSetup {
+    glm::vec3 normal;
+    float cover;  // slope part only
+};
+
+TriangleSetup setupTriangle(const TriangleMesh &mesh, std::size_t t, double maxSlope) {
+    const glm::vec3 n = glm::normalize(mesh.crossNormal(t));
+    const double cosUp = std::clamp(static_cast<double>(glm::dot(n, kUp)), -1.0, 1.0);
+    return {n, static_cast<float>(slopeCover(std::acos(cosUp), maxSlope))};
+}
+
+}  // namespace
+
+double slopeCover(double slope, double maxSlope) {
+    if (slope >= maxSlope) return 0.0;
+    const double band = std::min(kSlideBand, maxSlope);
+    const double x = std::clamp((maxSlope - slope) / band, 0.0, 1.0);
+    return std::cos(slope) * x * x * (3.0 - 2.0 * x);  // smoothstep
+}
+
+std::vector<LandingSite> findLandingSites(const TriangleMesh &targets, const RayCaster &occluders,
+                                          const SnowfallSettings &settings, const SubProgress &progress) {
+    if (!(settings.spacing > 0.0)) throw InvalidArgument("snow spacing must be positive");
+    const glm::vec3 fall = glm::normalize(settings.direction);
+    if (!std::isfinite(fall.x)) throw InvalidArgument("snowfall direction must be a non-zero vector");
+    const glm::vec3 from = -fall;  // snow comes from this way
+    glm::vec3 coneT, coneB;
+    basis(from, coneT, coneB);
+    const int rays = settings.spread > 0.0 ? std::max(1, settings.exposureRays) : 1;
+    const double cosSpread = std::cos(settings.spread);
+    const std::size_t nTri = targets.triangleCount();
+
+    // Pass 1: how many sites each triangle gets (seeded per triangle: independent of threads).
+    std::vector<std::size_t> offsets(nTri + 1, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nTri), [&](const tbb::blocked_range<std::size_t> &r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            if (setupTriangle(targets, t, settings.maxSlope).cover <= 0.0f) continue;
+            Rng rng(settings.seed, t);
+            offsets[t + 1] = siteCount(targets.area(t), settings.spacing, rng);
+        }
+    });
+    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+    std::vector<LandingSite> sites(offsets.back());
+    progress.report(0.05);
+
+    // Pass 2: place the sites and cast their exposure rays.
+    const float eps = static_cast<float>(1e-4 * settings.spacing) + 1e-5f;  // m, leaves the surface
+    std::atomic<std::size_t> done{0};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nTri, 256), [&](const tbb::blocked_range<std::size_t> &r) {
+        progress.throwIfCancelled();
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            const std::size_t count = offsets[t + 1] - offsets[t];
+            if (count == 0) continue;
+            const TriangleSetup tri = setupTriangle(targets, t, settings.maxSlope);
+            Rng rng(settings.seed, t);
+            siteCount(targets.area(t), settings.spacing, rng);  // replay pass 1's draw
+            const double shiftU = rng.uniform(), shiftV = rng.uniform();
+            const glm::vec3 a = targets.vertex(t, 0), b = targets.vertex(t, 1), c = targets.vertex(t, 2);
+            for (std::size_t i = 0; i < count; ++i) {
+                // Square to triangle with the square-root map, which keeps the sequence stratified.
+                const double su = std::sqrt(fract(shiftU + (i + 1) * kR2a)), v = fract(shiftV + (i + 1) * kR2b);
+                const glm::vec3 p = a * float(1.0 - su) + b * float(su * (1.0 - v)) + c * float(su * v);
+                const glm::vec3 origin = p + tri.normal * eps;
+                const double rayU = rng.uniform(), rayV = rng.uniform();
+                int open = 0;
+                for (int k = 0; k < rays; ++k) {
+                    const double cosTheta = 1.0 - fract(rayU + k * kR2a) * (1.0 - cosSpread);
+                    const double sinTheta = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta));
+                    const double phi = 2.0 * kPi * fract(rayV + k * kR2b);
+                    const glm::vec3 dir = glm::normalize(from * float(cosTheta) +
+                                                         coneT * float(sinTheta * std::cos(phi)) +
+                                                         coneB * float(sinTheta * std::sin(phi)));
+                    if (glm::dot(dir, tri.normal) > 0.0f && !occluders.occluded(origin, dir)) ++open;
+                }
+                sites[offsets[t] + i] = {p, tri.normal, tri.cover * float(open) / float(rays)};
+            }
+        }
+        progress.report(0.05 + 0.95 * double(done += r.size()) / double(nTri));
+    });
+    sites.erase(std::remove_if(sites.begin(), sites.end(), [](const LandingSite &s) { return s.cover < kMinCover; }),
+                sites.end());
+    return sites;
+}
+
+}  // namespace firn

@@ -1,0 +1,691 @@
+#include "firn/transport/bake.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <queue>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/mat4x4.hpp>
+#include <glm/mat4x3.hpp>
+#include <glm/mat3x3.hpp>
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tree/LeafManager.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "firn/transport/half_space.h"
+#include "firn/transport/incident_light.h"
+#include "firn/transport/monte_carlo.h"
+#include "firn/transport/multigrid.h"
+#include "firn/transport/snow_topology.h"
+#include "firn/transport/sun_lobe.h"
+#include "firn/util/error.h"
+#include "firn/util/random.h"
+#include "firn/util/sampling.h"
+#include "firn/util/version.h"
+
+namespace firn {
+
+namespace {
+
+struct Preset {
+    int skySamples, sunSamples;
+    double tolerance;
+    int referenceSamples;
+    int snowBounces;  // passes gathering light between snow surfaces
+};
+
+Preset resolve(const BakeSettings &s) {
+    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1}
+               : s.quality == BakeQuality::Final ? Preset{16, 4, 1e-5, 0, 1}
+                                                 : Preset{64, 8, 1e-7, 64, 2};
+    if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
+        throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
+    if (s.skySamples) p.skySamples = s.skySamples;
+    if (s.sunSamples) p.sunSamples = s.sunSamples;
+    if (s.tolerance > 0.0) p.tolerance = s.tolerance;
+    if (s.referenceSamples) p.referenceSamples = s.referenceSamples;
+    return p;
+}
+
+// Wall-clock time between laps (s).
+class Stopwatch {
+  public:
+    double lap() {
+        const auto now = std::chrono::steady_clock::now();
+        const double seconds = std::chrono::duration<double>(now - last_).count();
+        last_ = now;
+        return seconds;
+    }
+
+  private:
+    std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+// One colour channel of the optics. Lengths below are "resistances": 3 times the reduced optical depth,
+// the diffusion distance in units of D (the Marshak boundary sits 2 beyond the last scattering).
+struct Channel {
+    double k, omega, g;
+    double sigmaT(double rho) const { return k * rho; }
+    double sigmaTr(double rho) const { return (1.0 - omega * g) * k * rho; }   // sigma_a + sigma_s (1 - g)
+    double reducedAlbedo() const { return omega * (1.0 - g) / (1.0 - omega * g); }
+    double beta() const { return std::sqrt((1.0 - omega) / (3.0 * (1.0 - omega * g))); }  // kappa D
+};
+
+// The source function in one voxel: S(w) = l0 + l1 . w per channel (W/m^2/sr).
+struct Source {
+    glm::vec3 l0{0.0f};
+    glm::mat3 l1{0.0f};  // column c: the vector for channel c
+};
+
+// The diffusion system of one channel plus what the surface needs afterwards.
+struct ChannelSystem {
+    StencilOperator A;
+    std::vector<double> b;                  // W: diffuse sources at the voxel nodes
+    std::vector<float> escaped;             // W: light leaving through air faces without reaching the node
+    std::vector<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
+    std::vector<std::vector<float>> sunIn;  // per sun, W entering through air faces
+    std::vector<float> skyIn;               // W entering through air faces
+    // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
+    // returned at once (m^2), so later passes can add light from other snow without assembling again.
+    std::vector<float> skyToNode, skyReturned;
+
+    // Adds diffuse irradiance (W/m^2) on the surface patches.
+    void addDiffuse(const std::vector<glm::vec3> &irradiance, int c) {
+        for (std::size_t i = 0; i < b.size(); ++i) {
+            const double E = irradiance[i][c];
+            b[i] += E * skyToNode[i], escaped[i] += E * skyReturned[i], skyIn[i] += E * area[i];
+        }
+    }
+    std::vector<float> area;  // m^2, surface patch
+};
+
+// Finite volumes with exponential fitting: every link between two unknowns, and between an unknown and
+// a boundary, is treated as the exact one-dimensional diffusion problem -phi'' + beta^2 phi = 0 in the
+// resistance coordinate R (dR = 3 sigma_tr dz), so voxels many diffusion lengths thick stay exact.
+
+// A link between two unknowns R apart: conductance, and the absorption it lends each end.
+struct Link {
+    double conductance, halfMass;  // per unit face area
+};
+// sinh(x) / x and tanh(x) / x, by series where x is small (snow: x ~ 0.1 per voxel), where they are
+// exact to double precision and cost no exponentials.
+double sinhOverX(double x) {
+    const double x2 = x * x;
+    return x < 0.3 ? 1.0 + x2 / 6.0 * (1.0 + x2 / 20.0 * (1.0 + x2 / 42.0 * (1.0 + x2 / 72.0))) : std::sinh(x) / x;
+}
+double tanhOverX(double x) {
+    const double x2 = x * x;
+    return x < 0.1 ? 1.0 - x2 / 3.0 * (1.0 - 0.4 * x2 * (1.0 - 17.0 / 42.0 * x2)) : std::tanh(x) / x;
+}
+
+Link interiorLink(double beta, double R) {
+    const double x = beta * R;
+    return {1.0 / (R * sinhOverX(x)), 0.5 * beta * x * tanhOverX(0.5 * x)};
+}
+
+// The stretch from a boundary to the unknown's node, L in resistance, with the boundary condition
+// phi = Rb dphi/dR + Phi (Marshak: Rb = 2 for air, 2 (1 + a) / (1 - a) for a Lambertian surface of
+// albedo a, Phi = 4 x the diffuse light it sends in / (1 - a)). Exact solution of the stretch.
+struct BoundaryLink {
+    double beta, Rb, L, sh, ch, delta;  // sh, ch: sinh, cosh of beta L
+    BoundaryLink(double beta_, double Rb_, double L_)
+        : beta(beta_), Rb(Rb_), L(L_), sh(beta_ * L_ * sinhOverX(beta_ * L_)), ch(std::sqrt(1.0 + sh * sh)),
+          delta(Rb_ * beta_ * ch + sh) {}
+    double conductance() const { return beta / delta; }  // flux out through the boundary per node fluence
+    double mass() const { return beta * (Rb * beta * sh + sh * sh / (ch + 1.0)) / delta; }  // cosh - 1 = sinh^2 / (cosh + 1)
+    // A diffuse source at depth R (in resistance) scattering unit power: share reaching the node, and
+    // share leaving through the boundary at once.
+    double toNode(double R) const { return (Rb * beta * std::cosh(beta * R) + std::sinh(beta * R)) / delta; }
+    double toBoundary(double R) const { return std::sinh(beta * (L - R)) / delta; }
+    // Diffuse light (irradiance J) arriving through an air boundary: share leaving again at once.
+    double diffuseReturned() const { return (sh - 2.0 * beta * ch) / delta; }
+};
+
+ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, int c,
+                       const SubProgress &progress) {
+    const Medium &medium = *scene.medium;
+    const VolumeOptics &optics = medium.optics();
+    const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
+    const double h = medium.voxelSize(), h2 = h * h, aPrime = ch.reducedAlbedo();
+    const double beta = std::max(ch.beta(), 1e-9);
+    const std::size_t n = topo.size();
+    ChannelSystem sys;
+    sys.A.coord = topo.coord;
+    sys.A.neighbour.resize(n), sys.A.conductance.resize(n), sys.A.diag.resize(n);
+    sys.b.assign(n, 0.0), sys.escaped.assign(n, 0.0f), sys.outConductance.assign(n, 0.0f), sys.skyIn.assign(n, 0.0f);
+    sys.skyToNode.assign(n, 0.0f), sys.skyReturned.assign(n, 0.0f), sys.area.assign(n, 0.0f);
+    sys.sunIn.assign(scene.suns.size(), std::vector<float>(n, 0.0f));
+
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
+        progress.throwIfCancelled();
+        Medium::Accessor density = medium.accessor();
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const double sigmaTr = ch.sigmaTr(topo.density[i]);
+            const SurfacePatch &patch = topo.patches[i];
+            double diag = 0.0, source = 0.0;  // W scattered at the node
+            std::array<double, 6> mass{};     // absorption each side lends the node
+            std::array<std::optional<BoundaryLink>, 6> boundary;
+            std::array<double, 6> albedo{};   // occluder faces
+            for (int f = 0; f < 6; ++f) {
+                const std::int32_t link = topo.link[i][f];
+                sys.A.neighbour[i][f] = StencilOperator::kNone;
+                sys.A.conductance[i][f] = 0.0;
+                if (!SnowTopology::isFace(link)) {
+                    const Link L = interiorLink(beta, 1.5 * h * (sigmaTr + ch.sigmaTr(topo.density[link])));
+                    sys.A.neighbour[i][f] = std::uint32_t(link);
+                    sys.A.conductance[i][f] = h2 * L.conductance;
+                    diag += h2 * L.conductance;
+                    mass[f] = h2 * L.halfMass;
+                    continue;
+                }
+                const std::size_t fi = SnowTopology::faceIndex(link);
+                const BoundaryFace &face = topo.faces[fi];
+                const double beyond = ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f)));
+                double area = h2;  // m^2 of boundary the face stands for
+                if (!face.occluder) {
+                    // Air: the density ramps down to zero through any fringe; diffuse sky light (its share
+                    // of what falls on the voxel's surface patch) enters through the Marshak condition.
+                    // A face on the patch's side counts with its projection on the smooth surface: a
+                    // staircase has more face than the surface has area.
+                    const double facing = glm::dot(patch.normal, faceNormal(f));
+                    if (facing > 0.0) area = h2 * facing;
+                    const BoundaryLink &b = boundary[f].emplace(beta, 2.0, 3.0 * ch.sigmaTr(face.rampMass));
+                    const double shareOfPatch = patch.area * patch.share[f];  // m^2
+                    sys.outConductance[i] += area * b.conductance();
+                    sys.skyToNode[i] += 4.0 * shareOfPatch * b.conductance();
+                    sys.skyReturned[i] += shareOfPatch * b.diffuseReturned();
+                } else {
+                    // Occluder: a Lambertian surface at `distance` from the node.
+                    albedo[f] = std::min(scene.occluders->albedo(face.triangle)[c], 0.99);
+                    const double d = face.distance;
+                    boundary[f].emplace(beta, 2.0 * (1.0 + albedo[f]) / (1.0 - albedo[f]),
+                                        3.0 * (d * sigmaTr + 0.5 * d * d / h * (beyond - sigmaTr)));
+                }
+                diag += area * boundary[f]->conductance();
+                mass[f] = area * boundary[f]->mass();
+            }
+            // Absorption: the voxel's own, taken along the axes that meet a boundary (where the fluence
+            // varies; exact for a flat surface), or along all three alike inside.
+            std::array<double, 3> axisWeight{};
+            for (int f = 0; f < 6; ++f) axisWeight[f / 2] += boundary[f] ? 1.0 : 0.0;
+            const double weightSum = axisWeight[0] + axisWeight[1] + axisWeight[2];
+            for (int a = 0; a < 3; ++a)
+                diag += (weightSum > 0.0 ? axisWeight[a] / weightSum : 1.0 / 3.0) * (mass[2 * a] + mass[2 * a + 1]);
+
+            // Sun beams: the power each face lets in or out; the difference is scattered in this voxel.
+            std::array<double, 6> groundLight{};  // W/m^2 occluders under the snow send back in
+            for (int f = 0; f < 6; ++f)
+                if (boundary[f] && albedo[f] > 0.0) groundLight[f] = albedo[f] * light.skyUnderSnow[SnowTopology::faceIndex(topo.link[i][f])][c];
+            for (std::size_t s = 0; s < scene.suns.size(); ++s) {
+                const SunLight &sun = scene.suns[s];
+                const double E = sun.irradiance[c], Bv = light.beams[s].atVoxel[i][c];
+                if (E <= 0.0) continue;
+                // Through the surface patch (facing the sun: in, else out) and through the voxel's other faces.
+                const double muPatch = glm::dot(patch.normal, sun.direction);
+                const double patchFlow = !patch.isSurface() ? 0.0
+                                         : muPatch > 0.0  ? E * muPatch * patch.area * light.beams[s].atSurface[i][c]
+                                                          : E * muPatch * patch.area * Bv;
+                double in = std::max(patchFlow, 0.0), out = std::max(-patchFlow, 0.0);
+                std::array<double, 6> flow{};  // W through each link and occluder face, positive inwards
+                for (int f = 0; f < 6; ++f) {
+                    const double mu = glm::dot(faceNormal(f), sun.direction);
+                    const std::int32_t link = topo.link[i][f];
+                    if (!SnowTopology::isFace(link)) {
+                        flow[f] = E * h2 * mu * std::sqrt(Bv * double(light.beams[s].atVoxel[link][c]));
+                    } else if (topo.faces[SnowTopology::faceIndex(link)].occluder && mu < 0.0) {
+                        // The beam reaches the surface under the snow.
+                        const double B = Bv * std::exp(-sigmaTr * topo.faces[SnowTopology::faceIndex(link)].distance / std::max(-mu, 0.05));
+                        flow[f] = E * h2 * mu * B;
+                        groundLight[f] += albedo[f] * E * -mu * B;
+                    }
+                    (flow[f] > 0.0 ? in : out) += std::abs(flow[f]);
+                }
+                if (in <= 0.0) continue;
+                const double scattered = aPrime * std::max(0.0, in - out) / in;
+                for (int f = 0; f < 6; ++f)
+                    if (flow[f] > 0.0) source += scattered * flow[f];
+                if (patchFlow <= 0.0) continue;
+                // Into a surface voxel through its air faces: the beam scatters at mean resistance 3 mu
+                // (reduced depth mu below the surface), cut at the node; what scatters above the node
+                // partly escapes at once.
+                sys.sunIn[s][i] += patchFlow;
+                for (int f = 0; f < 6; ++f) {
+                    if (!topo.isAirFace(i, f) || patch.share[f] <= 0.0f) continue;
+                    const double P = scattered * patchFlow * patch.share[f], L = boundary[f]->L;
+                    const double R = 3.0 * muPatch * (1.0 - std::exp(-L / (3.0 * muPatch)));
+                    source += boundary[f]->toNode(R) * P;
+                    sys.escaped[i] += boundary[f]->toBoundary(R) * P;
+                }
+            }
+            // Light reflected by occluders under the snow enters diffusely through their faces.
+            for (int f = 0; f < 6; ++f)
+                if (groundLight[f] > 0.0)
+                    source += 4.0 * groundLight[f] / (1.0 - albedo[f]) * h2 * boundary[f]->conductance();
+            const double sky = light.skyOnSurface[i][c];
+            sys.A.diag[i] = diag;
+            sys.b[i] = source + sky * sys.skyToNode[i];
+            sys.escaped[i] += sky * sys.skyReturned[i];
+            sys.area[i] = patch.isSurface() ? patch.area : 0.0;
+            sys.skyIn[i] = sky * sys.area[i];
+        }
+    });
+    return sys;
+}
+
+// What the solve yields per unknown, per channel: the source function inside, and for surface voxels the
+// light leaving through their patch, as power times angular shape (W; radiance after dividing by pi A).
+struct SolvedVoxel {
+    Source inside;  // S = omega / (4 pi) (phi + 3 g F . w) plus the beams, F = -D grad phi
+    // Surface voxels only: what returns of the light that entered there, over and above the escape
+    // function's share of it (sharp: it follows shadows) ...
+    Source returned;
+    // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
+    // but spread unevenly over a voxel staircase).
+    glm::vec3 leaving{0.0f};
+};
+
+void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                  const ChannelSystem &sys, const std::vector<double> &phi, int c, std::vector<SolvedVoxel> &out) {
+    const Medium &medium = *scene.medium;
+    const VolumeOptics &optics = medium.optics();
+    const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
+    const double h = medium.voxelSize();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            glm::dvec3 gradient(0.0);
+            for (int axis = 0; axis < 3; ++axis) {
+                const std::int32_t lo = topo.link[i][2 * axis], hi = topo.link[i][2 * axis + 1];
+                const double pLo = lo >= 0 ? phi[lo] : phi[i], pHi = hi >= 0 ? phi[hi] : phi[i];
+                const int span = (lo >= 0) + (hi >= 0);
+                gradient[axis] = span ? (pHi - pLo) / (span * h) : 0.0;
+            }
+            const double D = 1.0 / (3.0 * ch.sigmaTr(topo.density[i]));
+            double j0 = phi[i];
+            glm::dvec3 j1 = -3.0 * ch.g * D * gradient;
+            for (std::size_t s = 0; s < scene.suns.size(); ++s) {
+                const double beam = scene.suns[s].irradiance[c] * light.beams[s].atVoxel[i][c];
+                j0 += beam;
+                j1 -= 3.0 * ch.g * beam * scene.suns[s].direction;
+            }
+            out[i].inside.l0[c] = ch.omega * kInvFourPi * j0;
+            out[i].inside.l1[c] = ch.omega * kInvFourPi * j1;
+            if (!topo.patches[i].isSurface()) continue;
+
+            // Light that entered returns with the shape of its incidence (the sun lobe; sky light
+            // isotropically, as a non-absorbing half-space returns uniform sky light); the deficit
+            // (absorbed, or gone elsewhere) and any surplus from deep inside take the escape function's
+            // u(mu) = 3/7 + 6/7 mu. So: leaving = sum in (shape - u) + out u.
+            const SurfacePatch &patch = topo.patches[i];
+            const glm::dvec3 escape1 = 6.0 / 7.0 * patch.normal;
+            const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
+            double r0 = sys.skyIn[i] * (1.0 - 3.0 / 7.0);
+            glm::dvec3 r1 = -double(sys.skyIn[i]) * escape1;
+            for (std::size_t s = 0; s < scene.suns.size(); ++s) {
+                const double P = sys.sunIn[s][i];
+                if (P <= 0.0) continue;
+                const glm::dvec3 d = -scene.suns[s].direction;  // where the sun's light travels
+                const SunLobe lobe = sunLobe(ch.g, std::clamp(-glm::dot(d, patch.normal), 0.05, 1.0));
+                glm::dvec3 t = d - glm::dot(d, patch.normal) * patch.normal;
+                t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
+                r0 += P * (lobe.a - 3.0 / 7.0);
+                r1 += P * (lobe.b * patch.normal + lobe.c * t - escape1);
+            }
+            out[i].returned.l0[c] = r0;
+            out[i].returned.l1[c] = r1;
+            out[i].leaving[c] = float(leaving);
+        }
+    });
+}
+
+// Radiance leaving each surface voxel. The returned part is the voxel's own (over its patch's area); the
+// light leaving in the escape function's shape is averaged over the voxel's neighbourhood (surface voxels
+// of its 3^3 block facing the same way, weighted by the cosine between the normals, by area): a voxel
+// staircase spreads the diffusion's outflow unevenly between steps, though the light itself varies only
+// over a few transport mean free paths. The shape follows the voxel's own normal.
+std::vector<Source> surfaceRadiance(const SnowTopology &topo, const std::vector<SolvedVoxel> &solved) {
+    std::vector<Source> out(topo.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface()) continue;
+            const glm::dvec3 &n = topo.patches[i].normal;
+            glm::dvec3 leaving(0.0);
+            double area = 0.0;
+            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
+                const std::uint32_t j = topo.neighbourhood[k];
+                const double w = std::max(0.0, glm::dot(n, topo.patches[j].normal));
+                leaving += w * glm::dvec3(solved[j].leaving);
+                area += w * topo.patches[j].area;
+            }
+            const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
+            const float own = float(kPi * topo.patches[i].area);
+            out[i].l0 = solved[i].returned.l0 / own + glm::vec3(exitance * (3.0 / 7.0 / kPi));
+            for (int c = 0; c < 3; ++c)
+                out[i].l1[c] = solved[i].returned.l1[c] / own + glm::vec3(exitance[c] * 6.0 / 7.0 / kPi * n);
+        }
+    });
+    return out;
+}
+
+// Inside the snow, within a few mean free paths of the surface, a camera ray still sees its surface
+// voxel's radiance: those voxels take it over (SnowTopology's shell), so where the ray reaches optical
+// depth 1 does not matter; deeper voxels keep their own source function, which only thin snow shows.
+std::vector<Source> composeSource(const SnowTopology &topo, const std::vector<SolvedVoxel> &solved,
+                                  const std::vector<Source> &surface) {
+    std::vector<Source> out(topo.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const std::int32_t owner = topo.shellOwner[i];
+            const float w = topo.shellWeight[i];
+            if (owner < 0) {
+                out[i] = solved[i].inside;
+            } else {
+                out[i].l0 = w * surface[owner].l0 + (1.0f - w) * solved[i].inside.l0;
+                out[i].l1 = w * surface[owner].l1 + (1.0f - w) * solved[i].inside.l1;
+            }
+        }
+    });
+    return out;
+}
+
+// REFERENCE quality: the radiance leaving each surface voxel, path traced from 12 directions around
+// its normal, fitted by least squares with the stored linear form.
+void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples, std::uint64_t seed,
+                      std::vector<Source> &out, const SubProgress &progress) {
+    const MonteCarloReference reference(scene);
+    const double h = scene.medium->voxelSize();
+    std::vector<std::size_t> surface;
+    for (std::size_t i = 0; i < topo.size(); ++i)
+        if (topo.patches[i].isSurface()) surface.push_back(i);
+    std::atomic<std::size_t> done{0};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, surface.size(), 1), [&](const auto &range) {
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+            progress.throwIfCancelled();
+            const std::size_t i = surface[k];
+            const glm::dvec3 centre = scene.medium->voxelCentre(topo.coord[i]);
+            glm::dmat4 normal(0.0);
+            glm::dmat4x3 rhs(0.0);  // column m: basis function m against the three channels
+            int d = 0;
+            for (double mu : {0.95, 0.7, 0.35})
+                for (int a = 0; a < 4; ++a, ++d) {
+                    const glm::dvec3 w = directionAround(topo.patches[i].normal, mu, kPi * (0.5 * a + 0.25 * (mu < 0.5)));
+                    const Ray ray{centre + 3.0 * h * w, -w};
+                    const Rgb L = reference.estimate(ray, samples, seed, i * 12 + d).mean;
+                    const glm::dvec4 basis(1.0, w.x, w.y, w.z);
+                    normal += glm::outerProduct(basis, basis);
+                    for (int m = 0; m < 4; ++m) rhs[m] += basis[m] * L;
+                }
+            const glm::dmat4 inverse = glm::inverse(normal);
+            for (int c = 0; c < 3; ++c) {
+                glm::dvec4 v;
+                for (int m = 0; m < 4; ++m) v[m] = rhs[m][c];
+                const glm::dvec4 coefficients = inverse * v;
+                out[i].l0[c] = coefficients[0];
+                for (int a = 0; a < 3; ++a) out[i].l1[c][a] = coefficients[1 + a];
+            }
+            progress.report(double(++done) / surface.size());
+        }
+    });
+}
+
+// The radiance the surface voxels around voxel c (outside the snow) show towards it: their values
+// weighted by how much their surface faces c (a voxel beside an edge takes the side's, one above it the
+// top's). False if no surface voxel is near.
+bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
+                   openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const std::vector<Source> &source,
+                   Source &S) {
+    double total = 0.0;
+    int count = 0;
+    glm::dvec3 l0(0.0);
+    glm::dmat3 l1(0.0);
+    for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dz = -1; dz <= 1; ++dz) {
+                const std::int32_t j = index.getValue(c.offsetBy(-dx, -dy, -dz));
+                if (j < 0 || !topo.patches[j].isSurface()) continue;
+                const double w = std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
+                l0 += w * glm::dvec3(source[j].l0), l1 += w * glm::dmat3(source[j].l1);
+                total += w, ++count;
+            }
+    if (count == 0) return false;
+    if (total <= 0.0) {  // nothing faces c: plain average
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) {
+                    const std::int32_t j = index.getValue(c.offsetBy(dx, dy, dz));
+                    if (j < 0 || !topo.patches[j].isSurface()) continue;
+                    l0 += glm::dvec3(source[j].l0), l1 += glm::dmat3(source[j].l1), total += 1.0;
+                }
+    }
+    S.l0 = glm::vec3(l0 / total);
+    S.l1 = glm::mat3(l1 / total);
+    return true;
+}
+
+// The four source grids over the snow's voxels and a margin of three. Unknowns hold their source
+// function. Outside them (the density ramp and surface fringes) the radiance of the nearest surface
+// voxels is carried out two voxels, so the renderer's trilinear ramp sees a constant ratio of emission
+// to extinction; voxels too thin for the solve, away from any surface, hold their single scattering; the
+// outermost ring holds zeros (Cycles reads Vec3 grids' edges wrongly).
+BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo,
+                     const std::vector<Source> &source, const Preset &preset, const BakeSettings &settings) {
+    const Medium &medium = *scene.medium;
+    const VolumeOptics &optics = medium.optics();
+    openvdb::BoolTree topology(medium.density().tree(), false, openvdb::TopologyCopy());
+    openvdb::tools::dilateActiveValues(topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    std::array<openvdb::Vec3fTree::Ptr, 4> trees;
+    for (auto &tree : trees)
+        tree = std::make_shared<openvdb::Vec3fTree>(topology, openvdb::Vec3f(0.0f), openvdb::TopologyCopy());
+    openvdb::BoolTree carried(topology, false, openvdb::TopologyCopy());  // voxels holding a surface's radiance
+    openvdb::tree::LeafManager<openvdb::Vec3fTree> leaves(*trees[0]);
+
+    auto write = [&](std::size_t l, openvdb::Index pos, const Source &S) {
+        const openvdb::Coord origin = leaves.leaf(l).origin();
+        leaves.leaf(l).setValueOnly(pos, openvdb::Vec3f(float(S.l0.x), float(S.l0.y), float(S.l0.z)));
+        for (int a = 0; a < 3; ++a)
+            trees[1 + a]->probeLeaf(origin)->setValueOnly(
+                pos, openvdb::Vec3f(float(S.l1[0][a]), float(S.l1[1][a]), float(S.l1[2][a])));
+    };
+    // Average of the 26 neighbours accepted by `take`, read by `value`; false if none.
+    auto average = [](const openvdb::Coord &c, const auto &take, const auto &value, Source &S) {
+        int count = 0;
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) {
+                    const openvdb::Coord n = c.offsetBy(dx, dy, dz);
+                    if (!take(n)) continue;
+                    const Source v = value(n);
+                    S.l0 += v.l0, S.l1 += v.l1, ++count;
+                }
+        if (count) S.l0 /= double(count), S.l1 /= double(count);
+        return count > 0;
+    };
+    // First: unknowns, and the voxels next to surface voxels.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        openvdb::tree::ValueAccessor<openvdb::BoolTree> mark(carried);
+        for (std::size_t l = range.begin(); l != range.end(); ++l)
+            for (auto it = leaves.leaf(l).beginValueOn(); it; ++it) {
+                const openvdb::Coord c = it.getCoord();
+                const std::int32_t i = index.getValue(c);
+                Source S;
+                if (i >= 0) {
+                    S = source[i];
+                } else if (facingAverage(topo, c, index, source, S)) {
+                    mark.setValueOnly(c, true);
+                } else {
+                    continue;
+                }
+                write(l, it.pos(), S);
+            }
+    });
+    // Then: one voxel further out, and thin snow on its own.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> mark(carried);
+        using Reader = openvdb::tree::ValueAccessor<const openvdb::Vec3fTree>;
+        std::array<Reader, 4> read{Reader(*trees[0]), Reader(*trees[1]), Reader(*trees[2]), Reader(*trees[3])};
+        Medium::Accessor density = medium.accessor();
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t l = range.begin(); l != range.end(); ++l)
+            for (auto it = leaves.leaf(l).beginValueOn(); it; ++it) {
+                const openvdb::Coord c = it.getCoord();
+                if (index.getValue(c) >= 0 || mark.getValue(c)) continue;
+                Source S;
+                const bool near = average(c, [&](const openvdb::Coord &n) { return mark.getValue(n) && index.getValue(n) < 0; },
+                                          [&](const openvdb::Coord &n) {
+                                              Source v;
+                                              const openvdb::Vec3f l0 = read[0].getValue(n);
+                                              v.l0 = glm::dvec3(l0.x(), l0.y(), l0.z());
+                                              for (int a = 0; a < 3; ++a) {
+                                                  const openvdb::Vec3f l1 = read[1 + a].getValue(n);
+                                                  for (int ch = 0; ch < 3; ++ch) v.l1[ch][a] = l1[ch];
+                                              }
+                                              return v;
+                                          },
+                                          S);
+                if (!near && density.getValue(c) > 0.0f) {
+                    const glm::dvec3 centre = medium.voxelCentre(c);
+                    for (const SunLight &sun : scene.suns) {
+                        const glm::dvec3 beam = glm::dvec3(sunBeamAt(scene, sun, centre, preset.sunSamples, settings.seed,
+                                                                     std::uint64_t(l), marcher)) *
+                                                sun.irradiance * optics.albedo * kInvFourPi;
+                        S.l0 += beam;
+                        for (int ch = 0; ch < 3; ++ch) S.l1[ch] -= 3.0 * optics.g * beam[ch] * sun.direction;
+                    }
+                }
+                if (near || density.getValue(c) > 0.0f) write(l, it.pos(), S);
+            }
+    });
+    BakedGrids out;
+    for (std::size_t k = 0; k < 4; ++k) {
+        auto grid = openvdb::Vec3fGrid::create(trees[k]);
+        grid->setTransform(medium.density().transform().copy());
+        grid->setName(BakedGrids::kNames[k]);
+        grid->setVectorType(openvdb::VEC_INVARIANT);
+        grid->insertMeta("firn_units", openvdb::StringMetadata("W/m^2/sr (source function: emission / extinction)"));
+        grid->insertMeta("firn_extinction_per_density", openvdb::DoubleMetadata(optics.extinctionPerDensity));
+        grid->insertMeta("firn_bake_quality",
+                         openvdb::StringMetadata(settings.quality == BakeQuality::Draft   ? "DRAFT"
+                                                 : settings.quality == BakeQuality::Final ? "FINAL"
+                                                                                          : "REFERENCE"));
+        grid->insertMeta("firn_bake_seed", openvdb::Int64Metadata(openvdb::Int64(settings.seed)));
+        grid->insertMeta("firn_version", openvdb::StringMetadata(kVersion));
+        out.source[k] = grid;
+    }
+    return out;
+}
+
+}  // namespace
+
+// Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
+// of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch).
+std::vector<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                                      const BakedGrids &baked, const SkyRays &rays, std::uint64_t seed,
+                                      const SubProgress &progress) {
+    std::vector<glm::vec3> out(topo.size(), glm::vec3(0.0f));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
+        progress.throwIfCancelled();
+        BakedRadiance radiance(scene, baked);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!light.snowRays[i]) continue;
+            const glm::dvec3 p = patchOutside(*scene.medium, topo, i);
+            glm::dvec3 sum(0.0);
+            for (int k = 0; k < rays.count(); ++k) {
+                if (!(light.snowRays[i] >> k & 1)) continue;
+                const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
+                const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+                sum += radiance.along(Ray{p, w}, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), 0.5);
+            }
+            out[i] = glm::vec3(kPi * sum / double(rays.count()));
+        }
+    });
+    return out;
+}
+
+BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
+    validate(scene);
+    const Preset preset = resolve(settings);
+    Progress quiet;
+    Progress &p = progress ? *progress : quiet;
+    const bool reference = settings.quality == BakeQuality::Reference;
+    const double solved = reference ? 0.5 : 0.9;  // progress when the diffusion solves are done
+
+    BakeStats local;
+    Stopwatch clock;
+    p.report(0.0, "Finding the snow's voxels");
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05));
+    local.topologySeconds = clock.lap();
+    p.report(0.05, "Tracing sun and sky light");
+    const IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
+                                               SubProgress(&p, 0.05, 0.4));
+    local.lightSeconds = clock.lap();
+
+    local.unknowns = topo.size();
+    for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
+    for (const SurfacePatch &patch : topo.patches) local.surfaceVoxels += patch.isSurface();
+    const bool hidden = std::any_of(light.snowRays.begin(), light.snowRays.end(), [](std::uint64_t r) { return r != 0; });
+    const int passes = local.passes = hidden ? 1 + preset.snowBounces : 1;
+
+    std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
+    for (auto &channel : phi) channel.assign(topo.size(), 0.0);
+    std::array<ChannelSystem, 3> systems;
+    std::array<std::unique_ptr<MultigridSolver>, 3> solvers;  // the operator stays, only sources change
+    std::vector<glm::vec3> fromSnow(topo.size(), glm::vec3(0.0f));  // W/m^2 gathered so far
+    std::vector<Source> source;
+    std::vector<SolvedVoxel> solvedVoxel(topo.size());
+    for (int pass = 0; pass < passes; ++pass) {
+        const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
+        std::vector<glm::vec3> more(topo.size(), glm::vec3(0.0f));  // light from other snow new this pass
+        if (pass > 0) {
+            // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
+            p.report(begin, "Gathering light between snow surfaces");
+            const BakedGrids previous = makeGrids(scene, topo, source, preset, settings);
+            const std::vector<glm::vec3> gathered = snowIrradiance(scene, topo, light, previous, SkyRays(preset.skySamples),
+                                                                   settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
+            for (std::size_t i = 0; i < topo.size(); ++i) more[i] = gathered[i] - fromSnow[i];
+            fromSnow = gathered;
+            local.gatherSeconds += clock.lap();
+        }
+        for (int c = 0; c < 3; ++c) {
+            const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
+            p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
+            if (pass == 0) {
+                systems[c] = assemble(scene, topo, light, c, sub);
+                if (c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
+                if (topo.size() > 0) solvers[c] = std::make_unique<MultigridSolver>(std::move(systems[c].A));
+            } else {
+                systems[c].addDiffuse(more, c);
+            }
+            if (solvers[c]) {
+                // Passes before the last only feed the gathering between surfaces: 0.1 % will do.
+                const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, 1e-3) : preset.tolerance;
+                const MultigridSolver::Result result = solvers[c]->solve(systems[c].b, phi[c], tolerance, 500, sub);
+                local.iterations[c] += result.iterations;
+                local.relativeResidual[c] = result.relativeResidual;
+            }
+            solvedVoxels(scene, topo, light, systems[c], phi[c], c, solvedVoxel);
+        }
+        std::vector<Source> surface = surfaceRadiance(topo, solvedVoxel);
+        if (reference && pass + 1 == passes) {
+            p.report(solved, "Path tracing the surface (reference)");
+            referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
+        }
+        source = composeSource(topo, solvedVoxel, surface);
+        local.solveSeconds += clock.lap();
+    }
+    p.report(reference ? 0.95 : solved, "Writing the grids");
+    BakedGrids grids = makeGrids(scene, topo, source, preset, settings);
+    local.gridSeconds = clock.lap();
+    p.report(1.0, "Done");
+    if (stats) *stats = local;
+    return grids;
+}
+
+}  // namespace firn

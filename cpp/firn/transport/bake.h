@@ -1,0 +1,53 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "firn/transport/baked_grids.h"
+#include "firn/transport/scene.h"
+#include "firn/util/progress.h"
+
+namespace firn {
+
+enum class BakeQuality {
+    Draft,      // fewer sky and shadow rays, looser solve: for previews
+    Final,      // the diffusion solve at full accuracy
+    Reference,  // surface voxels by brute-force Monte Carlo (slow; for checking and small scenes)
+};
+
+struct BakeSettings {
+    BakeQuality quality = BakeQuality::Final;
+    std::uint64_t seed = 0;
+    // 0: the quality's default.
+    int skySamples = 0;        // sky rays per boundary face
+    int sunSamples = 0;        // points on a sun's disc per shadow test
+    double tolerance = 0.0;    // relative residual of the diffusion solve
+    int referenceSamples = 0;  // Reference: paths per direction per surface voxel
+};
+
+struct BakeStats {
+    std::size_t unknowns = 0, airFaces = 0, occluderFaces = 0, surfaceVoxels = 0;
+    int passes = 0;                            // diffusion solves per channel (1 + snow-to-snow bounces)
+    std::array<int, 3> iterations{};          // per colour channel, all passes
+    std::array<double, 3> relativeResidual{};  // per colour channel, last pass
+    // Wall-clock seconds: voxels and faces, sun and sky tracing, diffusion solves, gathering between snow
+    // surfaces, writing the grids.
+    double topologySeconds = 0, lightSeconds = 0, solveSeconds = 0, gatherSeconds = 0, gridSeconds = 0;
+};
+
+// Computes the light scattered inside the snow, all orders, from the scene's suns and sky, with the
+// occluders' shadows, the light they reflect into the snow (once, and exactly for the surface the snow
+// lies on) and the light snow surfaces send each other across the air.
+//
+// Method (docs/bake.md): exact attenuation of the suns' beams and the sky's light through the snow and
+// past occluders; a similarity-scaled diffusion solve (D = 1 / (3 sigma_tr), sigma_tr = sigma_a +
+// sigma_s (1 - g)) over the voxels, finite volumes with exponential fitting, extrapolated boundaries
+// (Marshak) to air and albedo boundaries to occluders, sources placed at their true depth inside the
+// (optically thick) surface voxels; multigrid-preconditioned CG per colour channel. The radiance leaving
+// each surface voxel is rebuilt from its fluxes with the angular shapes of thick snow (sun lobe, escape
+// function); inside, the source function follows from the fluence and its gradient. Where snow hides part
+// of a surface's sky, its light is gathered from the first solution and the solve repeated.
+BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress = nullptr,
+                          BakeStats *stats = nullptr);
+
+}  // namespace firn

@@ -1,0 +1,52 @@
+#pragma once
+
+#include <array>
+#include <string>
+
+#include <openvdb/openvdb.h>
+
+#include "firn/transport/medium.h"
+#include "firn/transport/monte_carlo.h"
+#include "firn/transport/scene.h"
+#include "firn/util/color.h"
+
+namespace firn {
+
+// The bake's output, written beside `density` in the snow's VDB (contract: docs/vdb-contract.md).
+// The snow's source function S, the radiance it scatters towards w per unit extinction (W/m^2/sr, RGB):
+//   S(w) = source + source_x w.x + source_y w.y + source_z w.z
+// w the world direction towards the viewer (Cycles' Geometry > Incoming). Rendered with absorption
+// sigma_t = k density and emission sigma_t S(w), it gives the snow's scattered radiance.
+struct BakedGrids {
+    static constexpr std::array<const char *, 4> kNames{"firn_source", "firn_source_x", "firn_source_y",
+                                                        "firn_source_z"};
+    std::array<openvdb::Vec3fGrid::Ptr, 4> source;  // in kNames' order
+
+    openvdb::GridPtrVec grids() const;
+    // Picks the four grids out of a file's grids by name. Throws InvalidArgument if one is missing.
+    static BakedGrids find(const openvdb::GridPtrVec &grids);
+};
+
+// Integrates the baked emission along rays, as the renderer does; one per thread.
+class BakedRadiance {
+  public:
+    BakedRadiance(const Scene &scene, const BakedGrids &baked);
+    // Radiance the baked snow sends back along the ray (towards its origin) from t = 0 to tMax (m),
+    // integrated in steps of at most `step` voxels with the exact exponential of each step.
+    Rgb along(const Ray &ray, double tMax, double step);
+
+  private:
+    using Reader = openvdb::tree::ValueAccessor<const openvdb::Vec3fTree>;
+    const Scene &scene_;
+    Medium::ColumnMarcher marcher_;
+    Medium::Accessor density_;
+    std::array<Reader, 4> source_;
+};
+
+// What Cycles draws for the snow along a camera ray with the contract's material: the integral of
+// sigma_t S(-direction) exp(-tau) along the ray, through the trilinear density and source grids, up to
+// the first occluder (the sky and surfaces behind the snow are not included: the renderer adds them,
+// attenuated by exp(-tau)).
+Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray);
+
+}  // namespace firn

@@ -1,0 +1,74 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "firn/transport/scene.h"
+#include "firn/transport/snow_topology.h"
+#include "firn/util/progress.h"
+
+namespace firn {
+
+// Light reaching the snow from outside, per colour channel, before it scatters. Sun and sky light enter
+// through the smooth surface patches of surface voxels (not through the voxels' staircase faces, which
+// would shade each other).
+struct IncidentLight {
+    // One per sun: the sun's beam as a fraction of its irradiance, after the snow in front of the point
+    // (transmittance with the similarity-reduced extinction sigma_tr = (1 - omega g) sigma_t: light that
+    // scattered forwards still travels with the beam) and occluders (averaged over the sun's disc).
+    struct Beam {
+        std::vector<glm::vec3> atVoxel;    // at each unknown's centre
+        std::vector<glm::vec3> atSurface;  // just outside each surface voxel's patch (0 inside the snow)
+    };
+    std::vector<Beam> beams;
+    // W/m^2 onto each surface voxel's patch from the sky, past occluders and snow, plus sun and sky light
+    // that occluders reflect once towards the snow (0 inside the snow).
+    std::vector<glm::vec3> skyOnSurface;
+    // Per surface voxel: which of its sky rays (SkyRays, bit k for ray k) snow hides; the snow's own light
+    // arrives along them instead (gathered after a first solve, bake.cpp).
+    std::vector<std::uint64_t> snowRays;
+    // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
+    std::vector<glm::vec3> skyUnderSnow;
+};
+
+// The rays a surface patch gathers its sky along: stratified, cosine-weighted around its normal, the k-th
+// depending only on (seed, stream, k), so a later pass can trace the same ones. At most 64.
+class SkyRays {
+  public:
+    explicit SkyRays(int samples);
+    int count() const { return strata_ * strata_; }
+    glm::dvec3 direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const;
+
+  private:
+    int strata_;
+};
+
+struct IncidentLightSettings {
+    int skySamples = 16;  // rays per face, cosine-weighted, stratified
+    int sunSamples = 4;   // points on each sun's disc per shadow test
+    std::uint64_t seed = 0;
+};
+
+IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topology,
+                                   const IncidentLightSettings &settings, const SubProgress &progress);
+
+// Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe.
+glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i);
+
+// Reduced extinction per unit density, per channel: k (1 - omega g) (m^2/kg).
+glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
+
+// How light crossing snow is attenuated: inside the snow, as the similarity beam (forward-scattered light
+// travels on, sigma_tr); on its way to a surface from outside, uncollided (sigma_t: what other snow
+// scatters towards the surface arrives as that snow's own radiance, gathered separately).
+enum class Crossing { Beam, Uncollided };
+
+// The beam fraction at a point towards one sun: snow transmittance from `point` times occluder
+// visibility from `shadowPoint` (default: the same point).
+glm::vec3 sunBeamAt(const Scene &scene, const SunLight &sun, const glm::dvec3 &point, int sunSamples,
+                    std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher,
+                    const glm::dvec3 *shadowPoint = nullptr, Crossing crossing = Crossing::Beam);
+
+}  // namespace firn

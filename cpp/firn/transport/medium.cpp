@@ -1,0 +1,136 @@
+#include "firn/transport/medium.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <openvdb/tools/Interpolation.h>
+
+#include "firn/util/error.h"
+#include "firn/util/openvdb_library.h"
+
+namespace firn {
+
+namespace {
+
+using openvdb::Vec3d;
+
+// Voxel size if the transform is a uniform scale plus translation (voxel axes = world axes), else 0.
+double axisAlignedVoxelSize(const openvdb::math::Transform &transform) {
+    if (!transform.isLinear() || !transform.hasUniformScale()) return 0.0;
+    const double h = transform.voxelSize()[0];
+    const Vec3d o = transform.indexToWorld(Vec3d(0.0));
+    for (int axis = 0; axis < 3; ++axis) {
+        Vec3d e(0.0);
+        e[axis] = 1.0;
+        const Vec3d step = transform.indexToWorld(e) - o;
+        for (int k = 0; k < 3; ++k)
+            if (std::abs(step[k] - (k == axis ? h : 0.0)) > 1e-9 * h) return 0.0;
+    }
+    return h;
+}
+
+}  // namespace
+
+Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
+    : density_(std::move(density)), optics_(optics) {
+    initializeOpenVdb();
+    validate(optics_);
+    if (optics_.extinctionPerDensity <= 0.0) throw InvalidArgument("extinction per density must be positive to bake");
+    if (!density_) throw InvalidArgument("no density grid");
+    if (density_->background() != 0.0f) throw InvalidArgument("the density grid's background must be 0");
+    h_ = axisAlignedVoxelSize(density_->transform());
+    if (!(h_ > 0.0)) throw InvalidArgument("the density grid needs cubic voxels aligned with the world axes");
+    if (density_->tree().activeTileCount() > 0) {  // Cycles draws tiles as nothing; light sees voxels only
+        auto voxels = density_->deepCopy();
+        voxels->tree().voxelizeActiveTiles();
+        density_ = voxels;
+    }
+    if (density_->activeVoxelCount() == 0) throw InvalidArgument("the density grid has no active voxels");
+    const Vec3d o = density_->transform().indexToWorld(Vec3d(0.0));
+    origin_ = glm::dvec3(o.x(), o.y(), o.z());
+
+    for (auto it = density_->cbeginValueOn(); it; ++it) {
+        const float v = *it;
+        if (!std::isfinite(v) || v < 0.0f)
+            throw InvalidArgument("density must be finite and non-negative (kg/m^3), found " + std::to_string(v));
+        maxDensity_ = std::max(maxDensity_, double(v));
+    }
+    // Inactive voxels inside leaves may hold values other than the background: trilinear lookups read them.
+    for (auto leaf = density_->tree().cbeginLeaf(); leaf; ++leaf)
+        for (auto it = leaf->cbeginValueOff(); it; ++it)
+            if (*it != 0.0f) throw InvalidArgument("inactive density voxels must hold 0");
+
+    const openvdb::CoordBBox box = density_->evalActiveVoxelBoundingBox();
+    boundsMin_ = indexToWorld(glm::dvec3(box.min().x() - 1, box.min().y() - 1, box.min().z() - 1));
+    boundsMax_ = indexToWorld(glm::dvec3(box.max().x() + 1, box.max().y() + 1, box.max().z() + 1));
+    // Three face-dilations reach every voxel whose trilinear cell touches an active voxel (corners included).
+    intersector_ = std::make_unique<openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0>>(*density_, 3);
+}
+
+Medium::~Medium() = default;
+
+bool Medium::clipToBounds(const glm::dvec3 &origin, const glm::dvec3 &direction, double &t0, double &t1) const {
+    t0 = 0.0;
+    t1 = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (direction[a] == 0.0) {
+            if (origin[a] < boundsMin_[a] || origin[a] > boundsMax_[a]) return false;
+            continue;
+        }
+        double ta = (boundsMin_[a] - origin[a]) / direction[a];
+        double tb = (boundsMax_[a] - origin[a]) / direction[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+    }
+    return t0 < t1;
+}
+
+double Medium::densityAt(const glm::dvec3 &world, Accessor &accessor) const {
+    const glm::dvec3 ijk = worldToIndex(world);
+    return openvdb::tools::BoxSampler::sample(accessor, Vec3d(ijk.x, ijk.y, ijk.z));
+}
+
+Medium::ColumnMarcher::ColumnMarcher(const Medium &medium)
+    : medium_(medium), intersector_(*medium.intersector_), accessor_(medium.accessor()) {}
+
+double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax,
+                                     double limit) {
+    const double h = medium_.voxelSize();
+    const glm::dvec3 start = medium_.worldToIndex(origin);
+    const Vec3d eye(start.x, start.y, start.z), dir(direction.x, direction.y, direction.z);
+    constexpr double kStep = 0.5;  // voxels
+    const double sumLimit = limit / h, tEnd = tMax / h;
+    // Most rays start in snow and reach the limit within a few voxels: plain steps first; the hierarchical
+    // walk over occupied 8^3 blocks only for rays that get further.
+    // A ray that meets empty space (it started outside, or left the snow) goes over to the walk at once.
+    constexpr int kPlainSteps = 16;
+    double sum = 0.0;  // kg/m^3 * voxels
+    int i = 0;
+    for (; i < kPlainSteps; ++i) {
+        const double t = (i + 0.5) * kStep;
+        if (t >= tEnd) return sum * h;
+        const double rho = openvdb::tools::BoxSampler::sample(accessor_, eye + t * dir);
+        if (rho <= 0.0) break;
+        sum += rho * kStep;
+        if (sum > sumLimit) return sum * h;
+    }
+    const double tStart = i * kStep;
+    const openvdb::math::Ray<double> ray(eye, dir, tStart, tEnd);
+    if (!intersector_.setIndexRay(ray)) return sum * h;
+    // Beyond the first voxels a ray mostly crosses air near the surface: whole-voxel steps.
+    constexpr double kLongStep = 1.0;  // voxels
+    double t0 = 0.0, t1 = 0.0;
+    while (intersector_.march(t0, t1)) {
+        const double span = t1 - t0;
+        const int steps = std::max(1, static_cast<int>(std::ceil(span / kLongStep)));
+        const double dt = span / steps;
+        for (int i = 0; i < steps; ++i) sum += openvdb::tools::BoxSampler::sample(accessor_, eye + (t0 + (i + 0.5) * dt) * dir) * dt;
+        if (sum > sumLimit) break;
+    }
+    return sum * h;
+}
+
+}  // namespace firn

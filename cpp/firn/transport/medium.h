@@ -1,0 +1,90 @@
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include <glm/vec3.hpp>
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/RayIntersector.h>
+
+#include "firn/optics/transport_scales.h"  // validate(VolumeOptics)
+#include "firn/optics/volume_optics.h"
+
+namespace firn {
+
+// The snow as light sees it: sigma_t(x) = k * density(x) (1/m), with the density interpolated trilinearly
+// between voxel centres in world space, exactly as Cycles reads the grid. Every transport code in Firn
+// (the bake, the Monte Carlo reference, the baked-radiance renderer) samples this one definition.
+class Medium {
+  public:
+    using Accessor = openvdb::FloatGrid::ConstAccessor;
+
+    // Validates: uniform, axis-aligned voxels; background 0; finite, non-negative densities; optics sane.
+    // Active tiles are voxelized (on a copy).
+    Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics);
+    ~Medium();
+
+    const openvdb::FloatGrid &density() const { return *density_; }
+    openvdb::FloatGrid::ConstPtr densityPtr() const { return density_; }
+    const VolumeOptics &optics() const { return optics_; }
+    double voxelSize() const { return h_; }  // m
+    double maxDensity() const { return maxDensity_; }  // kg/m^3
+    double maxSigmaT() const { return optics_.extinctionPerDensity * maxDensity_; }  // 1/m
+
+    glm::dvec3 indexToWorld(const glm::dvec3 &ijk) const { return origin_ + h_ * ijk; }
+    glm::dvec3 worldToIndex(const glm::dvec3 &p) const { return (p - origin_) / h_; }
+    glm::dvec3 voxelCentre(const openvdb::Coord &c) const { return indexToWorld(glm::dvec3(c.x(), c.y(), c.z())); }
+
+    // World box (m) outside which the density is zero: the active voxels' centres grown by one voxel.
+    const glm::dvec3 &boundsMin() const { return boundsMin_; }
+    const glm::dvec3 &boundsMax() const { return boundsMax_; }
+    // Parametric range [t0, t1] (m) of the ray inside the bounds; false if it misses.
+    bool clipToBounds(const glm::dvec3 &origin, const glm::dvec3 &direction, double &t0, double &t1) const;
+
+    Accessor accessor() const { return density_->getConstAccessor(); }
+    double densityAt(const glm::dvec3 &world, Accessor &accessor) const;  // kg/m^3, trilinear
+
+    // Integrates the density along rays (kg/m^2), skipping empty 8^3 blocks. One per thread (cheap copies).
+    class ColumnMarcher {
+      public:
+        explicit ColumnMarcher(const Medium &medium);
+        // Mass column between t = 0 and tMax (m) along origin + t * direction (unit), midpoint rule on
+        // half-voxel steps; stops once the column exceeds `limit` (kg/m^2) and returns what it has.
+        double column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double limit);
+
+        // Walks the ray from t = 0 to tMax (m) where the density may be non-zero, in steps of at most
+        // `step` voxels, calling visit(midpoint in index space, step length in m); stops when it returns false.
+        template <typename Visit>
+        void march(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double step, Visit &&visit) {
+            const glm::dvec3 start = medium_.worldToIndex(origin);
+            const openvdb::math::Ray<double> ray(openvdb::Vec3d(start.x, start.y, start.z),
+                                                 openvdb::Vec3d(direction.x, direction.y, direction.z), 0.0,
+                                                 tMax / medium_.voxelSize());
+            if (!intersector_.setIndexRay(ray)) return;
+            double t0 = 0.0, t1 = 0.0;
+            while (intersector_.march(t0, t1)) {
+                const int steps = std::max(1, int(std::ceil((t1 - t0) / step)));
+                const double dt = (t1 - t0) / steps;
+                for (int i = 0; i < steps; ++i)
+                    if (!visit(ray(t0 + (i + 0.5) * dt), dt * medium_.voxelSize())) return;
+            }
+        }
+
+      private:
+        const Medium &medium_;
+        openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0> intersector_;
+        Accessor accessor_;
+    };
+
+  private:
+    openvdb::FloatGrid::ConstPtr density_;
+    VolumeOptics optics_;
+    double h_ = 0.0;
+    glm::dvec3 origin_{0.0};
+    double maxDensity_ = 0.0;
+    glm::dvec3 boundsMin_{0.0}, boundsMax_{0.0};
+    std::unique_ptr<openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0>> intersector_;
+};
+
+}  // namespace firn

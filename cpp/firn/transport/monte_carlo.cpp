@@ -1,0 +1,186 @@
+#include "firn/transport/monte_carlo.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "firn/util/random.h"
+#include "firn/util/sampling.h"
+
+namespace firn {
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr double kSurfaceEpsilon = 1e-5;  // m: rays leaving a surface start this far off it
+constexpr long kMaxEvents = 10'000'000;   // a safety net only; paths end by escaping or roulette
+
+double maxComponent(const Rgb &c) { return std::max({c.x, c.y, c.z}); }
+
+// One path tracer per thread: holds a density accessor.
+class PathTracer {
+  public:
+    explicit PathTracer(const Scene &scene)
+        : scene_(scene),
+          medium_(*scene.medium),
+          accessor_(medium_.accessor()),
+          k_(medium_.optics().extinctionPerDensity),
+          sigmaBar_(std::max(medium_.maxSigmaT(), 1e-12)) {}
+
+    // Radiance scattered by the medium towards the camera along one camera ray, one sample.
+    Rgb sample(const Ray &camera, Rng &rng) {
+        glm::dvec3 p = camera.origin, d = camera.direction;
+        Rgb throughput(1.0), radiance(0.0);
+        bool first = true;
+        for (long event = 0; event < kMaxEvents; ++event) {
+            // The next collision ignoring surfaces, then the first surface before it: the same as tracking
+            // up to the surface (free flights are memoryless), and most flights in snow are short.
+            const float tNear = first ? 0.0f : float(kSurfaceEpsilon);
+            double tCollision = sampleCollision(p, d, kInfinity, rng);
+            std::optional<RayCaster::Hit> hit;
+            if (tCollision == kInfinity || scene_.occluders->caster().occluded(glm::vec3(p), glm::vec3(d), tNear, float(tCollision))) {
+                hit = scene_.occluders->caster().intersect(glm::vec3(p), glm::vec3(d), tNear,
+                                                           tCollision == kInfinity ? std::numeric_limits<float>::infinity() : float(tCollision));
+                if (hit) tCollision = kInfinity;
+            }
+            const double tSurface = hit ? double(hit->distance) : kInfinity;
+            if (tCollision < kInfinity) {
+                p += tCollision * d;
+                throughput *= medium_.optics().albedo;
+                radiance += throughput * sunLightScattered(p, d, rng);
+                d = sampleHenyeyGreenstein(d, medium_.optics().g, rng.uniform(), rng.uniform());
+            } else if (hit) {
+                if (first) return Rgb(0.0);  // a surface in front of the snow: the renderer draws it
+                p += tSurface * d;
+                const glm::dvec3 n = glm::dot(glm::dvec3(hit->normal), d) < 0.0 ? glm::dvec3(hit->normal)
+                                                                                  : -glm::dvec3(hit->normal);
+                throughput *= scene_.occluders->albedo(hit->triangle);
+                radiance += throughput * sunLightReflected(p, n, rng);
+                d = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
+            } else {
+                if (!first) radiance += throughput * scene_.sky.radianceFrom(d);
+                return radiance;
+            }
+            first = false;
+            // Russian roulette once the path carries little: unbiased, and it ends absorbing paths.
+            const double q = maxComponent(throughput);
+            if (q < 0.25) {
+                if (rng.uniform() >= q) return radiance;
+                throughput /= q;
+            }
+        }
+        return radiance;
+    }
+
+  private:
+    double sigmaT(const glm::dvec3 &p) { return k_ * medium_.densityAt(p, accessor_); }
+
+    // Delta tracking: distance to the first real collision before tEnd, or infinity.
+    double sampleCollision(const glm::dvec3 &p, const glm::dvec3 &d, double tEnd, Rng &rng) {
+        double t0, t1;
+        if (!medium_.clipToBounds(p, d, t0, t1)) return kInfinity;
+        t1 = std::min(t1, tEnd);
+        for (double t = t0;;) {
+            t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
+            if (t >= t1) return kInfinity;
+            if (rng.uniform() * sigmaBar_ < sigmaT(p + t * d)) return t;
+        }
+    }
+
+    // Ratio tracking with Russian roulette: unbiased transmittance of the medium from p along d.
+    double transmittance(const glm::dvec3 &p, const glm::dvec3 &d, Rng &rng) {
+        double t0, t1;
+        if (!medium_.clipToBounds(p, d, t0, t1)) return 1.0;
+        double T = 1.0;
+        for (double t = t0;;) {
+            t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
+            if (t >= t1) return T;
+            T *= 1.0 - sigmaT(p + t * d) / sigmaBar_;
+            if (T < 0.1) {
+                if (rng.uniform() >= T * 10.0) return 0.0;
+                T = 0.1;
+            }
+        }
+    }
+
+    // Sun light arriving at p along a sampled direction of each disc: irradiance * visibility, with the
+    // direction towards the sun returned through `towardsSun`.
+    Rgb sunIrradiance(const SunLight &sun, const glm::dvec3 &p, double offset, glm::dvec3 &towardsSun, Rng &rng) {
+        towardsSun = sampleSunDirection(sun, rng.uniform(), rng.uniform());
+        if (scene_.occluders->caster().occluded(glm::vec3(p), glm::vec3(towardsSun), float(offset))) return Rgb(0.0);
+        return sun.irradiance * transmittance(p, towardsSun, rng);
+    }
+
+    // Single scattering of sun light at a medium collision, towards -d (the camera side of the path).
+    Rgb sunLightScattered(const glm::dvec3 &p, const glm::dvec3 &d, Rng &rng) {
+        Rgb sum(0.0);
+        for (const SunLight &sun : scene_.suns) {
+            glm::dvec3 w;
+            const Rgb E = sunIrradiance(sun, p, 0.0, w, rng);
+            // Light travels along -w and leaves along -d: the scattering cosine is dot(w, d).
+            if (E != Rgb(0.0)) sum += E * henyeyGreenstein(glm::dot(w, d), medium_.optics().g);
+        }
+        return sum;
+    }
+
+    // Sun light reflected by a Lambertian surface with normal n (albedo applied by the caller).
+    Rgb sunLightReflected(const glm::dvec3 &p, const glm::dvec3 &n, Rng &rng) {
+        Rgb sum(0.0);
+        for (const SunLight &sun : scene_.suns) {
+            glm::dvec3 w;
+            const Rgb E = sunIrradiance(sun, p, kSurfaceEpsilon, w, rng);
+            sum += E * std::max(0.0, glm::dot(n, w)) / kPi;
+        }
+        return sum;
+    }
+
+    const Scene &scene_;
+    const Medium &medium_;
+    Medium::Accessor accessor_;
+    double k_, sigmaBar_;
+};
+
+}  // namespace
+
+MonteCarloReference::MonteCarloReference(Scene scene) : scene_(std::move(scene)) { validate(scene_); }
+
+RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std::uint64_t seed,
+                                               std::uint64_t stream) const {
+    PathTracer tracer(scene_);
+    Rng rng(seed, stream);
+    Rgb sum(0.0), sumSquares(0.0);
+    for (int s = 0; s < samples; ++s) {
+        const Rgb L = tracer.sample(ray, rng);
+        sum += L;
+        sumSquares += L * L;
+    }
+    RadianceEstimate out;
+    const double n = std::max(samples, 1);
+    out.mean = sum / n;
+    const Rgb variance = glm::max(sumSquares / n - out.mean * out.mean, Rgb(0.0));
+    out.standardError = glm::sqrt(variance / std::max(n - 1.0, 1.0));
+    return out;
+}
+
+std::vector<RadianceEstimate> MonteCarloReference::estimate(const std::vector<Ray> &rays, int samplesPerRay,
+                                                            std::uint64_t seed, Progress *progress) const {
+    std::vector<RadianceEstimate> out(rays.size());
+    std::atomic<std::size_t> done{0};
+    if (progress) progress->report(0.0, "Monte Carlo reference");
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (progress) progress->throwIfCancelled();
+            out[i] = estimate(rays[i], samplesPerRay, seed, i);
+            if (progress) progress->report(double(++done) / rays.size());
+        }
+    });
+    return out;
+}
+
+}  // namespace firn

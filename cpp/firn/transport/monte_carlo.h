@@ -1,0 +1,48 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "firn/transport/scene.h"
+#include "firn/util/color.h"
+#include "firn/util/progress.h"
+
+namespace firn {
+
+struct Ray {
+    glm::dvec3 origin;     // m, world space
+    glm::dvec3 direction;  // unit
+};
+
+struct RadianceEstimate {
+    Rgb mean{0.0};           // W/m^2/sr
+    Rgb standardError{0.0};  // of the mean
+};
+
+// Brute-force volumetric path tracing of the scene: the reference the bake is tested against and the
+// REFERENCE quality. It shares no approximation with the bake: delta tracking through the trilinear
+// density with a global majorant, Henyey-Greenstein sampling at every real collision (all orders, no
+// truncation), ratio-tracked shadow rays to the suns, Lambertian occluders, the sky where paths escape.
+//
+// Estimates, for each camera ray, the radiance the snow scatters towards the camera: paths whose first
+// event is a scattering in the medium. It excludes what a renderer draws itself behind the snow (sky and
+// surfaces seen through it, attenuated by exp(-tau)); that is exactly what the baked emission stands for.
+class MonteCarloReference {
+  public:
+    explicit MonteCarloReference(Scene scene);
+
+    RadianceEstimate estimate(const Ray &ray, int samples, std::uint64_t seed, std::uint64_t stream) const;
+
+    // Many rays in parallel; deterministic for a given seed. Reports to and honours `progress`.
+    std::vector<RadianceEstimate> estimate(const std::vector<Ray> &rays, int samplesPerRay, std::uint64_t seed,
+                                           Progress *progress = nullptr) const;
+
+    const Scene &scene() const { return scene_; }
+
+  private:
+    Scene scene_;
+};
+
+}  // namespace firn

@@ -1,0 +1,44 @@
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "firn/geometry/mesh.h"
+#include "firn/geometry/ray_caster.h"
+#include "firn/transport/lights.h"
+#include "firn/transport/medium.h"
+#include "firn/util/color.h"
+
+namespace firn {
+
+// Opaque, diffusely reflecting scene surfaces: they cast shadows on and in the snow, block the sky, and
+// reflect light back into snow lying on them (the ground under the snow shows through thin snow).
+class Occluders {
+  public:
+    Occluders() = default;  // none
+    // One diffuse albedo per triangle, each channel in [0, 1]. Throws InvalidArgument.
+    Occluders(TriangleMesh mesh, std::vector<Rgb> albedo);
+
+    bool empty() const { return mesh_.empty(); }
+    const TriangleMesh &mesh() const { return mesh_; }
+    const RayCaster &caster() const { return *caster_; }
+    const Rgb &albedo(unsigned triangle) const { return albedo_[triangle]; }
+
+  private:
+    TriangleMesh mesh_;
+    std::vector<Rgb> albedo_;
+    std::shared_ptr<const RayCaster> caster_ = std::make_shared<RayCaster>(TriangleMesh{});
+};
+
+// Everything that lights or shadows the snow.
+struct Scene {
+    std::shared_ptr<const Medium> medium;
+    std::vector<SunLight> suns;
+    Sky sky;
+    std::shared_ptr<const Occluders> occluders = std::make_shared<Occluders>();
+};
+
+// Throws InvalidArgument if a light is malformed or the medium is missing.
+void validate(const Scene &scene);
+
+}  // namespace firn

@@ -1,0 +1,270 @@
+#include "firn/transport/snow_topology.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <queue>
+#include <unordered_map>
+
+#include <glm/geometric.hpp>
+#include <openvdb/tools/PoissonSolver.h>
+#include <openvdb/tree/LeafManager.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace firn {
+
+namespace {
+
+using IndexLeaf = openvdb::Int32Tree::LeafNodeType;
+
+std::uint64_t leafKey(const openvdb::Coord &c) {
+    auto part = [](int v) { return std::uint64_t(std::uint32_t((v >> 3) + (1 << 20)) & 0x1FFFFF); };
+    return part(c.x()) | part(c.y()) << 21 | part(c.z()) << 42;
+}
+
+// Flags the leaves an occluder triangle may cut (bounding box, then plane against the leaf's box grown by
+// one voxel): only their voxels need ray tests along their links.
+std::unique_ptr<std::atomic<bool>[]> leavesNearOccluders(const Medium &medium, const Occluders &occluders,
+                                                         const openvdb::tree::LeafManager<openvdb::Int32Tree> &leaves) {
+    auto near = std::make_unique<std::atomic<bool>[]>(leaves.leafCount());
+    for (std::size_t i = 0; i < leaves.leafCount(); ++i) near[i] = false;
+    if (occluders.empty()) return near;
+    std::unordered_map<std::uint64_t, std::size_t> leafIndex;
+    for (std::size_t i = 0; i < leaves.leafCount(); ++i) leafIndex[leafKey(leaves.leaf(i).origin())] = i;
+    const TriangleMesh &mesh = occluders.mesh();
+    const double h = medium.voxelSize();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.triangleCount(), 64), [&](const auto &range) {
+        for (std::size_t t = range.begin(); t != range.end(); ++t) {
+            glm::dvec3 lo(1e300), hi(-1e300);
+            for (int k = 0; k < 3; ++k) {
+                const glm::dvec3 ijk = medium.worldToIndex(glm::dvec3(mesh.vertex(t, k)));
+                lo = glm::min(lo, ijk), hi = glm::max(hi, ijk);
+            }
+            const glm::dvec3 p0(mesh.vertex(t, 0));
+            const glm::dvec3 n = glm::normalize(glm::dvec3(mesh.crossNormal(t)));
+            const double reach = 4.5 * h * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
+            auto leafOf = [](double v) { return int(std::floor(v)) & ~7; };
+            for (int x = leafOf(lo.x - 1); x <= leafOf(hi.x + 1); x += 8)
+                for (int y = leafOf(lo.y - 1); y <= leafOf(hi.y + 1); y += 8)
+                    for (int z = leafOf(lo.z - 1); z <= leafOf(hi.z + 1); z += 8) {
+                        const auto found = leafIndex.find(leafKey(openvdb::Coord(x, y, z)));
+                        if (found == leafIndex.end()) continue;
+                        const glm::dvec3 centre = medium.indexToWorld(glm::dvec3(x + 3.5, y + 3.5, z + 3.5));
+                        if (std::abs(glm::dot(n, centre - p0)) <= reach) near[found->second] = true;
+                    }
+        }
+    });
+    return near;
+}
+
+// Outward normal from the density gradient (a 3x3x3 Sobel stencil), or from the air faces where the
+// gradient is flat or points the wrong way.
+void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
+    topo.patches.assign(topo.size(), SurfacePatch{});
+    const double h = medium.voxelSize();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        Medium::Accessor density = medium.accessor();
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            glm::dvec3 faces(0.0);
+            int airFaces = 0;
+            for (int f = 0; f < 6; ++f)
+                if (topo.isAirFace(i, f)) faces += faceNormal(f), ++airFaces;
+            if (airFaces == 0) continue;
+            glm::dvec3 gradient(0.0);
+            const openvdb::Coord &c = topo.coord[i];
+            for (int dx = -1; dx <= 1; ++dx)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dz = -1; dz <= 1; ++dz) {
+                        const double w = (2 - std::abs(dx)) * (2 - std::abs(dy)) * (2 - std::abs(dz));
+                        gradient += w * double(density.getValue(c.offsetBy(dx, dy, dz))) * glm::dvec3(dx, dy, dz);
+                    }
+            glm::dvec3 n = -gradient;
+            if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
+            SurfacePatch &patch = topo.patches[i];
+            patch.normal = glm::length(n) > 0.0 ? glm::normalize(n) : glm::dvec3(0.0, 0.0, 1.0);
+            double projected = 0.0;
+            for (int f = 0; f < 6; ++f)
+                if (topo.isAirFace(i, f)) projected += std::max(0.0, glm::dot(patch.normal, faceNormal(f)));
+            for (int f = 0; f < 6; ++f)
+                if (topo.isAirFace(i, f))
+                    patch.share[f] = float(projected > 1e-6 ? std::max(0.0, glm::dot(patch.normal, faceNormal(f))) / projected
+                                                           : 1.0 / airFaces);
+            patch.area = h * h * std::max(projected, 0.3);
+        }
+    });
+}
+
+// Snow (kg/m^2) from voxel c's centre out through face `face` to where the density ramps to zero, through
+// any fringe voxels: the trapezoid rule is exact for the linear ramps between voxel centres.
+float rampMass(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &c, int face) {
+    double mass = 0.0, inner = density.getValue(c);
+    openvdb::Coord next = c;
+    for (int k = 0; k < 4 && inner > 0.0; ++k) {
+        next += faceStep(face);
+        const double outer = density.getValue(next);
+        mass += 0.5 * medium.voxelSize() * (inner + outer);
+        inner = outer;
+    }
+    return float(mass);
+}
+
+void computeNeighbourhoods(SnowTopology &topo) {
+    topo.neighbourhoodStart.assign(topo.size() + 1, 0);
+    std::vector<std::vector<std::uint32_t>> lists(topo.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface()) continue;
+            for (int dx = -1; dx <= 1; ++dx)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dz = -1; dz <= 1; ++dz) {
+                        const std::int32_t j = index.getValue(topo.coord[i].offsetBy(dx, dy, dz));
+                        if (j >= 0 && topo.patches[j].isSurface()) lists[i].push_back(std::uint32_t(j));
+                    }
+        }
+    });
+    for (std::size_t i = 0; i < topo.size(); ++i) topo.neighbourhoodStart[i + 1] = topo.neighbourhoodStart[i] + lists[i].size();
+    topo.neighbourhood.reserve(topo.neighbourhoodStart.back());
+    for (const auto &list : lists) topo.neighbourhood.insert(topo.neighbourhood.end(), list.begin(), list.end());
+}
+
+// Optical depth (sigma_t) from outside to each voxel centre near the surface by Dijkstra from the surface
+// voxels inwards, over the shell only.
+void computeShell(const Medium &medium, SnowTopology &topo) {
+    constexpr double kShellStart = 3.0, kShellEnd = 6.0;
+    const double k = medium.optics().extinctionPerDensity, h = medium.voxelSize();
+    std::vector<double> depth(topo.size(), std::numeric_limits<double>::infinity());
+    topo.shellOwner.assign(topo.size(), -1);
+    topo.shellWeight.assign(topo.size(), 0.0f);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t i = range.begin(); i != range.end(); ++i)
+            if (topo.patches[i].isSurface()) {
+                depth[i] = k * marcher.column(medium.voxelCentre(topo.coord[i]), topo.patches[i].normal, 3.0 * h, kShellEnd / k);
+                topo.shellOwner[i] = std::int32_t(i);
+                topo.shellWeight[i] = 1.0f;
+            }
+    });
+    using Entry = std::pair<double, std::int32_t>;
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+    for (std::size_t i = 0; i < topo.size(); ++i)  // only shallow surface voxels have a shell to fill
+        if (topo.patches[i].isSurface() && depth[i] < kShellEnd) queue.emplace(depth[i], std::int32_t(i));
+    while (!queue.empty()) {
+        const auto [d, i] = queue.top();
+        queue.pop();
+        if (d > depth[i]) continue;
+        for (int f = 0; f < 6; ++f) {
+            const std::int32_t j = topo.link[i][f];
+            if (j < 0 || topo.patches[j].isSurface()) continue;
+            const double next = d + 0.5 * k * h * (topo.density[i] + topo.density[j]);
+            if (next >= kShellEnd || next >= depth[j]) continue;
+            depth[j] = next, topo.shellOwner[j] = topo.shellOwner[i];
+            topo.shellWeight[j] = float(std::clamp((kShellEnd - next) / (kShellEnd - kShellStart), 0.0, 1.0));
+            queue.emplace(next, j);
+        }
+    }
+}
+
+}  // namespace
+
+SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress) {
+    const double h = medium.voxelSize();
+    const float minDensity = float(kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h));
+    const openvdb::FloatTree &densityTree = medium.density().tree();
+
+    openvdb::BoolTree dense(densityTree, false, openvdb::TopologyCopy());
+    openvdb::tree::LeafManager<openvdb::BoolTree>(dense).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
+        const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
+        for (auto it = leaf.beginValueOn(); it; ++it)
+            if (!densityLeaf || densityLeaf->getValue(it.pos()) < minDensity) it.setValueOff();
+    });
+    // Peel surface fringes: thin voxels with air on one side and a thick voxel on the other.
+    const float fringeDensity = float(kFringeOpticalDepth / (medium.optics().extinctionPerDensity * h));
+    openvdb::BoolTree mask(dense);
+    openvdb::tree::LeafManager<openvdb::BoolTree>(mask).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> isDense(dense);
+        openvdb::tree::ValueAccessor<const openvdb::FloatTree> density(densityTree);
+        for (auto it = leaf.beginValueOn(); it; ++it) {
+            const openvdb::Coord c = it.getCoord();
+            if (density.getValue(c) >= fringeDensity) continue;
+            for (int f = 0; f < 6; ++f)
+                if (!isDense.isValueOn(c + faceStep(f)) && density.getValue(c - faceStep(f)) >= fringeDensity) {
+                    it.setValueOff();
+                    break;
+                }
+        }
+    });
+    SnowTopology topo;
+    topo.index = openvdb::tools::poisson::createIndexTree(mask);
+    const std::size_t n = std::size_t(topo.index->activeVoxelCount());
+    topo.coord.resize(n), topo.density.resize(n), topo.link.resize(n);
+    progress.report(0.2);
+
+    openvdb::tree::LeafManager<openvdb::Int32Tree> leaves(*topo.index);
+    const auto near = leavesNearOccluders(medium, occluders, leaves);
+    progress.report(0.4);
+    progress.throwIfCancelled();
+
+    // Links and boundary faces, leaf by leaf; faces are numbered in leaf order afterwards.
+    std::vector<std::vector<BoundaryFace>> leafFaces(leaves.leafCount());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        progress.throwIfCancelled();
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        Medium::Accessor density = medium.accessor();
+        for (std::size_t l = range.begin(); l != range.end(); ++l) {
+            const IndexLeaf &leaf = leaves.leaf(l);
+            const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
+            for (auto it = leaf.cbeginValueOn(); it; ++it) {
+                const std::uint32_t i = std::uint32_t(*it);
+                const openvdb::Coord c = it.getCoord();
+                topo.coord[i] = c;
+                topo.density[i] = densityLeaf->getValue(it.pos());
+                for (int f = 0; f < 6; ++f) {
+                    BoundaryFace face{i, std::uint8_t(f), false, 0.0f, 0};
+                    if (near[l]) {
+                        // Both voxels of a link test the same segment, from the lower centre (nudged along
+                        // the axis so that a surface through voxel centres cuts the link below them).
+                        const bool up = f & 1;
+                        const openvdb::Coord lower = up ? c : c + faceStep(f);
+                        const glm::dvec3 axis = faceNormal(f | 1);
+                        const double nudge = 1e-4 * h;
+                        const auto hit = occluders.caster().intersect(glm::vec3(medium.voxelCentre(lower) + nudge * axis),
+                                                                      glm::vec3(axis), 0.0f, float(h));
+                        if (hit) {
+                            face.occluder = true, face.triangle = hit->triangle;
+                            face.distance = float(std::clamp(up ? hit->distance + nudge : h - hit->distance - nudge, 0.0, h));
+                        }
+                    }
+                    const std::int32_t neighbour = index.getValue(c + faceStep(f));
+                    if (!face.occluder && neighbour >= 0) {
+                        topo.link[i][f] = neighbour;
+                    } else {
+                        if (!face.occluder) face.rampMass = rampMass(medium, density, c, f);
+                        topo.link[i][f] = -1 - std::int32_t(leafFaces[l].size());
+                        leafFaces[l].push_back(face);
+                    }
+                }
+            }
+        }
+    });
+    std::vector<std::size_t> offset(leaves.leafCount() + 1, 0);
+    for (std::size_t l = 0; l < leaves.leafCount(); ++l) offset[l + 1] = offset[l] + leafFaces[l].size();
+    topo.faces.resize(offset.back());
+    tbb::parallel_for(std::size_t(0), leaves.leafCount(), [&](std::size_t l) {
+        std::copy(leafFaces[l].begin(), leafFaces[l].end(), topo.faces.begin() + offset[l]);
+        for (const BoundaryFace &face : leafFaces[l]) {
+            std::int32_t &link = topo.link[face.voxel][face.face];
+            link = -1 - std::int32_t(offset[l] + SnowTopology::faceIndex(link));
+        }
+    });
+    computeSurfacePatches(medium, topo);
+    computeNeighbourhoods(topo);
+    computeShell(medium, topo);
+    progress.report(1.0);
+    return topo;
+}
+
+}  // namespace firn

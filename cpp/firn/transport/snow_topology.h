@@ -1,0 +1,84 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <openvdb/openvdb.h>
+
+#include "firn/transport/medium.h"
+#include "firn/transport/scene.h"
+#include "firn/util/progress.h"
+
+namespace firn {
+
+// The six voxel faces, in the order -x, +x, -y, +y, -z, +z.
+inline const openvdb::Coord &faceStep(int face) {
+    static const openvdb::Coord kStep[6] = {openvdb::Coord(-1, 0, 0), openvdb::Coord(1, 0, 0),
+                                            openvdb::Coord(0, -1, 0), openvdb::Coord(0, 1, 0),
+                                            openvdb::Coord(0, 0, -1), openvdb::Coord(0, 0, 1)};
+    return kStep[face];
+}
+inline glm::dvec3 faceNormal(int face) {
+    glm::dvec3 n(0.0);
+    n[face / 2] = (face & 1) ? 1.0 : -1.0;
+    return n;
+}
+
+// A face of a snow voxel where the snow ends: open air, or an occluder between the voxel's centre and
+// its neighbour's (the ground under the snow).
+struct BoundaryFace {
+    std::uint32_t voxel = 0;  // index into SnowTopology's voxels
+    std::uint8_t face = 0;    // 0..5 as in faceStep
+    bool occluder = false;
+    float distance = 0.0f;    // occluder faces: m from the voxel centre to the surface
+    std::uint32_t triangle = 0;
+    float rampMass = 0.0f;    // air faces: kg/m^2 of snow from the voxel centre out to where the density ramps to 0
+};
+
+// The smooth surface through a surface voxel (one with air faces): outward normal from the density
+// gradient, and the area of that surface inside the voxel (its air faces projected onto it, m^2).
+// Light enters and leaves the snow through these patches rather than through the voxels' staircase.
+struct SurfacePatch {
+    glm::dvec3 normal{0.0, 0.0, 1.0};
+    double area = 0.0;  // 0 for voxels inside the snow
+    std::array<float, 6> share{};  // of the patch's light crossing each air face (sums to 1)
+    bool isSurface() const { return area > 0.0; }
+};
+
+// The unknowns of the diffusion solve: voxels optically thick enough for diffusion (sigma_t h >= 0.1) and
+// not a surface's fringe, indexed 0..n-1 in OpenVDB leaf order, each linked to its six neighbours or to a
+// boundary face.
+struct SnowTopology {
+    openvdb::Int32Tree::Ptr index;  // voxel -> unknown, -1 elsewhere
+    std::vector<openvdb::Coord> coord;
+    std::vector<float> density;                     // kg/m^3
+    std::vector<std::array<std::int32_t, 6>> link;  // >= 0: neighbour unknown; < 0: face -1 - link
+    std::vector<BoundaryFace> faces;
+    std::vector<SurfacePatch> patches;  // per unknown
+    // Surface voxels: the surface voxels of their 3^3 block, themselves included (CSR over unknowns).
+    std::vector<std::uint32_t> neighbourhoodStart, neighbourhood;
+    // Voxels just under the surface, within a few mean free paths: the surface voxel nearest to them (-1
+    // for the others) and how much of its radiance they carry (1 down to optical depth 3, 0 from 6).
+    std::vector<std::int32_t> shellOwner;
+    std::vector<float> shellWeight;
+
+    std::size_t size() const { return coord.size(); }
+    static bool isFace(std::int32_t link) { return link < 0; }
+    static std::size_t faceIndex(std::int32_t link) { return std::size_t(-1 - link); }
+    bool isAirFace(std::size_t voxel, int face) const {
+        return isFace(link[voxel][face]) && !faces[faceIndex(link[voxel][face])].occluder;
+    }
+};
+
+// Voxels with sigma_t h below this are too thin for diffusion: light crosses them (single scattering).
+constexpr double kMinVoxelOpticalDepth = 0.1;
+// A voxel thinner than this lying on a thicker one, under open air, is the fringe of a surface (a partly
+// filled voxel of an antialiased surface): it belongs to the density ramp in front of the thick voxel,
+// not to the unknowns, so the thick voxel carries the surface's radiance.
+constexpr double kFringeOpticalDepth = 5.0;
+
+SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress);
+
+}  // namespace firn

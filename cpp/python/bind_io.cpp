@@ -1,0 +1,68 @@
+// Reading Firn's VDB files from Python without pyopenvdb (which Blender's Python may lack).
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <openvdb/tools/Count.h>
+#include <openvdb/tools/Interpolation.h>
+
+#include "bindings.h"
+#include "firn/io/vdb_io.h"
+#include "firn/util/error.h"
+#include "mesh_arrays.h"
+
+namespace py = pybind11;
+
+namespace firncore {
+
+namespace {
+
+openvdb::FloatGrid::Ptr floatGrid(const std::string &path, const std::string &name) {
+    for (const auto &grid : firn::readGrids(path))
+        if (grid->getName() == name) {
+            if (auto typed = openvdb::gridPtrCast<openvdb::FloatGrid>(grid)) return typed;
+            throw firn::InvalidArgument("grid '" + name + "' in " + path + " is not a float grid");
+        }
+    throw firn::InvalidArgument(path + " has no grid named '" + name + "'");
+}
+
+}  // namespace
+
+void bindIo(py::module_ &m) {
+    m.def(
+        "grid_names",
+        [](const std::string &path) {
+            std::vector<std::string> names;
+            for (const auto &grid : firn::readGrids(path)) names.push_back(grid->getName());
+            return names;
+        },
+        py::arg("path"), "Names of the grids in a VDB file.");
+    m.def(
+        "sample_grid",
+        [](const std::string &path, const std::string &name, const FloatArray &points) {
+            if (points.ndim() != 2 || points.shape(1) != 3) throw firn::InvalidArgument("points must be (N, 3)");
+            const openvdb::FloatGrid::Ptr grid = floatGrid(path, name);
+            py::array_t<float> values(points.shape(0));
+            auto out = values.mutable_unchecked<1>();
+            const auto in = points.unchecked<2>();
+            const openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sampler(*grid);
+            for (py::ssize_t i = 0; i < points.shape(0); ++i)
+                out(i) = sampler.wsSample(openvdb::Vec3d(in(i, 0), in(i, 1), in(i, 2)));
+            return values;
+        },
+        py::arg("path"), py::arg("name"), py::arg("points"),
+        "Trilinear samples of a float grid at world-space points (m), in the grid's own units.");
+    m.def(
+        "grid_statistics",
+        [](const std::string &path, const std::string &name) {
+            const openvdb::FloatGrid::Ptr grid = floatGrid(path, name);
+            const openvdb::math::MinMax<float> range = openvdb::tools::minMax(grid->tree());
+            py::dict out;
+            out["active_voxels"] = grid->activeVoxelCount();
+            out["min"] = range.min(), out["max"] = range.max();
+            out["voxel_size"] = grid->voxelSize()[0];
+            return out;
+        },
+        py::arg("path"), py::arg("name"), "Active voxel count, min and max value and voxel size (m) of a float grid.");
+}
+
+}  // namespace firncore

@@ -1,0 +1,200 @@
+// Add Snow Layer from Python: settings, generation, regeneration from kept metaballs, the surface mesh.
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <openvdb/tools/VolumeToMesh.h>
+
+#include "bindings.h"
+#include "firn/io/vdb_io.h"
+#include "firn/snow/snow_layer.h"
+#include "firn/util/error.h"
+#include "mesh_arrays.h"
+
+namespace py = pybind11;
+
+namespace firncore {
+
+namespace {
+
+template <typename T>
+py::array_t<T> rows(std::size_t n, std::size_t columns) {
+    const auto count = static_cast<py::ssize_t>(n), width = static_cast<py::ssize_t>(columns);
+    return columns == 1 ? py::array_t<T>({count}) : py::array_t<T>({count, width});
+}
+
+py::dict metaballsToArrays(const std::vector<firn::Metaball> &balls) {
+    const std::size_t n = balls.size();
+    auto centres = rows<float>(n, 3), normals = rows<float>(n, 3);
+    auto radii = rows<float>(n, 1), bases = rows<float>(n, 1), depths = rows<float>(n, 1);
+    auto c = centres.mutable_unchecked<2>(), nm = normals.mutable_unchecked<2>();
+    auto r = radii.mutable_unchecked<1>(), b = bases.mutable_unchecked<1>(), d = depths.mutable_unchecked<1>();
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) c(i, k) = balls[i].centre[k], nm(i, k) = balls[i].normal[k];
+        r(i) = balls[i].radius, b(i) = balls[i].base, d(i) = balls[i].depth;
+    }
+    py::dict out;
+    out["centres"] = centres, out["radii"] = radii, out["normals"] = normals, out["bases"] = bases,
+    out["depths"] = depths;
+    return out;
+}
+
+std::vector<firn::Metaball> metaballsFromArrays(const py::dict &arrays) {
+    const auto get = [&](const char *key) {
+        if (!arrays.contains(key)) throw firn::InvalidArgument(std::string("metaballs need the array '") + key + "'");
+        return arrays[key].cast<FloatArray>();
+    };
+    const FloatArray centres = get("centres"), normals = get("normals"), radii = get("radii"), bases = get("bases"),
+                     depths = get("depths");
+    const py::ssize_t n = radii.size();
+    if (centres.size() != 3 * n || normals.size() != 3 * n || bases.size() != n || depths.size() != n)
+        throw firn::InvalidArgument("metaball arrays disagree in length");
+    std::vector<firn::Metaball> balls(n);
+    for (py::ssize_t i = 0; i < n; ++i) {
+        const float *c = centres.data() + 3 * i, *nm = normals.data() + 3 * i;
+        balls[i] = {{c[0], c[1], c[2]}, radii.data()[i], {nm[0], nm[1], nm[2]}, bases.data()[i], depths.data()[i]};
+        if (!(balls[i].radius > 0.0f) || !std::isfinite(c[0] + c[1] + c[2]))
+            throw firn::InvalidArgument("metaball " + std::to_string(i) + " has a bad centre or radius");
+    }
+    return balls;
+}
+
+// What Python gets back: statistics and the kept metaballs. Grids go to the VDB file.
+py::dict describe(const firn::SnowLayer &layer) {
+    py::dict out;
+    out["metaballs"] = metaballsToArrays(layer.metaballs);
+    out["site_count"] = layer.siteCount;
+    out["voxel_size"] = layer.voxelSize;
+    out["active_voxels"] = layer.grids.density->activeVoxelCount();
+    out["mean_density"] = firn::meanInteriorDensity(layer.grids);
+    const openvdb::CoordBBox box = layer.grids.density->evalActiveVoxelBoundingBox();
+    const openvdb::Vec3d lo = layer.grids.density->indexToWorld(box.min());
+    const openvdb::Vec3d hi = layer.grids.density->indexToWorld(box.max());
+    out["bounds"] = py::make_tuple(py::make_tuple(lo.x(), lo.y(), lo.z()), py::make_tuple(hi.x(), hi.y(), hi.z()));
+    return out;
+}
+
+std::shared_ptr<firn::Progress> orNew(std::shared_ptr<firn::Progress> progress) {
+    return progress ? progress : std::make_shared<firn::Progress>();
+}
+
+void bindSettings(py::module_ &m) {
+    using S = firn::SnowLayerSettings;
+    py::class_<S>(m, "SnowLayerSettings", "Settings of Add Snow Layer. Lengths in m, angles in rad, densities in kg/m^3.")
+        .def(py::init([](const py::kwargs &kwargs) {
+                 S s;
+                 py::object self = py::cast(s);
+                 for (const auto &item : kwargs) {
+                     const auto key = item.first.cast<std::string>();
+                     if (!py::hasattr(self, key.c_str())) throw py::type_error("SnowLayerSettings has no '" + key + "'");
+                     py::setattr(self, key.c_str(), item.second);
+                 }
+                 return self.cast<S>();
+             }))
+        .def_readwrite("depth", &S::depth, "m of snow on open level ground")
+        .def_readwrite("max_slope", &S::maxSlope, "rad from horizontal; steeper surfaces stay bare")
+        .def_readwrite("spacing", &S::spacing, "m between landing sites: small is smooth, large is uneven")
+        .def_readwrite("randomness", &S::randomness, "0..1 jitter of depth and ball radius")
+        .def_readwrite("smoothness", &S::smoothness, "0..1 overlap of the metaballs")
+        .def_property(
+            "direction", [](const S &s) { return py::make_tuple(s.direction.x, s.direction.y, s.direction.z); },
+            [](S &s, const std::array<float, 3> &d) { s.direction = {d[0], d[1], d[2]}; },
+            "the way snow falls (x, y, z); tilt it for wind")
+        .def_readwrite("spread", &S::spread, "rad, half-angle of the cone snow falls from")
+        .def_readwrite("exposure_rays", &S::exposureRays, "rays per landing site for sheltering")
+        .def_readwrite("density_top", &S::densityTop, "kg/m^3 at the snow surface")
+        .def_readwrite("density_bottom", &S::densityBottom, "kg/m^3 approached at depth")
+        .def_readwrite("compaction", &S::compaction, "0..1: how fast density rises with depth")
+        .def_readwrite("voxel_size", &S::voxelSize, "m; 0 picks it from depth and spacing")
+        .def_readwrite("max_voxels", &S::maxVoxels, "voxel budget checked before allocating")
+        .def_readwrite("seed", &S::seed)
+        .def("validate", &S::validate, "Raises ValueError naming the first setting out of range.")
+        .def_property_readonly("effective_voxel_size", &S::effectiveVoxelSize, "m, the voxel size that will be used");
+}
+
+}  // namespace
+
+void bindSnow(py::module_ &m) {
+    bindSettings(m);
+    m.def(
+        "generate_snow_layer",
+        [](const FloatArray &vertices, const IndexArray &triangles, const py::object &occluders,
+           const firn::SnowLayerSettings &settings, const std::string &path, std::shared_ptr<firn::Progress> progress) {
+            const firn::TriangleMesh targets = meshFromArrays(vertices, triangles, "targets");
+            const firn::TriangleMesh blockers = optionalMesh(occluders, "occluders");
+            progress = orNew(progress);
+            firn::SnowLayer layer;
+            {
+                py::gil_scoped_release release;
+                layer = firn::generateSnowLayer(targets, blockers, settings, progress.get());
+                firn::writeGrids(path, {layer.grids.density, layer.grids.surface});
+            }
+            py::dict out = describe(layer);
+            out["dropped_triangles"] = targets.droppedDegenerate + blockers.droppedDegenerate;
+            return out;
+        },
+        py::arg("vertices"), py::arg("triangles"), py::arg("occluders") = py::none(), py::arg("settings"),
+        py::arg("path"), py::arg("progress") = nullptr,
+        R"doc(Puts snow on the target triangles (world space, m) and writes its `density` and `surface` grids to the
+VDB file at `path` (atomically). `occluders` is None or (vertices, triangles) of everything else that shelters
+the targets. Returns a dict: metaballs (arrays centres, radii, normals, bases, depths), site_count, voxel_size,
+active_voxels, mean_density (kg/m^3), bounds, dropped_triangles. Releases the GIL; raises ValueError for bad
+input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `progress` is cancelled.)doc");
+
+    m.def(
+        "rasterize_metaballs",
+        [](const py::dict &metaballs, const firn::SnowLayerSettings &settings, const std::string &path,
+           std::shared_ptr<firn::Progress> progress) {
+            settings.validate();
+            firn::SnowLayer layer;
+            layer.metaballs = metaballsFromArrays(metaballs);
+            if (layer.metaballs.empty()) throw firn::InvalidArgument("no metaballs to rasterize");
+            layer.voxelSize = settings.effectiveVoxelSize();
+            layer.siteCount = 0;
+            progress = orNew(progress);
+            {
+                py::gil_scoped_release release;
+                layer.grids = firn::rasterizeSnow(layer.metaballs, settings.raster(),
+                                                  firn::SubProgress(progress.get(), 0.0, 1.0));
+                firn::writeGrids(path, {layer.grids.density, layer.grids.surface});
+            }
+            return describe(layer);
+        },
+        py::arg("metaballs"), py::arg("settings"), py::arg("path"), py::arg("progress") = nullptr,
+        "Rebuilds the grids from (possibly edited) metaballs, as returned by generate_snow_layer, into `path`.");
+
+    m.def(
+        "snow_surface_mesh",
+        [](const std::string &path, double adaptivity) {
+            if (adaptivity < 0.0 || adaptivity > 1.0) throw firn::InvalidArgument("adaptivity must be in [0, 1]");
+            openvdb::FloatGrid::Ptr surface;
+            for (const auto &grid : firn::readGrids(path))
+                if (grid->getName() == "surface") surface = openvdb::gridPtrCast<openvdb::FloatGrid>(grid);
+            if (!surface) throw firn::InvalidArgument(path + " has no 'surface' grid");
+            std::vector<openvdb::Vec3s> points;
+            std::vector<openvdb::Vec3I> tris;
+            std::vector<openvdb::Vec4I> quads;
+            {
+                py::gil_scoped_release release;
+                openvdb::tools::volumeToMesh(*surface, points, tris, quads, 0.0, adaptivity);
+            }
+            auto vertices = rows<float>(points.size(), 3);
+            auto faces = rows<unsigned>(tris.size() + 2 * quads.size(), 3);
+            auto v = vertices.mutable_unchecked<2>();
+            auto f = faces.mutable_unchecked<2>();
+            for (std::size_t i = 0; i < points.size(); ++i)
+                for (int k = 0; k < 3; ++k) v(i, k) = points[i][k];
+            std::size_t row = 0;
+            // OpenVDB winds faces clockwise seen from outside; Blender wants counter-clockwise.
+            for (const auto &t : tris) f(row, 0) = t[2], f(row, 1) = t[1], f(row, 2) = t[0], ++row;
+            for (const auto &q : quads) {
+                f(row, 0) = q[3], f(row, 1) = q[2], f(row, 2) = q[1], ++row;
+                f(row, 0) = q[3], f(row, 1) = q[1], f(row, 2) = q[0], ++row;
+            }
+            return py::make_tuple(vertices, faces);
+        },
+        py::arg("path"), py::arg("adaptivity") = 0.0,
+        "The snow surface (iso-surface of the `surface` grid in the VDB at `path`) as (vertices (N, 3) m, "
+        "triangles (M, 3)), counter-clockwise seen from outside.");
+}
+
+}  // namespace firncore

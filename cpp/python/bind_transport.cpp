@@ -1,0 +1,282 @@
+// Bake Scattering: optics, lights, the bake itself, and the reference tools the tests and benchmarks use.
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include "bindings.h"
+#include "firn/io/vdb_io.h"
+#include "firn/transport/bake.h"
+#include "firn/transport/half_space.h"
+#include "firn/transport/monte_carlo.h"
+#include "firn/transport/slab.h"
+#include "firn/util/error.h"
+#include "mesh_arrays.h"
+
+namespace py = pybind11;
+
+namespace firncore {
+
+namespace {
+
+using RgbTuple = std::array<double, 3>;
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+firn::Rgb rgb(const RgbTuple &t) { return {t[0], t[1], t[2]}; }
+RgbTuple tuple(const firn::Rgb &c) { return {c.x, c.y, c.z}; }
+
+firn::BakeQuality parseQuality(const std::string &name) {
+    if (name == "DRAFT") return firn::BakeQuality::Draft;
+    if (name == "FINAL") return firn::BakeQuality::Final;
+    if (name == "REFERENCE") return firn::BakeQuality::Reference;
+    throw firn::InvalidArgument("quality must be 'DRAFT', 'FINAL' or 'REFERENCE', not '" + name + "'");
+}
+
+// (vertices (N, 3) m, triangles (M, 3), albedo (r, g, b)) per object, merged with one albedo per triangle.
+std::shared_ptr<const firn::Occluders> occludersFrom(const py::list &objects) {
+    std::vector<firn::TriangleMesh> meshes;
+    std::vector<firn::Rgb> albedo;
+    for (const py::handle &object : objects) {
+        const auto item = object.cast<py::tuple>();
+        if (item.size() != 3) throw firn::InvalidArgument("an occluder is (vertices, triangles, albedo)");
+        meshes.push_back(meshFromArrays(item[0].cast<FloatArray>(), item[1].cast<IndexArray>(), "occluder"));
+        albedo.insert(albedo.end(), meshes.back().triangleCount(), rgb(item[2].cast<RgbTuple>()));
+    }
+    if (meshes.empty()) return std::make_shared<firn::Occluders>();
+    return std::make_shared<firn::Occluders>(firn::merge(meshes), std::move(albedo));
+}
+
+openvdb::FloatGrid::Ptr densityGrid(const openvdb::GridPtrVec &grids, const std::string &path) {
+    for (const auto &grid : grids)
+        if (grid->getName() == "density")
+            if (auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(grid)) return density;
+    throw firn::InvalidArgument(path + " has no float grid named 'density'");
+}
+
+firn::Scene sceneFrom(const openvdb::GridPtrVec &grids, const std::string &path, const firn::VolumeOptics &optics,
+                      const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,
+                      const py::list &occluders) {
+    firn::Scene scene;
+    scene.medium = std::make_shared<firn::Medium>(densityGrid(grids, path), optics);
+    scene.suns = suns;
+    if (sky) scene.sky = *sky;
+    scene.occluders = occludersFrom(occluders);
+    firn::validate(scene);
+    return scene;
+}
+
+std::vector<firn::Ray> raysFrom(const DoubleArray &origins, const DoubleArray &directions) {
+    if (origins.ndim() != 2 || origins.shape(1) != 3 || directions.ndim() != 2 || directions.shape(1) != 3 ||
+        origins.shape(0) != directions.shape(0))
+        throw firn::InvalidArgument("origins and directions must be (N, 3) arrays of the same length");
+    std::vector<firn::Ray> rays(origins.shape(0));
+    for (py::ssize_t i = 0; i < origins.shape(0); ++i) {
+        const glm::dvec3 d(directions.at(i, 0), directions.at(i, 1), directions.at(i, 2));
+        const double length = glm::length(d);
+        if (!(length > 0.0) || !std::isfinite(length)) throw firn::InvalidArgument("ray directions must be non-zero");
+        rays[i] = {{origins.at(i, 0), origins.at(i, 1), origins.at(i, 2)}, d / length};
+    }
+    return rays;
+}
+
+DoubleArray rgbRows(const std::vector<firn::Rgb> &values) {
+    DoubleArray out({py::ssize_t(values.size()), py::ssize_t(3)});
+    auto view = out.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < values.size(); ++i)
+        for (int c = 0; c < 3; ++c) view(i, c) = values[i][c];
+    return out;
+}
+
+void bindLights(py::module_ &m) {
+    py::class_<firn::SunLight>(m, "SunLight", R"doc(
+A distant disc light (Blender's Sun): direction towards the sun (world, normalized here), irradiance in
+W/m^2 per RGB channel on a plane facing it, angular_diameter in radians.)doc")
+        .def(py::init([](const RgbTuple &direction, const RgbTuple &irradiance, double angularDiameter) {
+                 const glm::dvec3 d(direction[0], direction[1], direction[2]);
+                 const double length = glm::length(d);
+                 if (!(length > 0.0) || !std::isfinite(length)) throw firn::InvalidArgument("sun direction must be non-zero");
+                 firn::SunLight sun{d / length, rgb(irradiance), angularDiameter};
+                 firn::validate(sun);
+                 return sun;
+             }),
+             py::arg("direction"), py::arg("irradiance"), py::arg("angular_diameter") = 0.0)
+        .def_property_readonly("direction", [](const firn::SunLight &s) { return tuple(s.direction); })
+        .def_property_readonly("irradiance", [](const firn::SunLight &s) { return tuple(s.irradiance); })
+        .def_readonly("angular_diameter", &firn::SunLight::angularDiameter);
+
+    py::class_<firn::Sky>(m, "Sky", R"doc(
+The world's light. radiance: W/m^2/sr per RGB channel, uniform, or scaling `map`, an equirectangular
+(H, W, 3 or 4) float array in Blender's convention: rows from the bottom (nadir) up to the top (zenith),
+as Image.pixels; u = 0.5 looks along +X, u = 0.25 along +Y (Environment Texture, default mapping).)doc")
+        .def(py::init([](const RgbTuple &radiance, const std::optional<FloatArray> &map) {
+                 firn::Sky sky{rgb(radiance), nullptr};
+                 if (map) {
+                     if (map->ndim() != 3 || (map->shape(2) != 3 && map->shape(2) != 4))
+                         throw firn::InvalidArgument("sky map must be an (H, W, 3) or (H, W, 4) array");
+                     const int height = int(map->shape(0)), width = int(map->shape(1)), stride = int(map->shape(2));
+                     std::vector<firn::Rgb> pixels(std::size_t(width) * height);
+                     const float *data = map->data();
+                     for (std::size_t i = 0; i < pixels.size(); ++i)
+                         pixels[i] = firn::Rgb(data[i * stride], data[i * stride + 1], data[i * stride + 2]);
+                     sky.map = std::make_shared<firn::EnvironmentMap>(width, height, std::move(pixels));
+                 }
+                 firn::validate(sky);
+                 return sky;
+             }),
+             py::arg("radiance") = RgbTuple{1.0, 1.0, 1.0}, py::arg("map") = py::none())
+        .def_property_readonly("radiance", [](const firn::Sky &s) { return tuple(s.radiance); })
+        .def(
+            "radiance_from",
+            [](const firn::Sky &s, const RgbTuple &d) -> RgbTuple {
+                return tuple(s.radianceFrom(glm::normalize(glm::dvec3(d[0], d[1], d[2]))));
+            },
+            py::arg("direction"), "Radiance arriving from a world direction (W/m^2/sr).");
+}
+
+py::dict statsDict(const firn::BakeStats &stats) {
+    py::dict d;
+    d["unknowns"] = stats.unknowns;
+    d["surface_voxels"] = stats.surfaceVoxels;
+    d["air_faces"] = stats.airFaces;
+    d["occluder_faces"] = stats.occluderFaces;
+    d["iterations"] = stats.iterations;
+    d["relative_residual"] = stats.relativeResidual;
+    d["passes"] = stats.passes;
+    py::dict seconds;
+    seconds["topology"] = stats.topologySeconds, seconds["light"] = stats.lightSeconds;
+    seconds["solve"] = stats.solveSeconds, seconds["gather"] = stats.gatherSeconds, seconds["grids"] = stats.gridSeconds;
+    d["seconds"] = seconds;
+    return d;
+}
+
+}  // namespace
+
+void bindTransport(py::module_ &m) {
+    bindLights(m);
+    m.attr("BAKED_GRID_NAMES") = py::make_tuple(firn::BakedGrids::kNames[0], firn::BakedGrids::kNames[1],
+                                                firn::BakedGrids::kNames[2], firn::BakedGrids::kNames[3]);
+
+    m.def(
+        "bake",
+        [](const std::string &path, const firn::VolumeOptics &optics, const std::vector<firn::SunLight> &suns,
+           const std::optional<firn::Sky> &sky, const py::list &occluders, const std::string &quality,
+           std::uint64_t seed, std::shared_ptr<firn::Progress> progress, int skySamples, int sunSamples,
+           int referenceSamples) {
+            firn::BakeSettings settings;
+            settings.quality = parseQuality(quality);
+            settings.seed = seed;
+            settings.skySamples = skySamples;
+            settings.sunSamples = sunSamples;
+            settings.referenceSamples = referenceSamples;
+            openvdb::GridPtrVec grids = firn::readGrids(path);
+            const firn::Scene scene = sceneFrom(grids, path, optics, suns, sky, occluders);
+            firn::BakeStats stats;
+            {
+                py::gil_scoped_release release;
+                const firn::BakedGrids baked = firn::bakeScattering(scene, settings, progress.get(), &stats);
+                openvdb::GridPtrVec out;
+                for (const auto &grid : grids) {
+                    const std::string name = grid->getName();
+                    if (std::find(firn::BakedGrids::kNames.begin(), firn::BakedGrids::kNames.end(), name) ==
+                        firn::BakedGrids::kNames.end())
+                        out.push_back(grid);
+                }
+                for (const auto &grid : baked.grids()) out.push_back(grid);
+                firn::writeGrids(path, out);
+            }
+            return statsDict(stats);
+        },
+        py::arg("vdb_path"), py::arg("optics"), py::arg("suns") = std::vector<firn::SunLight>{},
+        py::arg("sky") = py::none(), py::arg("occluders") = py::list(), py::arg("quality") = "FINAL",
+        py::arg("seed") = 0, py::arg("progress") = nullptr, py::arg("sky_samples") = 0, py::arg("sun_samples") = 0,
+        py::arg("reference_samples") = 0, R"doc(
+Bakes the light scattered inside the snow of `vdb_path` (its 'density' grid, kg/m^3) and writes the file
+back, atomically, with the baked grids BAKED_GRID_NAMES added (docs/vdb-contract.md). occluders: list of
+(vertices (N, 3) float32 m, triangles (M, 3) uint32, albedo (r, g, b)). quality: 'DRAFT', 'FINAL' or
+'REFERENCE' (Monte Carlo surface, slow). sky_samples (rays per surface voxel, at most 64), sun_samples
+(points on a sun's disc) and reference_samples (paths per direction, REFERENCE) override the quality's
+defaults when non-zero. Releases the GIL; raises firncore.Cancelled if `progress` is
+cancelled, ValueError for bad input, OSError for file trouble. Returns the solve's statistics.)doc");
+
+    m.def(
+        "render_baked",
+        [](const std::string &path, const firn::VolumeOptics &optics, const DoubleArray &origins,
+           const DoubleArray &directions, const py::list &occluders) {
+            const openvdb::GridPtrVec grids = firn::readGrids(path);
+            const firn::Scene scene = sceneFrom(grids, path, optics, {}, std::nullopt, occluders);
+            const firn::BakedGrids baked = firn::BakedGrids::find(grids);
+            const std::vector<firn::Ray> rays = raysFrom(origins, directions);
+            std::vector<firn::Rgb> radiance(rays.size());
+            {
+                py::gil_scoped_release release;
+                for (std::size_t i = 0; i < rays.size(); ++i) radiance[i] = firn::renderBaked(scene, baked, rays[i]);
+            }
+            return rgbRows(radiance);
+        },
+        py::arg("vdb_path"), py::arg("optics"), py::arg("origins"), py::arg("directions"),
+        py::arg("occluders") = py::list(), R"doc(
+What Cycles draws for the baked snow of `vdb_path` along camera rays (N, 3 origins and directions, m):
+the emission-absorption integral of the contract's material, up to the first occluder. (N, 3) W/m^2/sr.)doc");
+
+    m.def(
+        "monte_carlo_radiance",
+        [](const std::string &path, const firn::VolumeOptics &optics, const DoubleArray &origins,
+           const DoubleArray &directions, const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,
+           const py::list &occluders, int samples, std::uint64_t seed, std::shared_ptr<firn::Progress> progress) {
+            if (samples < 1) throw firn::InvalidArgument("samples must be at least 1");
+            const openvdb::GridPtrVec grids = firn::readGrids(path);
+            const firn::MonteCarloReference reference(sceneFrom(grids, path, optics, suns, sky, occluders));
+            const std::vector<firn::Ray> rays = raysFrom(origins, directions);
+            std::vector<firn::RadianceEstimate> estimates;
+            {
+                py::gil_scoped_release release;
+                estimates = reference.estimate(rays, samples, seed, progress.get());
+            }
+            std::vector<firn::Rgb> mean, error;
+            for (const auto &e : estimates) mean.push_back(e.mean), error.push_back(e.standardError);
+            return py::make_tuple(rgbRows(mean), rgbRows(error));
+        },
+        py::arg("vdb_path"), py::arg("optics"), py::arg("origins"), py::arg("directions"),
+        py::arg("suns") = std::vector<firn::SunLight>{}, py::arg("sky") = py::none(), py::arg("occluders") = py::list(),
+        py::arg("samples") = 64, py::arg("seed") = 0, py::arg("progress") = nullptr, R"doc(
+Brute-force volumetric path tracing of the same scene: the radiance the snow scatters along each camera
+ray (what the baked emission stands for). Returns (mean, standard error), each (N, 3) W/m^2/sr.)doc");
+
+    m.def(
+        "write_slab_vdb",
+        [](const std::string &path, double voxelSize, int width, int layers, float density) {
+            firn::writeGrids(path, {firn::makeSlabDensity(voxelSize, width, layers, density)});
+        },
+        py::arg("path"), py::arg("voxel_size"), py::arg("width"), py::arg("layers"), py::arg("density"), R"doc(
+Writes a test VDB: a box of uniform density (kg/m^3), width x width voxels around the z axis and `layers`
+deep, whose top surface (half-column point of the density ramp) is the plane z = 0.)doc");
+
+    m.def(
+        "slab_monte_carlo",
+        [](double omega, double g, double tau, double mu0, long photons, std::uint64_t seed) {
+            if (photons < 1) throw firn::InvalidArgument("photons must be at least 1");
+            if (!(omega >= 0.0 && omega <= 1.0) || !(g > -1.0 && g < 1.0) || !(tau > 0.0) || !(mu0 <= 1.0))
+                throw firn::InvalidArgument("slab: omega in [0, 1], g in (-1, 1), tau > 0, mu0 <= 1");
+            firn::SlabResponse r;
+            {
+                py::gil_scoped_release release;
+                r = firn::slabMonteCarlo(omega, g, tau, mu0, photons, seed);
+            }
+            py::dict d;
+            d["reflectance"] = r.reflectance, d["transmittance"] = r.transmittance;
+            d["reflectance_error"] = r.reflectanceError, d["transmittance_error"] = r.transmittanceError;
+            return d;
+        },
+        py::arg("omega"), py::arg("g"), py::arg("tau"), py::arg("mu0"), py::arg("photons"), py::arg("seed") = 0,
+        R"doc(
+Photon Monte Carlo of a plane-parallel slab (optical thickness tau, float('inf') for a half-space), lit by
+a beam at cos(zenith) mu0 (a uniform sky if mu0 <= 0): reflectance and transmittance with standard errors.)doc");
+    m.def("art_plane_albedo", &firn::artPlaneAlbedo, py::arg("omega"), py::arg("g"), py::arg("mu0"),
+          "Kokhanovsky & Zege (2004) plane albedo of a semi-infinite medium, exp(-y u(mu0)).");
+    m.def("art_spherical_albedo", &firn::artSphericalAlbedo, py::arg("omega"), py::arg("g"),
+          "Kokhanovsky & Zege (2004) spherical albedo of a semi-infinite medium, exp(-y).");
+}
+
+}  // namespace firncore

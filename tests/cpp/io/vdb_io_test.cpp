@@ -1,0 +1,73 @@
+#include "firn/io/vdb_io.h"
+#include "firn/util/openvdb_library.h"
+
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "firn/util/error.h"
+
+namespace firn {
+
+namespace {
+
+std::filesystem::path tempPath(const std::string &name) {
+    return std::filesystem::temp_directory_path() / ("firn_vdb_io_test_" + std::to_string(::getpid())) / name;
+}
+
+openvdb::FloatGrid::Ptr cubeWithTile(double voxelSize) {
+    initializeOpenVdb();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));
+    grid->tree().addTile(1, openvdb::Coord(0), 250.0f, true);  // one 8^3 tile of snow, 250 kg/m^3
+    grid->tree().setValue(openvdb::Coord(20, 0, 0), 100.0f);
+    return grid;
+}
+
+}  // namespace
+
+TEST(VdbIo, RoundTripKeepsValuesAndInMemoryTransform) {
+    const auto path = tempPath("roundtrip.vdb");
+    writeGrids(path.string(), {cubeWithTile(0.1)});
+    const openvdb::GridPtrVec grids = readGrids(path.string());
+    ASSERT_EQ(grids.size(), 1u);
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[0]);
+    ASSERT_TRUE(grid);
+    EXPECT_EQ(grid->getName(), "density");
+    EXPECT_FLOAT_EQ(grid->tree().getValue(openvdb::Coord(3, 4, 5)), 250.0f);
+    EXPECT_FLOAT_EQ(grid->tree().getValue(openvdb::Coord(20, 0, 0)), 100.0f);
+    const openvdb::Vec3d centre = grid->indexToWorld(openvdb::Coord(20, 0, 0));
+    EXPECT_NEAR(centre.x(), 2.0, 1e-12);  // unshifted on the way back in
+    std::filesystem::remove_all(path.parent_path());
+}
+
+TEST(VdbIo, FileHasNoTilesAndIsShiftedHalfAVoxelForCycles) {
+    const auto path = tempPath("cycles.vdb");
+    writeGrids(path.string(), {cubeWithTile(0.1)});
+    openvdb::io::File file(path.string());
+    file.open();
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("density"));
+    file.close();
+    EXPECT_EQ(grid->tree().activeTileCount(), 0u);  // Cycles renders tiles as nothing
+    EXPECT_EQ(grid->activeVoxelCount(), 8u * 8u * 8u + 1u);
+    // Cycles centres voxel i at (i + 1/2) h + translation: the file's translation is -h/2.
+    EXPECT_NEAR(grid->indexToWorld(openvdb::Coord(0)).x(), -0.05, 1e-12);
+    std::filesystem::remove_all(path.parent_path());
+}
+
+TEST(VdbIo, FailedWriteLeavesNoFileAndThrows) {
+    const auto dir = tempPath("blocked");
+    std::filesystem::create_directories(dir.parent_path());
+    std::ofstream(dir.string()) << "a file where a folder should be";
+    EXPECT_THROW(writeGrids((dir / "x.vdb").string(), {cubeWithTile(0.1)}), IoError);
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.vdb"));
+    std::filesystem::remove_all(dir.parent_path());
+}
+
+TEST(VdbIo, ReadingAMissingFileThrowsIoError) {
+    EXPECT_THROW(readGrids("/nonexistent/firn/none.vdb"), IoError);
+}
+
+}  // namespace firn

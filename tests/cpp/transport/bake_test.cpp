@@ -1,0 +1,157 @@
+// The bake against physics: the exact semi-infinite table (adding-doubling / Chandrasekhar H-functions,
+// /work/shared/notes/snow-optics.md), energy conservation, and the independent Monte Carlo reference.
+#include "firn/transport/bake.h"
+
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+#include <openvdb/tools/Interpolation.h>
+
+#include "firn/transport/monte_carlo.h"
+#include "firn/transport/slab.h"
+#include "firn/transport/snow_topology.h"
+#include "firn/util/error.h"
+#include "firn/util/sampling.h"
+
+namespace firn {
+
+namespace {
+
+constexpr double kVoxel = 0.01;    // m
+constexpr float kDensity = 300.0f;  // kg/m^3
+
+Scene slabScene(double sigmaT, double omega, double g, int width, int layers) {
+    Scene scene;
+    scene.medium = std::make_shared<Medium>(makeSlabDensity(kVoxel, width, layers, kDensity),
+                                            VolumeOptics{sigmaT / kDensity, Rgb(omega), g});
+    return scene;
+}
+
+SunLight sunAt(double mu0) { return SunLight{{std::sqrt(1.0 - mu0 * mu0), 0.0, mu0}, Rgb(1.0), 0.0}; }
+
+// Reflected flux over incident flux at the slab's centre, from the radiance Cycles would render.
+double planeAlbedo(const Scene &scene, const BakedGrids &baked, double mu0) {
+    return renderedExitance(scene, baked, {0.0, 0.0, 0.0}, {0.0, 0.0, 1.0}, 0) / mu0;
+}
+
+// Exact plane albedo A(mu0) (notes' table).
+struct ExactCase {
+    double g, omega, sigmaT, A1, A05;
+    int width, layers;
+};
+// Real snow: sigma_t of thousands per metre, 1 cm voxels, so each voxel is 20-50 optical depths thick.
+const ExactCase kCases[] = {{0.0, 0.999, 2000.0, 0.91285, 0.93806, 40, 30}, {0.87, 0.9999, 5000.0, 0.92182, 0.94594, 32, 30}};
+
+}  // namespace
+
+TEST(Bake, SlabPlaneAlbedoMatchesExactValues) {
+    for (const ExactCase &c : kCases)
+        for (double mu0 : {1.0, 0.5}) {
+            Scene scene = slabScene(c.sigmaT, c.omega, c.g, c.width, c.layers);
+            scene.suns = {sunAt(mu0)};
+            const BakedGrids baked = bakeScattering(scene, BakeSettings{});
+            const double exact = mu0 == 1.0 ? c.A1 : c.A05;
+            EXPECT_NEAR(planeAlbedo(scene, baked, mu0), exact, 0.01 * exact) << "g " << c.g << " mu0 " << mu0;
+        }
+}
+
+// By reciprocity A(mu) is also the radiance seen at cos(view) mu under a uniform sky of unit radiance.
+TEST(Bake, SlabUnderUniformSkyShowsExactAlbedo) {
+    for (const ExactCase &c : kCases) {
+        Scene scene = slabScene(c.sigmaT, c.omega, c.g, c.width, c.layers);
+        scene.sky.radiance = Rgb(1.0);
+        const BakedGrids baked = bakeScattering(scene, BakeSettings{});
+        for (double mu : {1.0, 0.5}) {
+            const glm::dvec3 w(std::sqrt(1.0 - mu * mu), 0.0, mu);
+            const double L = renderBaked(scene, baked, Ray{0.5 * w, -w})[0];
+            const double exact = mu == 1.0 ? c.A1 : c.A05;
+            EXPECT_NEAR(L, exact, 0.01 * exact) << "g " << c.g << " mu " << mu;
+        }
+    }
+}
+
+// Without absorption, reflected + transmitted (the uncollided beam included) = incident.
+TEST(Bake, ConservativeSlabConservesEnergy) {
+    const int layers = 6;
+    Scene scene = slabScene(500.0, 1.0, 0.85, 48, layers);  // optical thickness 30, reduced 4.5
+    const double mu0 = 0.8;
+    scene.suns = {sunAt(mu0)};
+    const BakedGrids baked = bakeScattering(scene, BakeSettings{});
+    const double reflected = renderedExitance(scene, baked, {0, 0, 0}, {0, 0, 1}, 1);
+    const double diffuse = renderedExitance(scene, baked, {0, 0, -layers * kVoxel}, {0, 0, -1}, 1);
+    const double direct = mu0 * std::exp(-500.0 * layers * kVoxel / mu0);
+    EXPECT_NEAR(reflected + diffuse + direct, mu0, 0.01 * mu0);
+    EXPECT_GT(diffuse, 0.2 * mu0);  // a real transmission test, not a thick slab
+}
+
+TEST(Bake, OutputFollowsTheContract) {
+    Scene scene = slabScene(2000.0, 0.999, 0.85, 12, 8);
+    scene.sky.radiance = Rgb(1.0);
+    const BakedGrids baked = bakeScattering(scene, BakeSettings{BakeQuality::Draft});
+    for (std::size_t k = 0; k < 4; ++k) {
+        const auto &grid = baked.source[k];
+        EXPECT_EQ(grid->getName(), BakedGrids::kNames[k]);
+        EXPECT_EQ(grid->tree().activeTileCount(), 0u);
+        EXPECT_EQ(grid->transform(), scene.medium->density().transform());
+        // Every active voxel on the outside of the grid is zero (Cycles misreads Vec3 grids' edges).
+        openvdb::tree::ValueAccessor<const openvdb::Vec3fTree> acc(grid->tree());
+        for (auto it = grid->cbeginValueOn(); it; ++it) {
+            bool edge = false;
+            for (int f = 0; f < 6 && !edge; ++f) edge = !acc.isValueOn(it.getCoord() + faceStep(f));
+            if (edge) {
+                ASSERT_EQ(*it, openvdb::Vec3f(0.0f)) << grid->getName() << " at " << it.getCoord();
+            }
+        }
+    }
+    // Around the surface the ratio emission / extinction is constant: the source grid holds the same
+    // value on the density's last voxel and two voxels beyond it.
+    openvdb::tree::ValueAccessor<const openvdb::Vec3fTree> l0(baked.source[0]->tree());
+    const openvdb::Coord top(6, 6, -1);
+    EXPECT_GT(l0.getValue(top).x(), 0.5f);
+    EXPECT_NEAR(l0.getValue(top + openvdb::Coord(0, 0, 1)).x(), l0.getValue(top).x(), 0.01f * l0.getValue(top).x());
+    EXPECT_NEAR(l0.getValue(top + openvdb::Coord(0, 0, 2)).x(), l0.getValue(top).x(), 0.01f * l0.getValue(top).x());
+}
+
+TEST(Bake, SameSeedSameResult) {
+    Scene scene = slabScene(2000.0, 0.999, 0.85, 12, 8);
+    scene.sky.radiance = Rgb(0.3);
+    scene.suns = {SunLight{glm::normalize(glm::dvec3(0.3, 0.2, 1.0)), Rgb(1.0), 0.01}};
+    const BakedGrids a = bakeScattering(scene, BakeSettings{BakeQuality::Draft, 5});
+    const BakedGrids b = bakeScattering(scene, BakeSettings{BakeQuality::Draft, 5});
+    for (std::size_t k = 0; k < 4; ++k) {
+        openvdb::tree::ValueAccessor<const openvdb::Vec3fTree> other(b.source[k]->tree());
+        for (auto it = a.source[k]->cbeginValueOn(); it; ++it) ASSERT_EQ(*it, other.getValue(it.getCoord()));
+    }
+}
+
+TEST(Bake, ReportsProgressAndStopsWhenCancelled) {
+    Scene scene = slabScene(2000.0, 0.999, 0.85, 16, 8);
+    scene.sky.radiance = Rgb(1.0);
+    double last = -1.0;
+    bool monotone = true;
+    Progress progress([&](double fraction, const std::string &) {
+        monotone = monotone && fraction >= last;
+        last = fraction;
+    });
+    bakeScattering(scene, BakeSettings{BakeQuality::Draft}, &progress);
+    EXPECT_DOUBLE_EQ(progress.fraction(), 1.0);
+    EXPECT_TRUE(monotone);
+    Progress cancelled;
+    cancelled.cancel();
+    EXPECT_THROW(bakeScattering(scene, BakeSettings{}, &cancelled), Cancelled);
+}
+
+TEST(Bake, RejectsBadInput) {
+    Scene scene = slabScene(2000.0, 0.999, 0.85, 4, 4);
+    scene.suns = {SunLight{{0.0, 0.0, 2.0}, Rgb(1.0), 0.0}};  // not a unit vector
+    EXPECT_THROW(bakeScattering(scene, BakeSettings{}), InvalidArgument);
+    BakeSettings settings;
+    settings.skySamples = -1;
+    scene.suns.clear();
+    EXPECT_THROW(bakeScattering(scene, settings), InvalidArgument);
+    EXPECT_THROW(Medium(makeSlabDensity(kVoxel, 4, 4, kDensity), VolumeOptics{0.0, Rgb(0.9), 0.8}), InvalidArgument);
+    EXPECT_THROW(Medium(makeSlabDensity(kVoxel, 4, 4, kDensity), VolumeOptics{1.0, Rgb(1.1), 0.8}), InvalidArgument);
+}
+
+}  // namespace firn

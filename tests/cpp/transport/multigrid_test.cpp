@@ -1,0 +1,71 @@
+#include "firn/transport/multigrid.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "firn/util/error.h"
+
+namespace firn {
+
+namespace {
+
+// -laplace(phi) + m phi = b on a ball of radius r voxels, with Robin (conductance 0.5) boundaries and a
+// conductance jump of 100 across x = 0: the shape of the bake's systems.
+StencilOperator ballProblem(int r, double mass) {
+    StencilOperator A;
+    openvdb::Int32Tree index(-1);
+    openvdb::tree::ValueAccessor<openvdb::Int32Tree> access(index);
+    for (int i = -r; i <= r; ++i)
+        for (int j = -r; j <= r; ++j)
+            for (int k = -r; k <= r; ++k)
+                if (i * i + j * j + k * k <= r * r) {
+                    access.setValue(openvdb::Coord(i, j, k), int(A.coord.size()));
+                    A.coord.emplace_back(i, j, k);
+                }
+    const std::size_t n = A.coord.size();
+    A.neighbour.resize(n), A.conductance.resize(n), A.diag.assign(n, mass);
+    const openvdb::Coord step[6] = {openvdb::Coord(-1, 0, 0), openvdb::Coord(1, 0, 0), openvdb::Coord(0, -1, 0),
+                                    openvdb::Coord(0, 1, 0),  openvdb::Coord(0, 0, -1), openvdb::Coord(0, 0, 1)};
+    for (std::size_t i = 0; i < n; ++i)
+        for (int f = 0; f < 6; ++f) {
+            const int j = access.getValue(A.coord[i] + step[f]);
+            A.neighbour[i][f] = j < 0 ? StencilOperator::kNone : std::uint32_t(j);
+            const double c = j < 0 ? 0.5 : (A.coord[i].x() > 0 && A.coord[j].x() > 0 ? 100.0 : 1.0);
+            A.conductance[i][f] = j < 0 ? 0.0 : c;
+            A.diag[i] += c;
+        }
+    return A;
+}
+
+}  // namespace
+
+// The operator is held in single precision (conductances, and the absorption apart from them), so the
+// double-precision residual reaches about 1e-7 of the matrix's own scale.
+TEST(Multigrid, SolvesToToleranceInFewIterationsAtAnySize) {
+    for (int r : {8, 16, 24}) {
+        StencilOperator A = ballProblem(r, 1e-3);
+        const StencilOperator copy = A;
+        std::vector<double> b(A.size()), x(A.size(), 0.0), Ax(A.size());
+        for (std::size_t i = 0; i < b.size(); ++i) b[i] = A.coord[i].z() > r / 2 ? 1.0 : 0.0;
+        const MultigridSolver solver(std::move(A));
+        const auto result = solver.solve(b, x, 1e-7, 100, SubProgress(nullptr, 0, 1));
+        copy.apply(x.data(), Ax.data());
+        double worst = 0.0;
+        for (std::size_t i = 0; i < b.size(); ++i) worst = std::max(worst, std::abs(Ax[i] - b[i]));
+        EXPECT_LT(worst, 1e-6);
+        EXPECT_LE(result.iterations, 20) << "radius " << r;  // does not grow with the domain
+        EXPECT_GE(solver.levelCount(), 2);
+    }
+}
+
+TEST(Multigrid, HonoursCancellation) {
+    StencilOperator A = ballProblem(10, 1e-6);
+    std::vector<double> b(A.size(), 1.0), x(A.size(), 0.0);
+    const MultigridSolver solver(std::move(A));
+    Progress progress;
+    progress.cancel();
+    EXPECT_THROW(solver.solve(b, x, 1e-12, 100, SubProgress(&progress, 0, 1)), Cancelled);
+}
+
+}  // namespace firn
