@@ -30,17 +30,13 @@ openvdb::FloatGrid::Ptr floatGrid(const std::string &path, const std::string &na
 void bindIo(py::module_ &m) {
     m.def(
         "grid_names",
-        [](const std::string &path) {
-            std::vector<std::string> names;
-            for (const auto &grid : firn::readGrids(path)) names.push_back(grid->getName());
-            return names;
-        },
+        [](const std::string &path) { return longCall([&] { return firn::gridNames(path); }); },
         py::arg("path"), "Names of the grids in a VDB file.");
     m.def(
         "sample_grid",
         [](const std::string &path, const std::string &name, const FloatArray &points) {
             if (points.ndim() != 2 || points.shape(1) != 3) throw firn::InvalidArgument("points must be (N, 3)");
-            const openvdb::FloatGrid::Ptr grid = floatGrid(path, name);
+            const openvdb::FloatGrid::Ptr grid = longCall([&] { return floatGrid(path, name); });
             py::array_t<float> values(points.shape(0));
             auto out = values.mutable_unchecked<1>();
             const auto in = points.unchecked<2>();
@@ -54,8 +50,11 @@ void bindIo(py::module_ &m) {
     m.def(
         "grid_statistics",
         [](const std::string &path, const std::string &name) {
-            const openvdb::FloatGrid::Ptr grid = floatGrid(path, name);
-            const openvdb::math::MinMax<float> range = openvdb::tools::minMax(grid->tree());
+            openvdb::FloatGrid::Ptr grid;
+            const openvdb::math::MinMax<float> range = longCall([&] {
+                grid = floatGrid(path, name);
+                return openvdb::tools::minMax(grid->tree());
+            });
             py::dict out;
             out["active_voxels"] = grid->activeVoxelCount();
             out["min"] = range.min(), out["max"] = range.max();

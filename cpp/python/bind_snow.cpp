@@ -122,12 +122,11 @@ void bindSnow(py::module_ &m) {
             const firn::TriangleMesh targets = meshFromArrays(vertices, triangles, "targets");
             const firn::TriangleMesh blockers = optionalMesh(occluders, "occluders");
             progress = orNew(progress);
-            firn::SnowLayer layer;
-            {
-                py::gil_scoped_release release;
-                layer = firn::generateSnowLayer(targets, blockers, settings, progress.get());
-                firn::writeGrids(path, {layer.grids.density, layer.grids.surface});
-            }
+            const firn::SnowLayer layer = longCall([&] {
+                firn::SnowLayer made = firn::generateSnowLayer(targets, blockers, settings, progress.get());
+                firn::writeGrids(path, {made.grids.density, made.grids.surface});
+                return made;
+            });
             py::dict out = describe(layer);
             out["dropped_triangles"] = targets.droppedDegenerate + blockers.droppedDegenerate;
             return out;
@@ -151,12 +150,11 @@ input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `prog
             layer.voxelSize = settings.effectiveVoxelSize();
             layer.siteCount = 0;
             progress = orNew(progress);
-            {
-                py::gil_scoped_release release;
+            longCall([&] {
                 layer.grids = firn::rasterizeSnow(layer.metaballs, settings.raster(),
                                                   firn::SubProgress(progress.get(), 0.0, 1.0));
                 firn::writeGrids(path, {layer.grids.density, layer.grids.surface});
-            }
+            });
             return describe(layer);
         },
         py::arg("metaballs"), py::arg("settings"), py::arg("path"), py::arg("progress") = nullptr,
@@ -166,17 +164,16 @@ input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `prog
         "snow_surface_mesh",
         [](const std::string &path, double adaptivity) {
             if (adaptivity < 0.0 || adaptivity > 1.0) throw firn::InvalidArgument("adaptivity must be in [0, 1]");
-            openvdb::FloatGrid::Ptr surface;
-            for (const auto &grid : firn::readGrids(path))
-                if (grid->getName() == "surface") surface = openvdb::gridPtrCast<openvdb::FloatGrid>(grid);
-            if (!surface) throw firn::InvalidArgument(path + " has no 'surface' grid");
             std::vector<openvdb::Vec3s> points;
             std::vector<openvdb::Vec3I> tris;
             std::vector<openvdb::Vec4I> quads;
-            {
-                py::gil_scoped_release release;
+            longCall([&] {
+                openvdb::FloatGrid::Ptr surface;
+                for (const auto &grid : firn::readGrids(path))
+                    if (grid->getName() == "surface") surface = openvdb::gridPtrCast<openvdb::FloatGrid>(grid);
+                if (!surface) throw firn::InvalidArgument(path + " has no 'surface' grid");
                 openvdb::tools::volumeToMesh(*surface, points, tris, quads, 0.0, adaptivity);
-            }
+            });
             auto vertices = rows<float>(points.size(), 3);
             auto faces = rows<unsigned>(tris.size() + 2 * quads.size(), 3);
             auto v = vertices.mutable_unchecked<2>();

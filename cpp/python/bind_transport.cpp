@@ -35,17 +35,21 @@ firn::BakeQuality parseQuality(const std::string &name) {
 }
 
 // (vertices (N, 3) m, triangles (M, 3), albedo (r, g, b)) per object, merged with one albedo per triangle.
-std::shared_ptr<const firn::Occluders> occludersFrom(const py::list &objects) {
+// Occluders as copied out of Python (with the GIL); their ray-tracing structure is built without it.
+struct OccluderArrays {
     std::vector<firn::TriangleMesh> meshes;
-    std::vector<firn::Rgb> albedo;
+    std::vector<firn::Rgb> albedo;  // per triangle
+};
+
+OccluderArrays occludersFrom(const py::list &objects) {
+    OccluderArrays out;
     for (const py::handle &object : objects) {
         const auto item = object.cast<py::tuple>();
         if (item.size() != 3) throw firn::InvalidArgument("an occluder is (vertices, triangles, albedo)");
-        meshes.push_back(meshFromArrays(item[0].cast<FloatArray>(), item[1].cast<IndexArray>(), "occluder"));
-        albedo.insert(albedo.end(), meshes.back().triangleCount(), rgb(item[2].cast<RgbTuple>()));
+        out.meshes.push_back(meshFromArrays(item[0].cast<FloatArray>(), item[1].cast<IndexArray>(), "occluder"));
+        out.albedo.insert(out.albedo.end(), out.meshes.back().triangleCount(), rgb(item[2].cast<RgbTuple>()));
     }
-    if (meshes.empty()) return std::make_shared<firn::Occluders>();
-    return std::make_shared<firn::Occluders>(firn::merge(meshes), std::move(albedo));
+    return out;
 }
 
 openvdb::FloatGrid::Ptr densityGrid(const openvdb::GridPtrVec &grids, const std::string &path) {
@@ -55,14 +59,17 @@ openvdb::FloatGrid::Ptr densityGrid(const openvdb::GridPtrVec &grids, const std:
     throw firn::InvalidArgument(path + " has no float grid named 'density'");
 }
 
+// Heavy (reads the grids' scene, builds the occluders' BVH): call it inside longCall.
 firn::Scene sceneFrom(const openvdb::GridPtrVec &grids, const std::string &path, const firn::VolumeOptics &optics,
                       const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,
-                      const py::list &occluders) {
+                      OccluderArrays occluders) {
     firn::Scene scene;
     scene.medium = std::make_shared<firn::Medium>(densityGrid(grids, path), optics);
     scene.suns = suns;
     if (sky) scene.sky = *sky;
-    scene.occluders = occludersFrom(occluders);
+    if (!occluders.meshes.empty())
+        scene.occluders =
+            std::make_shared<firn::Occluders>(firn::merge(occluders.meshes), std::move(occluders.albedo));
     firn::validate(scene);
     return scene;
 }
@@ -170,11 +177,11 @@ void bindTransport(py::module_ &m) {
             settings.skySamples = skySamples;
             settings.sunSamples = sunSamples;
             settings.referenceSamples = referenceSamples;
-            openvdb::GridPtrVec grids = firn::readGrids(path);
-            const firn::Scene scene = sceneFrom(grids, path, optics, suns, sky, occluders);
+            OccluderArrays blockers = occludersFrom(occluders);
             firn::BakeStats stats;
-            {
-                py::gil_scoped_release release;
+            longCall([&] {
+                openvdb::GridPtrVec grids = firn::readGrids(path);
+                const firn::Scene scene = sceneFrom(grids, path, optics, suns, sky, std::move(blockers));
                 const firn::BakedGrids baked = firn::bakeScattering(scene, settings, progress.get(), &stats);
                 openvdb::GridPtrVec out;
                 for (const auto &grid : grids) {
@@ -185,7 +192,7 @@ void bindTransport(py::module_ &m) {
                 }
                 for (const auto &grid : baked.grids()) out.push_back(grid);
                 firn::writeGrids(path, out);
-            }
+            });
             return statsDict(stats);
         },
         py::arg("vdb_path"), py::arg("optics"), py::arg("suns") = std::vector<firn::SunLight>{},
@@ -204,15 +211,15 @@ cancelled, ValueError for bad input, OSError for file trouble. Returns the solve
         "render_baked",
         [](const std::string &path, const firn::VolumeOptics &optics, const DoubleArray &origins,
            const DoubleArray &directions, const py::list &occluders) {
-            const openvdb::GridPtrVec grids = firn::readGrids(path);
-            const firn::Scene scene = sceneFrom(grids, path, optics, {}, std::nullopt, occluders);
-            const firn::BakedGrids baked = firn::BakedGrids::find(grids);
+            OccluderArrays blockers = occludersFrom(occluders);
             const std::vector<firn::Ray> rays = raysFrom(origins, directions);
             std::vector<firn::Rgb> radiance(rays.size());
-            {
-                py::gil_scoped_release release;
+            longCall([&] {
+                const openvdb::GridPtrVec grids = firn::readGrids(path);
+                const firn::Scene scene = sceneFrom(grids, path, optics, {}, std::nullopt, std::move(blockers));
+                const firn::BakedGrids baked = firn::BakedGrids::find(grids);
                 for (std::size_t i = 0; i < rays.size(); ++i) radiance[i] = firn::renderBaked(scene, baked, rays[i]);
-            }
+            });
             return rgbRows(radiance);
         },
         py::arg("vdb_path"), py::arg("optics"), py::arg("origins"), py::arg("directions"),
@@ -226,14 +233,13 @@ the emission-absorption integral of the contract's material, up to the first occ
            const DoubleArray &directions, const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,
            const py::list &occluders, int samples, std::uint64_t seed, std::shared_ptr<firn::Progress> progress) {
             if (samples < 1) throw firn::InvalidArgument("samples must be at least 1");
-            const openvdb::GridPtrVec grids = firn::readGrids(path);
-            const firn::MonteCarloReference reference(sceneFrom(grids, path, optics, suns, sky, occluders));
+            OccluderArrays blockers = occludersFrom(occluders);
             const std::vector<firn::Ray> rays = raysFrom(origins, directions);
-            std::vector<firn::RadianceEstimate> estimates;
-            {
-                py::gil_scoped_release release;
-                estimates = reference.estimate(rays, samples, seed, progress.get());
-            }
+            const std::vector<firn::RadianceEstimate> estimates = longCall([&] {
+                const openvdb::GridPtrVec grids = firn::readGrids(path);
+                const firn::MonteCarloReference reference(sceneFrom(grids, path, optics, suns, sky, std::move(blockers)));
+                return reference.estimate(rays, samples, seed, progress.get());
+            });
             std::vector<firn::Rgb> mean, error;
             for (const auto &e : estimates) mean.push_back(e.mean), error.push_back(e.standardError);
             return py::make_tuple(rgbRows(mean), rgbRows(error));
@@ -247,7 +253,7 @@ ray (what the baked emission stands for). Returns (mean, standard error), each (
     m.def(
         "write_slab_vdb",
         [](const std::string &path, double voxelSize, int width, int layers, float density) {
-            firn::writeGrids(path, {firn::makeSlabDensity(voxelSize, width, layers, density)});
+            longCall([&] { firn::writeGrids(path, {firn::makeSlabDensity(voxelSize, width, layers, density)}); });
         },
         py::arg("path"), py::arg("voxel_size"), py::arg("width"), py::arg("layers"), py::arg("density"), R"doc(
 Writes a test VDB: a box of uniform density (kg/m^3), width x width voxels around the z axis and `layers`
@@ -259,11 +265,7 @@ deep, whose top surface (half-column point of the density ramp) is the plane z =
             if (photons < 1) throw firn::InvalidArgument("photons must be at least 1");
             if (!(omega >= 0.0 && omega <= 1.0) || !(g > -1.0 && g < 1.0) || !(tau > 0.0) || !(mu0 <= 1.0))
                 throw firn::InvalidArgument("slab: omega in [0, 1], g in (-1, 1), tau > 0, mu0 <= 1");
-            firn::SlabResponse r;
-            {
-                py::gil_scoped_release release;
-                r = firn::slabMonteCarlo(omega, g, tau, mu0, photons, seed);
-            }
+            const firn::SlabResponse r = longCall([&] { return firn::slabMonteCarlo(omega, g, tau, mu0, photons, seed); });
             py::dict d;
             d["reflectance"] = r.reflectance, d["transmittance"] = r.transmittance;
             d["reflectance_error"] = r.reflectanceError, d["transmittance_error"] = r.transmittanceError;

@@ -14,7 +14,7 @@ import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import fail, job_running  # noqa: E402
+from ui_test import HUNG, fail, job_running  # noqa: E402
 
 state = {"phase": "start", "ticks": 0, "since": 0.0, "heard": 0}
 
@@ -63,7 +63,7 @@ def register_waiting_job():
         def compute(_inputs, progress):
             started = time.perf_counter()
             while not progress.cancelled:
-                if time.perf_counter() - started > 30.0:
+                if time.perf_counter() - started > HUNG:
                     return "not cancelled"
                 time.sleep(0.01)
             raise firncore.Cancelled("cancelled")
@@ -144,8 +144,8 @@ def tick():
             print("PASS")
             bpy.ops.wm.quit_blender()
             return None
-        if phase in {"cancel button", "escaped"} and time.perf_counter() - state["since"] > 10.0:
-            fail(f"{phase}: the job did not stop within 10 s")
+        if phase in {"cancel button", "escaped"} and time.perf_counter() - state["since"] > HUNG:
+            fail(f"{phase}: the job did not stop: hung")
     except Exception:
         traceback.print_exc()
         fail("exception")

@@ -14,11 +14,11 @@ import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import fail, job_running, window_context  # noqa: E402
+from ui_test import HUNG, fail, job_running, window_context  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "blender"))
 
-state = {"phase": "start", "ticks": 0, "since": 0.0, "last": 0.0, "gap": 0.0}
+state = {"phase": "start", "ticks": 0, "since": 0.0, "while_computing": 0}
 FOLDER = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"firn_modal_bake_{os.getpid()}")
 
 
@@ -44,8 +44,10 @@ def start_bake(quality):
         result = bpy.ops.firn.bake_scattering("INVOKE_DEFAULT", quality=quality)
     if result != {"RUNNING_MODAL"}:
         fail(f"expected RUNNING_MODAL, got {result}")
-    state["since"] = state["last"] = time.perf_counter()
-    state["ticks"], state["gap"] = 0, 0.0
+    if not job_running():  # the operator returned to the UI while its worker thread bakes
+        fail("the bake did not run in a worker thread")
+    state["since"] = time.perf_counter()
+    state["ticks"], state["while_computing"] = 0, 0
 
 
 def file_bytes(obj):
@@ -58,8 +60,7 @@ def tick():
 
     try:
         state["ticks"] += 1
-        now = time.perf_counter()
-        state["gap"], state["last"] = max(state["gap"], now - state["last"]), now
+        state["while_computing"] += job_running()
         phase = state["phase"]
         slab = bpy.data.objects.get("Slab")
         if phase == "start":
@@ -68,13 +69,13 @@ def tick():
             start_bake("DRAFT")
             state["phase"] = "baking"
         elif phase == "baking" and not job_running():
-            elapsed = time.perf_counter() - state["since"]
-            # Frozen means the UI timer could not run for most of the job (a slow one on 2 busy cores is fine).
-            if elapsed > 1.0 and state["gap"] > 0.8 * elapsed:
-                fail(f"UI froze: no timer tick for {state['gap']:.2f} s of a {elapsed:.2f} s job")
+            # The UI (this timer) ran while the worker baked; how often depends on the machine's load.
+            if state["while_computing"] == 0:
+                fail("UI froze: the timer never ran while the worker baked")
             if slab.firn.bake_state != "BAKED":
                 fail(f"after the bake the state is {slab.firn.bake_state}")
-            print(f"bake finished after {elapsed:.2f} s with {state['ticks']} UI ticks meanwhile")
+            print(f"bake finished after {time.perf_counter() - state['since']:.2f} s with "
+                  f"{state['while_computing']} UI ticks while it computed")
             state["before"] = (file_bytes(slab), slab.firn.bake_fingerprint)
             bpy.context.scene.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 2.0
             start_bake("REFERENCE")
@@ -99,8 +100,8 @@ def tick():
             print("PASS")
             bpy.ops.wm.quit_blender()
             return None
-        elif phase in {"baking", "cancelled"} and time.perf_counter() - state["since"] > 300:
-            fail(f"{phase}: no end after 300 s")
+        elif phase in {"baking", "cancelled"} and time.perf_counter() - state["since"] > HUNG:
+            fail(f"{phase}: hung")
     except Exception:
         traceback.print_exc()
         fail("exception")

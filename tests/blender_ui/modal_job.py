@@ -13,9 +13,9 @@ import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import fail, job_running, window_context  # noqa: E402
+from ui_test import HUNG, fail, job_running, window_context  # noqa: E402
 
-state = {"ticks": 0, "phase": "start", "started": 0.0, "last": 0.0, "gap": 0.0}
+state = {"ticks": 0, "phase": "start", "started": 0.0, "while_computing": 0}
 
 
 def setup():
@@ -33,8 +33,10 @@ def start_job():
         result = bpy.ops.firn.add_snow_layer("INVOKE_DEFAULT", depth=0.1, spacing=0.02)
     if result != {"RUNNING_MODAL"}:
         fail(f"expected RUNNING_MODAL, got {result}")
-    state["started"] = state["last"] = time.perf_counter()
-    state["gap"] = 0.0
+    if not job_running():  # the operator returned to the UI while its worker thread computes
+        fail("the job did not run in a worker thread")
+    state["started"] = time.perf_counter()
+    state["while_computing"] = 0
 
 
 def snow_objects():
@@ -44,8 +46,7 @@ def snow_objects():
 def tick():
     try:
         state["ticks"] += 1
-        now = time.perf_counter()
-        state["gap"], state["last"] = max(state["gap"], now - state["last"]), now
+        state["while_computing"] += job_running()
         if state["phase"] == "start":
             setup()
             start_job()
@@ -53,18 +54,17 @@ def tick():
             state["ticks"] = 0
         elif state["phase"] == "running":
             if snow_objects():
-                elapsed = time.perf_counter() - state["started"]
-                # The UI (this timer) kept running while the worker computed: frozen means no tick for most
-                # of the job (slow ticks on 2 busy cores are fine).
-                if elapsed > 1.0 and state["gap"] > 0.8 * elapsed:
-                    fail(f"UI froze: no timer tick for {state['gap']:.2f} s of a {elapsed:.2f} s job")
-                print(f"modal job finished after {elapsed:.2f} s with {state['ticks']} UI ticks meanwhile")
+                # The UI (this timer) ran while the worker computed; how often depends on the machine's load.
+                if state["while_computing"] == 0:
+                    fail("UI froze: the timer never ran while the worker computed")
+                print(f"modal job finished after {time.perf_counter() - state['started']:.2f} s with "
+                      f"{state['while_computing']} UI ticks while it computed")
                 state["phase"] = "cancel"
                 bpy.ops.mesh.primitive_plane_add(size=12.0, location=(50, 0, 0))
                 start_job()
                 state["ticks"] = 0
-            elif time.perf_counter() - state["started"] > 60:
-                fail("modal job did not finish in 60 s")
+            elif time.perf_counter() - state["started"] > HUNG:
+                fail("modal job hung")
         elif state["phase"] == "cancel":
             if state["ticks"] == 4:  # the job is under way: press Esc as a user would
                 if not job_running():
@@ -81,8 +81,8 @@ def tick():
                 print("PASS")
                 bpy.ops.wm.quit_blender()
                 return None
-            if time.perf_counter() - state["started"] > 20.0:
-                fail("Esc did not stop the job within 20 s")
+            if time.perf_counter() - state["started"] > HUNG:
+                fail("Esc did not stop the job: hung")
     except Exception:
         traceback.print_exc()
         fail("exception")

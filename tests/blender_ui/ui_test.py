@@ -6,6 +6,8 @@ import threading
 
 import bpy
 
+HUNG = 240.0  # s: a guard against a hang only, far beyond any run on a busy machine (CTest's TIMEOUT is 600)
+
 
 def fail(message):
     print("FAIL:", message, file=sys.stderr, flush=True)

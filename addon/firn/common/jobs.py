@@ -10,6 +10,7 @@ While a job runs, the status bar shows its progress and a Cancel button (as does
 `job_passes_events` so the user keeps working meanwhile; short ones hold the input until they end.
 """
 
+import os
 import threading
 
 import bpy
@@ -18,6 +19,7 @@ from .core import firncore
 from .errors import UserError
 
 _TIMER_INTERVAL = 0.1  # s
+_WORKER_NICENESS = 10  # the worker yields the processor to Blender's UI (and its drawing, in software GL)
 _running = []  # jobs started from the UI, until their operator ends
 
 
@@ -39,6 +41,7 @@ class Job:
         self._thread = threading.Thread(target=self._run, args=(compute, inputs), name="firn-job", daemon=True)
 
     def _run(self, compute, inputs):
+        _lower_priority()
         try:
             self.result = compute(inputs, self.progress)
         except BaseException as error:  # handed to the main thread, which reports it
@@ -56,6 +59,15 @@ class Job:
 
     def wait(self):
         self._thread.join()
+
+
+def _lower_priority():
+    """Lowers the calling thread's scheduling priority (Linux: niceness is per thread)."""
+    try:
+        thread = threading.get_native_id()
+        os.setpriority(os.PRIO_PROCESS, thread, max(os.getpriority(os.PRIO_PROCESS, thread), _WORKER_NICENESS))
+    except (AttributeError, OSError):  # no per-thread priority here: the job runs at the UI's priority
+        pass
 
 
 class FirnJobMixin:

@@ -67,4 +67,18 @@ openvdb::GridPtrVec readGrids(const std::string &path) {
     }
 }
 
+std::vector<std::string> gridNames(const std::string &path) {
+    initializeOpenVdb();
+    try {
+        openvdb::io::File file(path);
+        file.open();  // reads the header and the grid descriptors; voxels stay on disk
+        std::vector<std::string> names;
+        for (auto name = file.beginName(); name != file.endName(); ++name) names.push_back(name.gridName());
+        file.close();
+        return names;
+    } catch (const openvdb::Exception &e) {
+        throw IoError("cannot read " + path + ": " + e.what());
+    }
+}
+
 }  // namespace firn

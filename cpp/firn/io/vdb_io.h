@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <openvdb/openvdb.h>
 
@@ -18,5 +19,8 @@ void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids);
 
 // Every grid in the file, with in-memory (unshifted) transforms. Throws IoError.
 openvdb::GridPtrVec readGrids(const std::string &path);
+
+// The names of the file's grids, from its header alone (no voxel is read). Throws IoError.
+std::vector<std::string> gridNames(const std::string &path);
 
 }  // namespace firn
