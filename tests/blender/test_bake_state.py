@@ -102,6 +102,7 @@ def test_edits_that_keep_the_vertex_count_are_seen_and_name_the_object(clean_sce
     moved_and_back(cube)
     moved_and_back(ground)
 
+    name = obj.name
     bpy.ops.ed.undo_push(message="baked")
     cube.data.vertices[3].co.x += 0.5
     cube.data.update()
@@ -109,7 +110,7 @@ def test_edits_that_keep_the_vertex_count_are_seen_and_name_the_object(clean_sce
     bpy.context.view_layer.update()
     assert state(obj) == ("OUTDATED", ["object Cube"])
     bpy.ops.ed.undo()  # Blender's own undo
-    obj = bpy.data.objects[obj.name]
+    obj = bpy.data.objects[name]
     bpy.context.view_layer.update()
     assert state(obj) == ("BAKED", [])
 

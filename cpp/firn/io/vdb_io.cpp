@@ -105,7 +105,8 @@ std::vector<std::string> removeGrids(const std::string &path, const std::vector<
         openvdb::io::File file(path);
         file.open(/*delayLoad=*/false);  // everything in memory before the file is replaced
         meta = file.getMetadata();
-        for (const openvdb::GridBase::Ptr &grid : *file.getGrids()) {
+        const openvdb::GridPtrVecPtr grids = file.getGrids();
+        for (const openvdb::GridBase::Ptr &grid : *grids) {
             if (std::find(names.begin(), names.end(), grid->getName()) == names.end())
                 kept.push_back(grid);
             else
