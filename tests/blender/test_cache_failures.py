@@ -6,6 +6,7 @@ Tests run as root, whom chmod does not stop: a read-only folder is a tmpfs remou
 small tmpfs filled up (both skipped where mounting is not allowed); a folder that cannot be created is one whose
 parent is a regular file."""
 
+import errno
 import glob
 import os
 import shutil
@@ -56,13 +57,13 @@ def tmpfs(tmp_path):
 
 def fill(folder):
     """Writes a file into `folder` until its disk is full."""
-    with open(os.path.join(folder, "filler"), "wb") as file:
-        try:
+    try:
+        with open(os.path.join(folder, "filler"), "wb") as file:
             while True:
                 file.write(b"\0" * 4096)
                 file.flush()
-        except OSError:
-            pass
+    except OSError as error:
+        assert error.errno == errno.ENOSPC
 
 
 def leftovers(folder):
@@ -72,13 +73,14 @@ def leftovers(folder):
 
 def snow_on_plane():
     bpy.ops.mesh.primitive_plane_add(size=1.0)
-    assert bpy.ops.firn.add_snow_layer(depth=0.05, spacing=0.05) == {"FINISHED"}
+    assert bpy.ops.firn.add_snow_layer(depth=0.05, spacing=0.05, voxel_size=0.02) == {"FINISHED"}
     return bpy.context.object
 
 
 def fake_bake(snow):
     """The baked grids in the snow's file and the add-on's post-bake step, as if Bake Scattering had run."""
     add_contract_grids(bake_state.snow_path(snow), uniform_source(S))
+    assert cache.unreadable(bake_state.snow_path(snow)) is None  # pyopenvdb says nothing when its write fails
     bake.adopt_bake(snow, 12.0, dict(bake.bake_inputs.signature(bpy.context, snow),
                                      optics=bake_state.optics_digest(snow)), "test grids")
     assert bake_state.changes(snow) == ("BAKED", [])
@@ -138,7 +140,7 @@ def every_writer_fails_and_changes_nothing(snow, folder, reason):
 def test_a_read_only_cache_folder_keeps_the_snow_and_its_bake(cache_folder, tmpfs):
     """Found before any work starts."""
     mount, remount_read_only = tmpfs
-    folder = mount(16 << 20)
+    folder = mount(8 << 20)
     snow = baked_snow_in(folder, cache_folder)
     remount_read_only(folder)
     every_writer_fails_and_changes_nothing(snow, folder, "Read-only file system")
@@ -148,7 +150,7 @@ def test_a_read_only_cache_folder_keeps_the_snow_and_its_bake(cache_folder, tmpf
 
 def test_a_full_disk_keeps_the_previous_file(cache_folder, tmpfs):
     """Found by the core while it writes (OpenVDB alone would rename the truncated file into place)."""
-    folder = tmpfs[0](4 << 20)
+    folder = tmpfs[0](8 << 20)
     snow = baked_snow_in(folder, cache_folder)
     fill(folder)
     every_writer_fails_and_changes_nothing(snow, folder, "No space left on device")
@@ -164,7 +166,8 @@ def saved_with_snow(directory):
     snow = snow_on_plane()
     fake_bake(snow)
     blend = os.path.join(directory, "scene.blend")
-    bpy.ops.wm.save_as_mainfile(filepath=blend)
+    bpy.ops.wm.save_as_mainfile(filepath=blend)  # moves the snow's file beside the .blend, after writing it
+    bpy.ops.wm.save_mainfile()  # the .blend names the moved file
     assert os.path.isfile(bake_state.snow_path(snow))
     return blend
 
