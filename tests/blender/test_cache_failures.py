@@ -15,7 +15,7 @@ import subprocess
 import bpy
 import pytest
 
-from bake_helpers import S, add_contract_grids, uniform_source
+from bake_helpers import S, add_contract_grids, needs_core_bake, uniform_source
 from firn.bake import operators as bake, state as bake_state, ui as bake_ui
 from firn.common import cache, preferences
 from firn.material import nodes as materials
@@ -228,7 +228,16 @@ def test_a_file_deleted_or_truncated_during_the_session(clean_scene, tmp_path):
     assert cache.file_problem(snow.data) is None and not leftovers(os.path.dirname(path))
 
 
-def test_clear_bake_leaves_the_grids_the_file_had_before_the_bake(clean_scene):
+def core_bake(snow):
+    snow.select_set(True)
+    bpy.context.view_layer.objects.active = snow
+    assert bpy.ops.firn.bake_scattering(quality="DRAFT") == {"FINISHED"}
+    assert bake_state.changes(snow) == ("BAKED", [])
+
+
+@pytest.mark.parametrize("baked_by", [fake_bake, pytest.param(core_bake, marks=needs_core_bake)],
+                         ids=["grids_written_here", "core_bake"])
+def test_clear_bake_leaves_the_grids_the_file_had_before_the_bake(clean_scene, baked_by):
     import pyopenvdb
 
     def grids(path):
@@ -240,7 +249,7 @@ def test_clear_bake_leaves_the_grids_the_file_had_before_the_bake(clean_scene):
     snow = snow_on_plane()
     path = bake_state.snow_path(snow)
     before = grids(path)
-    fake_bake(snow)
+    baked_by(snow)
     assert set(materials.BAKED_GRIDS) <= set(grids(path))
     snow.select_set(True)
     assert bpy.ops.firn.clear_bake() == {"FINISHED"}
