@@ -49,7 +49,8 @@ def draw_bake(layout, obj):
         bake.quality, bake.seed = settings.bake_quality, settings.bake_seed
         row.operator("firn.clear_bake", text="", icon="TRASH")
     _draw_state(col, obj)
-    draw_file_problem(col, obj.data)
+    if settings.is_snow:
+        draw_file_problem(col, obj.data)
     if not settings.is_snow:
         col.label(text="Its 'density' grid is read as kg/m³ with Firn's snow optics", icon="INFO")
 
