@@ -156,6 +156,8 @@ def test_a_full_disk_keeps_the_previous_file(cache_folder, tmpfs):
     every_writer_fails_and_changes_nothing(snow, folder, "No space left on device")
     with pytest.raises(RuntimeError, match="cannot write .*Snow.vdb: No space left on device"):
         bpy.ops.firn.regenerate_snow()
+    with pytest.raises(RuntimeError, match="cannot write .*Snow.vdb.firn-bake.vdb: No space left on device"):
+        bpy.ops.firn.bake_scattering(quality="DRAFT")
     os.remove(os.path.join(folder, "filler"))
     bpy.context.view_layer.objects.active = snow
     assert bpy.ops.firn.regenerate_snow() == {"FINISHED"}  # room again: it works

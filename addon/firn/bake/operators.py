@@ -120,6 +120,14 @@ def _summary(quality, inputs, seconds):
     return ", ".join(parts)
 
 
+def _stage(path, staged):
+    """The copy of a snow file that the bake rewrites; OSError in the core's words when it cannot be made."""
+    try:
+        shutil.copyfile(path, staged)
+    except OSError as error:
+        raise OSError(f"cannot write {staged}: {error.strerror or error}") from error
+
+
 def _remove(path):
     try:
         os.remove(path)
@@ -220,7 +228,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
                 if progress.cancelled:
                     raise firncore.Cancelled("cancelled")
                 started = time.perf_counter()
-                cache.core_write(shutil.copyfile, job["path"], job["staged"])
+                cache.core_write(_stage, job["path"], job["staged"])
                 cache.core_write(core_bake, job["staged"], job["optics"], job["inputs"], inputs["quality"],
                                  inputs["seed"], progress)
                 seconds.append(time.perf_counter() - started)
