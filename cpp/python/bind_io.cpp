@@ -1,4 +1,4 @@
-// Reading Firn's VDB files from Python without pyopenvdb (which Blender's Python may lack).
+// Reading Firn's VDB files from Python without pyopenvdb (which Blender's Python may lack), and taking grids out.
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
@@ -32,6 +32,16 @@ void bindIo(py::module_ &m) {
         "grid_names",
         [](const std::string &path) { return longCall([&] { return firn::gridNames(path); }); },
         py::arg("path"), "Names of the grids in a VDB file.");
+    m.def(
+        "remove_grids",
+        [](const std::string &path, const std::vector<std::string> &names) {
+            py::gil_scoped_release release;
+            return firn::removeGrids(path, names);
+        },
+        py::arg("path"), py::arg("names"),
+        "Rewrites the VDB file at `path` without the named grids (atomically: temporary file, then rename); the "
+        "other grids and the file's metadata stay as they were. Returns the names it removed (none: the file is "
+        "untouched). Raises OSError for file trouble, ValueError if no grid would remain.");
     m.def(
         "sample_grid",
         [](const std::string &path, const std::string &name, const FloatArray &points) {

@@ -57,8 +57,10 @@ def test_bake_then_every_kind_of_change(clean_scene, tmp_path):
     background = bpy.context.scene.world.node_tree.nodes["Background"]
     outdated_by(lambda: setattr(background.inputs["Strength"], "default_value", 2.0),
                 lambda: setattr(background.inputs["Strength"], "default_value", 1.0), "world")
-    outdated_by(lambda: setattr(cube, "location", (3, 0, 1)), lambda: setattr(cube, "location", (3, 0, 0)), "objects")
-    outdated_by(lambda: setattr(cube, "hide_render", True), lambda: setattr(cube, "hide_render", False), "objects")
+    outdated_by(lambda: setattr(cube, "location", (3, 0, 1)), lambda: setattr(cube, "location", (3, 0, 0)),
+                "object Cube")
+    outdated_by(lambda: setattr(cube, "hide_render", True), lambda: setattr(cube, "hide_render", False),
+                "object Cube")
     outdated_by(lambda: setattr(obj.firn, "anisotropy", 0.5),
                 lambda: setattr(obj.firn, "anisotropy", 0.845), "optics")
     outdated_by(lambda: setattr(obj, "location", (0, 0, 1)), lambda: setattr(obj, "location", (0, 0, 0)), "snow")
@@ -73,6 +75,77 @@ def test_bake_then_every_kind_of_change(clean_scene, tmp_path):
     stat = os.stat(path)
     os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns + 1_000_000_000))  # the file was rewritten
     assert state(obj) == ("OUTDATED", ["snow"])
+
+
+def test_edits_that_keep_the_vertex_count_are_seen_and_name_the_object(clean_scene, tmp_path):
+    """Moving one vertex of an occluder or of the ground, or a modifier setting, keeps every count: the evaluated
+    shape's digest still sees it; undoing it gives the bake back."""
+    bpy.ops.mesh.primitive_plane_add(size=4.0, location=(0, 0, -0.2))
+    ground = bpy.context.object
+    ground.name = "Ground"
+    bpy.ops.mesh.primitive_cube_add(location=(3, 0, 0))
+    cube = bpy.context.object
+    obj = baked_slab(str(tmp_path), uniform_source(S))
+
+    def moved_and_back(mesh_object):
+        vertex = mesh_object.data.vertices[0]
+        before = vertex.co.copy()
+        vertex.co.z += 0.01  # 1 cm
+        mesh_object.data.update()
+        bpy.context.view_layer.update()
+        assert state(obj) == ("OUTDATED", [f"object {mesh_object.name}"])
+        vertex.co = before
+        mesh_object.data.update()
+        bpy.context.view_layer.update()
+        assert state(obj) == ("BAKED", [])
+
+    moved_and_back(cube)
+    moved_and_back(ground)
+
+    name = obj.name
+    bpy.ops.ed.undo_push(message="baked")
+    cube.data.vertices[3].co.x += 0.5
+    cube.data.update()
+    bpy.ops.ed.undo_push(message="vertex moved")
+    bpy.context.view_layer.update()
+    assert state(obj) == ("OUTDATED", ["object Cube"])
+    bpy.ops.ed.undo()  # Blender's own undo
+    obj = bpy.data.objects[name]
+    bpy.context.view_layer.update()
+    assert state(obj) == ("BAKED", [])
+
+
+def test_a_modifier_setting_that_keeps_counts_outdates_the_bake(clean_scene, tmp_path):
+    bpy.ops.mesh.primitive_cube_add(location=(3, 0, 0))
+    cube = bpy.context.object
+    displace = cube.modifiers.new("Displace", "DISPLACE")
+    displace.strength = 0.1
+    obj = baked_slab(str(tmp_path), uniform_source(S))
+    displace.strength = 0.2
+    bpy.context.view_layer.update()
+    assert state(obj) == ("OUTDATED", ["object Cube"])
+    displace.strength = 0.1
+    bpy.context.view_layer.update()
+    assert state(obj) == ("BAKED", [])
+
+
+def test_many_changed_objects_are_counted(clean_scene, tmp_path):
+    obj = baked_slab(str(tmp_path), uniform_source(S))
+    for i in range(5):
+        bpy.ops.mesh.primitive_cube_add(location=(3 + 3 * i, 0, 0))
+    bpy.context.view_layer.update()
+    assert state(obj) == ("OUTDATED", ["object Cube", "object Cube.001", "object Cube.002", "2 more objects"])
+
+
+def test_a_fingerprint_of_an_older_firn_says_objects(clean_scene, tmp_path):
+    import json
+
+    bpy.ops.mesh.primitive_cube_add(location=(3, 0, 0))
+    obj = baked_slab(str(tmp_path), uniform_source(S))
+    parts = json.loads(obj.firn.bake_fingerprint)
+    parts["occluders"] = "0123456789abcdef"  # one digest for every object
+    obj.firn.bake_fingerprint = json.dumps(parts)
+    assert state(obj) == ("OUTDATED", ["objects"])
 
 
 def test_several_changes_are_all_named(clean_scene, tmp_path):

@@ -14,6 +14,7 @@ import time
 
 import bpy
 
+from ..common import cache
 from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin, running_jobs
@@ -22,6 +23,8 @@ from ..properties import BAKE_QUALITY_ITEMS
 from . import inputs as bake_inputs, state as bake_state
 
 BAKE_LABEL = "Bake Scattering"
+REBUILD_ADVICE = ("Regenerate the snow (Firn Snow Layer panel) to write it again, or put the .blend's firn_cache "
+                  "folder back beside it and reopen")
 _STAGED_SUFFIX = ".firn-bake.vdb"
 
 
@@ -58,13 +61,15 @@ def _check_volume(obj):
         raise UserError(f"'{obj.name}' has its volume packed into the .blend: unpack it to bake")
     if volume.is_sequence:
         raise UserError(f"'{obj.name}' is a volume sequence: Firn bakes single volumes")
+    problem = cache.file_problem(volume)
+    if problem is not None:
+        raise UserError(f"'{obj.name}': {problem}. {REBUILD_ADVICE}")
     path = bake_state.snow_path(obj)
-    if not os.path.isfile(path):
-        raise UserError(f"The volume file of '{obj.name}' is missing: {path}")
     try:
         names = firncore.grid_names(path)
     except (OSError, ValueError) as error:
-        raise UserError(f"Cannot read the volume of '{obj.name}': {error}") from error
+        raise UserError(f"Cannot read the volume of '{obj.name}' ({error}). {REBUILD_ADVICE}") from error
+    cache.check_writable(path)  # the staged copy goes beside it
     if "density" not in names:
         raise UserError(f"'{obj.name}' has no 'density' grid to bake")
     return path
@@ -115,11 +120,36 @@ def _summary(quality, inputs, seconds):
     return ", ".join(parts)
 
 
+def _stage(path, staged):
+    """The copy of a snow file that the bake rewrites; OSError in the core's words when it cannot be made."""
+    try:
+        shutil.copyfile(path, staged)
+    except OSError as error:
+        raise OSError(f"cannot write {staged}: {error.strerror or error}") from error
+
+
 def _remove(path):
     try:
         os.remove(path)
     except FileNotFoundError:
         pass
+
+
+def _remove_baked_grids(obj):
+    """Takes the baked grids out of obj's file (the core rewrites it atomically; the other grids stay as they
+    were). A file that is missing, packed or linked has nothing Firn can take out: the bake is just forgotten."""
+    volume = obj.data
+    path = bake_state.snow_path(obj)
+    if obj.library or volume.library or volume.packed_file is not None or cache.file_problem(volume):
+        return
+    try:
+        removed = firncore.remove_grids(path, list(materials.BAKED_GRIDS))
+    except (OSError, ValueError) as error:
+        raise UserError(f"Cannot clear the bake of '{obj.name}' ({error}); it stays baked. "
+                        f"{cache.WRITE_ADVICE}") from error
+    if removed:
+        volume.grids.unload()
+        volume.grids.load()
 
 
 def adopt_bake(obj, extinction_per_density, signature, summary):
@@ -198,8 +228,9 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
                 if progress.cancelled:
                     raise firncore.Cancelled("cancelled")
                 started = time.perf_counter()
-                shutil.copyfile(job["path"], job["staged"])
-                core_bake(job["staged"], job["optics"], job["inputs"], inputs["quality"], inputs["seed"], progress)
+                cache.core_write(_stage, job["path"], job["staged"])
+                cache.core_write(core_bake, job["staged"], job["optics"], job["inputs"], inputs["quality"],
+                                 inputs["seed"], progress)
                 seconds.append(time.perf_counter() - started)
         except BaseException:
             for job in inputs["jobs"]:
@@ -250,11 +281,19 @@ class FIRN_OT_clear_bake(bpy.types.Operator):
     def execute(self, context):
         cleared = []
         for obj in bake_targets(context):
-            if obj.firn.bake_fingerprint:
-                obj.firn.bake_fingerprint = ""
-                obj.firn.bake_summary = ""
-                materials.ensure_snow_material(obj)
-                cleared.append(obj.name)
+            if not obj.firn.bake_fingerprint:
+                continue
+            try:
+                _remove_baked_grids(obj)
+            except UserError as error:
+                self.report({"ERROR"}, str(error))
+                continue
+            obj.firn.bake_fingerprint = ""
+            obj.firn.bake_summary = ""
+            materials.ensure_snow_material(obj)
+            cleared.append(obj.name)
+        if not cleared:
+            return {"CANCELLED"}
         self.report({"INFO"}, f"Cleared the bake of {', '.join(cleared)}")
         return {"FINISHED"}
 

@@ -2,8 +2,9 @@
 
 At bake time a fingerprint of everything the bake depends on is stored on the object (obj.firn.bake_fingerprint,
 JSON {component: digest}); the panel compares it with the live scene at every redraw. Components: the sun lamps
-(and lamps ignored), the world, the occluders (transforms, mesh sizes, modifiers, albedo), the optics, and the
-snow itself (its file's size and modification time, and its transform). Nothing here renders or reads grids.
+(and lamps ignored), the world, the occluders ({object name: digest of its transform, evaluated shape, modifiers
+and albedo}, so a change names the object), the optics, and the snow itself (its file's size and modification
+time, and its transform). Nothing here renders or reads grids.
 """
 
 import json
@@ -23,6 +24,7 @@ STATES = (
 )
 # What each component is called in the panel's "needs re-bake" line.
 LABELS = {"lights": "lamps", "sky": "world", "occluders": "objects", "optics": "optics", "snow": "snow"}
+MAX_NAMED_OBJECTS = 3  # changed occluders named one by one; more are counted
 
 
 def optics_digest(obj):
@@ -74,6 +76,18 @@ def stored(obj):
         return {}  # damaged: anything differs
 
 
+def _changed_objects(then, now):
+    """Labels of the occluders added, removed or changed; a fingerprint of an older Firn (one digest for all the
+    objects) gives just "objects"."""
+    if not isinstance(then, dict) or not isinstance(now, dict):
+        return [LABELS["occluders"]]
+    names = sorted(name for name in set(then) | set(now) if then.get(name) != now.get(name))
+    shown = [f"object {name}" for name in names[:MAX_NAMED_OBJECTS]]
+    if len(names) > MAX_NAMED_OBJECTS:
+        shown.append(f"{len(names) - MAX_NAMED_OBJECTS} more objects")
+    return shown
+
+
 def changes(obj, context=None):
     """(state, [labels of what changed]) of a snow object against the live scene."""
     then = stored(obj)
@@ -84,8 +98,12 @@ def changes(obj, context=None):
         now = {"optics": optics_digest(obj), "snow": snow_digest(obj)}
     else:
         now = fingerprint(context, obj)
-    changed = [LABELS.get(key, key) for key in sorted(set(then) | set(now))
-               if key in now and then.get(key) != now[key]]
+    changed = []
+    for key in sorted(set(then) | set(now)):
+        if key not in now or then.get(key) == now[key]:
+            continue
+        changed.extend(_changed_objects(then.get(key), now[key]) if key == "occluders"
+                       else [LABELS.get(key, key)])
     return (OUTDATED if changed else BAKED), changed
 
 

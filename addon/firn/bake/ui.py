@@ -3,7 +3,7 @@
 import textwrap
 
 from ..common.jobs import running_jobs
-from ..common.panels import panel_pair
+from ..common.panels import draw_file_problem, panel_pair
 from . import state as bake_state
 from .operators import BAKE_LABEL
 
@@ -49,6 +49,8 @@ def draw_bake(layout, obj):
         bake.quality, bake.seed = settings.bake_quality, settings.bake_seed
         row.operator("firn.clear_bake", text="", icon="TRASH")
     _draw_state(col, obj)
+    if settings.is_snow:
+        draw_file_problem(col, obj.data)
     if not settings.is_snow:
         col.label(text="Its 'density' grid is read as kg/m³ with Firn's snow optics", icon="INFO")
 

@@ -3,6 +3,11 @@
 Saved file: //firn_cache/<blend name>/<object>.vdb (relative, so the folder travels with the .blend).
 Unsaved file: a temporary folder of this Blender session; the files move next to the .blend on first save.
 A folder set in the add-on preferences overrides both.
+
+Failures (docs/reliability.md): a folder that cannot be written is found before any work starts, a write that fails
+half way (full disk) is reported by the core, which leaves the previous file as it was. A snow file that is missing
+or damaged is said so in the panels; a damaged one is set aside on load (the Volume points at no file), because
+Blender 3.4 aborts on reading some truncated VDB files.
 """
 
 import os
@@ -13,8 +18,13 @@ import bpy
 from bpy.app.handlers import persistent
 
 from . import preferences
+from .core import firncore
+from .errors import UserError
 
 _SESSION_FOLDER = os.path.join(tempfile.gettempdir(), f"firn_cache_{os.getpid()}")
+DAMAGED_KEY = "firn_damaged_file"  # Volume custom property: the path of a file set aside as unreadable
+WRITE_ADVICE = ("Free some disk space, make the folder writable, or set a Cache Folder in Preferences > Add-ons > "
+                "Firn")
 
 
 def _blend_cache_folder():
@@ -41,6 +51,55 @@ def snow_file(object_name):
     if bpy.data.filepath and not (prefs and prefs.cache_folder):
         return absolute, f"{_blend_cache_folder()}/{file_name}"
     return absolute, absolute
+
+
+def check_writable(path):
+    """UserError, before any work, when the folder of `path` cannot take a new file (read-only, not a folder)."""
+    folder = os.path.dirname(path)
+    try:
+        os.makedirs(folder, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):  # unnamed: leaves nothing behind
+            pass
+    except OSError as error:
+        raise UserError(f"Cannot write snow files to {folder} ({error.strerror or error}); nothing was changed. "
+                        f"{WRITE_ADVICE}") from error
+
+
+def core_write(write, *args):
+    """write(*args): a core call that writes a snow file (atomically). Its OSError (full disk, folder gone)
+    becomes a UserError that says nothing changed and what to do."""
+    try:
+        return write(*args)
+    except OSError as error:
+        raise UserError(f"{error}; nothing was changed. {WRITE_ADVICE}") from error
+
+
+def unreadable(path):
+    """Why the core cannot read the VDB file at `path` (it reads it all), or None."""
+    try:
+        firncore.grid_names(path)
+    except (OSError, ValueError, RuntimeError) as error:
+        return str(error)
+    return None
+
+
+def volume_path(volume):
+    return bpy.path.abspath(volume.filepath, library=volume.library)
+
+
+def file_problem(volume):
+    """What is wrong with a snow Volume's file, in a few words, or None; cheap enough for panels."""
+    if volume.get(DAMAGED_KEY):
+        return f"Snow file damaged: {volume[DAMAGED_KEY]}"
+    if volume.packed_file is None and not os.path.isfile(volume_path(volume)):
+        return f"Snow file missing: {volume_path(volume)}"
+    return None
+
+
+def file_fixed(volume):
+    """A new file was written for the Volume: forget that its old one was set aside."""
+    if DAMAGED_KEY in volume:
+        del volume[DAMAGED_KEY]
 
 
 def _snow_volumes():
@@ -73,14 +132,31 @@ def _find_moved_files_on_load(*_args):
             volume.filepath = stored
 
 
+@persistent
+def _set_aside_damaged_files_on_load(*_args):
+    """A snow file the core cannot read (truncated, overwritten) would abort Blender when it loads the grids:
+    point its Volume at no file and remember the path, for the panels and Regenerate."""
+    for volume in _snow_volumes():
+        path = volume_path(volume)
+        if volume.packed_file is not None or not os.path.isfile(path):
+            continue
+        reason = unreadable(path)
+        if reason is not None:
+            print(f"Firn: {reason}: set aside, Regenerate the snow")
+            volume[DAMAGED_KEY] = path
+            volume.filepath = ""
+
+
 def register_extras():
     bpy.app.handlers.save_post.append(_move_session_files_on_save)
     bpy.app.handlers.load_post.append(_find_moved_files_on_load)
+    bpy.app.handlers.load_post.append(_set_aside_damaged_files_on_load)
 
 
 def unregister_extras():
     bpy.app.handlers.save_post.remove(_move_session_files_on_save)
     bpy.app.handlers.load_post.remove(_find_moved_files_on_load)
+    bpy.app.handlers.load_post.remove(_set_aside_damaged_files_on_load)
 
 
 classes = ()

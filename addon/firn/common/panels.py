@@ -2,6 +2,8 @@
 
 import bpy
 
+from . import cache
+
 
 def panel_pair(name, label, poll, draw):
     """Two panels that draw the same: FIRN_PT_<name> in Properties > Object, and FIRN_PT_sidebar_<name> under
@@ -18,3 +20,14 @@ def panel_pair(name, label, poll, draw):
         members, bl_idname=f"FIRN_PT_sidebar_{name}", bl_space_type="VIEW_3D", bl_region_type="UI",
         bl_category="Firn", bl_parent_id="FIRN_PT_sidebar"))
     return in_properties, in_sidebar
+
+
+def draw_file_problem(layout, volume):
+    """A red line when a snow Volume's file is missing or damaged, and what to do about it."""
+    problem = cache.file_problem(volume)
+    if problem is None:
+        return
+    col = layout.column(align=True)
+    col.alert = True
+    col.label(text=problem, icon="ERROR")
+    col.label(text="Regenerate rebuilds it from its targets (or its metaballs)")

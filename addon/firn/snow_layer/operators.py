@@ -78,6 +78,7 @@ def gather_inputs(context, props, targets, object_name):
         raise UserError("The selected objects have no faces to hold snow (a curve needs a bevel or extrusion)")
     occluders = _triangles(_occluder_objects(context, props, targets), depsgraph)
     path, stored_path = cache.snow_file(object_name)
+    cache.check_writable(path)
     settings = core_settings(props, _max_voxels())
     try:
         settings.validate()
@@ -92,8 +93,8 @@ def gather_inputs(context, props, targets, object_name):
 def compute_snow(inputs, progress):
     """Worker thread: the core generates the grids and writes the VDB; no bpy here."""
     vertices, triangles = inputs["targets"]
-    result = firncore.generate_snow_layer(vertices, triangles, inputs["occluders"], inputs["settings"],
-                                          inputs["path"], progress)
+    result = cache.core_write(firncore.generate_snow_layer, vertices, triangles, inputs["occluders"],
+                              inputs["settings"], inputs["path"], progress)
     if inputs["surface_mesh"]:
         result["surface"] = firncore.snow_surface_mesh(inputs["path"])
     return result
@@ -168,6 +169,7 @@ def write_snow(snow, inputs, result):
     """Points the snow Volume at its new file and refreshes everything derived from it."""
     volume = snow.data
     volume.filepath = inputs["stored_path"]
+    cache.file_fixed(volume)
     volume.grids.unload()
     volume.grids.load()
     snow.firn.mean_density = result["mean_density"]
@@ -261,7 +263,8 @@ class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
         snow = active_snow(context)
         targets = [item.object for item in snow.firn.targets if item.object is not None]
         if not targets:
-            raise UserError(f"'{snow.name}' has no target objects left: use Add Snow Layer instead")
+            kept = " or Rebuild from Metaballs" if snow.firn.metaballs is not None else ""
+            raise UserError(f"'{snow.name}' has no target objects left: use Add Snow Layer{kept} instead")
         return dict(gather_inputs(context, snow.firn.layer, targets, snow.name), name=snow.name)
 
     compute = staticmethod(compute_snow)
@@ -290,12 +293,14 @@ class FIRN_OT_rebuild_from_metaballs(FirnJobMixin, bpy.types.Operator):
         snow = active_snow(context)
         settings = core_settings(snow.firn.layer, _max_voxels())
         path, stored_path = cache.snow_file(snow.name)
+        cache.check_writable(path)
         return {"name": snow.name, "metaballs": read_metaballs(snow.firn.metaballs), "settings": settings,
                 "path": path, "stored_path": stored_path, "surface_mesh": snow.firn.layer.surface_mesh}
 
     @staticmethod
     def compute(inputs, progress):
-        result = firncore.rasterize_metaballs(inputs["metaballs"], inputs["settings"], inputs["path"], progress)
+        result = cache.core_write(firncore.rasterize_metaballs, inputs["metaballs"], inputs["settings"],
+                                  inputs["path"], progress)
         if inputs["surface_mesh"]:
             result["surface"] = firncore.snow_surface_mesh(inputs["path"])
         return result

@@ -2,6 +2,7 @@
 
 import bpy
 
+from ..common.panels import draw_file_problem
 from ..properties import SNOW_LAYER_PROPERTIES, active_snow
 
 
@@ -20,6 +21,7 @@ def draw_layer_settings(layout, holder):
 
 def draw_snow_layer(layout, snow):
     """The snow's generation settings and what can be done with them."""
+    draw_file_problem(layout, snow.data)
     draw_layer_settings(layout, snow.firn.layer)
     targets = ", ".join(item.object.name for item in snow.firn.targets if item.object) or "none"
     layout.label(text=f"Targets: {targets}")

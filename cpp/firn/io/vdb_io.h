@@ -17,10 +17,16 @@ namespace firn {
 // Active tiles are voxelized first (Cycles renders tiles as empty).
 void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids);
 
-// Every grid in the file, with in-memory (unshifted) transforms. Throws IoError.
+// Every grid in the file, read in full, with in-memory (unshifted) transforms. Throws IoError, also for a
+// damaged (e.g. truncated) file.
 openvdb::GridPtrVec readGrids(const std::string &path);
 
 // The names of the file's grids, from its header alone (no voxel is read). Throws IoError.
 std::vector<std::string> gridNames(const std::string &path);
+
+// Rewrites the file at `path` without the grids named in `names`, atomically as writeGrids does; the other
+// grids, their transforms and the file's metadata are written back unchanged. Returns the names removed; when
+// none is in the file, the file is left untouched. Throws IoError, InvalidArgument if no grid would remain.
+std::vector<std::string> removeGrids(const std::string &path, const std::vector<std::string> &names);
 
 }  // namespace firn

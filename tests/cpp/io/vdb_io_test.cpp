@@ -66,6 +66,68 @@ TEST(VdbIo, FailedWriteLeavesNoFileAndThrows) {
     std::filesystem::remove_all(dir.parent_path());
 }
 
+TEST(VdbIo, FullDiskLeavesThePreviousFileAndNoTemporaryFile) {
+    // The temporary file is a link to /dev/full: every write fails with ENOSPC, as on a full disk.
+    const auto path = tempPath("full.vdb");
+    writeGrids(path.string(), {cubeWithTile(0.1)});
+    const auto before = std::filesystem::file_size(path);
+    const auto temp = std::filesystem::path(path.string() + ".tmp" + std::to_string(::getpid()));
+    std::filesystem::create_symlink("/dev/full", temp);
+    try {
+        writeGrids(path.string(), {cubeWithTile(0.2)});
+        ADD_FAILURE() << "a write to a full disk did not throw";
+    } catch (const IoError &e) {
+        EXPECT_NE(std::string(e.what()).find("No space left on device"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(std::filesystem::symlink_status(temp)));
+    EXPECT_EQ(std::filesystem::file_size(path), before);
+    EXPECT_NEAR(readGrids(path.string())[0]->voxelSize()[0], 0.1, 1e-12);  // the previous file, intact
+    std::filesystem::remove_all(path.parent_path());
+}
+
+TEST(VdbIo, RemoveGridsKeepsTheOthersAsStored) {
+    const auto path = tempPath("remove.vdb");
+    auto source = openvdb::Vec3SGrid::create();
+    source->setName("firn_source");
+    source->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+    source->tree().setValue(openvdb::Coord(1, 2, 3), openvdb::Vec3s(1, 2, 3));
+    auto surface = cubeWithTile(0.1);
+    surface->setName("surface");
+    writeGrids(path.string(), {cubeWithTile(0.1), surface, source});
+
+    EXPECT_EQ(removeGrids(path.string(), {"firn_source", "firn_source_x"}), std::vector<std::string>{"firn_source"});
+    const openvdb::GridPtrVec grids = readGrids(path.string());
+    ASSERT_EQ(grids.size(), 2u);
+    EXPECT_EQ(grids[0]->getName(), "density");
+    EXPECT_EQ(grids[1]->getName(), "surface");
+    auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(grids[0]);
+    EXPECT_EQ(density->activeVoxelCount(), 8u * 8u * 8u + 1u);
+    EXPECT_FLOAT_EQ(density->tree().getValue(openvdb::Coord(20, 0, 0)), 100.0f);
+    EXPECT_NEAR(density->indexToWorld(openvdb::Coord(20, 0, 0)).x(), 2.0, 1e-12);  // not shifted twice
+
+    const auto stamp = std::filesystem::last_write_time(path);
+    EXPECT_TRUE(removeGrids(path.string(), {"firn_source"}).empty());  // nothing to remove: not rewritten
+    EXPECT_EQ(std::filesystem::last_write_time(path), stamp);
+    EXPECT_THROW(removeGrids(path.string(), {"density", "surface"}), InvalidArgument);
+    EXPECT_EQ(readGrids(path.string()).size(), 2u);
+    EXPECT_THROW(removeGrids((path.parent_path() / "none.vdb").string(), {"density"}), IoError);
+    std::filesystem::remove_all(path.parent_path());
+}
+
+TEST(VdbIo, ReadingATruncatedFileThrowsIoError) {
+    const auto path = tempPath("truncated.vdb");
+    auto surface = cubeWithTile(0.1);
+    surface->setName("surface");
+    writeGrids(path.string(), {cubeWithTile(0.1), surface});
+    const auto size = std::filesystem::file_size(path);
+    for (const double kept : {0.95, 0.6, 0.3}) {  // shorter and shorter
+        std::filesystem::resize_file(path, static_cast<std::uintmax_t>(kept * size));
+        EXPECT_THROW(readGrids(path.string()), IoError) << kept;
+        EXPECT_THROW(removeGrids(path.string(), {"surface"}), IoError) << kept;
+    }
+    std::filesystem::remove_all(path.parent_path());
+}
+
 TEST(VdbIo, ReadingAMissingFileThrowsIoError) {
     EXPECT_THROW(readGrids("/nonexistent/firn/none.vdb"), IoError);
 }

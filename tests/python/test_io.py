@@ -1,0 +1,41 @@
+"""Firn's VDB files from Python: taking grids out again (Clear Bake), atomically."""
+
+import os
+
+import numpy as np
+import pytest
+
+import firncore
+
+from test_snow import plane
+
+
+def snow_file(path):
+    firncore.generate_snow_layer(*plane(1.0), settings=firncore.SnowLayerSettings(depth=0.1, seed=1), path=path)
+    return path
+
+
+def test_remove_grids_leaves_the_others_as_they_were(tmp_path):
+    path = snow_file(os.fspath(tmp_path / "snow.vdb"))
+    points = np.random.default_rng(0).uniform([-0.5, -0.5, -0.05], [0.5, 0.5, 0.15], (400, 3)).astype(np.float32)
+    before = {name: firncore.sample_grid(path, name, points) for name in ("density", "surface")}
+    assert firncore.remove_grids(path, ["surface", "firn_source"]) == ["surface"]
+    assert firncore.grid_names(path) == ["density"]
+    assert np.array_equal(firncore.sample_grid(path, "density", points), before["density"])
+    assert sorted(os.listdir(tmp_path)) == ["snow.vdb"]  # no temporary file left
+
+
+def test_remove_grids_of_nothing_leaves_the_file_untouched(tmp_path):
+    path = snow_file(os.fspath(tmp_path / "snow.vdb"))
+    stamp = os.stat(path).st_mtime_ns
+    assert firncore.remove_grids(path, ["firn_source"]) == []
+    assert os.stat(path).st_mtime_ns == stamp
+
+
+def test_remove_grids_refuses_to_empty_a_file_and_reports_missing_files(tmp_path):
+    path = snow_file(os.fspath(tmp_path / "snow.vdb"))
+    with pytest.raises(ValueError, match="empty"):
+        firncore.remove_grids(path, ["density", "surface"])
+    assert sorted(firncore.grid_names(path)) == ["density", "surface"]
+    with pytest.raises(OSError):
+        firncore.remove_grids(os.fspath(tmp_path / "none.vdb"), ["density"])
