@@ -130,14 +130,6 @@ def test_bad_selection_is_reported_and_changes_nothing(clean_scene, setup, messa
     assert set(bpy.data.objects) == objects_before
 
 
-def test_unit_scale_other_than_one_is_refused(clean_scene):
-    ground = add_plane()
-    clean_scene.unit_settings.scale_length = 0.01
-    select_only(ground)
-    with pytest.raises(RuntimeError, match="Unit Scale 1.0"):
-        bpy.ops.firn.add_snow_layer()
-
-
 def test_over_budget_is_reported(clean_scene):
     ground = add_plane(size=20.0)
     select_only(ground)
