@@ -7,23 +7,13 @@ import bmesh
 import bpy
 import numpy as np
 import pytest
-from mathutils import Matrix, Vector
+from mathutils import Vector
 
 from bake_helpers import mean_pixel, needs_core_bake, ortho_camera, render, uniform_world
 from firn.bake import inputs as bake_inputs, state as bake_state
+from firn.common import scene_geometry
 from firn.common.core import firncore
-
-
-def select_only(*objects):
-    bpy.ops.object.select_all(action="DESELECT")
-    for obj in objects:
-        obj.select_set(True)
-    bpy.context.view_layer.objects.active = objects[0] if objects else None
-
-
-def density_at(snow, *points):
-    """Density (kg/m^3) at points given in metres: the grids' space (vdb-contract.md)."""
-    return firncore.sample_grid(bpy.path.abspath(snow.data.filepath), "density", np.array(points, np.float32))
+from scene_helpers import density_at, select_only
 
 
 def add_plane(size, **kwargs):
@@ -255,7 +245,7 @@ def test_particle_instances_are_targets(clean_scene):
     settings.render_type, settings.instance_object, settings.particle_size = "OBJECT", tile, 1.0
     emitter.show_instancer_for_viewport = False  # only the tiles
     bpy.context.view_layer.update()
-    parts = bake_inputs.scene_geometry.evaluated_parts([emitter], bpy.context.evaluated_depsgraph_get())
+    parts = scene_geometry.evaluated_parts([emitter], bpy.context.evaluated_depsgraph_get())
     assert len(parts) == 4 and all(name.startswith("Plane.001 > Plane") for name, *_ in parts)
 
 

@@ -8,18 +8,7 @@ import numpy as np
 import pytest
 
 from firn.common.core import firncore
-
-
-def select_only(*objects):
-    bpy.ops.object.select_all(action="DESELECT")
-    for obj in objects:
-        obj.select_set(True)
-    bpy.context.view_layer.objects.active = objects[0] if objects else None
-
-
-def density_at(snow, *points):
-    path = bpy.path.abspath(snow.data.filepath)
-    return firncore.sample_grid(path, "density", np.array(points, np.float32))
+from scene_helpers import density_at, select_only
 
 
 def add_plane(size=2.0, **kwargs):
