@@ -62,19 +62,25 @@ def _owner(instance):
 def evaluated_parts(objects, depsgraph):
     """[(name, vertices m, triangles, slots, materials)] of everything `objects` put in the scene, evaluated:
     each object's own surface (modifiers applied) and every instance it makes, in world space, metres."""
-    wanted = {obj.as_pointer() for obj in objects}
+    wanted = {obj.as_pointer(): obj for obj in objects}
     metres = metres_per_unit(depsgraph.scene)
-    parts = []
+    parts, seen = [], set()
     # An instance's object is valid only during its step of the iteration: read it there.
     for instance in depsgraph.object_instances:
-        obj = instance.object
-        if obj.type not in MESH_LIKE_TYPES or _owner(instance).as_pointer() not in wanted:
+        obj, owner = instance.object, _owner(instance).as_pointer()
+        if owner not in wanted:
             continue
-        if not instance.is_instance and not instance.show_self:
-            continue  # an emitter that shows only its particles
+        seen.add(owner)
+        if obj.type not in MESH_LIKE_TYPES or not (instance.is_instance or instance.show_self):
+            continue  # an Empty, or an emitter that shows only its particles
         name = f"{instance.parent.name} > {obj.name}" if instance.is_instance else obj.name
-        matrix = np.array(instance.matrix_world, np.float64)
-        parts.append((name, *_mesh_arrays(obj, matrix, metres)))
+        parts.append((name, *_mesh_arrays(obj, np.array(instance.matrix_world, np.float64), metres)))
+    # Objects the viewport hides are not in its depsgraph's list; their own surface still counts (a hidden
+    # occluder collection, a ground hidden after the snow was made).
+    for pointer, obj in wanted.items():
+        if pointer not in seen and is_mesh_like(obj):
+            evaluated = obj.evaluated_get(depsgraph)
+            parts.append((obj.name, *_mesh_arrays(evaluated, np.array(evaluated.matrix_world, np.float64), metres)))
     return parts
 
 
