@@ -131,13 +131,21 @@ def _store_metaballs(snow, metaballs):
     snow.firn.metaballs = holder
 
 
+def _metaball_matrix(holder, metres):
+    """The point mesh's coordinates → world metres. Its parent is the snow, whose space is world metres: the
+    transform relative to it (read from the object itself, so right before the depsgraph updated matrix_world)."""
+    if holder.parent is not None and holder.parent.firn.is_snow:
+        return np.array(holder.matrix_parent_inverse @ holder.matrix_basis, np.float64)
+    return np.array(holder.matrix_world, np.float64) * metres
+
+
 def read_metaballs(holder, metres):
     """The metaball arrays back from the point mesh (after the user edited it), in world metres."""
     mesh = holder.data
     n = len(mesh.vertices)
     centres = np.empty(n * 3, np.float32)
     mesh.vertices.foreach_get("co", centres)
-    matrix = np.array(holder.matrix_world, np.float64) * metres  # its parent, the snow, scales metres to units
+    matrix = _metaball_matrix(holder, metres)
     centres = (centres.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]).astype(np.float32)
     arrays = {"centres": centres}
     for key in ("radii", "bases", "depths"):
