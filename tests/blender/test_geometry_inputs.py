@@ -282,6 +282,7 @@ def test_instanced_occluder_casts_a_shadow_in_the_bake(clean_scene):
     snow = add_snow(add_plane(2.0), depth=0.05, spacing=0.05)
     bpy.ops.mesh.primitive_cube_add(size=0.6)
     collection_instance("Roof", (0.5, 0, 0.6), bpy.context.object)
+    select_only(snow)
     assert bpy.ops.firn.bake_scattering(quality="DRAFT", seed=1) == {"FINISHED"}
     import pyopenvdb
 
