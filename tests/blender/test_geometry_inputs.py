@@ -115,6 +115,16 @@ def test_lengths_are_typed_in_the_scene_units(clean_scene):
     assert snow_top(snow, 0.1, 0.2) == pytest.approx(0.1, abs=0.02)
 
 
+@pytest.mark.parametrize("metres_per_unit", [0.01, 100.0])
+def test_default_lengths_are_metres_at_any_unit_scale(clean_scene, metres_per_unit):
+    """Left at their defaults, depth and spacing are 10 cm and 5 cm (not 1 mm or 10 m) and show so."""
+    clean_scene.unit_settings.scale_length = metres_per_unit
+    snow = add_snow(add_plane(2.0 / metres_per_unit))
+    assert snow.firn.layer.depth * metres_per_unit == pytest.approx(0.1)
+    assert snow.firn.layer.spacing * metres_per_unit == pytest.approx(0.05)
+    assert snow_top(snow, 0.1, 0.2) == pytest.approx(0.1, abs=0.02)
+
+
 def test_rebuild_from_metaballs_keeps_metres(clean_scene):
     _ground, snow = snow_in_a_scene_of_unit_scale(clean_scene, 0.01)
     before = firncore.grid_statistics(bpy.path.abspath(snow.data.filepath), "density")["active_voxels"]

@@ -81,8 +81,8 @@ class Frame:
         if scale <= 0.0 or not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-5):
             raise UserError(
                 f"'{obj.name}' has a non-uniform, negative or zero scale: Cycles stretches the optics of such "
-                "volumes. Baking needs rotation, uniform scale and translation only (Firn snow keeps an identity "
-                "transform)")
+                "volumes. Baking needs rotation, uniform scale and translation only (Firn snow keeps a transform "
+                "that only scales its metres to Blender units: 1 / Unit Scale)")
         self.rotation = rotation  # object → world, for directions
         # Points come in world metres (scene_geometry); matrix_world maps object space to Blender units.
         self.world_to_object = np.linalg.inv(matrix) @ np.diag([1.0 / metres_per_unit] * 3 + [1.0])

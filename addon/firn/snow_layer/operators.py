@@ -17,6 +17,9 @@ from ..material import nodes as materials
 from ..properties import SNOW_LAYER_PROPERTIES, active_snow
 from .ui import draw_layer_settings
 
+LENGTH_SETTINGS = ("depth", "spacing")  # with a non-zero default, in Blender units (voxel size 0 is automatic)
+
+
 def copy_settings(source, target):
     for name in SNOW_LAYER_PROPERTIES:
         setattr(target, name, getattr(source, name))
@@ -244,7 +247,15 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
     def draw(self, _context):
         draw_layer_settings(self.layout, self)
 
+    def physical_defaults(self, metres):
+        """Lengths left at their defaults mean the defaults in metres (10 cm of snow) in any Unit Scale, not
+        1 mm of snow in a centimetre scene."""
+        for name in LENGTH_SETTINGS:
+            if not self.properties.is_property_set(name):
+                setattr(self, name, self.properties.bl_rna.properties[name].default / metres)
+
     def prepare(self, context):
+        self.physical_defaults(scene_geometry.metres_per_unit(context.scene))
         targets = [obj for obj in context.selected_objects if is_snow_target(obj)]
         name = free_object_name("Snow")
         return dict(gather_inputs(context, self, targets, name), name=name, targets_objects=targets)
