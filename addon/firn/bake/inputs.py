@@ -6,8 +6,9 @@
   HDRI, any node world) is rendered by Cycles into a small equirectangular radiance map (W/m²/sr) in the
   convention of cpp/firn/lights.h. The sun disc of a Nishita Sky Texture is measured apart and becomes a sun:
   a half-degree disc is far smaller than a map pixel.
-- Occluders: every rendered mesh-like object that casts shadows (not snow), split by material, each part with
-  its diffuse albedo.
+- Occluders: every rendered mesh-like object or collection instance that casts shadows (not snow), with what it
+  instances (particles, Geometry Nodes), split by object, instance and material, each part with its diffuse
+  albedo.
 
 Everything is given in the snow object's own frame, the space of its grids: Cycles renders a VDB volume in
 object space (a uniform scale leaves the optical path unchanged), so the core bakes there. Firn snow's grids are
