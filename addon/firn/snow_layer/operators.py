@@ -136,7 +136,7 @@ def _store_metaballs(snow, metaballs):
 
 def _metaball_matrix(holder, metres):
     """The point mesh's coordinates → world metres. Its parent is the snow, whose space is world metres: the
-    transform relative to it (read from the object itself, so right before the depsgraph updated matrix_world)."""
+    transform relative to it, read from the object itself (right even before the depsgraph updates matrix_world)."""
     if holder.parent is not None and holder.parent.firn.is_snow:
         return np.array(holder.matrix_parent_inverse @ holder.matrix_basis, np.float64)
     return np.array(holder.matrix_world, np.float64) * metres
