@@ -158,6 +158,20 @@ def bake_snow_at_unit_scale(scene, metres_per_unit, directory):
     return mean_pixel(render(directory, size=(8, 8), name=f"unit_{metres_per_unit:g}"))
 
 
+def test_bake_occluders_are_in_metres_in_a_centimetre_scene(clean_scene):
+    clean_scene.unit_settings.scale_length = 0.01
+    snow = add_snow(add_plane(200.0), depth=10.0, spacing=5.0)
+    bpy.ops.mesh.primitive_cube_add(size=50.0, location=(100.0, 0.0, 100.0))  # 0.5 m at (1, 0, 1) m
+    bpy.context.view_layer.update()
+    frame = bake_inputs.Frame(snow, 0.01)
+    assert frame.is_identity  # the snow's frame is world metres
+    occluders = bake_inputs.gather_occluders(bake_inputs.occluder_objects(bpy.context.view_layer),
+                                             bpy.context.evaluated_depsgraph_get(), frame)
+    (cube,) = [o for o in occluders if o.name == "Cube"]
+    assert cube.vertices.mean(axis=0) == pytest.approx((1.0, 0.0, 1.0), abs=1e-5)
+    assert np.ptp(cube.vertices, axis=0) == pytest.approx((0.5, 0.5, 0.5), abs=1e-5)
+
+
 @needs_core_bake
 def test_bake_of_a_centimetre_scene_is_as_bright(clean_scene, tmp_path):
     """The volume's scale (100) turns Cycles' path lengths back into metres: σt (1/m) and the baked source render
