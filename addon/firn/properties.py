@@ -7,17 +7,19 @@ import bpy
 from .bake import state as bake_state
 from .material import nodes as materials, optics
 
-# Defined once, used by the operator (redo panel) and by the settings kept on each snow object.
+# Defined once, used by the operator (redo panel) and by the settings kept on each snow object. Lengths are in
+# Blender units (unit="LENGTH": shown and typed in the scene's units, Unit Scale applied); the operator turns them
+# into metres for the core, which checks their range in metres (hence no hard maximum here).
 SNOW_LAYER_PROPERTIES = {
     "depth": bpy.props.FloatProperty(
         name="Depth", description="Snow depth on open level ground", subtype="DISTANCE", unit="LENGTH",
-        default=0.1, min=0.001, max=20.0, soft_max=2.0, precision=3),
+        default=0.1, min=1e-6, soft_min=0.001, soft_max=2.0, precision=3),
     "max_slope": bpy.props.FloatProperty(
         name="Maximum Slope", description="Steeper surfaces stay bare; snow thins over the last 15 degrees",
         subtype="ANGLE", default=math.radians(60.0), min=math.radians(1.0), max=math.radians(90.0)),
     "spacing": bpy.props.FloatProperty(
         name="Spacing", description="Distance between landing sites: small gives smooth snow, large gives uneven snow",
-        subtype="DISTANCE", unit="LENGTH", default=0.05, min=0.002, max=10.0, soft_max=1.0, precision=3),
+        subtype="DISTANCE", unit="LENGTH", default=0.05, min=1e-6, soft_min=0.002, soft_max=1.0, precision=3),
     "randomness": bpy.props.FloatProperty(
         name="Randomness", description="Jitter of the depth and of the metaball radii", subtype="FACTOR",
         default=0.25, min=0.0, max=1.0),
@@ -111,7 +113,7 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
     metaballs: bpy.props.PointerProperty(
         type=bpy.types.Object, name="Metaballs", description="Point mesh of the snow's metaballs (edit, then rebuild)")
     voxel_size: bpy.props.FloatProperty(
-        name="Voxel Size", description="Voxel size of the snow volume", subtype="DISTANCE", unit="LENGTH",
+        name="Voxel Size", description="Voxel size of the snow volume in metres (whatever the Unit Scale)",
         default=0.0, min=0.0)
 
     # --- optics: how the snow's density grid becomes light transport (docs/optics.md) ---
@@ -129,9 +131,8 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
     grain_radius: bpy.props.FloatProperty(
         name="Grain Radius",
         description="Optical (effective) radius of the ice grains, 3 / (917 kg/m³ × specific surface area): "
-        "fresh powder 0.05 mm, settled 0.1-0.15 mm, old or wet snow 0.5-1 mm",
-        subtype="DISTANCE",
-        unit="LENGTH",
+        "fresh powder 0.05 mm, settled 0.1-0.15 mm, old or wet snow 0.5-1 mm. In metres whatever the Unit Scale: "
+        "a grain's size belongs to the snow, not to the scene",
         default=_DEFAULT_GRAIN_RADIUS,
         min=1e-6,
         max=0.01,

@@ -129,6 +129,7 @@ void bindSnow(py::module_ &m) {
             });
             py::dict out = describe(layer);
             out["dropped_triangles"] = targets.droppedDegenerate + blockers.droppedDegenerate;
+            out["open_surfaces_turned"] = layer.openSurfaces.surfaces;
             return out;
         },
         py::arg("vertices"), py::arg("triangles"), py::arg("occluders") = py::none(), py::arg("settings"),
@@ -136,7 +137,8 @@ void bindSnow(py::module_ &m) {
         R"doc(Puts snow on the target triangles (world space, m) and writes its `density` and `surface` grids to the
 VDB file at `path` (atomically). `occluders` is None or (vertices, triangles) of everything else that shelters
 the targets. Returns a dict: metaballs (arrays centres, radii, normals, bases, depths), site_count, voxel_size,
-active_voxels, mean_density (kg/m^3), bounds, dropped_triangles. Releases the GIL; raises ValueError for bad
+active_voxels, mean_density (kg/m^3), bounds, dropped_triangles, open_surfaces_turned (open target surfaces
+whose downward normals were ignored: snow lies on their upper side). Releases the GIL; raises ValueError for bad
 input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `progress` is cancelled.)doc");
 
     m.def(

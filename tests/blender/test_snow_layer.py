@@ -8,18 +8,7 @@ import numpy as np
 import pytest
 
 from firn.common.core import firncore
-
-
-def select_only(*objects):
-    bpy.ops.object.select_all(action="DESELECT")
-    for obj in objects:
-        obj.select_set(True)
-    bpy.context.view_layer.objects.active = objects[0] if objects else None
-
-
-def density_at(snow, *points):
-    path = bpy.path.abspath(snow.data.filepath)
-    return firncore.sample_grid(path, "density", np.array(points, np.float32))
+from scene_helpers import density_at, select_only
 
 
 def add_plane(size=2.0, **kwargs):
@@ -128,14 +117,6 @@ def test_bad_selection_is_reported_and_changes_nothing(clean_scene, setup, messa
     with pytest.raises(RuntimeError, match=message):
         bpy.ops.firn.add_snow_layer()
     assert set(bpy.data.objects) == objects_before
-
-
-def test_unit_scale_other_than_one_is_refused(clean_scene):
-    ground = add_plane()
-    clean_scene.unit_settings.scale_length = 0.01
-    select_only(ground)
-    with pytest.raises(RuntimeError, match="Unit Scale 1.0"):
-        bpy.ops.firn.add_snow_layer()
 
 
 def test_over_budget_is_reported(clean_scene):

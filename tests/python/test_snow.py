@@ -122,3 +122,15 @@ def test_pyopenvdb_still_imports_after_firncore_used_openvdb(tmp_path):
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=os.environ)
     assert done.returncode == 0, done.stderr
     assert int(done.stdout) > 0
+
+
+def test_open_surface_facing_down_gets_snow_on_its_upper_side(tmp_vdb):
+    """A plane wound clockwise seen from above (normals down) is open: its normals are ignored and counted."""
+    vertices, triangles = plane()
+    result = firncore.generate_snow_layer(vertices, triangles[:, ::-1].copy(),
+                                          settings=firncore.SnowLayerSettings(depth=0.1), path=tmp_vdb)
+    assert result["open_surfaces_turned"] == 1
+    above, below = firncore.sample_grid(tmp_vdb, "density", np.array([[0, 0, 0.05], [0, 0, -0.05]], np.float32))
+    assert above > 100.0 and below == 0.0
+    upright = firncore.generate_snow_layer(*plane(), settings=firncore.SnowLayerSettings(depth=0.1), path=tmp_vdb)
+    assert upright["open_surfaces_turned"] == 0

@@ -6,12 +6,14 @@
   HDRI, any node world) is rendered by Cycles into a small equirectangular radiance map (W/m²/sr) in the
   convention of cpp/firn/lights.h. The sun disc of a Nishita Sky Texture is measured apart and becomes a sun:
   a half-degree disc is far smaller than a map pixel.
-- Occluders: every rendered mesh-like object that casts shadows (not snow), split by material, each part with
-  its diffuse albedo.
+- Occluders: every rendered mesh-like object or collection instance that casts shadows (not snow), with what it
+  instances (particles, Geometry Nodes), split by object, instance and material, each part with its diffuse
+  albedo.
 
 Everything is given in the snow object's own frame, the space of its grids: Cycles renders a VDB volume in
-object space (a uniform scale leaves the optical path unchanged), so the core bakes there. Firn snow keeps an
-identity transform, so for it this is world space.
+object space (a uniform scale leaves the optical path unchanged), so the core bakes there. Firn snow's grids are
+in world metres and its transform scales metres to Blender units (identity at Unit Scale 1), so for it this is
+world space in metres.
 """
 
 import hashlib
@@ -71,9 +73,9 @@ class BakeInputs:
 
 
 class Frame:
-    """The snow object's frame: world → object space for points and directions."""
+    """The snow object's frame: world (metres) → object space for points and directions."""
 
-    def __init__(self, obj):
+    def __init__(self, obj, metres_per_unit=1.0):
         matrix = np.array(obj.matrix_world, np.float64)
         linear = matrix[:3, :3]
         scale = np.cbrt(np.linalg.det(linear))
@@ -81,11 +83,12 @@ class Frame:
         if scale <= 0.0 or not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-5):
             raise UserError(
                 f"'{obj.name}' has a non-uniform, negative or zero scale: Cycles stretches the optics of such "
-                "volumes. Baking needs rotation, uniform scale and translation only (Firn snow keeps an identity "
-                "transform)")
+                "volumes. Baking needs rotation, uniform scale and translation only (Firn snow keeps a transform "
+                "that only scales its metres to Blender units: 1 / Unit Scale)")
         self.rotation = rotation  # object → world, for directions
-        self.world_to_object = np.linalg.inv(matrix)
-        self.is_identity = np.allclose(matrix, np.eye(4), atol=1e-9)
+        # Points come in world metres (scene_geometry); matrix_world maps object space to Blender units.
+        self.world_to_object = np.linalg.inv(matrix) @ np.diag([1.0 / metres_per_unit] * 3 + [1.0])
+        self.is_identity = np.allclose(self.world_to_object, np.eye(4), atol=1e-9)
 
     def direction(self, world_direction):
         local = self.rotation.T @ np.asarray(world_direction, np.float64)
@@ -122,8 +125,10 @@ def lamp_objects(view_layer):
 
 
 def occluder_objects(view_layer):
-    """Rendered mesh-like objects that cast shadows in Cycles; snow volumes are never occluders."""
-    return [obj for obj in rendered_objects(view_layer) if scene_geometry.is_mesh_like(obj) and obj.visible_shadow]
+    """Rendered objects that cast shadows in Cycles, mesh-like ones and collection instances (their instances
+    come with them: scene_geometry); snow volumes are never occluders."""
+    return [obj for obj in rendered_objects(view_layer)
+            if scene_geometry.makes_geometry(obj) and obj.visible_shadow]
 
 
 # --- suns -----------------------------------------------------------------------------------------------------
@@ -396,11 +401,11 @@ def diffuse_albedo(material):
 
 
 def gather_occluders(objects, depsgraph, frame):
+    """One Occluder per object or instance and material, modifiers applied."""
     occluders = []
-    for obj in objects:
-        for vertices, triangles, material in scene_geometry.world_triangles_by_material(obj, depsgraph):
-            name = obj.name if material is None else f"{obj.name} [{material.name}]"
-            occluders.append(Occluder(name, frame.points(vertices), triangles, diffuse_albedo(material)))
+    for name, vertices, triangles, material in scene_geometry.world_triangles_by_material(objects, depsgraph):
+        name = name if material is None else f"{name} [{material.name}]"
+        occluders.append(Occluder(name, frame.points(vertices), triangles, diffuse_albedo(material)))
     return occluders
 
 
@@ -408,9 +413,8 @@ def gather_occluders(objects, depsgraph, frame):
 
 def gather(context, snow, sky_cache=None):
     """BakeInputs of one snow object. Renders the world when it is not a plain colour (a second or two)."""
-    scene_geometry.check_unit_scale(context.scene)
     depsgraph = context.evaluated_depsgraph_get()  # first: it also brings every matrix_world up to date
-    frame = Frame(snow)
+    frame = Frame(snow, scene_geometry.metres_per_unit(context.scene))
     view_layer = context.view_layer
     suns, ignored = gather_suns(lamp_objects(view_layer), frame)
     sky, sky_suns, sky_warnings = gather_sky(context.scene, frame, sky_cache)
@@ -517,7 +521,8 @@ def signature(context, snow):
     view_layer = context.view_layer
     depsgraph = context.evaluated_depsgraph_get()
     try:
-        suns, ignored = gather_suns(lamp_objects(view_layer), Frame(snow))
+        frame = Frame(snow, scene_geometry.metres_per_unit(context.scene))
+        suns, ignored = gather_suns(lamp_objects(view_layer), frame)
         lights = tuple((s.name, rounded(s.direction), rounded(s.irradiance), round(s.angular_diameter, 7))
                        for s in suns), tuple(ignored)
     except UserError as error:

@@ -1,4 +1,11 @@
-"""Blender objects to world-space triangle arrays for the core (numpy, metres)."""
+"""Blender objects to world-space triangle arrays for the core (numpy, metres).
+
+Blender units become metres here, at the seam: one Blender unit is Scene > Units > Unit Scale metres. Objects are
+read through the evaluated depsgraph, so modifiers are applied and what an object instances (a collection
+instance, a particle system's objects, Geometry Nodes instances) comes with it, each copy at its own place.
+"""
+
+import math
 
 import numpy as np
 
@@ -8,18 +15,23 @@ from .errors import UserError
 MESH_LIKE_TYPES = {"MESH", "SURFACE", "CURVE", "FONT", "META"}
 
 
-def check_unit_scale(scene):
-    if abs(scene.unit_settings.scale_length - 1.0) > 1e-6:
-        raise UserError(
-            f"Firn works in metres and needs Unit Scale 1.0 (this scene has {scene.unit_settings.scale_length:g}); "
-            "set it in Scene Properties > Units and scale the objects instead"
-        )
+def metres_per_unit(scene):
+    """Metres in one Blender unit: Scene > Units > Unit Scale (0.01 in a centimetre scene)."""
+    scale = scene.unit_settings.scale_length
+    if not (math.isfinite(scale) and scale > 0.0):
+        raise UserError(f"Scene > Units > Unit Scale must be a positive number of metres per unit (it is {scale:g})")
+    return scale
 
 
-def _evaluated_triangles(obj, depsgraph):
+def unit_matrix(scene):
+    """The 4 × 4 transform from metres to Blender units: what a snow Volume (grids in metres) carries."""
+    return np.diag([1.0 / metres_per_unit(scene)] * 3 + [1.0])
+
+
+def _mesh_arrays(evaluated, matrix, metres):
     """(vertices (N, 3) float32 world m, triangles (M, 3) uint32, material slot per triangle (M,) int32,
-    materials by slot) of the evaluated object. Mirroring transforms flip the winding (faces keep pointing out)."""
-    evaluated = obj.evaluated_get(depsgraph)
+    materials by slot) of an evaluated object placed by `matrix` (Blender units). Mirroring transforms flip the
+    winding (faces keep pointing out)."""
     materials = [slot.material for slot in evaluated.material_slots]
     mesh = evaluated.to_mesh()
     try:
@@ -34,8 +46,7 @@ def _evaluated_triangles(obj, depsgraph):
         mesh.loop_triangles.foreach_get("material_index", slots)
     finally:
         evaluated.to_mesh_clear()
-    matrix = np.array(evaluated.matrix_world, np.float64)
-    linear, translation = matrix[:3, :3], matrix[:3, 3]
+    linear, translation = matrix[:3, :3] * metres, matrix[:3, 3] * metres
     vertices = (local.reshape(-1, 3).astype(np.float64) @ linear.T + translation).astype(np.float32)
     triangles = corners.reshape(-1, 3).astype(np.uint32)
     if np.linalg.det(linear) < 0.0:
@@ -43,25 +54,54 @@ def _evaluated_triangles(obj, depsgraph):
     return vertices, triangles, slots, materials
 
 
-def world_triangles(obj, depsgraph):
-    """(vertices (N, 3) float32 m, triangles (M, 3) uint32) of the evaluated object, in world space.
-
-    A negative-determinant transform (mirroring) keeps faces pointing outward: their winding is flipped.
-    """
-    vertices, triangles, _slots, _materials = _evaluated_triangles(obj, depsgraph)
-    return vertices, triangles
+def _owner(instance):
+    """The original object a depsgraph entry belongs to: the instancer for an instance, else the object."""
+    return (instance.parent if instance.is_instance else instance.object).original
 
 
-def world_triangles_by_material(obj, depsgraph):
-    """[(vertices, triangles, material or None)]: the evaluated object's world triangles, one part per
-    material slot that has faces, each with only the vertices its triangles use."""
-    vertices, triangles, slots, materials = _evaluated_triangles(obj, depsgraph)
+def evaluated_parts(objects, depsgraph):
+    """[(name, vertices m, triangles, slots, materials)] of everything `objects` put in the scene, evaluated:
+    each object's own surface (modifiers applied) and every instance it makes, in world space, metres."""
+    wanted = {obj.as_pointer(): obj for obj in objects}
+    metres = metres_per_unit(depsgraph.scene)
+    parts, seen = [], set()
+    # An instance's object is valid only during its step of the iteration: read it there.
+    for instance in depsgraph.object_instances:
+        obj, owner = instance.object, _owner(instance).as_pointer()
+        if owner not in wanted:
+            continue
+        seen.add(owner)
+        if obj.type not in MESH_LIKE_TYPES or not (instance.is_instance or instance.show_self):
+            continue  # an Empty, or an emitter that shows only its particles
+        name = f"{instance.parent.name} > {obj.name}" if instance.is_instance else obj.name
+        parts.append((name, *_mesh_arrays(obj, np.array(instance.matrix_world, np.float64), metres)))
+    # Objects the viewport hides are not in its depsgraph's list; their own surface still counts (a hidden
+    # occluder collection, a ground hidden after the snow was made).
+    for pointer, obj in wanted.items():
+        if pointer not in seen and is_mesh_like(obj):
+            evaluated = obj.evaluated_get(depsgraph)
+            parts.append((obj.name, *_mesh_arrays(evaluated, np.array(evaluated.matrix_world, np.float64), metres)))
+    return parts
+
+
+def world_triangles(objects, depsgraph):
+    """(vertices (N, 3) float32 m, triangles (M, 3) uint32) of the evaluated objects and their instances joined
+    into one, in world space; None when none has a triangle."""
+    return concatenate((vertices, triangles) for _name, vertices, triangles, _slots, _materials
+                       in evaluated_parts(objects, depsgraph))
+
+
+def world_triangles_by_material(objects, depsgraph):
+    """[(name, vertices, triangles, material or None)]: the world triangles of the evaluated objects and their
+    instances, one part per object or instance and material slot that has faces, each with only the vertices
+    its triangles use."""
     parts = []
-    for slot in np.unique(slots):
-        used = triangles[slots == slot]
-        kept, remapped = np.unique(used, return_inverse=True)
-        material = materials[slot] if 0 <= slot < len(materials) else None
-        parts.append((vertices[kept], remapped.reshape(-1, 3).astype(np.uint32), material))
+    for name, vertices, triangles, slots, materials in evaluated_parts(objects, depsgraph):
+        for slot in np.unique(slots):
+            used = triangles[slots == slot]
+            kept, remapped = np.unique(used, return_inverse=True)
+            material = materials[slot] if 0 <= slot < len(materials) else None
+            parts.append((name, vertices[kept], remapped.reshape(-1, 3).astype(np.uint32), material))
     return parts
 
 
@@ -79,10 +119,16 @@ def concatenate(meshes):
     return np.concatenate(vertex_parts), np.concatenate(triangle_parts)
 
 
-def merged_triangles(objects, depsgraph):
-    """All objects' world triangles joined into one (vertices, triangles) pair; None when there are none."""
-    return concatenate(world_triangles(obj, depsgraph) for obj in objects)
-
-
 def is_mesh_like(obj):
     return obj.type in MESH_LIKE_TYPES and not obj.firn.is_snow
+
+
+def is_instancer(obj):
+    """An Empty that instances a collection (mesh-like objects bring their particle and Geometry Nodes
+    instances themselves)."""
+    return obj.type == "EMPTY" and obj.instance_type == "COLLECTION" and obj.instance_collection is not None
+
+
+def makes_geometry(obj):
+    """Objects whose evaluated surface or instances can hold or stop snow."""
+    return is_mesh_like(obj) or is_instancer(obj)

@@ -7,6 +7,7 @@ import os
 
 import bpy
 import numpy as np
+from mathutils import Matrix
 
 from ..common import cache, preferences, scene_geometry
 from ..common.core import firncore
@@ -16,18 +17,23 @@ from ..material import nodes as materials
 from ..properties import SNOW_LAYER_PROPERTIES, active_snow
 from .ui import draw_layer_settings
 
+LENGTH_SETTINGS = ("depth", "spacing")  # with a non-zero default, in Blender units (voxel size 0 is automatic)
+
+
 def copy_settings(source, target):
     for name in SNOW_LAYER_PROPERTIES:
         setattr(target, name, getattr(source, name))
 
 
-def core_settings(props, max_voxels):
-    """firncore.SnowLayerSettings from any holder of SNOW_LAYER_PROPERTIES."""
+def core_settings(props, max_voxels, metres):
+    """firncore.SnowLayerSettings from any holder of SNOW_LAYER_PROPERTIES. Its lengths are Blender units (what
+    the user types and sees, shown in the scene's units), `metres` per unit: the core gets metres."""
     return firncore.SnowLayerSettings(
-        depth=props.depth, max_slope=props.max_slope, spacing=props.spacing, randomness=props.randomness,
-        smoothness=props.smoothness, direction=tuple(props.direction), spread=props.spread,
-        compaction=props.compaction, density_top=props.density_top, density_bottom=props.density_bottom,
-        seed=props.seed, voxel_size=props.voxel_size, max_voxels=max_voxels)
+        depth=props.depth * metres, max_slope=props.max_slope, spacing=props.spacing * metres,
+        randomness=props.randomness, smoothness=props.smoothness, direction=tuple(props.direction),
+        spread=props.spread, compaction=props.compaction, density_top=props.density_top,
+        density_bottom=props.density_bottom, seed=props.seed, voxel_size=props.voxel_size * metres,
+        max_voxels=max_voxels)
 
 
 def _max_voxels():
@@ -36,21 +42,20 @@ def _max_voxels():
 
 
 def is_snow_target(obj):
-    """Objects snow can lie on: anything that evaluates to a mesh, and earlier snow (layers stack)."""
-    return scene_geometry.is_mesh_like(obj) or (obj.type == "VOLUME" and obj.firn.is_snow)
+    """Objects snow can lie on: anything that evaluates to a mesh, collection instances, and earlier snow
+    (layers stack)."""
+    return scene_geometry.makes_geometry(obj) or (obj.type == "VOLUME" and obj.firn.is_snow)
 
 
 def _triangles(objects, depsgraph):
-    """World triangles of mesh-like objects and of the surface of snow objects."""
-    meshes = []
+    """World triangles (m) of mesh-like objects with their instances, and of the surface of snow objects (their
+    grids are in world metres already: vdb-contract.md)."""
+    meshes = [scene_geometry.world_triangles([obj for obj in objects if obj.type != "VOLUME"], depsgraph)]
     for obj in objects:
-        if obj.type == "VOLUME":
-            path = bpy.path.abspath(obj.data.filepath)
-            if os.path.exists(path):
-                meshes.append(firncore.snow_surface_mesh(path))
-        else:
-            meshes.append(scene_geometry.world_triangles(obj, depsgraph))
-    return scene_geometry.concatenate(meshes)
+        path = bpy.path.abspath(obj.data.filepath) if obj.type == "VOLUME" else ""
+        if os.path.exists(path):
+            meshes.append(firncore.snow_surface_mesh(path))
+    return scene_geometry.concatenate(mesh for mesh in meshes if mesh is not None)
 
 
 def _occluder_objects(context, props, targets):
@@ -63,15 +68,15 @@ def _occluder_objects(context, props, targets):
         candidates = [obj for obj in context.view_layer.objects if obj.visible_get()]
     # Earlier snow shelters nothing: a second layer on the same objects overlaps the first; to stack a layer on
     # earlier snow, select the snow as a target.
-    return [obj for obj in candidates if scene_geometry.is_mesh_like(obj) and obj not in targets]
+    return [obj for obj in candidates if scene_geometry.makes_geometry(obj) and obj not in targets]
 
 
 def gather_inputs(context, props, targets, object_name):
     """Everything the core needs, read from Blender on the main thread."""
-    scene_geometry.check_unit_scale(context.scene)
+    metres = scene_geometry.metres_per_unit(context.scene)
     if not targets:
-        raise UserError("Select the objects to cover with snow (meshes, curves, surfaces, text, metaballs "
-                        "or earlier snow)")
+        raise UserError("Select the objects to cover with snow (meshes, curves, surfaces, text, metaballs, "
+                        "collection instances or earlier snow)")
     depsgraph = context.evaluated_depsgraph_get()
     target_arrays = _triangles(targets, depsgraph)
     if target_arrays is None:
@@ -79,7 +84,7 @@ def gather_inputs(context, props, targets, object_name):
     occluders = _triangles(_occluder_objects(context, props, targets), depsgraph)
     path, stored_path = cache.snow_file(object_name)
     cache.check_writable(path)
-    settings = core_settings(props, _max_voxels())
+    settings = core_settings(props, _max_voxels(), metres)
     try:
         settings.validate()
     except ValueError as error:
@@ -87,6 +92,7 @@ def gather_inputs(context, props, targets, object_name):
     return {
         "targets": target_arrays, "occluders": occluders, "settings": settings, "path": path,
         "stored_path": stored_path, "surface_mesh": props.surface_mesh,
+        "unit_matrix": scene_geometry.unit_matrix(context.scene),
     }
 
 
@@ -98,6 +104,17 @@ def compute_snow(inputs, progress):
     if inputs["surface_mesh"]:
         result["surface"] = firncore.snow_surface_mesh(inputs["path"])
     return result
+
+
+def input_notes(result):
+    """What the core did to the input geometry, for the operator's report: "" when nothing."""
+    notes = []
+    if result.get("dropped_triangles"):
+        notes.append(f"{result['dropped_triangles']} degenerate faces skipped")
+    if result.get("open_surfaces_turned"):
+        notes.append(f"normals ignored on {result['open_surfaces_turned']} open surface(s) facing down: snow falls "
+                     "on their upper side")
+    return "".join(f"; {note}" for note in notes)
 
 
 def _store_metaballs(snow, metaballs):
@@ -118,13 +135,21 @@ def _store_metaballs(snow, metaballs):
     snow.firn.metaballs = holder
 
 
-def read_metaballs(holder):
-    """The metaball arrays back from the point mesh (after the user edited it)."""
+def _metaball_matrix(holder, metres):
+    """The point mesh's coordinates → world metres. Its parent is the snow, whose space is world metres: the
+    transform relative to it, read from the object itself (right even before the depsgraph updates matrix_world)."""
+    if holder.parent is not None and holder.parent.firn.is_snow:
+        return np.array(holder.matrix_parent_inverse @ holder.matrix_basis, np.float64)
+    return np.array(holder.matrix_world, np.float64) * metres
+
+
+def read_metaballs(holder, metres):
+    """The metaball arrays back from the point mesh (after the user edited it), in world metres."""
     mesh = holder.data
     n = len(mesh.vertices)
     centres = np.empty(n * 3, np.float32)
     mesh.vertices.foreach_get("co", centres)
-    matrix = np.array(holder.matrix_world, np.float64)
+    matrix = _metaball_matrix(holder, metres)
     centres = (centres.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]).astype(np.float32)
     arrays = {"centres": centres}
     for key in ("radii", "bases", "depths"):
@@ -166,7 +191,10 @@ def _remove_children(snow):
 
 
 def write_snow(snow, inputs, result):
-    """Points the snow Volume at its new file and refreshes everything derived from it."""
+    """Points the snow Volume at its new file and refreshes everything derived from it. The grids are in world
+    metres; the object's transform turns them into Blender units (vdb-contract.md), and its children (metaballs,
+    surface mesh, in metres too) follow it."""
+    snow.matrix_world = Matrix(inputs["unit_matrix"].tolist())
     volume = snow.data
     volume.filepath = inputs["stored_path"]
     cache.file_fixed(volume)
@@ -221,7 +249,15 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
     def draw(self, _context):
         draw_layer_settings(self.layout, self)
 
+    def physical_defaults(self, metres):
+        """Lengths left at their defaults mean the defaults in metres (10 cm of snow) in any Unit Scale, not
+        1 mm of snow in a centimetre scene."""
+        for name in LENGTH_SETTINGS:
+            if not self.properties.is_property_set(name):
+                setattr(self, name, self.properties.bl_rna.properties[name].default / metres)
+
     def prepare(self, context):
+        self.physical_defaults(scene_geometry.metres_per_unit(context.scene))
         targets = [obj for obj in context.selected_objects if is_snow_target(obj)]
         name = free_object_name("Snow")
         return dict(gather_inputs(context, self, targets, name), name=name, targets_objects=targets)
@@ -238,10 +274,9 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
             obj.select_set(False)
         snow.select_set(True)
         context.view_layer.objects.active = snow
-        dropped = result["dropped_triangles"]
-        note = f", {dropped} degenerate faces skipped" if dropped else ""
         self.report({"INFO"}, f"Snow on {len(inputs['targets_objects'])} objects: "
-                              f"{result['active_voxels']:,} voxels of {result['voxel_size'] * 1000:.1f} mm{note}")
+                              f"{result['active_voxels']:,} voxels of {result['voxel_size'] * 1000:.1f} mm"
+                              f"{input_notes(result)}")
 
 
 class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
@@ -271,6 +306,9 @@ class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
 
     def apply(self, context, inputs, result):
         write_snow(bpy.data.objects[inputs["name"]], inputs, result)
+        notes = input_notes(result)
+        if notes:
+            self.report({"INFO"}, f"Snow regenerated{notes}")
 
 
 class FIRN_OT_rebuild_from_metaballs(FirnJobMixin, bpy.types.Operator):
@@ -291,11 +329,13 @@ class FIRN_OT_rebuild_from_metaballs(FirnJobMixin, bpy.types.Operator):
 
     def prepare(self, context):
         snow = active_snow(context)
-        settings = core_settings(snow.firn.layer, _max_voxels())
+        metres = scene_geometry.metres_per_unit(context.scene)
+        settings = core_settings(snow.firn.layer, _max_voxels(), metres)
         path, stored_path = cache.snow_file(snow.name)
         cache.check_writable(path)
-        return {"name": snow.name, "metaballs": read_metaballs(snow.firn.metaballs), "settings": settings,
-                "path": path, "stored_path": stored_path, "surface_mesh": snow.firn.layer.surface_mesh}
+        return {"name": snow.name, "metaballs": read_metaballs(snow.firn.metaballs, metres), "settings": settings,
+                "path": path, "stored_path": stored_path, "surface_mesh": snow.firn.layer.surface_mesh,
+                "unit_matrix": scene_geometry.unit_matrix(context.scene)}
 
     @staticmethod
     def compute(inputs, progress):

@@ -87,15 +87,19 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
     layer.voxelSize = settings.effectiveVoxelSize();
     if (progress) progress->report(0.0, "finding where snow lands");
 
-    const RayCaster shelter(merge({targets, occluders}));
-    const auto sites = findLandingSites(targets, shelter, settings.snowfall(), SubProgress(progress, 0.0, 0.4));
+    TriangleMesh oriented = targets;
+    layer.openSurfaces = orientOpenSurfaces(oriented, -glm::normalize(settings.direction));
+    const RayCaster shelter(merge({oriented, occluders}));
+    const auto sites = findLandingSites(oriented, shelter, settings.snowfall(), SubProgress(progress, 0.0, 0.4));
     layer.siteCount = sites.size();
     layer.metaballs = layoutMetaballs(sites, settings.layout());
     const RasterSettings raster = settings.raster();
     const double estimate = estimateVoxelCount(layer.metaballs, settings.spacing, raster.voxelSize);
     checkVoxelBudget(estimate, raster);
     if (layer.metaballs.empty()) throw InvalidArgument(
-        "no snow lands on the targets: every surface is sheltered, facing down or steeper than the maximum slope");
+        "no snow lands on the targets: every surface is sheltered, steeper than the maximum slope or the underside "
+        "of a closed object (if a closed object's normals point inward, recalculate them: Mesh > Normals > "
+        "Recalculate Outside)");
     if (progress) progress->report(0.45, "building the snow volume");
     layer.grids = rasterizeSnow(layer.metaballs, raster, SubProgress(progress, 0.45, 1.0));
     if (progress) progress->report(1.0, "done");

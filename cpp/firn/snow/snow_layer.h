@@ -6,6 +6,7 @@
 #include <glm/vec3.hpp>
 
 #include "firn/geometry/mesh.h"
+#include "firn/geometry/orientation.h"
 #include "firn/snow/metaball_layout.h"
 #include "firn/snow/snow_rasterizer.h"
 #include "firn/snow/snowfall.h"
@@ -45,10 +46,12 @@ struct SnowLayer {
     SnowGrids grids;
     std::size_t siteCount = 0;
     double voxelSize = 0.0;           // m
+    Reorientation openSurfaces;       // open target surfaces turned to face up (their normals ignored)
 };
 
 // Add Snow Layer's whole computation: landing sites on `targets`, sheltered by `occluders` and by the
-// targets themselves; metaball columns; the density and surface grids. Checks the voxel budget before
+// targets themselves; metaball columns; the density and surface grids. Open target surfaces take snow on their
+// upper side whatever their winding (orientOpenSurfaces); closed ones keep their normals. Checks the voxel budget before
 // allocating. Reports to and can be cancelled through `progress` (may be null).
 SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occluders,
                             const SnowLayerSettings &settings, Progress *progress);

@@ -1,0 +1,23 @@
+#pragma once
+
+#include <cstddef>
+
+#include <glm/vec3.hpp>
+
+#include "firn/geometry/mesh.h"
+
+namespace firn {
+
+// What orientOpenSurfaces changed.
+struct Reorientation {
+    std::size_t surfaces = 0;   // open components with at least one triangle turned
+    std::size_t triangles = 0;  // triangles whose winding was reversed
+};
+
+// Snow falls on the upper side of a sheet whatever its normals say, but only a closed surface has an inside.
+// Splits the mesh into edge-connected components (vertices welded by exact position, so unwelded imports still
+// connect); a component with a boundary edge (an edge of one triangle) is open, and its triangles facing away
+// from `up` are reversed to face it. Closed components keep their winding: their normals say where the inside is.
+Reorientation orientOpenSurfaces(TriangleMesh &mesh, const glm::vec3 &up);
+
+}  // namespace firn
