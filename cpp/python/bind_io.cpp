@@ -31,12 +31,19 @@ void bindIo(py::module_ &m) {
     m.def(
         "grid_names",
         [](const std::string &path) { return longCall([&] { return firn::gridNames(path); }); },
-        py::arg("path"), "Names of the grids in a VDB file.");
+        py::arg("path"), "Names of the grids in a VDB file, from its header (no voxel is read).");
+    m.def(
+        "verify_file",
+        [](const std::string &path) {
+            longCall([&] { firn::readGrids(path); });
+        },
+        py::arg("path"),
+        "Reads every grid of the VDB file at `path`, as a bake does. Raises OSError if it is missing or damaged "
+        "(truncated, corrupted), which a header read alone does not notice.");
     m.def(
         "remove_grids",
         [](const std::string &path, const std::vector<std::string> &names) {
-            py::gil_scoped_release release;
-            return firn::removeGrids(path, names);
+            return longCall([&] { return firn::removeGrids(path, names); });
         },
         py::arg("path"), py::arg("names"),
         "Rewrites the VDB file at `path` without the named grids (atomically: temporary file, then rename); the "

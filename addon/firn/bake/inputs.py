@@ -485,12 +485,21 @@ def world_signature(world):
     return world.name, tuple(world.color), world.use_nodes, world.cycles_visibility.scatter, tree
 
 
+def _positions_digest(positions):
+    """CRC-32 of float32 positions with each float's 4 lowest mantissa bits cleared (a relative 2e-6), so float
+    noise does not flip it; a CRC catches any single changed float."""
+    positions = positions + np.float32(0.0)  # -0.0 becomes 0.0
+    return zlib.crc32(np.bitwise_and(positions.view(np.uint32), np.uint32(0xFFFFFFF0)))
+
+
 def geometry_digest(obj, depsgraph):
     """Digest of the evaluated object's shape: its vertex positions (object space, modifiers applied; the
-    transform is digested apart) and its vertex and face counts, so that moving one vertex changes it. Each
-    float's 4 lowest mantissa bits are cleared (a relative 2e-6) so float noise does not flip it. A CRC-32 is
-    enough (it catches any single changed float) and cheap: about 4 ms for a million triangles (to_mesh() and a
-    SHA-1 would take 200 ms: a mesh's evaluated data is read in place)."""
+    transform is digested apart) and its vertex and face counts, so that moving one vertex changes it. Cheap:
+    about 4 ms for a million triangles (to_mesh() and a SHA-1 would take 200 ms: a mesh's evaluated data is read
+    in place). An object without a surface of its own (a collection instance) digests its instances' shapes."""
+    if not scene_geometry.is_mesh_like(obj):
+        return tuple((name, _positions_digest(vertices), len(triangles)) for name, vertices, triangles, *_rest
+                     in scene_geometry.evaluated_parts([obj], depsgraph))
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.data if obj.type == "MESH" else evaluated.to_mesh()  # a mesh's evaluated data: no copy
     try:
@@ -498,9 +507,7 @@ def geometry_digest(obj, depsgraph):
             return None
         positions = np.empty(len(mesh.vertices) * 3, np.float32)
         mesh.vertices.foreach_get("co", positions)
-        positions += 0.0  # -0.0 becomes 0.0
-        bits = np.bitwise_and(positions.view(np.uint32), np.uint32(0xFFFFFFF0), out=positions.view(np.uint32))
-        return zlib.crc32(bits), len(mesh.vertices), len(mesh.polygons), len(mesh.loops)
+        return _positions_digest(positions), len(mesh.vertices), len(mesh.polygons), len(mesh.loops)
     finally:
         if obj.type != "MESH":
             evaluated.to_mesh_clear()

@@ -75,6 +75,15 @@ def _check_volume(obj):
     return path
 
 
+def _verify(job):
+    """Worker thread: reads the whole snow file (the main thread only read its header), so a damaged one is
+    reported as such rather than as a failed write of the staged copy."""
+    try:
+        firncore.verify_file(job["path"])
+    except OSError as error:
+        raise UserError(f"Cannot read the volume of '{job['name']}' ({error}). {REBUILD_ADVICE}") from error
+
+
 def _volume_optics(obj):
     try:
         return optics.volume_optics(obj.firn)
@@ -228,6 +237,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
                 if progress.cancelled:
                     raise firncore.Cancelled("cancelled")
                 started = time.perf_counter()
+                _verify(job)
                 cache.core_write(_stage, job["path"], job["staged"])
                 cache.core_write(core_bake, job["staged"], job["optics"], job["inputs"], inputs["quality"],
                                  inputs["seed"], progress)

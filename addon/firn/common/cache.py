@@ -77,7 +77,7 @@ def core_write(write, *args):
 def unreadable(path):
     """Why the core cannot read the VDB file at `path` (it reads it all), or None."""
     try:
-        firncore.grid_names(path)
+        firncore.verify_file(path)
     except (OSError, ValueError, RuntimeError) as error:
         return str(error)
     return None
