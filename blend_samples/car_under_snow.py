@@ -88,7 +88,7 @@ def main():
     stages.run("bake scattering", common.bake, [snow])
     stages.run("render (Cycles)", common.render, scene, args.output, args.width, args.samples)
     if not args.no_save:
-        stages.run("save .blend", common.save_next_to, __file__)
+        stages.run("save .blend", common.save_next_to, __file__, args.blend)
     print(f"firn sample: total {stages.total():.2f} s -> {args.output}")
 
 

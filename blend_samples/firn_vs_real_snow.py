@@ -59,11 +59,13 @@ def main():
     panels = [os.path.join(folder, "real_snow.png"), os.path.join(folder, "firn.png")]
     scene, targets = stages.run("build scene", build_scene)
     stages.run("Real Snow", real_snow, targets)
-    stages.run("render Real Snow", common.render, scene, panels[0], args.width // 2, args.samples, aspect=(1, 1))
+    stages.run("render Real Snow", common.render, scene, panels[0], args.width // 2, args.samples, aspect=(1, 1),
+               label="Real Snow (Blender)")
     scene, targets = stages.run("build scene again", build_scene)
     snow = stages.run("Firn: add snow layer", common.add_snow, targets, depth=0.1, spacing=0.04)
     stages.run("Firn: bake", common.bake, [snow])
-    stages.run("render Firn", common.render, scene, panels[1], args.width // 2, args.samples, aspect=(1, 1))
+    stages.run("render Firn", common.render, scene, panels[1], args.width // 2, args.samples, aspect=(1, 1),
+               label="Firn")
     common.side_by_side(panels, args.output)
     print(f"firn sample: total {stages.total():.2f} s -> {args.output}")
 

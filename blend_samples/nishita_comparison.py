@@ -46,15 +46,18 @@ def main():
     width = args.width // 3
 
     snow.hide_render, surface.hide_render = True, False
-    stages.run("render opaque", common.render, scene, panels[0], width, args.samples, aspect=(1, 1))
+    stages.run("render opaque", common.render, scene, panels[0], width, args.samples, aspect=(1, 1),
+               label="(a) opaque surface")
     snow.hide_render, surface.hide_render = False, True
     scene.cycles.volume_bounces = 0  # Cycles: exact single scattering, nothing more (cycles-volumes notes)
-    stages.run("render single", common.render, scene, panels[1], width, args.samples, aspect=(1, 1))
+    stages.run("render single", common.render, scene, panels[1], width, args.samples, aspect=(1, 1),
+               label="(b) single scattering")
     stages.run("bake", common.bake, [snow])
-    stages.run("render multiple", common.render, scene, panels[2], width, args.samples, aspect=(1, 1))
+    stages.run("render multiple", common.render, scene, panels[2], width, args.samples, aspect=(1, 1),
+               label="(c) multiple scattering")
     common.side_by_side(panels, args.output)
     if not args.no_save:
-        stages.run("save .blend", common.save_next_to, __file__)
+        stages.run("save .blend", common.save_next_to, __file__, args.blend)
     print(f"firn sample: total {stages.total():.2f} s -> {args.output}")
 
 

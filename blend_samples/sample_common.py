@@ -39,13 +39,17 @@ def parse_args(description, default_output):
     parser.add_argument("--width", type=int, default=500)
     parser.add_argument("--samples", type=int, default=32)
     parser.add_argument("--no-save", action="store_true", help="do not save the .blend next to the script")
+    parser.add_argument("--blend", help="save the .blend here instead of next to the script")
     return parser.parse_args(argv)
 
 
 def new_scene():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     addon_utils.enable("firn", default_set=True)
-    return bpy.context.scene
+    scene = bpy.context.scene
+    # Baked snow is brighter than Cycles' default indirect clamp (10): no clamp, as the bake advises.
+    scene.cycles.sample_clamp_indirect = 0.0
+    return scene
 
 
 def nishita_sky(scene, sun_elevation_deg, sun_rotation_deg, strength=0.3):
@@ -110,7 +114,8 @@ def add_snow(targets, **settings):
     return bpy.context.object
 
 
-def render(scene, output, width, samples, aspect=(16, 9)):
+def render(scene, output, width, samples, aspect=(16, 9), label=None):
+    """Cycles render to a PNG; `label` is written on the picture (comparison panels say what they show)."""
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.samples = samples
@@ -120,12 +125,29 @@ def render(scene, output, width, samples, aspect=(16, 9)):
     scene.render.resolution_percentage = 100
     scene.render.image_settings.file_format = "PNG"
     scene.render.filepath = os.path.abspath(output)
+    stamp_label(scene, label)
     os.makedirs(os.path.dirname(scene.render.filepath), exist_ok=True)
     bpy.ops.render.render(write_still=True)
 
 
-def save_next_to(script_file):
-    path = os.path.splitext(os.path.abspath(script_file))[0] + ".blend"
+def stamp_label(scene, label):
+    """Blender's render stamp, burnt into the image, with the note `label` alone (no date, frame, etc.)."""
+    r = scene.render
+    r.use_stamp = label is not None
+    if label is None:
+        return
+    for name in dir(r):
+        if name.startswith("use_stamp_"):
+            setattr(r, name, False)
+    r.use_stamp_note, r.stamp_note_text = True, label
+    r.stamp_font_size = max(12, r.resolution_x // 14)
+    r.stamp_foreground, r.stamp_background = (1.0, 1.0, 1.0, 1.0), (0.0, 0.0, 0.0, 0.6)
+
+
+def save_next_to(script_file, path=None):
+    """Saves the scene to `path`, or next to the sample's script; its snow's cache folder goes beside it."""
+    path = os.path.abspath(path) if path else os.path.splitext(os.path.abspath(script_file))[0] + ".blend"
+    os.makedirs(os.path.dirname(path), exist_ok=True)
     bpy.ops.wm.save_as_mainfile(filepath=path)
     return path
 
@@ -140,7 +162,7 @@ def bake(snows, quality="FINAL"):
         raise RuntimeError("Bake Scattering failed")
 
 
-def side_by_side(paths, output, labels=None):
+def side_by_side(paths, output):
     """Joins PNGs of equal height left to right into one PNG (Blender's image API, no other dependency)."""
     import numpy as np
 

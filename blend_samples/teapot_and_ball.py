@@ -49,7 +49,8 @@ def snow_version(name, depth, voxel_size, args, stages):
                       smoothness=0.8, voxel_size=voxel_size)
     stages.run(f"bake ({name})", common.bake, [snow])
     path = os.path.join(tempfile.mkdtemp(prefix="firn_panels_"), f"teapot_and_ball_{name}.png")
-    stages.run(f"render ({name})", common.render, scene, path, args.width // 2, args.samples, aspect=(1, 1))
+    stages.run(f"render ({name})", common.render, scene, path, args.width // 2, args.samples, aspect=(1, 1),
+               label=f"{name} snow, {depth * 1000:.0f} mm")
     return path
 
 
@@ -59,7 +60,7 @@ def main():
     paths = [snow_version(name, depth, voxel, args, stages) for name, depth, voxel in DEPTHS]
     common.side_by_side(paths, args.output)
     if not args.no_save:
-        stages.run("save .blend", common.save_next_to, __file__)
+        stages.run("save .blend", common.save_next_to, __file__, args.blend)
     print(f"firn sample: total {stages.total():.2f} s -> {args.output}")
 
 

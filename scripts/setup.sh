@@ -38,8 +38,9 @@ firn_build() {
     echo "firn: configuring $FIRN_BUILD"
     cmake -S "$FIRN_ROOT" -B "$FIRN_BUILD" -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE=/usr/bin/python3
   fi
-  echo "firn: building"
-  cmake --build "$FIRN_BUILD" --parallel "$(nproc)"
+  # FIRN_BUILD_TARGETS (e.g. firn_addon for the demo) builds only those; unset, everything (tests too).
+  echo "firn: building ${FIRN_BUILD_TARGETS:-everything}"
+  cmake --build "$FIRN_BUILD" --parallel "$(nproc)" ${FIRN_BUILD_TARGETS:+--target $FIRN_BUILD_TARGETS}
 }
 
 firn_install_packages
