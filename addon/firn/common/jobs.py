@@ -19,7 +19,7 @@ from .core import firncore
 from .errors import UserError
 
 _TIMER_INTERVAL = 0.1  # s
-_WORKER_NICENESS = 10  # the worker yields the processor to Blender's UI (and its drawing, in software GL)
+_WORKER_NICENESS = 5  # the worker yields the processor to Blender's UI (and its drawing, in software GL)
 _running = []  # jobs started from the UI, until their operator ends
 
 

@@ -13,7 +13,7 @@ namespace firn {
 // and the workers run its tasks at a lower OS priority (niceness kWorkerNiceness), so the host's UI thread is
 // never starved of the processor by a bake running on every core.
 
-constexpr int kWorkerNiceness = 10;
+constexpr int kWorkerNiceness = 5;
 
 // Caps the threads the core's parallel loops use; 0 lifts the cap (all hardware threads).
 void setThreadCount(int count);
