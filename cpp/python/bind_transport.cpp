@@ -76,7 +76,9 @@ std::vector<firn::Ray> raysFrom(const DoubleArray &origins, const DoubleArray &d
         const glm::dvec3 d(directions.at(i, 0), directions.at(i, 1), directions.at(i, 2));
         const double length = glm::length(d);
         if (!(length > 0.0) || !std::isfinite(length)) throw firn::InvalidArgument("ray directions must be non-zero");
-        rays[i] = {{origins.at(i, 0), origins.at(i, 1), origins.at(i, 2)}, d / length};
+        const glm::dvec3 o(origins.at(i, 0), origins.at(i, 1), origins.at(i, 2));
+        if (!std::isfinite(o.x + o.y + o.z)) throw firn::InvalidArgument("ray origins must be finite");
+        rays[i] = {o, d / length};
     }
     return rays;
 }

@@ -188,3 +188,19 @@ def test_file_problems(tmp_path):
     pyopenvdb.write(path, grids=[grid])
     with pytest.raises(ValueError, match="density"):
         firncore.bake(path, SNOW)
+
+
+def test_rays_from_non_finite_origins_are_value_errors(slab):
+    """Fuzzing (issue 11): a NaN origin went into the ray marcher (undefined float-to-int conversions)."""
+    firncore.bake(slab, SNOW, quality="DRAFT")
+    directions = np.array([[0.0, 0.0, -1.0]])
+    with pytest.raises(ValueError, match="origins"):
+        firncore.render_baked(slab, SNOW, np.array([[math.nan, 0.0, 1.0]]), directions)
+    with pytest.raises(ValueError, match="origins"):
+        firncore.monte_carlo_radiance(slab, SNOW, np.array([[0.0, math.inf, 1.0]]), directions, samples=1)
+
+
+def test_huge_test_slab_is_a_budget_error(tmp_vdb):
+    """Fuzzing: write_slab_vdb(width=100000) filled 1e10 voxels until memory ran out."""
+    with pytest.raises(firncore.BudgetError, match="budget"):
+        firncore.write_slab_vdb(tmp_vdb, voxel_size=0.01, width=100000, layers=100000, density=300.0)

@@ -62,7 +62,7 @@ openvdb::GridPtrVec readGrids(const std::string &path) {
         const auto shift = meta->getMetadata<openvdb::BoolMetadata>(kShiftKey);
         if (shift && shift->value()) shiftHalfVoxel(*grids, +1.0);
         return *grids;
-    } catch (const openvdb::Exception &e) {
+    } catch (const std::exception &e) {  // openvdb::Exception, and std:: ones from a corrupted or truncated file
         throw IoError("cannot read " + path + ": " + e.what());
     }
 }

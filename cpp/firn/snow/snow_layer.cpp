@@ -64,6 +64,7 @@ SnowfallSettings SnowLayerSettings::snowfall() const {
     s.spacing = spacing;
     s.exposureRays = exposureRays;
     s.seed = seed;
+    s.maxSites = maxVoxels;  // a site that gets snow costs at least a voxel
     return s;
 }
 

@@ -49,6 +49,31 @@ LeafRange leavesOf(const Metaball &b, double h) {
                                openvdb::Coord(toLeaf(hi.x + 1), toLeaf(hi.y + 1), toLeaf(hi.z + 1)))};
 }
 
+// Balls from a user's edits may hold anything: every value finite, radius positive, every ball inside the
+// index range the leaf keys address, and no single ball (or all of them together) bigger than the budget.
+void checkBalls(const std::vector<Metaball> &balls, const RasterSettings &s) {
+    const double reach = double(kKeyBias - 2) * kLeafDim * s.voxelSize;  // m from the origin
+    double pairs = 0.0;
+    for (std::size_t i = 0; i < balls.size(); ++i) {
+        const Metaball &b = balls[i];
+        const float sum = b.centre.x + b.centre.y + b.centre.z + b.normal.x + b.normal.y + b.normal.z + b.radius +
+                          b.base + b.depth;
+        if (!std::isfinite(sum) || !(b.radius > 0.0f))
+            throw InvalidArgument("metaball " + std::to_string(i) +
+                                  " has a non-finite value or a radius that is not positive");
+        const float far = std::max({std::abs(b.centre.x), std::abs(b.centre.y), std::abs(b.centre.z)}) + b.radius;
+        if (!(far < reach))
+            throw InvalidArgument("metaball " + std::to_string(i) + " reaches " + std::to_string(far) +
+                                  " m from the origin; at this voxel size the grid ends at " + std::to_string(reach) +
+                                  " m");
+        const double leaves = double(leavesOf(b, s.voxelSize).leaves.volume());
+        checkVoxelBudget(leaves * kLeafVoxels / 4.0, s);  // this ball alone
+        pairs += leaves;
+    }
+    // Deep snow has a few thousand balls reaching each leaf, some 16 per voxel of the budget at most.
+    checkVoxelBudget(pairs / 32.0, s);
+}
+
 std::string millions(double n) {
     std::ostringstream s;
     s.precision(3);
@@ -186,6 +211,7 @@ SnowGrids rasterizeSnow(const std::vector<Metaball> &balls, const RasterSettings
     initializeOpenVdb();
     const double h = s.voxelSize;
     if (!(h > 0.0) || !std::isfinite(h)) throw InvalidArgument("voxel size must be a positive number of metres");
+    checkBalls(balls, s);
 
     const auto pairs = binBallsByLeaf(balls, h);
     std::vector<std::size_t> starts;  // first pair of each leaf

@@ -154,4 +154,10 @@ TEST(Bake, RejectsBadInput) {
     EXPECT_THROW(Medium(makeSlabDensity(kVoxel, 4, 4, kDensity), VolumeOptics{1.0, Rgb(1.1), 0.8}), InvalidArgument);
 }
 
+// Fuzzing (issue 11): write_slab_vdb(width=100000) filled 1e10 voxels until memory ran out.
+TEST(Bake, TestSlabIsRefusedOverItsBudget) {
+    EXPECT_THROW(makeSlabDensity(kVoxel, 100000, 100000, kDensity), BudgetExceeded);
+    EXPECT_THROW(makeSlabDensity(INFINITY, 4, 4, kDensity), InvalidArgument);
+}
+
 }  // namespace firn
