@@ -227,7 +227,7 @@ the emission-absorption integral of the contract's material, up to the first occ
         [](const std::string &path, const firn::VolumeOptics &optics, const DoubleArray &origins,
            const DoubleArray &directions, const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,
            const py::list &occluders, int samples, std::uint64_t seed, std::shared_ptr<firn::Progress> progress) {
-            if (samples < 1) throw firn::InvalidArgument("samples must be at least 1");
+            if (samples < 1 || samples > 1000000) throw firn::InvalidArgument("samples must be between 1 and 1e6");
             const openvdb::GridPtrVec grids = firn::readGrids(path);
             const firn::MonteCarloReference reference(sceneFrom(grids, path, optics, suns, sky, occluders));
             const std::vector<firn::Ray> rays = raysFrom(origins, directions);
@@ -258,7 +258,7 @@ deep, whose top surface (half-column point of the density ramp) is the plane z =
     m.def(
         "slab_monte_carlo",
         [](double omega, double g, double tau, double mu0, long photons, std::uint64_t seed) {
-            if (photons < 1) throw firn::InvalidArgument("photons must be at least 1");
+            if (photons < 1 || photons > 100000000) throw firn::InvalidArgument("photons must be between 1 and 1e8");
             if (!(omega >= 0.0 && omega <= 1.0) || !(g > -1.0 && g < 1.0) || !(tau > 0.0) || !(mu0 <= 1.0))
                 throw firn::InvalidArgument("slab: omega in [0, 1], g in (-1, 1), tau > 0, mu0 <= 1");
             firn::SlabResponse r;

@@ -204,3 +204,13 @@ def test_huge_test_slab_is_a_budget_error(tmp_vdb):
     """Fuzzing: write_slab_vdb(width=100000) filled 1e10 voxels until memory ran out."""
     with pytest.raises(firncore.BudgetError, match="budget"):
         firncore.write_slab_vdb(tmp_vdb, voxel_size=0.01, width=100000, layers=100000, density=300.0)
+
+
+def test_huge_sample_counts_are_value_errors(slab):
+    """Fuzzing: huge counts ran for hours (no progress to cancel slab_monte_carlo); they are refused at once."""
+    with pytest.raises(ValueError, match="sun samples"):
+        firncore.bake(slab, SNOW, quality="DRAFT", sun_samples=10**9)
+    with pytest.raises(ValueError, match="photons"):
+        firncore.slab_monte_carlo(omega=0.9, g=0.0, tau=1.0, mu0=1.0, photons=10**12)
+    with pytest.raises(ValueError, match="samples"):
+        firncore.monte_carlo_radiance(slab, SNOW, np.zeros((1, 3)), np.array([[0.0, 0.0, -1.0]]), samples=10**9)

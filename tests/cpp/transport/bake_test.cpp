@@ -154,6 +154,20 @@ TEST(Bake, RejectsBadInput) {
     EXPECT_THROW(Medium(makeSlabDensity(kVoxel, 4, 4, kDensity), VolumeOptics{1.0, Rgb(1.1), 0.8}), InvalidArgument);
 }
 
+// Fuzzing (issue 11): sun_samples=10**9 baked on for hours; absurd counts are refused at once.
+TEST(Bake, HugeSampleCountsAreRefused) {
+    Scene scene = slabScene(2000.0, 0.999, 0.85, 4, 4);
+    scene.suns = {sunAt(0.5)};
+    BakeSettings settings;
+    settings.quality = BakeQuality::Draft;
+    settings.sunSamples = 1000000000;
+    EXPECT_THROW(bakeScattering(scene, settings), InvalidArgument);
+    settings.sunSamples = 0;
+    settings.referenceSamples = 1000000000;
+    settings.quality = BakeQuality::Reference;
+    EXPECT_THROW(bakeScattering(scene, settings), InvalidArgument);
+}
+
 // Fuzzing (issue 11): write_slab_vdb(width=100000) filled 1e10 voxels until memory ran out.
 TEST(Bake, TestSlabIsRefusedOverItsBudget) {
     EXPECT_THROW(makeSlabDensity(kVoxel, 100000, 100000, kDensity), BudgetExceeded);
