@@ -27,6 +27,19 @@ using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecas
 firn::Rgb rgb(const RgbTuple &t) { return {t[0], t[1], t[2]}; }
 RgbTuple tuple(const firn::Rgb &c) { return {c.x, c.y, c.z}; }
 
+RgbTuple rgbFrom(const py::handle &values, const char *what) {
+    const py::sequence rgb = itemsOf(values, 3, what, "(r, g, b)");
+    RgbTuple out;
+    for (std::size_t c = 0; c < 3; ++c) {
+        out[c] = PyFloat_AsDouble(py::object(rgb[c]).ptr());
+        if (out[c] == -1.0 && PyErr_Occurred()) {
+            PyErr_Clear();
+            throw firn::InvalidArgument(std::string(what) + " must be three numbers");
+        }
+    }
+    return out;
+}
+
 firn::BakeQuality parseQuality(const std::string &name) {
     if (name == "DRAFT") return firn::BakeQuality::Draft;
     if (name == "FINAL") return firn::BakeQuality::Final;
@@ -39,10 +52,9 @@ std::shared_ptr<const firn::Occluders> occludersFrom(const py::list &objects) {
     std::vector<firn::TriangleMesh> meshes;
     std::vector<firn::Rgb> albedo;
     for (const py::handle &object : objects) {
-        const auto item = object.cast<py::tuple>();
-        if (item.size() != 3) throw firn::InvalidArgument("an occluder is (vertices, triangles, albedo)");
-        meshes.push_back(meshFromArrays(item[0].cast<FloatArray>(), item[1].cast<IndexArray>(), "occluder"));
-        albedo.insert(albedo.end(), meshes.back().triangleCount(), rgb(item[2].cast<RgbTuple>()));
+        const py::sequence item = itemsOf(object, 3, "an occluder", "(vertices, triangles, albedo)");
+        meshes.push_back(meshFromArrays(item[0], item[1], "occluder"));
+        albedo.insert(albedo.end(), meshes.back().triangleCount(), rgb(rgbFrom(item[2], "occluder albedo")));
     }
     if (meshes.empty()) return std::make_shared<firn::Occluders>();
     return std::make_shared<firn::Occluders>(firn::merge(meshes), std::move(albedo));

@@ -214,3 +214,14 @@ def test_huge_sample_counts_are_value_errors(slab):
         firncore.slab_monte_carlo(omega=0.9, g=0.0, tau=1.0, mu0=1.0, photons=10**12)
     with pytest.raises(ValueError, match="samples"):
         firncore.monte_carlo_radiance(slab, SNOW, np.zeros((1, 3)), np.array([[0.0, 0.0, -1.0]]), samples=10**9)
+
+
+def test_occluders_of_the_wrong_kind_are_value_errors(slab):
+    """Fuzzing: an occluder that is not a tuple, or a colour name as albedo, leaked pybind11's RuntimeError."""
+    triangle = (np.eye(3, dtype=np.float32), np.array([[0, 1, 2]], np.uint32))
+    with pytest.raises(ValueError, match="occluder"):
+        firncore.bake(slab, SNOW, occluders=["wall"])
+    with pytest.raises(ValueError, match="albedo"):
+        firncore.bake(slab, SNOW, occluders=[(*triangle, "red")])
+    with pytest.raises(ValueError, match="albedo"):
+        firncore.bake(slab, SNOW, occluders=[(*triangle, (0.5, None, 0.5))])
