@@ -5,7 +5,7 @@
 // an iteration running past the watchdog fails the run. Same seed, same inputs: a failure replays with
 // `firn_fuzz --first SEED --count 1`.
 //
-//   firn_fuzz [--first N] [--count M] [--seconds S] [--dir D] [--verbose]
+//   firn_fuzz [--first N] [--count M] [--seconds S] [--dir D] [--memory-mb MB] [--verbose]
 //
 // Inputs stay tiny (few triangles, voxel budgets of thousands) so an iteration takes milliseconds.
 #include <atomic>
@@ -15,11 +15,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <functional>
 #include <limits>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <sys/resource.h>
 
 #include <openvdb/openvdb.h>
 
@@ -134,8 +137,8 @@ SnowLayerSettings randomSettings(Input &in) {
     s.maxSlope = in.setting(0.1, 1.6);
     s.randomness = in.setting(0.0, 1.0);
     s.smoothness = in.setting(0.0, 1.0);
-    s.direction = in.chance(0.9) ? glm::vec3(float(in.range(-0.5, 0.5)), float(in.range(-0.5, 0.5)), -1.0f)
-                                 : glm::vec3(float(in.awkward()), float(in.awkward()), float(in.awkward()));
+    s.direction = in.chance(0.9) ? glm::vec3{float(in.range(-0.5, 0.5)), float(in.range(-0.5, 0.5)), -1.0f}
+                                 : glm::vec3{float(in.awkward()), float(in.awkward()), float(in.awkward())};
     s.spread = in.setting(0.0, 1.0);
     s.exposureRays = in.chance(0.95) ? in.integer(1, 4) : in.integer(-5, 5000);
     s.densityTop = in.setting(50.0, 400.0);
@@ -163,7 +166,7 @@ void editMetaballs(Input &in, std::vector<Metaball> &balls) {
         switch (in.integer(0, 4)) {
         case 0: b.centre[in.integer(0, 2)] = float(in.awkward()); break;
         case 1: b.radius = float(in.awkward()); break;
-        case 2: b.normal = glm::vec3(float(in.awkward()), 0.0f, float(in.awkward())); break;
+        case 2: b.normal = glm::vec3{float(in.awkward()), 0.0f, float(in.awkward())}; break;
         case 3: b.base = float(in.awkward()); break;
         default: b.depth = float(in.awkward()); break;
         }
@@ -187,7 +190,7 @@ void fuzzSnowLayer(Input &in) {
 void fuzzMetaballs(Input &in) {
     std::vector<Metaball> balls(in.integer(0, 6));
     for (Metaball &b : balls) {
-        b.centre = glm::vec3(in.coordinate(1.0), in.coordinate(1.0), in.coordinate(1.0));
+        b.centre = glm::vec3{in.coordinate(1.0), in.coordinate(1.0), in.coordinate(1.0)};
         b.radius = float(in.setting(0.01, 0.2));
         b.normal = glm::vec3(0.0f, 0.0f, 1.0f);
         b.base = float(in.setting(-0.1, 0.1));
@@ -208,7 +211,10 @@ openvdb::FloatGrid::Ptr randomDensity(Input &in) {
     auto grid = openvdb::FloatGrid::create(in.chance(0.95) ? 0.0f : float(in.awkward()));
     grid->setName("density");
     const double h = in.chance(0.9) ? in.range(0.005, 0.05) : std::abs(in.awkward());
-    if (h > 0.0 && std::isfinite(h)) grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    try {
+        grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    } catch (const openvdb::ArithmeticError &) {  // OpenVDB itself makes no such grid: keep h = 1 m
+    }
     const int n = in.integer(1, 5), layers = in.integer(1, 5);
     auto acc = grid->getAccessor();
     for (int x = 0; x < n; ++x)
@@ -221,13 +227,13 @@ openvdb::FloatGrid::Ptr randomDensity(Input &in) {
 }
 
 VolumeOptics randomOptics(Input &in) {
-    return {in.setting(0.5, 10.0), Rgb(float(in.setting(0.9, 1.0)), float(in.setting(0.9, 1.0)), float(in.setting(0.9, 1.0))),
+    return {in.setting(0.5, 10.0), Rgb{in.setting(0.9, 1.0), in.setting(0.9, 1.0), in.setting(0.9, 1.0)},
             in.setting(0.0, 0.9)};
 }
 
 SunLight randomSun(Input &in) {
     SunLight sun;
-    sun.direction = in.chance(0.9) ? glm::dvec3(in.range(-1, 1), in.range(-1, 1), in.range(0.1, 1)) : glm::dvec3(in.awkward(), 0.0, in.awkward());
+    sun.direction = in.chance(0.9) ? glm::dvec3{in.range(-1, 1), in.range(-1, 1), in.range(0.1, 1)} : glm::dvec3{in.awkward(), 0.0, in.awkward()};
     sun.irradiance = Rgb(float(in.setting(0.0, 5.0)));
     sun.angularDiameter = in.setting(0.0, 0.1);
     return sun;
@@ -235,7 +241,9 @@ SunLight randomSun(Input &in) {
 
 void fuzzBake(Input &in) {
     Scene scene;
-    scene.medium = std::make_shared<Medium>(randomDensity(in), randomOptics(in));
+    const openvdb::FloatGrid::Ptr density = randomDensity(in);  // first the grid, then the optics: seeded order
+    const VolumeOptics optics = randomOptics(in);
+    scene.medium = std::make_shared<Medium>(density, optics);
     for (int i = in.integer(0, 2); i > 0; --i) scene.suns.push_back(randomSun(in));
     scene.sky.radiance = Rgb(float(in.setting(0.0, 1.0)));
     if (in.chance(0.3)) {
@@ -336,6 +344,7 @@ int run(int argc, char **argv) {
     std::uint64_t first = 0, count = 1000;
     double seconds = 0.0;
     bool verbose = false;
+    rlim_t memoryMb = 2048;  // 0: no limit (under ASan, use ASAN_OPTIONS=max_allocation_size_mb instead)
     std::filesystem::path dir = std::filesystem::temp_directory_path() / ("firn_fuzz_" + std::to_string(::getpid()));
     for (int i = 1; i < argc; ++i) {
         const std::string arg = argv[i];
@@ -347,9 +356,14 @@ int run(int argc, char **argv) {
         else if (arg == "--count") count = std::stoull(next());
         else if (arg == "--seconds") seconds = std::stod(next());
         else if (arg == "--dir") dir = next();
+        else if (arg == "--memory-mb") memoryMb = std::stoull(next());
         else if (arg == "--verbose") verbose = true;
         else throw InvalidArgument("unknown argument " + arg);
     }
+    // OpenVDB's reader trusts the lengths in a file: a corrupted one asks for gigabytes (docs/reliability.md).
+    // Capped, the allocation fails and readGrids reports it as IoError instead of taking the machine's memory.
+    const rlimit memory{memoryMb << 20, memoryMb << 20};
+    if (memoryMb > 0) setrlimit(RLIMIT_DATA, &memory);
     initializeOpenVdb();
     setThreadCount(2);
     std::filesystem::create_directories(dir);

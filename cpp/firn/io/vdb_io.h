@@ -16,7 +16,8 @@ namespace firn {
 // Active tiles are voxelized first (Cycles renders tiles as empty).
 void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids);
 
-// Every grid in the file, with in-memory (unshifted) transforms. Throws IoError.
+// Every grid in the file, with in-memory (unshifted) transforms. Throws IoError, also for a file without grids
+// and for any exception OpenVDB's reader raises on a corrupted file.
 openvdb::GridPtrVec readGrids(const std::string &path);
 
 }  // namespace firn

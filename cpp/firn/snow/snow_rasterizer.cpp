@@ -25,6 +25,7 @@ using FloatLeaf = FloatTree::LeafNodeType;
 constexpr int kLeafDim = FloatLeaf::DIM;  // 8
 constexpr int kLeafVoxels = FloatLeaf::SIZE;
 constexpr double kSurfaceBandVoxels = 3.0;  // half-width of the surface level set
+constexpr double kMinVoxelSize = 1e-4;      // m
 
 // Leaf coordinates (index / 8) packed into 64 bits, 21 bits per axis.
 constexpr std::int64_t kKeyBias = 1 << 20;
@@ -210,7 +211,9 @@ double estimateVoxelCount(const std::vector<Metaball> &balls, double spacing, do
 SnowGrids rasterizeSnow(const std::vector<Metaball> &balls, const RasterSettings &s, const SubProgress &progress) {
     initializeOpenVdb();
     const double h = s.voxelSize;
-    if (!(h > 0.0) || !std::isfinite(h)) throw InvalidArgument("voxel size must be a positive number of metres");
+    // OpenVDB refuses transforms below ~1.5e-5 m (its determinant tolerance); snow needs no voxel under 0.1 mm.
+    if (!(h >= kMinVoxelSize) || !std::isfinite(h))
+        throw InvalidArgument("voxel size must be a finite number of metres, at least 0.1 mm (got " + std::to_string(h) + ")");
     checkBalls(balls, s);
 
     const auto pairs = binBallsByLeaf(balls, h);
