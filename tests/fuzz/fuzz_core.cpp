@@ -5,9 +5,10 @@
 // an iteration running past the watchdog fails the run. Same seed, same inputs: a failure replays with
 // `firn_fuzz --first SEED --count 1`.
 //
-//   firn_fuzz [--first N] [--count M] [--seconds S] [--dir D] [--memory-mb MB] [--verbose]
+//   firn_fuzz [--first N] [--count M] [--seconds S] [--dir D] [--memory-mb MB] [--skip TARGET]... [--verbose]
 //
 // Inputs stay tiny (few triangles, voxel budgets of thousands) so an iteration takes milliseconds.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -344,6 +345,7 @@ int run(int argc, char **argv) {
     std::uint64_t first = 0, count = 1000;
     double seconds = 0.0;
     bool verbose = false;
+    std::vector<std::string> skipped;  // target names whose seeds are passed over
     rlim_t memoryMb = 2048;  // 0: no limit (under ASan, use ASAN_OPTIONS=max_allocation_size_mb instead)
     std::filesystem::path dir = std::filesystem::temp_directory_path() / ("firn_fuzz_" + std::to_string(::getpid()));
     for (int i = 1; i < argc; ++i) {
@@ -357,6 +359,7 @@ int run(int argc, char **argv) {
         else if (arg == "--seconds") seconds = std::stod(next());
         else if (arg == "--dir") dir = next();
         else if (arg == "--memory-mb") memoryMb = std::stoull(next());
+        else if (arg == "--skip") skipped.push_back(next());
         else if (arg == "--verbose") verbose = true;
         else throw InvalidArgument("unknown argument " + arg);
     }
@@ -381,6 +384,7 @@ int run(int argc, char **argv) {
     for (std::uint64_t seed = first; seed < first + count; ++seed) {
         if (seconds > 0.0 && double(nowMs() - begin) > 1000.0 * seconds) break;
         const Target &target = targets[seed % targets.size()];
+        if (std::find(skipped.begin(), skipped.end(), target.name) != skipped.end()) continue;
         Input in(seed);
         gSeed = seed;
         gIterationStart = nowMs();
