@@ -147,6 +147,7 @@ void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std:
                 float zLo = c.z - half;
                 const float lateral = normal.x * dx + normal.y * dy;
                 if (normal.z > 0.05f) zLo = std::max(zLo, c.z + (lowest - lateral) / normal.z);
+                zLo = std::min(zLo, c.z + half);  // a base far below (an edited ball) empties the range, in int range
                 const int kLo = std::max(zLeafLo, int(std::ceil(zLo / h)));
                 const int kHi = std::min(zLeafHi, int(std::floor((c.z + half) / h)));
                 const int row = ((x - origin.x()) << 6) | ((y - origin.y()) << 3);

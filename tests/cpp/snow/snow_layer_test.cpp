@@ -187,6 +187,9 @@ TEST(SnowLayer, EditedMetaballsAreCheckedBeforeRasterizing) {
     EXPECT_THROW(rebuild([](Metaball &b) { b.radius = 1e30f; }), InvalidArgument);     // int overflow of its leaves
     EXPECT_THROW(rebuild([](Metaball &b) { b.centre.y = 1e6f; }), InvalidArgument);    // beyond the leaf keys
     EXPECT_THROW(rebuild([](Metaball &b) { b.radius = 100.0f; }), BudgetExceeded);     // 1e10 leaf pairs
+    // A base 1e30 m below the ball (UBSan: float-to-int overflow) leaves the ball out, nothing else.
+    const SnowGrids sunk = rebuild([](Metaball &b) { b.base = -1e30f; });
+    EXPECT_LE(sunk.density->activeVoxelCount(), layer.grids.density->activeVoxelCount());
 }
 
 TEST(SnowLayer, BadSettingsAreRejectedWithTheirName) {
