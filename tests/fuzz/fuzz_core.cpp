@@ -363,6 +363,7 @@ int run(int argc, char **argv) {
         else if (arg == "--verbose") verbose = true;
         else throw InvalidArgument("unknown argument " + arg);
     }
+    if (verbose) std::setvbuf(stdout, nullptr, _IOLBF, 0);  // the last line names the last seed before a sanitizer stops
     // OpenVDB's reader trusts the lengths in a file: a corrupted one asks for gigabytes (docs/reliability.md).
     // Capped, the allocation fails and readGrids reports it as IoError instead of taking the machine's memory.
     const rlimit memory{memoryMb << 20, memoryMb << 20};

@@ -97,6 +97,7 @@ std::vector<Metaball> layoutMetaballs(const std::vector<LandingSite> &sites, con
     std::vector<std::size_t> offsets(sites.size() + 1, 0);
     tbb::parallel_for(std::size_t(0), sites.size(), [&](std::size_t i) {
         const double d = columnDepth(i);
+        if (!std::isfinite(d)) return;  // a site on a triangle too large for float normals (1e19 m): no snow
         // A column whose lowest ball would sit deeper than its radius below the surface leaves no snow.
         const ColumnTable::Column c = table.lookup(d);
         offsets[i + 1] = c.zLow > -radius ? c.layers : 0;

@@ -123,6 +123,10 @@ struct LeafField {
     std::array<float, kLeafVoxels> weightedBelowBase{};  // m x field, positive below the surface
 };
 
+// floor or ceil of a voxel coordinate, clamped to [lo, hi] before the conversion to int (NaN gives lo): an edited
+// ball's base or normal may put its z-range anywhere (UBSan: float-to-int overflow).
+int clampedIndex(float x, int lo, int hi) { return x >= float(lo) ? (x <= float(hi) ? int(x) : hi) : lo; }
+
 void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std::size_t count,
                 const std::vector<Metaball> &balls, float h, LeafField &out) {
     const int zLeafLo = origin.z(), zLeafHi = origin.z() + kLeafDim - 1;
@@ -147,9 +151,8 @@ void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std:
                 float zLo = c.z - half;
                 const float lateral = normal.x * dx + normal.y * dy;
                 if (normal.z > 0.05f) zLo = std::max(zLo, c.z + (lowest - lateral) / normal.z);
-                zLo = std::min(zLo, c.z + half);  // a base far below (an edited ball) empties the range, in int range
-                const int kLo = std::max(zLeafLo, int(std::ceil(zLo / h)));
-                const int kHi = std::min(zLeafHi, int(std::floor((c.z + half) / h)));
+                const int kLo = clampedIndex(std::ceil(zLo / h), zLeafLo, zLeafHi + 1);
+                const int kHi = clampedIndex(std::floor((c.z + half) / h), zLeafLo - 1, zLeafHi);
                 const int row = ((x - origin.x()) << 6) | ((y - origin.y()) << 3);
                 for (int z = kLo; z <= kHi; ++z) {
                     const glm::vec3 offset(dx, dy, z * h - c.z);
