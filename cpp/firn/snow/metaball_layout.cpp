@@ -45,6 +45,8 @@ class ColumnTable {
 
     Column lookup(double depth) const {
         const double x = depth / step_;
+        // NaN or far past the deepest column (a site on a triangle too large for float normals): no snow.
+        if (!std::isfinite(x) || x > 2.0 * kEntries) return {0, 0.0, 0.0};
         const int i = static_cast<int>(x);
         if (i < 0 || i + 1 >= kEntries) return solve(depth);
         const Column &a = table_[i], &b = table_[i + 1];
@@ -97,7 +99,6 @@ std::vector<Metaball> layoutMetaballs(const std::vector<LandingSite> &sites, con
     std::vector<std::size_t> offsets(sites.size() + 1, 0);
     tbb::parallel_for(std::size_t(0), sites.size(), [&](std::size_t i) {
         const double d = columnDepth(i);
-        if (!std::isfinite(d)) return;  // a site on a triangle too large for float normals (1e19 m): no snow
         // A column whose lowest ball would sit deeper than its radius below the surface leaves no snow.
         const ColumnTable::Column c = table.lookup(d);
         offsets[i + 1] = c.zLow > -radius ? c.layers : 0;
