@@ -185,7 +185,8 @@ void finishLeaf(const LeafField &in, const RasterSettings &s, FloatLeaf &surface
         const double toIso = (kSnowIsoValue - field) / std::max(double(glm::length(in.gradient[i])), 1e-12);
         // Half a voxel into the object, so that the voxel on its surface is whole snow: no thin gap below.
         const double belowBase = field > 0.0 ? in.weightedBelowBase[i] / field - 0.5 * h : band;
-        const double distance = std::clamp(std::max(toIso, belowBase), -band, band);
+        double distance = std::clamp(std::max(toIso, belowBase), -band, band);
+        if (std::isnan(distance)) distance = band;  // float sums of absurd (edited) balls overflowed: no snow
         surface.setValueOnly(i, float(distance));
         surface.setActiveState(i, std::abs(distance) < band);
         const double coverage = std::clamp(0.5 - distance / h, 0.0, 1.0);
