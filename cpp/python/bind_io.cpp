@@ -25,6 +25,13 @@ openvdb::FloatGrid::Ptr floatGrid(const std::string &path, const std::string &na
     throw firn::InvalidArgument(path + " has no grid named '" + name + "'");
 }
 
+// OpenVDB's coordinates are 32-bit: a point beyond them (1e30 m) cannot be looked up, and holds no snow.
+bool withinIndexRange(const openvdb::FloatGrid &grid, const openvdb::Vec3d &world) {
+    const openvdb::Vec3d ijk = grid.worldToIndex(world);
+    const double limit = double(std::numeric_limits<std::int32_t>::max() / 2);
+    return std::abs(ijk.x()) < limit && std::abs(ijk.y()) < limit && std::abs(ijk.z()) < limit;
+}
+
 }  // namespace
 
 void bindIo(py::module_ &m) {
@@ -58,8 +65,12 @@ void bindIo(py::module_ &m) {
             auto out = values.mutable_unchecked<1>();
             const auto in = points.unchecked<2>();
             const openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sampler(*grid);
-            for (py::ssize_t i = 0; i < points.shape(0); ++i)
-                out(i) = sampler.wsSample(openvdb::Vec3d(in(i, 0), in(i, 1), in(i, 2)));
+            for (py::ssize_t i = 0; i < points.shape(0); ++i) {
+                const openvdb::Vec3d p(in(i, 0), in(i, 1), in(i, 2));
+                if (!std::isfinite(p.x() + p.y() + p.z()))
+                    throw firn::InvalidArgument("point " + std::to_string(i) + " is not finite");
+                out(i) = withinIndexRange(*grid, p) ? sampler.wsSample(p) : grid->background();
+            }
             return values;
         },
         py::arg("path"), py::arg("name"), py::arg("points"),

@@ -41,7 +41,7 @@ py::dict metaballsToArrays(const std::vector<firn::Metaball> &balls) {
 std::vector<firn::Metaball> metaballsFromArrays(const py::dict &arrays) {
     const auto get = [&](const char *key) {
         if (!arrays.contains(key)) throw firn::InvalidArgument(std::string("metaballs need the array '") + key + "'");
-        return arrays[key].cast<FloatArray>();
+        return floatArray(arrays[key], std::string("metaball array '") + key + "'");
     };
     const FloatArray centres = get("centres"), normals = get("normals"), radii = get("radii"), bases = get("bases"),
                      depths = get("depths");
@@ -117,7 +117,7 @@ void bindSnow(py::module_ &m) {
     bindSettings(m);
     m.def(
         "generate_snow_layer",
-        [](const FloatArray &vertices, const IndexArray &triangles, const py::object &occluders,
+        [](const py::object &vertices, const py::object &triangles, const py::object &occluders,
            const firn::SnowLayerSettings &settings, const std::string &path, std::shared_ptr<firn::Progress> progress) {
             const firn::TriangleMesh targets = meshFromArrays(vertices, triangles, "targets");
             const firn::TriangleMesh blockers = optionalMesh(occluders, "occluders");

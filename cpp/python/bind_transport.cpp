@@ -27,6 +27,19 @@ using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecas
 firn::Rgb rgb(const RgbTuple &t) { return {t[0], t[1], t[2]}; }
 RgbTuple tuple(const firn::Rgb &c) { return {c.x, c.y, c.z}; }
 
+RgbTuple rgbFrom(const py::handle &values, const char *what) {
+    const py::sequence rgb = itemsOf(values, 3, what, "(r, g, b)");
+    RgbTuple out;
+    for (std::size_t c = 0; c < 3; ++c) {
+        out[c] = PyFloat_AsDouble(py::object(rgb[c]).ptr());
+        if (out[c] == -1.0 && PyErr_Occurred()) {
+            PyErr_Clear();
+            throw firn::InvalidArgument(std::string(what) + " must be three numbers");
+        }
+    }
+    return out;
+}
+
 firn::BakeQuality parseQuality(const std::string &name) {
     if (name == "DRAFT") return firn::BakeQuality::Draft;
     if (name == "FINAL") return firn::BakeQuality::Final;
@@ -44,10 +57,9 @@ struct OccluderArrays {
 OccluderArrays occludersFrom(const py::list &objects) {
     OccluderArrays out;
     for (const py::handle &object : objects) {
-        const auto item = object.cast<py::tuple>();
-        if (item.size() != 3) throw firn::InvalidArgument("an occluder is (vertices, triangles, albedo)");
-        out.meshes.push_back(meshFromArrays(item[0].cast<FloatArray>(), item[1].cast<IndexArray>(), "occluder"));
-        out.albedo.insert(out.albedo.end(), out.meshes.back().triangleCount(), rgb(item[2].cast<RgbTuple>()));
+        const py::sequence item = itemsOf(object, 3, "an occluder", "(vertices, triangles, albedo)");
+        out.meshes.push_back(meshFromArrays(item[0], item[1], "occluder"));
+        out.albedo.insert(out.albedo.end(), out.meshes.back().triangleCount(), rgb(rgbFrom(item[2], "occluder albedo")));
     }
     return out;
 }
@@ -83,7 +95,9 @@ std::vector<firn::Ray> raysFrom(const DoubleArray &origins, const DoubleArray &d
         const glm::dvec3 d(directions.at(i, 0), directions.at(i, 1), directions.at(i, 2));
         const double length = glm::length(d);
         if (!(length > 0.0) || !std::isfinite(length)) throw firn::InvalidArgument("ray directions must be non-zero");
-        rays[i] = {{origins.at(i, 0), origins.at(i, 1), origins.at(i, 2)}, d / length};
+        const glm::dvec3 o(origins.at(i, 0), origins.at(i, 1), origins.at(i, 2));
+        if (!std::isfinite(o.x + o.y + o.z)) throw firn::InvalidArgument("ray origins must be finite");
+        rays[i] = {o, d / length};
     }
     return rays;
 }
@@ -232,7 +246,7 @@ the emission-absorption integral of the contract's material, up to the first occ
         [](const std::string &path, const firn::VolumeOptics &optics, const DoubleArray &origins,
            const DoubleArray &directions, const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,
            const py::list &occluders, int samples, std::uint64_t seed, std::shared_ptr<firn::Progress> progress) {
-            if (samples < 1) throw firn::InvalidArgument("samples must be at least 1");
+            if (samples < 1 || samples > 1000000) throw firn::InvalidArgument("samples must be between 1 and 1e6");
             OccluderArrays blockers = occludersFrom(occluders);
             const std::vector<firn::Ray> rays = raysFrom(origins, directions);
             const std::vector<firn::RadianceEstimate> estimates = longCall([&] {
@@ -262,7 +276,7 @@ deep, whose top surface (half-column point of the density ramp) is the plane z =
     m.def(
         "slab_monte_carlo",
         [](double omega, double g, double tau, double mu0, long photons, std::uint64_t seed) {
-            if (photons < 1) throw firn::InvalidArgument("photons must be at least 1");
+            if (photons < 1 || photons > 100000000) throw firn::InvalidArgument("photons must be between 1 and 1e8");
             if (!(omega >= 0.0 && omega <= 1.0) || !(g > -1.0 && g < 1.0) || !(tau > 0.0) || !(mu0 <= 1.0))
                 throw firn::InvalidArgument("slab: omega in [0, 1], g in (-1, 1), tau > 0, mu0 <= 1");
             const firn::SlabResponse r = longCall([&] { return firn::slabMonteCarlo(omega, g, tau, mu0, photons, seed); });

@@ -1,6 +1,6 @@
 #include "mesh_arrays.h"
 
-#include <string>
+#include <cmath>
 
 #include "firn/util/error.h"
 
@@ -15,17 +15,44 @@ void requireRows3(const py::array &a, const char *what, const char *part) {
 }
 }  // namespace
 
-firn::TriangleMesh meshFromArrays(const FloatArray &vertices, const IndexArray &triangles, const char *what) {
-    requireRows3(vertices, what, "vertices");
-    requireRows3(triangles, what, "triangles");
-    return firn::makeTriangleMesh(vertices.data(), vertices.shape(0), triangles.data(), triangles.shape(0));
+FloatArray floatArray(const py::handle &values, const std::string &what) {
+    FloatArray array = FloatArray::ensure(values);
+    if (!array) throw firn::InvalidArgument(what + " must be an array of numbers");
+    return array;
+}
+
+IndexArray indexArray(const py::handle &values, const std::string &what) {
+    const py::array any = py::array::ensure(values);
+    if (any && any.dtype().is(py::dtype::of<unsigned>())) return IndexArray::ensure(any);
+    using Wide = py::array_t<double, py::array::c_style | py::array::forcecast>;
+    const Wide wide = Wide::ensure(values);
+    if (!wide) throw firn::InvalidArgument(what + " must be an array of vertex indices");
+    const double *v = wide.data();
+    for (py::ssize_t i = 0; i < wide.size(); ++i)
+        if (!(v[i] >= 0.0 && v[i] <= 4294967295.0 && v[i] == std::floor(v[i])))
+            throw firn::InvalidArgument(what + ": " + std::to_string(v[i]) +
+                                        " is not a vertex index (negative, fractional or 2^32 or more)");
+    return IndexArray::ensure(wide);
+}
+
+firn::TriangleMesh meshFromArrays(const py::handle &vertices, const py::handle &triangles, const char *what) {
+    const FloatArray points = floatArray(vertices, std::string(what) + ": vertices");
+    const IndexArray indices = indexArray(triangles, std::string(what) + ": triangles");
+    requireRows3(points, what, "vertices");
+    requireRows3(indices, what, "triangles");
+    return firn::makeTriangleMesh(points.data(), points.shape(0), indices.data(), indices.shape(0));
 }
 
 firn::TriangleMesh optionalMesh(const py::object &arrays, const char *what) {
     if (arrays.is_none()) return {};
-    const auto pair = arrays.cast<py::tuple>();
-    if (pair.size() != 2) throw firn::InvalidArgument(std::string(what) + " must be (vertices, triangles)");
-    return meshFromArrays(pair[0].cast<FloatArray>(), pair[1].cast<IndexArray>(), what);
+    const py::sequence pair = itemsOf(arrays, 2, what, "(vertices, triangles)");
+    return meshFromArrays(pair[0], pair[1], what);
+}
+
+py::sequence itemsOf(const py::handle &object, std::size_t size, const std::string &what, const char *form) {
+    if (!py::isinstance<py::sequence>(object) || py::isinstance<py::str>(object) || py::len(object) != size)
+        throw firn::InvalidArgument(what + " must be " + form);
+    return py::reinterpret_borrow<py::sequence>(object);
 }
 
 }  // namespace firncore

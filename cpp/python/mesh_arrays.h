@@ -1,6 +1,8 @@
 #pragma once
 
 // numpy (N, 3) arrays <-> firn::TriangleMesh, shared by every binding that takes geometry.
+#include <string>
+
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
@@ -11,11 +13,23 @@ namespace firncore {
 using FloatArray = pybind11::array_t<float, pybind11::array::c_style | pybind11::array::forcecast>;
 using IndexArray = pybind11::array_t<unsigned, pybind11::array::c_style | pybind11::array::forcecast>;
 
+// Any array-like as C-contiguous float32; InvalidArgument naming `what` when it holds no numbers.
+FloatArray floatArray(const pybind11::handle &values, const std::string &what);
+
+// Any array-like as uint32 vertex indices; InvalidArgument for what the cast would change (negative,
+// fractional, 2^32 or more: numpy would wrap -1 to 4294967295 and 2^32 to 0).
+IndexArray indexArray(const pybind11::handle &values, const std::string &what);
+
 // Validates shapes ((N, 3) vertices in m, (M, 3) triangle indices) and builds a mesh; `what` names the
 // input in error messages.
-firn::TriangleMesh meshFromArrays(const FloatArray &vertices, const IndexArray &triangles, const char *what);
+firn::TriangleMesh meshFromArrays(const pybind11::handle &vertices, const pybind11::handle &triangles,
+                                  const char *what);
 
 // An empty mesh when `arrays` is None, else meshFromArrays of its (vertices, triangles).
 firn::TriangleMesh optionalMesh(const pybind11::object &arrays, const char *what);
+
+// The items of a sequence (tuple, list, array; not a string) of `size`; InvalidArgument naming `what` and `form` otherwise.
+pybind11::sequence itemsOf(const pybind11::handle &object, std::size_t size, const std::string &what,
+                           const char *form);
 
 }  // namespace firncore

@@ -134,3 +134,28 @@ def test_open_surface_facing_down_gets_snow_on_its_upper_side(tmp_vdb):
     assert above > 100.0 and below == 0.0
     upright = firncore.generate_snow_layer(*plane(), settings=firncore.SnowLayerSettings(depth=0.1), path=tmp_vdb)
     assert upright["open_surfaces_turned"] == 0
+
+
+def test_indices_that_numpy_would_wrap_are_value_errors(tmp_vdb):
+    """Fuzzing (issue 11): int64 index 2**32 + 3 was cast to uint32 3, a valid vertex: a silently wrong mesh."""
+    vertices, _ = plane()
+    settings = firncore.SnowLayerSettings(depth=0.1)
+    for bad in (2**32 + 3, -1):
+        triangles = np.array([[0, 1, 2], [0, 2, bad]], np.int64)
+        with pytest.raises(ValueError, match="not a vertex index"):
+            firncore.generate_snow_layer(vertices, triangles, settings=settings, path=tmp_vdb)
+    with pytest.raises(ValueError, match="not a vertex index"):
+        firncore.generate_snow_layer(vertices, np.array([[0, 1, 2.5]]), settings=settings, path=tmp_vdb)
+
+
+def test_arguments_of_the_wrong_kind_are_value_errors(tmp_vdb):
+    """Fuzzing: a string inside occluders or metaballs leaked pybind11's cast error as a RuntimeError."""
+    settings = firncore.SnowLayerSettings(depth=0.1)
+    with pytest.raises(ValueError, match="occluders must be"):
+        firncore.generate_snow_layer(*plane(), occluders="table", settings=settings, path=tmp_vdb)
+    with pytest.raises(ValueError, match="vertices must be an array of numbers"):
+        firncore.generate_snow_layer(*plane(), occluders=(["a", "b", "c"], [[0, 1, 2]]), settings=settings,
+                                     path=tmp_vdb)
+    balls = firncore.generate_snow_layer(*plane(1.0), settings=settings, path=tmp_vdb)["metaballs"]
+    with pytest.raises(ValueError, match="centres"):
+        firncore.rasterize_metaballs({**balls, "centres": "here"}, settings, tmp_vdb)

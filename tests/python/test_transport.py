@@ -184,3 +184,40 @@ def test_file_problems(tmp_path):
     pyopenvdb.write(path, grids=[grid])
     with pytest.raises(ValueError, match="density"):
         firncore.bake(path, SNOW)
+
+
+def test_rays_from_non_finite_origins_are_value_errors(slab):
+    """Fuzzing (issue 11): a NaN origin went into the ray marcher (undefined float-to-int conversions)."""
+    firncore.bake(slab, SNOW, quality="DRAFT")
+    directions = np.array([[0.0, 0.0, -1.0]])
+    with pytest.raises(ValueError, match="origins"):
+        firncore.render_baked(slab, SNOW, np.array([[math.nan, 0.0, 1.0]]), directions)
+    with pytest.raises(ValueError, match="origins"):
+        firncore.monte_carlo_radiance(slab, SNOW, np.array([[0.0, math.inf, 1.0]]), directions, samples=1)
+
+
+def test_huge_test_slab_is_a_budget_error(tmp_vdb):
+    """Fuzzing: write_slab_vdb(width=100000) filled 1e10 voxels until memory ran out."""
+    with pytest.raises(firncore.BudgetError, match="budget"):
+        firncore.write_slab_vdb(tmp_vdb, voxel_size=0.01, width=100000, layers=100000, density=300.0)
+
+
+def test_huge_sample_counts_are_value_errors(slab):
+    """Fuzzing: huge counts ran for hours (no progress to cancel slab_monte_carlo); they are refused at once."""
+    with pytest.raises(ValueError, match="sun samples"):
+        firncore.bake(slab, SNOW, quality="DRAFT", sun_samples=10**9)
+    with pytest.raises(ValueError, match="photons"):
+        firncore.slab_monte_carlo(omega=0.9, g=0.0, tau=1.0, mu0=1.0, photons=10**12)
+    with pytest.raises(ValueError, match="samples"):
+        firncore.monte_carlo_radiance(slab, SNOW, np.zeros((1, 3)), np.array([[0.0, 0.0, -1.0]]), samples=10**9)
+
+
+def test_occluders_of_the_wrong_kind_are_value_errors(slab):
+    """Fuzzing: an occluder that is not a tuple, or a colour name as albedo, leaked pybind11's RuntimeError."""
+    triangle = (np.eye(3, dtype=np.float32), np.array([[0, 1, 2]], np.uint32))
+    with pytest.raises(ValueError, match="occluder"):
+        firncore.bake(slab, SNOW, occluders=["wall"])
+    with pytest.raises(ValueError, match="albedo"):
+        firncore.bake(slab, SNOW, occluders=[(*triangle, "red")])
+    with pytest.raises(ValueError, match="albedo"):
+        firncore.bake(slab, SNOW, occluders=[(*triangle, (0.5, None, 0.5))])

@@ -87,10 +87,14 @@ openvdb::GridPtrVec readGrids(const std::string &path) {
         openvdb::GridPtrVecPtr grids = file.getGrids();
         const openvdb::MetaMap::Ptr meta = file.getMetadata();
         file.close();
+        // OpenVDB reads a file cut short inside its header as a file of no grids; Firn never writes one.
+        if (grids->empty()) throw IoError("cannot read " + path + ": no grids in it (truncated or corrupted?)");
         const auto shift = meta->getMetadata<openvdb::BoolMetadata>(kShiftKey);
         if (shift && shift->value()) shiftHalfVoxel(*grids, +1.0);
         return *grids;
-    } catch (const std::exception &e) {  // a damaged file throws more than openvdb::IoError
+    } catch (const IoError &) {
+        throw;
+    } catch (const std::exception &e) {  // openvdb::Exception, and std:: ones from a corrupted or truncated file
         throw IoError("cannot read " + path + ": " + e.what());
     }
 }

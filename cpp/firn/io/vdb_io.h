@@ -18,7 +18,7 @@ namespace firn {
 void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids);
 
 // Every grid in the file, read in full, with in-memory (unshifted) transforms. Throws IoError, also for a
-// damaged (e.g. truncated) file.
+// damaged (truncated, corrupted) file, a file without grids, and any exception OpenVDB's reader raises.
 openvdb::GridPtrVec readGrids(const std::string &path);
 
 // The names of the file's grids, from its header alone (no voxel is read). Throws IoError.

@@ -45,6 +45,8 @@ class ColumnTable {
 
     Column lookup(double depth) const {
         const double x = depth / step_;
+        // NaN or far past the deepest column (a site on a triangle too large for float normals): no snow.
+        if (!std::isfinite(x) || x > 2.0 * kEntries) return {0, 0.0, 0.0};
         const int i = static_cast<int>(x);
         if (i < 0 || i + 1 >= kEntries) return solve(depth);
         const Column &a = table_[i], &b = table_[i + 1];

@@ -25,6 +25,7 @@ using FloatLeaf = FloatTree::LeafNodeType;
 constexpr int kLeafDim = FloatLeaf::DIM;  // 8
 constexpr int kLeafVoxels = FloatLeaf::SIZE;
 constexpr double kSurfaceBandVoxels = 3.0;  // half-width of the surface level set
+constexpr double kMinVoxelSize = 1e-4;      // m
 
 // Leaf coordinates (index / 8) packed into 64 bits, 21 bits per axis.
 constexpr std::int64_t kKeyBias = 1 << 20;
@@ -47,6 +48,31 @@ LeafRange leavesOf(const Metaball &b, double h) {
     const auto toLeaf = [](double x) { return int(std::floor(std::floor(x) / kLeafDim)); };
     return {openvdb::CoordBBox(openvdb::Coord(toLeaf(lo.x), toLeaf(lo.y), toLeaf(lo.z)),
                                openvdb::Coord(toLeaf(hi.x + 1), toLeaf(hi.y + 1), toLeaf(hi.z + 1)))};
+}
+
+// Balls from a user's edits may hold anything: every value finite, radius positive, every ball inside the
+// index range the leaf keys address, and no single ball (or all of them together) bigger than the budget.
+void checkBalls(const std::vector<Metaball> &balls, const RasterSettings &s) {
+    const double reach = double(kKeyBias - 2) * kLeafDim * s.voxelSize;  // m from the origin
+    double pairs = 0.0;
+    for (std::size_t i = 0; i < balls.size(); ++i) {
+        const Metaball &b = balls[i];
+        const float sum = b.centre.x + b.centre.y + b.centre.z + b.normal.x + b.normal.y + b.normal.z + b.radius +
+                          b.base + b.depth;
+        if (!std::isfinite(sum) || !(b.radius > 0.0f))
+            throw InvalidArgument("metaball " + std::to_string(i) +
+                                  " has a non-finite value or a radius that is not positive");
+        const float far = std::max({std::abs(b.centre.x), std::abs(b.centre.y), std::abs(b.centre.z)}) + b.radius;
+        if (!(far < reach))
+            throw InvalidArgument("metaball " + std::to_string(i) + " reaches " + std::to_string(far) +
+                                  " m from the origin; at this voxel size the grid ends at " + std::to_string(reach) +
+                                  " m");
+        const double leaves = double(leavesOf(b, s.voxelSize).leaves.volume());
+        checkVoxelBudget(leaves * kLeafVoxels / 4.0, s);  // this ball alone
+        pairs += leaves;
+    }
+    // Deep snow has a few thousand balls reaching each leaf, some 16 per voxel of the budget at most.
+    checkVoxelBudget(pairs / 32.0, s);
 }
 
 std::string millions(double n) {
@@ -97,6 +123,10 @@ struct LeafField {
     std::array<float, kLeafVoxels> weightedBelowBase{};  // m x field, positive below the surface
 };
 
+// floor or ceil of a voxel coordinate, clamped to [lo, hi] before the conversion to int (NaN gives lo): an edited
+// ball's base or normal may put its z-range anywhere (UBSan: float-to-int overflow).
+int clampedIndex(float x, int lo, int hi) { return x >= float(lo) ? (x <= float(hi) ? int(x) : hi) : lo; }
+
 void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std::size_t count,
                 const std::vector<Metaball> &balls, float h, LeafField &out) {
     const int zLeafLo = origin.z(), zLeafHi = origin.z() + kLeafDim - 1;
@@ -121,8 +151,8 @@ void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std:
                 float zLo = c.z - half;
                 const float lateral = normal.x * dx + normal.y * dy;
                 if (normal.z > 0.05f) zLo = std::max(zLo, c.z + (lowest - lateral) / normal.z);
-                const int kLo = std::max(zLeafLo, int(std::ceil(zLo / h)));
-                const int kHi = std::min(zLeafHi, int(std::floor((c.z + half) / h)));
+                const int kLo = clampedIndex(std::ceil(zLo / h), zLeafLo, zLeafHi + 1);
+                const int kHi = clampedIndex(std::floor((c.z + half) / h), zLeafLo - 1, zLeafHi);
                 const int row = ((x - origin.x()) << 6) | ((y - origin.y()) << 3);
                 for (int z = kLo; z <= kHi; ++z) {
                     const glm::vec3 offset(dx, dy, z * h - c.z);
@@ -155,7 +185,8 @@ void finishLeaf(const LeafField &in, const RasterSettings &s, FloatLeaf &surface
         const double toIso = (kSnowIsoValue - field) / std::max(double(glm::length(in.gradient[i])), 1e-12);
         // Half a voxel into the object, so that the voxel on its surface is whole snow: no thin gap below.
         const double belowBase = field > 0.0 ? in.weightedBelowBase[i] / field - 0.5 * h : band;
-        const double distance = std::clamp(std::max(toIso, belowBase), -band, band);
+        double distance = std::clamp(std::max(toIso, belowBase), -band, band);
+        if (std::isnan(distance)) distance = band;  // float sums of absurd (edited) balls overflowed: no snow
         surface.setValueOnly(i, float(distance));
         surface.setActiveState(i, std::abs(distance) < band);
         const double coverage = std::clamp(0.5 - distance / h, 0.0, 1.0);
@@ -185,7 +216,10 @@ double estimateVoxelCount(const std::vector<Metaball> &balls, double spacing, do
 SnowGrids rasterizeSnow(const std::vector<Metaball> &balls, const RasterSettings &s, const SubProgress &progress) {
     initializeOpenVdb();
     const double h = s.voxelSize;
-    if (!(h > 0.0) || !std::isfinite(h)) throw InvalidArgument("voxel size must be a positive number of metres");
+    // OpenVDB refuses transforms below ~1.5e-5 m (its determinant tolerance); snow needs no voxel under 0.1 mm.
+    if (!(h >= kMinVoxelSize) || !std::isfinite(h))
+        throw InvalidArgument("voxel size must be a finite number of metres, at least 0.1 mm (got " + std::to_string(h) + ")");
+    checkBalls(balls, s);
 
     const auto pairs = binBallsByLeaf(balls, h);
     std::vector<std::size_t> starts;  // first pair of each leaf

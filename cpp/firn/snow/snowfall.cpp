@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <sstream>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
@@ -34,9 +35,8 @@ void basis(const glm::vec3 &n, glm::vec3 &t, glm::vec3 &b) {
     b = glm::vec3(c, sign + n.y * n.y * a, -n.y);
 }
 
-// Number of sites on a triangle of `area` m^2: the expectation area/spacing^2, rounded at random.
-std::size_t siteCount(double area, double spacing, Rng &rng) {
-    const double expected = area / (spacing * spacing);
+// Number of sites on a triangle expecting `expected` (area/spacing^2, within the budget): rounded at random.
+std::size_t siteCount(double expected, Rng &rng) {
     const double whole = std::floor(expected);
     return static_cast<std::size_t>(whole) + (rng.uniform() < expected - whole ? 1 : 0);
 }
@@ -50,6 +50,15 @@ TriangleSetup setupTriangle(const TriangleMesh &mesh, std::size_t t, double maxS
     const glm::vec3 n = glm::normalize(mesh.crossNormal(t));
     const double cosUp = std::clamp(static_cast<double>(glm::dot(n, kUp)), -1.0, 1.0);
     return {n, static_cast<float>(slopeCover(std::acos(cosUp), maxSlope))};
+}
+
+void checkSiteBudget(double sites, double maxSites) {
+    if (sites <= maxSites) return;
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "snow would land on about " << sites << " sites, over the budget of " << maxSites
+        << ": use a larger spacing, fewer or smaller targets (or raise the voxel budget in Firn's preferences)";
+    throw BudgetExceeded(msg.str());
 }
 
 }  // namespace
@@ -73,14 +82,19 @@ std::vector<LandingSite> findLandingSites(const TriangleMesh &targets, const Ray
     const double cosSpread = std::cos(settings.spread);
     const std::size_t nTri = targets.triangleCount();
 
-    // Pass 1: how many sites each triangle gets (seeded per triangle: independent of threads).
-    std::vector<std::size_t> offsets(nTri + 1, 0);
+    // Pass 1: how many sites each triangle gets (seeded per triangle: independent of threads), refused before
+    // anything is placed when a huge surface or a tiny spacing would make more than the budget allows.
+    std::vector<double> expected(nTri, 0.0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nTri), [&](const tbb::blocked_range<std::size_t> &r) {
-        for (std::size_t t = r.begin(); t != r.end(); ++t) {
-            if (setupTriangle(targets, t, settings.maxSlope).cover <= 0.0f) continue;
-            Rng rng(settings.seed, t);
-            offsets[t + 1] = siteCount(targets.area(t), settings.spacing, rng);
-        }
+        for (std::size_t t = r.begin(); t != r.end(); ++t)
+            if (!(setupTriangle(targets, t, settings.maxSlope).cover <= 0.0f))
+                expected[t] = targets.area(t) / (settings.spacing * settings.spacing);
+    });
+    checkSiteBudget(std::accumulate(expected.begin(), expected.end(), 0.0), settings.maxSites);
+    std::vector<std::size_t> offsets(nTri + 1, 0);
+    tbb::parallel_for(std::size_t(0), nTri, [&](std::size_t t) {
+        Rng rng(settings.seed, t);
+        offsets[t + 1] = siteCount(expected[t], rng);
     });
     std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
     std::vector<LandingSite> sites(offsets.back());
@@ -96,7 +110,7 @@ std::vector<LandingSite> findLandingSites(const TriangleMesh &targets, const Ray
             if (count == 0) continue;
             const TriangleSetup tri = setupTriangle(targets, t, settings.maxSlope);
             Rng rng(settings.seed, t);
-            siteCount(targets.area(t), settings.spacing, rng);  // replay pass 1's draw
+            siteCount(expected[t], rng);  // replay pass 1's draw
             const double shiftU = rng.uniform(), shiftV = rng.uniform();
             const glm::vec3 a = targets.vertex(t, 0), b = targets.vertex(t, 1), c = targets.vertex(t, 2);
             for (std::size_t i = 0; i < count; ++i) {

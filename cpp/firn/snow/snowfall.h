@@ -20,6 +20,7 @@ struct SnowfallSettings {
     double spacing = 0.05;                   // m, mean distance between landing sites
     int exposureRays = 16;                   // rays per site into the cone (1 when spread is 0)
     std::uint64_t seed = 0;
+    double maxSites = 50e6;                  // landing sites allowed, checked before placing any
 };
 
 struct LandingSite {
@@ -35,7 +36,8 @@ double slopeCover(double slope, double maxSlope);
 // Sites at a mean density of one per spacing^2 of surface (a Kronecker (R2) sequence per triangle, randomly
 // shifted: stratified and seeded); each site's exposure is the unblocked fraction of exposureRays rays cast
 // into the snowfall cone against `occluders` (which should include the targets themselves).
-// Sites that get no snow (cover below 1 %) are left out.
+// Sites that get no snow (cover below 1 %) are left out. Throws BudgetExceeded, before placing any, when the
+// expected number of sites exceeds maxSites.
 std::vector<LandingSite> findLandingSites(const TriangleMesh &targets, const RayCaster &occluders,
                                           const SnowfallSettings &settings, const SubProgress &progress);
 

@@ -41,12 +41,18 @@ struct Preset {
     int snowBounces;  // passes gathering light between snow surfaces
 };
 
+constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
+
 Preset resolve(const BakeSettings &s) {
     Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1}
                : s.quality == BakeQuality::Final ? Preset{16, 4, 1e-5, 0, 1}
                                                  : Preset{64, 8, 1e-7, 64, 2};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
+    // Each is work per surface voxel: more than these is no bake but a hang (sky rays are capped at 64 anyway).
+    if (s.sunSamples > kMaxSunSamples || s.referenceSamples > kMaxReferenceSamples)
+        throw InvalidArgument("bake settings: at most " + std::to_string(kMaxSunSamples) + " sun samples and " +
+                              std::to_string(kMaxReferenceSamples) + " reference samples");
     if (s.skySamples) p.skySamples = s.skySamples;
     if (s.sunSamples) p.sunSamples = s.sunSamples;
     if (s.tolerance > 0.0) p.tolerance = s.tolerance;

@@ -16,6 +16,9 @@ namespace {
 
 using openvdb::Vec3d;
 
+constexpr double kMaxDensity = 10000.0;              // kg/m^3: ten times ice, room for any scaled grid
+constexpr double kMaxVoxelOpticalThickness = 1e7;   // snow at 1 m voxels is ~1e4
+
 // Voxel size if the transform is a uniform scale plus translation (voxel axes = world axes), else 0.
 double axisAlignedVoxelSize(const openvdb::math::Transform &transform) {
     if (!transform.isLinear() || !transform.hasUniformScale()) return 0.0;
@@ -57,6 +60,14 @@ Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
             throw InvalidArgument("density must be finite and non-negative (kg/m^3), found " + std::to_string(v));
         maxDensity_ = std::max(maxDensity_, double(v));
     }
+    // Beyond these no snow exists and the solver's arithmetic degrades (a coarse operator that is no longer
+    // positive definite at 1e30 m^2/kg): refuse them with the numbers, not a solver failure.
+    if (maxDensity_ > kMaxDensity)
+        throw InvalidArgument("density above 10000 kg/m^3 is not snow (ice is 917), found " +
+                              std::to_string(maxDensity_));
+    if (!(maxSigmaT() * h_ <= kMaxVoxelOpticalThickness))
+        throw InvalidArgument("a voxel " + std::to_string(h_) + " m wide is " + std::to_string(maxSigmaT() * h_) +
+                              " mean free paths thick (extinction per density x density x voxel size); at most 1e7");
     // Inactive voxels inside leaves may hold values other than the background: trilinear lookups read them.
     for (auto leaf = density_->tree().cbeginLeaf(); leaf; ++leaf)
         for (auto it = leaf->cbeginValueOff(); it; ++it)

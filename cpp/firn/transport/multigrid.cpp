@@ -200,7 +200,9 @@ std::vector<double> denseCholesky(const Stencil<float> &A) {
     for (std::size_t j = 0; j < n; ++j) {
         double d = L[j * n + j];
         for (std::size_t k = 0; k < j; ++k) d -= L[j * n + k] * L[j * n + k];
-        if (!(d > 0.0)) throw std::runtime_error("multigrid: coarse operator is not positive definite");
+        if (!(d > 0.0))  // seen with voxels thousands of mean free paths thick: exp(-tau) underflows
+            throw InvalidArgument("the diffusion solve broke down (coarse operator not positive definite): the snow "
+                                  "is too optically thick per voxel; use a smaller voxel size");
         L[j * n + j] = std::sqrt(d);
         for (std::size_t i = j + 1; i < n; ++i) {
             double s = L[i * n + j];

@@ -9,10 +9,19 @@
 
 namespace firn {
 
+namespace {
+constexpr double kMaxSlabVoxels = 16e6;
+}  // namespace
+
 openvdb::FloatGrid::Ptr makeSlabDensity(double voxelSize, int width, int layers, float density) {
     initializeOpenVdb();
-    if (!(voxelSize > 0.0) || width < 1 || layers < 1 || !(density > 0.0f))
-        throw InvalidArgument("slab: voxel size, width, layers and density must be positive");
+    if (!(voxelSize > 0.0) || !std::isfinite(voxelSize) || width < 1 || layers < 1 || !(density > 0.0f) ||
+        !std::isfinite(density))
+        throw InvalidArgument("slab: voxel size, width, layers and density must be positive and finite");
+    // A test geometry: far more voxels than any test needs is a mistake, refused before filling.
+    if (double(width) * width * layers > kMaxSlabVoxels)
+        throw BudgetExceeded("slab: " + std::to_string(width) + " x " + std::to_string(width) + " x " +
+                             std::to_string(layers) + " voxels is over the test slab's budget of 16 million");
     auto grid = openvdb::FloatGrid::create(0.0f);
     grid->setName("density");
     auto transform = openvdb::math::Transform::createLinearTransform(voxelSize);

@@ -132,4 +132,13 @@ TEST(VdbIo, ReadingAMissingFileThrowsIoError) {
     EXPECT_THROW(readGrids("/nonexistent/firn/none.vdb"), IoError);
 }
 
+// Fuzzing (issue 11): a file cut short inside its header read as a file of no grids, as if it were fine.
+TEST(VdbIo, TruncatedHeaderThrowsIoError) {
+    const std::string path = tempPath("truncated.vdb").string();
+    writeGrids(path, {cubeWithTile(0.1)});
+    std::filesystem::resize_file(path, 20);
+    EXPECT_THROW(readGrids(path), IoError);
+    std::filesystem::remove(path);
+}
+
 }  // namespace firn

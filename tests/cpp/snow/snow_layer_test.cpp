@@ -158,6 +158,40 @@ TEST(SnowLayer, VoxelBudgetIsCheckedBeforeAllocating) {
     }
 }
 
+// Fuzzing (issue 11): a huge target with a fine spacing asked for 1e12 landing sites and threw std::bad_alloc.
+TEST(SnowLayer, LandingSiteCountIsCheckedBeforePlacingThem) {
+    SnowLayerSettings s;
+    s.spacing = 0.01;
+    s.maxVoxels = 1e6;
+    try {
+        generate(test::plane(1e4f), {}, s);
+        FAIL() << "expected BudgetExceeded";
+    } catch (const BudgetExceeded &e) {
+        EXPECT_NE(std::string(e.what()).find("larger spacing"), std::string::npos) << e.what();
+    }
+}
+
+// Fuzzing: kept metaballs come back from the user; nonsense in them is refused, not rasterized.
+TEST(SnowLayer, EditedMetaballsAreCheckedBeforeRasterizing) {
+    SnowLayerSettings s;
+    s.maxVoxels = 1e6;
+    const SnowLayer layer = generate(test::plane(0.5f), {}, s);
+    const auto rebuild = [&](auto edit) {
+        std::vector<Metaball> balls = layer.metaballs;
+        edit(balls.back());
+        return rasterizeSnow(balls, s.raster(), SubProgress(nullptr, 0, 1));
+    };
+    EXPECT_THROW(rebuild([](Metaball &b) { b.centre.x = std::nanf(""); }), InvalidArgument);
+    EXPECT_THROW(rebuild([](Metaball &b) { b.depth = INFINITY; }), InvalidArgument);
+    EXPECT_THROW(rebuild([](Metaball &b) { b.radius = 0.0f; }), InvalidArgument);
+    EXPECT_THROW(rebuild([](Metaball &b) { b.radius = 1e30f; }), InvalidArgument);     // int overflow of its leaves
+    EXPECT_THROW(rebuild([](Metaball &b) { b.centre.y = 1e6f; }), InvalidArgument);    // beyond the leaf keys
+    EXPECT_THROW(rebuild([](Metaball &b) { b.radius = 100.0f; }), BudgetExceeded);     // 1e10 leaf pairs
+    // A base 1e30 m below the ball (UBSan: float-to-int overflow) leaves the ball out, nothing else.
+    const SnowGrids sunk = rebuild([](Metaball &b) { b.base = -1e30f; });
+    EXPECT_LE(sunk.density->activeVoxelCount(), layer.grids.density->activeVoxelCount());
+}
+
 TEST(SnowLayer, BadSettingsAreRejectedWithTheirName) {
     const TriangleMesh ground = test::plane(1.0f);
     auto expectMessage = [&](SnowLayerSettings s, const std::string &name) {

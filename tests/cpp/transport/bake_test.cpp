@@ -154,4 +154,36 @@ TEST(Bake, RejectsBadInput) {
     EXPECT_THROW(Medium(makeSlabDensity(kVoxel, 4, 4, kDensity), VolumeOptics{1.0, Rgb(1.1), 0.8}), InvalidArgument);
 }
 
+// Fuzzing (issue 11): sun_samples=10**9 baked on for hours; absurd counts are refused at once.
+TEST(Bake, HugeSampleCountsAreRefused) {
+    Scene scene = slabScene(2000.0, 0.999, 0.85, 4, 4);
+    scene.suns = {sunAt(0.5)};
+    BakeSettings settings;
+    settings.quality = BakeQuality::Draft;
+    settings.sunSamples = 1000000000;
+    EXPECT_THROW(bakeScattering(scene, settings), InvalidArgument);
+    settings.sunSamples = 0;
+    settings.referenceSamples = 1000000000;
+    settings.quality = BakeQuality::Reference;
+    EXPECT_THROW(bakeScattering(scene, settings), InvalidArgument);
+}
+
+// Fuzzing (issue 11): 1e30 m^2/kg, or 1 m voxels of dense snow, broke the solver with a raw std::runtime_error.
+TEST(Bake, OpticallyAbsurdVoxelsAreInvalidArguments) {
+    EXPECT_THROW(Medium(makeSlabDensity(kVoxel, 2, 2, kDensity), VolumeOptics{1e30, Rgb(0.9), 0.5}), InvalidArgument);
+    EXPECT_THROW(Medium(makeSlabDensity(kVoxel, 2, 2, 1e6f), VolumeOptics{1.0, Rgb(0.9), 0.5}), InvalidArgument);
+    Scene scene;
+    scene.medium = std::make_shared<Medium>(makeSlabDensity(1.0, 3, 3, 586.0f), VolumeOptics{8.6, Rgb(0.93), 0.39});
+    scene.sky.radiance = Rgb(1.0);
+    BakeSettings settings;
+    settings.quality = BakeQuality::Draft;
+    EXPECT_THROW(bakeScattering(scene, settings), InvalidArgument);
+}
+
+// Fuzzing (issue 11): write_slab_vdb(width=100000) filled 1e10 voxels until memory ran out.
+TEST(Bake, TestSlabIsRefusedOverItsBudget) {
+    EXPECT_THROW(makeSlabDensity(kVoxel, 100000, 100000, kDensity), BudgetExceeded);
+    EXPECT_THROW(makeSlabDensity(INFINITY, 4, 4, kDensity), InvalidArgument);
+}
+
 }  // namespace firn
