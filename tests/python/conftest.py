@@ -15,6 +15,7 @@ def cancelled_while_running(call, progress):
     has returned, the cancel comes too late and no firncore.Cancelled is raised. True if the call was cancelled.
     (The call must be long enough to be still running after its first report: a job of many progress steps.)"""
     import threading
+    import time
 
     import firncore
 
@@ -30,7 +31,7 @@ def cancelled_while_running(call, progress):
     worker = threading.Thread(target=work)
     worker.start()
     while worker.is_alive() and progress.fraction == 0.0:
-        threading.Event().wait(0.001)
+        time.sleep(0.001)
     progress.cancel()
     worker.join()
     return outcome["cancelled"]
