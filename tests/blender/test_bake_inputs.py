@@ -2,13 +2,15 @@
 Nishita sun discs), occluders with their albedo, and the snow's frame. No core bake needed."""
 
 import math
+import os
+import threading
 
 import bpy
 import numpy as np
 import pytest
 
 from bake_helpers import uniform_world, volume_object
-from firn.bake import inputs as bake_inputs
+from firn.bake import inputs as bake_inputs, world_probe
 from firn.common.errors import UserError
 
 
@@ -141,7 +143,7 @@ def test_node_world_becomes_an_equirect_map_in_the_core_convention(clean_scene):
     sky, suns, _ = bake_inputs.gather_sky(bpy.context.scene, identity_frame())
     assert suns == [] and sky.radiance == (1.0, 1.0, 1.0)
     height, width = sky.map.shape[:2]
-    assert (width, height) == bake_inputs.SKY_MAP_SIZE and sky.map.dtype == np.float32
+    assert (width, height) == world_probe.SKY_MAP_SIZE and sky.map.dtype == np.float32
     decoded = 2.0 * sky.map - 1.0  # the direction each pixel's radiance came from
     # Pixel (column i, row j; row 0 at the bottom) is centred at ((i + 1/2) / W, (j + 1/2) / H).
     u = (np.arange(width) + 0.5) / width
@@ -188,7 +190,7 @@ def test_nishita_sun_disc_becomes_a_sun(clean_scene):
     expected = bake_inputs.sky_sun_direction(node)
     longitude, latitude = math.atan2(expected.y, expected.x), math.asin(expected.z)
     half, pixels = math.radians(2.0), 32
-    with bake_inputs.WorldProbe(world, 1) as probe:
+    with world_probe.WorldProbe(world, 1) as probe:
         probe.equirect(np.eye(3), (1, 1), samples=1)  # sets up the panoramic camera
         cycles = probe.camera.data.cycles
         # Cycles turns the longitude range the other way: azimuth = -(longitude_min + u (max - min)).
@@ -210,6 +212,51 @@ def test_nishita_sun_disc_becomes_a_sun(clean_scene):
     assert sun.irradiance == pytest.approx(tuple(irradiance), rel=0.01)  # measured 0.5 %
     # The map keeps the sky without the disc.
     assert sky.map.max() < 0.01 * max(sun.irradiance) / (math.pi * (node.sun_size / 2) ** 2)
+
+
+def render_in_worker(request, cancelled=lambda: False):
+    """world_probe.render as the bake's worker thread calls it: off the main thread, so by a child Blender."""
+    outcome = {}
+
+    def work():
+        try:
+            outcome["rendering"] = world_probe.render(request, cancelled)
+        except world_probe.RenderError as error:
+            outcome["error"] = error
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    thread.join()
+    return outcome
+
+
+def test_a_child_blender_renders_the_world_as_the_main_thread_does(clean_scene):
+    """From a worker thread the world is rendered by a child Blender (the UI keeps its main thread): the same
+    sky map and the same sun as a render in place, and its files are removed."""
+    nishita_world(math.radians(30), math.radians(40))
+    frame = identity_frame()
+    here_sky, here_suns, _ = bake_inputs.gather_sky(bpy.context.scene, frame)
+    request = bake_inputs.world_request(bpy.context.scene, [frame])
+    outcome = render_in_worker(request)
+    assert not os.path.exists(request.folder)
+    sky, suns = bake_inputs.sky_from_rendering(request, outcome["rendering"], frame)
+    # Cycles seeds each pixel alone: the same world, samples and seed give the same pixels in any process.
+    assert np.allclose(sky.map, here_sky.map, rtol=1e-5, atol=1e-7)
+    assert len(suns) == len(here_suns) == 1
+    assert suns[0].irradiance == pytest.approx(here_suns[0].irradiance, rel=1e-5)
+    assert suns[0].direction == pytest.approx(here_suns[0].direction)
+
+
+def test_a_child_render_stops_on_cancel_and_says_why_it_failed(clean_scene):
+    direction_world()
+    request = bake_inputs.world_request(bpy.context.scene, [identity_frame()])
+    assert render_in_worker(request, cancelled=lambda: True) == {"rendering": None}
+    assert not os.path.exists(request.folder)
+
+    request = bake_inputs.world_request(bpy.context.scene, [identity_frame()])
+    request.world = "Not There"
+    error = render_in_worker(request)["error"]
+    assert "Not There" in str(error) and "missing" in str(error)
 
 
 def test_mapped_nishita_keeps_its_disc_in_the_map_and_says_so(clean_scene):

@@ -226,7 +226,7 @@ def test_cancel_before_the_core_runs_changes_nothing(clean_scene, tmp_path):
     staged = path + ".firn-bake.vdb"
     progress = firncore.Progress()
     progress.cancel()
-    inputs = {"jobs": [{"path": path, "staged": staged}], "quality": "FINAL", "seed": 0}
+    inputs = {"jobs": [{"path": path, "staged": staged}], "quality": "FINAL", "seed": 0, "world": None}
     with pytest.raises(firncore.Cancelled):
         bake.FIRN_OT_bake_scattering.compute(inputs, progress)
     assert not os.path.exists(staged)
@@ -238,8 +238,8 @@ def test_clamp_indirect_that_would_cut_bounce_light_is_reported(clean_scene):
     from firn.bake.inputs import BakeInputs, Sky, Sun
 
     scene = bpy.context.scene
-    bright = {"inputs": BakeInputs([Sun("Sun", (0, 0, 1), (1000.0, 1000.0, 900.0), 0.01)], Sky((1.0,) * 3), [])}
-    dim = {"inputs": BakeInputs([Sun("Sun", (0, 0, 1), (3.0, 3.0, 3.0), 0.01)], Sky((0.5,) * 3), [])}
+    bright = {"inputs": BakeInputs([Sun("Sun", (0, 0, 1), (1000.0, 1000.0, 900.0), 0.01)], Sky((1.0,) * 3), [], None)}
+    dim = {"inputs": BakeInputs([Sun("Sun", (0, 0, 1), (3.0, 3.0, 3.0), 0.01)], Sky((0.5,) * 3), [], None)}
     scene.cycles.sample_clamp_indirect = 10.0  # Cycles' default
     assert "Clamp Indirect (10)" in bake._clamp_warning(scene, [dim, bright])
     assert bake._clamp_warning(scene, [dim]) is None  # 3 / pi + 0.5 < 10
@@ -250,8 +250,10 @@ def test_clamp_indirect_that_would_cut_bounce_light_is_reported(clean_scene):
 def test_status_names_the_object_being_baked(clean_scene):
     status = bake.FIRN_OT_bake_scattering.job_status
     progress = firncore.Progress()
-    assert status(None, {"jobs": [{"name": "Snow"}, {"name": "Roof"}], "current": 1}, progress) == "Roof (2/2) "
-    assert status(None, {"jobs": [{"name": "Snow"}], "current": 0}, progress) == ""
+    jobs = [{"name": "Snow"}, {"name": "Roof"}]
+    assert status(None, {"jobs": jobs, "current": 1, "world": None}, progress) == "Roof (2/2) "
+    assert status(None, {"jobs": jobs[:1], "current": 0, "world": None}, progress) == ""
+    assert status(None, {"jobs": jobs, "current": 0, "world": "a request"}, progress) == "Rendering the world"
 
 
 def test_a_bake_is_still_baked_after_saving_and_reopening(clean_scene, tmp_path):

@@ -1,5 +1,6 @@
 """Blender with a window (under xvfb-run): Bake Scattering as a user starts it. It runs in a worker thread while
-the UI keeps running; Esc during a second bake leaves the first bake's file, material and fingerprint intact.
+the UI keeps running; Esc during a second bake (while a child Blender renders the new sky world) leaves the first
+bake's file, material and fingerprint intact; a third bake under that sky completes.
 Needs the core's bake (firncore.bake): without it the script exits with 77, which CTest reports as skipped.
 
 xvfb-run blender --factory-startup --enable-event-simulate --python modal_bake.py   (exit code 0 = pass)
@@ -37,6 +38,16 @@ def setup():
     slab = volume_object(path, "Slab")
     slab.select_set(True)
     return slab
+
+
+def sky_world():
+    """A world that is not a plain colour (a Nishita sky with its sun): the bake has it rendered."""
+    world = bpy.data.worlds.new("Sky")
+    world.use_nodes = True
+    sky = world.node_tree.nodes.new("ShaderNodeTexSky")
+    sky.sky_type = "NISHITA"
+    world.node_tree.links.new(sky.outputs["Color"], world.node_tree.nodes["Background"].inputs["Color"])
+    bpy.context.scene.world = world
 
 
 def start_bake(quality):
@@ -77,7 +88,7 @@ def tick():
             print(f"bake finished after {time.perf_counter() - state['since']:.2f} s with "
                   f"{state['while_computing']} UI ticks while it computed")
             state["before"] = (file_bytes(slab), slab.firn.bake_fingerprint)
-            bpy.context.scene.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 2.0
+            sky_world()
             start_bake("REFERENCE")
             state["phase"] = "second"
         elif phase == "second" and state["ticks"] == 4:
@@ -97,10 +108,18 @@ def tick():
                 fail("a staged file was left behind")
             if slab.firn.bake_state != "OUTDATED":  # the world changed since the kept bake
                 fail(f"state {slab.firn.bake_state} after the cancelled re-bake")
+            start_bake("DRAFT")
+            state["phase"] = "sky"
+        elif phase == "sky" and not job_running():
+            if state["while_computing"] == 0:
+                fail("UI froze: the timer never ran while the world rendered and the worker baked")
+            if slab.firn.bake_state != "BAKED" or "sky map" not in slab.firn.bake_summary:
+                fail(f"the bake under a sky texture: {slab.firn.bake_state}, '{slab.firn.bake_summary}'")
+            print(f"sky bake: {slab.firn.bake_summary}")
             print("PASS")
             bpy.ops.wm.quit_blender()
             return None
-        elif phase in {"baking", "cancelled"} and time.perf_counter() - state["since"] > HUNG:
+        elif phase in {"baking", "cancelled", "sky"} and time.perf_counter() - state["since"] > HUNG:
             fail(f"{phase}: hung")
     except Exception:
         traceback.print_exc()

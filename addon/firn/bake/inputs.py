@@ -1,11 +1,13 @@
-"""What lights and shadows a snow object, read from Blender for the bake (main thread only). No physics here.
+"""What lights and shadows a snow object, read from Blender for the bake (main thread, but for the functions
+that say "any thread"). No physics here.
 
 - Suns: Blender Sun lamps (direction towards the sun, irradiance = Strength × Color in W/m², Angle). Other lamp
   types do not light the bake: they are listed so the operator can say so.
 - Sky: the scene's World. A plain Background colour × strength is read directly; anything else (Nishita sky,
-  HDRI, any node world) is rendered by Cycles into a small equirectangular radiance map (W/m²/sr) in the
-  convention of cpp/firn/lights.h. The sun disc of a Nishita Sky Texture is measured apart and becomes a sun:
-  a half-degree disc is far smaller than a map pixel.
+  HDRI, any node world) is rendered by Cycles (bake/world_probe.py, off the main thread when the bake runs from
+  the UI) into a small equirectangular radiance map (W/m²/sr) in the convention of cpp/firn/transport/lights.h.
+  The sun disc of a Nishita Sky Texture is measured apart and becomes a sun: a half-degree disc is far smaller
+  than a map pixel.
 - Occluders: every rendered mesh-like object or collection instance that casts shadows (not snow), with what it
   instances (particles, Geometry Nodes), split by object, instance and material, each part with its diffuse
   albedo.
@@ -18,27 +20,18 @@ world space in metres.
 
 import hashlib
 import math
-import os
-import shutil
-import tempfile
 import zlib
 from dataclasses import dataclass, field
 
 import bpy
 import numpy as np
-from mathutils import Euler, Matrix, Vector
+from mathutils import Vector
 
 from ..common import scene_geometry
 from ..common.errors import UserError
+from . import world_probe
 
 DEFAULT_ALBEDO = (0.8, 0.8, 0.8)  # surfaces without a material: Blender's default grey
-SKY_MAP_SIZE = (128, 64)  # equirectangular pixels (2.8 degrees each)
-SKY_MAP_SAMPLES = 16  # per pixel; a camera ray straight to the world has no noise but the pixel footprint
-SUN_VIEW_SIZE = 32  # pixels across the close-up that measures a sky texture's sun disc
-SUN_VIEW_SAMPLES = 64
-# A camera at the origin looking along +X with +Z up renders an equirect image in Blender's Environment
-# Texture convention (u = 0.5 looks along +X, u = 0.25 along +Y); checked by test_bake_inputs.py.
-_EQUIRECT_CAMERA = Euler((math.pi / 2, 0.0, -math.pi / 2)).to_matrix()
 
 
 @dataclass(frozen=True)
@@ -67,8 +60,9 @@ class Occluder:
 @dataclass
 class BakeInputs:
     suns: list
-    sky: Sky
+    sky: Sky  # None while the world is still to be rendered (add_rendered_sky)
     occluders: list
+    frame: "Frame"
     warnings: list = field(default_factory=list)
 
 
@@ -194,129 +188,6 @@ def sky_sun_direction(node):
     return Vector((math.sin(r) * math.cos(e), math.cos(r) * math.cos(e), math.sin(e)))
 
 
-# What a Light Path node in the world reads for light that reaches snow: a volume-scattered or light-sampled ray
-# (every "Is ... Ray" false; Cycles 3.4 has no "Is Volume Scatter Ray" output), one bounce in, infinitely long.
-_SCATTERED_RAY = {"Ray Length": 1e30, "Ray Depth": 1.0}
-
-
-def _as_seen_by_scattered_light(tree):
-    """Replaces the Light Path nodes of a world tree with the values a scattered ray reads, so a world that
-    shows one thing to the camera and lights with another (Is Camera Ray) is probed for its lighting."""
-    for node in [node for node in tree.nodes if node.type == "LIGHT_PATH"]:
-        for output in node.outputs:
-            if not output.is_linked:
-                continue
-            value = tree.nodes.new("ShaderNodeValue")
-            value.outputs[0].default_value = _SCATTERED_RAY.get(output.name, 0.0)
-            for link in list(output.links):
-                tree.links.new(value.outputs[0], link.to_socket)
-        tree.nodes.remove(node)
-
-
-class WorldProbe:
-    """Renders a copy of a world with Cycles in a scene of its own: equirect maps and close-ups of the sun.
-
-    The user's scenes, world and last render are left alone; everything made here is removed on close() but a
-    render slot "Firn World Probe", reused by every bake.
-    """
-
-    def __init__(self, world, frame_current):
-        self._folder = tempfile.mkdtemp(prefix="firn_world_")
-        self.world = world.copy()
-        self.world.cycles_visibility.camera = True  # the probe's camera rays stand for the light reaching snow
-        if self.world.use_nodes and self.world.node_tree is not None:
-            _as_seen_by_scattered_light(self.world.node_tree)
-        self.scene = bpy.data.scenes.new("Firn World Probe")
-        self.scene.world = self.world
-        self.scene.frame_current = frame_current
-        self.scene.render.engine = "CYCLES"
-        cycles = self.scene.cycles
-        cycles.device = "CPU"
-        cycles.use_denoising = False
-        cycles.use_adaptive_sampling = False
-        cycles.pixel_filter_type = "BOX"  # a pixel is the mean radiance over its footprint
-        self.scene.render.filter_size = 1.0
-        self.scene.render.resolution_percentage = 100
-        self.scene.render.film_transparent = False
-        settings = self.scene.render.image_settings
-        settings.file_format, settings.color_depth, settings.exr_codec = "OPEN_EXR", "32", "ZIP"
-        self._camera_data = bpy.data.cameras.new("Firn World Probe")
-        self.camera = bpy.data.objects.new("Firn World Probe", self._camera_data)
-        self.scene.collection.objects.link(self.camera)
-        self.scene.camera = self.camera
-
-    def close(self):
-        bpy.data.objects.remove(self.camera)
-        bpy.data.cameras.remove(self._camera_data)
-        bpy.data.scenes.remove(self.scene)
-        bpy.data.worlds.remove(self.world)
-        shutil.rmtree(self._folder, ignore_errors=True)
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *_exc):
-        self.close()
-
-    def equirect(self, rotation, size=SKY_MAP_SIZE, samples=SKY_MAP_SAMPLES):
-        """(height, width, 3) radiance map; `rotation` (3 × 3, object → world) turns it into an object's frame."""
-        camera = self._camera_data
-        camera.type = "PANO"
-        camera.cycles.panorama_type = "EQUIRECTANGULAR"
-        camera.cycles.latitude_min, camera.cycles.latitude_max = -math.pi / 2, math.pi / 2
-        camera.cycles.longitude_min, camera.cycles.longitude_max = -math.pi, math.pi
-        self.camera.matrix_world = (Matrix(np.asarray(rotation).tolist()) @ _EQUIRECT_CAMERA).to_4x4()
-        return self._render(size, samples)
-
-    def close_up(self, direction, field_of_view, size=SUN_VIEW_SIZE, samples=SUN_VIEW_SAMPLES):
-        """(size, size, 3) radiance seen by a square pinhole camera looking along `direction` (world)."""
-        camera = self._camera_data
-        camera.type = "PERSP"
-        camera.sensor_fit = "HORIZONTAL"
-        camera.angle = field_of_view
-        self.camera.matrix_world = Vector(direction).to_track_quat("-Z", "Y").to_matrix().to_4x4()
-        return self._render((size, size), samples)
-
-    def _render(self, size, samples):
-        render = self.scene.render
-        render.resolution_x, render.resolution_y = size
-        self.scene.cycles.samples = samples
-        path = os.path.join(self._folder, "probe.exr")
-        render.filepath = path
-        with _spare_render_slot():
-            try:
-                bpy.ops.render.render(write_still=True, scene=self.scene.name)
-            except RuntimeError as error:
-                raise UserError(f"Could not render the world for the bake: {error}") from error
-        image = bpy.data.images.load(path, check_existing=False)
-        try:
-            width, height = image.size
-            pixels = np.empty(width * height * 4, np.float32)
-            image.pixels.foreach_get(pixels)  # scene-linear floats, rows bottom to top
-        finally:
-            bpy.data.images.remove(image)
-        return pixels.reshape(height, width, 4)[:, :, :3].copy()
-
-
-class _spare_render_slot:
-    """Renders into a render slot of Firn's own, so the user's last render stays on view in its slot (Blender's
-    Python cannot remove slots: the one slot is made once and reused)."""
-
-    name = "Firn World Probe"
-
-    def __enter__(self):
-        self.image = bpy.data.images.get("Render Result")
-        if self.image is not None:
-            slots = self.image.render_slots
-            self.previous = slots.active_index
-            slot = next((slot for slot in slots if slot.name == self.name), None) or slots.new(name=self.name)
-            slots.active = slot
-
-    def __exit__(self, *_exc):
-        if self.image is not None:
-            self.image.render_slots.active_index = self.previous
-
-
 def sun_irradiance(radiance, field_of_view):
     """Irradiance (W/m², per channel) on a plane facing the view from a square pinhole image of radiance:
     E = sum L cos(theta) dOmega, with dOmega cos(theta) = dA / (1 + x² + y²)² on the image plane at distance 1."""
@@ -328,51 +199,79 @@ def sun_irradiance(radiance, field_of_view):
     return (radiance * weight[:, :, None]).sum(axis=(0, 1))
 
 
-def _separate_sky_suns(probe, world, frame):
-    """Measures each Nishita sun disc (radiance with it minus without it) and switches it off in the probe's
-    world, so the map holds the sky alone. Returns ([Sun], warnings)."""
-    suns, warnings = [], []
+def _measured_sky_suns(world):
+    """(Nishita nodes whose sun disc is measured apart: [(node name, direction towards the sun in the world, its
+    angular diameter in rad)], warnings about the others)."""
+    measured, warnings = [], []
     for node in _sky_sun_nodes(world):
         if node.inputs["Vector"].is_linked:
             warnings.append(f"The sun disc of the mapped sky texture '{node.name}' stays in the sky map (blurred): "
                             "unlink its Vector input or use a Sun lamp for sharp sunlight")
             continue
-        direction = sky_sun_direction(node)
-        field_of_view = max(2.0 * node.sun_size, math.radians(0.5))
-        with_disc = probe.close_up(direction, field_of_view)
-        probe.world.node_tree.nodes[node.name].sun_disc = False
-        without_disc = probe.close_up(direction, field_of_view)
-        irradiance = np.maximum(sun_irradiance(with_disc - without_disc, field_of_view), 0.0)
-        if irradiance.max() > 0.0:
-            suns.append(Sun(f"{world.name}: {node.name}", frame.direction(direction),
-                            tuple(float(e) for e in irradiance), node.sun_size))
-    return suns, warnings
+        measured.append((node.name, tuple(sky_sun_direction(node)), node.sun_size))
+    return measured, warnings
 
 
-def gather_sky(scene, frame, cache=None):
-    """(Sky, [Sun] from sky textures, warnings) of the scene's world, in the snow's frame. `cache` (a dict) keeps
-    rendered worlds for further snow objects in the same orientation."""
+def plan_sky(scene):
+    """(Sky, warnings) of a world read from its settings, or (None, warnings) when it must be rendered
+    (world_request, then sky_from_rendering)."""
     world = scene.world
     if world is not None and not world.cycles_visibility.scatter:
-        return Sky(description="world hidden from volume scattering"), [], [
+        return Sky(description="world hidden from volume scattering"), [
             f"World '{world.name}' is hidden from volume scattering rays (Ray Visibility): it does not light the snow"]
     radiance = uniform_world_radiance(world)
     if radiance is not None:
-        return Sky(radiance=tuple(radiance), description="uniform"), [], []
-    key = tuple(np.round(frame.rotation, 6).ravel())
-    if cache is None or key not in cache:
-        with WorldProbe(world, scene.frame_current) as probe:
-            suns, warnings = _separate_sky_suns(probe, world, frame)
-            sky_map = probe.equirect(frame.rotation)
-        if not np.all(np.isfinite(sky_map)):
-            raise UserError(f"World '{world.name}' renders non-finite radiance")
-        sky_map = np.maximum(sky_map, 0.0)  # node worlds can go negative; radiance cannot
-        height, width = sky_map.shape[:2]
-        found = Sky(radiance=(1.0, 1.0, 1.0), map=sky_map, description=f"map {width}×{height}"), suns, warnings
-        if cache is None:
-            return found
-        cache[key] = found
-    return cache[key]
+        return Sky(radiance=tuple(radiance), description="uniform"), []
+    return None, _measured_sky_suns(world)[1]
+
+
+def world_request(scene, frames):
+    """Main thread: a world_probe.Request for the scene's world seen from each Frame (one map per distinct
+    orientation). Cheap: the world is only saved; world_probe.render renders it, off the main thread if asked
+    from a worker."""
+    rotations = {_rotation_key(frame): frame.rotation for frame in frames}
+    try:
+        return world_probe.request(scene.world, scene.frame_current, list(rotations.values()),
+                                   _measured_sky_suns(scene.world)[0])
+    except world_probe.RenderError as error:
+        raise UserError(f"Could not render the world for the bake: {error}") from error
+
+
+def _rotation_key(frame):
+    return tuple(np.round(frame.rotation, 6).ravel())
+
+
+def sky_from_rendering(request, rendering, frame):
+    """(Sky, [Sun]) in `frame` from a world rendered for `request` (numpy only: any thread)."""
+    keys = [tuple(np.round(np.asarray(r), 6).ravel()) for r in request.rotations]
+    sky_map = rendering.maps[keys.index(_rotation_key(frame))]
+    if not np.all(np.isfinite(sky_map)):
+        raise UserError(f"World '{request.world}' renders non-finite radiance")
+    sky_map = np.maximum(sky_map, 0.0)  # node worlds can go negative; radiance cannot
+    height, width = sky_map.shape[:2]
+    suns = []
+    for (name, direction, diameter), (with_disc, without_disc) in zip(request.suns, rendering.discs):
+        # The disc alone: the sky with it minus the sky without it, integrated over the close-up.
+        field_of_view = world_probe.disc_field_of_view(diameter)
+        irradiance = np.maximum(sun_irradiance(with_disc - without_disc, field_of_view), 0.0)
+        if irradiance.max() > 0.0:
+            suns.append(Sun(f"{request.world}: {name}", frame.direction(direction),
+                            tuple(float(e) for e in irradiance), diameter))
+    return Sky(radiance=(1.0, 1.0, 1.0), map=sky_map, description=f"map {width}×{height}"), suns
+
+
+def gather_sky(scene, frame):
+    """(Sky, [Sun] from sky textures, warnings) of the scene's world in `frame`, rendered here if need be (main
+    thread)."""
+    sky, warnings = plan_sky(scene)
+    if sky is not None:
+        return sky, [], warnings
+    request = world_request(scene, [frame])
+    try:
+        rendering = world_probe.render(request, cancelled=lambda: False)
+    except world_probe.RenderError as error:
+        raise UserError(f"Could not render the world for the bake: {error}") from error
+    return (*sky_from_rendering(request, rendering, frame), warnings)
 
 
 # --- occluders ------------------------------------------------------------------------------------------------
@@ -411,18 +310,24 @@ def gather_occluders(objects, depsgraph, frame):
 
 # --- everything -----------------------------------------------------------------------------------------------
 
-def gather(context, snow, sky_cache=None):
-    """BakeInputs of one snow object. Renders the world when it is not a plain colour (a second or two)."""
+def gather(context, snow):
+    """BakeInputs of one snow object. A world that is not a plain colour is left to render (`sky` None, see
+    plan_sky): bake/operators.py renders it off the main thread."""
     depsgraph = context.evaluated_depsgraph_get()  # first: it also brings every matrix_world up to date
     frame = Frame(snow, scene_geometry.metres_per_unit(context.scene))
     view_layer = context.view_layer
     suns, ignored = gather_suns(lamp_objects(view_layer), frame)
-    sky, sky_suns, sky_warnings = gather_sky(context.scene, frame, sky_cache)
-    warnings = list(sky_warnings)
+    sky, warnings = plan_sky(context.scene)
     if ignored:
         warnings.insert(0, "Only Sun lamps light the bake; ignored: " + ", ".join(ignored))
     occluders = gather_occluders(occluder_objects(view_layer), depsgraph, frame)
-    return BakeInputs(suns + sky_suns, sky, occluders, warnings)
+    return BakeInputs(suns, sky, occluders, frame, warnings)
+
+
+def add_rendered_sky(inputs, request, rendering):
+    """Completes BakeInputs gathered with the world left to render (any thread)."""
+    inputs.sky, sky_suns = sky_from_rendering(request, rendering, inputs.frame)
+    inputs.suns = inputs.suns + sky_suns
 
 
 # --- what the bake depends on, cheap enough to check at every redraw ------------------------------------------

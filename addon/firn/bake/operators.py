@@ -20,7 +20,7 @@ from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin, running_jobs
 from ..material import nodes as materials, optics
 from ..properties import BAKE_QUALITY_ITEMS
-from . import inputs as bake_inputs, state as bake_state
+from . import inputs as bake_inputs, state as bake_state, world_probe
 
 BAKE_LABEL = "Bake Scattering"
 REBUILD_ADVICE = ("Regenerate the snow (Firn Snow Layer panel) to write it again, or put the .blend's firn_cache "
@@ -84,6 +84,24 @@ def _verify(job):
         raise UserError(f"Cannot read the volume of '{job['name']}' ({error}). {REBUILD_ADVICE}") from error
 
 
+def _render_world(inputs, progress):
+    """Any thread: renders the world the jobs' skies wait for (world_probe: a child Blender off the main thread)
+    and completes their inputs; then the job's status moves on to the bake."""
+    request = inputs["world"]
+    if request is None:
+        return
+    try:
+        rendering = world_probe.render(request, cancelled=lambda: progress.cancelled)
+    except world_probe.RenderError as error:
+        raise UserError(f"Could not render the world for the bake: {error}") from error
+    if rendering is None:
+        raise firncore.Cancelled("cancelled")
+    for job in inputs["jobs"]:
+        if job["inputs"].sky is None:
+            bake_inputs.add_rendered_sky(job["inputs"], request, rendering)
+    inputs["world"] = None
+
+
 def _volume_optics(obj):
     try:
         return optics.volume_optics(obj.firn)
@@ -120,6 +138,17 @@ def _clamp_warning(scene, jobs):
         return None
     return (f"The snow may be up to about {brightest:.3g} W/m²/sr bright, and Clamp Indirect ({clamp:g}) cuts the "
             "light it throws on nearby objects: raise it or set 0 (Render Properties > Light Paths > Clamping)")
+
+
+def _light_warnings(scene, jobs):
+    """What the user should know about the light once it is known (the world rendered)."""
+    warnings = []
+    if all(not job["inputs"].suns and max(job["inputs"].sky.radiance) <= 0.0 for job in jobs):
+        warnings.append("Nothing lights the snow (no Sun lamp, black world): the bake is black")
+    clamp = _clamp_warning(scene, jobs)
+    if clamp:
+        warnings.append(clamp)
+    return warnings
 
 
 def _summary(quality, inputs, seconds):
@@ -204,34 +233,36 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
     def prepare(self, context):
         if not hasattr(firncore, "bake"):
             raise UserError("This build of Firn's core cannot bake (firncore.bake is missing): update Firn")
-        jobs, warnings, sky_cache = [], [], {}
+        jobs, warnings = [], []
         for obj in bake_targets(context):
             path = _check_volume(obj)
             volume_optics = _volume_optics(obj)
             signature = bake_inputs.signature(context, obj)
             signature["optics"] = bake_state.optics_digest(obj)
-            inputs = bake_inputs.gather(context, obj, sky_cache)
+            inputs = bake_inputs.gather(context, obj)
             warnings.extend(w for w in inputs.warnings if w not in warnings)
             jobs.append({"name": obj.name, "path": path, "staged": path + _STAGED_SUFFIX,
                          "stamp": bake_state.file_stamp(path), "optics": volume_optics, "inputs": inputs,
                          "signature": signature})
-        if all(not job["inputs"].suns and max(job["inputs"].sky.radiance) <= 0.0 for job in jobs):
-            warnings.append("Nothing lights the snow (no Sun lamp, black world): the bake is black")
-        clamp = _clamp_warning(context.scene, jobs)
-        if clamp:
-            warnings.append(clamp)
-        return {"jobs": jobs, "warnings": warnings, "quality": self.quality, "seed": self.seed, "current": 0}
+        unlit = [job["inputs"].frame for job in jobs if job["inputs"].sky is None]
+        world = bake_inputs.world_request(context.scene, unlit) if unlit else None  # last: it writes a file
+        return {"jobs": jobs, "warnings": warnings, "quality": self.quality, "seed": self.seed, "current": 0,
+                "world": world}
 
     def job_status(self, inputs, progress):
+        if inputs["world"] is not None:
+            return "Rendering the world"
         jobs = inputs["jobs"]
         part = f"{jobs[inputs['current']]['name']} ({inputs['current'] + 1}/{len(jobs)}) " if len(jobs) > 1 else ""
         return part + progress.stage
 
     @staticmethod
     def compute(inputs, progress):
-        """Worker thread: bake every object into its staged copy; on any failure or cancel, delete them all."""
+        """Worker thread: render the world (a child Blender), then bake every object into its staged copy; on any
+        failure or cancel, delete them all."""
         seconds = []
         try:
+            _render_world(inputs, progress)
             for index, job in enumerate(inputs["jobs"]):
                 inputs["current"] = index
                 if progress.cancelled:
@@ -265,7 +296,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
         finally:
             for job in inputs["jobs"]:
                 _remove(job["staged"])
-        for warning in inputs["warnings"]:
+        for warning in inputs["warnings"] + _light_warnings(context.scene, inputs["jobs"]):
             self.report({"WARNING"}, warning)
         if changed_settings:
             self.report({"WARNING"}, "Changed for baked snow: " + "; ".join(changed_settings))
