@@ -219,3 +219,60 @@ def test_nan_vertices_and_absurd_voxel_size_are_reported(clean_scene):
     with pytest.raises(RuntimeError, match="voxel size"):
         bpy.ops.firn.add_snow_layer(depth=0.05, voxel_size=0.5)
     assert not any(obj.firn.is_snow for obj in bpy.data.objects)
+
+
+def snow_top_in_file(snow):
+    """Height (m) of the top of the snow's densest-to-empty extent: the upper face of its highest active density
+    voxel, read from its file with pyopenvdb."""
+    import pyopenvdb
+
+    grid = pyopenvdb.read(bpy.path.abspath(snow.data.filepath), "density")
+    _low, high = grid.evalActiveVoxelBoundingBox()
+    return grid.transform.indexToWorld((0.0, 0.0, high[2] + 0.5))[2]
+
+
+def snow_top_in_render(snow):
+    """Height (m) of the highest lit row in a 1 m-tall orthographic side view of the snow (black world, a sun
+    behind the camera): what Cycles renders from the Volume, read back from the picture."""
+    scene = bpy.context.scene
+    camera = bpy.data.objects.new("Side", bpy.data.cameras.new("Side"))
+    scene.collection.objects.link(camera)
+    camera.location, camera.rotation_euler = (0.0, -4.0, 0.25), (math.pi / 2, 0.0, 0.0)
+    camera.data.type, camera.data.ortho_scale = "ORTHO", 1.0  # rows cover z from -0.25 to 0.75 m
+    scene.camera = camera
+    scene.world = bpy.data.worlds.new("Black")
+    scene.world.color = (0.0, 0.0, 0.0)
+    if not any(obj.type == "LIGHT" for obj in scene.objects):
+        sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+        sun.rotation_euler = (math.radians(60), 0.0, 0.0)  # shining towards +Y and down, from behind the camera
+        scene.collection.objects.link(sun)
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples, scene.cycles.use_denoising, scene.cycles.seed = 4, False, 0
+    scene.render.resolution_x = scene.render.resolution_y = 64
+    scene.render.resolution_percentage = 100
+    path = os.path.join(bpy.app.tempdir, "side.png")
+    scene.render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(path, check_existing=False)
+    pixels = np.array(image.pixels[:]).reshape(64, 64, 4)[:, :, :3]  # rows bottom to top
+    bpy.data.images.remove(image)
+    bpy.data.objects.remove(camera)
+    lit_rows = np.nonzero(pixels.mean(axis=(1, 2)) > 0.05)[0]
+    return -0.25 + (lit_rows.max() + 1) / 64.0
+
+
+def test_regenerated_snow_renders_its_new_file_not_the_grids_loaded_before(clean_scene):
+    """Regenerate rewrites the snow's file at the same path; Blender keeps the grids an evaluated Volume loaded
+    while its path is unchanged, so the old snow rendered until the .blend was reopened."""
+    ground = add_plane()
+    select_only(ground)
+    bpy.ops.firn.add_snow_layer(depth=0.05)
+    snow = bpy.context.object
+    thin = snow_top_in_file(snow)
+    assert snow_top_in_render(snow) == pytest.approx(thin, abs=0.035)  # two rows of 1.6 cm
+    snow.firn.layer.depth = 0.4
+    select_only(snow)
+    assert bpy.ops.firn.regenerate_snow() == {"FINISHED"}
+    deep = snow_top_in_file(snow)
+    assert deep > thin + 0.2
+    assert snow_top_in_render(snow) == pytest.approx(deep, abs=0.035)

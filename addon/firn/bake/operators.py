@@ -186,16 +186,14 @@ def _remove_baked_grids(obj):
         raise UserError(f"Cannot clear the bake of '{obj.name}' ({error}); it stays baked. "
                         f"{cache.WRITE_ADVICE}") from error
     if removed:
-        volume.grids.unload()
-        volume.grids.load()
+        cache.reload_grids(volume)
 
 
 def adopt_bake(obj, extinction_per_density, signature, summary):
     """After the baked grids arrived in obj's file: reload them, remember what the bake was made from (the scene
     `signature` taken before baking, the file as it is now) and render the snow from the bake."""
     volume = obj.data
-    volume.grids.unload()
-    volume.grids.load()
+    cache.reload_grids(volume)
     settings = obj.firn
     settings.is_snow = True  # any baked Volume is Firn snow from now on: its optics are in Snow Material
     settings.bake_extinction_per_density = extinction_per_density

@@ -102,6 +102,25 @@ def file_fixed(volume):
         del volume[DAMAGED_KEY]
 
 
+def reload_grids(volume):
+    """Reads a Volume's grids again after Firn rewrote its file. Blender's evaluated copies keep the grids they
+    loaded for as long as the file path stays the same (unloaded and loaded again, the old grids come back and
+    render until the .blend is reopened), so the path is cleared while each live view layer is evaluated, then
+    set back."""
+    path = volume.filepath
+    volume.filepath = ""  # unloads the Volume and tells its evaluated copies that their file changed
+    for view_layer in _live_view_layers():
+        view_layer.update()
+    volume.filepath = path
+    volume.grids.load()
+
+
+def _live_view_layers():
+    """The view layers with an evaluated scene: the context's and those shown in windows."""
+    layers = [bpy.context.view_layer] + [window.view_layer for window in bpy.context.window_manager.windows]
+    return list({layer.as_pointer(): layer for layer in layers if layer is not None}.values())
+
+
 def _snow_volumes():
     return [obj.data for obj in bpy.data.objects if obj.type == "VOLUME" and obj.firn.is_snow]
 

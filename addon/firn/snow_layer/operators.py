@@ -198,8 +198,7 @@ def write_snow(snow, inputs, result):
     volume = snow.data
     volume.filepath = inputs["stored_path"]
     cache.file_fixed(volume)
-    volume.grids.unload()
-    volume.grids.load()
+    cache.reload_grids(volume)
     snow.firn.mean_density = result["mean_density"]
     snow.firn.voxel_size = result["voxel_size"]
     _remove_children(snow)
