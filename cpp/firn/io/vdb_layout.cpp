@@ -171,6 +171,11 @@ std::int64_t checkMetadata(Cursor &at, const char *what, std::uint64_t gridBytes
         if (fixed != fixedMetadataBytes().end() && fixed->second != bytes)
             throw ReadError("metadata '" + name + "' of type " + type + " has " + std::to_string(bytes) +
                             " bytes instead of " + std::to_string(fixed->second) + " (corrupted)");
+        if (type == "bool") {  // OpenVDB loads the byte as a bool: another value than 0 or 1 is undefined behaviour
+            Cursor value = at.range(bytes);
+            const auto b = value.value<std::uint8_t>("bool metadata");
+            if (b > 1) throw ReadError("metadata '" + name + "' holds " + std::to_string(b) + " as a bool (corrupted)");
+        }
         if (type == "__delayedload") {
             Cursor value = at.range(bytes);
             delayedLoadLeaves = checkDelayedLoad(value, gridBytes);

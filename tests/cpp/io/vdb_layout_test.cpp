@@ -111,6 +111,21 @@ TEST(VdbLayout, ADelayedLoadTableThatDoesNotMatchTheTreeIsRefused) {
     std::filesystem::remove_all(std::filesystem::path(path).parent_path());
 }
 
+// OpenVDB loads a bool metadata's byte as a bool: 105 is undefined behaviour (UBSan, the asan fuzz run).
+TEST(VdbLayout, ABoolMetadataOtherThanZeroOrOneIsRefused) {
+    const std::string path = writeSnowFile("bool.vdb");
+    std::string bytes = bytesOf(path);
+    const std::string name = "firn_half_voxel_shift";
+    const std::size_t at = bytes.find(name);
+    ASSERT_NE(at, std::string::npos);
+    const std::size_t value = at + name.size() + 4 + 4 + 4;  // the type's length, "bool", the value's byte count
+    ASSERT_EQ(bytes.substr(at + name.size() + 4, 4), "bool");
+    bytes[value] = char(105);
+    writeBytes(path, bytes);
+    EXPECT_NE(readErrorOf([&] { gridNames(path); }).find("holds 105 as a bool"), std::string::npos);
+    std::filesystem::remove_all(std::filesystem::path(path).parent_path());
+}
+
 // A truncated file is found from its grid descriptors alone: the cheap check the add-on runs on load.
 TEST(VdbLayout, ATruncatedFileFailsTheHeaderCheck) {
     const std::string path = writeSnowFile("truncated.vdb");
