@@ -1,9 +1,9 @@
 #include "firn/io/vdb_layout.h"
 
-#include <cerrno>
-#include <cstring>
 #include <algorithm>
 #include <array>
+#include <cerrno>
+#include <cstring>
 #include <map>
 #include <set>
 
