@@ -38,15 +38,18 @@ void bindIo(py::module_ &m) {
     m.def(
         "grid_names",
         [](const std::string &path) { return longCall([&] { return firn::gridNames(path); }); },
-        py::arg("path"), "Names of the grids in a VDB file, from its header (no voxel is read).");
+        py::arg("path"),
+        "Names of the grids in a VDB file, from its header and grid descriptors (no voxel is read), whose lengths "
+        "and offsets are checked against the file's size: a truncated file raises firncore.ReadError (an OSError). "
+        "Cheap; a file damaged inside its voxels is found by verify_file or the read that uses it.");
     m.def(
         "verify_file",
         [](const std::string &path) {
             longCall([&] { firn::readGrids(path); });
         },
         py::arg("path"),
-        "Reads every grid of the VDB file at `path`, as a bake does. Raises OSError if it is missing or damaged "
-        "(truncated, corrupted), which a header read alone does not notice.");
+        "Reads every grid of the VDB file at `path`, as a bake does. Raises firncore.ReadError (an OSError) if it is "
+        "missing or damaged (truncated, corrupted), also inside its voxels, which grid_names does not read.");
     m.def(
         "remove_grids",
         [](const std::string &path, const std::vector<std::string> &names) {

@@ -184,7 +184,7 @@ void bindTransport(py::module_ &m) {
         [](const std::string &path, const firn::VolumeOptics &optics, const std::vector<firn::SunLight> &suns,
            const std::optional<firn::Sky> &sky, const py::list &occluders, const std::string &quality,
            std::uint64_t seed, std::shared_ptr<firn::Progress> progress, int skySamples, int sunSamples,
-           int referenceSamples) {
+           int referenceSamples, const std::optional<std::string> &outputPath) {
             firn::BakeSettings settings;
             settings.quality = parseQuality(quality);
             settings.seed = seed;
@@ -205,21 +205,23 @@ void bindTransport(py::module_ &m) {
                         out.push_back(grid);
                 }
                 for (const auto &grid : baked.grids()) out.push_back(grid);
-                firn::writeGrids(path, out);
+                firn::writeGrids(outputPath.value_or(path), out);
             });
             return statsDict(stats);
         },
         py::arg("vdb_path"), py::arg("optics"), py::arg("suns") = std::vector<firn::SunLight>{},
         py::arg("sky") = py::none(), py::arg("occluders") = py::list(), py::arg("quality") = "FINAL",
         py::arg("seed") = 0, py::arg("progress") = nullptr, py::arg("sky_samples") = 0, py::arg("sun_samples") = 0,
-        py::arg("reference_samples") = 0, R"doc(
+        py::arg("reference_samples") = 0, py::arg("output_path") = py::none(), R"doc(
 Bakes the light scattered inside the snow of `vdb_path` (its 'density' grid, kg/m^3) and writes the file
-back, atomically, with the baked grids BAKED_GRID_NAMES added (docs/vdb-contract.md). occluders: list of
+back, atomically, with the baked grids BAKED_GRID_NAMES added (docs/vdb-contract.md), or, given `output_path`,
+writes that file instead and leaves `vdb_path` as it was. occluders: list of
 (vertices (N, 3) float32 m, triangles (M, 3) uint32, albedo (r, g, b)). quality: 'DRAFT', 'FINAL' or
 'REFERENCE' (Monte Carlo surface, slow). sky_samples (rays per surface voxel, at most 64), sun_samples
 (points on a sun's disc) and reference_samples (paths per direction, REFERENCE) override the quality's
 defaults when non-zero. Releases the GIL; raises firncore.Cancelled if `progress` is
-cancelled, ValueError for bad input, OSError for file trouble. Returns the solve's statistics.)doc");
+cancelled, ValueError for bad input, firncore.ReadError (an OSError) when `vdb_path` is missing or damaged,
+firncore.WriteError (an OSError) when the result cannot be written. Returns the solve's statistics.)doc");
 
     m.def(
         "render_baked",

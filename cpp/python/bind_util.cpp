@@ -25,6 +25,10 @@ void bindErrors(py::module_ &m) {
             PyErr_SetString(PyExc_OSError, e.what());
         }
     });
+    // Registered after the IoError translator, so tried before it: a call that reads one file and writes another
+    // (the bake) says which of the two failed. Both are OSError.
+    py::register_exception<firn::ReadError>(m, "ReadError", PyExc_OSError);
+    py::register_exception<firn::WriteError>(m, "WriteError", PyExc_OSError);
 }
 
 void bindProgress(py::module_ &m) {

@@ -80,7 +80,7 @@ def snow_on_plane():
 def fake_bake(snow):
     """The baked grids in the snow's file and the add-on's post-bake step, as if Bake Scattering had run."""
     add_contract_grids(bake_state.snow_path(snow), uniform_source(S))
-    assert cache.unreadable(bake_state.snow_path(snow)) is None  # pyopenvdb says nothing when its write fails
+    bake.firncore.verify_file(bake_state.snow_path(snow))  # a full read: pyopenvdb says nothing when its write fails
     bake.adopt_bake(snow, 12.0, dict(bake.bake_inputs.signature(bpy.context, snow),
                                      optics=bake_state.optics_digest(snow)), "test grids")
     assert bake_state.changes(snow) == ("BAKED", [])
@@ -228,6 +228,25 @@ def test_a_file_deleted_or_truncated_during_the_session(clean_scene, tmp_path):
         bpy.ops.firn.bake_scattering(quality="DRAFT")
     assert bpy.ops.firn.rebuild_from_metaballs() == {"FINISHED"}
     assert cache.file_problem(snow.data) is None and not leftovers(os.path.dirname(path))
+
+
+@needs_core_bake
+def test_a_file_damaged_inside_its_voxels_is_found_by_the_bake(clean_scene, tmp_path):
+    """The panels and the load-time check read a file's header only; the bake's own (single) read of the file
+    finds damage inside its voxels, and says so apart from a failed write."""
+    snow = snow_on_plane()
+    path = bake_state.snow_path(snow)
+    damaged = bytearray(read_bytes(path))
+    damaged[len(damaged) // 2:len(damaged) // 2 + 64] = b"\xff" * 64  # same size: the header stays right
+    with open(path, "wb") as file:
+        file.write(damaged)
+    assert cache.unreadable(path) is None  # cheap, at load: header and grid descriptors
+    with pytest.raises(OSError):
+        bake.firncore.verify_file(path)
+    with pytest.raises(RuntimeError, match="Cannot read the volume of 'Snow' \\(cannot read .*Regenerate the snow"):
+        bpy.ops.firn.bake_scattering(quality="DRAFT")
+    assert read_bytes(path) == bytes(damaged) and not leftovers(os.path.dirname(path))
+    assert not snow.firn.bake_fingerprint
 
 
 def core_bake(snow):

@@ -287,6 +287,7 @@ void fuzzVdbFile(Input &in, const std::filesystem::path &dir) {
         std::ofstream file(path, std::ios::binary | std::ios::trunc);
         file.write(bytes.data(), std::streamsize(bytes.size()));
     }
+    gridNames(path.string());  // the cheap header check the add-on runs on load, then the full read
     for (const auto &read : readGrids(path.string()))
         if (!read) throw std::logic_error("readGrids returned a null grid");
 }

@@ -63,3 +63,37 @@ def test_remove_grids_refuses_to_empty_a_file_and_reports_missing_files(tmp_path
     assert sorted(firncore.grid_names(path)) == ["density", "surface"]
     with pytest.raises(OSError):
         firncore.remove_grids(os.fspath(tmp_path / "none.vdb"), ["density"])
+
+
+def test_read_and_write_failures_are_oserrors_of_their_own_kind(tmp_path):
+    """A call that reads one file and writes another (the bake) says which one failed (issue 11)."""
+    assert issubclass(firncore.ReadError, OSError) and issubclass(firncore.WriteError, OSError)
+    with pytest.raises(firncore.ReadError, match="cannot read"):
+        firncore.verify_file(os.fspath(tmp_path / "none.vdb"))
+    path = snow_file(os.fspath(tmp_path / "snow.vdb"))
+    with open(path, "r+b") as file:
+        file.truncate(os.path.getsize(path) - 1)
+    with pytest.raises(firncore.ReadError, match="truncated or corrupted"):
+        firncore.grid_names(path)  # the header check sees a grid that ends past the file's end
+
+
+def test_bake_reads_one_file_and_writes_another(tmp_path):
+    """The add-on's bake reads the snow file once and writes a staged copy: the core does both, and says which
+    failed."""
+    source, output = os.fspath(tmp_path / "snow.vdb"), os.fspath(tmp_path / "baked.vdb")
+    firncore.write_slab_vdb(source, voxel_size=0.02, width=4, layers=4, density=300.0)
+    before = open(source, "rb").read()
+    optics = firncore.VolumeOptics(10.0, (0.99, 0.99, 0.99), 0.8)
+    firncore.bake(source, optics, sky=firncore.Sky(), quality="DRAFT", output_path=output)
+    assert open(source, "rb").read() == before
+    assert sorted(firncore.grid_names(output)) == sorted(["density"] + list(firncore.BAKED_GRID_NAMES))
+    with pytest.raises(firncore.WriteError, match="cannot write"):
+        firncore.bake(source, optics, sky=firncore.Sky(), quality="DRAFT",
+                      output_path=os.fspath(tmp_path / "snow.vdb" / "inside_a_file.vdb"))
+    damaged = bytearray(before)
+    damaged[len(damaged) // 2:len(damaged) // 2 + 64] = b"\xff" * 64  # inside the voxels; the header is intact
+    with open(source, "wb") as file:
+        file.write(damaged)
+    firncore.grid_names(source)
+    with pytest.raises(firncore.ReadError, match="cannot read"):
+        firncore.bake(source, optics, sky=firncore.Sky(), quality="DRAFT", output_path=output)

@@ -2,14 +2,14 @@
 occluders, and the snow's material switched to render it (docs/user-guide.md "Bake Scattering").
 
 The core rewrites a snow file atomically; to keep the previous bake intact when a bake of several objects is
-cancelled or fails half way, each object is baked into a staged copy beside its file, and the copies replace
+cancelled or fails half way, each object is baked into a staged copy beside its file (the core reads the file
+and writes the copy), and the copies replace
 the files only once every bake has finished (apply, main thread). Cancel: the staged copies are deleted, no file
 or material is touched.
 """
 
 import math
 import os
-import shutil
 import time
 
 import bpy
@@ -40,12 +40,13 @@ def baking():
     return any(job.label == BAKE_LABEL for job in running_jobs())
 
 
-def core_bake(path, volume_optics, inputs, quality, seed, progress):
-    """The one call into the core's bake (cpp/python/bind_transport.cpp): it reads `density` from `path` and writes the
-    file back, atomically, with the baked grids added."""
+def core_bake(path, output, volume_optics, inputs, quality, seed, progress):
+    """The one call into the core's bake (cpp/python/bind_transport.cpp): it reads `path` once, bakes its `density`
+    and writes its grids with the baked ones added to `output`, atomically. Raises firncore.ReadError when `path`
+    cannot be read, another OSError when `output` cannot be written."""
     sky = inputs.sky
     firncore.bake(
-        path, volume_optics,
+        path, volume_optics, output_path=output,
         suns=[firncore.SunLight(sun.direction, sun.irradiance, sun.angular_diameter) for sun in inputs.suns],
         sky=firncore.Sky(radiance=tuple(sky.radiance), map=sky.map),  # map: (H, W, 3), rows bottom to top
         occluders=[(o.vertices, o.triangles, o.albedo) for o in inputs.occluders],
@@ -75,12 +76,13 @@ def _check_volume(obj):
     return path
 
 
-def _verify(job):
-    """Worker thread: reads the whole snow file (the main thread only read its header), so a damaged one is
-    reported as such rather than as a failed write of the staged copy."""
+def _bake_job(job, quality, seed, progress):
+    """Worker thread: bakes one snow file into its staged copy. The main thread only checked the file's header;
+    the core's one full read says when the file is damaged (its ReadError), apart from a failed write."""
     try:
-        firncore.verify_file(job["path"])
-    except OSError as error:
+        cache.core_write(core_bake, job["path"], job["staged"], job["optics"], job["inputs"], quality, seed,
+                         progress)
+    except firncore.ReadError as error:
         raise UserError(f"Cannot read the volume of '{job['name']}' ({error}). {REBUILD_ADVICE}") from error
 
 
@@ -156,14 +158,6 @@ def _summary(quality, inputs, seconds):
     parts = [quality.title(), f"{suns} sun{'s' if suns != 1 else ''}", f"sky {inputs.sky.description}",
              f"{len(inputs.occluders)} occluder parts", f"{seconds:.1f} s"]
     return ", ".join(parts)
-
-
-def _stage(path, staged):
-    """The copy of a snow file that the bake rewrites; OSError in the core's words when it cannot be made."""
-    try:
-        shutil.copyfile(path, staged)
-    except OSError as error:
-        raise OSError(f"cannot write {staged}: {error.strerror or error}") from error
 
 
 def _remove(path):
@@ -266,10 +260,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
                 if progress.cancelled:
                     raise firncore.Cancelled("cancelled")
                 started = time.perf_counter()
-                _verify(job)
-                cache.core_write(_stage, job["path"], job["staged"])
-                cache.core_write(core_bake, job["staged"], job["optics"], job["inputs"], inputs["quality"],
-                                 inputs["seed"], progress)
+                _bake_job(job, inputs["quality"], inputs["seed"], progress)
                 seconds.append(time.perf_counter() - started)
         except BaseException:
             for job in inputs["jobs"]:

@@ -67,17 +67,22 @@ def check_writable(path):
 
 def core_write(write, *args):
     """write(*args): a core call that writes a snow file (atomically). Its OSError (full disk, folder gone)
-    becomes a UserError that says nothing changed and what to do."""
+    becomes a UserError that says nothing changed and what to do. A firncore.ReadError (a file the call reads is
+    damaged) is not the write's fault: it goes to the caller, which knows what was read."""
     try:
         return write(*args)
+    except firncore.ReadError:
+        raise
     except OSError as error:
         raise UserError(f"{error}; nothing was changed. {WRITE_ADVICE}") from error
 
 
 def unreadable(path):
-    """Why the core cannot read the VDB file at `path` (it reads it all), or None."""
+    """Why the core cannot read the VDB file at `path`, or None. Cheap, for every snow file at load: the header
+    and grid descriptors, every grid checked to lie within the file (a truncated file fails). Damage inside the
+    voxels is found by the core's full read when the file is used (bake, Clear Bake)."""
     try:
-        firncore.verify_file(path)
+        firncore.grid_names(path)
     except (OSError, ValueError, RuntimeError) as error:
         return str(error)
     return None

@@ -8,6 +8,7 @@
 
 #include <unistd.h>
 
+#include "firn/io/vdb_layout.h"
 #include "firn/util/error.h"
 #include "firn/util/openvdb_library.h"
 #include "firn/util/version.h"
@@ -56,7 +57,7 @@ void writeFileAtomically(const std::string &path, const openvdb::GridPtrVec &gri
     } catch (const std::exception &e) {
         std::error_code ignored;
         std::filesystem::remove(temp, ignored);
-        throw IoError("cannot write " + path + ": " + e.what());
+        throw WriteError("cannot write " + path + ": " + e.what());
     }
 }
 
@@ -81,6 +82,7 @@ void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids) {
 
 openvdb::GridPtrVec readGrids(const std::string &path) {
     initializeOpenVdb();
+    checkVdbLayout(path, VdbCheck::Trees);  // every length and offset fits the file: OpenVDB trusts them
     try {
         openvdb::io::File file(path);
         file.open(/*delayLoad=*/false);  // read it all now: a truncated file fails here, not in a later reader
@@ -88,19 +90,20 @@ openvdb::GridPtrVec readGrids(const std::string &path) {
         const openvdb::MetaMap::Ptr meta = file.getMetadata();
         file.close();
         // OpenVDB reads a file cut short inside its header as a file of no grids; Firn never writes one.
-        if (grids->empty()) throw IoError("cannot read " + path + ": no grids in it (truncated or corrupted?)");
+        if (grids->empty()) throw ReadError("cannot read " + path + ": no grids in it (truncated or corrupted?)");
         const auto shift = meta->getMetadata<openvdb::BoolMetadata>(kShiftKey);
         if (shift && shift->value()) shiftHalfVoxel(*grids, +1.0);
         return *grids;
-    } catch (const IoError &) {
+    } catch (const ReadError &) {
         throw;
     } catch (const std::exception &e) {  // openvdb::Exception, and std:: ones from a corrupted or truncated file
-        throw IoError("cannot read " + path + ": " + e.what());
+        throw ReadError("cannot read " + path + ": " + e.what());
     }
 }
 
 std::vector<std::string> gridNames(const std::string &path) {
     initializeOpenVdb();
+    checkVdbLayout(path, VdbCheck::Header);  // a truncated file fails here
     try {
         openvdb::io::File file(path);
         file.open();  // reads the header and the grid descriptors; voxels stay on disk
@@ -109,7 +112,7 @@ std::vector<std::string> gridNames(const std::string &path) {
         file.close();
         return names;
     } catch (const std::exception &e) {  // a damaged file throws more than openvdb::IoError
-        throw IoError("cannot read " + path + ": " + e.what());
+        throw ReadError("cannot read " + path + ": " + e.what());
     }
 }
 
@@ -118,6 +121,7 @@ std::vector<std::string> removeGrids(const std::string &path, const std::vector<
     openvdb::GridPtrVec kept;
     std::vector<std::string> removed;
     openvdb::MetaMap::Ptr meta;
+    checkVdbLayout(path, VdbCheck::Trees);
     try {
         // As stored (no half-voxel shift, no voxelizing): the kept grids go back exactly as they were.
         openvdb::io::File file(path);
@@ -132,7 +136,7 @@ std::vector<std::string> removeGrids(const std::string &path, const std::vector<
         }
         file.close();
     } catch (const std::exception &e) {
-        throw IoError("cannot read " + path + ": " + e.what());
+        throw ReadError("cannot read " + path + ": " + e.what());
     }
     if (removed.empty()) return removed;
     if (kept.empty()) throw InvalidArgument("removing those grids would leave " + path + " empty");

@@ -49,6 +49,10 @@ Preset resolve(const BakeSettings &s) {
                                                  : Preset{64, 8, 1e-7, 64, 2};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
+    // Conjugate gradients in double precision stall near 1e-15: asked for less, it iterated on a residual of
+    // rounding noise until 0/0 made the whole bake NaN (fuzz seed 7179: a tolerance of 5e-324).
+    if (s.tolerance > 0.0 && s.tolerance < MultigridSolver::kFinestTolerance)
+        throw InvalidArgument("bake settings: the tolerance must be 0 (the quality's) or within [1e-12, 1)");
     // Each is work per surface voxel: more than these is no bake but a hang (sky rays are capped at 64 anyway).
     if (s.sunSamples > kMaxSunSamples || s.referenceSamples > kMaxReferenceSamples)
         throw InvalidArgument("bake settings: at most " + std::to_string(kMaxSunSamples) + " sun samples and " +
@@ -688,6 +692,12 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     }
     p.report(reference ? 0.95 : solved, "Writing the grids");
     BakedGrids grids = makeGrids(scene, topo, source, preset, settings);
+    // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
+    // (Cycles would render black or white voxels). Not InvalidArgument: the fuzz driver must see it as a bug.
+    for (const auto &grid : grids.source)
+        for (auto it = grid->cbeginValueOn(); it; ++it)
+            if (!std::isfinite(it->x() + it->y() + it->z()))
+                throw std::logic_error("the bake computed a non-finite radiance (NaN or inf); nothing was written");
     local.gridSeconds = clock.lap();
     p.report(1.0, "Done");
     if (stats) *stats = local;

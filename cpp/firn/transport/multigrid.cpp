@@ -314,7 +314,7 @@ MultigridSolver::Result MultigridSolver::solve(const std::vector<double> &b, std
     const FineOperator A{hierarchy_->levels.front().A, hierarchy_->remainder};
     openvdb::math::pcg::State termination = openvdb::math::pcg::terminationDefaults<double>();
     termination.iterations = maxIterations;
-    termination.relativeError = relativeTolerance;
+    termination.relativeError = std::max(relativeTolerance, kFinestTolerance);
     termination.absoluteError = 0.0;
     Interrupter interrupter{&progress};
     openvdb::math::pcg::State state;

@@ -43,6 +43,10 @@ class MultigridSolver {
         int iterations = 0;
         double relativeResidual = 0.0;  // max |b - A x| / max |b|
     };
+    // The smallest relative residual asked of a solve: double precision stalls near 1e-15, and iterating on
+    // rounding noise ends in 0/0 (NaN everywhere). Smaller tolerances are raised to it.
+    static constexpr double kFinestTolerance = 1e-12;
+
     // x holds the initial guess on entry. Throws Cancelled when progress is cancelled.
     Result solve(const std::vector<double> &b, std::vector<double> &x, double relativeTolerance,
                  int maxIterations, const SubProgress &progress) const;

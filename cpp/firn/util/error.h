@@ -29,4 +29,17 @@ class IoError : public std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+// A file could not be read: missing, unreadable, truncated or corrupted. Python sees firncore.ReadError (an
+// OSError), so a caller that reads and writes in one call can tell "this input is bad" from "cannot write".
+class ReadError : public IoError {
+  public:
+    using IoError::IoError;
+};
+
+// A file could not be written (full disk, read-only folder). Python sees firncore.WriteError (an OSError).
+class WriteError : public IoError {
+  public:
+    using IoError::IoError;
+};
+
 }  // namespace firn
