@@ -31,6 +31,9 @@ def view3d():
 
 
 def setup():
+    window = bpy.context.window_manager.windows[0]
+    window.event_simulate(type="ESC", value="PRESS")  # closes the splash screen, as a user would
+    window.event_simulate(type="ESC", value="RELEASE")
     addon_utils.enable("firn", default_set=True)
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj)
@@ -71,10 +74,11 @@ def screenshot(name):
     with bpy.context.temp_override(**context):
         bpy.ops.screen.screenshot_area(filepath=path)
     image = bpy.data.images.load(path)
-    pixels = np.empty(image.size[0] * image.size[1] * 4, np.float32)
+    width, height = image.size
+    pixels = np.empty(width * height * 4, np.float32)
     image.pixels.foreach_get(pixels)
     bpy.data.images.remove(image)
-    rgba = pixels.reshape(image.size[1], image.size[0], 4)
+    rgba = pixels.reshape(height, width, 4)
     return rgba[..., :3].mean(axis=-1)  # brightness per pixel
 
 

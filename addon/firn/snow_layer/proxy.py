@@ -41,7 +41,7 @@ def new_mesh(name, vertices, triangles, smooth=False):
     mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, np.int32))
     if smooth:
         mesh.polygons.foreach_set("use_smooth", np.ones(len(triangles), bool))
-    mesh.update()
+    mesh.update(calc_edges=True)  # a valid mesh: every loop names its edge
     return mesh
 
 
