@@ -129,3 +129,29 @@ def test_preview_material_follows_the_optics(clean_scene):
     after = tuple(bsdf.inputs["Base Color"].default_value)
     assert all(a < b for a, b in zip(after[:3], before[:3]))
     assert all(a > b for a, b in zip(bsdf.inputs["Subsurface Radius"].default_value, radius_before))
+
+
+def test_proxy_shows_the_bake_until_it_is_cleared(clean_scene):
+    from bake_helpers import uniform_world
+    from firn.material import preview
+
+    uniform_world((1.0, 1.0, 1.0))
+    ground = add_plane(size=0.6)
+    select_only(ground)
+    assert bpy.ops.firn.add_snow_layer(depth=0.05, spacing=0.03) == {"FINISHED"}
+    snow = bpy.context.object
+    select_only(snow)
+    assert bpy.ops.firn.bake_scattering(quality="DRAFT") == {"FINISHED"}
+    proxy = snow_proxy.proxy_of(snow)
+    mesh, material = proxy.data, proxy.data.materials[0]
+    assert preview.is_showing_bake(material)
+    colours = np.empty(len(mesh.vertices) * 4, np.float32)
+    mesh.attributes[preview.BAKED_ATTRIBUTE].data.foreach_get("color", colours)
+    points = np.empty(len(mesh.vertices) * 3, np.float32)
+    mesh.vertices.foreach_get("co", points)
+    # The proxy's vertices are in the grids' metres: its colours are firn_source there (vdb-contract.md).
+    expected = firncore.sample_color_grid(bpy.path.abspath(snow.data.filepath), "firn_source", points.reshape(-1, 3))
+    assert np.allclose(colours.reshape(-1, 4)[:, :3], expected, rtol=1e-6, atol=1e-7)
+    assert expected.mean() > 0.0  # a white sky lights the snow: its top glows
+    assert bpy.ops.firn.clear_bake() == {"FINISHED"}
+    assert not preview.is_showing_bake(material) and preview.BAKED_ATTRIBUTE not in mesh.attributes

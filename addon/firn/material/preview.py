@@ -5,7 +5,10 @@ material shows what the optics predict of the surface: the plane albedo of a sem
 diffuse light (the white-sky albedo, per RGB) as its colour, and subsurface scattering whose radius is the
 snow's transport mean free path 1 / sigma_t' (per RGB; Blender's radius is the medium's mean free path, and
 the similarity-scaled, isotropic medium has sigma_t' = sigma_t (1 - g)), so edges and thin snow glow as they do
-in the render. No physics here: every number comes from firncore.
+in the render. After Bake Scattering the proxy shows the bake instead: the baked source function's isotropic part
+`firn_source` (W/(m² sr), vdb-contract.md), sampled at its vertices into the colour attribute BAKED_ATTRIBUTE,
+emitted as the surface's radiance (what Cycles renders of optically thick snow, seen from any side). No physics
+here: every number comes from firncore.
 """
 
 import bpy
@@ -13,7 +16,8 @@ import bpy
 from . import optics
 
 _TAG = "firn_preview"  # ID property marking the proxy materials Firn manages
-_NODES = ("Firn Preview BSDF", "Firn Preview Output")
+_NODES = ("Firn Preview BSDF", "Firn Preview Output", "Firn Preview Baked", "Firn Preview Emission")
+BAKED_ATTRIBUTE = "firn_baked"  # colour per proxy vertex: firn_source there
 _FALLBACK_ALBEDO = (0.9, 0.9, 0.9)  # shown while the optics settings are invalid (the panel says why)
 
 
@@ -41,6 +45,14 @@ def _build(material):
     output.name = output.label = "Firn Preview Output"
     output.location = (300, 0)
     tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
+    baked = tree.nodes.new("ShaderNodeAttribute")
+    baked.name = baked.label = "Firn Preview Baked"
+    baked.attribute_name = BAKED_ATTRIBUTE
+    baked.location = (-300, -400)
+    emission = tree.nodes.new("ShaderNodeEmission")
+    emission.name = emission.label = "Firn Preview Emission"
+    emission.location = (0, -400)
+    tree.links.new(baked.outputs["Color"], emission.inputs["Color"])
     bsdf.inputs["Subsurface"].default_value = 1.0
     bsdf.inputs["Specular"].default_value = 0.3  # ice's Fresnel reflectance at normal incidence is 0.018
     bsdf.inputs["Roughness"].default_value = 0.8
@@ -70,3 +82,17 @@ def refresh_preview_material(material, settings, metres):
     bsdf.inputs["Subsurface Radius"].default_value = radius
     material.diffuse_color = (*colour, 1.0)  # Solid mode's colour
     material.roughness = 0.8
+
+
+def show_baked(material, baked):
+    """The preview shows the bake (emission of the baked colour attribute) or the optics (Principled)."""
+    if not all(name in (material.node_tree.nodes if material.node_tree else ()) for name in _NODES):
+        _build(material)
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    shown = nodes["Firn Preview Emission"].outputs["Emission"] if baked else nodes["Firn Preview BSDF"].outputs["BSDF"]
+    links.new(shown, nodes["Firn Preview Output"].inputs["Surface"])
+
+
+def is_showing_bake(material):
+    surface = material.node_tree.nodes["Firn Preview Output"].inputs["Surface"]
+    return surface.is_linked and surface.links[0].from_node.name == "Firn Preview Emission"

@@ -10,7 +10,8 @@ import bpy
 import numpy as np
 
 from ..common import scene_geometry
-from ..material import preview
+from ..common.core import firncore
+from ..material import nodes as materials, preview
 
 MAX_TRIANGLES = 150_000  # the proxy's budget: drawn at interactive rates, a few MB in the .blend
 ADAPTIVITY = 0.0  # even triangles shade evenly; OpenVDB's adaptive merging costs more time than coarser voxels
@@ -24,8 +25,6 @@ DISPLAY_ITEMS = (
 
 def mesh_arrays(path, progress=None):
     """Worker thread: the proxy's (vertices m, triangles) from the snow's VDB file; no bpy here."""
-    from ..common.core import firncore
-
     return firncore.snow_surface_mesh(path, adaptivity=ADAPTIVITY, max_triangles=MAX_TRIANGLES, progress=progress)
 
 
@@ -67,6 +66,7 @@ def store_proxy(snow, arrays, metres):
     for collection in snow.users_collection:
         collection.objects.link(proxy)
     preview.ensure_preview_material(snow, mesh, metres)
+    show_bake(snow)
     apply_display(snow)
     return proxy
 
@@ -85,6 +85,28 @@ def refresh_preview(snow, scene):
     proxy = proxy_of(snow) if snow.type == "VOLUME" else None
     if proxy is not None and proxy.data.materials and preview.is_preview_material(proxy.data.materials[0]):
         preview.refresh_preview_material(proxy.data.materials[0], snow.firn, scene_geometry.metres_per_unit(scene))
+
+
+def show_bake(snow):
+    """After Bake Scattering or Clear Bake: the proxy shows the snow's baked colours (firn_source sampled at its
+    vertices, which are in the grids' metres) while the snow has a bake in its file, else its optics."""
+    proxy = proxy_of(snow)
+    if proxy is None or not proxy.data.materials or not preview.is_preview_material(proxy.data.materials[0]):
+        return
+    mesh, material = proxy.data, proxy.data.materials[0]
+    if preview.BAKED_ATTRIBUTE in mesh.attributes:
+        mesh.attributes.remove(mesh.attributes[preview.BAKED_ATTRIBUTE])
+    baked = bool(snow.firn.bake_fingerprint) and materials.has_baked_grids(snow.data)
+    if baked:
+        points = np.empty(len(mesh.vertices) * 3, np.float32)
+        mesh.vertices.foreach_get("co", points)
+        colours = firncore.sample_color_grid(bpy.path.abspath(snow.data.filepath), "firn_source",
+                                             points.reshape(-1, 3))
+        rgba = np.ones((len(colours), 4), np.float32)
+        rgba[:, :3] = colours
+        attribute = mesh.attributes.new(preview.BAKED_ATTRIBUTE, "FLOAT_COLOR", "POINT")
+        attribute.data.foreach_set("color", rgba.ravel())
+    preview.show_baked(material, baked)
 
 
 def apply_display(snow):
