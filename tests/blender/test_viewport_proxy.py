@@ -108,12 +108,14 @@ def test_proxy_holds_and_stops_no_snow_or_light(clean_scene):
 def test_display_setting(clean_scene):
     _ground, snow = snow_on_plane()
     proxy = snow_proxy.proxy_of(snow)
+    output = snow.active_material.node_tree.nodes["Firn Output"]
+    assert output.target == "CYCLES"  # EEVEE (Material Preview) does not slice the volume over the proxy
     snow.firn.display = "VOLUME"
-    assert proxy.hide_viewport and snow.display_type == "TEXTURED"
+    assert proxy.hide_viewport and snow.display_type == "TEXTURED" and output.target == "ALL"
     snow.firn.display = "BOUNDS"
-    assert proxy.hide_viewport and snow.display_type == "BOUNDS"
+    assert proxy.hide_viewport and snow.display_type == "BOUNDS" and output.target == "CYCLES"
     snow.firn.display = "SURFACE"
-    assert not proxy.hide_viewport and snow.display_type == "BOUNDS"
+    assert not proxy.hide_viewport and snow.display_type == "BOUNDS" and output.target == "CYCLES"
     # The choice survives a regenerate.
     snow.firn.display = "VOLUME"
     assert bpy.ops.firn.regenerate_snow() == {"FINISHED"}
@@ -145,6 +147,7 @@ def test_proxy_shows_the_bake_until_it_is_cleared(clean_scene):
     proxy = snow_proxy.proxy_of(snow)
     mesh, material = proxy.data, proxy.data.materials[0]
     assert preview.is_showing_bake(material)
+    assert snow.active_material.node_tree.nodes["Firn Output"].target == "CYCLES"  # the baked tree, for Cycles
     colours = np.empty(len(mesh.vertices) * 4, np.float32)
     mesh.attributes[preview.BAKED_ATTRIBUTE].data.foreach_get("color", colours)
     points = np.empty(len(mesh.vertices) * 3, np.float32)

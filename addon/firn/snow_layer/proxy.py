@@ -107,12 +107,19 @@ def show_bake(snow):
         attribute = mesh.attributes.new(preview.BAKED_ATTRIBUTE, "FLOAT_COLOR", "POINT")
         attribute.data.foreach_set("color", rgba.ravel())
     preview.show_baked(material, baked)
+    apply_display(snow)  # the snow's material may have been rebuilt
 
 
 def apply_display(snow):
-    """Shows the snow in the viewport as its Display setting says (obj.firn.display)."""
+    """Shows the snow in the viewport as its Display setting says (obj.firn.display). EEVEE renders a volume's
+    material whatever the object's display type (in view-aligned slices: the streaks the proxy replaces), so
+    unless the volume itself is to be seen the snow material's output is for Cycles alone."""
     display = snow.firn.display
     snow.display_type = "TEXTURED" if display == "VOLUME" else "BOUNDS"
     proxy = proxy_of(snow)
     if proxy is not None:
         proxy.hide_viewport = display != "SURFACE"
+    material = materials.snow_material(snow)
+    output = material.node_tree.nodes.get("Firn Output") if material and material.node_tree else None
+    if output is not None:
+        output.target = "ALL" if display == "VOLUME" else "CYCLES"
