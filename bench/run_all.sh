@@ -27,6 +27,10 @@ mkdir -p "$(dirname "$report")"
     "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/baked_vs_brute_force.py" -- --samples 64 --pixels 32 --bounces "$bounces"
     echo
   done
+  echo "## The viewport proxy of the car sample's snow (build time, triangles, .blend growth)"
+  echo
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/proxy_bench.py"
+  echo
   echo "## The UI's longest stalls during Add Snow Layer and Bake Scattering (car sample, window under Xvfb)"
   echo
   "$FIRN_ROOT/bench/ui_stall.sh"

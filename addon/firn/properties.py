@@ -6,6 +6,7 @@ import bpy
 
 from .bake import state as bake_state
 from .material import nodes as materials, optics
+from .snow_layer import proxy
 
 # Defined once, used by the operator (redo panel) and by the settings kept on each snow object. Lengths are in
 # Blender units (unit="LENGTH": shown and typed in the scene's units, Unit Scale applied); the operator turns them
@@ -72,9 +73,14 @@ _DEFAULT_G = 0.845  # Kokhanovsky & Zege (2004), irregular grains
 _DEFAULT_OPTICS = optics.physical_default(_DEFAULT_GRAIN_RADIUS, _DEFAULT_DENSITY, _DEFAULT_G)
 
 
-def _refresh_material(self, _context):
-    """Every optics setting updates the snow's material live."""
+def _refresh_material(self, context):
+    """Every optics setting updates the snow's material, and its viewport proxy's, live."""
     materials.refresh_snow_material(self.id_data)
+    proxy.refresh_preview(self.id_data, context.scene if context else bpy.context.scene)
+
+
+def _apply_display(self, _context):
+    proxy.apply_display(self.id_data)
 
 
 def _get_bake_state(self):
@@ -108,6 +114,14 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
         description="This volume object holds Firn snow",
         default=False,
     )
+    is_proxy: bpy.props.BoolProperty(
+        name="Is Snow Proxy",
+        description="This mesh is a snow object's viewport proxy: never rendered, never holds or stops snow",
+        default=False,
+    )
+    display: bpy.props.EnumProperty(
+        name="Display", description="How the snow shows in the viewport (Cycles always renders the volume)",
+        items=proxy.DISPLAY_ITEMS, default="SURFACE", update=_apply_display)
     layer: bpy.props.PointerProperty(type=FIRN_SnowLayerSettings, name="Snow Layer")
     targets: bpy.props.CollectionProperty(type=FIRN_SnowTarget, name="Targets")
     metaballs: bpy.props.PointerProperty(

@@ -25,8 +25,15 @@ openvdb::FloatGrid::Ptr floatGrid(const std::string &path, const std::string &na
     throw firn::InvalidArgument(path + " has no grid named '" + name + "'");
 }
 
+openvdb::Vec3fGrid::Ptr colorGrid(const std::string &path, const std::string &name) {
+    const openvdb::GridBase::Ptr grid = firn::readGrid(path, name);
+    if (!grid) throw firn::InvalidArgument(path + " has no grid named '" + name + "'");
+    if (auto typed = openvdb::gridPtrCast<openvdb::Vec3fGrid>(grid)) return typed;
+    throw firn::InvalidArgument("grid '" + name + "' in " + path + " is not an RGB (Vec3f) grid");
+}
+
 // OpenVDB's coordinates are 32-bit: a point beyond them (1e30 m) cannot be looked up, and holds no snow.
-bool withinIndexRange(const openvdb::FloatGrid &grid, const openvdb::Vec3d &world) {
+bool withinIndexRange(const openvdb::GridBase &grid, const openvdb::Vec3d &world) {
     const openvdb::Vec3d ijk = grid.worldToIndex(world);
     const double limit = double(std::numeric_limits<std::int32_t>::max() / 2);
     return std::abs(ijk.x()) < limit && std::abs(ijk.y()) < limit && std::abs(ijk.z()) < limit;
@@ -78,6 +85,26 @@ void bindIo(py::module_ &m) {
         },
         py::arg("path"), py::arg("name"), py::arg("points"),
         "Trilinear samples of a float grid at world-space points (m), in the grid's own units.");
+    m.def(
+        "sample_color_grid",
+        [](const std::string &path, const std::string &name, const FloatArray &points) {
+            if (points.ndim() != 2 || points.shape(1) != 3) throw firn::InvalidArgument("points must be (N, 3)");
+            const openvdb::Vec3fGrid::Ptr grid = longCall([&] { return colorGrid(path, name); });
+            py::array_t<float> values({points.shape(0), py::ssize_t(3)});
+            auto out = values.mutable_unchecked<2>();
+            const auto in = points.unchecked<2>();
+            const openvdb::tools::GridSampler<openvdb::Vec3fGrid, openvdb::tools::BoxSampler> sampler(*grid);
+            for (py::ssize_t i = 0; i < points.shape(0); ++i) {
+                const openvdb::Vec3d p(in(i, 0), in(i, 1), in(i, 2));
+                if (!std::isfinite(p.x() + p.y() + p.z()))
+                    throw firn::InvalidArgument("point " + std::to_string(i) + " is not finite");
+                const openvdb::Vec3f v = withinIndexRange(*grid, p) ? sampler.wsSample(p) : grid->background();
+                for (int k = 0; k < 3; ++k) out(i, k) = v[k];
+            }
+            return values;
+        },
+        py::arg("path"), py::arg("name"), py::arg("points"),
+        "Trilinear samples of an RGB (Vec3f) grid, such as the baked firn_source, at world-space points (m): (N, 3).");
     m.def(
         "grid_statistics",
         [](const std::string &path, const std::string &name) {

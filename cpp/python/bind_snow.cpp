@@ -2,11 +2,10 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
-#include <openvdb/tools/VolumeToMesh.h>
-
 #include "bindings.h"
 #include "firn/io/vdb_io.h"
 #include "firn/snow/snow_layer.h"
+#include "firn/snow/surface_mesh.h"
 #include "firn/util/error.h"
 #include "mesh_arrays.h"
 
@@ -164,36 +163,32 @@ input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `prog
 
     m.def(
         "snow_surface_mesh",
-        [](const std::string &path, double adaptivity) {
-            if (adaptivity < 0.0 || adaptivity > 1.0) throw firn::InvalidArgument("adaptivity must be in [0, 1]");
-            std::vector<openvdb::Vec3s> points;
-            std::vector<openvdb::Vec3I> tris;
-            std::vector<openvdb::Vec4I> quads;
-            longCall([&] {
-                openvdb::FloatGrid::Ptr surface;
-                for (const auto &grid : firn::readGrids(path))
-                    if (grid->getName() == "surface") surface = openvdb::gridPtrCast<openvdb::FloatGrid>(grid);
-                if (!surface) throw firn::InvalidArgument(path + " has no 'surface' grid");
-                openvdb::tools::volumeToMesh(*surface, points, tris, quads, 0.0, adaptivity);
+        [](const std::string &path, double adaptivity, std::size_t maxTriangles,
+           std::shared_ptr<firn::Progress> progress) {
+            const firn::SurfaceMeshSettings settings{adaptivity, maxTriangles};
+            progress = orNew(progress);
+            const firn::SurfaceMesh mesh = longCall([&] {
+                // The surface grid alone: a snow file's density is several times larger.
+                const auto surface = openvdb::gridPtrCast<openvdb::FloatGrid>(firn::readGrid(path, "surface"));
+                if (!surface) throw firn::InvalidArgument(path + " has no float 'surface' grid");
+                return firn::meshSurface(*surface, settings, firn::SubProgress(progress.get(), 0.0, 1.0));
             });
-            auto vertices = rows<float>(points.size(), 3);
-            auto faces = rows<unsigned>(tris.size() + 2 * quads.size(), 3);
+            auto vertices = rows<float>(mesh.vertices.size(), 3);
+            auto faces = rows<unsigned>(mesh.triangles.size(), 3);
             auto v = vertices.mutable_unchecked<2>();
             auto f = faces.mutable_unchecked<2>();
-            for (std::size_t i = 0; i < points.size(); ++i)
-                for (int k = 0; k < 3; ++k) v(i, k) = points[i][k];
-            std::size_t row = 0;
-            // OpenVDB winds faces clockwise seen from outside; Blender wants counter-clockwise.
-            for (const auto &t : tris) f(row, 0) = t[2], f(row, 1) = t[1], f(row, 2) = t[0], ++row;
-            for (const auto &q : quads) {
-                f(row, 0) = q[3], f(row, 1) = q[2], f(row, 2) = q[1], ++row;
-                f(row, 0) = q[3], f(row, 1) = q[1], f(row, 2) = q[0], ++row;
-            }
+            for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+                for (int k = 0; k < 3; ++k) v(i, k) = mesh.vertices[i][k];
+            for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+                for (int k = 0; k < 3; ++k) f(i, k) = mesh.triangles[i][k];
             return py::make_tuple(vertices, faces);
         },
-        py::arg("path"), py::arg("adaptivity") = 0.0,
-        "The snow surface (iso-surface of the `surface` grid in the VDB at `path`) as (vertices (N, 3) m, "
-        "triangles (M, 3)), counter-clockwise seen from outside.");
+        py::arg("path"), py::arg("adaptivity") = 0.0, py::arg("max_triangles") = 0, py::arg("progress") = nullptr,
+        R"doc(The snow surface (zero crossing of the `surface` level set in the VDB at `path`) as (vertices (N, 3)
+float32, world m; triangles (M, 3) uint32, counter-clockwise seen from outside). `adaptivity` (0..1) merges flat
+regions; `max_triangles` (0: no budget, else at least 100) is met with more adaptivity, then coarser voxels
+(the viewport proxy). Releases the GIL; raises ValueError for bad settings or a file without a surface grid,
+OSError for an unreadable file, firncore.Cancelled when `progress` is cancelled.)doc");
 }
 
 }  // namespace firncore

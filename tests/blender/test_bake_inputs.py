@@ -409,5 +409,5 @@ def test_a_snow_layer_and_its_helper_meshes_are_not_occluders(clean_scene):
     ground = bpy.context.object
     bpy.ops.firn.add_snow_layer(depth=0.05, spacing=0.05, surface_mesh=True)
     snow = bpy.context.object
-    assert len(snow.children) == 2  # the metaball points and the surface mesh, both hidden from renders
+    assert len(snow.children) == 3  # the metaball points, the surface mesh and the proxy, all hidden from renders
     assert bake_inputs.occluder_objects(bpy.context.view_layer) == [ground]  # the ground under the snow stays

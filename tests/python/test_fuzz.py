@@ -121,7 +121,8 @@ def test_fuzz_snow_layer(seed, tmp_path):
     rebuilt = call(firncore.rasterize_metaballs, balls, settings, os.fspath(tmp_path / "again.vdb"))
     if rebuilt is not None:
         check_snow_result(rebuilt)
-    surface = call(firncore.snow_surface_mesh, path, setting(rng, 0, 1))
+    budget = int(rng.choice([0, 5, 100, 1000, 150_000]))  # triangles; 5 is refused with a message
+    surface = call(firncore.snow_surface_mesh, path, setting(rng, 0, 1), budget)
     if surface is not None:
         vertices, faces = surface
         assert faces.size == 0 or faces.max() < len(vertices)

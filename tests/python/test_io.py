@@ -97,3 +97,19 @@ def test_bake_reads_one_file_and_writes_another(tmp_path):
     firncore.grid_names(source)
     with pytest.raises(firncore.ReadError, match="cannot read"):
         firncore.bake(source, optics, sky=firncore.Sky(), quality="DRAFT", output_path=output)
+
+
+def test_sample_color_grid_reads_rgb_grids_and_refuses_others(tmp_vdb):
+    """The viewport proxy's baked colours: firn_source sampled where the bake left light."""
+    firncore.write_slab_vdb(tmp_vdb, voxel_size=0.01, width=8, layers=8, density=300.0)
+    snow = firncore.optics(grain_radius=100e-6, density=300.0, g=0.85)
+    firncore.bake(tmp_vdb, snow, sky=firncore.Sky((1.0, 1.0, 1.0)), quality="DRAFT")
+    points = np.array([[0, 0, -0.005], [0, 0, 5.0]], np.float32)
+    inside, far = firncore.sample_color_grid(tmp_vdb, "firn_source", points)
+    assert inside.shape == (3,) and np.all(inside > 0.0) and list(far) == [0.0, 0.0, 0.0]
+    with pytest.raises(ValueError, match="not an RGB"):
+        firncore.sample_color_grid(tmp_vdb, "density", points)
+    with pytest.raises(ValueError, match="no grid named"):
+        firncore.sample_color_grid(tmp_vdb, "nothing", points)
+    with pytest.raises(ValueError, match="point 0"):
+        firncore.sample_color_grid(tmp_vdb, "firn_source", np.array([[math.nan, 0, 0]], np.float32))

@@ -159,3 +159,27 @@ def test_arguments_of_the_wrong_kind_are_value_errors(tmp_vdb):
     balls = firncore.generate_snow_layer(*plane(1.0), settings=settings, path=tmp_vdb)["metaballs"]
     with pytest.raises(ValueError, match="centres"):
         firncore.rasterize_metaballs({**balls, "centres": "here"}, settings, tmp_vdb)
+
+
+def test_surface_mesh_meets_a_triangle_budget_near_the_surface(tmp_vdb):
+    firncore.generate_snow_layer(*plane(1.0), settings=firncore.SnowLayerSettings(depth=0.1), path=tmp_vdb)
+    _vertices, full = firncore.snow_surface_mesh(tmp_vdb)
+    budget = len(full) // 10
+    vertices, triangles = firncore.snow_surface_mesh(tmp_vdb, adaptivity=0.1, max_triangles=budget)
+    assert budget // 20 < len(triangles) <= budget
+    assert vertices.dtype == np.float32 and vertices.shape[1] == 3 and triangles.dtype == np.uint32
+    assert triangles.max() < len(vertices)
+    # Still the snow: its top at the depth (10 cm on level ground), every vertex near the level set's zero.
+    assert vertices[:, 2].max() == pytest.approx(0.1, abs=0.02)
+    distance = firncore.sample_grid(tmp_vdb, "surface", vertices)
+    assert np.abs(distance).max() < 0.1  # within the coarsest voxel the budget can have needed
+
+
+def test_surface_mesh_refuses_bad_settings(tmp_vdb):
+    firncore.generate_snow_layer(*plane(1.0), settings=firncore.SnowLayerSettings(depth=0.1), path=tmp_vdb)
+    with pytest.raises(ValueError, match="adaptivity"):
+        firncore.snow_surface_mesh(tmp_vdb, adaptivity=2.0)
+    with pytest.raises(ValueError, match="budget"):
+        firncore.snow_surface_mesh(tmp_vdb, max_triangles=10)
+    with pytest.raises(TypeError):
+        firncore.snow_surface_mesh(tmp_vdb, max_triangles=-1)

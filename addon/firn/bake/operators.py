@@ -20,6 +20,7 @@ from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin, running_jobs
 from ..material import nodes as materials, optics
 from ..properties import BAKE_QUALITY_ITEMS
+from ..snow_layer import proxy
 from . import inputs as bake_inputs, state as bake_state, world_probe
 
 BAKE_LABEL = "Bake Scattering"
@@ -194,6 +195,7 @@ def adopt_bake(obj, extinction_per_density, signature, summary):
     settings.bake_summary = summary
     bake_state.store(obj, dict(signature, snow=bake_state.snow_digest(obj)))
     materials.ensure_snow_material(obj)
+    proxy.show_bake(obj)
 
 
 class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
@@ -321,6 +323,7 @@ class FIRN_OT_clear_bake(bpy.types.Operator):
             obj.firn.bake_fingerprint = ""
             obj.firn.bake_summary = ""
             materials.ensure_snow_material(obj)
+            proxy.show_bake(obj)
             cleared.append(obj.name)
         if not cleared:
             return {"CANCELLED"}

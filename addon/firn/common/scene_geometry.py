@@ -120,7 +120,8 @@ def concatenate(meshes):
 
 
 def is_mesh_like(obj):
-    return obj.type in MESH_LIKE_TYPES and not obj.firn.is_snow
+    """Mesh-like objects of the scene, not Firn's own: snow Volumes and their viewport proxies."""
+    return obj.type in MESH_LIKE_TYPES and not (obj.firn.is_snow or obj.firn.is_proxy)
 
 
 def is_instancer(obj):

@@ -15,6 +15,7 @@ from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
 from ..material import nodes as materials
 from ..properties import SNOW_LAYER_PROPERTIES, active_snow
+from . import proxy
 from .ui import draw_layer_settings
 
 LENGTH_SETTINGS = ("depth", "spacing")  # with a non-zero default, in Blender units (voxel size 0 is automatic)
@@ -101,6 +102,12 @@ def compute_snow(inputs, progress):
     vertices, triangles = inputs["targets"]
     result = cache.core_write(firncore.generate_snow_layer, vertices, triangles, inputs["occluders"],
                               inputs["settings"], inputs["path"], progress)
+    return with_meshes(inputs, result)
+
+
+def with_meshes(inputs, result):
+    """Worker thread: the viewport proxy's mesh, and the full surface mesh when asked for, from the new file."""
+    result["proxy"] = proxy.mesh_arrays(inputs["path"])
     if inputs["surface_mesh"]:
         result["surface"] = firncore.snow_surface_mesh(inputs["path"])
     return result
@@ -165,16 +172,7 @@ def read_metaballs(holder, metres):
 
 
 def _store_surface_mesh(snow, surface):
-    vertices, triangles = surface
-    mesh = bpy.data.meshes.new(f"{snow.name} Surface")
-    mesh.vertices.add(len(vertices))
-    mesh.vertices.foreach_set("co", vertices.ravel())
-    mesh.loops.add(triangles.size)
-    mesh.loops.foreach_set("vertex_index", triangles.ravel().astype(np.int32))
-    mesh.polygons.add(len(triangles))
-    mesh.polygons.foreach_set("loop_start", np.arange(0, triangles.size, 3, dtype=np.int32))
-    mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, np.int32))
-    mesh.update()
+    mesh = proxy.new_mesh(f"{snow.name} Surface", *surface)
     surface_object = bpy.data.objects.new(mesh.name, mesh)
     surface_object.parent = snow
     surface_object.hide_render = True  # the volume renders the snow; the mesh is for the viewport and modelling
@@ -206,6 +204,8 @@ def write_snow(snow, inputs, result):
     if "surface" in result:
         _store_surface_mesh(snow, result["surface"])
     materials.ensure_snow_material(snow)
+    if "proxy" in result:
+        proxy.store_proxy(snow, result["proxy"], 1.0 / inputs["unit_matrix"][0, 0])
 
 
 def new_snow_object(context, name):
@@ -340,9 +340,7 @@ class FIRN_OT_rebuild_from_metaballs(FirnJobMixin, bpy.types.Operator):
     def compute(inputs, progress):
         result = cache.core_write(firncore.rasterize_metaballs, inputs["metaballs"], inputs["settings"],
                                   inputs["path"], progress)
-        if inputs["surface_mesh"]:
-            result["surface"] = firncore.snow_surface_mesh(inputs["path"])
-        return result
+        return with_meshes(inputs, result)
 
     def apply(self, context, inputs, result):
         write_snow(bpy.data.objects[inputs["name"]], inputs, result)

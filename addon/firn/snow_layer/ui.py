@@ -22,6 +22,7 @@ def draw_layer_settings(layout, holder):
 def draw_snow_layer(layout, snow):
     """The snow's generation settings and what can be done with them."""
     draw_file_problem(layout, snow.data)
+    layout.row().prop(snow.firn, "display", expand=True)
     draw_layer_settings(layout, snow.firn.layer)
     targets = ", ".join(item.object.name for item in snow.firn.targets if item.object) or "none"
     layout.label(text=f"Targets: {targets}")

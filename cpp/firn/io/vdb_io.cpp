@@ -101,6 +101,24 @@ openvdb::GridPtrVec readGrids(const std::string &path) {
     }
 }
 
+openvdb::GridBase::Ptr readGrid(const std::string &path, const std::string &name) {
+    initializeOpenVdb();
+    checkVdbLayout(path, VdbCheck::Trees);  // as readGrids: OpenVDB trusts every length it reads
+    try {
+        openvdb::io::File file(path);
+        file.open(/*delayLoad=*/false);
+        if (!file.hasGrid(name)) return nullptr;
+        openvdb::GridPtrVec grids{file.readGrid(name)};
+        const openvdb::MetaMap::Ptr meta = file.getMetadata();
+        file.close();
+        const auto shift = meta->getMetadata<openvdb::BoolMetadata>(kShiftKey);
+        if (shift && shift->value()) shiftHalfVoxel(grids, +1.0);
+        return grids.front();
+    } catch (const std::exception &e) {  // openvdb::Exception, and std:: ones from a corrupted or truncated file
+        throw ReadError("cannot read " + path + ": " + e.what());
+    }
+}
+
 std::vector<std::string> gridNames(const std::string &path) {
     initializeOpenVdb();
     checkVdbLayout(path, VdbCheck::Header);  // a truncated file fails here

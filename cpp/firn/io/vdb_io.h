@@ -21,6 +21,10 @@ void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids);
 // damaged (truncated, corrupted) file, a file without grids, and any exception OpenVDB's reader raises.
 openvdb::GridPtrVec readGrids(const std::string &path);
 
+// The grid called `name` alone, read in full, with its in-memory transform; nullptr when the file has none of
+// that name. Throws IoError as readGrids does.
+openvdb::GridBase::Ptr readGrid(const std::string &path, const std::string &name);
+
 // The names of the file's grids, from its header alone (no voxel is read). Throws IoError.
 std::vector<std::string> gridNames(const std::string &path);
 

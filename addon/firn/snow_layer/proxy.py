@@ -1,0 +1,125 @@
+"""The snow's viewport proxy: its surface as a shaded mesh for Solid and Material Preview, never rendered.
+
+The core meshes the `surface` level set (firncore.snow_surface_mesh, OpenVDB's volume-to-mesh within a
+triangle budget) in world metres; the proxy is a child of the snow Volume, whose transform turns metres into
+Blender units, so it sits exactly where the volume is drawn. While the proxy shows, the Volume is drawn as its
+bounds: Blender then never uploads the dense 3-D texture for the viewport, and Cycles still renders the volume.
+"""
+
+import bpy
+import numpy as np
+
+from ..common import scene_geometry
+from ..common.core import firncore
+from ..material import nodes as materials, preview
+
+MAX_TRIANGLES = 150_000  # the proxy's budget: drawn at interactive rates, a few MB in the .blend
+ADAPTIVITY = 0.0  # even triangles shade evenly; OpenVDB's adaptive merging costs more time than coarser voxels
+
+DISPLAY_ITEMS = (
+    ("SURFACE", "Surface", "A shaded mesh of the snow's surface in the viewport (Cycles renders the volume)"),
+    ("VOLUME", "Volume", "The volume itself in the viewport (slow to draw for large snow)"),
+    ("BOUNDS", "Bounds", "Only the snow's bounding box in the viewport"),
+)
+
+
+def mesh_arrays(path, progress=None):
+    """Worker thread: the proxy's (vertices m, triangles) from the snow's VDB file; no bpy here."""
+    return firncore.snow_surface_mesh(path, adaptivity=ADAPTIVITY, max_triangles=MAX_TRIANGLES, progress=progress)
+
+
+def new_mesh(name, vertices, triangles, smooth=False):
+    """A Blender mesh of (vertices (N, 3), triangles (M, 3)) arrays."""
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(len(vertices))
+    mesh.vertices.foreach_set("co", np.ascontiguousarray(vertices, np.float32).ravel())
+    mesh.loops.add(triangles.size)
+    mesh.loops.foreach_set("vertex_index", triangles.ravel().astype(np.int32))
+    mesh.polygons.add(len(triangles))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, triangles.size, 3, dtype=np.int32))
+    mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, np.int32))
+    if smooth:
+        mesh.polygons.foreach_set("use_smooth", np.ones(len(triangles), bool))
+    mesh.update(calc_edges=True)  # a valid mesh: every loop names its edge
+    return mesh
+
+
+def proxy_of(snow):
+    """The snow's proxy object, or None."""
+    return next((child for child in snow.children if child.firn.is_proxy), None)
+
+
+def store_proxy(snow, arrays, metres):
+    """Makes the snow's proxy from the core's arrays (world m), replacing any earlier one; call after the snow's
+    transform is set. Its material shows the snow's optics."""
+    remove_proxy(snow)
+    vertices, triangles = arrays
+    mesh = new_mesh(f"{snow.name} Proxy", vertices, triangles, smooth=True)
+    proxy = bpy.data.objects.new(mesh.name, mesh)
+    proxy.firn.is_proxy = True
+    proxy.parent = snow  # metres in the snow's space (identity parent inverse): where the volume is drawn
+    proxy.hide_render = True
+    # Rendered viewport (Cycles) renders what the viewport shows: no ray may see the proxy.
+    for ray in ("camera", "diffuse", "glossy", "transmission", "volume_scatter", "shadow"):
+        setattr(proxy, f"visible_{ray}", False)
+    proxy.hide_select = True  # click the snow's bounds to select the snow
+    for collection in snow.users_collection:
+        collection.objects.link(proxy)
+    preview.ensure_preview_material(snow, mesh, metres)
+    show_bake(snow)
+    apply_display(snow)
+    return proxy
+
+
+def remove_proxy(snow):
+    proxy = proxy_of(snow)
+    if proxy is not None:
+        mesh = proxy.data
+        bpy.data.objects.remove(proxy)
+        if mesh.users == 0:
+            bpy.data.meshes.remove(mesh)
+
+
+def refresh_preview(snow, scene):
+    """After an optics change: the proxy's material shows the new optics."""
+    proxy = proxy_of(snow) if snow.type == "VOLUME" else None
+    if proxy is not None and proxy.data.materials and preview.is_preview_material(proxy.data.materials[0]):
+        preview.refresh_preview_material(proxy.data.materials[0], snow.firn, scene_geometry.metres_per_unit(scene))
+
+
+def show_bake(snow):
+    """After Bake Scattering or Clear Bake: the proxy shows the snow's baked colours (firn_source sampled at its
+    vertices, which are in the grids' metres) while the snow has a bake in its file, else its optics."""
+    proxy = proxy_of(snow)
+    if proxy is None or not proxy.data.materials or not preview.is_preview_material(proxy.data.materials[0]):
+        return
+    mesh, material = proxy.data, proxy.data.materials[0]
+    if preview.BAKED_ATTRIBUTE in mesh.attributes:
+        mesh.attributes.remove(mesh.attributes[preview.BAKED_ATTRIBUTE])
+    baked = bool(snow.firn.bake_fingerprint) and materials.has_baked_grids(snow.data)
+    if baked:
+        points = np.empty(len(mesh.vertices) * 3, np.float32)
+        mesh.vertices.foreach_get("co", points)
+        colours = firncore.sample_color_grid(bpy.path.abspath(snow.data.filepath), "firn_source",
+                                             points.reshape(-1, 3))
+        rgba = np.ones((len(colours), 4), np.float32)
+        rgba[:, :3] = colours
+        attribute = mesh.attributes.new(preview.BAKED_ATTRIBUTE, "FLOAT_COLOR", "POINT")
+        attribute.data.foreach_set("color", rgba.ravel())
+    preview.show_baked(material, baked)
+    apply_display(snow)  # the snow's material may have been rebuilt
+
+
+def apply_display(snow):
+    """Shows the snow in the viewport as its Display setting says (obj.firn.display). EEVEE renders a volume's
+    material whatever the object's display type (in view-aligned slices: the streaks the proxy replaces), so
+    unless the volume itself is to be seen the snow material's output is for Cycles alone."""
+    display = snow.firn.display
+    snow.display_type = "TEXTURED" if display == "VOLUME" else "BOUNDS"
+    proxy = proxy_of(snow)
+    if proxy is not None:
+        proxy.hide_viewport = display != "SURFACE"
+    material = materials.snow_material(snow)
+    output = material.node_tree.nodes.get("Firn Output") if material and material.node_tree else None
+    if output is not None:
+        output.target = "ALL" if display == "VOLUME" else "CYCLES"

@@ -1,0 +1,156 @@
+#include "firn/snow/surface_mesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <openvdb/tools/SignedFloodFill.h>
+#include <openvdb/tools/VolumeToMesh.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "firn/util/error.h"
+#include "firn/util/openvdb_library.h"
+
+namespace firn {
+
+namespace {
+
+constexpr float kHalfWidth = 3.0f;  // voxels of narrow band each side, as the rasterizer writes (vdb-contract.md)
+constexpr int kMaxCoarsening = 64;  // voxel size factor beyond which a snow layer has no shape left to mesh
+
+std::size_t triangleCount(const openvdb::tools::VolumeToMesh &mesher) {
+    std::size_t n = 0;
+    const openvdb::tools::PolygonPoolList &pools = mesher.polygonPoolList();
+    for (std::size_t i = 0; i < mesher.polygonPoolListSize(); ++i)
+        n += pools[i].numTriangles() + 2 * pools[i].numQuads();
+    return n;
+}
+
+SurfaceMesh collect(openvdb::tools::VolumeToMesh &mesher, double adaptivity, double voxelSize) {
+    SurfaceMesh mesh;
+    mesh.adaptivity = adaptivity;
+    mesh.voxelSize = voxelSize;
+    mesh.vertices.assign(mesher.pointList().get(), mesher.pointList().get() + mesher.pointListSize());
+    mesh.triangles.reserve(triangleCount(mesher));
+    const openvdb::tools::PolygonPoolList &pools = mesher.polygonPoolList();
+    // OpenVDB winds polygons clockwise seen from outside (negative inside); reversed here.
+    for (std::size_t i = 0; i < mesher.polygonPoolListSize(); ++i) {
+        const openvdb::tools::PolygonPool &pool = pools[i];
+        for (std::size_t t = 0; t < pool.numTriangles(); ++t) {
+            const openvdb::Vec3I &v = pool.triangle(t);
+            mesh.triangles.emplace_back(v[2], v[1], v[0]);
+        }
+        for (std::size_t q = 0; q < pool.numQuads(); ++q) {
+            const openvdb::Vec4I &v = pool.quad(q);
+            mesh.triangles.emplace_back(v[3], v[2], v[1]);
+            mesh.triangles.emplace_back(v[3], v[1], v[0]);
+        }
+    }
+    return mesh;
+}
+
+SurfaceMesh mesh(const openvdb::FloatGrid &grid, double adaptivity) {
+    openvdb::tools::VolumeToMesh mesher(0.0, adaptivity);
+    mesher(grid);
+    return collect(mesher, adaptivity, grid.voxelSize()[0]);
+}
+
+void validate(const openvdb::FloatGrid &surface, const SurfaceMeshSettings &settings) {
+    if (!(settings.adaptivity >= 0.0 && settings.adaptivity <= 1.0))
+        throw InvalidArgument("surface mesh adaptivity must be in [0, 1]");
+    if (settings.maxTriangles != 0 && settings.maxTriangles < kMinTriangleBudget)
+        throw InvalidArgument("surface mesh triangle budget must be 0 (none) or at least " +
+                              std::to_string(kMinTriangleBudget));
+    if (surface.getGridClass() != openvdb::GRID_LEVEL_SET)
+        throw InvalidArgument("grid '" + surface.getName() + "' is not a level set");
+    if (!surface.transform().isLinear() || !surface.hasUniformVoxels())
+        throw InvalidArgument("grid '" + surface.getName() + "' needs a uniform linear transform");
+}
+
+int exponentOfTwo(int powerOfTwo) {
+    int n = 0;
+    while ((1 << n) < powerOfTwo) ++n;
+    return n;
+}
+
+int powerOfTwoAtLeast(double x) {
+    int f = 1;
+    while (f < x && f < kMaxCoarsening) f *= 2;
+    return f;
+}
+
+// The level set sampled at every `factor`-th voxel (factor a power of two), on voxels `factor` times larger with
+// the same origin. Its values stay signed distances in m (clamped to the band's half-width, with the right
+// sign, where the fine grid is inactive), so its zero crossing is the same surface, resolved to the coarse
+// voxel. Every coarse voxel within one coarse voxel of a fine leaf is active: a closed shell around the
+// surface, outside which a signed flood fill gives the inactive voxels their side. In parallel over the leaves.
+openvdb::FloatGrid::Ptr coarsen(const openvdb::FloatGrid &fine, int factor) {
+    using Tree = openvdb::FloatTree;
+    const int shift = exponentOfTwo(factor);
+    const double h = fine.voxelSize()[0];
+    openvdb::FloatGrid::Ptr coarse = openvdb::FloatGrid::create(fine.background());
+    openvdb::math::Transform::Ptr xform = openvdb::math::Transform::createLinearTransform(h * factor);
+    xform->postTranslate(fine.transform().indexToWorld(openvdb::Vec3d(0.0)));
+    coarse->setTransform(xform);
+    coarse->setGridClass(openvdb::GRID_LEVEL_SET);
+    std::vector<const Tree::LeafNodeType *> leaves;
+    fine.tree().getNodes(leaves);
+    tbb::enumerable_thread_specific<Tree> parts(Tree(fine.background()));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size()), [&](const tbb::blocked_range<std::size_t> &r) {
+        openvdb::tree::ValueAccessor<const Tree> in(fine.tree());
+        openvdb::tree::ValueAccessor<Tree> out(parts.local());
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            if (leaves[i]->isEmpty()) continue;
+            const openvdb::Coord lo = leaves[i]->origin(), hi = lo.offsetBy(Tree::LeafNodeType::DIM - 1);
+            const openvdb::Coord from(lo.x() >> shift, lo.y() >> shift, lo.z() >> shift);
+            const openvdb::Coord to(hi.x() >> shift, hi.y() >> shift, hi.z() >> shift);
+            for (int x = from.x() - 1; x <= to.x() + 1; ++x)
+                for (int y = from.y() - 1; y <= to.y() + 1; ++y)
+                    for (int z = from.z() - 1; z <= to.z() + 1; ++z)
+                        out.setValue(openvdb::Coord(x, y, z), in.getValue(openvdb::Coord(x, y, z) << shift));
+        }
+    });
+    for (Tree &part : parts) coarse->tree().merge(part);
+    openvdb::tools::signedFloodFill(coarse->tree());
+    return coarse;
+}
+
+}  // namespace
+
+SurfaceMesh meshSurface(const openvdb::FloatGrid &surface, const SurfaceMeshSettings &settings,
+                        const SubProgress &progress) {
+    initializeOpenVdb();
+    validate(surface, settings);
+    const std::size_t budget = settings.maxTriangles;
+    const auto fits = [&](const SurfaceMesh &m) { return budget == 0 || m.triangles.size() <= budget; };
+    progress.report(0.0);
+    // A first guess of the coarsening, so large snow is not meshed at full resolution only to be thrown away:
+    // a closed narrow band holds about 2 * halfWidth voxels per surface voxel, and volume-to-mesh makes about
+    // two triangles per surface voxel; a factor f coarser has f^2 fewer.
+    int factor = 1;
+    if (budget != 0) {
+        const double estimate = 2.0 * double(surface.activeVoxelCount()) / (2.0 * kHalfWidth);
+        factor = std::max(1, powerOfTwoAtLeast(std::sqrt(estimate / double(budget))) / 2);
+    }
+    SurfaceMesh best;
+    bool first = true;
+    while (true) {
+        progress.throwIfCancelled();
+        SurfaceMesh next = factor == 1 ? mesh(surface, settings.adaptivity)
+                                       : mesh(*coarsen(surface, factor), settings.adaptivity);
+        const bool empty = next.triangles.empty() && !first;  // too coarse for the snow's thickness
+        if (!empty && (first || next.triangles.size() < best.triangles.size())) best = std::move(next);
+        first = false;
+        if (empty || fits(best) || factor >= kMaxCoarsening) break;
+        // Triangles fall as the square of the voxel size.
+        factor *= std::max(2, powerOfTwoAtLeast(std::sqrt(double(best.triangles.size()) / double(budget))));
+        factor = std::min(factor, kMaxCoarsening);
+        progress.report(0.5);
+    }
+    progress.report(1.0);
+    return best;
+}
+
+}  // namespace firn
