@@ -22,7 +22,7 @@ void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids);
 openvdb::GridPtrVec readGrids(const std::string &path);
 
 // The grid called `name` alone, read in full, with its in-memory transform; nullptr when the file has none of
-// that name. Throws IoError as readGrids does.
+// that name. Throws ReadError as readGrids does.
 openvdb::GridBase::Ptr readGrid(const std::string &path, const std::string &name);
 
 // The names of the file's grids, from its header alone (no voxel is read). Throws IoError.
