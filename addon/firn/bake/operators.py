@@ -85,6 +85,7 @@ def _bake_job(job, quality, seed, progress):
                          progress)
     except firncore.ReadError as error:
         raise UserError(f"Cannot read the volume of '{job['name']}' ({error}). {REBUILD_ADVICE}") from error
+    job["proxy_colours"] = proxy.baked_colours(job["staged"], job["proxy_points"])
 
 
 def _render_world(inputs, progress):
@@ -184,9 +185,10 @@ def _remove_baked_grids(obj):
         cache.reload_grids(volume)
 
 
-def adopt_bake(obj, extinction_per_density, signature, summary):
+def adopt_bake(obj, extinction_per_density, signature, summary, proxy_colours=None):
     """After the baked grids arrived in obj's file: reload them, remember what the bake was made from (the scene
-    `signature` taken before baking, the file as it is now) and render the snow from the bake."""
+    `signature` taken before baking, the file as it is now) and render the snow from the bake; its viewport proxy
+    shows `proxy_colours` (sampled by the worker) or the file's."""
     volume = obj.data
     cache.reload_grids(volume)
     settings = obj.firn
@@ -195,7 +197,7 @@ def adopt_bake(obj, extinction_per_density, signature, summary):
     settings.bake_summary = summary
     bake_state.store(obj, dict(signature, snow=bake_state.snow_digest(obj)))
     materials.ensure_snow_material(obj)
-    proxy.show_bake(obj)
+    proxy.show_bake(obj, proxy_colours)
 
 
 class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
@@ -237,7 +239,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
             warnings.extend(w for w in inputs.warnings if w not in warnings)
             jobs.append({"name": obj.name, "path": path, "staged": path + _STAGED_SUFFIX,
                          "stamp": bake_state.file_stamp(path), "optics": volume_optics, "inputs": inputs,
-                         "signature": signature})
+                         "signature": signature, "proxy_points": proxy.vertex_positions(obj)})
         unlit = [job["inputs"].frame for job in jobs if job["inputs"].sky is None]
         world = bake_inputs.world_request(context.scene, unlit) if unlit else None  # last: it writes a file
         return {"jobs": jobs, "warnings": warnings, "quality": self.quality, "seed": self.seed, "current": 0,
@@ -281,7 +283,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
                     continue
                 os.replace(job["staged"], job["path"])
                 adopt_bake(obj, job["optics"].extinction_per_density, job["signature"],
-                           _summary(inputs["quality"], job["inputs"], duration))
+                           _summary(inputs["quality"], job["inputs"], duration), job["proxy_colours"])
                 changed_settings.extend(_render_settings(obj))
                 baked.append(obj.name)
         finally:

@@ -87,9 +87,24 @@ def refresh_preview(snow, scene):
         preview.refresh_preview_material(proxy.data.materials[0], snow.firn, scene_geometry.metres_per_unit(scene))
 
 
-def show_bake(snow):
-    """After Bake Scattering or Clear Bake: the proxy shows the snow's baked colours (firn_source sampled at its
-    vertices, which are in the grids' metres) while the snow has a bake in its file, else its optics."""
+def vertex_positions(snow):
+    """Main thread: the proxy's vertices (N, 3) float32, in the grids' metres, or None without a proxy."""
+    proxy = proxy_of(snow)
+    if proxy is None:
+        return None
+    points = np.empty(len(proxy.data.vertices) * 3, np.float32)
+    proxy.data.vertices.foreach_get("co", points)
+    return points.reshape(-1, 3)
+
+
+def baked_colours(path, points):
+    """Any thread (no bpy): the baked source function firn_source of the file at `path`, at the proxy's vertices."""
+    return None if points is None else firncore.sample_color_grid(path, "firn_source", points)
+
+
+def show_bake(snow, colours=None):
+    """After Bake Scattering or Clear Bake: the proxy shows the snow's baked colours (`colours` per vertex, sampled
+    by the bake's worker; read here when not given) while the snow has a bake in its file, else its optics."""
     proxy = proxy_of(snow)
     if proxy is None or not proxy.data.materials or not preview.is_preview_material(proxy.data.materials[0]):
         return
@@ -98,16 +113,13 @@ def show_bake(snow):
         mesh.attributes.remove(mesh.attributes[preview.BAKED_ATTRIBUTE])
     baked = bool(snow.firn.bake_fingerprint) and materials.has_baked_grids(snow.data)
     if baked:
-        points = np.empty(len(mesh.vertices) * 3, np.float32)
-        mesh.vertices.foreach_get("co", points)
-        colours = firncore.sample_color_grid(bpy.path.abspath(snow.data.filepath), "firn_source",
-                                             points.reshape(-1, 3))
+        if colours is None or len(colours) != len(mesh.vertices):
+            colours = baked_colours(bpy.path.abspath(snow.data.filepath), vertex_positions(snow))
         rgba = np.ones((len(colours), 4), np.float32)
         rgba[:, :3] = colours
         attribute = mesh.attributes.new(preview.BAKED_ATTRIBUTE, "FLOAT_COLOR", "POINT")
         attribute.data.foreach_set("color", rgba.ravel())
     preview.show_baked(material, baked)
-    apply_display(snow)  # the snow's material may have been rebuilt
 
 
 def apply_display(snow):
