@@ -13,6 +13,11 @@ run_blender -b --factory-startup --python-expr "import bpy; bpy.ops.wm.save_as_m
 xvfb-run -a -s "-screen 0 1200x2400x24" \
   env BLENDER_USER_SCRIPTS="$FIRN_BUILD/blender_scripts" BLENDER_USER_CONFIG="$FIRN_BUILD/docs_config" \
   blender --factory-startup -noaudio "$empty" --python "$FIRN_ROOT/scripts/screenshot_panels.py" -- "$images/panels.png"
+scene="$(dirname "$empty")/viewport.blend"
+run_blender -b --factory-startup --python "$FIRN_ROOT/scripts/screenshot_viewport.py" -- build "$scene"
+xvfb-run -a -s "-screen 0 1280x800x24" \
+  env BLENDER_USER_SCRIPTS="$FIRN_BUILD/blender_scripts" BLENDER_USER_CONFIG="$FIRN_BUILD/docs_config" \
+  blender --factory-startup -noaudio "$scene" --python "$FIRN_ROOT/scripts/screenshot_viewport.py" -- shoot "$images"
 for sample in car_under_snow teapot_and_ball nishita_comparison firn_vs_real_snow; do
   run_blender -b --factory-startup --python "$FIRN_ROOT/blend_samples/$sample.py" -- --output "$images/$sample.png" --no-save
 done

@@ -120,6 +120,7 @@ def show_bake(snow, colours=None):
         attribute = mesh.attributes.new(preview.BAKED_ATTRIBUTE, "FLOAT_COLOR", "POINT")
         attribute.data.foreach_set("color", rgba.ravel())
     preview.show_baked(material, baked)
+    apply_display(snow)  # the snow's material may have been rebuilt
 
 
 def apply_display(snow):
