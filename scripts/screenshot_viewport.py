@@ -90,9 +90,6 @@ def shoot(folder):
     def tick():
         try:
             if state["last"] is None and state["since"] == 0.0:
-                window = bpy.context.window_manager.windows[0]
-                window.event_simulate(type="ESC", value="PRESS")  # closes the splash screen
-                window.event_simulate(type="ESC", value="RELEASE")
                 frame_view()
                 view3d()[1].shading.type = state["modes"][0]
                 state["since"] = time.perf_counter()
