@@ -1,6 +1,6 @@
 """Blender with a window (under xvfb-run): Bake Scattering as a user starts it. It runs in a worker thread while
 the UI keeps running; Esc during a second bake (while a child Blender renders the new sky world) leaves the first
-bake's file, material and fingerprint intact; a third bake under that sky completes.
+bake's file, material and fingerprint intact.
 Needs the core's bake (firncore.bake): without it the script exits with 77, which CTest reports as skipped.
 
 xvfb-run blender --factory-startup --enable-event-simulate --python modal_bake.py   (exit code 0 = pass)
@@ -108,18 +108,10 @@ def tick():
                 fail("a staged file was left behind")
             if slab.firn.bake_state != "OUTDATED":  # the world changed since the kept bake
                 fail(f"state {slab.firn.bake_state} after the cancelled re-bake")
-            start_bake("DRAFT")
-            state["phase"] = "sky"
-        elif phase == "sky" and not job_running():
-            if state["while_computing"] == 0:
-                fail("UI froze: the timer never ran while the world rendered and the worker baked")
-            if slab.firn.bake_state != "BAKED" or "sky map" not in slab.firn.bake_summary:
-                fail(f"the bake under a sky texture: {slab.firn.bake_state}, '{slab.firn.bake_summary}'")
-            print(f"sky bake: {slab.firn.bake_summary}")
             print("PASS")
             bpy.ops.wm.quit_blender()
             return None
-        elif phase in {"baking", "cancelled", "sky"} and time.perf_counter() - state["since"] > HUNG:
+        elif phase in {"baking", "cancelled"} and time.perf_counter() - state["since"] > HUNG:
             fail(f"{phase}: hung")
     except Exception:
         traceback.print_exc()
