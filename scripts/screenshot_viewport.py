@@ -19,6 +19,9 @@ import bpy
 import numpy as np
 from mathutils import Euler, Vector
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "blender_ui"))
+from ui_test import window_context  # noqa: E402
+
 MODES = ("SOLID", "MATERIAL", "RENDERED")
 SETTLE_CHECK = 2.0  # s between two screenshots that must be the same for the view to count as settled
 GIVE_UP = 600.0  # s per mode
@@ -54,10 +57,8 @@ def build(path):
 
 
 def view3d():
-    window = bpy.context.window_manager.windows[0]
-    area = next(a for a in window.screen.areas if a.type == "VIEW_3D")
-    region = next(r for r in area.regions if r.type == "WINDOW")
-    return {"window": window, "screen": window.screen, "area": area, "region": region}, area.spaces.active
+    context = window_context()  # the UI tests' override for the first window's 3D viewport
+    return context, context["area"].spaces.active
 
 
 def frame_view():
