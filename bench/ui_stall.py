@@ -26,7 +26,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "blend_samples"))
 sys.path.insert(0, os.path.join(HERE, "..", "tests", "blender_ui"))
 import car_under_snow  # noqa: E402
-from ui_test import job_running, window_context  # noqa: E402
+from ui_test import window_context, worker_alive  # noqa: E402
 
 TICK = 0.01  # s
 SETTLED = 1.0  # s without a viewport redraw before an operator starts
@@ -90,7 +90,7 @@ def measure(now):
         stalls.seconds = now - stalls.began
         state["rows"].append(stalls.row())
         return True
-    if job_running():
+    if worker_alive():
         stalls.gap(state["last"], now)
         stalls.ticks += 1
     else:

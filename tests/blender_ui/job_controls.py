@@ -1,6 +1,7 @@
 """Blender with a window (under xvfb-run): the controls every long Firn job has, on a job that runs until it is
 cancelled. While it runs, input passes on to the rest of Blender (a listener started before the job still sees
-key presses), the status bar carries a Cancel button, and the Cancel button's operator or Esc stop it.
+key presses), the status bar carries a Cancel button, and the Cancel button's operator or Esc stop it; opening
+another file stops it too.
 
 xvfb-run blender --factory-startup --enable-event-simulate --python job_controls.py   (exit code 0 = pass)
 """
@@ -14,7 +15,7 @@ import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, job_running  # noqa: E402
+from ui_test import HUNG, fail, job_running, worker_alive  # noqa: E402
 
 state = {"phase": "start", "ticks": 0, "since": 0.0, "heard": 0}
 
@@ -141,10 +142,19 @@ def tick():
             state["phase"], state["since"] = "escaped", time.perf_counter()
         elif phase == "escaped" and not job_running():
             print(f"Esc stopped the job in {time.perf_counter() - state['since']:.2f} s")
+            start_job()
+            state["phase"], state["ticks"] = "open", 0
+        elif phase == "open" and state["ticks"] == 3:
+            bpy.ops.wm.read_homefile(use_empty=True)  # Blender drops the running operator
+            if job_running():
+                fail("the job's operator outlived the file it ran in")
+            state["phase"], state["since"] = "opened", time.perf_counter()
+        elif phase == "opened" and not worker_alive():
+            print(f"opening a file stopped the job in {time.perf_counter() - state['since']:.2f} s")
             print("PASS")
             bpy.ops.wm.quit_blender()
             return None
-        if phase in {"cancel button", "escaped"} and time.perf_counter() - state["since"] > HUNG:
+        if phase in {"cancel button", "escaped", "opened"} and time.perf_counter() - state["since"] > HUNG:
             fail(f"{phase}: the job did not stop: hung")
     except Exception:
         traceback.print_exc()
@@ -152,4 +162,4 @@ def tick():
     return 0.05
 
 
-bpy.app.timers.register(tick, first_interval=0.5)
+bpy.app.timers.register(tick, first_interval=0.5, persistent=True)  # persistent: it outlives the file load

@@ -1,6 +1,6 @@
 """Blender with a window (under xvfb-run): Bake Scattering as a user starts it. It runs in a worker thread while
 the UI keeps running; Esc during a second bake (while a child Blender renders the new sky world) leaves the first
-bake's file, material and fingerprint intact.
+bake's file, material and fingerprint intact; a third bake under that sky completes.
 Needs the core's bake (firncore.bake): without it the script exits with 77, which CTest reports as skipped.
 
 xvfb-run blender --factory-startup --enable-event-simulate --python modal_bake.py   (exit code 0 = pass)
@@ -15,7 +15,7 @@ import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, job_running, window_context  # noqa: E402
+from ui_test import HUNG, fail, job_running, window_context, worker_alive  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "blender"))
 
@@ -55,7 +55,7 @@ def start_bake(quality):
         result = bpy.ops.firn.bake_scattering("INVOKE_DEFAULT", quality=quality)
     if result != {"RUNNING_MODAL"}:
         fail(f"expected RUNNING_MODAL, got {result}")
-    if not job_running():  # the operator returned to the UI while its worker thread bakes
+    if not worker_alive():  # the operator returned to the UI while its worker thread bakes
         fail("the bake did not run in a worker thread")
     state["since"] = time.perf_counter()
     state["ticks"], state["while_computing"] = 0, 0
@@ -71,7 +71,7 @@ def tick():
 
     try:
         state["ticks"] += 1
-        state["while_computing"] += job_running()
+        state["while_computing"] += worker_alive()
         phase = state["phase"]
         slab = bpy.data.objects.get("Slab")
         if phase == "start":
@@ -108,10 +108,18 @@ def tick():
                 fail("a staged file was left behind")
             if slab.firn.bake_state != "OUTDATED":  # the world changed since the kept bake
                 fail(f"state {slab.firn.bake_state} after the cancelled re-bake")
+            start_bake("DRAFT")
+            state["phase"] = "sky"
+        elif phase == "sky" and not job_running():
+            if state["while_computing"] == 0:
+                fail("UI froze: the timer never ran while the world rendered and the worker baked")
+            if slab.firn.bake_state != "BAKED" or "sky map" not in slab.firn.bake_summary:
+                fail(f"the bake under a sky texture: {slab.firn.bake_state}, '{slab.firn.bake_summary}'")
+            print(f"sky bake: {slab.firn.bake_summary}")
             print("PASS")
             bpy.ops.wm.quit_blender()
             return None
-        elif phase in {"baking", "cancelled"} and time.perf_counter() - state["since"] > HUNG:
+        elif phase in {"baking", "cancelled", "sky"} and time.perf_counter() - state["since"] > HUNG:
             fail(f"{phase}: hung")
     except Exception:
         traceback.print_exc()

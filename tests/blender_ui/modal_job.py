@@ -13,7 +13,7 @@ import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, job_running, window_context  # noqa: E402
+from ui_test import HUNG, fail, job_running, window_context, worker_alive  # noqa: E402
 
 state = {"ticks": 0, "phase": "start", "started": 0.0, "while_computing": 0}
 
@@ -33,7 +33,7 @@ def start_job():
         result = bpy.ops.firn.add_snow_layer("INVOKE_DEFAULT", depth=0.1, spacing=0.02)
     if result != {"RUNNING_MODAL"}:
         fail(f"expected RUNNING_MODAL, got {result}")
-    if not job_running():  # the operator returned to the UI while its worker thread computes
+    if not worker_alive():  # the operator returned to the UI while its worker thread computes
         fail("the job did not run in a worker thread")
     state["started"] = time.perf_counter()
     state["while_computing"] = 0
@@ -46,7 +46,7 @@ def snow_objects():
 def tick():
     try:
         state["ticks"] += 1
-        state["while_computing"] += job_running()
+        state["while_computing"] += worker_alive()
         if state["phase"] == "start":
             setup()
             start_job()

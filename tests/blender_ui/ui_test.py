@@ -14,9 +14,17 @@ def fail(message):
     os._exit(1)  # from a timer, sys.exit would only end the callback
 
 
-def job_running():
+def worker_alive():
     """A Firn worker thread (addon/firn/common/jobs.py names them) is computing."""
     return any(thread.name == "firn-job" and thread.is_alive() for thread in threading.enumerate())
+
+
+def job_running():
+    """A Firn job's operator has not ended: its worker computes, or its result waits for the operator's next timer
+    event to be applied (checking the result before that would race with the operator)."""
+    from firn.common import jobs
+
+    return bool(jobs.running_jobs())
 
 
 def window_context():

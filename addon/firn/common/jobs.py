@@ -24,8 +24,9 @@ _running = []  # jobs started from the UI, until their operator ends
 
 
 def running_jobs():
-    """Jobs still computing (a file load can drop a modal operator without ending it: its job is done)."""
-    return [job for job in _running if not job.done]
+    """Jobs whose operator has not ended: computing, or done and waiting for the operator's next timer event to
+    apply the result (a new job on the same data waits for that too)."""
+    return list(_running)
 
 
 class Job:
@@ -138,6 +139,11 @@ class FirnJobMixin:
         except UserError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
+
+    def cancel(self, context):
+        """Blender drops the operator (a file load, quitting): the job stops and its result is not applied."""
+        self._job.cancel()
+        self._end_modal(context)
 
     def _end_modal(self, context):
         wm = context.window_manager
