@@ -13,6 +13,8 @@
 #include "firn/transport/monte_carlo.h"
 #include "firn/transport/slab.h"
 #include "firn/util/error.h"
+#include "firn/util/random.h"
+#include "firn/util/sampling.h"
 #include "mesh_arrays.h"
 
 namespace py = pybind11;
@@ -73,11 +75,12 @@ openvdb::FloatGrid::Ptr densityGrid(const openvdb::GridPtrVec &grids, const std:
 
 // Heavy (reads the grids' scene, builds the occluders' BVH): call it inside longCall.
 firn::Scene sceneFrom(const openvdb::GridPtrVec &grids, const std::string &path, const firn::VolumeOptics &optics,
-                      const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,
-                      OccluderArrays occluders) {
+                      const std::vector<firn::SunLight> &suns, const std::vector<firn::Lamp> &lamps,
+                      const std::optional<firn::Sky> &sky, OccluderArrays occluders) {
     firn::Scene scene;
     scene.medium = std::make_shared<firn::Medium>(densityGrid(grids, path), optics);
     scene.suns = suns;
+    scene.lamps = lamps;
     if (sky) scene.sky = *sky;
     if (!occluders.meshes.empty())
         scene.occluders =
@@ -126,6 +129,55 @@ W/m^2 per RGB channel on a plane facing it, angular_diameter in radians.)doc")
         .def_property_readonly("direction", [](const firn::SunLight &s) { return tuple(s.direction); })
         .def_property_readonly("irradiance", [](const firn::SunLight &s) { return tuple(s.irradiance); })
         .def_readonly("angular_diameter", &firn::SunLight::angularDiameter);
+
+    py::class_<firn::Lamp>(m, "Lamp", R"doc(
+A lamp at a finite distance (cpp/firn/transport/lamps.h). shape: 'POINT', 'SPOT' (spheres of `radius` m,
+emission = intensity W/sr per RGB channel; Blender: Power / (4 pi) x Color), 'RECTANGLE' or 'ELLIPSE'
+(one-sided, `size` = (x, y) m, emission = radiance W/m^2/sr; Blender: Power / (4 area) x Color).
+position (m), axis: where a spot or area lamp shines (Blender: the lamp's -Z), tangent: an area's x
+direction (both normalized here, tangent made perpendicular to axis); spot_angle (rad, full) and
+spot_blend (0..1) as Blender's Spot Size and Blend.)doc")
+        .def(py::init([](const std::string &shape, const RgbTuple &position, const RgbTuple &emission,
+                         const RgbTuple &axis, const RgbTuple &tangent, double radius, double spotAngle,
+                         double spotBlend, const std::array<double, 2> &size) {
+                 firn::Lamp lamp;
+                 if (shape == "POINT") lamp.shape = firn::Lamp::Shape::Point;
+                 else if (shape == "SPOT") lamp.shape = firn::Lamp::Shape::Spot;
+                 else if (shape == "RECTANGLE") lamp.shape = firn::Lamp::Shape::Rectangle;
+                 else if (shape == "ELLIPSE") lamp.shape = firn::Lamp::Shape::Ellipse;
+                 else throw firn::InvalidArgument("lamp shape must be 'POINT', 'SPOT', 'RECTANGLE' or 'ELLIPSE', not '" + shape + "'");
+                 const glm::dvec3 a(axis[0], axis[1], axis[2]), t(tangent[0], tangent[1], tangent[2]);
+                 const glm::dvec3 across = t - glm::dot(t, a) / std::max(glm::dot(a, a), 1e-300) * a;
+                 if (!(glm::length(a) > 0.0) || !(glm::length(across) > 0.0))
+                     throw firn::InvalidArgument("lamp axis and tangent must be non-zero and not parallel");
+                 lamp.position = {position[0], position[1], position[2]};
+                 lamp.axis = glm::normalize(a), lamp.tangent = glm::normalize(across);
+                 lamp.emission = rgb(emission);
+                 lamp.radius = radius, lamp.spotAngle = spotAngle, lamp.spotBlend = spotBlend;
+                 lamp.sizeX = size[0], lamp.sizeY = size[1];
+                 firn::validate(lamp);
+                 return lamp;
+             }),
+             py::arg("shape"), py::arg("position"), py::arg("emission"), py::arg("axis") = RgbTuple{0.0, 0.0, -1.0},
+             py::arg("tangent") = RgbTuple{1.0, 0.0, 0.0}, py::arg("radius") = 0.0, py::arg("spot_angle") = firn::kPi,
+             py::arg("spot_blend") = 0.0, py::arg("size") = std::array<double, 2>{1.0, 1.0})
+        .def_property_readonly("position", [](const firn::Lamp &l) { return tuple(l.position); })
+        .def_property_readonly("emission", [](const firn::Lamp &l) { return tuple(l.emission); })
+        .def(
+            "irradiance",
+            [](const firn::Lamp &l, const RgbTuple &point, const RgbTuple &normal, int samples, std::uint64_t seed) -> RgbTuple {
+                if (samples < 1 || samples > 10000000) throw firn::InvalidArgument("samples must be between 1 and 1e7");
+                const glm::dvec3 n = glm::normalize(glm::dvec3(normal[0], normal[1], normal[2]));
+                firn::Rng rng(seed, 0);
+                firn::Rgb sum(0.0);
+                for (int s = 0; s < samples; ++s) {
+                    const firn::LampSample sample = firn::sampleLamp(l, {point[0], point[1], point[2]}, rng.uniform(), rng.uniform());
+                    sum += sample.irradiance * std::max(0.0, glm::dot(n, sample.direction));
+                }
+                return tuple(sum / double(samples));
+            },
+            py::arg("point"), py::arg("normal"), py::arg("samples") = 1, py::arg("seed") = 0,
+            "Irradiance (W/m^2) onto a surface at `point` facing `normal`, nothing in between (mean of `samples`).");
 
     py::class_<firn::Sky>(m, "Sky", R"doc(
 The world's light. radiance: W/m^2/sr per RGB channel, uniform, or scaling `map`, an equirectangular
@@ -184,7 +236,7 @@ void bindTransport(py::module_ &m) {
         [](const std::string &path, const firn::VolumeOptics &optics, const std::vector<firn::SunLight> &suns,
            const std::optional<firn::Sky> &sky, const py::list &occluders, const std::string &quality,
            std::uint64_t seed, std::shared_ptr<firn::Progress> progress, int skySamples, int sunSamples,
-           int referenceSamples, const std::optional<std::string> &outputPath) {
+           int referenceSamples, const std::optional<std::string> &outputPath, const std::vector<firn::Lamp> &lamps) {
             firn::BakeSettings settings;
             settings.quality = parseQuality(quality);
             settings.seed = seed;
@@ -195,7 +247,7 @@ void bindTransport(py::module_ &m) {
             firn::BakeStats stats;
             longCall([&] {
                 openvdb::GridPtrVec grids = firn::readGrids(path);
-                const firn::Scene scene = sceneFrom(grids, path, optics, suns, sky, std::move(blockers));
+                const firn::Scene scene = sceneFrom(grids, path, optics, suns, lamps, sky, std::move(blockers));
                 const firn::BakedGrids baked = firn::bakeScattering(scene, settings, progress.get(), &stats);
                 openvdb::GridPtrVec out;
                 for (const auto &grid : grids) {
@@ -212,13 +264,15 @@ void bindTransport(py::module_ &m) {
         py::arg("vdb_path"), py::arg("optics"), py::arg("suns") = std::vector<firn::SunLight>{},
         py::arg("sky") = py::none(), py::arg("occluders") = py::list(), py::arg("quality") = "FINAL",
         py::arg("seed") = 0, py::arg("progress") = nullptr, py::arg("sky_samples") = 0, py::arg("sun_samples") = 0,
-        py::arg("reference_samples") = 0, py::arg("output_path") = py::none(), R"doc(
-Bakes the light scattered inside the snow of `vdb_path` (its 'density' grid, kg/m^3) and writes the file
+        py::arg("reference_samples") = 0, py::arg("output_path") = py::none(),
+        py::arg("lamps") = std::vector<firn::Lamp>{}, R"doc(
+Bakes the light scattered inside the snow of `vdb_path` (its 'density' grid, kg/m^3), lit by `suns`, `lamps`
+(firncore.Lamp) and `sky`, and writes the file
 back, atomically, with the baked grids BAKED_GRID_NAMES added (docs/vdb-contract.md), or, given `output_path`,
 writes that file instead and leaves `vdb_path` as it was. occluders: list of
 (vertices (N, 3) float32 m, triangles (M, 3) uint32, albedo (r, g, b)). quality: 'DRAFT', 'FINAL' or
 'REFERENCE' (Monte Carlo surface, slow). sky_samples (rays per surface voxel, at most 64), sun_samples
-(points on a sun's disc) and reference_samples (paths per direction, REFERENCE) override the quality's
+(points on a sun's disc or a lamp) and reference_samples (paths per direction, REFERENCE) override the quality's
 defaults when non-zero. Releases the GIL; raises firncore.Cancelled if `progress` is
 cancelled, ValueError for bad input, firncore.ReadError (an OSError) when `vdb_path` is missing or damaged,
 firncore.WriteError (an OSError) when the result cannot be written. Returns the solve's statistics.)doc");
@@ -232,7 +286,7 @@ firncore.WriteError (an OSError) when the result cannot be written. Returns the 
             std::vector<firn::Rgb> radiance(rays.size());
             longCall([&] {
                 const openvdb::GridPtrVec grids = firn::readGrids(path);
-                const firn::Scene scene = sceneFrom(grids, path, optics, {}, std::nullopt, std::move(blockers));
+                const firn::Scene scene = sceneFrom(grids, path, optics, {}, {}, std::nullopt, std::move(blockers));
                 const firn::BakedGrids baked = firn::BakedGrids::find(grids);
                 for (std::size_t i = 0; i < rays.size(); ++i) radiance[i] = firn::renderBaked(scene, baked, rays[i]);
             });
@@ -247,13 +301,14 @@ the emission-absorption integral of the contract's material, up to the first occ
         "monte_carlo_radiance",
         [](const std::string &path, const firn::VolumeOptics &optics, const DoubleArray &origins,
            const DoubleArray &directions, const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,
-           const py::list &occluders, int samples, std::uint64_t seed, std::shared_ptr<firn::Progress> progress) {
+           const py::list &occluders, int samples, std::uint64_t seed, std::shared_ptr<firn::Progress> progress,
+           const std::vector<firn::Lamp> &lamps) {
             if (samples < 1 || samples > 1000000) throw firn::InvalidArgument("samples must be between 1 and 1e6");
             OccluderArrays blockers = occludersFrom(occluders);
             const std::vector<firn::Ray> rays = raysFrom(origins, directions);
             const std::vector<firn::RadianceEstimate> estimates = longCall([&] {
                 const openvdb::GridPtrVec grids = firn::readGrids(path);
-                const firn::MonteCarloReference reference(sceneFrom(grids, path, optics, suns, sky, std::move(blockers)));
+                const firn::MonteCarloReference reference(sceneFrom(grids, path, optics, suns, lamps, sky, std::move(blockers)));
                 return reference.estimate(rays, samples, seed, progress.get());
             });
             std::vector<firn::Rgb> mean, error;
@@ -262,7 +317,8 @@ the emission-absorption integral of the contract's material, up to the first occ
         },
         py::arg("vdb_path"), py::arg("optics"), py::arg("origins"), py::arg("directions"),
         py::arg("suns") = std::vector<firn::SunLight>{}, py::arg("sky") = py::none(), py::arg("occluders") = py::list(),
-        py::arg("samples") = 64, py::arg("seed") = 0, py::arg("progress") = nullptr, R"doc(
+        py::arg("samples") = 64, py::arg("seed") = 0, py::arg("progress") = nullptr,
+        py::arg("lamps") = std::vector<firn::Lamp>{}, R"doc(
 Brute-force volumetric path tracing of the same scene: the radiance the snow scatters along each camera
 ray (what the baked emission stands for). Returns (mean, standard error), each (N, 3) W/m^2/sr.)doc");
 

@@ -130,15 +130,16 @@ def test_sunlit_slab_reflects_the_plane_albedo(clean_scene, tmp_path):
 def test_state_through_the_operators_and_reports(clean_scene, tmp_path, capfd):
     uniform_world((1.0, 1.0, 1.0))
     sun = add_sun(math.radians(30))
-    bpy.context.scene.collection.objects.link(bpy.data.objects.new("Bulb", bpy.data.lights.new("Bulb", "POINT")))
+    bulb = bpy.data.objects.new("Bulb", bpy.data.lights.new("Bulb", "POINT"))
+    bulb.location = (0.0, 0.0, 0.5)
+    bpy.context.scene.collection.objects.link(bulb)
     slab = snow_slab(str(tmp_path), half=10, depth=10, voxel=0.02)
     slab.data.render.precision = "HALF"
     assert slab.firn.bake_state == "NONE"
     assert bpy.ops.firn.bake_scattering(quality="DRAFT") == {"FINISHED"}
     output = capfd.readouterr().out
-    assert "Only Sun lamps light the bake; ignored: Bulb (Point)" in output
     assert "'Slab' volume precision Half → Full" in output
-    assert slab.firn.bake_state == "BAKED" and "Draft" in slab.firn.bake_summary
+    assert slab.firn.bake_state == "BAKED" and "Draft, 1 sun, 1 lamp," in slab.firn.bake_summary
     sun.rotation_euler = (math.radians(40), 0.0, 0.0)
     bpy.context.view_layer.update()
     assert slab.firn.bake_state == "OUTDATED"

@@ -1,4 +1,4 @@
-"""What the bake reads from Blender: suns, ignored lamps, the world (uniform, rendered into an equirect map,
+"""What the bake reads from Blender: suns and lamps, the world (uniform, rendered into an equirect map,
 Nishita sun discs), occluders with their albedo, and the snow's frame. No core bake needed."""
 
 import math
@@ -68,8 +68,8 @@ def test_sun_direction_irradiance_and_angle(clean_scene):
     sun = add_lamp("SUN", "Sun", energy=3.0, color=(1.0, 0.5, 0.25), angle=0.1)
     sun.rotation_euler = (math.radians(30), 0.0, math.radians(45))
     bpy.context.view_layer.update()
-    suns, ignored = bake_inputs.gather_suns(bake_inputs.lamp_objects(bpy.context.view_layer), identity_frame())
-    assert ignored == [] and len(suns) == 1
+    suns, lamps = bake_inputs.gather_lights(bake_inputs.lamp_objects(bpy.context.view_layer), identity_frame())
+    assert lamps == [] and len(suns) == 1
     # Light travels along the lamp's -Z; towards the sun is +Z: Rz(45) Rx(30) (0, 0, 1) by hand.
     expected = (math.sin(math.radians(30)) * math.sin(math.radians(45)),
                 -math.sin(math.radians(30)) * math.cos(math.radians(45)), math.cos(math.radians(30)))
@@ -82,21 +82,34 @@ def test_scaled_lamp_still_gives_a_unit_direction(clean_scene):
     sun = add_lamp("SUN", "Sun", energy=1.0)
     sun.scale = (3.0, 3.0, 0.2)
     bpy.context.view_layer.update()
-    (found,), _ = bake_inputs.gather_suns([sun], identity_frame())
+    (found,), _ = bake_inputs.gather_lights([sun], identity_frame())
     assert found.direction == pytest.approx((0.0, 0.0, 1.0), abs=1e-9)
 
 
-def test_other_lamp_types_are_listed_as_ignored(clean_scene):
-    add_lamp("SUN", "Sun", energy=2.0)
-    add_lamp("POINT", "Bulb")
-    add_lamp("SPOT", "Spot")
-    add_lamp("AREA", "Panel")
-    suns, ignored = bake_inputs.gather_suns(bake_inputs.lamp_objects(bpy.context.view_layer), identity_frame())
-    assert [sun.name for sun in suns] == ["Sun"]
-    assert sorted(ignored) == ["Bulb (Point)", "Panel (Area)", "Spot (Spot)"]
-    obj = volume_object("/nonexistent.vdb")
-    inputs = bake_inputs.gather(bpy.context, obj)
-    assert any("Only Sun lamps" in w and "Bulb (Point)" in w for w in inputs.warnings)
+def test_point_spot_and_area_lamps_as_cycles_emits_them(clean_scene):
+    """Emission by Cycles 3.4's conventions (measured there: test_lamps.py): I = P / 4π for points and spots,
+    L = P / (4 A) for area lamps, whose size follows the object's scale; they shine along their local -Z."""
+    add_lamp("POINT", "Bulb", energy=100.0, color=(1.0, 0.5, 0.25), shadow_soft_size=0.1, location=(1, 2, 3))
+    spot = add_lamp("SPOT", "Spot", energy=40.0, spot_size=math.radians(60), spot_blend=0.3)
+    spot.rotation_euler = (math.radians(90), 0.0, 0.0)  # -Z turns to +Y
+    panel = add_lamp("AREA", "Panel", energy=8.0, shape="RECTANGLE", size=2.0, size_y=0.5)
+    panel.scale = (1.0, 2.0, 1.0)
+    add_lamp("AREA", "Disc", energy=math.pi, shape="DISK", size=2.0)
+    add_lamp("POINT", "Off", energy=0.0)
+    no_volumes = add_lamp("POINT", "Surfaces only", energy=10.0)
+    no_volumes.visible_volume_scatter = False
+    bpy.context.view_layer.update()
+    suns, lamps = bake_inputs.gather_lights(bake_inputs.lamp_objects(bpy.context.view_layer), identity_frame())
+    found = {lamp.name: lamp for lamp in lamps}
+    assert suns == [] and sorted(found) == ["Bulb", "Disc", "Panel", "Spot"]
+    bulb = found["Bulb"]
+    assert bulb.shape == "POINT" and bulb.position == pytest.approx((1, 2, 3)) and bulb.radius == pytest.approx(0.1)
+    assert bulb.emission == pytest.approx(tuple(100.0 / (4 * math.pi) * c for c in (1.0, 0.5, 0.25)))
+    assert found["Spot"].axis == pytest.approx((0.0, 1.0, 0.0), abs=1e-6)
+    assert (found["Spot"].spot_angle, found["Spot"].spot_blend) == pytest.approx((math.radians(60), 0.3))
+    assert found["Panel"].shape == "RECTANGLE" and found["Panel"].size == pytest.approx((2.0, 1.0))
+    assert found["Panel"].emission == pytest.approx((8.0 / (4 * 2.0),) * 3)
+    assert found["Disc"].shape == "ELLIPSE" and found["Disc"].emission == pytest.approx((0.25,) * 3)  # A = π
 
 
 def test_lamps_hidden_from_renders_or_excluded_do_not_light(clean_scene):
@@ -115,7 +128,7 @@ def test_lamps_hidden_from_renders_or_excluded_do_not_light(clean_scene):
 def test_sun_wider_than_90_degrees_is_refused(clean_scene):
     sun = add_lamp("SUN", "Wide", energy=1.0, angle=math.radians(120))
     with pytest.raises(UserError, match="up to 90"):
-        bake_inputs.gather_suns([sun], identity_frame())
+        bake_inputs.gather_lights([sun], identity_frame())
 
 
 # --- world ----------------------------------------------------------------------------------------------------
@@ -387,7 +400,7 @@ def test_occluders_and_suns_in_a_rotated_volume_frame(clean_scene, tmp_path):
     obj.scale = (2.0, 2.0, 2.0)
     bpy.context.view_layer.update()
     frame = bake_inputs.Frame(obj)
-    inputs_suns, _ = bake_inputs.gather_suns([sun], frame)
+    inputs_suns, _ = bake_inputs.gather_lights([sun], frame)
     # World -Y is the object's -X after a 90 degree turn about Z.
     assert inputs_suns[0].direction == pytest.approx((-1.0, 0.0, 0.0), abs=1e-6)
     (occluder,) = bake_inputs.gather_occluders(bake_inputs.occluder_objects(bpy.context.view_layer),

@@ -65,7 +65,7 @@ def test_bake_then_every_kind_of_change(clean_scene, tmp_path):
                 lambda: setattr(obj.firn, "anisotropy", 0.845), "optics")
     outdated_by(lambda: setattr(obj, "location", (0, 0, 1)), lambda: setattr(obj, "location", (0, 0, 0)), "snow")
 
-    point = bpy.data.objects.new("Bulb", bpy.data.lights.new("Bulb", "POINT"))  # listed as ignored: still a change
+    point = bpy.data.objects.new("Bulb", bpy.data.lights.new("Bulb", "POINT"))  # a lamp lights the bake too
     bpy.context.scene.collection.objects.link(point)
     assert state(obj) == ("OUTDATED", ["lamps"])
     bpy.data.objects.remove(point)

@@ -1,8 +1,10 @@
 """What lights and shadows a snow object, read from Blender for the bake (main thread, but for the functions
 that say "any thread"). No physics here.
 
-- Suns: Blender Sun lamps (direction towards the sun, irradiance = Strength × Color in W/m², Angle). Other lamp
-  types do not light the bake: they are listed so the operator can say so.
+- Suns: Blender Sun lamps (direction towards the sun, irradiance = Strength × Color in W/m², Angle).
+- Lamps: Point and Spot (intensity Power / 4π × Color in W/sr, Radius; a Spot's Size and Blend) and Area lamps
+  (radiance Power / (4 × area) × Color in W/m²/sr, shape and size): Cycles 3.4's emission, measured in
+  tests/blender/test_lamps.py. A lamp whose Volume Scatter ray visibility is off does not light the snow.
 - Sky: the scene's World. A plain Background colour × strength is read directly; anything else (Nishita sky,
   HDRI, any node world) is rendered by Cycles (bake/world_probe.py, off the main thread when the bake runs from
   the UI) into a small equirectangular radiance map (W/m²/sr) in the convention of cpp/firn/transport/lights.h.
@@ -42,6 +44,21 @@ class Sun:
     angular_diameter: float  # rad
 
 
+@dataclass(frozen=True)
+class Lamp:
+    """A Point, Spot or Area lamp in the snow's frame (cpp/firn/transport/lamps.h)."""
+    name: str
+    shape: str  # POINT, SPOT, RECTANGLE, ELLIPSE
+    position: tuple  # m
+    emission: tuple  # W/sr (POINT, SPOT) or W/m²/sr (RECTANGLE, ELLIPSE) per RGB channel
+    axis: tuple  # unit: where it shines
+    tangent: tuple  # unit: an area lamp's size X direction
+    radius: float = 0.0  # m
+    spot_angle: float = math.pi  # rad, full
+    spot_blend: float = 0.0
+    size: tuple = (1.0, 1.0)  # m
+
+
 @dataclass
 class Sky:
     radiance: tuple = (0.0, 0.0, 0.0)  # W/m²/sr per channel; scales `map` when there is one
@@ -64,6 +81,7 @@ class BakeInputs:
     occluders: list
     frame: "Frame"
     warnings: list = field(default_factory=list)
+    lamps: list = field(default_factory=list)  # [Lamp]
 
 
 class Frame:
@@ -83,6 +101,10 @@ class Frame:
         # Points come in world metres (scene_geometry); matrix_world maps object space to Blender units.
         self.world_to_object = np.linalg.inv(matrix) @ np.diag([1.0 / metres_per_unit] * 3 + [1.0])
         self.is_identity = np.allclose(self.world_to_object, np.eye(4), atol=1e-9)
+
+    def length(self, metres):
+        """A length in the snow's frame."""
+        return metres * float(np.cbrt(np.linalg.det(self.world_to_object[:3, :3])))
 
     def direction(self, world_direction):
         local = self.rotation.T @ np.asarray(world_direction, np.float64)
@@ -125,26 +147,61 @@ def occluder_objects(view_layer):
             if scene_geometry.makes_geometry(obj) and obj.visible_shadow]
 
 
-# --- suns -----------------------------------------------------------------------------------------------------
+# --- suns and lamps -------------------------------------------------------------------------------------------
 
-def gather_suns(lamps, frame):
-    """([Sun], [ignored lamp description]) for the given lamp objects."""
-    suns, ignored = [], []
+def _sun(obj, frame):
+    light = obj.data
+    # A lamp shines along its local -Z axis; the core wants the direction towards the sun.
+    towards = obj.matrix_world.to_3x3() @ Vector((0.0, 0.0, 1.0))
+    if towards.length < 1e-12:
+        return None  # a zero-scaled lamp lights nothing
+    if light.angle > math.pi / 2:
+        raise UserError(f"Sun '{obj.name}' has an Angle of {math.degrees(light.angle):.0f}°: "
+                        "Firn bakes suns of up to 90°")
+    return Sun(obj.name, frame.direction(towards.normalized()), tuple(light.energy * c for c in light.color),
+               light.angle)
+
+
+def _lamp(obj, frame, metres_per_unit):
+    """A Point, Spot or Area lamp as Cycles 3.4 renders it: its transform's rotation, its scale for an area's
+    size (not for a sphere's radius), and its location."""
+    light = obj.data
+    matrix = obj.matrix_world.to_3x3()
+    u, v, w = (matrix.col[k] for k in range(3))
+    if min(u.length, v.length, w.length) < 1e-12:
+        return None  # a zero-scaled lamp lights nothing
+    position = frame.points(np.array([obj.matrix_world.translation], np.float64) * metres_per_unit)[0]
+    placed = {"position": tuple(float(x) for x in position), "axis": frame.direction(-w.normalized()),
+              "tangent": frame.direction(u.normalized())}
+    colour = light.color
+    if light.type in {"POINT", "SPOT"}:
+        emission = tuple(light.energy / (4.0 * math.pi) * c for c in colour)
+        radius = frame.length(light.shadow_soft_size * metres_per_unit)
+        spot = {"spot_angle": light.spot_size, "spot_blend": light.spot_blend} if light.type == "SPOT" else {}
+        return Lamp(obj.name, light.type, emission=emission, radius=radius, **placed, **spot)
+    square = light.shape in {"SQUARE", "DISK"}
+    size = (frame.length(light.size * u.length * metres_per_unit),
+            frame.length((light.size if square else light.size_y) * v.length * metres_per_unit))
+    ellipse = light.shape in {"DISK", "ELLIPSE"}
+    area = size[0] * size[1] * (math.pi / 4.0 if ellipse else 1.0)
+    emission = tuple(light.energy / (4.0 * area) * c for c in colour)
+    return Lamp(obj.name, "ELLIPSE" if ellipse else "RECTANGLE", emission=emission, size=size, **placed)
+
+
+def gather_lights(lamps, frame, metres_per_unit=1.0):
+    """([Sun], [Lamp]) for the given lamp objects; dark lamps and lamps that do not light volumes (Volume
+    Scatter ray visibility off) are left out."""
+    suns, others = [], []
     for obj in lamps:
-        light = obj.data
-        if light.type != "SUN":
-            ignored.append(f"{obj.name} ({light.type.title()})")
+        if obj.data.energy <= 0.0 or not obj.visible_volume_scatter:
             continue
-        # A lamp shines along its local -Z axis; the core wants the direction towards the sun.
-        towards = obj.matrix_world.to_3x3() @ Vector((0.0, 0.0, 1.0))
-        if towards.length < 1e-12 or light.energy <= 0.0:
-            continue  # a zero-scaled or dark lamp lights nothing
-        if light.angle > math.pi / 2:
-            raise UserError(f"Sun '{obj.name}' has an Angle of {math.degrees(light.angle):.0f}°: "
-                            "Firn bakes suns of up to 90°")
-        suns.append(Sun(obj.name, frame.direction(towards.normalized()),
-                        tuple(light.energy * c for c in light.color), light.angle))
-    return suns, ignored
+        if obj.data.type == "SUN":
+            light = _sun(obj, frame)
+            suns += [light] if light else []
+        else:
+            light = _lamp(obj, frame, metres_per_unit)
+            others += [light] if light else []
+    return suns, others
 
 
 # --- sky ------------------------------------------------------------------------------------------------------
@@ -316,12 +373,10 @@ def gather(context, snow):
     depsgraph = context.evaluated_depsgraph_get()  # first: it also brings every matrix_world up to date
     frame = Frame(snow, scene_geometry.metres_per_unit(context.scene))
     view_layer = context.view_layer
-    suns, ignored = gather_suns(lamp_objects(view_layer), frame)
+    suns, lamps = gather_lights(lamp_objects(view_layer), frame, scene_geometry.metres_per_unit(context.scene))
     sky, warnings = plan_sky(context.scene)
-    if ignored:
-        warnings.insert(0, "Only Sun lamps light the bake; ignored: " + ", ".join(ignored))
     occluders = gather_occluders(occluder_objects(view_layer), depsgraph, frame)
-    return BakeInputs(suns, sky, occluders, frame, warnings)
+    return BakeInputs(suns, sky, occluders, frame, warnings, lamps)
 
 
 def add_rendered_sky(inputs, request, rendering):
@@ -426,6 +481,11 @@ def _occluder_record(obj, depsgraph):
             geometry_digest(obj, depsgraph), modifiers, albedo)
 
 
+def _lamp_record(lamp):
+    return tuple(rounded(v) if isinstance(v, tuple) else round(v, 7) if isinstance(v, float) else v
+                 for v in vars(lamp).values())
+
+
 def signature(context, snow):
     """{component: digest} of what lights and shadows `snow`, without rendering anything; "occluders" is
     {object name: digest}, so a change can name the object. A changed digest means the bake no longer matches
@@ -433,10 +493,10 @@ def signature(context, snow):
     view_layer = context.view_layer
     depsgraph = context.evaluated_depsgraph_get()
     try:
-        frame = Frame(snow, scene_geometry.metres_per_unit(context.scene))
-        suns, ignored = gather_suns(lamp_objects(view_layer), frame)
+        metres_per_unit = scene_geometry.metres_per_unit(context.scene)
+        suns, lamps = gather_lights(lamp_objects(view_layer), Frame(snow, metres_per_unit), metres_per_unit)
         lights = tuple((s.name, rounded(s.direction), rounded(s.irradiance), round(s.angular_diameter, 7))
-                       for s in suns), tuple(ignored)
+                       for s in suns), tuple(_lamp_record(lamp) for lamp in lamps)
     except UserError as error:
         lights = str(error)
     return {

@@ -49,6 +49,9 @@ def core_bake(path, output, volume_optics, inputs, quality, seed, progress):
     firncore.bake(
         path, volume_optics, output_path=output,
         suns=[firncore.SunLight(sun.direction, sun.irradiance, sun.angular_diameter) for sun in inputs.suns],
+        lamps=[firncore.Lamp(lamp.shape, lamp.position, lamp.emission, axis=lamp.axis, tangent=lamp.tangent,
+                             radius=lamp.radius, spot_angle=lamp.spot_angle, spot_blend=lamp.spot_blend,
+                             size=lamp.size) for lamp in inputs.lamps],
         sky=firncore.Sky(radiance=tuple(sky.radiance), map=sky.map),  # map: (H, W, 3), rows bottom to top
         occluders=[(o.vertices, o.triangles, o.albedo) for o in inputs.occluders],
         quality=quality, seed=seed, progress=progress)
@@ -147,8 +150,9 @@ def _clamp_warning(scene, jobs):
 def _light_warnings(scene, jobs):
     """What the user should know about the light once it is known (the world rendered)."""
     warnings = []
-    if all(not job["inputs"].suns and max(job["inputs"].sky.radiance) <= 0.0 for job in jobs):
-        warnings.append("Nothing lights the snow (no Sun lamp, black world): the bake is black")
+    if all(not job["inputs"].suns and not job["inputs"].lamps and max(job["inputs"].sky.radiance) <= 0.0
+           for job in jobs):
+        warnings.append("Nothing lights the snow (no lamp, black world): the bake is black")
     clamp = _clamp_warning(scene, jobs)
     if clamp:
         warnings.append(clamp)
@@ -156,8 +160,11 @@ def _light_warnings(scene, jobs):
 
 
 def _summary(quality, inputs, seconds):
-    suns = len(inputs.suns)
-    parts = [quality.title(), f"{suns} sun{'s' if suns != 1 else ''}", f"sky {inputs.sky.description}",
+    suns, lamps = len(inputs.suns), len(inputs.lamps)
+    parts = [quality.title(), f"{suns} sun{'s' if suns != 1 else ''}"]
+    if lamps:
+        parts.append(f"{lamps} lamp{'s' if lamps != 1 else ''}")
+    parts += [f"sky {inputs.sky.description}",
              f"{len(inputs.occluders)} occluder parts", f"{seconds:.1f} s"]
     return ", ".join(parts)
 

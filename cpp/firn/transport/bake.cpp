@@ -100,7 +100,7 @@ struct ChannelSystem {
     std::vector<double> b;                  // W: diffuse sources at the voxel nodes
     std::vector<float> escaped;             // W: light leaving through air faces without reaching the node
     std::vector<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
-    std::vector<std::vector<float>> sunIn;  // per sun, W entering through air faces
+    std::vector<std::vector<float>> sunIn;  // per beam (sun or lamp), W entering through air faces
     std::vector<float> skyIn;               // W entering through air faces
     // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
     // returned at once (m^2), so later passes can add light from other snow without assembling again.
@@ -171,7 +171,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     sys.A.neighbour.resize(n), sys.A.conductance.resize(n), sys.A.diag.resize(n);
     sys.b.assign(n, 0.0), sys.escaped.assign(n, 0.0f), sys.outConductance.assign(n, 0.0f), sys.skyIn.assign(n, 0.0f);
     sys.skyToNode.assign(n, 0.0f), sys.skyReturned.assign(n, 0.0f), sys.area.assign(n, 0.0f);
-    sys.sunIn.assign(scene.suns.size(), std::vector<float>(n, 0.0f));
+    sys.sunIn.assign(light.beams.size(), std::vector<float>(n, 0.0f));
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         progress.throwIfCancelled();
@@ -233,27 +233,27 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             std::array<double, 6> groundLight{};  // W/m^2 occluders under the snow send back in
             for (int f = 0; f < 6; ++f)
                 if (boundary[f] && albedo[f] > 0.0) groundLight[f] = albedo[f] * light.skyUnderSnow[SnowTopology::faceIndex(topo.link[i][f])][c];
-            for (std::size_t s = 0; s < scene.suns.size(); ++s) {
-                const SunLight &sun = scene.suns[s];
-                const double E = sun.irradiance[c], Bv = light.beams[s].atVoxel[i][c];
-                if (E <= 0.0) continue;
-                // Through the surface patch (facing the sun: in, else out) and through the voxel's other faces.
-                const double muPatch = glm::dot(patch.normal, sun.direction);
-                const double patchFlow = !patch.isSurface() ? 0.0
-                                         : muPatch > 0.0  ? E * muPatch * patch.area * light.beams[s].atSurface[i][c]
-                                                          : E * muPatch * patch.area * Bv;
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+            for (std::size_t s = 0; s < light.beams.size(); ++s) {
+                const IncidentLight::Beam &beam = light.beams[s];
+                const double Bv = beam.atVoxel[i][c], Bs = beam.atSurface[i][c];  // W/m^2
+                if (Bv <= 0.0 && Bs <= 0.0) continue;
+                const glm::dvec3 w = towardsBeam(scene, s, centre);
+                // Through the surface patch (facing the light: in, else out) and through the voxel's other faces.
+                const double muPatch = glm::dot(patch.normal, w);
+                const double patchFlow = !patch.isSurface() ? 0.0 : muPatch * patch.area * (muPatch > 0.0 ? Bs : Bv);
                 double in = std::max(patchFlow, 0.0), out = std::max(-patchFlow, 0.0);
                 std::array<double, 6> flow{};  // W through each link and occluder face, positive inwards
                 for (int f = 0; f < 6; ++f) {
-                    const double mu = glm::dot(faceNormal(f), sun.direction);
+                    const double mu = glm::dot(faceNormal(f), w);
                     const std::int32_t link = topo.link[i][f];
                     if (!SnowTopology::isFace(link)) {
-                        flow[f] = E * h2 * mu * std::sqrt(Bv * double(light.beams[s].atVoxel[link][c]));
+                        flow[f] = h2 * mu * std::sqrt(Bv * double(beam.atVoxel[link][c]));
                     } else if (topo.faces[SnowTopology::faceIndex(link)].occluder && mu < 0.0) {
                         // The beam reaches the surface under the snow.
                         const double B = Bv * std::exp(-sigmaTr * topo.faces[SnowTopology::faceIndex(link)].distance / std::max(-mu, 0.05));
-                        flow[f] = E * h2 * mu * B;
-                        groundLight[f] += albedo[f] * E * -mu * B;
+                        flow[f] = h2 * mu * B;
+                        groundLight[f] += albedo[f] * -mu * B;
                     }
                     (flow[f] > 0.0 ? in : out) += std::abs(flow[f]);
                 }
@@ -319,10 +319,11 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const double D = 1.0 / (3.0 * ch.sigmaTr(topo.density[i]));
             double j0 = phi[i];
             glm::dvec3 j1 = -3.0 * ch.g * D * gradient;
-            for (std::size_t s = 0; s < scene.suns.size(); ++s) {
-                const double beam = scene.suns[s].irradiance[c] * light.beams[s].atVoxel[i][c];
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+            for (std::size_t s = 0; s < light.beams.size(); ++s) {
+                const double beam = light.beams[s].atVoxel[i][c];
                 j0 += beam;
-                j1 -= 3.0 * ch.g * beam * scene.suns[s].direction;
+                if (beam > 0.0) j1 -= 3.0 * ch.g * beam * towardsBeam(scene, s, centre);
             }
             out[i].inside.l0[c] = ch.omega * kInvFourPi * j0;
             out[i].inside.l1[c] = ch.omega * kInvFourPi * j1;
@@ -337,10 +338,10 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
             double r0 = sys.skyIn[i] * (1.0 - 3.0 / 7.0);
             glm::dvec3 r1 = -double(sys.skyIn[i]) * escape1;
-            for (std::size_t s = 0; s < scene.suns.size(); ++s) {
+            for (std::size_t s = 0; s < light.beams.size(); ++s) {
                 const double P = sys.sunIn[s][i];
                 if (P <= 0.0) continue;
-                const glm::dvec3 d = -scene.suns[s].direction;  // where the sun's light travels
+                const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
                 const SunLobe lobe = sunLobe(ch.g, std::clamp(-glm::dot(d, patch.normal), 0.05, 1.0));
                 glm::dvec3 t = d - glm::dot(d, patch.normal) * patch.normal;
                 t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
@@ -562,12 +563,13 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo,
                                           S);
                 if (!near && density.getValue(c) > 0.0f) {
                     const glm::dvec3 centre = medium.voxelCentre(c);
-                    for (const SunLight &sun : scene.suns) {
-                        const glm::dvec3 beam = glm::dvec3(sunBeamAt(scene, sun, centre, preset.sunSamples, settings.seed,
-                                                                     std::uint64_t(l), marcher)) *
-                                                sun.irradiance * optics.albedo * kInvFourPi;
+                    for (std::size_t b = 0; b < beamCount(scene); ++b) {
+                        const glm::dvec3 beam = glm::dvec3(beamAt(scene, b, centre, preset.sunSamples, settings.seed,
+                                                                  std::uint64_t(l), marcher).irradiance) *
+                                                optics.albedo * kInvFourPi;
+                        const glm::dvec3 w = towardsBeam(scene, b, centre);
                         S.l0 += beam;
-                        for (int ch = 0; ch < 3; ++ch) S.l1[ch] -= 3.0 * optics.g * beam[ch] * sun.direction;
+                        for (int ch = 0; ch < 3; ++ch) S.l1[ch] -= 3.0 * optics.g * beam[ch] * w;
                     }
                 }
                 if (near || density.getValue(c) > 0.0f) write(l, it.pos(), S);

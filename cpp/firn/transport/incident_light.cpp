@@ -35,9 +35,9 @@ glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const gl
     const double limit = columnLimit(reduced);
     const glm::dvec3 p = q + 1e-5 * n;
     glm::dvec3 irradiance(0.0);
-    for (const SunLight &sun : scene.suns) {
-        const double cosine = glm::dot(n, sun.direction);
-        if (cosine > 0.0) irradiance += sun.irradiance * cosine * glm::dvec3(sunBeamAt(scene, sun, p, 1, 0, 0, marcher));
+    for (std::size_t b = 0; b < beamCount(scene); ++b) {
+        const double cosine = glm::dot(n, towardsBeam(scene, b, p));
+        if (cosine > 0.0) irradiance += cosine * glm::dvec3(beamAt(scene, b, p, 1, 0, 0, marcher).irradiance);
     }
     const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
     if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
@@ -80,17 +80,45 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
     return glm::vec3(sum / double(rays.count()));
 }
 
-constexpr float kDark = 1e-6f;  // beam fractions below this are darkness
+// Unknowns in the order beam b's light reaches them, in buckets half a voxel deep (nearest the light
+// first), and each unknown's bucket: a voxel's neighbours one step towards the light lie in earlier buckets
+// (at least h / sqrt(3) nearer, a few voxels away from a lamp), so a sweep can look back at them.
+std::vector<std::vector<std::uint32_t>> bucketsAlongBeam(const Scene &scene, std::size_t b, const SnowTopology &topo,
+                                                          std::vector<std::uint32_t> &bucketOf) {
+    const Medium &medium = *scene.medium;
+    std::vector<double> depth(topo.size());
+    for (std::size_t i = 0; i < topo.size(); ++i) {
+        const glm::dvec3 x = medium.voxelCentre(topo.coord[i]);
+        depth[i] = b < scene.suns.size() ? -glm::dot(x, scene.suns[b].direction)
+                                         : glm::length(x - scene.lamps[b - scene.suns.size()].position);
+    }
+    const double nearest = topo.size() ? *std::min_element(depth.begin(), depth.end()) : 0.0;
+    std::vector<std::vector<std::uint32_t>> buckets;
+    bucketOf.resize(topo.size());
+    for (std::size_t i = 0; i < topo.size(); ++i) {
+        bucketOf[i] = std::uint32_t((depth[i] - nearest) / (0.5 * medium.voxelSize()));
+        if (bucketOf[i] >= buckets.size()) buckets.resize(bucketOf[i] + 1);
+        buckets[bucketOf[i]].push_back(std::uint32_t(i));
+    }
+    return buckets;
+}
 
-// Unknowns grouped by their coordinate along `axis`, ordered so that `step` leads from one group to the next.
-std::vector<std::vector<std::uint32_t>> slicesAlong(const SnowTopology &topo, int axis, int step) {
-    if (topo.size() == 0) return {};
-    int lo = topo.coord[0][axis], hi = lo;
-    for (const openvdb::Coord &c : topo.coord) lo = std::min(lo, c[axis]), hi = std::max(hi, c[axis]);
-    std::vector<std::vector<std::uint32_t>> slices(std::size_t(hi - lo + 1));
-    for (std::size_t i = 0; i < topo.size(); ++i) slices[std::size_t(topo.coord[i][axis] - lo)].push_back(std::uint32_t(i));
-    if (step < 0) std::reverse(slices.begin(), slices.end());
-    return slices;
+// Offsets to a voxel's neighbours one step towards a light in direction w: along w's main axis, and
+// diagonally along the others where w leans that way.
+std::vector<openvdb::Coord> stepsTowards(const glm::dvec3 &w) {
+    const int axis = int(std::max_element(&w.x, &w.x + 3, [](double a, double b) { return std::abs(a) < std::abs(b); }) - &w.x);
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    std::vector<openvdb::Coord> steps;
+    for (int bu = 0; bu < 2; ++bu)
+        for (int bv = 0; bv < 2; ++bv) {
+            if ((bu && std::abs(w[u]) < 1e-3) || (bv && std::abs(w[v]) < 1e-3)) continue;
+            openvdb::Coord o(0);
+            o[axis] = w[axis] > 0.0 ? 1 : -1;
+            if (bu) o[u] = w[u] > 0.0 ? 1 : -1;
+            if (bv) o[v] = w[v] > 0.0 ? 1 : -1;
+            steps.push_back(o);
+        }
+    return steps;
 }
 
 template <typename Body>
@@ -107,24 +135,53 @@ glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics) {
     return optics.extinctionPerDensity * (glm::dvec3(1.0) - optics.albedo * optics.g);
 }
 
-glm::vec3 sunBeamAt(const Scene &scene, const SunLight &sun, const glm::dvec3 &point, int sunSamples,
-                    std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher,
-                    const glm::dvec3 *shadowPoint, Crossing crossing) {
+std::size_t beamCount(const Scene &scene) { return scene.suns.size() + scene.lamps.size(); }
+
+glm::dvec3 towardsBeam(const Scene &scene, std::size_t b, const glm::dvec3 &point) {
+    if (b < scene.suns.size()) return scene.suns[b].direction;
+    const glm::dvec3 w = scene.lamps[b - scene.suns.size()].position - point;
+    const double length = glm::length(w);
+    return length > 0.0 ? w / length : glm::dvec3(0.0, 0.0, 1.0);
+}
+
+BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
+                  std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint, Crossing crossing) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
-    const double column = marcher.column(point, sun.direction, std::numeric_limits<double>::infinity(), limit);
-    if (column >= limit) return glm::vec3(0.0f);
+    const bool sun = b < scene.suns.size();
+    const glm::dvec3 w = towardsBeam(scene, b, point);
+    const double reach = sun ? std::numeric_limits<double>::infinity()
+                             : glm::length(scene.lamps[b - scene.suns.size()].position - point);
+    BeamSample out;
+    const double column = marcher.column(point, w, reach, limit);
+    out.snowBlocks = column >= limit;
+    if (out.snowBlocks) return out;
     const glm::vec3 from(shadowPoint ? *shadowPoint : point);
-    int visible = sunSamples;
-    if (!scene.occluders->empty()) {
-        Rng rng(seed, stream);
-        visible = 0;
-        for (int s = 0; s < sunSamples; ++s) {
-            const glm::dvec3 w = sunSamples == 1 ? sun.direction : sampleSunDirection(sun, rng.uniform(), rng.uniform());
-            visible += !scene.occluders->caster().occluded(from, glm::vec3(w), 1e-5f);
+    const RayCaster &caster = scene.occluders->caster();
+    Rng rng(seed, stream);
+    glm::dvec3 sum(0.0);
+    if (sun) {
+        const SunLight &light = scene.suns[b];
+        int visible = samples;
+        if (!scene.occluders->empty()) {
+            visible = 0;
+            for (int s = 0; s < samples; ++s) {
+                const glm::dvec3 d = samples == 1 ? light.direction : sampleSunDirection(light, rng.uniform(), rng.uniform());
+                visible += !caster.occluded(from, glm::vec3(d), 1e-5f);
+            }
+        }
+        sum = light.irradiance * double(visible);
+    } else {
+        const Lamp &lamp = scene.lamps[b - scene.suns.size()];
+        if (lamp.shape != Lamp::Shape::Rectangle && lamp.shape != Lamp::Shape::Ellipse && lamp.radius == 0.0) samples = 1;
+        for (int s = 0; s < samples; ++s) {
+            const LampSample l = sampleLamp(lamp, glm::dvec3(from), rng.uniform(), rng.uniform());
+            if (l.irradiance == Rgb(0.0)) continue;
+            if (!caster.occluded(from, glm::vec3(l.direction), 1e-5f, float(l.distance * (1.0 - 1e-6)))) sum += l.irradiance;
         }
     }
-    return glm::vec3(glm::exp(-reduced * column)) * (float(visible) / float(sunSamples));
+    out.irradiance = glm::vec3(glm::exp(-reduced * column) * sum / double(samples));
+    return out;
 }
 
 SkyRays::SkyRays(int samples) : strata_(std::clamp(int(std::lround(std::sqrt(double(samples)))), 1, 8)) {}
@@ -148,62 +205,54 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     const Medium &medium = *scene.medium;
     auto outside = [&](std::size_t i) { return patchOutside(medium, topo, i); };
     IncidentLight light;
-    const double jobs = double(scene.suns.size() + 1);
+    const double jobs = double(beamCount(scene) + 1);
 
-    for (std::size_t s = 0; s < scene.suns.size(); ++s) {
-        const SunLight &sun = scene.suns[s];
+    for (std::size_t b = 0; b < beamCount(scene); ++b) {
         IncidentLight::Beam beam;
         beam.atVoxel.assign(topo.size(), glm::vec3(0.0f));
         beam.atSurface.assign(topo.size(), glm::vec3(0.0f));
-        const std::uint64_t seed = settings.seed ^ (0x5A17ull + s);
-        // Voxel centres slice by slice across the sun's main axis, sunward slice first: a voxel inside the
-        // snow whose sunward neighbours all lie in darkness is dark too, and needs no ray.
-        const int axis = int(std::max_element(&sun.direction.x, &sun.direction.x + 3,
-                                              [](double a, double b) { return std::abs(a) < std::abs(b); }) -
-                             &sun.direction.x);
-        const int toward = sun.direction[axis] > 0.0 ? 1 : -1;
-        std::vector<openvdb::Coord> upstream;  // offsets to the sunward neighbours in the previous slice
-        for (int b = 0; b < 2; ++b)
-            for (int c = 0; c < 2; ++c) {
-                openvdb::Coord o(0);
-                o[axis] = toward;
-                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-                if (b) o[u] = sun.direction[u] > 0.0 ? 1 : -1;
-                if (c) o[v] = sun.direction[v] > 0.0 ? 1 : -1;
-                if ((b && std::abs(sun.direction[u]) < 1e-3) || (c && std::abs(sun.direction[v]) < 1e-3)) continue;
-                upstream.push_back(o);
-            }
-        const std::vector<std::vector<std::uint32_t>> slices = slicesAlong(topo, axis, -toward);
-        for (const std::vector<std::uint32_t> &slice : slices)
-            parallelChunks(slice.size(), progress, [&](const auto &range) {
+        const std::uint64_t seed = settings.seed ^ (0x5A17ull + b);
+        // Voxel centres nearest the light first: a voxel inside the snow whose neighbours towards the light
+        // all lie behind too much snow lies behind too much snow too, and needs no ray.
+        std::vector<std::uint32_t> bucketOf;
+        std::vector<std::uint8_t> blocked(topo.size(), 0);
+        for (const std::vector<std::uint32_t> &bucket : bucketsAlongBeam(scene, b, topo, bucketOf))
+            parallelChunks(bucket.size(), progress, [&](const auto &range) {
                 Medium::ColumnMarcher marcher(medium);
                 openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
                 for (std::size_t n = range.begin(); n != range.end(); ++n) {
-                    const std::uint32_t i = slice[n];
+                    const std::uint32_t i = bucket[n];
+                    const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
                     bool dark = !topo.patches[i].isSurface();
-                    for (std::size_t k = 0; k < upstream.size() && dark; ++k) {
-                        const std::int32_t j = index.getValue(topo.coord[i] + upstream[k]);
-                        dark = j >= 0 && std::max({beam.atVoxel[j].x, beam.atVoxel[j].y, beam.atVoxel[j].z}) < kDark;
+                    for (const openvdb::Coord &step : stepsTowards(towardsBeam(scene, b, centre))) {
+                        if (!dark) break;
+                        const std::int32_t j = index.getValue(topo.coord[i] + step);
+                        dark = j >= 0 && bucketOf[j] < bucketOf[i] && blocked[j];
                     }
-                    if (!dark)
-                        beam.atVoxel[i] = sunBeamAt(scene, sun, medium.voxelCentre(topo.coord[i]), settings.sunSamples,
-                                                    seed, 2 * i, marcher);
+                    if (dark) {
+                        blocked[i] = 1;
+                        continue;
+                    }
+                    const BeamSample sample = beamAt(scene, b, centre, settings.sunSamples, seed, 2 * i, marcher);
+                    beam.atVoxel[i] = sample.irradiance;
+                    blocked[i] = sample.snowBlocks;
                 }
             });
         parallelChunks(topo.size(), progress, [&](const auto &range) {
             Medium::ColumnMarcher marcher(medium);
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                if (topo.patches[i].isSurface() && glm::dot(topo.patches[i].normal, sun.direction) > 0.0) {
+                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+                if (topo.patches[i].isSurface() && glm::dot(topo.patches[i].normal, towardsBeam(scene, b, centre)) > 0.0) {
                     // Snow in the way from outside the density ramp; occluders' shadow on the surface itself
                     // (half a voxel out), so shadow edges fall where they do on the snow.
-                    const glm::dvec3 surface = medium.voxelCentre(topo.coord[i]) + 0.5 * medium.voxelSize() * topo.patches[i].normal;
-                    beam.atSurface[i] = sunBeamAt(scene, sun, outside(i), settings.sunSamples, seed, 2 * i + 1, marcher,
-                                                  &surface, Crossing::Uncollided);
+                    const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
+                    beam.atSurface[i] = beamAt(scene, b, outside(i), settings.sunSamples, seed, 2 * i + 1, marcher,
+                                               &surface, Crossing::Uncollided).irradiance;
                 }
             }
         });
         light.beams.push_back(std::move(beam));
-        progress.report((s + 1) / jobs);
+        progress.report((b + 1) / jobs);
     }
 
     light.skyOnSurface.assign(topo.size(), glm::vec3(0.0f));

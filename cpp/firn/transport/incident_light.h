@@ -15,9 +15,10 @@ namespace firn {
 // through the smooth surface patches of surface voxels (not through the voxels' staircase faces, which
 // would shade each other).
 struct IncidentLight {
-    // One per sun: the sun's beam as a fraction of its irradiance, after the snow in front of the point
-    // (transmittance with the similarity-reduced extinction sigma_tr = (1 - omega g) sigma_t: light that
-    // scattered forwards still travels with the beam) and occluders (averaged over the sun's disc).
+    // One per beam (beamCount: the suns, then the lamps): irradiance (W/m^2 on a plane facing the light)
+    // after the snow in front of the point (transmittance with the similarity-reduced extinction
+    // sigma_tr = (1 - omega g) sigma_t: light that scattered forwards still travels with the beam) and
+    // occluders (averaged over the sun's disc or the lamp).
     struct Beam {
         std::vector<glm::vec3> atVoxel;    // at each unknown's centre
         std::vector<glm::vec3> atSurface;  // just outside each surface voxel's patch (0 inside the snow)
@@ -47,7 +48,7 @@ class SkyRays {
 
 struct IncidentLightSettings {
     int skySamples = 16;  // rays per face, cosine-weighted, stratified
-    int sunSamples = 4;   // points on each sun's disc per shadow test
+    int sunSamples = 4;   // points on each sun's disc or lamp per shadow test
     std::uint64_t seed = 0;
 };
 
@@ -65,10 +66,21 @@ glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
 // scatters towards the surface arrives as that snow's own radiance, gathered separately).
 enum class Crossing { Beam, Uncollided };
 
-// The beam fraction at a point towards one sun: snow transmittance from `point` times occluder
-// visibility from `shadowPoint` (default: the same point).
-glm::vec3 sunBeamAt(const Scene &scene, const SunLight &sun, const glm::dvec3 &point, int sunSamples,
-                    std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher,
-                    const glm::dvec3 *shadowPoint = nullptr, Crossing crossing = Crossing::Beam);
+// The lights that reach into the snow as beams, each from one direction at a point: the scene's suns
+// (beam b < suns.size()), then its lamps (towards their centre).
+std::size_t beamCount(const Scene &scene);
+glm::dvec3 towardsBeam(const Scene &scene, std::size_t b, const glm::dvec3 &point);  // unit
+
+struct BeamSample {
+    glm::vec3 irradiance{0.0f};  // W/m^2 on a plane facing the light
+    bool snowBlocks = false;     // the snow in front leaves less than 1e-5 of it
+};
+
+// Beam b at a point: snow transmittance from `point` towards the light times the light's irradiance
+// seen past occluders from `shadowPoint` (default: the same point), over `samples` points of a sun's disc
+// or a lamp.
+BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
+                  std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint = nullptr,
+                  Crossing crossing = Crossing::Beam);
 
 }  // namespace firn

@@ -53,7 +53,7 @@ class PathTracer {
             if (tCollision < kInfinity) {
                 p += tCollision * d;
                 throughput *= medium_.optics().albedo;
-                radiance += throughput * sunLightScattered(p, d, rng);
+                radiance += throughput * lightScattered(p, d, rng);
                 d = sampleHenyeyGreenstein(d, medium_.optics().g, rng.uniform(), rng.uniform());
             } else if (hit) {
                 if (first) return Rgb(0.0);  // a surface in front of the snow: the renderer draws it
@@ -61,7 +61,7 @@ class PathTracer {
                 const glm::dvec3 n = glm::dot(glm::dvec3(hit->normal), d) < 0.0 ? glm::dvec3(hit->normal)
                                                                                   : -glm::dvec3(hit->normal);
                 throughput *= scene_.occluders->albedo(hit->triangle);
-                radiance += throughput * sunLightReflected(p, n, rng);
+                radiance += throughput * lightReflected(p, n, rng);
                 d = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
             } else {
                 if (!first) radiance += throughput * scene_.sky.radianceFrom(d);
@@ -93,10 +93,11 @@ class PathTracer {
         }
     }
 
-    // Ratio tracking with Russian roulette: unbiased transmittance of the medium from p along d.
-    double transmittance(const glm::dvec3 &p, const glm::dvec3 &d, Rng &rng) {
+    // Ratio tracking with Russian roulette: unbiased transmittance of the medium from p along d, up to tEnd.
+    double transmittance(const glm::dvec3 &p, const glm::dvec3 &d, double tEnd, Rng &rng) {
         double t0, t1;
         if (!medium_.clipToBounds(p, d, t0, t1)) return 1.0;
+        t1 = std::min(t1, tEnd);
         double T = 1.0;
         for (double t = t0;;) {
             t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
@@ -109,32 +110,45 @@ class PathTracer {
         }
     }
 
-    // Sun light arriving at p along a sampled direction of each disc: irradiance * visibility, with the
-    // direction towards the sun returned through `towardsSun`.
-    Rgb sunIrradiance(const SunLight &sun, const glm::dvec3 &p, double offset, glm::dvec3 &towardsSun, Rng &rng) {
-        towardsSun = sampleSunDirection(sun, rng.uniform(), rng.uniform());
-        if (scene_.occluders->caster().occluded(glm::vec3(p), glm::vec3(towardsSun), float(offset))) return Rgb(0.0);
-        return sun.irradiance * transmittance(p, towardsSun, rng);
+    // Light of sun or lamp b (the suns, then the lamps) arriving at p from one sampled point of it:
+    // irradiance * visibility * transmittance, with the direction towards that point in `towards`.
+    Rgb lightIrradiance(std::size_t b, const glm::dvec3 &p, double offset, glm::dvec3 &towards, Rng &rng) {
+        const double u1 = rng.uniform(), u2 = rng.uniform();
+        Rgb E;
+        double distance = kInfinity;
+        if (b < scene_.suns.size()) {
+            towards = sampleSunDirection(scene_.suns[b], u1, u2);
+            E = scene_.suns[b].irradiance;
+        } else {
+            const LampSample lamp = sampleLamp(scene_.lamps[b - scene_.suns.size()], p, u1, u2);
+            towards = lamp.direction, E = lamp.irradiance, distance = lamp.distance;
+        }
+        if (E == Rgb(0.0)) return E;
+        const float far = distance == kInfinity ? std::numeric_limits<float>::infinity() : float(distance * (1.0 - 1e-6));
+        if (scene_.occluders->caster().occluded(glm::vec3(p), glm::vec3(towards), float(offset), far)) return Rgb(0.0);
+        return E * transmittance(p, towards, distance, rng);
     }
 
-    // Single scattering of sun light at a medium collision, towards -d (the camera side of the path).
-    Rgb sunLightScattered(const glm::dvec3 &p, const glm::dvec3 &d, Rng &rng) {
+    std::size_t lightCount() const { return scene_.suns.size() + scene_.lamps.size(); }
+
+    // Single scattering of the lights at a medium collision, towards -d (the camera side of the path).
+    Rgb lightScattered(const glm::dvec3 &p, const glm::dvec3 &d, Rng &rng) {
         Rgb sum(0.0);
-        for (const SunLight &sun : scene_.suns) {
+        for (std::size_t b = 0; b < lightCount(); ++b) {
             glm::dvec3 w;
-            const Rgb E = sunIrradiance(sun, p, 0.0, w, rng);
+            const Rgb E = lightIrradiance(b, p, 0.0, w, rng);
             // Light travels along -w and leaves along -d: the scattering cosine is dot(w, d).
             if (E != Rgb(0.0)) sum += E * henyeyGreenstein(glm::dot(w, d), medium_.optics().g);
         }
         return sum;
     }
 
-    // Sun light reflected by a Lambertian surface with normal n (albedo applied by the caller).
-    Rgb sunLightReflected(const glm::dvec3 &p, const glm::dvec3 &n, Rng &rng) {
+    // The lights reflected by a Lambertian surface with normal n (albedo applied by the caller).
+    Rgb lightReflected(const glm::dvec3 &p, const glm::dvec3 &n, Rng &rng) {
         Rgb sum(0.0);
-        for (const SunLight &sun : scene_.suns) {
+        for (std::size_t b = 0; b < lightCount(); ++b) {
             glm::dvec3 w;
-            const Rgb E = sunIrradiance(sun, p, kSurfaceEpsilon, w, rng);
+            const Rgb E = lightIrradiance(b, p, kSurfaceEpsilon, w, rng);
             sum += E * std::max(0.0, glm::dot(n, w)) / kPi;
         }
         return sum;

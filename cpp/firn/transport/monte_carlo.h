@@ -24,7 +24,8 @@ struct RadianceEstimate {
 // Brute-force volumetric path tracing of the scene: the reference the bake is tested against and the
 // REFERENCE quality. It shares no approximation with the bake: delta tracking through the trilinear
 // density with a global majorant, Henyey-Greenstein sampling at every real collision (all orders, no
-// truncation), ratio-tracked shadow rays to the suns, Lambertian occluders, the sky where paths escape.
+// truncation), ratio-tracked shadow rays to the suns and lamps, Lambertian occluders, the sky where paths
+// escape.
 //
 // Estimates, for each camera ray, the radiance the snow scatters towards the camera: paths whose first
 // event is a scattering in the medium. It excludes what a renderer draws itself behind the snow (sky and

@@ -23,6 +23,7 @@ void validate(const Scene &scene) {
     if (!scene.medium) throw InvalidArgument("the scene has no snow medium");
     if (!scene.occluders) throw InvalidArgument("the scene's occluders are missing");
     for (const SunLight &sun : scene.suns) validate(sun);
+    for (const Lamp &lamp : scene.lamps) validate(lamp);
     validate(scene.sky);
 }
 

@@ -5,6 +5,7 @@
 
 #include "firn/geometry/mesh.h"
 #include "firn/geometry/ray_caster.h"
+#include "firn/transport/lamps.h"
 #include "firn/transport/lights.h"
 #include "firn/transport/medium.h"
 #include "firn/util/color.h"
@@ -34,6 +35,7 @@ class Occluders {
 struct Scene {
     std::shared_ptr<const Medium> medium;
     std::vector<SunLight> suns;
+    std::vector<Lamp> lamps;
     Sky sky;
     std::shared_ptr<const Occluders> occluders = std::make_shared<Occluders>();
 };

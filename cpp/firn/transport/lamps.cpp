@@ -1,0 +1,89 @@
+#include "firn/transport/lamps.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "firn/util/error.h"
+#include "firn/util/sampling.h"
+
+namespace firn {
+
+namespace {
+
+double smoothstep(double edge, double x) {
+    const double t = std::clamp(x / edge, 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// Cycles 3.4's spot_attenuation: the cone, its blend and a cosine; cosTheta from the spot's axis.
+double spotFactor(const Lamp &lamp, double cosTheta) {
+    const double cosHalf = std::cos(0.5 * lamp.spotAngle);
+    if (cosTheta <= cosHalf) return 0.0;
+    const double smooth = (1.0 - cosHalf) * lamp.spotBlend;
+    return cosTheta * (smooth > 0.0 ? smoothstep(smooth, cosTheta - cosHalf) : 1.0);
+}
+
+// A point uniform over the area lamp, relative to its centre, and the lamp's area (m^2).
+glm::dvec3 areaPoint(const Lamp &lamp, double u1, double u2, double &area) {
+    const glm::dvec3 bitangent = glm::cross(lamp.axis, lamp.tangent);
+    if (lamp.shape == Lamp::Shape::Rectangle) {
+        area = lamp.sizeX * lamp.sizeY;
+        return (u1 - 0.5) * lamp.sizeX * lamp.tangent + (u2 - 0.5) * lamp.sizeY * bitangent;
+    }
+    area = 0.25 * kPi * lamp.sizeX * lamp.sizeY;
+    const double r = std::sqrt(u1), phi = 2.0 * kPi * u2;
+    return 0.5 * r * (std::cos(phi) * lamp.sizeX * lamp.tangent + std::sin(phi) * lamp.sizeY * bitangent);
+}
+
+bool isUnit(const glm::dvec3 &v) { return std::abs(glm::length(v) - 1.0) < 1e-6; }
+
+}  // namespace
+
+LampSample sampleLamp(const Lamp &lamp, const glm::dvec3 &x, double u1, double u2) {
+    LampSample s;
+    if (!(glm::length(x - lamp.position) > 1e-9)) return s;  // at the lamp's centre: no direction, no light
+    glm::dvec3 q = lamp.position;
+    double gain = 1.0;  // irradiance per unit emission, times the dimming by the lamp's own geometry
+    if (lamp.isArea()) {
+        double area = 0.0;
+        q += areaPoint(lamp, u1, u2, area);
+        s.direction = q - x;
+        s.distance = glm::length(s.direction);
+        if (!(s.distance > 0.0)) return LampSample{};
+        s.direction /= s.distance;
+        gain = area * std::max(0.0, -glm::dot(lamp.axis, s.direction)) / (s.distance * s.distance);
+    } else {
+        const glm::dvec3 outward = glm::normalize(x - lamp.position);
+        if (lamp.radius > 0.0)  // the sphere seen from x: a disc of its radius facing x
+            q += Frame(outward).toWorld(lamp.radius * std::sqrt(u1) * std::cos(2.0 * kPi * u2),
+                                        lamp.radius * std::sqrt(u1) * std::sin(2.0 * kPi * u2), 0.0);
+        s.direction = q - x;
+        s.distance = glm::length(s.direction);
+        s.direction /= s.distance;
+        gain = std::max(0.0, -glm::dot(outward, s.direction)) / (s.distance * s.distance);
+        if (lamp.shape == Lamp::Shape::Spot) gain *= spotFactor(lamp, -glm::dot(lamp.axis, s.direction));
+    }
+    s.irradiance = lamp.emission * gain;
+    return s;
+}
+
+void validate(const Lamp &lamp) {
+    const Rgb &e = lamp.emission;
+    if (!(std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z)) || e.x < 0.0 || e.y < 0.0 || e.z < 0.0)
+        throw InvalidArgument("lamp emission must be finite and non-negative (W/sr, or W/m^2/sr for area lamps)");
+    if (!std::isfinite(lamp.position.x + lamp.position.y + lamp.position.z))
+        throw InvalidArgument("lamp position must be finite");
+    if (!isUnit(lamp.axis) || !isUnit(lamp.tangent) || std::abs(glm::dot(lamp.axis, lamp.tangent)) > 1e-6)
+        throw InvalidArgument("lamp axis and tangent must be perpendicular unit vectors");
+    if (!(lamp.radius >= 0.0) || !std::isfinite(lamp.radius))
+        throw InvalidArgument("lamp radius must be finite and non-negative (m)");
+    if (lamp.shape == Lamp::Shape::Spot &&
+        (!(lamp.spotAngle > 0.0 && lamp.spotAngle <= kPi) || !(lamp.spotBlend >= 0.0 && lamp.spotBlend <= 1.0)))
+        throw InvalidArgument("spot lamp: angle in (0, pi] rad and blend in [0, 1]");
+    if (lamp.isArea() && !(lamp.sizeX > 0.0 && lamp.sizeY > 0.0 && std::isfinite(lamp.sizeX * lamp.sizeY)))
+        throw InvalidArgument("area lamp sizes must be finite and positive (m)");
+}
+
+}  // namespace firn
