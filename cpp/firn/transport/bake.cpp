@@ -57,6 +57,7 @@ Preset resolve(const BakeSettings &s) {
     if (s.sunSamples > kMaxSunSamples || s.referenceSamples > kMaxReferenceSamples)
         throw InvalidArgument("bake settings: at most " + std::to_string(kMaxSunSamples) + " sun samples and " +
                               std::to_string(kMaxReferenceSamples) + " reference samples");
+    if (s.sourceScale < 1 || s.sourceScale > 4) throw InvalidArgument("bake settings: source scale must be 1 to 4");
     if (s.skySamples) p.skySamples = s.skySamples;
     if (s.sunSamples) p.sunSamples = s.sunSamples;
     if (s.tolerance > 0.0) p.tolerance = s.tolerance;
@@ -632,7 +633,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     BakeStats local;
     Stopwatch clock;
     p.report(0.0, "Finding the snow's voxels");
-    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05));
+    const SnowTopology topo =
+        buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05), settings.sourceScale);
     local.topologySeconds = clock.lap();
     p.report(0.05, "Tracing sun and sky light");
     const IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
@@ -693,7 +695,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         local.solveSeconds += clock.lap();
     }
     p.report(reference ? 0.95 : solved, "Writing the grids");
-    BakedGrids grids = makeGrids(scene, topo, source, preset, settings);
+    BakedGrids grids = coarsened(makeGrids(scene, topo, source, preset, settings), scene.medium->density(),
+                                 settings.sourceScale);
     // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
     // (Cycles would render black or white voxels). Not InvalidArgument: the fuzz driver must see it as a bug.
     for (const auto &grid : grids.source)

@@ -23,6 +23,9 @@ struct BakeSettings {
     int sunSamples = 0;        // points on a sun's disc per shadow test
     double tolerance = 0.0;    // relative residual of the diffusion solve
     int referenceSamples = 0;  // Reference: paths per direction per surface voxel
+    // The source grids' voxel size in density voxels: 1 keeps them as fine as the density, 2 (default) stores
+    // an eighth of the voxels, which is what Cycles' memory follows (baked_grids.h: coarsened).
+    int sourceScale = 2;
 };
 
 struct BakeStats {

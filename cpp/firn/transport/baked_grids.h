@@ -27,6 +27,12 @@ struct BakedGrids {
     static BakedGrids find(const openvdb::GridPtrVec &grids);
 };
 
+// The source grids at `factor` (>= 1) times the density's voxel size: a coarse voxel holds the extinction-
+// weighted mean of its factor^3 voxels where there is snow, elsewhere the mean of the values the bake extends
+// beyond the snow, and a ring of zeros surrounds them (Cycles holds a Vec3 grid's edge value half a voxel
+// further). Cycles stores a grid densely over its bounding box: a factor of 2 keeps 1/8 of the source's memory.
+BakedGrids coarsened(const BakedGrids &fine, const openvdb::FloatGrid &density, int factor);
+
 // Integrates the baked emission along rays, as the renderer does; one per thread.
 class BakedRadiance {
   public:
@@ -41,6 +47,7 @@ class BakedRadiance {
     Medium::ColumnMarcher marcher_;
     Medium::Accessor density_;
     std::array<Reader, 4> source_;
+    double sourceIndexPerDensityIndex_;  // the source grids may be coarser than the density
 };
 
 // What Cycles draws for the snow along a camera ray with the contract's material: the integral of

@@ -133,7 +133,7 @@ void computeNeighbourhoods(SnowTopology &topo) {
 
 // Optical depth (sigma_t) from outside to each voxel centre near the surface by Dijkstra from the surface
 // voxels inwards, over the shell only.
-void computeShell(const Medium &medium, SnowTopology &topo) {
+void computeShell(const Medium &medium, SnowTopology &topo, int shellVoxels) {
     constexpr double kShellStart = 3.0, kShellEnd = 6.0;
     const double k = medium.optics().extinctionPerDensity, h = medium.voxelSize();
     std::vector<double> depth(topo.size(), std::numeric_limits<double>::infinity());
@@ -166,11 +166,29 @@ void computeShell(const Medium &medium, SnowTopology &topo) {
             queue.emplace(next, j);
         }
     }
+    // The first shellVoxels - 1 voxels under the surface, whatever their optical depth.
+    std::vector<std::int32_t> frontier;
+    for (std::size_t i = 0; i < topo.size(); ++i)
+        if (topo.patches[i].isSurface()) frontier.push_back(std::int32_t(i));
+    std::vector<std::uint8_t> reached(topo.size(), 0);
+    for (int step = 1; step < shellVoxels; ++step) {
+        std::vector<std::int32_t> next;
+        for (const std::int32_t i : frontier)
+            for (int f = 0; f < 6; ++f) {
+                const std::int32_t j = topo.link[i][f];
+                if (j < 0 || topo.patches[j].isSurface() || reached[j]) continue;
+                reached[j] = 1;
+                if (topo.shellWeight[j] < 1.0f) topo.shellOwner[j] = topo.shellOwner[i], topo.shellWeight[j] = 1.0f;
+                next.push_back(j);
+            }
+        frontier = std::move(next);
+    }
 }
 
 }  // namespace
 
-SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress) {
+SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress,
+                               int shellVoxels) {
     const double h = medium.voxelSize();
     const float minDensity = float(kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h));
     const openvdb::FloatTree &densityTree = medium.density().tree();
@@ -262,7 +280,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
     });
     computeSurfacePatches(medium, topo);
     computeNeighbourhoods(topo);
-    computeShell(medium, topo);
+    computeShell(medium, topo, shellVoxels);
     progress.report(1.0);
     return topo;
 }

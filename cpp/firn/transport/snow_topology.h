@@ -60,7 +60,8 @@ struct SnowTopology {
     // Surface voxels: the surface voxels of their 3^3 block, themselves included (CSR over unknowns).
     std::vector<std::uint32_t> neighbourhoodStart, neighbourhood;
     // Voxels just under the surface, within a few mean free paths: the surface voxel nearest to them (-1
-    // for the others) and how much of its radiance they carry (1 down to optical depth 3, 0 from 6).
+    // for the others) and how much of its radiance they carry (1 down to optical depth 3, 0 from 6, and 1 for
+    // the first shellVoxels - 1 voxels under the surface whatever their depth: see buildSnowTopology).
     std::vector<std::int32_t> shellOwner;
     std::vector<float> shellWeight;
 
@@ -79,6 +80,11 @@ constexpr double kMinVoxelOpticalDepth = 0.1;
 // not to the unknowns, so the thick voxel carries the surface's radiance.
 constexpr double kFringeOpticalDepth = 5.0;
 
-SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress);
+// shellVoxels: how many voxels deep, at least, the surface's radiance is carried into the snow. Source grids
+// `shellVoxels` times coarser than the density average a surface voxel with those under it (baked_grids.h):
+// in thick snow they lie many optical depths deep, unseen, and carrying the surface's radiance keeps the
+// average right.
+SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress,
+                               int shellVoxels = 1);
 
 }  // namespace firn

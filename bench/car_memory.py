@@ -1,0 +1,71 @@
+"""The car sample's bake and render cost: bake time per active voxel (FINAL) and Cycles' peak memory rendering it at
+500 × 281 pixels, with the baked grids as fine as the density and 2× coarser (the default). Cycles' peak is the
+"Peak" of its status line (its own allocations, the dense volume textures included).
+
+bench/run.sh bench/car_memory.py
+"""
+
+import os
+import re
+import sys
+import tempfile
+import time
+
+import bpy
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "blend_samples"))
+import car_under_snow as car  # noqa: E402
+import sample_common as common  # noqa: E402
+
+
+def cycles_peak_mb(scene, path):
+    """Renders one sample at 500 × 281 and returns Cycles' peak memory (MB)."""
+    peaks = []
+
+    def stats(text):
+        found = re.findall(r"Peak:([0-9.]+)M", text)
+        if found:
+            peaks.append(float(found[-1]))
+
+    bpy.app.handlers.render_stats.append(stats)
+    try:
+        common.render(scene, path, 500, 1)
+    finally:
+        bpy.app.handlers.render_stats.remove(stats)
+    return max(peaks)
+
+
+def bake_with_source_scale(snow, scale):
+    """Bake Scattering (FINAL) with the core's source grids at `scale` density voxels; seconds."""
+    from firn.common.core import firncore
+
+    bake = firncore.bake
+    firncore.bake = lambda *args, **kwargs: bake(*args, source_scale=scale, **kwargs)
+    try:
+        started = time.perf_counter()
+        common.bake([snow])
+        return time.perf_counter() - started
+    finally:
+        firncore.bake = bake
+
+
+def main():
+    from firn.common.core import firncore
+
+    scene, targets = car.build_scene()
+    snow = common.add_snow(targets, depth=0.12, spacing=0.06, voxel_size=0.02)
+    path = bpy.path.abspath(snow.data.filepath)
+    voxels = firncore.grid_statistics(path, "density")["active_voxels"]
+    folder = tempfile.mkdtemp(prefix="firn_bench_")
+    print(f"firncore {firncore.__version__}, car sample, {os.cpu_count()} threads")
+    print("source grids   bake s   us/voxel   Cycles peak MB   file MB")
+    for scale in (1, 2):
+        seconds = bake_with_source_scale(snow, scale)
+        peak = cycles_peak_mb(scene, os.path.join(folder, f"car_{scale}.png"))
+        label = "as density" if scale == 1 else f"{scale}x coarser"
+        print(f"{label:<13} {seconds:7.1f}   {1e6 * seconds / voxels:8.2f}   {peak:14.0f}   {os.path.getsize(path) / 1e6:7.0f}")
+    print(f"(density active voxels: {voxels})")
+
+
+main()
