@@ -103,16 +103,7 @@ def build_scene():
 
 
 def main():
-    args = common.parse_args(__doc__, "out/night_street.png")
-    stages = common.Stages()
-    scene, targets = stages.run("build scene", build_scene)
-    snow = stages.run("add snow layer", common.add_snow, targets, depth=0.08, spacing=0.04, voxel_size=0.02)
-    stages.run("bake", common.bake, [snow])
-    print(f"firn sample: bake {snow.firn.bake_summary}")
-    stages.run("render", common.render, scene, args.output, args.width, args.samples)
-    if not args.no_save:
-        stages.run("save .blend", common.save_next_to, __file__, args.blend)
-    print(f"firn sample: total {stages.total():.2f} s -> {args.output}")
+    common.snow_bake_render(__file__, __doc__, build_scene, depth=0.08, spacing=0.04, voxel_size=0.02)
 
 
 if __name__ == "__main__":

@@ -184,3 +184,18 @@ def side_by_side(paths, output):
     result.save()
     for image in images + [result]:
         bpy.data.images.remove(image)
+
+
+def snow_bake_render(script_file, description, build_scene, **snow_settings):
+    """The whole job of a one-picture sample: build its scene, snow its targets, bake, render, save the .blend."""
+    name = os.path.splitext(os.path.basename(script_file))[0]
+    args = parse_args(description, f"out/{name}.png")
+    stages = Stages()
+    scene, targets = stages.run("build scene", build_scene)
+    snow = stages.run("add snow layer", add_snow, targets, **snow_settings)
+    stages.run("bake scattering", bake, [snow])
+    print(f"firn sample: bake {snow.firn.bake_summary}")
+    stages.run("render (Cycles)", render, scene, args.output, args.width, args.samples)
+    if not args.no_save:
+        stages.run("save .blend", save_next_to, script_file, args.blend)
+    print(f"firn sample: total {stages.total():.2f} s -> {args.output}")
