@@ -31,6 +31,12 @@ mkdir -p "$(dirname "$report")"
   echo
   "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/proxy_bench.py"
   echo
+  echo "## The car sample's bake and Cycles' memory (baked grids as fine as the density, and 2x coarser)"
+  echo
+  echo '```'
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/car_memory.py"
+  echo '```'
+  echo
   echo "## The UI's longest stalls during Add Snow Layer and Bake Scattering (car sample, window under Xvfb)"
   echo
   "$FIRN_ROOT/bench/ui_stall.sh"

@@ -217,6 +217,7 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["iterations"] = stats.iterations;
     d["relative_residual"] = stats.relativeResidual;
     d["passes"] = stats.passes;
+    d["source_scale"] = stats.sourceScale;
     py::dict seconds;
     seconds["topology"] = stats.topologySeconds, seconds["light"] = stats.lightSeconds;
     seconds["solve"] = stats.solveSeconds, seconds["gather"] = stats.gatherSeconds, seconds["grids"] = stats.gridSeconds;
@@ -267,7 +268,7 @@ void bindTransport(py::module_ &m) {
         py::arg("sky") = py::none(), py::arg("occluders") = py::list(), py::arg("quality") = "FINAL",
         py::arg("seed") = 0, py::arg("progress") = nullptr, py::arg("sky_samples") = 0, py::arg("sun_samples") = 0,
         py::arg("reference_samples") = 0, py::arg("output_path") = py::none(),
-        py::arg("lamps") = std::vector<firn::Lamp>{}, py::arg("source_scale") = 2, R"doc(
+        py::arg("lamps") = std::vector<firn::Lamp>{}, py::arg("source_scale") = 0, R"doc(
 Bakes the light scattered inside the snow of `vdb_path` (its 'density' grid, kg/m^3), lit by `suns`, `lamps`
 (firncore.Lamp) and `sky`, and writes the file
 back, atomically, with the baked grids BAKED_GRID_NAMES added (docs/vdb-contract.md), or, given `output_path`,
@@ -275,8 +276,8 @@ writes that file instead and leaves `vdb_path` as it was. occluders: list of
 (vertices (N, 3) float32 m, triangles (M, 3) uint32, albedo (r, g, b)). quality: 'DRAFT', 'FINAL' or
 'REFERENCE' (Monte Carlo surface, slow). sky_samples (rays per surface voxel, at most 64), sun_samples
 (points on a sun's disc or a lamp) and reference_samples (paths per direction, REFERENCE) override the quality's
-defaults when non-zero. source_scale: the baked grids' voxel size in density voxels (2: an eighth of the
-memory Cycles needs for them; 1: as fine as the density). Releases the GIL; raises firncore.Cancelled if `progress` is
+defaults when non-zero. source_scale: the baked grids' voxel size in density voxels (1: as fine as the
+density; 2: an eighth of the memory Cycles needs for them; 0: the finest within 512 MB of Cycles' memory). Releases the GIL; raises firncore.Cancelled if `progress` is
 cancelled, ValueError for bad input, firncore.ReadError (an OSError) when `vdb_path` is missing or damaged,
 firncore.WriteError (an OSError) when the result cannot be written. Returns the solve's statistics.)doc");
 

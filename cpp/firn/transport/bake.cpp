@@ -57,7 +57,7 @@ Preset resolve(const BakeSettings &s) {
     if (s.sunSamples > kMaxSunSamples || s.referenceSamples > kMaxReferenceSamples)
         throw InvalidArgument("bake settings: at most " + std::to_string(kMaxSunSamples) + " sun samples and " +
                               std::to_string(kMaxReferenceSamples) + " reference samples");
-    if (s.sourceScale < 1 || s.sourceScale > 4) throw InvalidArgument("bake settings: source scale must be 1 to 4");
+    if (s.sourceScale < 0 || s.sourceScale > 4) throw InvalidArgument("bake settings: source scale must be 0 (auto) to 4");
     if (s.skySamples) p.skySamples = s.skySamples;
     if (s.sunSamples) p.sunSamples = s.sunSamples;
     if (s.tolerance > 0.0) p.tolerance = s.tolerance;
@@ -622,9 +622,25 @@ std::vector<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &to
     return out;
 }
 
+namespace {
+
+// The finest source grids whose dense box fits Cycles' budget (kSourceBudgetBytes): a small object keeps the
+// density's resolution, a street's snow gets coarser light (its dense box would not fit in memory).
+int sourceScaleFor(const Medium &medium, const BakeSettings &settings) {
+    if (settings.sourceScale > 0) return settings.sourceScale;
+    const openvdb::Coord extent = medium.density().evalActiveVoxelBoundingBox().dim();
+    const double boxVoxels = double(extent.x() + 6) * double(extent.y() + 6) * double(extent.z() + 6);  // + extension, ring
+    int scale = 1;
+    while (scale < 4 && 4 * 16.0 * boxVoxels / (scale * scale * scale) > kSourceBudgetBytes) ++scale;
+    return scale;
+}
+
+}  // namespace
+
 BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
     validate(scene);
     const Preset preset = resolve(settings);
+    const int sourceScale = sourceScaleFor(*scene.medium, settings);
     Progress quiet;
     Progress &p = progress ? *progress : quiet;
     const bool reference = settings.quality == BakeQuality::Reference;
@@ -634,7 +650,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     Stopwatch clock;
     p.report(0.0, "Finding the snow's voxels");
     const SnowTopology topo =
-        buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05), settings.sourceScale);
+        buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05), sourceScale);
     local.topologySeconds = clock.lap();
     p.report(0.05, "Tracing sun and sky light");
     const IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
@@ -695,8 +711,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         local.solveSeconds += clock.lap();
     }
     p.report(reference ? 0.95 : solved, "Writing the grids");
-    BakedGrids grids = coarsened(makeGrids(scene, topo, source, preset, settings), scene.medium->density(),
-                                 settings.sourceScale);
+    BakedGrids grids = coarsened(makeGrids(scene, topo, source, preset, settings), scene.medium->density(), sourceScale);
+    local.sourceScale = sourceScale;
     // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
     // (Cycles would render black or white voxels). Not InvalidArgument: the fuzz driver must see it as a bug.
     for (const auto &grid : grids.source)

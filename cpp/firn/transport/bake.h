@@ -23,14 +23,20 @@ struct BakeSettings {
     int sunSamples = 0;        // points on a sun's disc per shadow test
     double tolerance = 0.0;    // relative residual of the diffusion solve
     int referenceSamples = 0;  // Reference: paths per direction per surface voxel
-    // The source grids' voxel size in density voxels: 1 keeps them as fine as the density, 2 (default) stores
-    // an eighth of the voxels, which is what Cycles' memory follows (baked_grids.h: coarsened).
-    int sourceScale = 2;
+    // The source grids' voxel size in density voxels: 1 keeps them as fine as the density, 2 stores an eighth
+    // of the voxels, which is what Cycles' memory follows (baked_grids.h: coarsened). 0: the finest whose
+    // dense box Cycles will allocate stays within kSourceBudgetBytes.
+    int sourceScale = 0;
 };
+
+// What Cycles (dense volume textures, no NanoVDB) may allocate for the four source grids: 16 bytes per voxel
+// of their bounding box each.
+constexpr double kSourceBudgetBytes = 512.0 * 1024 * 1024;
 
 struct BakeStats {
     std::size_t unknowns = 0, airFaces = 0, occluderFaces = 0, surfaceVoxels = 0;
     int passes = 0;                            // diffusion solves per channel (1 + snow-to-snow bounces)
+    int sourceScale = 1;                       // the source grids' voxel size in density voxels
     std::array<int, 3> iterations{};          // per colour channel, all passes
     std::array<double, 3> relativeResidual{};  // per colour channel, last pass
     // Wall-clock seconds: voxels and faces, sun and sky tracing, diffusion solves, gathering between snow

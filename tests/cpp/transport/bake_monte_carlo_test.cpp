@@ -72,8 +72,10 @@ struct Comparison {
     Rgb meanAbsoluteError{0.0}, meanStandardError{0.0};  // relative, per channel, over pixels
 };
 
-Comparison compare(const Scene &scene, int pixels, int sub, int samplesPerPixel) {
-    const BakedGrids baked = bakeScattering(scene, BakeSettings{});
+Comparison compare(const Scene &scene, int pixels, int sub, int samplesPerPixel, int sourceScale = 0) {
+    BakeSettings settings;
+    settings.sourceScale = sourceScale;
+    const BakedGrids baked = bakeScattering(scene, settings);
     const std::vector<Pixel> image = camera(pixels, sub);
     std::vector<Ray> rays;
     for (const Pixel &pixel : image) rays.insert(rays.end(), pixel.rays.begin(), pixel.rays.end());
@@ -158,6 +160,14 @@ TEST(BakeVersusMonteCarlo, SunLitBumpySnowWithShadow) {
     scene.sky.radiance = Rgb(0.15);
     scene.suns = {SunLight{glm::normalize(glm::dvec3(0.5, 0.3, 0.8)), Rgb(1.0), 0.0093}};
     expectWithin(compare(scene, 8, 2, 1024), 0.05);
+}
+
+// The same with the source grids 2x coarser than the density, as large scenes get them.
+TEST(BakeVersusMonteCarlo, SunLitBumpySnowWithCoarseSource) {
+    Scene scene = bumpyScene(0.6);
+    scene.sky.radiance = Rgb(0.15);
+    scene.suns = {SunLight{glm::normalize(glm::dvec3(0.5, 0.3, 0.8)), Rgb(1.0), 0.0093}};
+    expectWithin(compare(scene, 8, 2, 1024, 2), 0.05);
 }
 
 }  // namespace firn
