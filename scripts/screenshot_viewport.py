@@ -17,10 +17,10 @@ import traceback
 import addon_utils
 import bpy
 import numpy as np
-from mathutils import Euler, Vector
+from mathutils import Euler
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "blender_ui"))
-from ui_test import window_context  # noqa: E402
+from ui_test import aim_view, window_context  # noqa: E402
 
 MODES = ("SOLID", "MATERIAL", "RENDERED")
 SETTLE_CHECK = 2.0  # s between two screenshots that must be the same for the view to count as settled
@@ -66,11 +66,7 @@ def frame_view():
     space.overlay.show_overlays = False
     space.show_gizmo = False
     space.shading.use_scene_world_render = True
-    region = space.region_3d
-    region.view_perspective = "PERSP"
-    region.view_location = Vector((0.0, 0.0, 0.5))
-    region.view_rotation = Euler((math.radians(62.0), 0.0, math.radians(40.0))).to_quaternion()
-    region.view_distance = 9.0
+    aim_view(space, (0.0, 0.0, 0.5), 62.0, 40.0, 9.0)
     context["area"].tag_redraw()
 
 

@@ -33,3 +33,17 @@ def window_context():
     area = next(a for a in window.screen.areas if a.type == "VIEW_3D")
     return {"window": window, "screen": window.screen, "area": area,
             "region": next(r for r in area.regions if r.type == "WINDOW")}
+
+
+def aim_view(space, location, pitch_deg, yaw_deg, distance):
+    """Points a 3D viewport (`space`, a SpaceView3D) at `location` in perspective: tilted `pitch_deg` from looking
+    straight down, turned `yaw_deg` about Z, from `distance` Blender units."""
+    import math
+
+    from mathutils import Euler, Vector
+
+    region = space.region_3d
+    region.view_perspective = "PERSP"
+    region.view_location = Vector(location)
+    region.view_rotation = Euler((math.radians(pitch_deg), 0.0, math.radians(yaw_deg))).to_quaternion()
+    region.view_distance = distance

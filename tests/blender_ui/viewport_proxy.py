@@ -5,7 +5,6 @@ covers must be brighter with it than the ground beneath them is without it.
 xvfb-run blender --factory-startup --enable-event-simulate --python viewport_proxy.py   (exit code 0 = pass)
 """
 
-import math
 import os
 import sys
 import tempfile
@@ -15,10 +14,9 @@ import traceback
 import addon_utils
 import bpy
 import numpy as np
-from mathutils import Euler, Vector
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, window_context  # noqa: E402
+from ui_test import HUNG, aim_view, fail, window_context  # noqa: E402
 
 GROUND = (0.3, 0.3, 0.3, 1.0)  # a mid-grey ground: white snow on it must stand out
 MIN_SNOW_PIXELS = 2000  # the snow covers a quarter of the view (about 100k pixels): far more than this
@@ -51,11 +49,7 @@ def setup():
         fail("Add Snow Layer did not finish")
     context, space = view3d()
     space.overlay.show_overlays = False  # no grid, no outlines: the pixels are the shaded scene's
-    region = space.region_3d
-    region.view_perspective = "PERSP"
-    region.view_location = Vector((0.0, 0.0, 0.0))
-    region.view_rotation = Euler((math.radians(55.0), 0.0, math.radians(30.0))).to_quaternion()
-    region.view_distance = 5.0
+    aim_view(space, (0.0, 0.0, 0.0), 55.0, 30.0, 5.0)
     context["area"].tag_redraw()
 
 
