@@ -1,0 +1,127 @@
+"""Add Grain Snow: snow as packed ice spheres on the selected objects (Chrisman), accumulated by the core."""
+
+import math
+
+import bpy
+from mathutils import Matrix
+
+from ..common import scene_geometry
+from ..common.core import firncore
+from ..common.errors import UserError
+from ..common.jobs import FirnJobMixin
+from ..material import ice
+from . import light_paths, points
+
+# Lengths are metres whatever the Unit Scale (the names scripts rely on, issue 12); the redo panel shows mm.
+GRAIN_SNOW_PROPERTIES = {
+    "grain_radius": bpy.props.FloatProperty(
+        name="Grain Radius", description="Radius of the ice spheres in metres (snow: 0.0001-0.002)",
+        default=0.0005, min=1e-6, soft_min=5e-5, soft_max=0.01, precision=5, step=0.01),
+    "grain_radius_variation": bpy.props.FloatProperty(
+        name="Radius Variation", description="Grain radii spread uniformly over radius ± this, in metres (0 to the "
+        "radius)", default=0.0, min=0.0, soft_max=0.01, precision=5, step=0.01),
+    "grain_count": bpy.props.IntProperty(
+        name="Grains", description="How many grains fall", default=20000, min=1, soft_max=2000000),
+    "ior": bpy.props.FloatProperty(
+        name="Index of Refraction", description="Of ice: 1.31 (visible light)", default=1.31, min=1.0, max=3.0),
+    "max_slope": bpy.props.FloatProperty(
+        name="Maximum Slope", description="Grains landing on steeper surfaces roll off (are discarded)",
+        subtype="ANGLE", default=math.radians(60.0), min=0.0, max=math.radians(90.0)),
+    "direction": bpy.props.FloatVectorProperty(
+        name="Snowfall Direction", description="The way the grains fall", subtype="DIRECTION", size=3,
+        default=(0.0, 0.0, -1.0)),
+    "seed": bpy.props.IntProperty(name="Seed", description="Same seed, same grains", default=0, min=0),
+}
+
+
+def gather_inputs(context, props):
+    """Everything the core needs, read from Blender on the main thread; UserError for what cannot work."""
+    targets = [obj for obj in context.selected_objects if scene_geometry.makes_geometry(obj)]
+    if not targets:
+        raise UserError("Select the objects the grains fall on (meshes, curves, surfaces, text, metaballs or "
+                        "collection instances)")
+    if props.grain_radius_variation > props.grain_radius:
+        raise UserError(f"Radius Variation ({props.grain_radius_variation * 1e3:g} mm) must not exceed the Grain "
+                        f"Radius ({props.grain_radius * 1e3:g} mm)")
+    if sum(abs(c) for c in props.direction) == 0.0:
+        raise UserError("Snowfall Direction must not be zero")
+    mesh = scene_geometry.world_triangles(targets, context.evaluated_depsgraph_get())
+    if mesh is None:
+        raise UserError("The selected objects have no faces to hold grains (a curve needs a bevel or extrusion)")
+    return {
+        "vertices": mesh[0], "triangles": mesh[1], "targets": [obj.name for obj in targets],
+        "radius": props.grain_radius, "variation": props.grain_radius_variation, "count": props.grain_count,
+        "direction": tuple(props.direction), "max_slope": props.max_slope, "seed": props.seed, "ior": props.ior,
+        "unit_matrix": scene_geometry.unit_matrix(context.scene),
+    }
+
+
+def compute_grains(inputs, progress):
+    """Worker thread: the core accumulates the grains; no bpy here."""
+    return firncore.accumulate_grains(
+        inputs["vertices"], inputs["triangles"], count=inputs["count"], radius=inputs["radius"],
+        radius_variation=inputs["variation"], direction=inputs["direction"],
+        max_slope=inputs["max_slope"], seed=inputs["seed"], progress=progress)
+
+
+class FIRN_OT_add_grain_snow(FirnJobMixin, bpy.types.Operator):
+    """Cover the selected objects with snow made of ice grains, rendered as true spheres (slow, exact close-ups)"""
+
+    bl_idname = "firn.add_grain_snow"
+    bl_label = "Add Grain Snow"
+    bl_options = {"REGISTER", "UNDO"}
+    __annotations__ = dict(GRAIN_SNOW_PROPERTIES)
+    job_label = "Add Grain Snow"
+
+    @classmethod
+    def poll(cls, context):
+        if context.mode != "OBJECT":
+            cls.poll_message_set("Switch to Object Mode")
+            return False
+        return True
+
+    def draw(self, _context):
+        col = self.layout.column()
+        col.use_property_split = True
+        col.use_property_decorate = False
+        for name in GRAIN_SNOW_PROPERTIES:
+            col.prop(self, name)
+            if name in ("grain_radius", "grain_radius_variation"):
+                col.label(text=f"{getattr(self, name) * 1e3:.3f} mm")
+
+    def prepare(self, context):
+        return gather_inputs(context, self)
+
+    compute = staticmethod(compute_grains)
+
+    def apply(self, context, inputs, result):
+        centres, radii = result["centres"], result["radii"]
+        if len(radii) == 0:
+            raise UserError("No grain landed: the selected surfaces are all steeper than the Maximum Slope")
+        material = ice.ice_material("Firn Ice", inputs["ior"], firncore.ice_absorption_rgb(), inputs["radius"])
+        obj = points.new_grain_object(context, "Grain Snow", centres, radii, material,
+                                      Matrix(inputs["unit_matrix"].tolist()))
+        for other in context.selected_objects:
+            other.select_set(False)
+        obj.select_set(True)
+        context.view_layer.objects.active = obj
+        changes = light_paths.raise_light_paths(context.scene)
+        landed = f"{len(radii):,} grains on {', '.join(inputs['targets'])}"
+        steep = f", {result['discarded']:,} steep landings discarded" if result.get("discarded") else ""
+        paths = f"; Cycles light paths raised: {', '.join(changes)}" if changes else ""
+        self.report({"INFO"}, f"{landed}{steep}{paths}")
+
+
+def _menu_entry(self, _context):
+    self.layout.operator(FIRN_OT_add_grain_snow.bl_idname, icon="PARTICLE_POINT")
+
+
+classes = (FIRN_OT_add_grain_snow,)
+
+
+def register_extras():
+    bpy.types.VIEW3D_MT_add.append(_menu_entry)
+
+
+def unregister_extras():
+    bpy.types.VIEW3D_MT_add.remove(_menu_entry)
