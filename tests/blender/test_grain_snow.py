@@ -88,8 +88,8 @@ def test_bad_input_is_refused_with_the_reason(clean_scene):
     with pytest.raises(RuntimeError, match="Select the objects the grains fall on"):
         bpy.ops.firn.add_grain_snow()
     select_only(add_plane(0.1))
-    with pytest.raises(RuntimeError, match="must not exceed the Grain Radius"):
-        bpy.ops.firn.add_grain_snow(grain_radius=0.001, grain_radius_variation=0.002)
+    with pytest.raises(RuntimeError, match="must be less than the Grain Radius"):
+        bpy.ops.firn.add_grain_snow(grain_radius=0.001, grain_radius_variation=0.001)
     steep = add_plane(0.1, location=(1, 0, 0), rotation=(math.radians(75), 0, 0))
     select_only(steep)
     with pytest.raises(RuntimeError, match="No grain landed"):

@@ -18,8 +18,8 @@ GRAIN_SNOW_PROPERTIES = {
         name="Grain Radius", description="Radius of the ice spheres in metres (snow: 0.0001-0.002)",
         default=0.0005, min=1e-6, soft_min=5e-5, soft_max=0.01, precision=5, step=0.01),
     "grain_radius_variation": bpy.props.FloatProperty(
-        name="Radius Variation", description="Grain radii spread uniformly over radius ± this, in metres (0 to the "
-        "radius)", default=0.0, min=0.0, soft_max=0.01, precision=5, step=0.01),
+        name="Radius Variation", description="Grain radii spread uniformly over radius ± this, in metres (less than "
+        "the radius)", default=0.0, min=0.0, soft_max=0.01, precision=5, step=0.01),
     "grain_count": bpy.props.IntProperty(
         name="Grains", description="How many grains fall", default=20000, min=1, soft_max=2000000),
     "ior": bpy.props.FloatProperty(
@@ -40,8 +40,8 @@ def gather_inputs(context, props):
     if not targets:
         raise UserError("Select the objects the grains fall on (meshes, curves, surfaces, text, metaballs or "
                         "collection instances)")
-    if props.grain_radius_variation > props.grain_radius:
-        raise UserError(f"Radius Variation ({props.grain_radius_variation * 1e3:g} mm) must not exceed the Grain "
+    if props.grain_radius_variation >= props.grain_radius:
+        raise UserError(f"Radius Variation ({props.grain_radius_variation * 1e3:g} mm) must be less than the Grain "
                         f"Radius ({props.grain_radius * 1e3:g} mm)")
     if sum(abs(c) for c in props.direction) == 0.0:
         raise UserError("Snowfall Direction must not be zero")
@@ -58,10 +58,11 @@ def gather_inputs(context, props):
 
 def compute_grains(inputs, progress):
     """Worker thread: the core accumulates the grains; no bpy here."""
-    return firncore.accumulate_grains(
+    centres, radii, stats = firncore.accumulate_grains(
         inputs["vertices"], inputs["triangles"], count=inputs["count"], radius=inputs["radius"],
-        radius_variation=inputs["variation"], direction=inputs["direction"],
-        max_slope=inputs["max_slope"], seed=inputs["seed"], progress=progress)
+        radius_variation=inputs["variation"] / inputs["radius"], direction=inputs["direction"],
+        max_slope_deg=math.degrees(inputs["max_slope"]), seed=inputs["seed"], progress=progress)
+    return dict(stats, centres=centres, radii=radii)
 
 
 class FIRN_OT_add_grain_snow(FirnJobMixin, bpy.types.Operator):
@@ -98,7 +99,8 @@ class FIRN_OT_add_grain_snow(FirnJobMixin, bpy.types.Operator):
         centres, radii = result["centres"], result["radii"]
         if len(radii) == 0:
             raise UserError("No grain landed: the selected surfaces are all steeper than the Maximum Slope")
-        material = ice.ice_material("Firn Ice", inputs["ior"], firncore.ice_absorption_rgb(), inputs["radius"])
+        material = ice.ice_material("Firn Ice", inputs["ior"], firncore.ice_absorption_rgb(inputs["radius"]),
+                                    inputs["radius"])
         obj = points.new_grain_object(context, "Grain Snow", centres, radii, material,
                                       Matrix(inputs["unit_matrix"].tolist()))
         for other in context.selected_objects:
@@ -106,8 +108,9 @@ class FIRN_OT_add_grain_snow(FirnJobMixin, bpy.types.Operator):
         obj.select_set(True)
         context.view_layer.objects.active = obj
         changes = light_paths.raise_light_paths(context.scene)
-        landed = f"{len(radii):,} grains on {', '.join(inputs['targets'])}"
-        steep = f", {result['discarded']:,} steep landings discarded" if result.get("discarded") else ""
+        landed = f"{len(radii):,} grains{short} on {', '.join(inputs['targets'])}"
+        short = f" (of {inputs['count']:,}: the rays ran out)" if len(radii) < inputs["count"] else ""
+        steep = f", {result['steep']:,} steep landings discarded" if result["steep"] else ""
         paths = f"; Cycles light paths raised: {', '.join(changes)}" if changes else ""
         self.report({"INFO"}, f"{landed}{steep}{paths}")
 
