@@ -125,3 +125,18 @@ def test_red_ground_shows_through_thin_grain_snow_not_through_thick(clean_scene,
     assert thin[0] / thin[1] > 2.0
     assert thick[0] / thick[1] < 0.7 * thin[0] / thin[1]
     assert thick[1] > thin[1]  # the ice scatters the sky back: thick grain snow is brighter in green
+
+
+def test_multi_scale_grains_lie_on_the_snow_layer_which_takes_their_optics(clean_scene):
+    """Grains over a volumetric layer (issue 12, item 5): they land on its surface, and the layer's optics become
+    the grains' (Physical, their radius)."""
+    ground = add_plane(0.2)
+    select_only(ground)
+    assert bpy.ops.firn.add_snow_layer(depth=0.03) == {"FINISHED"}
+    snow = bpy.context.object
+    snow.firn.optics_mode = "CUSTOM"
+    select_only(snow)
+    grains = add_grains(grain_radius=0.0015, grain_count=400, seed=2)
+    centres, radii = grain_points(grains)
+    assert np.median(centres[:, 2] - radii) > 0.02  # on the 3 cm of snow, not on the ground under it
+    assert snow.firn.optics_mode == "PHYSICAL" and snow.firn.grain_radius == pytest.approx(0.0015)

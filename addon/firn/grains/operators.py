@@ -10,6 +10,7 @@ from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
 from ..material import ice
+from ..snow_layer.operators import is_snow_target, target_triangles
 from . import light_paths, points
 
 # Lengths are metres whatever the Unit Scale (the names scripts rely on, issue 12); the redo panel shows mm.
@@ -31,21 +32,25 @@ GRAIN_SNOW_PROPERTIES = {
         name="Snowfall Direction", description="The way the grains fall", subtype="DIRECTION", size=3,
         default=(0.0, 0.0, -1.0)),
     "seed": bpy.props.IntProperty(name="Seed", description="Same seed, same grains", default=0, min=0),
+    "match_snow_optics": bpy.props.BoolProperty(
+        name="Match Snow Optics", description="Grains on a Firn snow layer (select it as a target): give the layer "
+        "the optics of these grains (Physical, their radius), so grains near the surface and volume below agree",
+        default=True),
 }
 
 
 def gather_inputs(context, props):
     """Everything the core needs, read from Blender on the main thread; UserError for what cannot work."""
-    targets = [obj for obj in context.selected_objects if scene_geometry.makes_geometry(obj)]
+    targets = [obj for obj in context.selected_objects if is_snow_target(obj)]
     if not targets:
-        raise UserError("Select the objects the grains fall on (meshes, curves, surfaces, text, metaballs or "
-                        "collection instances)")
+        raise UserError("Select the objects the grains fall on (meshes, curves, surfaces, text, metaballs, "
+                        "collection instances or Firn snow)")
     if props.grain_radius_variation >= props.grain_radius:
         raise UserError(f"Radius Variation ({props.grain_radius_variation * 1e3:g} mm) must be less than the Grain "
                         f"Radius ({props.grain_radius * 1e3:g} mm)")
     if sum(abs(c) for c in props.direction) == 0.0:
         raise UserError("Snowfall Direction must not be zero")
-    mesh = scene_geometry.world_triangles(targets, context.evaluated_depsgraph_get())
+    mesh = target_triangles(targets, context.evaluated_depsgraph_get())
     if mesh is None:
         raise UserError("The selected objects have no faces to hold grains (a curve needs a bevel or extrusion)")
     return {
@@ -53,7 +58,18 @@ def gather_inputs(context, props):
         "radius": props.grain_radius, "variation": props.grain_radius_variation, "count": props.grain_count,
         "direction": tuple(props.direction), "max_slope": props.max_slope, "seed": props.seed, "ior": props.ior,
         "unit_matrix": scene_geometry.unit_matrix(context.scene),
+        "snow": [obj.name for obj in targets if obj.type == "VOLUME"] if props.match_snow_optics else [],
     }
+
+
+def match_snow_optics(snows, grain_radius):
+    """Multi-scale snow: the volumetric layers under the grains take the grains' optics (Physical, their radius:
+    KZ04 matches a pile of ice spheres, docs/grains.md). Returns the report's note ("" when none)."""
+    for snow in snows:
+        snow.firn.optics_mode = "PHYSICAL"
+        snow.firn.grain_radius = grain_radius
+    names = ", ".join(snow.name for snow in snows)
+    return f"; {names} now has the grains' optics (bake it again if it was baked)" if snows else ""
 
 
 def compute_grains(inputs, progress):
@@ -107,12 +123,13 @@ class FIRN_OT_add_grain_snow(FirnJobMixin, bpy.types.Operator):
             other.select_set(False)
         obj.select_set(True)
         context.view_layer.objects.active = obj
+        matched = match_snow_optics([bpy.data.objects[name] for name in inputs["snow"]], inputs["radius"])
         changes = light_paths.raise_light_paths(context.scene)
         landed = f"{len(radii):,} grains{short} on {', '.join(inputs['targets'])}"
         short = f" (of {inputs['count']:,}: the rays ran out)" if len(radii) < inputs["count"] else ""
         steep = f", {result['steep']:,} steep landings discarded" if result["steep"] else ""
         paths = f"; Cycles light paths raised: {', '.join(changes)}" if changes else ""
-        self.report({"INFO"}, f"{landed}{steep}{paths}")
+        self.report({"INFO"}, f"{landed}{steep}{matched}{paths}")
 
 
 def _menu_entry(self, _context):

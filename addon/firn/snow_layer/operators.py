@@ -48,7 +48,7 @@ def is_snow_target(obj):
     return scene_geometry.makes_geometry(obj) or (obj.type == "VOLUME" and obj.firn.is_snow)
 
 
-def _triangles(objects, depsgraph):
+def target_triangles(objects, depsgraph):
     """World triangles (m) of mesh-like objects with their instances, and of the surface of snow objects (their
     grids are in world metres already: vdb-contract.md)."""
     meshes = [scene_geometry.world_triangles([obj for obj in objects if obj.type != "VOLUME"], depsgraph)]
@@ -79,10 +79,10 @@ def gather_inputs(context, props, targets, object_name):
         raise UserError("Select the objects to cover with snow (meshes, curves, surfaces, text, metaballs, "
                         "collection instances or earlier snow)")
     depsgraph = context.evaluated_depsgraph_get()
-    target_arrays = _triangles(targets, depsgraph)
+    target_arrays = target_triangles(targets, depsgraph)
     if target_arrays is None:
         raise UserError("The selected objects have no faces to hold snow (a curve needs a bevel or extrusion)")
-    occluders = _triangles(_occluder_objects(context, props, targets), depsgraph)
+    occluders = target_triangles(_occluder_objects(context, props, targets), depsgraph)
     path, stored_path = cache.snow_file(object_name)
     cache.check_writable(path)
     settings = core_settings(props, _max_voxels(), metres)
