@@ -308,6 +308,7 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
     const double h = medium.voxelSize();
+    const double y = absorptionParameter(ch.omega, ch.g);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             glm::dvec3 gradient(0.0);
@@ -330,10 +331,12 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
             out[i].inside.l1[c] = ch.omega * kInvFourPi * j1;
             if (!topo.patches[i].isSurface()) continue;
 
-            // Light that entered returns with the shape of its incidence (the sun lobe; sky light
-            // isotropically, as a non-absorbing half-space returns uniform sky light); the deficit
-            // (absorbed, or gone elsewhere) and any surplus from deep inside take the escape function's
-            // u(mu) = 3/7 + 6/7 mu. So: leaving = sum in (shape - u) + out u.
+            // Sun light that entered returns as a half-space of this snow returns it, with the sun lobe's
+            // albedo and shape; sky light isotropically (a non-absorbing half-space returns uniform sky light
+            // so; absorption takes the escape function's shape from it, by reciprocity with ART's plane
+            // albedo). What the diffusion says beyond that (absorbed sky light, light gone elsewhere, light
+            // from deep inside, from the ground or from neighbouring snow) takes the escape function's
+            // u(mu) = 3/7 + 6/7 mu. So: leaving = sum returned (shape - u) + out u.
             const SurfacePatch &patch = topo.patches[i];
             const glm::dvec3 escape1 = 6.0 / 7.0 * patch.normal;
             const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
@@ -343,11 +346,12 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 const double P = sys.sunIn[s][i];
                 if (P <= 0.0) continue;
                 const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
-                const SunLobe lobe = sunLobe(ch.g, std::clamp(-glm::dot(d, patch.normal), 0.05, 1.0));
+                const SunLobe lobe = sunLobe(ch.g, std::clamp(-glm::dot(d, patch.normal), 0.05, 1.0), y);
                 glm::dvec3 t = d - glm::dot(d, patch.normal) * patch.normal;
                 t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
-                r0 += P * (lobe.a - 3.0 / 7.0);
-                r1 += P * (lobe.b * patch.normal + lobe.c * t - escape1);
+                const double returned = P * lobe.albedo;
+                r0 += returned * (lobe.a - 3.0 / 7.0);
+                r1 += returned * (lobe.b * patch.normal + lobe.c * t - escape1);
             }
             out[i].returned.l0[c] = r0;
             out[i].returned.l1[c] = r1;

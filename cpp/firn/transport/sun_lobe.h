@@ -4,23 +4,32 @@
 
 namespace firn {
 
-// The angular shape of sun light returned by a thick snow surface, in the form the baked grids store
-// (radiance linear in the outgoing direction w):
-//   R(w) = pi L(w) / (mu0 E) = a + b (n . w) + c (t . w)
-// n the surface normal, t the unit tangent pointing where the sun's light travels (forward), mu0 the
-// cosine of the sun's incidence, E its irradiance at normal incidence. It is the reflection function of a
-// non-absorbing half-space with a Henyey-Greenstein phase function (all orders), fitted by least squares
-// in relative error over the outgoing hemisphere, weighted by projected solid angle, with the flux fixed:
-// a + 2b/3 = 1 (all light returns). Absorption is accounted for separately (escape function).
+// The sun light a thick snow surface returns, in the form the baked grids store (radiance linear in the
+// outgoing direction w):
+//   pi L(w) / (mu0 E) = A (a + b (n . w) + c (t . w)),   a + 2b/3 = 1
+// n the surface normal, t the unit tangent pointing where the sun's light travels (forward), mu0 the cosine
+// of the sun's incidence, E its irradiance at normal incidence. A is the half-space's plane albedo (the
+// fraction of the sun's flux that returns) and (a, b, c) the shape of what returns: the reflection function
+// of a half-space with a Henyey-Greenstein phase function (all orders), fitted by least squares in relative
+// error over the outgoing hemisphere, weighted by projected solid angle, with the flux fixed. Absorption
+// changes both: what returns after few scatterings keeps the sun's direction, and absorption takes most from
+// the long paths that would have spread it.
 struct SunLobe {
     double a = 1.0, b = 0.0, c = 0.0;
+    double albedo = 1.0;  // A(mu0)
 };
 
-// Bilinear in (g, mu0) from the precomputed table (sun_lobe_table.inc), g clamped to [0, 0.95].
-SunLobe sunLobe(double g, double mu0);
+// The similarity parameter of absorption, y = 4 sqrt((1 - omega) / (3 (1 - g))) (Kokhanovsky & Zege 2004:
+// the spherical albedo of a weakly absorbing half-space is exp(-y)); the table's third axis.
+double absorptionParameter(double omega, double g);
 
-// The table's source: 1D Monte Carlo of a conservative half-space (photons deeper than 30 transport mean
-// free paths leave later with the escape function's shape). Used by tools/sun_lobe_table.cpp.
-SunLobe fitSunLobe(double g, double mu0, long photons, std::uint64_t seed);
+// Trilinear in (y, g, mu0) from the precomputed table (sun_lobe_table.inc); g clamped to [0, 0.95],
+// y to [0, 4] (omega down to 0.75 at g = 0.85).
+SunLobe sunLobe(double g, double mu0, double y = 0.0);
+
+// The table's source: 1D Monte Carlo of a half-space with analog absorption; photons deeper than 30 transport
+// mean free paths return with diffusion's probability exp(-kappa (z + z_b)) in the escape function's shape.
+// Used by tools/sun_lobe_table.cpp.
+SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t seed);
 
 }  // namespace firn

@@ -110,9 +110,9 @@ void expectWithin(const Comparison &c, double goal) {
     }
 }
 
-Scene bumpyScene(double g) {
+Scene bumpyScene(double g, Rgb omega = Rgb(0.999, 0.9995, 0.9998)) {
     Scene scene;
-    scene.medium = std::make_shared<Medium>(bumpyLayer(), VolumeOptics{1000.0 / kDensity, Rgb(0.999, 0.9995, 0.9998), g});
+    scene.medium = std::make_shared<Medium>(bumpyLayer(), VolumeOptics{1000.0 / kDensity, omega, g});
     scene.occluders = groundAndPlate();
     return scene;
 }
@@ -160,6 +160,17 @@ TEST(BakeVersusMonteCarlo, SunLitBumpySnowWithShadow) {
     scene.sky.radiance = Rgb(0.15);
     scene.suns = {SunLight{glm::normalize(glm::dvec3(0.5, 0.3, 0.8)), Rgb(1.0), 0.0093}};
     expectWithin(compare(scene, 8, 2, 1024), 0.05);
+}
+
+// Sooty snow, far from clean (omega 0.9, 0.95, 0.99: y = 0.9, 0.6, 0.3), under the same sun and sky: what
+// returns of the sun after few scatterings keeps its direction (the absorbing sun lobe, sun_lobe.h). Measured:
+// 13 %, 6 %, 5 % (the non-absorbing lobe gave 20 %, 7 %, 4 %); the goal of 5 % is not met at omega 0.9,
+// where the diffusion's flux itself errs, so this guards the lobe at 15 %.
+TEST(BakeVersusMonteCarlo, AbsorbingSnowUnderTheSun) {
+    Scene scene = bumpyScene(0.6, Rgb(0.9, 0.95, 0.99));
+    scene.sky.radiance = Rgb(0.15);
+    scene.suns = {SunLight{glm::normalize(glm::dvec3(0.5, 0.3, 0.8)), Rgb(1.0), 0.0093}};
+    expectWithin(compare(scene, 8, 2, 2048), 0.15);
 }
 
 // The same with the source grids 2x coarser than the density, as large scenes get them.

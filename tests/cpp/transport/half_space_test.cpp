@@ -38,24 +38,42 @@ TEST(HalfSpace, AsymptoticFormulasMatchExactTable) {
     EXPECT_NEAR(artPlaneAlbedo(0.9999, 0.87, 0.5), 0.94594, 0.005 * 0.94594);
 }
 
-// The sun lobe keeps the flux of a non-absorbing half-space (all light returns) and leans forwards
-// for slanting sun.
+// The sun lobe's shape keeps the flux it is given, a non-absorbing half-space returns all light, and the lobe
+// leans forwards for slanting sun.
 TEST(SunLobe, ConservesFluxAndLeansForward) {
-    for (double g : {0.0, 0.5, 0.85})
-        for (double mu0 : {0.2, 0.5, 1.0}) {
-            const SunLobe lobe = sunLobe(g, mu0);
-            EXPECT_NEAR(lobe.a + 2.0 * lobe.b / 3.0, 1.0, 1e-12);
-            EXPECT_GT(lobe.a - std::abs(lobe.c), 0.0) << "negative radiance at grazing, g " << g << " mu0 " << mu0;
-        }
+    for (double y : {0.0, 0.5, 2.0})
+        for (double g : {0.0, 0.5, 0.85})
+            for (double mu0 : {0.2, 0.5, 1.0}) {
+                const SunLobe lobe = sunLobe(g, mu0, y);
+                EXPECT_NEAR(lobe.a + 2.0 * lobe.b / 3.0, 1.0, 1e-12);
+                EXPECT_GT(lobe.a - std::abs(lobe.c), 0.0) << "negative radiance at grazing, g " << g << " mu0 " << mu0;
+                if (y == 0.0) {
+                    EXPECT_DOUBLE_EQ(lobe.albedo, 1.0);
+                }
+            }
     EXPECT_GT(sunLobe(0.85, 0.3).c, 0.3);
     EXPECT_NEAR(sunLobe(0.85, 1.0).c, 0.0, 0.05);  // overhead sun: no preferred azimuth
+    // Absorption takes most from long paths, which spread the light: what returns leans further forward.
+    EXPECT_GT(sunLobe(0.85, 0.3, 2.0).c, sunLobe(0.85, 0.3, 0.0).c + 0.1);
+}
+
+// The absorbing table's albedos against exact half-space values (adding-doubling and H-functions, the same
+// as HalfSpace.MonteCarloMatchesExact*; notes: snow-optics.md), through y and the trilinear interpolation.
+TEST(SunLobe, AbsorbingTableMatchesExactAlbedos) {
+    EXPECT_NEAR(sunLobe(0.0, 0.5, absorptionParameter(0.99, 0.0)).albedo, 0.81514, 0.015 * 0.81514);
+    EXPECT_NEAR(sunLobe(0.87, 1.0, absorptionParameter(0.999, 0.87)).albedo, 0.77340, 0.015 * 0.77340);
+    EXPECT_NEAR(sunLobe(0.87, 1.0, absorptionParameter(0.9999, 0.87)).albedo, 0.92182, 0.01 * 0.92182);
+    EXPECT_NEAR(sunLobe(0.0, 1.0, absorptionParameter(0.999, 0.0)).albedo, 0.91285, 0.01 * 0.91285);
 }
 
 // The table is what its generator computes (to its Monte Carlo noise).
 TEST(SunLobe, TableMatchesItsGenerator) {
-    const SunLobe table = sunLobe(0.85, 0.7), fresh = fitSunLobe(0.85, 0.7, 20000, 11);
-    EXPECT_NEAR(table.b, fresh.b, 0.06);
-    EXPECT_NEAR(table.c, fresh.c, 0.06);
+    for (double y : {0.0, 0.75}) {
+        const SunLobe table = sunLobe(0.8, 0.7, y), fresh = fitSunLobe(0.8, 0.7, y, 20000, 11);
+        EXPECT_NEAR(table.b, fresh.b, 0.06) << "y " << y;
+        EXPECT_NEAR(table.c, fresh.c, 0.06) << "y " << y;
+        EXPECT_NEAR(table.albedo, fresh.albedo, 0.02) << "y " << y;
+    }
 }
 
 }  // namespace firn
