@@ -143,7 +143,8 @@ void validate(const AccumulationSettings &s) {
     if (s.count > kMaxGrainCount)
         throw BudgetExceeded("grain count " + std::to_string(s.count) + " exceeds the limit of " +
                              std::to_string(kMaxGrainCount) + " grains (about 100 bytes each while accumulating)");
-    if (!(s.radius > 0.0) || !std::isfinite(s.radius)) throw InvalidArgument("grain radius must be a positive length (m)");
+    if (!(s.radius > 0.0 && s.radius <= kMaxGrainRadius))
+        throw InvalidArgument("grain radius must be a length in (0, 1000] m");
     if (!(s.radiusVariation >= 0.0 && s.radiusVariation < 1.0))
         throw InvalidArgument("grain radius variation must be in [0, 1): radius r (1 + sigma u), u in [-1, 1]");
     const double length = glm::length(s.direction);
@@ -169,6 +170,11 @@ AccumulationResult accumulateGrains(const TriangleMesh &mesh, const Accumulation
         uMin = std::min(uMin, u), uMax = std::max(uMax, u), vMin = std::min(vMin, v), vMax = std::max(vMax, v);
         wTop = std::min(wTop, w), wBottom = std::max(wBottom, w);
     }
+    const double extent = std::max({uMax - uMin, vMax - vMin, wBottom - wTop});  // m
+    // Grains below float precision at the scene's size could not be told apart by Embree or the grids' indices.
+    if (rMax < 1e-6 * extent)
+        throw InvalidArgument("grain radius " + std::to_string(settings.radius) + " m is too small for a scene " +
+                              std::to_string(extent) + " m across (at least 1e-6 of it)");
     uMin -= rMax, uMax += rMax, vMin -= rMax, vMax += rMax;
 
     const RayCaster caster(mesh);

@@ -13,10 +13,10 @@ void validate(const GrainSet &grains) {
                               std::to_string(grains.radii.size()) + ") differ in number");
     for (std::size_t i = 0; i < grains.size(); ++i) {
         const glm::dvec3 &c = grains.centres[i];
-        if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z))
-            throw InvalidArgument("grain " + std::to_string(i) + " has a non-finite centre");
-        if (!(grains.radii[i] > 0.0) || !std::isfinite(grains.radii[i]))
-            throw InvalidArgument("grain " + std::to_string(i) + " has a radius that is not a positive length (m)");
+        if (!(std::abs(c.x) <= kMaxGrainCoordinate && std::abs(c.y) <= kMaxGrainCoordinate && std::abs(c.z) <= kMaxGrainCoordinate))
+            throw InvalidArgument("grain " + std::to_string(i) + " has a centre that is not finite or lies beyond 1e6 m");
+        if (!(grains.radii[i] > 0.0 && grains.radii[i] <= kMaxGrainRadius))
+            throw InvalidArgument("grain " + std::to_string(i) + " has a radius that is not a length in (0, 1000] m");
     }
 }
 

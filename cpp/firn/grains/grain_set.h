@@ -9,6 +9,8 @@
 namespace firn {
 
 inline constexpr double kIceRefractiveIndex = 1.31;  // real index of ice in the visible (Warren & Brandt 2008)
+inline constexpr double kMaxGrainRadius = 1e3;       // m: anything larger is a mistake in units
+inline constexpr double kMaxGrainCoordinate = 1e6;   // m: beyond it Embree's float coordinates lose the grains
 
 struct GrainSet {
     std::vector<glm::dvec3> centres;  // m, world space
@@ -22,7 +24,8 @@ struct GrainSet {
     }
 };
 
-// InvalidArgument unless centres and radii have the same length, centres are finite and radii positive.
+// InvalidArgument unless centres and radii have the same length, centres lie within kMaxGrainCoordinate and
+// radii in (0, kMaxGrainRadius].
 void validate(const GrainSet &grains);
 
 }  // namespace firn

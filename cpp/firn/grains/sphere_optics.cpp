@@ -1,5 +1,6 @@
 #include "firn/grains/sphere_optics.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "firn/grains/fresnel.h"
@@ -37,7 +38,7 @@ SphereRayOptics sphereRayOptics(double eta, double gamma, double radius) {
         absorbed += left - inside;  // what is still inside after the last chord is negligible (< 1e-14)
     }
     SphereRayOptics optics;
-    optics.absorptionEfficiency = absorbed / kSteps;
+    optics.absorptionEfficiency = std::clamp(absorbed / kSteps, 0.0, 1.0);  // rounding leaves -1e-19 without absorption
     optics.g = scattered > 0.0 ? scatteredCos / scattered : 0.0;
     return optics;
 }
