@@ -24,18 +24,10 @@ namespace firncore {
 
 namespace {
 
-using Triple = std::array<double, 3>;
-using Doubles = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Triple = RgbTuple;
+using Doubles = DoubleArray;
 
-glm::dvec3 vec(const Triple &t) { return {t[0], t[1], t[2]}; }
-
-Doubles rowsOf3(const std::vector<glm::dvec3> &values) {
-    Doubles out({py::ssize_t(values.size()), py::ssize_t(3)});
-    auto view = out.mutable_unchecked<2>();
-    for (std::size_t i = 0; i < values.size(); ++i)
-        for (int c = 0; c < 3; ++c) view(i, c) = values[i][c];
-    return out;
-}
+glm::dvec3 vec(const Triple &t) { return rgb(t); }
 
 std::vector<glm::dvec3> rowsFrom(const py::handle &values, const char *what) {
     const Doubles a = py::cast<Doubles>(values);
@@ -79,7 +71,7 @@ void bindGrains(py::module_ &m) {
             const firn::AccumulationResult result = longCall([&] { return firn::accumulateGrains(mesh, s, progress.get()); });
             Doubles radii(py::ssize_t(result.grains.size()));
             std::copy(result.grains.radii.begin(), result.grains.radii.end(), radii.mutable_data());
-            return py::make_tuple(rowsOf3(result.grains.centres), radii, statsOf(result));
+            return py::make_tuple(rgbRows(result.grains.centres), radii, statsOf(result));
         },
         py::arg("vertices"), py::arg("triangles"), py::arg("count"), py::arg("radius"), py::arg("radius_variation") = 0.0,
         py::arg("direction") = Triple{0.0, 0.0, -1.0}, py::arg("max_slope_deg") = 60.0, py::arg("seed") = 0,
@@ -122,7 +114,7 @@ steep, overlapping).)doc");
             });
             std::vector<glm::dvec3> mean, error;
             for (const auto &e : estimates) mean.push_back(e.mean), error.push_back(e.standardError);
-            return py::make_tuple(rowsOf3(mean), rowsOf3(error));
+            return py::make_tuple(rgbRows(mean), rgbRows(error));
         },
         py::arg("centres"), py::arg("radii"), py::arg("origins"), py::arg("directions"), py::arg("vertices") = py::none(),
         py::arg("triangles") = py::none(), py::arg("surface_albedo") = Triple{0.8, 0.8, 0.8},
