@@ -123,7 +123,8 @@ steep, overlapping).)doc");
         py::arg("sun_radiance") = Triple{0.0, 0.0, 0.0}, py::arg("samples") = 16, py::arg("seed") = 0,
         py::arg("progress") = nullptr, R"doc(
 Brute-force Monte Carlo over ice spheres (centres (N, 3) m, radii (N,) m) and diffuse triangles (vertices,
-triangles; surface_albedo one RGB for all or (M, 3) per triangle): Fresnel reflect/refract at each interface,
+triangles; surface_albedo one RGB for all or (M, 3) per triangle: then no triangle may be degenerate, as the
+core drops those): Fresnel reflect/refract at each interface,
 absorption inside the ice (ice_absorption RGB 1/m; None: Warren & Brandt 2008 in Rec.709 channels at the mean
 radius), a uniform sky (W/m^2/sr) and optionally a sun disc (direction toward it, angular radius rad, radiance
 W/m^2/sr) that escaping paths can hit. Radiance along camera rays (origins, directions (N, 3)). Returns (mean,
