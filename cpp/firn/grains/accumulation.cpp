@@ -6,13 +6,13 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
 #include "firn/geometry/ray_caster.h"
+#include "firn/grains/cell_hash.h"
 #include "firn/grains/sphere_scene.h"
 #include "firn/util/error.h"
 #include "firn/util/random.h"
@@ -29,45 +29,40 @@ constexpr std::size_t kBatchSize = 256;
 // many): rebuilding at each doubling keeps the total build work within twice that of the final scene.
 constexpr std::size_t kMinRebuild = 4096;
 
-std::uint64_t cellKey(std::int64_t i, std::int64_t j, std::int64_t k) {
-    // Different cells may share a key; that only adds candidates, which the exact tests then reject.
-    return mix64(static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ull ^ static_cast<std::uint64_t>(j) * 0xC2B2AE3D27D4EB4Full ^
-                 static_cast<std::uint64_t>(k) * 0x165667B19E3779F9ull);
-}
-
 // Every grain, binned by centre in cubes of side 2 r_max: a grain can only overlap grains in the 27 cubes
-// around its own centre. A hash grid answers this point query in O(1), which Embree's BVH (built for rays) cannot
-// beat for grains that arrive one at a time.
+// around its own centre. A hash grid answers this point query in O(1), which Embree's BVH (built for rays and
+// rebuilt in batches) cannot beat for grains that arrive one at a time.
 class OverlapGrid {
   public:
     explicit OverlapGrid(double cell) : cell_(cell) {}
 
     void insert(unsigned grain, const glm::dvec3 &centre) {
         const glm::dvec3 c = glm::floor(centre / cell_);
-        cells_[cellKey(std::int64_t(c.x), std::int64_t(c.y), std::int64_t(c.z))].push_back(grain);
+        cells_.insert(CellHash::key(std::int64_t(c.x), std::int64_t(c.y), std::int64_t(c.z)), grain);
     }
 
     // True if a grain (centre, radius) would press into a neighbour deeper than the tolerance.
     bool overlaps(const GrainSet &grains, const glm::dvec3 &centre, double radius) const {
         const glm::dvec3 c = glm::floor(centre / cell_);
-        for (int di = -1; di <= 1; ++di)
-            for (int dj = -1; dj <= 1; ++dj)
-                for (int dk = -1; dk <= 1; ++dk) {
-                    const auto cell = cells_.find(cellKey(std::int64_t(c.x) + di, std::int64_t(c.y) + dj, std::int64_t(c.z) + dk));
-                    if (cell == cells_.end()) continue;
-                    for (unsigned other : cell->second) {
-                        const double rOther = grains.radii[other];
-                        const double allowed = radius + rOther - kGrainOverlapTolerance * std::min(radius, rOther);
-                        const glm::dvec3 gap = grains.centres[other] - centre;
-                        if (glm::dot(gap, gap) < allowed * allowed) return true;
-                    }
-                }
-        return false;
+        bool overlap = false;
+        const auto pressesInto = [&](unsigned other) {
+            const double rOther = grains.radii[other];
+            const double allowed = radius + rOther - kGrainOverlapTolerance * std::min(radius, rOther);
+            const glm::dvec3 gap = grains.centres[other] - centre;
+            overlap = glm::dot(gap, gap) < allowed * allowed;
+            return !overlap;
+        };
+        for (int di = -1; di <= 1 && !overlap; ++di)
+            for (int dj = -1; dj <= 1 && !overlap; ++dj)
+                for (int dk = -1; dk <= 1 && !overlap; ++dk)
+                    cells_.forEach(CellHash::key(std::int64_t(c.x) + di, std::int64_t(c.y) + dj, std::int64_t(c.z) + dk),
+                                   pressesInto);
+        return overlap;
     }
 
   private:
     double cell_;  // m
-    std::unordered_map<std::uint64_t, std::vector<unsigned>> cells_;
+    CellHash cells_;
 };
 
 // Grains not yet in the Embree scene, binned by the squares (side 2 r_max) of the plane across the fall that
@@ -80,22 +75,23 @@ class ColumnGrid {
         const double u = glm::dot(centre, frame_.t), v = glm::dot(centre, frame_.b);
         const auto i0 = index(u - radius), i1 = index(u + radius), j0 = index(v - radius), j1 = index(v + radius);
         for (auto i = i0; i <= i1; ++i)
-            for (auto j = j0; j <= j1; ++j) cells_[cellKey(i, j, 0)].push_back(grain);
+            for (auto j = j0; j <= j1; ++j) cells_.insert(CellHash::key(i, j, 0), grain);
     }
     void clear() { cells_.clear(); }
 
     // The nearest grain with index >= `first` that the ray (unit direction along the fall) enters.
     std::optional<SphereScene::Hit> intersect(const GrainSet &grains, const glm::dvec3 &origin,
                                               const glm::dvec3 &direction, unsigned first) const {
-        const auto cell = cells_.find(cellKey(index(glm::dot(origin, frame_.t)), index(glm::dot(origin, frame_.b)), 0));
-        if (cell == cells_.end()) return std::nullopt;
         std::optional<SphereScene::Hit> nearest;
-        // Lists grow in grain order, so the grains from `first` on are a tail.
-        for (auto it = cell->second.rbegin(); it != cell->second.rend() && *it >= first; ++it) {
-            const auto t = raySphereEntry(origin, direction, grains.centres[*it], grains.radii[*it]);
-            if (t && (!nearest || *t < nearest->distance))
-                nearest = SphereScene::Hit{*t, *it, glm::normalize(origin + *t * direction - grains.centres[*it])};
-        }
+        // A cell's grains come newest first, so those from `first` on come before any older one.
+        cells_.forEach(CellHash::key(index(glm::dot(origin, frame_.t)), index(glm::dot(origin, frame_.b)), 0),
+                       [&](unsigned grain) {
+                           if (grain < first) return false;
+                           const auto t = raySphereEntry(origin, direction, grains.centres[grain], grains.radii[grain]);
+                           if (t && (!nearest || *t < nearest->distance))
+                               nearest = SphereScene::Hit{*t, grain, glm::normalize(origin + *t * direction - grains.centres[grain])};
+                           return true;
+                       });
         return nearest;
     }
 
@@ -103,7 +99,7 @@ class ColumnGrid {
     std::int64_t index(double x) const { return static_cast<std::int64_t>(std::floor(x / cell_)); }
     Frame frame_;
     double cell_;  // m
-    std::unordered_map<std::uint64_t, std::vector<unsigned>> cells_;
+    CellHash cells_;
 };
 
 // What a falling ray met first.
