@@ -37,6 +37,11 @@ mkdir -p "$(dirname "$report")"
   "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/car_memory.py"
   echo '```'
   echo
+  echo "## Grain snow: accumulation on the car sample, pile albedo against KZ04"
+  echo
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/car_triangles.py" -- "$FIRN_ROOT/out/car_triangles.npz" > /dev/null
+  PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/bench/grains_bench.py" --scene "$FIRN_ROOT/out/car_triangles.npz"
+  echo
   echo "## The UI's longest stalls during Add Snow Layer and Bake Scattering (car sample, window under Xvfb)"
   echo
   "$FIRN_ROOT/bench/ui_stall.sh"
