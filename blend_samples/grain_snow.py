@@ -15,7 +15,11 @@ import sample_common as common  # noqa: E402
 
 GRAIN_RADIUS = 0.001  # m
 BALL_RADIUS = 0.025  # m
-PANELS = (("thin", -0.045, 1500), ("thick", 0.045, 12000))  # label, x (m), grains on ball and its ground
+# label, x (m), side of the ground square (m), grains on the ball and its square. Grains stack where they land
+# (Chrisman's model: no avalanches), so a square fills up like a box. One layer of 1 mm grains on the 8 cm square
+# is about 1,100 grains; the thick side rises about 8 cm, 3 cm over the ball and 3.5 cm in front of it: a few
+# transport mean free paths of packed 1 mm spheres (docs/grains.md).
+PANELS = (("thin", -0.055, 0.08, 1500), ("thick", 0.06, 0.12, 160000))
 
 
 def build_scene():
@@ -25,19 +29,21 @@ def build_scene():
     red = common.material("Red Ball", (0.8, 0.04, 0.03), roughness=0.9)
     grey = common.material("Ground", (0.35, 0.35, 0.35), roughness=0.9)
     pairs = []
-    for label, x, _count in PANELS:
+    for label, x, side, _count in PANELS:
         bpy.ops.mesh.primitive_uv_sphere_add(radius=BALL_RADIUS, location=(x, 0.0, BALL_RADIUS), segments=48,
                                              ring_count=24)
         ball = bpy.context.object
         ball.name = f"Ball ({label})"
         ball.data.materials.append(red)
         bpy.ops.object.shade_smooth()
-        bpy.ops.mesh.primitive_plane_add(size=0.08, location=(x, 0.0, 0.0))
+        bpy.ops.mesh.primitive_plane_add(size=side, location=(x, 0.0, 0.0))
         ground = bpy.context.object
         ground.name = f"Ground ({label})"
         ground.data.materials.append(grey)
         pairs.append((ball, ground))
-    common.camera((0.0, -0.19, 0.12), (0.0, 0.0, 0.018), lens=50.0)
+    bpy.ops.mesh.primitive_plane_add(size=2.0, location=(0.0, 0.0, -0.001))  # the floor beyond, no grains
+    bpy.context.object.data.materials.append(grey)
+    common.camera((0.0, -0.22, 0.26), (0.0, 0.0, 0.03), lens=45.0)
     return scene, pairs
 
 
@@ -56,11 +62,11 @@ def main():
     args = common.parse_args(__doc__.splitlines()[0], "out/grain_snow.png")
     stages = common.Stages()
     scene, pairs = stages.run("build scene", build_scene)
-    for (label, _x, count), targets in zip(PANELS, pairs):
+    for (label, _x, _side, count), targets in zip(PANELS, pairs):
         grains = stages.run(f"add grain snow ({label})", add_grains, targets, count, len(label))
         print(f"firn sample: {label}: {len(grains.data.vertices):,} grains of {GRAIN_RADIUS * 1e3:g} mm")
     stages.run("render (Cycles)", common.render, scene, args.output, args.width, args.samples, aspect=(2, 1),
-               label="Grain snow: thin (left), thick (right)")
+               label="thin | thick grain snow")
     if not args.no_save:
         stages.run("save .blend", common.save_next_to, __file__, args.blend)
     print(f"firn sample: total {stages.total():.1f} s")

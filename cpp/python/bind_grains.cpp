@@ -182,6 +182,13 @@ grains, top (m), accumulation stats, mean_events per path, bailed_out.)doc");
         },
         py::arg("radius"), py::arg("absorption"), py::arg("eta") = firn::kIceRefractiveIndex, R"doc(
 Ray optics of one ice sphere (radius m, absorption 1/m): (Q_abs, g) without diffraction.)doc");
+
+    m.def(
+        "ice_absorption_rgb", [](double radius) { return tuple(firn::iceAbsorptionRgb(radius)); },
+        py::arg("radius"), R"doc(
+Absorption coefficient of ice (1/m) per Rec.709 channel, for grains of `radius` (m): Warren & Brandt 2008 made RGB
+the way the rest of the core makes it (what the grain tracer uses by default, and the ice material of Add Grain
+Snow).)doc");
 }
 
 }  // namespace firncore

@@ -44,7 +44,7 @@ def test_one_point_per_grain_with_its_radius_on_the_plane(clean_scene):
     centres, radii = grain_points(grains)
     assert len(radii) == 1500
     assert radii.min() >= 0.001 - 1e-7 and radii.max() <= 0.003 + 1e-7 and radii.std() > 1e-4
-    assert np.abs(centres[:, :2]).max() < 0.1 + 0.003  # over the plane
+    assert np.abs(centres[:, :2]).max() < 0.1 + 3 * 0.003  # over the plane (edge grains lean out on others)
     assert (centres[:, 2] - radii).min() > -1e-5  # none sinks into the plane
 
 

@@ -125,11 +125,16 @@ class FIRN_OT_add_grain_snow(FirnJobMixin, bpy.types.Operator):
         context.view_layer.objects.active = obj
         matched = match_snow_optics([bpy.data.objects[name] for name in inputs["snow"]], inputs["radius"])
         changes = light_paths.raise_light_paths(context.scene)
-        landed = f"{len(radii):,} grains{short} on {', '.join(inputs['targets'])}"
-        short = f" (of {inputs['count']:,}: the rays ran out)" if len(radii) < inputs["count"] else ""
-        steep = f", {result['steep']:,} steep landings discarded" if result["steep"] else ""
-        paths = f"; Cycles light paths raised: {', '.join(changes)}" if changes else ""
-        self.report({"INFO"}, f"{landed}{steep}{matched}{paths}")
+        self.report({"INFO"}, summary(inputs, result) + matched +
+                    (f"; Cycles light paths raised: {', '.join(changes)}" if changes else ""))
+
+
+def summary(inputs, result):
+    """What landed where, and what did not, for the operator's report."""
+    count = len(result["radii"])
+    short = f" (of {inputs['count']:,}: the rays ran out)" if count < inputs["count"] else ""
+    steep = f", {result['steep']:,} steep landings discarded" if result["steep"] else ""
+    return f"{count:,} grains{short} on {', '.join(inputs['targets'])}{steep}"
 
 
 def _menu_entry(self, _context):
