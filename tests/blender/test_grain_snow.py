@@ -18,18 +18,26 @@ def add_plane(size, **kwargs):
 
 
 def grain_points(obj):
-    """(centres (N, 3) world, radii (N,)) of the point cloud the object evaluates to (what Cycles renders)."""
+    """(centres (N, 3) world, radii (N,)) of the spheres the object evaluates to: instanced icospheres for the
+    render (and in blender -b), points in an interactive viewport."""
     depsgraph = bpy.context.evaluated_depsgraph_get()
+    centres, radii = [], []
     for instance in depsgraph.object_instances:
-        if instance.object.type == "POINTCLOUD" and instance.parent and instance.parent.original == obj:
+        if not (instance.is_instance and instance.parent and instance.parent.original == obj):
+            continue
+        if instance.object.type == "POINTCLOUD":
             cloud = instance.object.data
             n = len(cloud.points)
-            centres, radii = np.empty(n * 3, np.float32), np.empty(n, np.float32)
-            cloud.attributes["position"].data.foreach_get("vector", centres)
-            cloud.attributes["radius"].data.foreach_get("value", radii)
+            local, r = np.empty(n * 3, np.float32), np.empty(n, np.float32)
+            cloud.attributes["position"].data.foreach_get("vector", local)
+            cloud.attributes["radius"].data.foreach_get("value", r)
             matrix = np.array(instance.matrix_world)
-            return centres.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3], radii
-    raise AssertionError(f"{obj.name} evaluates to no point cloud")
+            return local.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3], r
+        matrix = np.array(instance.matrix_world)  # a unit sphere scaled by the grain's radius
+        centres.append(matrix[:3, 3])
+        radii.append(np.linalg.norm(matrix[:3, 0]))
+    assert centres, f"{obj.name} evaluates to no grain"
+    return np.array(centres), np.array(radii)
 
 
 def add_grains(**settings):
