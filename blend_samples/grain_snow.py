@@ -15,10 +15,10 @@ import sample_common as common  # noqa: E402
 
 GRAIN_RADIUS = 0.001  # m
 BALL_RADIUS = 0.025  # m
-# label, x (m), side of the ground square (m), grains on the ball and its square. Grains stack where they land
-# (Chrisman's model: no avalanches), so a square fills up like a box. One layer of 1 mm grains on the 8 cm square
-# is about 1,100 grains; the thick side rises about 8 cm, 3 cm over the ball and 3.5 cm in front of it: a few
-# transport mean free paths of packed 1 mm spheres (docs/grains.md).
+# label, x (m), side of the ground square (m), grains on the ball and its square. Grains stay where they land
+# (Chrisman's model: no avalanches) and pack loosely (volume fraction ~0.24), so a square fills up like a box: a
+# sprinkling of 1 mm grains on the left; on the right about 10 cm of snow, several centimetres over and in front
+# of the ball, many transport mean free paths of 1 mm grains (docs/grains.md).
 PANELS = (("thin", -0.055, 0.08, 1500), ("thick", 0.06, 0.12, 160000))
 
 
