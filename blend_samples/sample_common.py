@@ -68,6 +68,14 @@ def nishita_sky(scene, sun_elevation_deg, sun_rotation_deg, strength=0.3):
     scene.world = world
 
 
+def overcast_sky(scene, radiance=1.0):
+    """A uniform sky of `radiance` (W/m²/sr per channel), as under an overcast sky (Chrisman's sky hemisphere)."""
+    world = bpy.data.worlds.new("Overcast")
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (radiance, radiance, radiance, 1.0)
+    scene.world = world
+
+
 def sun(elevation_deg, rotation_deg, irradiance=4.0):
     """A sun lamp (irradiance in W/m², Blender's Strength) from the same direction as the Nishita sky's sun."""
     # Blender's sun points along its local -Z; tilt it down from the zenith by (90 - elevation).
