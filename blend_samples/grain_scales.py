@@ -101,4 +101,5 @@ def main():
     print(f"firn sample: total {stages.total():.1f} s -> {args.output}")
 
 
-main()
+if __name__ == "__main__":
+    main()
