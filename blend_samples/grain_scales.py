@@ -92,13 +92,8 @@ def panel(name, make_snow, args, stages):
 
 
 def main():
-    args = common.parse_args(__doc__.splitlines()[0], "out/grain_scales.png")
-    stages = common.Stages()
-    paths = [panel(name, make_snow, args, stages) for name, make_snow in PANELS]
-    common.side_by_side(paths, args.output)
-    if not args.no_save:
-        stages.run("save .blend", common.save_next_to, __file__, args.blend)
-    print(f"firn sample: total {stages.total():.1f} s -> {args.output}")
+    common.panels_sample(__file__, __doc__.splitlines()[0], lambda args, stages: [
+        panel(name, make_snow, args, stages) for name, make_snow in PANELS])
 
 
 if __name__ == "__main__":

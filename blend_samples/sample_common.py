@@ -194,6 +194,18 @@ def side_by_side(paths, output):
         bpy.data.images.remove(image)
 
 
+def panels_sample(script_file, description, render_panels):
+    """The whole job of a comparison sample: `render_panels(args, stages)` renders its panels and returns their
+    PNGs, which are joined left to right into the output; then the .blend is saved."""
+    name = os.path.splitext(os.path.basename(script_file))[0]
+    args = parse_args(description, f"out/{name}.png")
+    stages = Stages()
+    side_by_side(render_panels(args, stages), args.output)
+    if not args.no_save:
+        stages.run("save .blend", save_next_to, script_file, args.blend)
+    print(f"firn sample: total {stages.total():.2f} s -> {args.output}")
+
+
 def snow_bake_render(script_file, description, build_scene, **snow_settings):
     """The whole job of a one-picture sample: build its scene, snow its targets, bake, render, save the .blend."""
     name = os.path.splitext(os.path.basename(script_file))[0]

@@ -6,6 +6,7 @@ import bpy
 from mathutils import Matrix
 
 from ..common import scene_geometry
+from ..common.modes import object_mode_poll
 from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
@@ -90,12 +91,7 @@ class FIRN_OT_add_grain_snow(FirnJobMixin, bpy.types.Operator):
     __annotations__ = dict(GRAIN_SNOW_PROPERTIES)
     job_label = "Add Grain Snow"
 
-    @classmethod
-    def poll(cls, context):
-        if context.mode != "OBJECT":
-            cls.poll_message_set("Switch to Object Mode")
-            return False
-        return True
+    poll = classmethod(object_mode_poll)
 
     def draw(self, _context):
         col = self.layout.column()

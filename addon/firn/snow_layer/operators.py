@@ -10,6 +10,7 @@ import numpy as np
 from mathutils import Matrix
 
 from ..common import cache, preferences, scene_geometry
+from ..common.modes import object_mode_poll
 from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
@@ -238,12 +239,7 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
     __annotations__ = dict(SNOW_LAYER_PROPERTIES)
     job_label = "Add Snow Layer"
 
-    @classmethod
-    def poll(cls, context):
-        if context.mode != "OBJECT":
-            cls.poll_message_set("Switch to Object Mode")
-            return False
-        return True
+    poll = classmethod(object_mode_poll)
 
     def draw(self, _context):
         draw_layer_settings(self.layout, self)
