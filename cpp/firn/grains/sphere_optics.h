@@ -35,6 +35,7 @@ PackedSphereOptics packedSphereOptics(const SphereRayOptics &sphere, double volu
 // Ice absorption per Rec.709 channel (1/m) for grains of radius r (m), from the Warren & Brandt 2008 spectrum
 // the way the rest of the core makes RGB (snow_optics.h: the channel's co-albedo is the one whose white-sky
 // albedo is the channel's), turned back into the gamma that gives that co-albedo: gamma = 3 (1 - omega) / (2 B r).
+// Radii outside snow's 1 um - 10 mm use the nearest end of that range.
 Rgb iceAbsorptionRgb(double radius);
 
 }  // namespace firn
