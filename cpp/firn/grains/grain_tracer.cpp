@@ -168,6 +168,10 @@ std::vector<GrainRadiance> GrainTracer::radiance(const std::vector<GrainRay> &ra
         Rgb sum(0.0), sumSquares(0.0);
         std::size_t events = 0, localEvents = 0, localBailed = 0;
         for (int j = 0; j < samples; ++j) {
+            if (progress && progress->isCancelled()) {  // between paths: a long one takes at most a second
+                cancelled.store(true);
+                return;
+            }
             Rng rng(seed, std::uint64_t(i) * std::uint64_t(samples) + std::uint64_t(j));
             const Rgb value = tracePath(rays[i], rng, events);
             localEvents += events;
