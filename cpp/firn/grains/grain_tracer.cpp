@@ -106,8 +106,12 @@ Rgb GrainTracer::tracePath(const GrainRay &ray, Rng &rng, std::size_t &events) c
             const GrainSurface &s = surface(triangle->triangle);
             throughput *= s.albedo;
             const glm::dvec3 hit = origin + tTriangle * direction;
-            direction = s.mirror ? reflect(direction, nTriangle)
-                                 : sampleCosineHemisphere(nTriangle, rng.uniform(), rng.uniform());
+            if (s.mirror) {
+                direction = reflect(direction, nTriangle);
+            } else {
+                const double u1 = rng.uniform(), u2 = rng.uniform();  // named: argument order is unspecified
+                direction = sampleCosineHemisphere(nTriangle, u1, u2);
+            }
             origin = hit + epsilon_ * nTriangle;
             leftGrain = -1;
             if (!survives()) return Rgb(0.0);

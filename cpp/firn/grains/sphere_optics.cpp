@@ -75,11 +75,12 @@ Rgb iceAbsorptionRgb(double radius) {
 
 namespace firn {
 
-Rgb kz04SpherePileAlbedo(double eta, const Rgb &gamma, double radius) {
+Rgb kz04SpherePileAlbedo(double eta, const Rgb &gamma, double radius, bool diffuse) {
     Rgb albedo;
     for (int c = 0; c < 3; ++c) {
         const SphereRayOptics sphere = sphereRayOptics(eta, gamma[c], radius);
-        albedo[c] = kz04PlaneAlbedo(sphere.absorptionEfficiency, sphere.g, 1.0);
+        albedo[c] = diffuse ? kz04SphericalAlbedo(sphere.absorptionEfficiency, sphere.g)
+                            : kz04PlaneAlbedo(sphere.absorptionEfficiency, sphere.g, 1.0);
     }
     return albedo;
 }

@@ -42,8 +42,9 @@ Rgb iceAbsorptionRgb(double radius);
 
 namespace firn {
 
-// KZ04's asymptotic plane albedo (mu0 = 1) of a deep packing of spheres, per channel, from the spheres' own ray
-// optics (omega and g without diffraction; the similarity relation makes the choice immaterial).
-Rgb kz04SpherePileAlbedo(double eta, const Rgb &gamma, double radius);
+// KZ04's asymptotic albedo of a deep packing of spheres, per channel, from the spheres' own ray optics (omega and
+// g without diffraction; the similarity relation makes the choice immaterial): the plane albedo at mu0 = 1, or
+// with `diffuse` the spherical (white-sky) albedo.
+Rgb kz04SpherePileAlbedo(double eta, const Rgb &gamma, double radius, bool diffuse = false);
 
 }  // namespace firn
