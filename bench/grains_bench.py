@@ -67,6 +67,11 @@ def pile(radius, gamma, paths, channel=0, label=None, piles=3):
     start = time.perf_counter()
     runs = [firncore.grain_pile_albedo(radius=radius, width=20 * radius, depth=depth, ice_absorption=absorption,
                                        paths=paths // piles, seed=seed) for seed in range(1, piles + 1)]
+    white = [firncore.grain_pile_albedo(radius=radius, width=20 * radius, depth=depth, ice_absorption=absorption,
+                                        paths=paths // piles // 2, seed=seed, illumination="DIFFUSE")
+             for seed in range(1, piles + 1)]
+    white_sky = sum(d["albedo"][channel] for d in white) / piles
+    white_kz = white[0]["kz04_albedo"][channel]
     seconds = time.perf_counter() - start
     each = [d["albedo"][channel] for d in runs]
     a = sum(each) / piles
@@ -81,6 +86,7 @@ def pile(radius, gamma, paths, channel=0, label=None, piles=3):
     row = (f"| {label or f'{radius * 1e3:g} mm'} | {gamma * radius:.2e} | {d['top'] * 1e3:.0f} | {d['grains']:,} | "
            f"{f:.3f} | {RHO_ICE * f:.0f} | {a:.4f} +- {se:.4f} (piles {spread:.4f}) | {kz:.4f} | {kz_spheres:.4f} | "
            f"{exact:.4f} | {100 * (a / kz - 1):+.1f} % | {100 * ((1 - a) / (1 - kz) - 1):+.1f} % | "
+           f"{white_sky:.4f} | {white_kz:.4f} | {100 * (white_sky / white_kz - 1):+.1f} % | "
            f"{d['mean_events']:.0f} | {seconds:.0f} s |")
     return row, f
 
@@ -108,11 +114,13 @@ def main():
           f"{args.paths:,} paths each. Ice at 800 nm (Warren & Brandt 2008): gamma = {gamma:.3f} 1/m. Piles 6 "
           "diffusion lengths deep, 20 r wide between mirror walls. KZ04 (rays): ART plane albedo from the "
           "spheres' own ray optics (omega, g); KZ04 (B 1.25, g 0.89): the notes' values for spheres; exact RT (HG): "
-          "photon Monte Carlo of a half-space with the spheres' omega and g and a Henyey-Greenstein phase function.")
+          "photon Monte Carlo of a half-space with the spheres' omega and g and a Henyey-Greenstein phase function; "
+          "white-sky: the same piles under a uniform sky (half the paths) against KZ04's spherical albedo exp(-y).")
     print()
     print("| r | gamma r | depth (mm) | grains | f | rho (kg/m^3) | A grains (3 piles) | A KZ04 (rays) | "
-          "A KZ04 (B 1.25, g 0.89) | A exact RT (HG) | A vs KZ04 | 1-A vs KZ04 | events/path | time |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "A KZ04 (B 1.25, g 0.89) | A exact RT (HG) | A vs KZ04 | 1-A vs KZ04 | white-sky grains | r_s KZ04 | "
+          "white-sky vs KZ04 | events/path | time |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     fractions = {}
     for radius in (0.1e-3, 0.5e-3, 2e-3):
         row, fractions[radius] = pile(radius, gamma, args.paths)

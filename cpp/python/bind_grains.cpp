@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <optional>
+#include <string>
 
 #include <glm/geometric.hpp>
 #include <pybind11/numpy.h>
@@ -134,7 +135,10 @@ standard error), each (N, 3) W/m^2/sr.)doc");
         "grain_pile_albedo",
         [](double radius, double width, double depth, double radiusVariation, double eta,
            const std::optional<Triple> &iceAbsorption, const Triple &groundAlbedo, std::size_t paths,
-           std::uint64_t seed, std::shared_ptr<firn::Progress> progress) {
+           std::uint64_t seed, const std::string &illumination, std::shared_ptr<firn::Progress> progress) {
+            if (illumination != "COLLIMATED" && illumination != "DIFFUSE")
+                throw firn::InvalidArgument("illumination must be 'COLLIMATED' or 'DIFFUSE', not '" + illumination + "'");
+            const bool diffuse = illumination == "DIFFUSE";
             firn::PileSettings s;
             s.radius = radius, s.width = width, s.depth = depth, s.radiusVariation = radiusVariation, s.seed = seed;
             if (paths < 1 || paths > 100'000'000) throw firn::InvalidArgument("paths must be between 1 and 1e8");
@@ -148,8 +152,9 @@ standard error), each (N, 3) W/m^2/sr.)doc");
                 pile = firn::buildGrainPile(s, progress.get());
                 const double margin = 2.0 * radius * (1.0 + radiusVariation);
                 f = firn::pileVolumeFraction(pile, margin, 0.2 * pile.top, 0.7 * pile.top);
-                albedo = firn::measurePileAlbedo(pile, eta, gamma, vec(groundAlbedo), paths, seed, progress.get());
-                predicted = firn::kz04SpherePileAlbedo(eta, gamma, radius);
+                albedo = firn::measurePileAlbedo(pile, eta, gamma, vec(groundAlbedo), paths, seed, progress.get(),
+                                                 diffuse ? firn::PileLight::Diffuse : firn::PileLight::Collimated);
+                predicted = firn::kz04SpherePileAlbedo(eta, gamma, radius, diffuse);
             });
             out["albedo"] = Triple{albedo.mean.x, albedo.mean.y, albedo.mean.z};
             out["standard_error"] = Triple{albedo.standardError.x, albedo.standardError.y, albedo.standardError.z};
@@ -167,10 +172,11 @@ standard error), each (N, 3) W/m^2/sr.)doc");
         py::arg("radius"), py::arg("width"), py::arg("depth"), py::arg("radius_variation") = 0.0,
         py::arg("eta") = firn::kIceRefractiveIndex, py::arg("ice_absorption") = py::none(),
         py::arg("ground_albedo") = Triple{0.0, 0.0, 0.0}, py::arg("paths") = 10000, py::arg("seed") = 0,
-        py::arg("progress") = nullptr, R"doc(
+        py::arg("illumination") = "COLLIMATED", py::arg("progress") = nullptr, R"doc(
 Accumulates a pile of grains (radius m, about `depth` m deep) in a mirror-walled box of side `width` (m) on a
-ground of ground_albedo, and measures its plane albedo for a collimated beam straight down (mu0 = 1) with `paths`
-paths. Returns a dict: albedo and standard_error (RGB), kz04_albedo (KZ04's asymptotic plane albedo from the
+ground of ground_albedo, and measures its albedo with `paths` paths: illumination 'COLLIMATED', the plane albedo
+for a beam straight down (mu0 = 1), or 'DIFFUSE', the spherical (white-sky) albedo under a uniform sky. Returns a
+dict: albedo and standard_error (RGB), kz04_albedo (KZ04's asymptotic albedo for the same light, from the
 spheres' ray optics), ice_absorption (1/m), volume_fraction and density (917 f kg/m^3) of the pile's interior,
 grains, top (m), accumulation stats, mean_events per path, bailed_out.)doc");
 

@@ -96,3 +96,5 @@ def test_bad_render_input():
         firncore.grain_radiance([[0, 0, 0]], [1.0], [[0, 0, 1]], [[0, 0, -1]], eta=0.9)
     with pytest.raises(ValueError):
         firncore.grain_pile_albedo(radius=1e-3, width=1e-3, depth=1e-2)
+    with pytest.raises(ValueError):
+        firncore.grain_pile_albedo(radius=1e-3, width=1e-2, depth=1e-2, illumination="SUN")

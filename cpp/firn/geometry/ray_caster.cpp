@@ -11,8 +11,7 @@
 namespace firn {
 
 struct RayCaster::Impl {
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
+    EmbreeScene embree;
     std::vector<glm::vec3> normals;  // unit, per triangle
     TriangleMesh mesh;               // for exact distances in point queries
 };
@@ -61,18 +60,16 @@ bool visitTriangle(RTCPointQueryFunctionArguments *args) {
 }  // namespace
 
 RayCaster::RayCaster(const TriangleMesh &mesh) : impl_(std::make_unique<Impl>()), empty_(mesh.empty()) {
-    impl_->device = rtcNewDevice(nullptr);
-    if (!impl_->device) throw std::runtime_error("Embree could not create a device");
-    impl_->scene = rtcNewScene(impl_->device);
+    RTCDevice device = impl_->embree.device;
     // Few rays per triangle here: a fast build (Morton) beats a better tree.
-    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_LOW);
+    rtcSetSceneBuildQuality(impl_->embree.scene, RTC_BUILD_QUALITY_LOW);
     if (!empty_) {
-        RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         auto *vertices = static_cast<float *>(rtcSetNewGeometryBuffer(
             geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
         auto *indices = static_cast<unsigned *>(rtcSetNewGeometryBuffer(
             geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
-        throwOnEmbreeError(impl_->device, "allocate the scene (out of memory?)");
+        throwOnEmbreeError(device, "allocate the scene (out of memory?)");
         for (std::size_t i = 0; i < mesh.positions.size(); ++i)
             for (int k = 0; k < 3; ++k) vertices[3 * i + k] = mesh.positions[i][k];
         impl_->normals.resize(mesh.triangles.size());
@@ -81,37 +78,26 @@ RayCaster::RayCaster(const TriangleMesh &mesh) : impl_(std::make_unique<Impl>())
             impl_->normals[t] = glm::normalize(mesh.crossNormal(t));
         }
         impl_->mesh = mesh;
-        rtcCommitGeometry(geometry);
-        rtcAttachGeometry(impl_->scene, geometry);
-        rtcReleaseGeometry(geometry);
+        impl_->embree.attach(geometry);
     }
-    rtcCommitScene(impl_->scene);
-    throwOnEmbreeError(impl_->device, "build the scene");
+    impl_->embree.commit("build the scene");
 }
 
-RayCaster::~RayCaster() {
-    if (impl_->scene) rtcReleaseScene(impl_->scene);
-    if (impl_->device) rtcReleaseDevice(impl_->device);
-}
+RayCaster::~RayCaster() = default;
 
 bool RayCaster::occluded(const glm::vec3 &origin, const glm::vec3 &direction, float tNear, float tFar) const {
     if (empty_) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRay ray = makeEmbreeRay(origin, direction, tNear, tFar);
-    rtcOccluded1(impl_->scene, &context, &ray);
+    rtcOccluded1(impl_->embree.scene, &context, &ray);
     return ray.tfar < 0.0f;  // Embree marks a blocked ray with tfar = -inf
 }
 
 std::optional<RayCaster::Hit> RayCaster::intersect(const glm::vec3 &origin, const glm::vec3 &direction,
                                                    float tNear, float tFar) const {
     if (empty_) return std::nullopt;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    RTCRayHit query{};
-    query.ray = makeEmbreeRay(origin, direction, tNear, tFar);
-    query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl_->scene, &context, &query);
+    const RTCRayHit query = intersectEmbree(impl_->embree.scene, origin, direction, tNear, tFar);
     if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
     return Hit{query.ray.tfar, query.hit.primID, impl_->normals[query.hit.primID]};
 }
@@ -125,7 +111,7 @@ std::optional<double> RayCaster::closestDistance(const glm::dvec3 &point, double
     RTCPointQueryContext context;
     rtcInitPointQueryContext(&context);
     ClosestQuery closest{&impl_->mesh, point, maxDistance};
-    rtcPointQuery(impl_->scene, &query, &context, visitTriangle, &closest);
+    rtcPointQuery(impl_->embree.scene, &query, &context, visitTriangle, &closest);
     if (closest.distance >= maxDistance) return std::nullopt;
     return closest.distance;
 }

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -130,6 +132,12 @@ void landOnTriangles(const RayCaster &caster, const TriangleMesh &mesh, const gl
     c.landing.consider(t, n);
 }
 
+std::string metres(double value) {
+    std::ostringstream text;
+    text << std::setprecision(3) << value << " m";
+    return text.str();
+}
+
 double facingCosine(const glm::dvec3 &normal, const glm::dvec3 &direction) { return -glm::dot(normal, direction); }
 
 }  // namespace
@@ -169,8 +177,8 @@ AccumulationResult accumulateGrains(const TriangleMesh &mesh, const Accumulation
     const double extent = std::max({uMax - uMin, vMax - vMin, wBottom - wTop});  // m
     // Grains below float precision at the scene's size could not be told apart by Embree or the grids' indices.
     if (rMax < 1e-6 * extent)
-        throw InvalidArgument("grain radius " + std::to_string(settings.radius) + " m is too small for a scene " +
-                              std::to_string(extent) + " m across (at least 1e-6 of it)");
+        throw InvalidArgument("grain radius " + metres(settings.radius) + " is too small for a scene " +
+                              metres(extent) + " across (at least 1e-6 of it)");
     uMin -= rMax, uMax += rMax, vMin -= rMax, vMax += rMax;
 
     const RayCaster caster(mesh);

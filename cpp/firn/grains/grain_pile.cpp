@@ -64,7 +64,7 @@ double pileVolumeFraction(const GrainPile &pile, double margin, double zLow, dou
 }
 
 PileAlbedo measurePileAlbedo(const GrainPile &pile, double eta, const Rgb &iceAbsorption, const Rgb &groundAlbedo,
-                             std::size_t paths, std::uint64_t seed, Progress *progress) {
+                             std::size_t paths, std::uint64_t seed, Progress *progress, PileLight light) {
     if (paths == 0) throw InvalidArgument("the albedo needs at least one path");
     GrainMaterials materials;
     materials.eta = eta;
@@ -77,8 +77,18 @@ PileAlbedo measurePileAlbedo(const GrainPile &pile, double eta, const Rgb &iceAb
     std::vector<GrainRay> rays(paths);
     Rng rng(seed, 0x5EED);
     const double w = pile.width, start = pile.top + 1e-3 * w;
-    for (GrainRay &r : rays)
-        r = GrainRay{{w * (0.25 + 0.5 * rng.uniform()), w * (0.25 + 0.5 * rng.uniform()), start}, {0.0, 0.0, -1.0}};
+    for (GrainRay &r : rays) {
+        const double x = w * (0.25 + 0.5 * rng.uniform());  // named: argument order is unspecified in C++
+        const double y = w * (0.25 + 0.5 * rng.uniform());
+        const glm::dvec3 origin(x, y, start);
+        // Oblique paths may meet a wall above the pile: the mirror sends them on as into the mirrored pile.
+        glm::dvec3 down(0.0, 0.0, -1.0);
+        if (light == PileLight::Diffuse) {
+            const double u1 = rng.uniform(), u2 = rng.uniform();
+            down = sampleCosineHemisphere(down, u1, u2);
+        }
+        r = GrainRay{origin, down};
+    }
     PileAlbedo albedo;
     // One path per ray: the spread over rays is the spread of the albedo estimate.
     const std::vector<GrainRadiance> each = tracer.radiance(rays, 1, seed, progress, &albedo.stats);

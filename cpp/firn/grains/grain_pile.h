@@ -45,9 +45,14 @@ struct PileAlbedo {
     GrainPathStats stats;
 };
 
-// The plane albedo: paths enter straight down at uniform points of the central half of the box's top and
-// the power that leaves upward is counted (a white sky of radiance 1 seen by each path: its escape weight).
+// How the pile is lit: a collimated beam straight down (the plane albedo at mu0 = 1) or a uniform sky (the
+// spherical, white-sky albedo: directions cosine-weighted over the upper hemisphere).
+enum class PileLight { Collimated, Diffuse };
+
+// The albedo: paths enter at uniform points of the central half of the box's top and the power that leaves
+// upward is counted (a white sky of radiance 1 seen by each path: its escape weight).
 PileAlbedo measurePileAlbedo(const GrainPile &pile, double eta, const Rgb &iceAbsorption, const Rgb &groundAlbedo,
-                             std::size_t paths, std::uint64_t seed, Progress *progress = nullptr);
+                             std::size_t paths, std::uint64_t seed, Progress *progress = nullptr,
+                             PileLight light = PileLight::Collimated);
 
 }  // namespace firn

@@ -106,8 +106,12 @@ Rgb GrainTracer::tracePath(const GrainRay &ray, Rng &rng, std::size_t &events) c
             const GrainSurface &s = surface(triangle->triangle);
             throughput *= s.albedo;
             const glm::dvec3 hit = origin + tTriangle * direction;
-            direction = s.mirror ? reflect(direction, nTriangle)
-                                 : sampleCosineHemisphere(nTriangle, rng.uniform(), rng.uniform());
+            if (s.mirror) {
+                direction = reflect(direction, nTriangle);
+            } else {
+                const double u1 = rng.uniform(), u2 = rng.uniform();  // named: argument order is unspecified
+                direction = sampleCosineHemisphere(nTriangle, u1, u2);
+            }
             origin = hit + epsilon_ * nTriangle;
             leftGrain = -1;
             if (!survives()) return Rgb(0.0);
@@ -168,6 +172,10 @@ std::vector<GrainRadiance> GrainTracer::radiance(const std::vector<GrainRay> &ra
         Rgb sum(0.0), sumSquares(0.0);
         std::size_t events = 0, localEvents = 0, localBailed = 0;
         for (int j = 0; j < samples; ++j) {
+            if (progress && progress->isCancelled()) {  // between paths: a long one takes at most a second
+                cancelled.store(true);
+                return;
+            }
             Rng rng(seed, std::uint64_t(i) * std::uint64_t(samples) + std::uint64_t(j));
             const Rgb value = tracePath(rays[i], rng, events);
             localEvents += events;

@@ -24,7 +24,9 @@
 
 namespace firn {
 
-inline constexpr std::size_t kMaxPathEvents = 10'000'000;  // interfaces and bounces per path before bail-out
+// Interfaces and bounces per path before bail-out: 400 times the mean of the deepest validated pile (2,236),
+// and what keeps a closed white room (whose paths never leave nor lose weight) from running for ever.
+inline constexpr std::size_t kMaxPathEvents = 1'000'000;
 
 struct GrainSurface {
     Rgb albedo{0.8};      // reflectance per channel

@@ -59,8 +59,11 @@ PackedSphereOptics packedSphereOptics(const SphereRayOptics &sphere, double volu
 }
 
 Rgb iceAbsorptionRgb(double radius) {
+    // The band averaging is defined for snow's grains (1 um - 10 mm); gamma barely depends on the radius (0.5 %
+    // from 0.1 to 2 mm), so larger or smaller grains take the nearest end of that range.
     SnowParameters snow;
-    snow.grainRadius = radius;
+    snow.grainRadius = std::clamp(radius, 1e-6, 0.01);
+    radius = snow.grainRadius;
     snow.B = 1.25;  // spheres; gamma does not depend on B to first order (it cancels below)
     snow.g = 0.89;
     const VolumeOptics optics = snowOptics(snow);
@@ -72,11 +75,12 @@ Rgb iceAbsorptionRgb(double radius) {
 
 namespace firn {
 
-Rgb kz04SpherePileAlbedo(double eta, const Rgb &gamma, double radius) {
+Rgb kz04SpherePileAlbedo(double eta, const Rgb &gamma, double radius, bool diffuse) {
     Rgb albedo;
     for (int c = 0; c < 3; ++c) {
         const SphereRayOptics sphere = sphereRayOptics(eta, gamma[c], radius);
-        albedo[c] = kz04PlaneAlbedo(sphere.absorptionEfficiency, sphere.g, 1.0);
+        albedo[c] = diffuse ? kz04SphericalAlbedo(sphere.absorptionEfficiency, sphere.g)
+                            : kz04PlaneAlbedo(sphere.absorptionEfficiency, sphere.g, 1.0);
     }
     return albedo;
 }

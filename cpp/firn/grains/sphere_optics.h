@@ -35,14 +35,16 @@ PackedSphereOptics packedSphereOptics(const SphereRayOptics &sphere, double volu
 // Ice absorption per Rec.709 channel (1/m) for grains of radius r (m), from the Warren & Brandt 2008 spectrum
 // the way the rest of the core makes RGB (snow_optics.h: the channel's co-albedo is the one whose white-sky
 // albedo is the channel's), turned back into the gamma that gives that co-albedo: gamma = 3 (1 - omega) / (2 B r).
+// Radii outside snow's 1 um - 10 mm use the nearest end of that range.
 Rgb iceAbsorptionRgb(double radius);
 
 }  // namespace firn
 
 namespace firn {
 
-// KZ04's asymptotic plane albedo (mu0 = 1) of a deep packing of spheres, per channel, from the spheres' own ray
-// optics (omega and g without diffraction; the similarity relation makes the choice immaterial).
-Rgb kz04SpherePileAlbedo(double eta, const Rgb &gamma, double radius);
+// KZ04's asymptotic albedo of a deep packing of spheres, per channel, from the spheres' own ray optics (omega and
+// g without diffraction; the similarity relation makes the choice immaterial): the plane albedo at mu0 = 1, or
+// with `diffuse` the spherical (white-sky) albedo.
+Rgb kz04SpherePileAlbedo(double eta, const Rgb &gamma, double radius, bool diffuse = false);
 
 }  // namespace firn

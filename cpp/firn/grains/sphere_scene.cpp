@@ -11,8 +11,7 @@
 namespace firn {
 
 struct SphereScene::Impl {
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
+    EmbreeScene embree;
 };
 
 std::optional<double> raySphereEntry(const glm::dvec3 &origin, const glm::dvec3 &direction, const glm::dvec3 &centre,
@@ -30,14 +29,11 @@ std::optional<double> raySphereEntry(const glm::dvec3 &origin, const glm::dvec3 
 
 SphereScene::SphereScene(const GrainSet &grains, std::size_t count)
     : impl_(std::make_unique<Impl>()), grains_(grains), count_(std::min(count, grains.size())) {
-    impl_->device = rtcNewDevice(nullptr);
-    if (!impl_->device) throw std::runtime_error("Embree could not create a device");
-    impl_->scene = rtcNewScene(impl_->device);
     if (count_ > 0) {
-        RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+        RTCGeometry geometry = rtcNewGeometry(impl_->embree.device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
         auto *points = static_cast<float *>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
                                                                     RTC_FORMAT_FLOAT4, 4 * sizeof(float), count_));
-        throwOnEmbreeError(impl_->device, "allocate the grains (out of memory?)");
+        throwOnEmbreeError(impl_->embree.device, "allocate the grains (out of memory?)");
         for (std::size_t i = 0; i < count_; ++i) {
             const glm::dvec3 &c = grains.centres[i];
             // Slightly larger in float, so rounding never loses a grain Embree should report; the exact test follows.
@@ -47,18 +43,12 @@ SphereScene::SphereScene(const GrainSet &grains, std::size_t count)
             points[4 * i + 2] = static_cast<float>(c.z);
             points[4 * i + 3] = r;
         }
-        rtcCommitGeometry(geometry);
-        rtcAttachGeometry(impl_->scene, geometry);
-        rtcReleaseGeometry(geometry);
+        impl_->embree.attach(geometry);
     }
-    rtcCommitScene(impl_->scene);
-    throwOnEmbreeError(impl_->device, "build the grain scene");
+    impl_->embree.commit("build the grain scene");
 }
 
-SphereScene::~SphereScene() {
-    if (impl_->scene) rtcReleaseScene(impl_->scene);
-    if (impl_->device) rtcReleaseDevice(impl_->device);
-}
+SphereScene::~SphereScene() = default;
 
 std::optional<SphereScene::Hit> SphereScene::intersect(const glm::dvec3 &origin, const glm::dvec3 &direction,
                                                        double tFar, long ignoreGrain) const {
@@ -70,12 +60,7 @@ std::optional<SphereScene::Hit> SphereScene::intersect(const glm::dvec3 &origin,
     // Each pass skips one grain Embree reports but the exact test rejects (the one being left, a float miss):
     // a handful of passes at most; the bound only guards against a pathological pile-up.
     for (int pass = 0; pass < 64; ++pass) {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        RTCRayHit query{};
-        query.ray = makeEmbreeRay(o, d, tNear, tFarFloat);
-        query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(impl_->scene, &context, &query);
+        const RTCRayHit query = intersectEmbree(impl_->embree.scene, o, d, tNear, tFarFloat);
         if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
         const unsigned grain = query.hit.primID;
         if (static_cast<long>(grain) != ignoreGrain) {

@@ -52,6 +52,7 @@ TEST(Accumulation, GrainsRestOnAFlatPlaneWithoutOverlap) {
         EXPECT_LE(g.radii[i], 2e-3 * 1.3 + 1e-12);
     }
     EXPECT_LE(worstGrainOverlap(g), kGrainOverlapTolerance + 1e-9);
+    EXPECT_GT(result.overlapping, 0u);  // the rule did have grains to discard
     // Stacking happened: 3000 grains of ~2 mm over 100 mm x 100 mm need several layers.
     const double highest = std::max_element(g.centres.begin(), g.centres.end(),
                                             [](auto &a, auto &b) { return a.z < b.z; })->z;
