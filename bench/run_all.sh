@@ -37,6 +37,19 @@ mkdir -p "$(dirname "$report")"
   "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/car_memory.py"
   echo '```'
   echo
+  echo "## Grain snow: accumulation on the car sample, pile albedo against KZ04"
+  echo
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/car_triangles.py" -- "$FIRN_ROOT/out/car_triangles.npz" > /dev/null
+  PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/bench/grains_bench.py" --scene "$FIRN_ROOT/out/car_triangles.npz"
+  echo
+  echo "## Grain snow in Cycles against the core's brute force (same grains, same run)"
+  echo
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/grains_vs_cycles.py" -- --grains 40000 --samples 256 --pixels 48
+  echo
+  echo "## Multi-scale grain snow against all grains at equal noise (grain_scales sample)"
+  echo
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/grain_scales_bench.py" -- --samples 16 --width 100
+  echo
   echo "## The UI's longest stalls during Add Snow Layer and Bake Scattering (car sample, window under Xvfb)"
   echo
   "$FIRN_ROOT/bench/ui_stall.sh"

@@ -34,9 +34,8 @@ def build_scene():
     return scene, targets
 
 
-def main():
-    args = common.parse_args(__doc__, "out/nishita_comparison.png")
-    stages = common.Stages()
+def render_panels(args, stages):
+    """(a) opaque, (b) single scattering, (c) baked multiple scattering: the three PNGs."""
     scene, targets = stages.run("build scene", build_scene)
     snow = stages.run("add snow layer", common.add_snow, targets, depth=0.1, spacing=0.04, surface_mesh=True)
     surface = next(child for child in snow.children if child.type == "MESH" and child != snow.firn.metaballs)
@@ -55,10 +54,11 @@ def main():
     stages.run("bake", common.bake, [snow])
     stages.run("render multiple", common.render, scene, panels[2], width, args.samples, aspect=(1, 1),
                label="(c) multiple scattering")
-    common.side_by_side(panels, args.output)
-    if not args.no_save:
-        stages.run("save .blend", common.save_next_to, __file__, args.blend)
-    print(f"firn sample: total {stages.total():.2f} s -> {args.output}")
+    return panels
+
+
+def main():
+    common.panels_sample(__file__, __doc__, render_panels)
 
 
 if __name__ == "__main__":

@@ -32,7 +32,7 @@ class Stages:
         return sum(seconds for _, seconds in self.rows)
 
 
-def parse_args(description, default_output):
+def parse_args(description, default_output, add_arguments=None):
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--output", default=default_output, help="PNG to render")
@@ -40,6 +40,8 @@ def parse_args(description, default_output):
     parser.add_argument("--samples", type=int, default=32)
     parser.add_argument("--no-save", action="store_true", help="do not save the .blend next to the script")
     parser.add_argument("--blend", help="save the .blend here instead of next to the script")
+    if add_arguments:
+        add_arguments(parser)  # the sample's own
     return parser.parse_args(argv)
 
 
@@ -65,6 +67,14 @@ def nishita_sky(scene, sun_elevation_deg, sun_rotation_deg, strength=0.3):
     background = nodes["Background"]
     background.inputs["Strength"].default_value = strength
     world.node_tree.links.new(sky.outputs["Color"], background.inputs["Color"])
+    scene.world = world
+
+
+def overcast_sky(scene, radiance=1.0):
+    """A uniform sky of `radiance` (W/m²/sr per channel), as under an overcast sky (Chrisman's sky hemisphere)."""
+    world = bpy.data.worlds.new("Overcast")
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (radiance, radiance, radiance, 1.0)
     scene.world = world
 
 
@@ -184,6 +194,18 @@ def side_by_side(paths, output):
     result.save()
     for image in images + [result]:
         bpy.data.images.remove(image)
+
+
+def panels_sample(script_file, description, render_panels, add_arguments=None):
+    """The whole job of a comparison sample: `render_panels(args, stages)` renders its panels and returns their
+    PNGs, which are joined left to right into the output; then the .blend is saved."""
+    name = os.path.splitext(os.path.basename(script_file))[0]
+    args = parse_args(description, f"out/{name}.png", add_arguments)
+    stages = Stages()
+    side_by_side(render_panels(args, stages), args.output)
+    if not args.no_save:
+        stages.run("save .blend", save_next_to, script_file, args.blend)
+    print(f"firn sample: total {stages.total():.2f} s -> {args.output}")
 
 
 def snow_bake_render(script_file, description, build_scene, **snow_settings):

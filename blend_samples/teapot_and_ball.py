@@ -55,13 +55,8 @@ def snow_version(name, depth, voxel_size, args, stages):
 
 
 def main():
-    args = common.parse_args(__doc__, "out/teapot_and_ball.png")
-    stages = common.Stages()
-    paths = [snow_version(name, depth, voxel, args, stages) for name, depth, voxel in DEPTHS]
-    common.side_by_side(paths, args.output)
-    if not args.no_save:
-        stages.run("save .blend", common.save_next_to, __file__, args.blend)
-    print(f"firn sample: total {stages.total():.2f} s -> {args.output}")
+    common.panels_sample(__file__, __doc__, lambda args, stages: [
+        snow_version(name, depth, voxel, args, stages) for name, depth, voxel in DEPTHS])
 
 
 if __name__ == "__main__":

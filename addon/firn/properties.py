@@ -119,6 +119,11 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
         description="This mesh is a snow object's viewport proxy: never rendered, never holds or stops snow",
         default=False,
     )
+    is_grains: bpy.props.BoolProperty(
+        name="Is Grain Snow",
+        description="This object holds Firn's ice grains (Add Grain Snow): one point per grain",
+        default=False,
+    )
     display: bpy.props.EnumProperty(
         name="Display", description="How the snow shows in the viewport (Cycles always renders the volume)",
         items=proxy.DISPLAY_ITEMS, default="SURFACE", update=_apply_display)

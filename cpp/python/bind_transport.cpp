@@ -23,11 +23,6 @@ namespace firncore {
 
 namespace {
 
-using RgbTuple = std::array<double, 3>;
-using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
-
-firn::Rgb rgb(const RgbTuple &t) { return {t[0], t[1], t[2]}; }
-RgbTuple tuple(const firn::Rgb &c) { return {c.x, c.y, c.z}; }
 
 RgbTuple rgbFrom(const py::handle &values, const char *what) {
     const py::sequence rgb = itemsOf(values, 3, what, "(r, g, b)");
@@ -103,14 +98,6 @@ std::vector<firn::Ray> raysFrom(const DoubleArray &origins, const DoubleArray &d
         rays[i] = {o, d / length};
     }
     return rays;
-}
-
-DoubleArray rgbRows(const std::vector<firn::Rgb> &values) {
-    DoubleArray out({py::ssize_t(values.size()), py::ssize_t(3)});
-    auto view = out.mutable_unchecked<2>();
-    for (std::size_t i = 0; i < values.size(); ++i)
-        for (int c = 0; c < 3; ++c) view(i, c) = values[i][c];
-    return out;
 }
 
 void bindLights(py::module_ &m) {

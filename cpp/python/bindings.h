@@ -23,5 +23,6 @@ void bindUtil(pybind11::module_ &m);       // errors, Progress, threads
 void bindOptics(pybind11::module_ &m);     // snow optics, KZ04 albedos, ice and water absorption
 void bindSnow(pybind11::module_ &m);       // Add Snow Layer
 void bindTransport(pybind11::module_ &m);  // lights, bake, reference tools
+void bindGrains(pybind11::module_ &m);    // grain snow: accumulation, grain renderer, pile albedo
 void bindIo(pybind11::module_ &m);         // reading grids back
 }  // namespace firncore

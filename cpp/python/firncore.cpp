@@ -10,5 +10,6 @@ PYBIND11_MODULE(firncore, m) {
     firncore::bindOptics(m);
     firncore::bindSnow(m);
     firncore::bindTransport(m);
+    firncore::bindGrains(m);
     firncore::bindIo(m);
 }

@@ -55,4 +55,12 @@ py::sequence itemsOf(const py::handle &object, std::size_t size, const std::stri
     return py::reinterpret_borrow<py::sequence>(object);
 }
 
+DoubleArray rgbRows(const std::vector<firn::Rgb> &values) {
+    DoubleArray out({pybind11::ssize_t(values.size()), pybind11::ssize_t(3)});
+    auto view = out.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < values.size(); ++i)
+        for (int c = 0; c < 3; ++c) view(i, c) = values[i][c];
+    return out;
+}
+
 }  // namespace firncore

@@ -1,16 +1,28 @@
 #pragma once
 
 // numpy (N, 3) arrays <-> firn::TriangleMesh, shared by every binding that takes geometry.
+#include <array>
 #include <string>
+#include <vector>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
 #include "firn/geometry/mesh.h"
+#include "firn/util/color.h"
 
 namespace firncore {
 
 using FloatArray = pybind11::array_t<float, pybind11::array::c_style | pybind11::array::forcecast>;
+using DoubleArray = pybind11::array_t<double, pybind11::array::c_style | pybind11::array::forcecast>;
+using RgbTuple = std::array<double, 3>;  // also any (x, y, z) triple
+
+inline firn::Rgb rgb(const RgbTuple &t) { return {t[0], t[1], t[2]}; }
+inline RgbTuple tuple(const firn::Rgb &c) { return {c.x, c.y, c.z}; }
+
+// Triples (RGB or points, both glm::dvec3) as an (N, 3) float64 array.
+DoubleArray rgbRows(const std::vector<firn::Rgb> &values);
+
 using IndexArray = pybind11::array_t<unsigned, pybind11::array::c_style | pybind11::array::forcecast>;
 
 // Any array-like as C-contiguous float32; InvalidArgument naming `what` when it holds no numbers.

@@ -2,8 +2,8 @@
 
     util  <-  geometry  <-  optics, snow  <-  transport, grains, spray  <-  io
 
-Folders on the same layer are siblings and do not include each other (optics and snow are independent; the
-future grains and spray build on snow and optics as transport does). The Python bindings (cpp/python/) sit above
+Folders on the same layer are siblings and do not include each other (optics and snow are independent; grains
+and the future spray build on snow and optics as transport does). The Python bindings (cpp/python/) sit above
 every layer. docs/architecture.md draws the same picture.
 """
 

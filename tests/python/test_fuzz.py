@@ -204,3 +204,31 @@ def test_fuzz_optics(seed):
     albedo = call(firncore.kz04_albedo, setting(rng, 390e-9, 800e-9), setting(rng, 0, 1), setting(rng, 0, 1), **snow)
     if albedo is not None:
         assert 0 <= albedo <= 1
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_fuzz_grains(seed):
+    rng = np.random.default_rng(seed)
+    vertices, triangles = soup(rng) if rng.random() < 0.5 else ground(rng)
+    direction = (awkward(rng), awkward(rng), awkward(rng)) if rng.random() < 0.1 else (0, 0, -1)
+    count = int(rng.choice([0, 1, 50, 200, 10**9])) if rng.random() < 0.2 else 100
+    grains = call(firncore.accumulate_grains, vertices, triangles, count=count, radius=setting(rng, 2e-3, 2e-2),
+                  radius_variation=setting(rng, 0, 0.9), direction=direction, max_slope_deg=setting(rng, 0, 90),
+                  seed=int(rng.integers(100)), max_rays=2000)
+    if grains is not None:
+        centres, radii, stats = grains
+        assert centres.shape == (len(radii), 3) and np.isfinite(centres).all() and (radii > 0).all()
+        assert stats["rays"] <= 2000
+    n = int(rng.integers(0, 20))
+    centres = rng.uniform(-0.1, 0.1, (n, 3))
+    radii = rng.uniform(1e-3, 2e-2, n)
+    if n and rng.random() < 0.3:
+        (centres.flat if rng.random() < 0.5 else radii)[0] = awkward(rng)
+    origins = rng.uniform(-0.3, 0.3, (4, 3))
+    directions = rng.normal(size=(4, 3)) if rng.random() < 0.9 else np.zeros((4, 3))
+    result = call(firncore.grain_radiance, centres, radii, origins, directions, eta=setting(rng, 1.2, 1.5),
+                  ice_absorption=(setting(rng, 0, 100),) * 3, sky=(setting(rng, 0, 2),) * 3,
+                  samples=int(rng.choice([1, 4, 0, -1])) if rng.random() < 0.2 else 4, seed=seed)
+    if result is not None:
+        mean, error = result
+        assert mean.shape == (4, 3) and np.isfinite(mean).all() and (mean >= 0).all()

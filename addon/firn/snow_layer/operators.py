@@ -10,6 +10,7 @@ import numpy as np
 from mathutils import Matrix
 
 from ..common import cache, preferences, scene_geometry
+from ..common.modes import object_mode_poll
 from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
@@ -48,7 +49,7 @@ def is_snow_target(obj):
     return scene_geometry.makes_geometry(obj) or (obj.type == "VOLUME" and obj.firn.is_snow)
 
 
-def _triangles(objects, depsgraph):
+def target_triangles(objects, depsgraph):
     """World triangles (m) of mesh-like objects with their instances, and of the surface of snow objects (their
     grids are in world metres already: vdb-contract.md)."""
     meshes = [scene_geometry.world_triangles([obj for obj in objects if obj.type != "VOLUME"], depsgraph)]
@@ -79,10 +80,10 @@ def gather_inputs(context, props, targets, object_name):
         raise UserError("Select the objects to cover with snow (meshes, curves, surfaces, text, metaballs, "
                         "collection instances or earlier snow)")
     depsgraph = context.evaluated_depsgraph_get()
-    target_arrays = _triangles(targets, depsgraph)
+    target_arrays = target_triangles(targets, depsgraph)
     if target_arrays is None:
         raise UserError("The selected objects have no faces to hold snow (a curve needs a bevel or extrusion)")
-    occluders = _triangles(_occluder_objects(context, props, targets), depsgraph)
+    occluders = target_triangles(_occluder_objects(context, props, targets), depsgraph)
     path, stored_path = cache.snow_file(object_name)
     cache.check_writable(path)
     settings = core_settings(props, _max_voxels(), metres)
@@ -238,12 +239,7 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
     __annotations__ = dict(SNOW_LAYER_PROPERTIES)
     job_label = "Add Snow Layer"
 
-    @classmethod
-    def poll(cls, context):
-        if context.mode != "OBJECT":
-            cls.poll_message_set("Switch to Object Mode")
-            return False
-        return True
+    poll = classmethod(object_mode_poll)
 
     def draw(self, _context):
         draw_layer_settings(self.layout, self)

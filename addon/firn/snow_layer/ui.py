@@ -42,6 +42,7 @@ class FIRN_PT_sidebar(bpy.types.Panel):
     def draw(self, context):
         layout = self.layout
         layout.operator("firn.add_snow_layer", icon="FREEZE")
+        layout.operator("firn.add_grain_snow", icon="PARTICLE_POINT")
         snow = active_snow(context)
         if snow is None:
             layout.label(text="Select objects, then Add Snow Layer")

@@ -1,54 +1,75 @@
 #include "firn/geometry/ray_caster.h"
 
-#include <string>
+#include <algorithm>
+#include <cmath>
 
-#include <embree3/rtcore.h>
 #include <glm/geometric.hpp>
 
+#include "firn/geometry/embree.h"
 #include "firn/util/error.h"
 
 namespace firn {
 
 struct RayCaster::Impl {
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
+    EmbreeScene embree;
     std::vector<glm::vec3> normals;  // unit, per triangle
+    TriangleMesh mesh;               // for exact distances in point queries
 };
 
 namespace {
 
-void throwOnDeviceError(RTCDevice device, const char *what) {
-    const RTCError error = rtcGetDeviceError(device);
-    if (error != RTC_ERROR_NONE)
-        throw std::runtime_error(std::string("Embree failed to ") + what + " (error " + std::to_string(error) + ")");
+// The point of triangle abc nearest to p (Ericson, "Real-Time Collision Detection", 2005, section 5.1.5).
+glm::dvec3 closestPointOnTriangle(const glm::dvec3 &p, const glm::dvec3 &a, const glm::dvec3 &b, const glm::dvec3 &c) {
+    const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return a;
+    const glm::dvec3 bp = p - b;
+    const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) return b;
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3));
+    const glm::dvec3 cp = p - c;
+    const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) return c;
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    const double denom = 1.0 / (va + vb + vc);
+    return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
-RTCRay makeRay(const glm::vec3 &o, const glm::vec3 &d, float tNear, float tFar) {
-    RTCRay ray{};
-    ray.org_x = o.x, ray.org_y = o.y, ray.org_z = o.z;
-    ray.dir_x = d.x, ray.dir_y = d.y, ray.dir_z = d.z;
-    ray.tnear = tNear;
-    ray.tfar = tFar;
-    ray.mask = 0xFFFFFFFF;
-    ray.flags = 0;
-    return ray;
+struct ClosestQuery {
+    const TriangleMesh *mesh;
+    glm::dvec3 point;
+    double distance;  // m, shrinks as nearer triangles are found
+};
+
+bool visitTriangle(RTCPointQueryFunctionArguments *args) {
+    auto *q = static_cast<ClosestQuery *>(args->userPtr);
+    const unsigned t = args->primID;
+    const glm::dvec3 nearest = closestPointOnTriangle(q->point, q->mesh->vertex(t, 0), q->mesh->vertex(t, 1),
+                                                      q->mesh->vertex(t, 2));
+    const double d = glm::length(nearest - q->point);
+    if (d >= q->distance) return false;
+    q->distance = d;
+    args->query->radius = static_cast<float>(d) * 1.0001f + 1e-7f;  // shrink the search, never below the exact d
+    return true;
 }
 
 }  // namespace
 
 RayCaster::RayCaster(const TriangleMesh &mesh) : impl_(std::make_unique<Impl>()), empty_(mesh.empty()) {
-    impl_->device = rtcNewDevice(nullptr);
-    if (!impl_->device) throw std::runtime_error("Embree could not create a device");
-    impl_->scene = rtcNewScene(impl_->device);
+    RTCDevice device = impl_->embree.device;
     // Few rays per triangle here: a fast build (Morton) beats a better tree.
-    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_LOW);
+    rtcSetSceneBuildQuality(impl_->embree.scene, RTC_BUILD_QUALITY_LOW);
     if (!empty_) {
-        RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         auto *vertices = static_cast<float *>(rtcSetNewGeometryBuffer(
             geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
         auto *indices = static_cast<unsigned *>(rtcSetNewGeometryBuffer(
             geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
-        throwOnDeviceError(impl_->device, "allocate the scene (out of memory?)");
+        throwOnEmbreeError(device, "allocate the scene (out of memory?)");
         for (std::size_t i = 0; i < mesh.positions.size(); ++i)
             for (int k = 0; k < 3; ++k) vertices[3 * i + k] = mesh.positions[i][k];
         impl_->normals.resize(mesh.triangles.size());
@@ -56,39 +77,43 @@ RayCaster::RayCaster(const TriangleMesh &mesh) : impl_(std::make_unique<Impl>())
             for (int k = 0; k < 3; ++k) indices[3 * t + k] = mesh.triangles[t][k];
             impl_->normals[t] = glm::normalize(mesh.crossNormal(t));
         }
-        rtcCommitGeometry(geometry);
-        rtcAttachGeometry(impl_->scene, geometry);
-        rtcReleaseGeometry(geometry);
+        impl_->mesh = mesh;
+        impl_->embree.attach(geometry);
     }
-    rtcCommitScene(impl_->scene);
-    throwOnDeviceError(impl_->device, "build the scene");
+    impl_->embree.commit("build the scene");
 }
 
-RayCaster::~RayCaster() {
-    if (impl_->scene) rtcReleaseScene(impl_->scene);
-    if (impl_->device) rtcReleaseDevice(impl_->device);
-}
+RayCaster::~RayCaster() = default;
 
 bool RayCaster::occluded(const glm::vec3 &origin, const glm::vec3 &direction, float tNear, float tFar) const {
     if (empty_) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    RTCRay ray = makeRay(origin, direction, tNear, tFar);
-    rtcOccluded1(impl_->scene, &context, &ray);
+    RTCRay ray = makeEmbreeRay(origin, direction, tNear, tFar);
+    rtcOccluded1(impl_->embree.scene, &context, &ray);
     return ray.tfar < 0.0f;  // Embree marks a blocked ray with tfar = -inf
 }
 
 std::optional<RayCaster::Hit> RayCaster::intersect(const glm::vec3 &origin, const glm::vec3 &direction,
                                                    float tNear, float tFar) const {
     if (empty_) return std::nullopt;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    RTCRayHit query{};
-    query.ray = makeRay(origin, direction, tNear, tFar);
-    query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl_->scene, &context, &query);
+    const RTCRayHit query = intersectEmbree(impl_->embree.scene, origin, direction, tNear, tFar);
     if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
     return Hit{query.ray.tfar, query.hit.primID, impl_->normals[query.hit.primID]};
+}
+
+std::optional<double> RayCaster::closestDistance(const glm::dvec3 &point, double maxDistance) const {
+    if (empty_) return std::nullopt;
+    RTCPointQuery query{};
+    query.x = static_cast<float>(point.x), query.y = static_cast<float>(point.y), query.z = static_cast<float>(point.z);
+    query.radius = static_cast<float>(maxDistance) * 1.0001f + 1e-7f;  // float rounding must not cull a triangle
+    query.time = 0.0f;
+    RTCPointQueryContext context;
+    rtcInitPointQueryContext(&context);
+    ClosestQuery closest{&impl_->mesh, point, maxDistance};
+    rtcPointQuery(impl_->embree.scene, &query, &context, visitTriangle, &closest);
+    if (closest.distance >= maxDistance) return std::nullopt;
+    return closest.distance;
 }
 
 }  // namespace firn

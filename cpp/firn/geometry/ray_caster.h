@@ -32,6 +32,10 @@ class RayCaster {
     std::optional<Hit> intersect(const glm::vec3 &origin, const glm::vec3 &direction, float tNear = 0.0f,
                                  float tFar = std::numeric_limits<float>::infinity()) const;
 
+    // Distance (m) from `point` to the nearest triangle, if one lies within `maxDistance` (m); an Embree
+    // point query (BVH-culled), the closest point on each candidate triangle computed in double precision.
+    std::optional<double> closestDistance(const glm::dvec3 &point, double maxDistance) const;
+
     bool empty() const { return empty_; }
 
   private:

@@ -1,0 +1,79 @@
+"""Blender with a window (under xvfb-run): Add Grain Snow started as a user would (INVOKE_DEFAULT) accumulates in
+a worker thread with progress, and Esc cancels it leaving the scene as it was (no object, Cycles' light paths
+untouched).
+
+xvfb-run blender --factory-startup --enable-event-simulate --python grain_job.py   (exit code 0 = pass)
+"""
+
+import os
+import sys
+import time
+import traceback
+
+import addon_utils
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ui_test import HUNG, fail, job_running, window_context, worker_alive  # noqa: E402
+
+GRAINS = 2_000_000  # seconds of accumulation on any machine: long enough to be cancelled half way
+state = {"phase": "start", "started": 0.0, "bounces": 0}
+
+
+def start_job():
+    addon_utils.enable("firn", default_set=True)
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    bpy.context.object.select_set(True)
+    state["bounces"] = bpy.context.scene.cycles.max_bounces
+    with bpy.context.temp_override(**window_context()):
+        result = bpy.ops.firn.add_grain_snow("INVOKE_DEFAULT", grain_radius=0.001, grain_count=GRAINS)
+    if result != {"RUNNING_MODAL"}:
+        fail(f"expected RUNNING_MODAL, got {result}")
+    if not worker_alive():
+        fail("the job did not run in a worker thread")
+    state["started"] = time.perf_counter()
+
+
+def press_esc():
+    window = bpy.context.window_manager.windows[0]
+    window.event_simulate(type="ESC", value="PRESS")
+    window.event_simulate(type="ESC", value="RELEASE")
+
+
+def tick():
+    try:
+        from firn.common.jobs import running_jobs
+
+        if state["phase"] == "start":
+            start_job()
+            state["phase"] = "running"
+        elif state["phase"] == "running":
+            jobs = running_jobs()
+            if not jobs:
+                fail("the job ended before it showed progress (raise GRAINS)")
+            if jobs[0].progress.fraction > 0.0:  # progress reported while the grains fall: press Esc
+                press_esc()
+                state["phase"], state["started"] = "cancelled", time.perf_counter()
+            elif time.perf_counter() - state["started"] > HUNG:
+                fail("no progress: hung")
+        elif state["phase"] == "cancelled":
+            if not job_running():
+                print(f"Esc stopped Add Grain Snow in {time.perf_counter() - state['started']:.2f} s")
+                if any(obj.firn.is_grains for obj in bpy.data.objects):
+                    fail("Esc left a grain object")
+                if bpy.context.scene.cycles.max_bounces != state["bounces"]:
+                    fail("a cancelled Add Grain Snow changed Cycles' light paths")
+                print("PASS")
+                bpy.ops.wm.quit_blender()
+                return None
+            if time.perf_counter() - state["started"] > HUNG:
+                fail("Esc did not stop the job: hung")
+    except Exception:
+        traceback.print_exc()
+        fail("exception")
+    return 0.05
+
+
+bpy.app.timers.register(tick, first_interval=0.5)
