@@ -8,13 +8,12 @@ xvfb-run blender --factory-startup --enable-event-simulate --python grain_job.py
 import os
 import sys
 import time
-import traceback
 
 import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, job_running, window_context, worker_alive  # noqa: E402
+from ui_test import HUNG, fail, job_running, passed, run_timer, window_context, worker_alive  # noqa: E402
 
 GRAINS = 2_000_000  # seconds of accumulation on any machine: long enough to be cancelled half way
 state = {"phase": "start", "started": 0.0, "bounces": 0}
@@ -42,38 +41,33 @@ def press_esc():
     window.event_simulate(type="ESC", value="RELEASE")
 
 
-def tick():
-    try:
-        from firn.common.jobs import running_jobs
+def step():
+    from firn.common.jobs import running_jobs
 
-        if state["phase"] == "start":
-            start_job()
-            state["phase"] = "running"
-        elif state["phase"] == "running":
-            jobs = running_jobs()
-            if not jobs:
-                fail("the job ended before it showed progress (raise GRAINS)")
-            if jobs[0].progress.fraction > 0.0:  # progress reported while the grains fall: press Esc
-                press_esc()
-                state["phase"], state["started"] = "cancelled", time.perf_counter()
-            elif time.perf_counter() - state["started"] > HUNG:
-                fail("no progress: hung")
-        elif state["phase"] == "cancelled":
-            if not job_running():
-                print(f"Esc stopped Add Grain Snow in {time.perf_counter() - state['started']:.2f} s")
-                if any(obj.firn.is_grains for obj in bpy.data.objects):
-                    fail("Esc left a grain object")
-                if bpy.context.scene.cycles.max_bounces != state["bounces"]:
-                    fail("a cancelled Add Grain Snow changed Cycles' light paths")
-                print("PASS")
-                bpy.ops.wm.quit_blender()
-                return None
-            if time.perf_counter() - state["started"] > HUNG:
-                fail("Esc did not stop the job: hung")
-    except Exception:
-        traceback.print_exc()
-        fail("exception")
-    return 0.05
+    if state["phase"] == "start":
+        start_job()
+        state["phase"] = "running"
+    elif state["phase"] == "running":
+        jobs = running_jobs()
+        if not jobs:
+            fail("the job ended before it showed progress (raise GRAINS)")
+        if jobs[0].progress.fraction > 0.0:  # progress reported while the grains fall: press Esc
+            press_esc()
+            state["phase"], state["started"] = "cancelled", time.perf_counter()
+        elif time.perf_counter() - state["started"] > HUNG:
+            fail("no progress: hung")
+    elif state["phase"] == "cancelled":
+        if not job_running():
+            print(f"Esc stopped Add Grain Snow in {time.perf_counter() - state['started']:.2f} s")
+            if any(obj.firn.is_grains for obj in bpy.data.objects):
+                fail("Esc left a grain object")
+            if bpy.context.scene.cycles.max_bounces != state["bounces"]:
+                fail("a cancelled Add Grain Snow changed Cycles' light paths")
+            passed()
+            return False
+        if time.perf_counter() - state["started"] > HUNG:
+            fail("Esc did not stop the job: hung")
+    return True
 
 
-bpy.app.timers.register(tick, first_interval=0.5)
+run_timer(step)

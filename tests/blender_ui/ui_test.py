@@ -47,3 +47,23 @@ def aim_view(space, location, pitch_deg, yaw_deg, distance):
     region.view_location = Vector(location)
     region.view_rotation = Euler((math.radians(pitch_deg), 0.0, math.radians(yaw_deg))).to_quaternion()
     region.view_distance = distance
+
+
+def passed(message="PASS"):
+    """Ends the test successfully (CTest looks for PASS on stdout)."""
+    print(message, flush=True)
+    bpy.ops.wm.quit_blender()
+
+
+def run_timer(step, interval=0.05, first_interval=0.5):
+    """Runs `step()` on a timer until it returns False; an exception in it fails the test."""
+    import traceback
+
+    def tick():
+        try:
+            return interval if step() is not False else None
+        except Exception:
+            traceback.print_exc()
+            fail("exception")
+
+    bpy.app.timers.register(tick, first_interval=first_interval)
