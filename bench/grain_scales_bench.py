@@ -3,7 +3,7 @@ grains, and under 6 mm of grains over a baked volumetric layer with the grains' 
 with different seeds at the same samples; half the difference of the two images is the noise, so the time to
 reach a common noise level is this render's time × (noise / target)² (Monte Carlo noise falls as 1/√samples).
 
-blender -b --factory-startup --python bench/grain_scales_bench.py -- [--samples 16] [--width 120]
+blender -b --factory-startup --python bench/grain_scales_bench.py -- [--samples 16] [--width 120] [--depth 0.04]
 """
 
 import os
@@ -39,6 +39,8 @@ def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     samples = int(argv[argv.index("--samples") + 1]) if "--samples" in argv else 16
     width = int(argv[argv.index("--width") + 1]) if "--width" in argv else 120
+    if "--depth" in argv:  # m of snow on the open table (the sample's 4 cm by default)
+        grain_scales.DEPTH = float(argv[argv.index("--depth") + 1])
     rows = []
     for name, make_snow in grain_scales.PANELS:
         if name == "volume":
@@ -49,7 +51,8 @@ def main():
         prepare = time.perf_counter() - start
         rows.append((name, prepare, *noise_and_time(samples, width)))
     target = min(row[2] for row in rows)
-    print(f"teapot under 4 cm of 1 mm grains (grain_scales sample), {width}² px, {samples} samples, 2 cores, "
+    print(f"teapot under {grain_scales.DEPTH * 100:g} cm of 1 mm grains (grain_scales sample; multi-scale: "
+          f"{grain_scales.SHELL * 1000:g} mm of grains over the volume), {width}² px, {samples} samples, 2 cores, "
           f"overcast sky")
     print("| snow | snow + bake (s) | render (s) | mean | noise | render time at the noise of the best (s) |")
     print("|---|---|---|---|---|---|")

@@ -48,7 +48,10 @@ mkdir -p "$(dirname "$report")"
   echo
   echo "## Multi-scale grain snow against all grains at equal noise (grain_scales sample)"
   echo
-  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/grain_scales_bench.py" -- --samples 16 --width 100
+  for depth in 0.04 0.08; do
+    "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/grain_scales_bench.py" -- --samples 16 --width 100 --depth "$depth"
+    echo
+  done
   echo
   echo "## The UI's longest stalls during Add Snow Layer and Bake Scattering (car sample, window under Xvfb)"
   echo

@@ -66,7 +66,7 @@ def render_panels(args, stages):
     for samples in SAMPLES:
         path = os.path.join(folder, f"grain_cube_{samples}.png")
         stages.run(f"render {samples} spp", common.render, scene, path, args.width // 3, samples, aspect=(1, 1),
-                   label=f"{samples} sample{'s' if samples > 1 else ''}")
+                   label=f"{samples} sample{'s' if samples > 1 else ''}", stamp_time=True)
         paths.append(path)
     return paths
 

@@ -2,7 +2,7 @@
 grains (every grain traced), under a baked volumetric snow layer with the grains' optics, and multi-scale (a
 shell of grains over the volumetric layer), under an overcast sky (a sun's light reaches the table through
 clear grains only by refraction, which path tracing finds too rarely). Prints each panel's render time at equal
-samples. Saves grain_scales.blend (the multi-scale panel) next to this script.
+samples, and stamps it on the panel. Saves grain_scales.blend (the multi-scale panel) next to this script.
 
 blender -b --factory-startup --python blend_samples/grain_scales.py -- [--output out/grain_scales.png]
 """
@@ -87,7 +87,7 @@ def panel(name, make_snow, args, stages):
     stages.run(f"snow ({name})", make_snow, targets)
     path = os.path.join(tempfile.mkdtemp(prefix="firn_panels_"), f"grain_scales_{name}.png")
     stages.run(f"render ({name})", common.render, scene, path, args.width // 3, args.samples, aspect=(1, 1),
-               label=name)
+               label=name, stamp_time=True)
     return path
 
 

@@ -124,8 +124,9 @@ def add_snow(targets, **settings):
     return bpy.context.object
 
 
-def render(scene, output, width, samples, aspect=(16, 9), label=None):
-    """Cycles render to a PNG; `label` is written on the picture (comparison panels say what they show)."""
+def render(scene, output, width, samples, aspect=(16, 9), label=None, stamp_time=False):
+    """Cycles render to a PNG; `label` is written on the picture (comparison panels say what they show), and
+    with `stamp_time` the render's own time (Blender's stamp measures it)."""
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.samples = samples
@@ -136,6 +137,7 @@ def render(scene, output, width, samples, aspect=(16, 9), label=None):
     scene.render.image_settings.file_format = "PNG"
     scene.render.filepath = os.path.abspath(output)
     stamp_label(scene, label)
+    scene.render.use_stamp_render_time = stamp_time and label is not None
     os.makedirs(os.path.dirname(scene.render.filepath), exist_ok=True)
     bpy.ops.render.render(write_still=True)
 
