@@ -52,7 +52,6 @@ mkdir -p "$(dirname "$report")"
     "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/grain_scales_bench.py" -- --samples 16 --width 100 --depth "$depth"
     echo
   done
-  echo
   echo "## The UI's longest stalls during Add Snow Layer and Bake Scattering (car sample, window under Xvfb)"
   echo
   "$FIRN_ROOT/bench/ui_stall.sh"
