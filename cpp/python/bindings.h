@@ -24,5 +24,6 @@ void bindOptics(pybind11::module_ &m);     // snow optics, KZ04 albedos, ice and
 void bindSnow(pybind11::module_ &m);       // Add Snow Layer
 void bindTransport(pybind11::module_ &m);  // lights, bake, reference tools
 void bindGrains(pybind11::module_ &m);    // grain snow: accumulation, grain renderer, pile albedo
+void bindStructure(pybind11::module_ &m); // small-scale structure: sub-balls, glints
 void bindIo(pybind11::module_ &m);         // reading grids back
 }  // namespace firncore
