@@ -79,6 +79,22 @@ def _refresh_material(self, context):
     proxy.refresh_preview(self.id_data, context.scene if context else bpy.context.scene)
 
 
+def _refresh_structure(self, context):
+    """Render mode, sub-balls and glints rebuild the snow's material and its rendered surface."""
+    materials.ensure_snow_material(self.id_data)
+    proxy.apply_render_surface(self.id_data, context.scene if context else bpy.context.scene)
+
+
+RENDER_MODE_ITEMS = (
+    ("OPAQUE", "Opaque", "The snow's surface as an opaque diffuse surface of the snow's white-sky albedo "
+     "(Nishita et al. 1997, Fig. 6 a)"),
+    ("SINGLE", "Single Scattering", "Light scattered once in the snow, attenuated on its way in and out "
+     "(Fig. 6 b): camera rays scatter, every other ray only sees the extinction"),
+    ("BAKED", "Multiple Scattering", "All orders of scattering (Fig. 6 c, d): the bake when there is one, else "
+     "Cycles' brute-force volume path tracing of the same optics (slow)"),
+)
+
+
 def _apply_display(self, _context):
     proxy.apply_display(self.id_data)
 
@@ -250,6 +266,42 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
         soft_max=600.0,
         update=_refresh_material,
     )
+
+    # --- small-scale structure (docs/structure.md) ---
+    render_mode: bpy.props.EnumProperty(
+        name="Render Mode", description="How Cycles renders the snow", items=RENDER_MODE_ITEMS, default="BAKED",
+        update=_refresh_structure)
+    sub_balls: bpy.props.BoolProperty(
+        name="Sub-Balls", description="Grains far smaller than a voxel in the shallow snow (Nishita's sub-balls): "
+        "the density gathers into tiny metaballs, its mean kept, so a bake still applies", default=False,
+        update=_refresh_structure)
+    sub_ball_radius: bpy.props.FloatProperty(
+        name="Grain Radius", description="Mean radius of the sub-balls in metres, whatever the Unit Scale",
+        default=0.5e-3, min=1e-5, max=0.05, soft_max=5e-3, precision=5, step=0.01, update=_refresh_structure)
+    sub_ball_variation: bpy.props.FloatProperty(
+        name="Size Variation", description="Sub-ball radius r (1 ± this), uniform", subtype="FACTOR",
+        default=0.3, min=0.0, max=0.95, update=_refresh_structure)
+    sub_ball_depth: bpy.props.FloatProperty(
+        name="Depth", description="Optical depths (at the mean density) below the surface where the sub-balls "
+        "fade out; deeper, light has forgotten the grains", default=3.0, min=0.1, soft_max=20.0,
+        update=_refresh_structure)
+    sub_ball_strength: bpy.props.FloatProperty(
+        name="Strength", description="0: smooth snow; 1: all the shallow snow's mass in the sub-balls",
+        subtype="FACTOR", default=1.0, min=0.0, max=1.0, update=_refresh_structure)
+    sub_ball_resolve: bpy.props.BoolProperty(
+        name="Resolve Grains", description="Step through the snow at the grain scale so close-ups show every "
+        "grain (slow: Cycles' volume steps shrink from the voxel to the grain radius)", default=False,
+        update=_refresh_structure)
+    glints: bpy.props.BoolProperty(
+        name="Glints", description="Randomly oriented ice facets at the surface that mirror the sun: the sparkle "
+        "of fresh snow", default=False, update=_refresh_structure)
+    glint_density: bpy.props.FloatProperty(
+        name="Facets per m²", description="Facets per square metre of snow surface (at most 1 / (4 r²)); "
+        "of these only about Ω_sun / 25 mirror the sun towards the camera", default=2e5, min=1.0, soft_max=2e6,
+        precision=0, update=_refresh_structure)
+    glint_size: bpy.props.FloatProperty(
+        name="Facet Radius", description="Radius of a facet in metres, whatever the Unit Scale",
+        default=0.3e-3, min=1e-5, max=0.05, soft_max=3e-3, precision=5, step=0.01, update=_refresh_structure)
 
     # --- bake (issue "Bake Scattering"; docs/user-guide.md) ---
     bake_quality: bpy.props.EnumProperty(

@@ -13,17 +13,25 @@ Incoming turned into the object's frame (the grids' space; identity for Firn sno
 volume renders its emission exactly in Cycles at any step size, and every ray sees it: camera rays (the snow's
 look) and the indirect rays of nearby surfaces (bounce light from the snow). The bake fixes the optics it was
 made with: k is the baked one (obj.firn.bake_extinction_per_density) until the next bake.
+
+Single scattering (render mode SINGLE, Nishita et al. 1997 Fig. 6 b): camera rays meet the Principled Volume
+(they scatter once and see the lamps and the world directly), every other ray (shadow rays, the ray after the
+scatter) only Volume Absorption of the whole extinction, so no light scatters twice. Opaque (OPAQUE): the volume
+renders nothing and the snow's surface does (snow_layer/proxy.py). Sub-balls (material/structure.py) multiply
+the density by their factor before it becomes extinction, in every form.
 """
 
 import bpy
 
-from . import optics
+from . import optics, structure
 
 _TAG = "firn_snow"  # ID property marking the materials Firn manages
 _BAKED_TAG = "firn_baked"  # ... and those showing a bake
+_FORM_TAG = "firn_form"  # the form a material was built in: OPTICS, SINGLE, BAKED or OPAQUE, "+grains" with sub-balls
 _OPTICS_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Output")
 _BAKED_NODES = ("Firn Density", "Firn Extinction", "Firn Absorption", "Firn Emission", "Firn Source",
                 "Firn Source X", "Firn Source Y", "Firn Source Z", "Firn Incoming", "Firn Output")
+_SINGLE_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Absorption", "Firn Single", "Firn Output")
 BAKED_GRIDS = ("firn_source", "firn_source_x", "firn_source_y", "firn_source_z")  # docs/vdb-contract.md
 
 
@@ -48,9 +56,19 @@ def has_baked_grids(volume):
     return set(BAKED_GRIDS) <= {grid.name for grid in volume.grids}
 
 
+def material_form(obj):
+    """How the snow renders now: its render mode, with BAKED meaning the bake while its grids are in the file and
+    brute-force path tracing of the optics (OPTICS) until then."""
+    mode = obj.firn.render_mode
+    if mode != "BAKED":
+        return mode
+    baked = obj.firn.bake_fingerprint and obj.type == "VOLUME" and has_baked_grids(obj.data)
+    return "BAKED" if baked else "OPTICS"
+
+
 def ensure_snow_material(obj):
-    """Gives a snow object its Firn material (created in the first slot if it has none), in the form that fits
-    it: baked while it has a bake whose grids are in its file, else the live optics. Returns the material."""
+    """Gives a snow object its Firn material (created in the first slot if it has none), built in the form that
+    fits it now (material_form, with or without sub-balls), and writes its values. Returns the material."""
     if _snow_slot(obj) is None:
         material = bpy.data.materials.new(f"Firn Snow ({obj.name})")
         material[_TAG] = 1
@@ -60,45 +78,63 @@ def ensure_snow_material(obj):
         # Linked to the object, not its data: optics belong to the object, and linked duplicates share data.
         slot.link = "OBJECT"
         slot.material = material
-    if obj.firn.bake_fingerprint and obj.type == "VOLUME" and has_baked_grids(obj.data):
-        _show_bake(obj)
-    else:
-        _show_optics(obj)
-    return snow_material(obj)
+    material = _own_material(_snow_slot(obj))
+    form = material_form(obj)
+    key = form + ("+grains" if obj.firn.sub_balls and form != "OPAQUE" else "")
+    names, build = _FORMS[form]
+    nodes = material.node_tree.nodes if material.use_nodes and material.node_tree else ()
+    if material.get(_FORM_TAG) != key or not all(name in nodes for name in names):
+        material.use_nodes = True
+        build(material.node_tree, obj.firn.sub_balls)
+        material[_FORM_TAG] = key
+        if form == "BAKED":
+            material[_BAKED_TAG] = 1
+        elif _BAKED_TAG in material:
+            del material[_BAKED_TAG]
+    if hasattr(material, "cycles"):
+        resolve = obj.firn.sub_balls and obj.firn.sub_ball_resolve and obj.firn.voxel_size > 0.0
+        step = obj.firn.sub_ball_radius / obj.firn.voxel_size if resolve else 1.0
+        material.cycles.volume_step_rate = min(1.0, step)  # Cycles steps voxel size x this through the volume
+    _write_values(obj, material, form)
+    return material
 
 
 def refresh_snow_material(obj):
     """Writes the object's current optics into its Firn material; invalid settings leave it unchanged, and so
     does a bake (it keeps the optics it was made with until the next bake)."""
     slot = _snow_slot(obj)
-    if slot is None or is_baked_material(slot.material):
+    if slot is None:
         return
-    try:
-        volume = optics.volume_optics(obj.firn)
-    except ValueError:
-        return  # the Snow Material panel shows why
-    nodes = _nodes(_own_material(slot), _OPTICS_NODES, _build_optics)
-    nodes["Firn Extinction"].inputs[1].default_value = volume.extinction_per_density
-    nodes["Firn Volume"].inputs["Color"].default_value = (*volume.albedo, 1.0)
-    nodes["Firn Volume"].inputs["Anisotropy"].default_value = volume.g
+    material = slot.material
+    form = material.get(_FORM_TAG, "").split("+")[0]
+    if form in _FORMS and material.node_tree and all(name in material.node_tree.nodes for name in _FORMS[form][0]):
+        _write_values(obj, _own_material(slot), form)
+    else:
+        ensure_snow_material(obj)  # made by an earlier Firn, or its nodes were edited away
 
 
-def _show_optics(obj):
-    material = _own_material(_snow_slot(obj))
-    if is_baked_material(material):
-        del material[_BAKED_TAG]
-        _build_optics(material.node_tree)
-    refresh_snow_material(obj)
-
-
-def _show_bake(obj):
-    material = _own_material(_snow_slot(obj))
-    if not is_baked_material(material):
-        material.use_nodes = True
-        _build_baked(material.node_tree)
-        material[_BAKED_TAG] = 1
-    nodes = _nodes(material, _BAKED_NODES, _build_baked)
-    nodes["Firn Extinction"].inputs[1].default_value = obj.firn.bake_extinction_per_density
+def _write_values(obj, material, form):
+    nodes = material.node_tree.nodes
+    if form == "BAKED":
+        extinction_per_density = obj.firn.bake_extinction_per_density
+    elif form in ("OPTICS", "SINGLE"):
+        try:
+            volume = optics.volume_optics(obj.firn)
+        except ValueError:
+            return  # the Snow Material panel shows why
+        extinction_per_density = volume.extinction_per_density
+        nodes["Firn Volume"].inputs["Color"].default_value = (*volume.albedo, 1.0)
+        nodes["Firn Volume"].inputs["Anisotropy"].default_value = volume.g
+    else:
+        return
+    nodes["Firn Extinction"].inputs[1].default_value = extinction_per_density
+    grains = nodes.get("Firn Sub-Balls")
+    if grains is not None:
+        try:
+            structure.set_inputs(grains, structure.sub_ball_inputs(
+                obj.firn, extinction_per_density * obj.firn.mean_density))
+        except ValueError:
+            pass  # the Snow Structure panel shows why
 
 
 def _snow_slot(obj):
@@ -118,52 +154,92 @@ def _own_material(slot):
     return material
 
 
-def _nodes(material, names, build):
-    """The material's Firn nodes, rebuilt if any is missing (a user edited the tree)."""
-    material.use_nodes = True
-    nodes = material.node_tree.nodes
-    if not all(name in nodes for name in names):
-        build(material.node_tree)
-    return nodes
-
-
 def _new_node(nodes, kind, name, label, location):
     node = nodes.new(kind)
     node.name, node.label, node.location = name, label, location
     return node
 
 
-def _density_extinction(nodes, links, y):
-    """Attribute 'density' (kg/m³) × k (m²/kg) = sigma_t (1/m): the 'Firn Extinction' node's output."""
+def _density_extinction(nodes, links, y, sub_balls):
+    """Attribute 'density' (kg/m³) × k (m²/kg) = sigma_t (1/m): the 'Firn Extinction' node's output; with
+    sub-balls the density is first multiplied by their factor (depth below the surface = -'surface', m)."""
     density = _new_node(nodes, "ShaderNodeAttribute", "Firn Density", "Density (kg/m³)", (-600, y))
     density.attribute_type = "GEOMETRY"
     density.attribute_name = "density"
     extinction = _new_node(nodes, "ShaderNodeMath", "Firn Extinction", "σt (1/m) = density × m²/kg", (-350, y))
     extinction.operation = "MULTIPLY"
-    links.new(density.outputs["Fac"], extinction.inputs[0])
+    if not sub_balls:
+        links.new(density.outputs["Fac"], extinction.inputs[0])
+        return extinction
+    surface = _new_node(nodes, "ShaderNodeAttribute", "Firn Surface", "surface (m)", (-1200, y + 300))
+    surface.attribute_type, surface.attribute_name = "GEOMETRY", "surface"
+    depth = _new_node(nodes, "ShaderNodeMath", "Firn Depth", "depth (m)", (-1000, y + 300))
+    depth.operation = "MULTIPLY"
+    depth.inputs[1].default_value = -1.0
+    links.new(surface.outputs["Fac"], depth.inputs[0])
+    coordinates = _new_node(nodes, "ShaderNodeTexCoord", "Firn Coordinates", "", (-1000, y + 500))
+    grains = _new_node(nodes, "ShaderNodeGroup", "Firn Sub-Balls", "Sub-Balls", (-800, y + 300))
+    grains.node_tree = structure.sub_ball_group()
+    links.new(coordinates.outputs["Object"], grains.inputs["Position"])  # metres for Firn snow
+    links.new(depth.outputs["Value"], grains.inputs["Depth"])
+    grain_density = _new_node(nodes, "ShaderNodeMath", "Firn Grain Density", "density × sub-balls", (-500, y + 150))
+    grain_density.operation = "MULTIPLY"
+    links.new(density.outputs["Fac"], grain_density.inputs[0])
+    links.new(grains.outputs["Factor"], grain_density.inputs[1])
+    links.new(grain_density.outputs["Value"], extinction.inputs[0])
     return extinction
 
 
-def _build_optics(tree):
-    nodes, links = tree.nodes, tree.links
-    nodes.clear()
-    extinction = _density_extinction(nodes, links, 0)
-    volume = _new_node(nodes, "ShaderNodeVolumePrincipled", "Firn Volume", "Snow", (-100, 0))
+def _principled(nodes, links, extinction, y):
+    volume = _new_node(nodes, "ShaderNodeVolumePrincipled", "Firn Volume", "Snow", (-100, y))
     volume.inputs["Density Attribute"].default_value = ""  # the density arrives through the link only
     volume.inputs["Absorption Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # Color = single-scattering albedo
-    output = _new_node(nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (200, 0))
     links.new(extinction.outputs["Value"], volume.inputs["Density"])
+    return volume
+
+
+def _absorption(nodes, links, extinction, y):
+    absorption = _new_node(nodes, "ShaderNodeVolumeAbsorption", "Firn Absorption", "Absorption σt", (-100, y))
+    absorption.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # absorbs (1 - Color) × Density = σt
+    links.new(extinction.outputs["Value"], absorption.inputs["Density"])
+    return absorption
+
+
+def _build_optics(tree, sub_balls):
+    nodes, links = tree.nodes, tree.links
+    nodes.clear()
+    volume = _principled(nodes, links, _density_extinction(nodes, links, 0, sub_balls), 0)
+    output = _new_node(nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (200, 0))
     links.new(volume.outputs["Volume"], output.inputs["Volume"])
 
 
-def _build_baked(tree):
+def _build_single(tree, sub_balls):
     nodes, links = tree.nodes, tree.links
     nodes.clear()
-    extinction = _density_extinction(nodes, links, 300)
+    extinction = _density_extinction(nodes, links, 0, sub_balls)
+    volume = _principled(nodes, links, extinction, 0)
+    absorption = _absorption(nodes, links, extinction, -300)
+    path = _new_node(nodes, "ShaderNodeLightPath", "Firn Light Path", "", (-100, 300))
+    single = _new_node(nodes, "ShaderNodeMixShader", "Firn Single", "camera rays scatter, others only attenuate",
+                       (200, 0))
+    links.new(path.outputs["Is Camera Ray"], single.inputs["Fac"])
+    links.new(absorption.outputs["Volume"], single.inputs[1])
+    links.new(volume.outputs["Volume"], single.inputs[2])
+    output = _new_node(nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (400, 0))
+    links.new(single.outputs["Shader"], output.inputs["Volume"])
 
-    absorption = _new_node(nodes, "ShaderNodeVolumeAbsorption", "Firn Absorption", "Absorption σt", (-100, 300))
-    absorption.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # absorbs (1 - Color) × Density = σt
-    links.new(extinction.outputs["Value"], absorption.inputs["Density"])
+
+def _build_opaque(tree, _sub_balls):
+    """No volume: the snow's surface renders it (snow_layer/proxy.py apply_render_surface)."""
+    tree.nodes.clear()
+    _new_node(tree.nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (200, 0))
+
+
+def _build_baked(tree, sub_balls):
+    nodes, links = tree.nodes, tree.links
+    nodes.clear()
+    extinction = _density_extinction(nodes, links, 300, sub_balls)
+    absorption = _absorption(nodes, links, extinction, 300)
 
     # w: the direction towards the viewer, in the grids' frame (World → Object, unit length).
     incoming = _new_node(nodes, "ShaderNodeNewGeometry", "Firn Incoming", "w (world)", (-1400, -300))
@@ -204,3 +280,11 @@ def _build_baked(tree):
     links.new(emission.outputs["Emission"], shader.inputs[1])
     output = _new_node(nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (300, 150))
     links.new(shader.outputs["Shader"], output.inputs["Volume"])
+
+
+_FORMS = {  # form: (the nodes it must have, its builder)
+    "OPTICS": (_OPTICS_NODES, _build_optics),
+    "SINGLE": (_SINGLE_NODES, _build_single),
+    "BAKED": (_BAKED_NODES, _build_baked),
+    "OPAQUE": (("Firn Output",), _build_opaque),
+}

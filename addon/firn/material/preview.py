@@ -9,14 +9,21 @@ in the render. After Bake Scattering the proxy shows the bake instead: the baked
 `firn_source` (W/(m² sr), vdb-contract.md), sampled at its vertices into the colour attribute BAKED_ATTRIBUTE,
 emitted as the surface's radiance (what Cycles renders of optically thick snow, seen from any side). No physics
 here: every number comes from firncore.
+
+The same material holds the proxy's face for Cycles (its own output, target CYCLES), used when the proxy renders
+(proxy.apply_render_surface): in render mode OPAQUE a diffuse surface of the white-sky albedo, else a transparent
+one over the volume; with glints, mirror facets of ice over either (material/structure.py), in EEVEE over the
+preview too.
 """
 
 import bpy
 
-from . import optics
+from . import optics, structure
 
 _TAG = "firn_preview"  # ID property marking the proxy materials Firn manages
-_NODES = ("Firn Preview BSDF", "Firn Preview Output", "Firn Preview Baked", "Firn Preview Emission")
+_NODES = ("Firn Preview BSDF", "Firn Preview Output", "Firn Preview Baked", "Firn Preview Emission",
+          "Firn Preview Shown", "Firn Render Mix", "Firn Render Output", "Firn Render Diffuse",
+          "Firn Render Transparent", "Firn Glints")
 BAKED_ATTRIBUTE = "firn_baked"  # colour per proxy vertex: firn_source there
 _FALLBACK_ALBEDO = (0.9, 0.9, 0.9)  # shown while the optics settings are invalid (the panel says why)
 
@@ -35,27 +42,39 @@ def preview_values(settings, metres):
     return tuple(volume.white_sky_albedo), tuple(length / metres for length in mean_free_path)
 
 
+def _node(tree, kind, name, location):
+    node = tree.nodes.new(kind)
+    node.name = node.label = name
+    node.location = location
+    return node
+
+
 def _build(material):
     material.use_nodes = True
     tree = material.node_tree
     tree.nodes.clear()
-    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
-    bsdf.name = bsdf.label = "Firn Preview BSDF"
-    output = tree.nodes.new("ShaderNodeOutputMaterial")
-    output.name = output.label = "Firn Preview Output"
-    output.location = (300, 0)
-    tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
-    baked = tree.nodes.new("ShaderNodeAttribute")
-    baked.name = baked.label = "Firn Preview Baked"
-    baked.attribute_name = BAKED_ATTRIBUTE
-    baked.location = (-300, -400)
-    emission = tree.nodes.new("ShaderNodeEmission")
-    emission.name = emission.label = "Firn Preview Emission"
-    emission.location = (0, -400)
-    tree.links.new(baked.outputs["Color"], emission.inputs["Color"])
+    bsdf = _node(tree, "ShaderNodeBsdfPrincipled", "Firn Preview BSDF", (0, 0))
     bsdf.inputs["Subsurface"].default_value = 1.0
     bsdf.inputs["Specular"].default_value = 0.3  # ice's Fresnel reflectance at normal incidence is 0.018
     bsdf.inputs["Roughness"].default_value = 0.8
+    baked = _node(tree, "ShaderNodeAttribute", "Firn Preview Baked", (-300, -400))
+    baked.attribute_name = BAKED_ATTRIBUTE
+    emission = _node(tree, "ShaderNodeEmission", "Firn Preview Emission", (0, -400))
+    tree.links.new(baked.outputs["Color"], emission.inputs["Color"])
+    # EEVEE and Solid: the preview, under the glints when they are on
+    shown, glints = structure.add_glint_shader(tree, bsdf.outputs["BSDF"], (300, 0))
+    shown.name = shown.label = "Firn Preview Shown"
+    output = _node(tree, "ShaderNodeOutputMaterial", "Firn Preview Output", (600, 0))
+    output.target = "EEVEE"
+    tree.links.new(shown.outputs["Shader"], output.inputs["Surface"])
+    # Cycles: the proxy's surface when it renders (proxy.apply_render_surface)
+    _node(tree, "ShaderNodeBsdfDiffuse", "Firn Render Diffuse", (0, -800))
+    _node(tree, "ShaderNodeBsdfTransparent", "Firn Render Transparent", (0, -1000))
+    mix = _node(tree, "ShaderNodeMixShader", "Firn Render Mix", (300, -800))
+    tree.links.new(shown.inputs[2].links[0].from_socket, mix.inputs[2])  # the facets' sharp Glossy
+    render = _node(tree, "ShaderNodeOutputMaterial", "Firn Render Output", (600, -800))
+    render.target = "CYCLES"
+    tree.links.new(mix.outputs["Shader"], render.inputs["Surface"])
 
 
 def ensure_preview_material(snow, mesh, metres):
@@ -72,27 +91,57 @@ def ensure_preview_material(snow, mesh, metres):
     return material
 
 
+def _has_nodes(material):
+    return all(name in (material.node_tree.nodes if material.node_tree else ()) for name in _NODES)
+
+
 def refresh_preview_material(material, settings, metres):
-    if not all(name in (material.node_tree.nodes if material.node_tree else ()) for name in _NODES):
+    """Writes a snow object's optics (its obj.firn `settings`) and structure into its proxy's material."""
+    if not _has_nodes(material):
         _build(material)
     colour, radius = preview_values(settings, metres)
-    bsdf = material.node_tree.nodes["Firn Preview BSDF"]
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    bsdf = nodes["Firn Preview BSDF"]
     bsdf.inputs["Base Color"].default_value = (*colour, 1.0)
     bsdf.inputs["Subsurface Color"].default_value = (*colour, 1.0)
     bsdf.inputs["Subsurface Radius"].default_value = radius
     material.diffuse_color = (*colour, 1.0)  # Solid mode's colour
     material.roughness = 0.8
+    nodes["Firn Render Diffuse"].inputs["Color"].default_value = (*colour, 1.0)
+    base = nodes["Firn Render Diffuse" if settings.render_mode == "OPAQUE" else "Firn Render Transparent"]
+    links.new(base.outputs["BSDF"], nodes["Firn Render Mix"].inputs[1])
+    _show_glints(material, settings)
+
+
+def _show_glints(material, settings):
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    glints = nodes["Firn Glints"]
+    mixes = (nodes["Firn Preview Shown"], nodes["Firn Render Mix"])
+    values = None
+    if settings.glints:
+        try:
+            values = structure.glint_inputs(settings)
+        except ValueError:
+            pass  # the Snow Structure panel shows why
+    for mix in mixes:
+        for link in mix.inputs["Fac"].links:
+            links.remove(link)
+        mix.inputs["Fac"].default_value = 0.0
+        if values is not None:
+            links.new(glints.outputs["Fac"], mix.inputs["Fac"])
+    if values is not None:
+        structure.set_inputs(glints, values)
 
 
 def show_baked(material, baked):
     """The preview shows the bake (emission of the baked colour attribute) or the optics (Principled)."""
-    if not all(name in (material.node_tree.nodes if material.node_tree else ()) for name in _NODES):
+    if not _has_nodes(material):
         _build(material)
     nodes, links = material.node_tree.nodes, material.node_tree.links
     shown = nodes["Firn Preview Emission"].outputs["Emission"] if baked else nodes["Firn Preview BSDF"].outputs["BSDF"]
-    links.new(shown, nodes["Firn Preview Output"].inputs["Surface"])
+    links.new(shown, nodes["Firn Preview Shown"].inputs[1])
 
 
 def is_showing_bake(material):
-    surface = material.node_tree.nodes["Firn Preview Output"].inputs["Surface"]
-    return surface.is_linked and surface.links[0].from_node.name == "Firn Preview Emission"
+    shown = material.node_tree.nodes["Firn Preview Shown"].inputs[1]
+    return shown.is_linked and shown.links[0].from_node.name == "Firn Preview Emission"

@@ -5,7 +5,7 @@ import textwrap
 
 from ..common.panels import panel_pair
 from ..properties import active_snow
-from . import nodes as materials, optics
+from . import nodes as materials, optics, structure
 from .operators import FIRN_MT_snow_material_presets
 
 
@@ -84,5 +84,45 @@ def draw_snow_material(layout, obj):
         layout.operator("firn.snow_optics_to_custom", icon="COPYDOWN")
 
 
-classes = panel_pair("snow_material", "Snow Material", lambda context: active_snow(context) is not None,
-                     draw_snow_material)
+def _draw_problem(layout, compute):
+    """A red line when the structure's settings are out of range (the material keeps its last valid values)."""
+    try:
+        compute()
+    except ValueError as error:
+        col = layout.column(align=True)
+        col.alert = True
+        for line in textwrap.wrap(str(error), 38):
+            col.label(text=line)
+
+
+def draw_snow_structure(layout, obj):
+    """Render mode, sub-balls and glints of one snow object."""
+    settings = obj.firn
+    layout.prop(settings, "render_mode")
+    if settings.render_mode == "BAKED" and materials.material_form(obj) == "OPTICS":
+        layout.label(text="Not baked: path tracing the volume (slow)", icon="INFO")
+    layout.prop(settings, "sub_balls")
+    col = layout.column(align=True)
+    col.active = settings.sub_balls and settings.render_mode != "OPAQUE"
+    col.prop(settings, "sub_ball_radius")
+    col.prop(settings, "sub_ball_variation")
+    col.prop(settings, "sub_ball_depth", text="Depth (optical)")
+    col.prop(settings, "sub_ball_strength")
+    col.prop(settings, "sub_ball_resolve")
+    if settings.sub_balls:
+        derived = optics.derived(settings)
+        if not derived.error:
+            _draw_problem(col, lambda: structure.sub_ball_inputs(settings, derived.sigma_t))
+    layout.prop(settings, "glints")
+    col = layout.column(align=True)
+    col.active = settings.glints
+    col.prop(settings, "glint_density")
+    col.prop(settings, "glint_size")
+    if settings.glints:
+        _draw_problem(col, lambda: structure.glint_inputs(settings))
+
+
+classes = (*panel_pair("snow_material", "Snow Material", lambda context: active_snow(context) is not None,
+                       draw_snow_material),
+           *panel_pair("snow_structure", "Snow Structure", lambda context: active_snow(context) is not None,
+                       draw_snow_structure))

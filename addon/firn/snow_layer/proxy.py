@@ -1,4 +1,5 @@
-"""The snow's viewport proxy: its surface as a shaded mesh for Solid and Material Preview, never rendered.
+"""The snow's viewport proxy: its surface as a shaded mesh for Solid and Material Preview; rendered by Cycles
+only as the snow's surface in render mode OPAQUE or with glints (apply_render_surface).
 
 The core meshes the `surface` level set (firncore.snow_surface_mesh, OpenVDB's volume-to-mesh within a
 triangle budget) in world metres; the proxy is a child of the snow Volume, whose transform turns metres into
@@ -58,17 +59,33 @@ def store_proxy(snow, arrays, metres):
     proxy = bpy.data.objects.new(mesh.name, mesh)
     proxy.firn.is_proxy = True
     proxy.parent = snow  # metres in the snow's space (identity parent inverse): where the volume is drawn
-    proxy.hide_render = True
-    # Rendered viewport (Cycles) renders what the viewport shows: no ray may see the proxy.
-    for ray in ("camera", "diffuse", "glossy", "transmission", "volume_scatter", "shadow"):
-        setattr(proxy, f"visible_{ray}", False)
     proxy.hide_select = True  # click the snow's bounds to select the snow
     for collection in snow.users_collection:
         collection.objects.link(proxy)
     preview.ensure_preview_material(snow, mesh, metres)
+    _set_rendered(proxy, rendered=False)
+    apply_render_surface(snow)
     show_bake(snow)
     apply_display(snow)
     return proxy
+
+
+def _set_rendered(proxy, rendered):
+    # Rendered viewport (Cycles) renders what the viewport shows: unless the proxy is the snow's rendered
+    # surface, no ray may see it.
+    proxy.hide_render = not rendered
+    for ray in ("camera", "diffuse", "glossy", "transmission", "volume_scatter", "shadow"):
+        setattr(proxy, f"visible_{ray}", rendered)
+
+
+def apply_render_surface(snow, scene=None):
+    """The proxy renders as the snow's surface when the snow is opaque or has glints (its material's Cycles
+    output, material/preview.py), and is invisible to Cycles otherwise."""
+    proxy = proxy_of(snow) if snow.type == "VOLUME" else None
+    if proxy is None:
+        return
+    _set_rendered(proxy, snow.firn.render_mode == "OPAQUE" or snow.firn.glints)
+    refresh_preview(snow, scene or bpy.context.scene)
 
 
 def remove_proxy(snow):
