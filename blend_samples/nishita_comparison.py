@@ -1,6 +1,7 @@
-"""The same snow three ways, after Nishita et al. (1997), Fig. 6: as an opaque white surface, as a volume with
-single scattering only, and with all orders of scattering baked by Firn. Renders the three side by side;
-saves nishita_comparison.blend (the baked version) next to this script.
+"""The same snow four ways, after Nishita et al. (1997), Fig. 6: (a) an opaque surface, (b) single scattering
+with sub-balls, (c) multiple scattering (baked) without and (d) with sub-balls, each a render mode of the snow
+(obj.firn.render_mode, sub_balls). Renders the four side by side; saves nishita_comparison.blend (the baked
+version, with sub-balls) next to this script.
 
 blender -b --factory-startup --python blend_samples/nishita_comparison.py -- [--output out/comparison.png]
 """
@@ -34,27 +35,29 @@ def build_scene():
     return scene, targets
 
 
-def render_panels(args, stages):
-    """(a) opaque, (b) single scattering, (c) baked multiple scattering: the three PNGs."""
-    scene, targets = stages.run("build scene", build_scene)
-    snow = stages.run("add snow layer", common.add_snow, targets, depth=0.1, spacing=0.04, surface_mesh=True)
-    surface = next(child for child in snow.children if child.type == "MESH" and child != snow.firn.metaballs)
-    surface.data.materials.append(common.material("Opaque Snow", (0.9, 0.9, 0.9), roughness=0.6))
-    folder = tempfile.mkdtemp(prefix="firn_panels_")  # the parts; only the joined picture is kept
-    panels = [os.path.join(folder, f"nishita_{name}.png") for name in ("opaque", "single", "multiple")]
-    width = args.width // 3
+PANELS = (  # name, render mode, sub-balls, label
+    ("opaque", "OPAQUE", False, "(a) opaque surface"),
+    ("single", "SINGLE", True, "(b) single scattering, sub-balls"),
+    ("multiple", "BAKED", False, "(c) multiple scattering"),
+    ("sub_balls", "BAKED", True, "(d) multiple, sub-balls"),
+)
 
-    snow.hide_render, surface.hide_render = True, False
-    stages.run("render opaque", common.render, scene, panels[0], width, args.samples, aspect=(1, 1),
-               label="(a) opaque surface")
-    snow.hide_render, surface.hide_render = False, True
-    scene.cycles.volume_bounces = 0  # Cycles: exact single scattering, nothing more (cycles-volumes notes)
-    stages.run("render single", common.render, scene, panels[1], width, args.samples, aspect=(1, 1),
-               label="(b) single scattering")
+
+def render_panels(args, stages):
+    """The four panels of Fig. 6 as PNGs."""
+    scene, targets = stages.run("build scene", build_scene)
+    snow = stages.run("add snow layer", common.add_snow, targets, depth=0.1, spacing=0.04)
+    snow.firn.sub_ball_radius = 2e-3  # coarse grains, as Nishita's, seen from a few metres
+    snow.firn.sub_ball_resolve = True
     stages.run("bake", common.bake, [snow])
-    stages.run("render multiple", common.render, scene, panels[2], width, args.samples, aspect=(1, 1),
-               label="(c) multiple scattering")
-    return panels
+    folder = tempfile.mkdtemp(prefix="firn_panels_")  # the parts; only the joined picture is kept
+    paths = []
+    for name, mode, sub_balls, label in PANELS:
+        snow.firn.render_mode, snow.firn.sub_balls = mode, sub_balls
+        paths.append(os.path.join(folder, f"nishita_{name}.png"))
+        stages.run(f"render {name}", common.render, scene, paths[-1], args.width // len(PANELS), args.samples,
+                   aspect=(1, 1), label=label)
+    return paths
 
 
 def main():

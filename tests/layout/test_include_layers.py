@@ -1,6 +1,6 @@
 """The core's folders are layers: a file includes only from its own folder and from the layers below it.
 
-    util  <-  geometry  <-  optics, snow  <-  transport, grains, spray  <-  io
+    util  <-  geometry  <-  optics, snow  <-  transport, grains, spray, structure  <-  io
 
 Folders on the same layer are siblings and do not include each other (optics and snow are independent; grains
 and the future spray build on snow and optics as transport does). The Python bindings (cpp/python/) sit above
@@ -16,7 +16,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 CORE = ROOT / "cpp" / "firn"
 GENERATED = {"firn/util/version.h"} | {f"firn/optics/data/{csv.stem}.h" for csv in (ROOT / "cpp" / "data").glob("*.csv")}
 
-LAYERS = (("util",), ("geometry",), ("optics", "snow"), ("transport", "grains", "spray"), ("io",))
+LAYERS = (("util",), ("geometry",), ("optics", "snow"), ("transport", "grains", "spray", "structure"), ("io",))
 RANK = {folder: rank for rank, folders in enumerate(LAYERS) for folder in folders}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"(firn/[^"]+)"', re.M)
 

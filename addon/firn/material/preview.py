@@ -23,7 +23,7 @@ from . import optics, structure
 _TAG = "firn_preview"  # ID property marking the proxy materials Firn manages
 _NODES = ("Firn Preview BSDF", "Firn Preview Output", "Firn Preview Baked", "Firn Preview Emission",
           "Firn Preview Shown", "Firn Render Mix", "Firn Render Output", "Firn Render Diffuse",
-          "Firn Render Transparent", "Firn Glints")
+          "Firn Render Transparent", "Firn Glints", "Firn Glint Glossy")
 BAKED_ATTRIBUTE = "firn_baked"  # colour per proxy vertex: firn_source there
 _FALLBACK_ALBEDO = (0.9, 0.9, 0.9)  # shown while the optics settings are invalid (the panel says why)
 
@@ -131,6 +131,7 @@ def _show_glints(material, settings):
             links.new(glints.outputs["Fac"], mix.inputs["Fac"])
     if values is not None:
         structure.set_inputs(glints, values)
+        nodes["Firn Glint Glossy"].inputs["Roughness"].default_value = settings.glint_roughness  # 0: mirrors
 
 
 def show_baked(material, baked):

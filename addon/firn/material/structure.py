@@ -154,8 +154,9 @@ def set_inputs(node, values):
 
 
 def add_glint_shader(tree, base, location):
-    """Mix(base, sharp Glossy along the facet normal, facet × Fresnel) in `tree`; returns (mix, glint group node).
-    The group node's Position is the object's coordinates (metres for Firn snow and its proxy)."""
+    """Mix(base, Glossy along the facet normal, facet × Fresnel) in `tree`; returns (mix, glint group node). The
+    Glossy ('Firn Glint Glossy', GGX) takes the facets' roughness; the group node's Position is the object's
+    coordinates (metres for Firn snow and its proxy)."""
     nodes, links = tree.nodes, tree.links
     x, y = location
     coordinates = nodes.new("ShaderNodeTexCoord")
@@ -166,7 +167,8 @@ def add_glint_shader(tree, base, location):
     glints.location = (x - 400, y - 200)
     links.new(coordinates.outputs["Object"], glints.inputs["Position"])
     glossy = nodes.new("ShaderNodeBsdfGlossy")
-    glossy.distribution = "SHARP"
+    glossy.name = glossy.label = "Firn Glint Glossy"
+    glossy.distribution = "GGX"
     glossy.location = (x - 200, y - 300)
     links.new(glints.outputs["Normal"], glossy.inputs["Normal"])
     mix = nodes.new("ShaderNodeMixShader")

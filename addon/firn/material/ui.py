@@ -118,6 +118,7 @@ def draw_snow_structure(layout, obj):
     col.active = settings.glints
     col.prop(settings, "glint_density")
     col.prop(settings, "glint_size")
+    col.prop(settings, "glint_roughness")
     if settings.glints:
         _draw_problem(col, lambda: structure.glint_inputs(settings))
 

@@ -70,12 +70,17 @@ def store_proxy(snow, arrays, metres):
     return proxy
 
 
-def _set_rendered(proxy, rendered):
-    # Rendered viewport (Cycles) renders what the viewport shows: unless the proxy is the snow's rendered
-    # surface, no ray may see it.
+_RAYS = ("camera", "glossy", "diffuse", "transmission", "volume_scatter", "shadow")
+
+
+def _set_rendered(proxy, rendered, opaque=False):
+    """Rendered viewport (Cycles) renders what the viewport shows: unless the proxy is the snow's rendered surface,
+    no ray may see it. Over the volume it carries only glints, which camera and mirror rays see: every other ray
+    passes it unchanged (its shadow is the facets' Fresnel share, under 1 % of the light), so only these two test it."""
     proxy.hide_render = not rendered
-    for ray in ("camera", "diffuse", "glossy", "transmission", "volume_scatter", "shadow"):
-        setattr(proxy, f"visible_{ray}", rendered)
+    seen = _RAYS if opaque else _RAYS[:2]
+    for ray in _RAYS:
+        setattr(proxy, f"visible_{ray}", rendered and ray in seen)
 
 
 def apply_render_surface(snow, scene=None):
@@ -84,7 +89,8 @@ def apply_render_surface(snow, scene=None):
     proxy = proxy_of(snow) if snow.type == "VOLUME" else None
     if proxy is None:
         return
-    _set_rendered(proxy, snow.firn.render_mode == "OPAQUE" or snow.firn.glints)
+    opaque = snow.firn.render_mode == "OPAQUE"
+    _set_rendered(proxy, opaque or snow.firn.glints, opaque)
     refresh_preview(snow, scene or bpy.context.scene)
 
 

@@ -8,7 +8,7 @@
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
-#include "firn/grains/fresnel.h"
+#include "firn/optics/fresnel.h"
 #include "firn/util/error.h"
 #include "firn/util/sampling.h"
 

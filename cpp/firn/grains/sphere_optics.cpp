@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "firn/grains/fresnel.h"
+#include "firn/optics/fresnel.h"
 #include "firn/optics/kz04.h"
 #include "firn/optics/snow_optics.h"
 #include "firn/util/error.h"

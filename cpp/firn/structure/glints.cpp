@@ -3,7 +3,7 @@
 #include <cmath>
 #include <string>
 
-#include "firn/grains/fresnel.h"
+#include "firn/optics/fresnel.h"
 #include "firn/util/error.h"
 #include "firn/util/sampling.h"
 

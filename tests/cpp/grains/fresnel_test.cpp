@@ -3,7 +3,7 @@
 
 #include <gtest/gtest.h>
 
-#include "firn/grains/fresnel.h"
+#include "firn/optics/fresnel.h"
 #include "firn/grains/sphere_optics.h"
 #include "firn/util/sampling.h"
 

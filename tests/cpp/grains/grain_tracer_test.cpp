@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "firn/grains/fresnel.h"
+#include "firn/optics/fresnel.h"
 #include "firn/grains/grain_pile.h"
 #include "firn/grains/grain_tracer.h"
 #include "firn/grains/sphere_optics.h"

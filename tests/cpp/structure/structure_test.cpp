@@ -4,7 +4,7 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
-#include "firn/grains/fresnel.h"
+#include "firn/optics/fresnel.h"
 #include "firn/structure/cell_balls.h"
 #include "firn/structure/glints.h"
 #include "firn/structure/sub_balls.h"
