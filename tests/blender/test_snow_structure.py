@@ -75,7 +75,7 @@ def test_render_modes_build_their_materials(clean_scene):
 
     snow.firn.sub_balls = True
     nodes = materials.snow_material(snow).node_tree.nodes
-    grains = linked_from(linked_from(nodes["Firn Extinction"].inputs[0]).inputs[1])
+    grains = linked_from(linked_from(nodes["Firn Extinction Grains"].inputs[0]).inputs[1])
     assert grains.name == "Firn Sub-Balls" and grains.node_tree.name == structure.SUB_BALL_GROUP
     assert linked_from(linked_from(grains.inputs["Depth"]).inputs[0]).attribute_name == "surface"
 

@@ -31,6 +31,7 @@ _FORM_TAG = "firn_form"  # the form a material was built in: OPTICS, SINGLE, BAK
 _OPTICS_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Output")
 _BAKED_NODES = ("Firn Density", "Firn Extinction", "Firn Absorption", "Firn Emission", "Firn Source",
                 "Firn Source X", "Firn Source Y", "Firn Source Z", "Firn Incoming", "Firn Output")
+_BRANCHES = ("", " Grains")  # the node names' suffixes: without and with sub-balls
 _SINGLE_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Absorption", "Firn Single", "Firn Output")
 BAKED_GRIDS = ("firn_source", "firn_source_x", "firn_source_y", "firn_source_z")  # docs/vdb-contract.md
 
@@ -123,18 +124,23 @@ def _write_values(obj, material, form):
         except ValueError:
             return  # the Snow Material panel shows why
         extinction_per_density = volume.extinction_per_density
-        nodes["Firn Volume"].inputs["Color"].default_value = (*volume.albedo, 1.0)
-        nodes["Firn Volume"].inputs["Anisotropy"].default_value = volume.g
+        for suffix in _BRANCHES:
+            if f"Firn Volume{suffix}" in nodes:
+                nodes[f"Firn Volume{suffix}"].inputs["Color"].default_value = (*volume.albedo, 1.0)
+                nodes[f"Firn Volume{suffix}"].inputs["Anisotropy"].default_value = volume.g
     else:
         return
-    nodes["Firn Extinction"].inputs[1].default_value = extinction_per_density
+    for suffix in _BRANCHES:
+        if f"Firn Extinction{suffix}" in nodes:
+            nodes[f"Firn Extinction{suffix}"].inputs[1].default_value = extinction_per_density
     grains = nodes.get("Firn Sub-Balls")
     if grains is not None:
         try:
-            structure.set_inputs(grains, structure.sub_ball_inputs(
-                obj.firn, extinction_per_density * obj.firn.mean_density))
+            values = structure.sub_ball_inputs(obj.firn, extinction_per_density * obj.firn.mean_density)
         except ValueError:
-            pass  # the Snow Structure panel shows why
+            return  # the Snow Structure panel shows why
+        structure.set_inputs(grains, values)
+        nodes["Firn Shallow Depth"].inputs[1].default_value = values["Fade End"]
 
 
 def _snow_slot(obj):
@@ -160,88 +166,98 @@ def _new_node(nodes, kind, name, label, location):
     return node
 
 
-def _density_extinction(nodes, links, y, sub_balls):
-    """Attribute 'density' (kg/m³) × k (m²/kg) = sigma_t (1/m): the 'Firn Extinction' node's output; with
-    sub-balls the density is first multiplied by their factor (depth below the surface = -'surface', m)."""
-    density = _new_node(nodes, "ShaderNodeAttribute", "Firn Density", "Density (kg/m³)", (-600, y))
-    density.attribute_type = "GEOMETRY"
-    density.attribute_name = "density"
-    extinction = _new_node(nodes, "ShaderNodeMath", "Firn Extinction", "σt (1/m) = density × m²/kg", (-350, y))
+def _extinction(nodes, links, density, suffix, y):
+    """density (kg/m³) × k (m²/kg) = sigma_t (1/m): the 'Firn Extinction' node (k set by _write_values)."""
+    extinction = _new_node(nodes, "ShaderNodeMath", f"Firn Extinction{suffix}", "σt (1/m) = density × m²/kg",
+                           (-350, y))
     extinction.operation = "MULTIPLY"
-    if not sub_balls:
-        links.new(density.outputs["Fac"], extinction.inputs[0])
-        return extinction
-    surface = _new_node(nodes, "ShaderNodeAttribute", "Firn Surface", "surface (m)", (-1200, y + 300))
-    surface.attribute_type, surface.attribute_name = "GEOMETRY", "surface"
-    depth = _new_node(nodes, "ShaderNodeMath", "Firn Depth", "depth (m)", (-1000, y + 300))
-    depth.operation = "MULTIPLY"
-    depth.inputs[1].default_value = -1.0
-    links.new(surface.outputs["Fac"], depth.inputs[0])
-    coordinates = _new_node(nodes, "ShaderNodeTexCoord", "Firn Coordinates", "", (-1000, y + 500))
-    grains = _new_node(nodes, "ShaderNodeGroup", "Firn Sub-Balls", "Sub-Balls", (-800, y + 300))
-    grains.node_tree = structure.sub_ball_group()
-    links.new(coordinates.outputs["Object"], grains.inputs["Position"])  # metres for Firn snow
-    links.new(depth.outputs["Value"], grains.inputs["Depth"])
-    grain_density = _new_node(nodes, "ShaderNodeMath", "Firn Grain Density", "density × sub-balls", (-500, y + 150))
-    grain_density.operation = "MULTIPLY"
-    links.new(density.outputs["Fac"], grain_density.inputs[0])
-    links.new(grains.outputs["Factor"], grain_density.inputs[1])
-    links.new(grain_density.outputs["Value"], extinction.inputs[0])
+    links.new(density, extinction.inputs[0])
     return extinction
 
 
-def _principled(nodes, links, extinction, y):
-    volume = _new_node(nodes, "ShaderNodeVolumePrincipled", "Firn Volume", "Snow", (-100, y))
+def _sub_balls(nodes, links, density, y):
+    """(density × the sub-balls' factor, 1 where they may differ from 1: snow down to their fade's end). Depth
+    below the surface = -'surface' (m); positions are the object's coordinates, metres for Firn snow."""
+    surface = _new_node(nodes, "ShaderNodeAttribute", "Firn Surface", "surface (m)", (-1200, y))
+    surface.attribute_type, surface.attribute_name = "GEOMETRY", "surface"
+    depth = _new_node(nodes, "ShaderNodeMath", "Firn Depth", "depth (m)", (-1000, y))
+    depth.operation = "MULTIPLY"
+    depth.inputs[1].default_value = -1.0
+    links.new(surface.outputs["Fac"], depth.inputs[0])
+    coordinates = _new_node(nodes, "ShaderNodeTexCoord", "Firn Coordinates", "", (-1000, y + 200))
+    grains = _new_node(nodes, "ShaderNodeGroup", "Firn Sub-Balls", "Sub-Balls", (-800, y))
+    grains.node_tree = structure.sub_ball_group()
+    links.new(coordinates.outputs["Object"], grains.inputs["Position"])
+    links.new(depth.outputs["Value"], grains.inputs["Depth"])
+    grain_density = _new_node(nodes, "ShaderNodeMath", "Firn Grain Density", "density × sub-balls", (-550, y))
+    grain_density.operation = "MULTIPLY"
+    links.new(density, grain_density.inputs[0])
+    links.new(grains.outputs["Factor"], grain_density.inputs[1])
+    has_snow = _new_node(nodes, "ShaderNodeMath", "Firn Has Snow", "density > 0", (-800, y - 200))
+    has_snow.operation = "GREATER_THAN"
+    links.new(density, has_snow.inputs[0])
+    shallow_depth = _new_node(nodes, "ShaderNodeMath", "Firn Shallow Depth", "depth < fade end", (-800, y - 350))
+    shallow_depth.operation = "LESS_THAN"
+    links.new(depth.outputs["Value"], shallow_depth.inputs[0])
+    shallow = _new_node(nodes, "ShaderNodeMath", "Firn Shallow", "where sub-balls are", (-550, y - 250))
+    shallow.operation = "MULTIPLY"
+    links.new(has_snow.outputs["Value"], shallow.inputs[0])
+    links.new(shallow_depth.outputs["Value"], shallow.inputs[1])
+    return grain_density.outputs["Value"], shallow.outputs["Value"]
+
+
+def _build(tree, sub_balls, shade, shared=None):
+    """A volume material: shade(nodes, links, extinction node, name suffix, shared) -> shader socket, fed sigma_t
+    from the density. With sub-balls it is built twice, the second from the grains' density, and a Mix Shader
+    chooses by 'Firn Shallow': Cycles skips a mix's unused side, so the grains' texture costs only where they are."""
+    nodes, links = tree.nodes, tree.links
+    nodes.clear()
+    context = shared(nodes, links) if shared else None
+    density = _new_node(nodes, "ShaderNodeAttribute", "Firn Density", "Density (kg/m³)", (-600, 300))
+    density.attribute_type, density.attribute_name = "GEOMETRY", "density"
+    shader = shade(nodes, links, _extinction(nodes, links, density.outputs["Fac"], "", 300), "", context)
+    if sub_balls:
+        grain_density, shallow = _sub_balls(nodes, links, density.outputs["Fac"], 900)
+        grains = shade(nodes, links, _extinction(nodes, links, grain_density, " Grains", 700), " Grains", context)
+        mix = _new_node(nodes, "ShaderNodeMixShader", "Firn Grain Mix", "sub-balls where they are", (400, 300))
+        links.new(shallow, mix.inputs["Fac"])
+        links.new(shader, mix.inputs[1])
+        links.new(grains, mix.inputs[2])
+        shader = mix.outputs["Shader"]
+    output = _new_node(nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (600, 300))
+    links.new(shader, output.inputs["Volume"])
+
+
+def _principled(nodes, links, extinction, suffix, _context=None):
+    volume = _new_node(nodes, "ShaderNodeVolumePrincipled", f"Firn Volume{suffix}", "Snow", (-100, 0))
     volume.inputs["Density Attribute"].default_value = ""  # the density arrives through the link only
     volume.inputs["Absorption Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # Color = single-scattering albedo
     links.new(extinction.outputs["Value"], volume.inputs["Density"])
-    return volume
+    return volume.outputs["Volume"]
 
 
-def _absorption(nodes, links, extinction, y):
-    absorption = _new_node(nodes, "ShaderNodeVolumeAbsorption", "Firn Absorption", "Absorption σt", (-100, y))
+def _absorption(nodes, links, extinction, suffix):
+    absorption = _new_node(nodes, "ShaderNodeVolumeAbsorption", f"Firn Absorption{suffix}", "Absorption σt",
+                           (-100, 300))
     absorption.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # absorbs (1 - Color) × Density = σt
     links.new(extinction.outputs["Value"], absorption.inputs["Density"])
-    return absorption
+    return absorption.outputs["Volume"]
 
 
-def _build_optics(tree, sub_balls):
-    nodes, links = tree.nodes, tree.links
-    nodes.clear()
-    volume = _principled(nodes, links, _density_extinction(nodes, links, 0, sub_balls), 0)
-    output = _new_node(nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (200, 0))
-    links.new(volume.outputs["Volume"], output.inputs["Volume"])
-
-
-def _build_single(tree, sub_balls):
-    nodes, links = tree.nodes, tree.links
-    nodes.clear()
-    extinction = _density_extinction(nodes, links, 0, sub_balls)
-    volume = _principled(nodes, links, extinction, 0)
-    absorption = _absorption(nodes, links, extinction, -300)
-    path = _new_node(nodes, "ShaderNodeLightPath", "Firn Light Path", "", (-100, 300))
-    single = _new_node(nodes, "ShaderNodeMixShader", "Firn Single", "camera rays scatter, others only attenuate",
-                       (200, 0))
+def _single(nodes, links, extinction, suffix, _context=None):
+    """Camera rays scatter (Principled Volume); every other ray only attenuates (Absorption of all of sigma_t)."""
+    path = _new_node(nodes, "ShaderNodeLightPath", f"Firn Light Path{suffix}", "", (-100, 500))
+    single = _new_node(nodes, "ShaderNodeMixShader", f"Firn Single{suffix}",
+                       "camera rays scatter, others only attenuate", (200, 0))
     links.new(path.outputs["Is Camera Ray"], single.inputs["Fac"])
-    links.new(absorption.outputs["Volume"], single.inputs[1])
-    links.new(volume.outputs["Volume"], single.inputs[2])
-    output = _new_node(nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (400, 0))
-    links.new(single.outputs["Shader"], output.inputs["Volume"])
+    links.new(_absorption(nodes, links, extinction, suffix), single.inputs[1])
+    links.new(_principled(nodes, links, extinction, suffix), single.inputs[2])
+    return single.outputs["Shader"]
 
 
-def _build_opaque(tree, _sub_balls):
-    """No volume: the snow's surface renders it (snow_layer/proxy.py apply_render_surface)."""
-    tree.nodes.clear()
-    _new_node(tree.nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (200, 0))
-
-
-def _build_baked(tree, sub_balls):
-    nodes, links = tree.nodes, tree.links
-    nodes.clear()
-    extinction = _density_extinction(nodes, links, 300, sub_balls)
-    absorption = _absorption(nodes, links, extinction, 300)
-
-    # w: the direction towards the viewer, in the grids' frame (World → Object, unit length).
+def _view_dependent_source(nodes, links):
+    """S(w) = firn_source + firn_source_x w.x + firn_source_y w.y + firn_source_z w.z (W/m²/sr per unit
+    extinction), w the direction towards the viewer in the grids' frame (World → Object, unit length)."""
     incoming = _new_node(nodes, "ShaderNodeNewGeometry", "Firn Incoming", "w (world)", (-1400, -300))
     to_object = _new_node(nodes, "ShaderNodeVectorTransform", "Firn Incoming Object", "w (object)", (-1200, -300))
     to_object.vector_type, to_object.convert_from, to_object.convert_to = "VECTOR", "WORLD", "OBJECT"
@@ -251,8 +267,6 @@ def _build_baked(tree, sub_balls):
     links.new(incoming.outputs["Incoming"], to_object.inputs["Vector"])
     links.new(to_object.outputs["Vector"], unit.inputs[0])
     links.new(unit.outputs["Vector"], components.inputs["Vector"])
-
-    # S(w) = source + source_x w.x + source_y w.y + source_z w.z (W/m²/sr per unit extinction)
     source = _new_node(nodes, "ShaderNodeAttribute", "Firn Source", "firn_source", (-600, 0))
     source.attribute_type, source.attribute_name = "GEOMETRY", "firn_source"
     total = source.outputs["Vector"]
@@ -270,16 +284,36 @@ def _build_baked(tree, sub_balls):
         links.new(total, added.inputs[0])
         links.new(scaled.outputs["Vector"], added.inputs[1])
         total = added.outputs["Vector"]
+    return total
 
-    emission = _new_node(nodes, "ShaderNodeEmission", "Firn Emission", "Emission σt S(w)", (-100, 0))
-    links.new(total, emission.inputs["Color"])
+
+def _baked(nodes, links, extinction, suffix, source):
+    """Absorption sigma_t + Emission sigma_t S(w): the baked light."""
+    emission = _new_node(nodes, "ShaderNodeEmission", f"Firn Emission{suffix}", "Emission σt S(w)", (-100, 0))
+    links.new(source, emission.inputs["Color"])
     links.new(extinction.outputs["Value"], emission.inputs["Strength"])
-
-    shader = _new_node(nodes, "ShaderNodeAddShader", "Firn Shader", "", (100, 150))
-    links.new(absorption.outputs["Volume"], shader.inputs[0])
+    shader = _new_node(nodes, "ShaderNodeAddShader", f"Firn Shader{suffix}", "", (100, 150))
+    links.new(_absorption(nodes, links, extinction, suffix), shader.inputs[0])
     links.new(emission.outputs["Emission"], shader.inputs[1])
-    output = _new_node(nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (300, 150))
-    links.new(shader.outputs["Shader"], output.inputs["Volume"])
+    return shader.outputs["Shader"]
+
+
+def _build_optics(tree, sub_balls):
+    _build(tree, sub_balls, _principled)
+
+
+def _build_single(tree, sub_balls):
+    _build(tree, sub_balls, _single)
+
+
+def _build_baked(tree, sub_balls):
+    _build(tree, sub_balls, _baked, _view_dependent_source)
+
+
+def _build_opaque(tree, _sub_balls):
+    """No volume: the snow's surface renders it (snow_layer/proxy.py apply_render_surface)."""
+    tree.nodes.clear()
+    _new_node(tree.nodes, "ShaderNodeOutputMaterial", "Firn Output", "", (200, 0))
 
 
 _FORMS = {  # form: (the nodes it must have, its builder)
