@@ -11,5 +11,6 @@ PYBIND11_MODULE(firncore, m) {
     firncore::bindSnow(m);
     firncore::bindTransport(m);
     firncore::bindGrains(m);
+    firncore::bindSpray(m);
     firncore::bindIo(m);
 }
