@@ -104,10 +104,10 @@ SprayParticle splitLump(SprayParticle &p, std::uint64_t newId, const LumpSetting
         half.ballOffset[slot] = whole.ballOffset[order[i]];
         half.ballRadius[slot] = whole.ballRadius[order[i]];
     }
-    for (SprayParticle *half : {&p, &other}) {
-        recentre(*half);
-        half->radius = equivalentRadius(*half);
-    }
+    // The halves keep their parent's reference point (moving it to their own centres could carry it across a
+    // surface the parent was outside of).
+    p.radius = equivalentRadius(p);
+    other.radius = equivalentRadius(other);
     // Equal and opposite momenta along the normal: m_a dv_a = -m_b dv_b, dv_b - dv_a = breakSpeed.
     const double ma = cube(p.radius), mb = cube(other.radius);
     p.velocity -= s.breakSpeed * mb / (ma + mb) * normal;

@@ -22,7 +22,8 @@ enum class ParticleState : std::uint8_t {
     OnObject = 2,  // came to rest on an object's triangles
 };
 
-// One lump. Its balls are offsets from `position`; a ball's field radius R is twice its solid radius, as the
+// One lump. Its balls are offsets from `position`, its reference point (the balls' centre when it is thrown; the
+// halves of a split keep their parent's), which is what flies and collides; a ball's field radius R is twice its solid radius, as the
 // Wyvill field of a lone ball crosses the snow's iso-value 1/2 at exactly u = r / R = 1/2
 // (1 - 22/9 u^2 + 17/9 u^4 - 4/9 u^6 = 1/2 at u = 1/2).
 struct SprayParticle {
@@ -61,8 +62,8 @@ SprayParticle makeLump(const glm::dvec3 &position, const glm::dvec3 &velocity, s
 // kg: lump density x the volume of the equivalent sphere.
 double lumpMass(const SprayParticle &particle, double lumpDensity);
 
-// Splits a lump of two balls or more in two, across a random plane through its centre: `particle` keeps one
-// half, the returned lump (id `newId`) takes the other. Momentum is conserved; the halves separate at
+// Splits a lump of two balls or more in two, across a random plane through its reference point: `particle` keeps
+// one half, the returned lump (id `newId`) takes the other, both at the same reference point. Momentum is conserved; the halves separate at
 // settings.breakSpeed along the plane's normal.
 SprayParticle splitLump(SprayParticle &particle, std::uint64_t newId, const LumpSettings &settings, Rng &rng);
 
