@@ -118,10 +118,12 @@ def test_an_interrupted_run_resumes_and_ends_as_an_uninterrupted_one(snow, tmp_p
                 voxels += sum(len(v) for _, v in values)
     assert compared >= 8 + 4 and voxels > 0  # every spray file, and the snow files of the frames with tracks
 
-    # Nothing left to do: a third run only checks; other settings start again.
+    # Nothing left to do: a third run only checks; a longer sequence goes on; other settings start again.
     assert firncore.simulate_spray(snow, [ski(8)], str(parts), fps=FPS, settings=settings())["frames_written"] == []
-    rerun = firncore.simulate_spray(snow, [ski(8)], str(parts), fps=FPS, settings=settings(seed=9))
-    assert rerun["resumed_after"] is None and rerun["frames_written"] == list(range(1, 9))
+    longer = firncore.simulate_spray(snow, [ski(10)], str(parts), fps=FPS, settings=settings())
+    assert longer["resumed_after"] == 8 and longer["frames_written"] == [9, 10]
+    rerun = firncore.simulate_spray(snow, [ski(10)], str(parts), fps=FPS, settings=settings(seed=9))
+    assert rerun["resumed_after"] is None and rerun["frames_written"] == list(range(1, 11))
 
 
 def test_the_terminal_speed_is_that_of_a_sphere_of_the_lumps_density():

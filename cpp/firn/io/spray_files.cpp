@@ -61,7 +61,10 @@ class Fingerprint {
     std::uint64_t digest_ = 0x46697261u;
 };
 
-std::uint64_t fingerprintOf(const SprayJob &job) {
+// fingerprints[k]: the digest of the inputs the state after frame index k depends on: the settings, objects, fps,
+// first frame, the snow file's bytes and the emitters' rectangles up to frame k (a longer sequence of the same
+// beginning resumes).
+std::vector<std::uint64_t> fingerprintsOf(const SprayJob &job, std::size_t frameCount) {
     Fingerprint f;
     const SpraySettings &s = job.settings;
     for (double x : {s.emission.rate, s.emission.spreadAngle, s.emission.throwSpeed, s.emission.cellSize,
@@ -69,12 +72,10 @@ std::uint64_t fingerprintOf(const SprayJob &job) {
                      s.lumps.breakRate, s.lumps.breakSpeed, s.flight.gravity, s.flight.airDensity,
                      s.flight.dragCoefficient, s.tracks.thickness, s.tracks.compactionDepth, s.tracks.maxDensity,
                      double(s.substeps), double(s.deposit), double(s.cutTracks), s.voxelSize, s.maxParticles,
-                     s.maxVoxels, job.fps, double(job.firstFrame)})
+                     s.maxVoxels, job.fps, double(job.firstFrame), double(job.emitters.size())})
         f.add(x);
     f.add(s.flight.down);
     f.add(s.seed);
-    for (const Emitter &e : job.emitters)
-        for (const EmitterRectangle &r : e.frames) f.add(r.centre), f.add(r.halfU), f.add(r.halfV);
     f.addBytes(reinterpret_cast<const char *>(job.objects.positions.data()),
                job.objects.positions.size() * sizeof(glm::vec3));
     f.addBytes(reinterpret_cast<const char *>(job.objects.triangles.data()),
@@ -83,7 +84,15 @@ std::uint64_t fingerprintOf(const SprayJob &job) {
     if (!snow) throw ReadError("cannot read " + job.snowPath);
     const std::vector<char> bytes{std::istreambuf_iterator<char>(snow), std::istreambuf_iterator<char>()};
     f.addBytes(bytes.data(), bytes.size());
-    return f.digest();
+    std::vector<std::uint64_t> digests;
+    for (std::size_t k = 0; k < frameCount; ++k) {
+        for (const Emitter &e : job.emitters) {
+            const EmitterRectangle &r = e.frames[k];
+            f.add(r.centre), f.add(r.halfU), f.add(r.halfV);
+        }
+        digests.push_back(f.digest());
+    }
+    return digests;
 }
 
 void putParticle(std::ostream &out, const SprayParticle &p) {
@@ -124,14 +133,13 @@ SnowGrids readSnow(const std::string &path) {
 }
 
 // The last frame of the sequence whose files are complete and were made by the same inputs, with its state.
-std::optional<SavedSprayState> lastCompleteFrame(const SprayJob &job, std::size_t frameCount,
-                                                 std::uint64_t fingerprint) {
-    for (std::size_t k = frameCount; k-- > 0;) {
+std::optional<SavedSprayState> lastCompleteFrame(const SprayJob &job, const std::vector<std::uint64_t> &fingerprints) {
+    for (std::size_t k = fingerprints.size(); k-- > 0;) {
         const SprayFramePaths paths = sprayFramePaths(job.directory, job.firstFrame + int(k));
         if (!std::filesystem::exists(paths.state) || !std::filesystem::exists(paths.spray)) continue;
         try {
             SavedSprayState saved = readSprayState(paths.state);
-            if (saved.fingerprint == fingerprint && saved.frame == k) return saved;
+            if (saved.fingerprint == fingerprints[k] && saved.frame == k) return saved;
         } catch (const ReadError &) {
             // a damaged marker: that frame is not complete
         }
@@ -205,13 +213,13 @@ SprayRun runSpraySequence(const SprayJob &job, Progress *progress) {
     scene.validate();
     if (job.directory.empty()) throw InvalidArgument("spray needs a folder for its files");
     const std::size_t frameCount = scene.frameCount();
-    const std::uint64_t fingerprint = fingerprintOf(job);
+    const std::vector<std::uint64_t> fingerprints = fingerprintsOf(job, frameCount);
     if (!job.objects.empty()) scene.objects = std::make_shared<RayCaster>(job.objects);
 
     SprayRun run;
     SprayState state;
     std::optional<int> snowFrame;
-    if (std::optional<SavedSprayState> saved = lastCompleteFrame(job, frameCount, fingerprint)) {
+    if (std::optional<SavedSprayState> saved = lastCompleteFrame(job, fingerprints)) {
         run.resumedAfter = job.firstFrame + int(saved->frame);
         snowFrame = saved->snowFrame;
         state.snow = readSnow(snowFrame ? sprayFramePaths(job.directory, *snowFrame).snow : job.snowPath);
@@ -233,7 +241,7 @@ SprayRun runSpraySequence(const SprayJob &job, Progress *progress) {
         } else {
             std::filesystem::remove(paths.snow);  // an earlier job's: the snow here is that of snowFrame
         }
-        writeSprayState(paths.state, {fingerprint, state.frame, state.nextId, snowFrame, state.particles});
+        writeSprayState(paths.state, {fingerprints[state.frame], state.frame, state.nextId, snowFrame, state.particles});
         run.writeSeconds += secondsSince(start);
         run.framesWritten.push_back(frame);
     };

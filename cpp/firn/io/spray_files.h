@@ -57,8 +57,8 @@ struct SprayRun {
 
 // Simulates the frames in order and writes each one's files; the state file of a frame is written after its VDB
 // files, so a run that was interrupted (cancelled, killed) resumes after the last complete frame whose state was
-// made by the same inputs (settings, emitters, objects, fps, first frame, the snow file's bytes) and ends with
-// the same files as a run that was never interrupted. Reports to `progress` (may be null) and stops when it is
+// made by the same inputs (settings, objects, fps, first frame, the snow file's bytes, and the emitters up to that
+// frame: a sequence made longer resumes too) and ends with the same files as a run that was never interrupted. Reports to `progress` (may be null) and stops when it is
 // cancelled. Throws InvalidArgument, BudgetExceeded, ReadError, WriteError, Cancelled.
 SprayRun runSpraySequence(const SprayJob &job, Progress *progress);
 
