@@ -92,9 +92,16 @@ std::vector<firn::Emitter> emittersFrom(const py::handle &emitters) {
     return out;
 }
 
-template <class T>
-py::array_t<T> arrayOf(std::vector<py::ssize_t> shape) {
-    return py::array_t<T>(shape);
+// One row per lump, of shape `row` (empty: a scalar per lump); fill(lump, out) writes a lump's row.
+template <class T, class Fill>
+py::array_t<T> perLump(const firn::SprayParticles &lumps, std::vector<py::ssize_t> row, Fill fill) {
+    py::ssize_t width = 1;
+    for (py::ssize_t n : row) width *= n;
+    row.insert(row.begin(), py::ssize_t(lumps.size()));
+    py::array_t<T> out(row);
+    T *data = out.mutable_data();
+    for (std::size_t i = 0; i < lumps.size(); ++i) fill(lumps[i], data + i * width);
+    return out;
 }
 
 void bindParticles(py::module_ &m) {
@@ -115,53 +122,39 @@ first ball_counts[i] are used.)doc")
         .def_property_readonly("snow_frame", [](const P &p) { return p.snowFrame; },
                                "Blender frame of the snow file in force (None: the input snow)")
         .def_property_readonly("positions", [](const P &p) {
-            auto a = arrayOf<double>({py::ssize_t(p.particles.size()), 3});
-            auto v = a.mutable_unchecked<2>();
-            for (std::size_t i = 0; i < p.particles.size(); ++i)
-                for (int k = 0; k < 3; ++k) v(i, k) = p.particles[i].position[k];
-            return a;
+            return perLump<double>(p.particles, {3}, [](const firn::SprayParticle &q, double *o) {
+                for (int k = 0; k < 3; ++k) o[k] = q.position[k];
+            });
         })
         .def_property_readonly("velocities", [](const P &p) {
-            auto a = arrayOf<double>({py::ssize_t(p.particles.size()), 3});
-            auto v = a.mutable_unchecked<2>();
-            for (std::size_t i = 0; i < p.particles.size(); ++i)
-                for (int k = 0; k < 3; ++k) v(i, k) = p.particles[i].velocity[k];
-            return a;
+            return perLump<double>(p.particles, {3}, [](const firn::SprayParticle &q, double *o) {
+                for (int k = 0; k < 3; ++k) o[k] = q.velocity[k];
+            });
         })
         .def_property_readonly("radii", [](const P &p) {
-            auto a = arrayOf<float>({py::ssize_t(p.particles.size())});
-            for (std::size_t i = 0; i < p.particles.size(); ++i) a.mutable_at(i) = p.particles[i].radius;
-            return a;
+            return perLump<float>(p.particles, {}, [](const firn::SprayParticle &q, float *o) { *o = q.radius; });
         })
         .def_property_readonly("ids", [](const P &p) {
-            auto a = arrayOf<std::uint64_t>({py::ssize_t(p.particles.size())});
-            for (std::size_t i = 0; i < p.particles.size(); ++i) a.mutable_at(i) = p.particles[i].id;
-            return a;
+            return perLump<std::uint64_t>(p.particles, {}, [](const firn::SprayParticle &q, std::uint64_t *o) { *o = q.id; });
         })
         .def_property_readonly("states", [](const P &p) {
-            auto a = arrayOf<std::uint8_t>({py::ssize_t(p.particles.size())});
-            for (std::size_t i = 0; i < p.particles.size(); ++i) a.mutable_at(i) = std::uint8_t(p.particles[i].state);
-            return a;
+            return perLump<std::uint8_t>(p.particles, {},
+                                         [](const firn::SprayParticle &q, std::uint8_t *o) { *o = std::uint8_t(q.state); });
         })
         .def_property_readonly("ball_counts", [](const P &p) {
-            auto a = arrayOf<std::uint8_t>({py::ssize_t(p.particles.size())});
-            for (std::size_t i = 0; i < p.particles.size(); ++i) a.mutable_at(i) = p.particles[i].ballCount;
-            return a;
+            return perLump<std::uint8_t>(p.particles, {},
+                                         [](const firn::SprayParticle &q, std::uint8_t *o) { *o = q.ballCount; });
         })
         .def_property_readonly("ball_offsets", [](const P &p) {
-            auto a = arrayOf<float>({py::ssize_t(p.particles.size()), py::ssize_t(firn::kMaxBallsPerLump), 3});
-            auto v = a.mutable_unchecked<3>();
-            for (std::size_t i = 0; i < p.particles.size(); ++i)
+            return perLump<float>(p.particles, {firn::kMaxBallsPerLump, 3}, [](const firn::SprayParticle &q, float *o) {
                 for (int b = 0; b < firn::kMaxBallsPerLump; ++b)
-                    for (int k = 0; k < 3; ++k) v(i, b, k) = p.particles[i].ballOffset[b][k];
-            return a;
+                    for (int k = 0; k < 3; ++k) o[3 * b + k] = q.ballOffset[b][k];
+            });
         })
         .def_property_readonly("ball_radii", [](const P &p) {
-            auto a = arrayOf<float>({py::ssize_t(p.particles.size()), py::ssize_t(firn::kMaxBallsPerLump)});
-            auto v = a.mutable_unchecked<2>();
-            for (std::size_t i = 0; i < p.particles.size(); ++i)
-                for (int b = 0; b < firn::kMaxBallsPerLump; ++b) v(i, b) = p.particles[i].ballRadius[b];
-            return a;
+            return perLump<float>(p.particles, {firn::kMaxBallsPerLump}, [](const firn::SprayParticle &q, float *o) {
+                for (int b = 0; b < firn::kMaxBallsPerLump; ++b) o[b] = q.ballRadius[b];
+            });
         });
 }
 
