@@ -67,7 +67,7 @@ SpraySettings(**kwargs) sets any of the attributes.)doc");
         .def_readwrite("voxel_size", &S::voxelSize, "m of the spray's grids; 0: the snow's")
         .def_readwrite("max_particles", &S::maxParticles,
                        "particle budget, counted as the metaballs the lumps could split into")
-        .def_readwrite("max_voxels", &S::maxVoxels, "active voxel budget of the spray's grids")
+        .def_readwrite("max_voxels", &S::maxVoxels, "voxel budget of the spray's grids and of one frame's track")
         .def_readwrite("seed", &S::seed)
         .def("validate", &S::validate, "Raises ValueError naming the first setting out of range.");
 }

@@ -84,7 +84,7 @@ SprayFrameStats simulateSprayFrame(SprayState &state, const SprayScene &scene, c
             std::vector<EmitterRectangle> positions;
             for (int k = 0; k <= s.substeps; ++k)
                 positions.push_back(emitterBetween(emitter, state.frame, double(k) / s.substeps));
-            const TrackStats t = carveTrack(state.snow, positions, s.flight.down, s.tracks);
+            const TrackStats t = carveTrack(state.snow, positions, s.flight.down, s.tracks, s.maxVoxels);
             stats.tracks.carvedVoxels += t.carvedVoxels;
             stats.tracks.removedMass += t.removedMass;
             stats.tracks.compactedMass += t.compactedMass;

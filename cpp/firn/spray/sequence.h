@@ -26,7 +26,7 @@ struct SpraySettings {
     bool cutTracks = true;       // emitters cut tracks in the snow
     double voxelSize = 0.0;      // m of the spray's grids; 0: the snow's
     double maxParticles = 2e6;   // lumps the simulation may hold, counted as the balls they could split into
-    double maxVoxels = 50e6;     // active voxels of the spray's grids
+    double maxVoxels = 50e6;     // voxels of the spray's grids, and of one frame's track (its swept volume)
     std::uint64_t seed = 0;
 
     // Throws InvalidArgument naming the first setting out of range.

@@ -72,9 +72,10 @@ std::array<Vec3s, 8> boxCorners(const EmitterRectangle &r, const glm::dvec3 &up,
     return out;
 }
 
-// Signed distance (m) to the union of the boxes, interior filled, exterior band `exteriorVoxels` wide.
+// Signed distance (m) to the union of the boxes, interior filled, exterior band `exteriorVoxels` wide; nullptr when
+// no box meets the snow. Throws BudgetExceeded, before allocating, when it could take more than maxVoxels voxels.
 openvdb::FloatGrid::Ptr sweptVolume(const std::vector<EmitterRectangle> &positions, const openvdb::FloatGrid &surface,
-                                    const glm::dvec3 &up, double thickness, double exteriorVoxels) {
+                                    const glm::dvec3 &up, double thickness, double exteriorVoxels, double maxVoxels) {
     const double top = snowTop(surface, up) + kBandVoxels * surface.voxelSize()[0];
     const openvdb::BBoxd snowBox = surface.transform().indexToWorld(surface.evalActiveVoxelBoundingBox());
     std::vector<Vec3s> points;
@@ -91,6 +92,18 @@ openvdb::FloatGrid::Ptr sweptVolume(const std::vector<EmitterRectangle> &positio
         for (const auto &f : faces) quads.emplace_back(base + f[0], base + f[1], base + f[2], base + f[3]);
     }
     if (quads.empty()) return nullptr;
+    // Its voxels are within the boxes' bounds where they meet the snow's, grown by the exterior band.
+    openvdb::BBoxd bounds;
+    for (const Vec3s &p : points) bounds.expand(openvdb::Vec3d(p));
+    const double band = exteriorVoxels * surface.voxelSize()[0];
+    openvdb::BBoxd reach(bounds.min() - openvdb::Vec3d(band), bounds.max() + openvdb::Vec3d(band));
+    reach.min() = openvdb::math::maxComponent(reach.min(), snowBox.min() - openvdb::Vec3d(band));
+    reach.max() = openvdb::math::minComponent(reach.max(), snowBox.max() + openvdb::Vec3d(band));
+    const double voxels = reach.volume() / std::pow(surface.voxelSize()[0], 3);
+    if (voxels > maxVoxels)
+        throw BudgetExceeded("an emitter's track over one frame would take about " + std::to_string(voxels) +
+                             " voxels, over the budget of " + std::to_string(maxVoxels) +
+                             ": use coarser snow voxels, a smaller emitter, or raise the voxel budget");
     return openvdb::tools::meshToSignedDistanceField<openvdb::FloatGrid>(
         surface.transform(), points, {}, quads, float(exteriorVoxels), std::numeric_limits<float>::max());
 }
@@ -107,13 +120,14 @@ void TrackSettings::validate() const {
 }
 
 TrackStats carveTrack(SnowGrids &snow, const std::vector<EmitterRectangle> &positions, const glm::dvec3 &down,
-                      const TrackSettings &s) {
+                      const TrackSettings &s, double maxVoxels) {
     TrackStats stats;
     if (positions.empty() || snow.surface->activeVoxelCount() == 0) return stats;
     const double h = snow.surface->voxelSize()[0], band = kBandVoxels * h, cube = h * h * h;
     const glm::dvec3 up = -down;
     const openvdb::FloatGrid::Ptr swept =
-        sweptVolume(positions, *snow.surface, up, s.thickness, std::max(kBandVoxels, s.compactionDepth / h + 2.0));
+        sweptVolume(positions, *snow.surface, up, s.thickness, std::max(kBandVoxels, s.compactionDepth / h + 2.0),
+                    maxVoxels);
     if (!swept) return stats;
 
     auto phi = snow.surface->getAccessor();

@@ -30,7 +30,7 @@ TEST(Tracks, TheGrooveIsTheSweptBoxAndItsSnowIsCompactedBelow) {
     TrackSettings s;
     s.thickness = 0.02;
     s.compactionDepth = 0.05;
-    const TrackStats stats = carveTrack(snow, slide(), {0.0, 0.0, -1.0}, s);
+    const TrackStats stats = carveTrack(snow, slide(), {0.0, 0.0, -1.0}, s, 50e6);
     ASSERT_GT(stats.carvedVoxels, 0u);
     const openvdb::FloatGrid &phi = *snow.surface;
     // Swept: x in [-0.5, 0.5], y in [-0.05, 0.05], from z = -0.05 - thickness = -0.07 up through the top.
@@ -71,7 +71,12 @@ TEST(Tracks, AnEmitterAboveTheSnowLeavesItAlone) {
     SnowGrids snow = test::slabSnow({-0.5, -0.3, -0.3}, {0.5, 0.3, 0.0}, kH, 300.0f);
     std::vector<EmitterRectangle> high = slide();
     for (EmitterRectangle &r : high) r.centre.z = 0.2;
-    EXPECT_EQ(carveTrack(snow, high, {0.0, 0.0, -1.0}, TrackSettings{}).carvedVoxels, 0u);
+    EXPECT_EQ(carveTrack(snow, high, {0.0, 0.0, -1.0}, TrackSettings{}, 50e6).carvedVoxels, 0u);
+}
+
+TEST(Tracks, ATrackOverTheVoxelBudgetIsRefusedBeforeAllocating) {
+    SnowGrids snow = test::slabSnow({-0.5, -0.3, -0.3}, {0.5, 0.3, 0.0}, kH, 300.0f);
+    EXPECT_THROW(carveTrack(snow, slide(), {0.0, 0.0, -1.0}, TrackSettings{}, 1000.0), BudgetExceeded);
 }
 
 TEST(Tracks, BadSettingsAreRefused) {
