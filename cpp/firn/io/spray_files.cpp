@@ -5,7 +5,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <stdexcept>
 #include <type_traits>
 
@@ -48,16 +47,32 @@ class Fingerprint {
     }
     void add(const glm::dvec3 &v) { add(v.x), add(v.y), add(v.z); }
     void addBytes(const char *data, std::size_t size) {
+        addWords(data, size);
+        add(std::uint64_t(size));
+    }
+    // A file's bytes, read a chunk at a time.
+    void addFile(const std::string &path) {
+        std::ifstream file(path, std::ios::binary);
+        if (!file) throw ReadError("cannot read " + path);
+        std::vector<char> chunk(1 << 20);  // a multiple of 8 bytes: words do not straddle chunks
+        std::uint64_t size = 0;
+        while (file.read(chunk.data(), std::streamsize(chunk.size())) || file.gcount() > 0) {
+            addWords(chunk.data(), std::size_t(file.gcount()));
+            size += std::uint64_t(file.gcount());
+        }
+        if (file.bad()) throw ReadError("cannot read " + path);
+        add(size);
+    }
+    std::uint64_t digest() const { return digest_; }
+
+  private:
+    void addWords(const char *data, std::size_t size) {
         for (std::size_t i = 0; i < size; i += 8) {
             std::uint64_t word = 0;
             std::memcpy(&word, data + i, std::min<std::size_t>(8, size - i));
             add(word);
         }
-        add(std::uint64_t(size));
     }
-    std::uint64_t digest() const { return digest_; }
-
-  private:
     std::uint64_t digest_ = 0x46697261u;
 };
 
@@ -80,10 +95,7 @@ std::vector<std::uint64_t> fingerprintsOf(const SprayJob &job, std::size_t frame
                job.objects.positions.size() * sizeof(glm::vec3));
     f.addBytes(reinterpret_cast<const char *>(job.objects.triangles.data()),
                job.objects.triangles.size() * sizeof(glm::uvec3));
-    std::ifstream snow(job.snowPath, std::ios::binary);
-    if (!snow) throw ReadError("cannot read " + job.snowPath);
-    const std::vector<char> bytes{std::istreambuf_iterator<char>(snow), std::istreambuf_iterator<char>()};
-    f.addBytes(bytes.data(), bytes.size());
+    f.addFile(job.snowPath);
     std::vector<std::uint64_t> digests;
     for (std::size_t k = 0; k < frameCount; ++k) {
         for (const Emitter &e : job.emitters) {
@@ -138,8 +150,8 @@ std::optional<SavedSprayState> lastCompleteFrame(const SprayJob &job, const std:
         const SprayFramePaths paths = sprayFramePaths(job.directory, job.firstFrame + int(k));
         if (!std::filesystem::exists(paths.state) || !std::filesystem::exists(paths.spray)) continue;
         try {
-            SavedSprayState saved = readSprayState(paths.state);
-            if (saved.fingerprint == fingerprints[k] && saved.frame == k) return saved;
+            const SavedSprayState header = readSprayState(paths.state, StateRead::Header);
+            if (header.fingerprint == fingerprints[k] && header.frame == k) return readSprayState(paths.state);
         } catch (const ReadError &) {
             // a damaged marker: that frame is not complete
         }
@@ -173,7 +185,7 @@ void writeSprayState(const std::string &path, const SavedSprayState &s) {
     });
 }
 
-SavedSprayState readSprayState(const std::string &path) {
+SavedSprayState readSprayState(const std::string &path, StateRead what) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw ReadError("cannot read " + path);
     in.exceptions(std::ios_base::failbit | std::ios_base::badbit);
@@ -197,6 +209,7 @@ SavedSprayState readSprayState(const std::string &path) {
         if (count > (size - header) / kParticleBytes || header + count * kParticleBytes != size)
             throw std::runtime_error("its length does not match its " + std::to_string(count) +
                                      " particles (truncated?)");
+        if (what == StateRead::Header) return s;
         s.particles.resize(count);
         for (SprayParticle &p : s.particles) p = takeParticle(in);
         return s;
@@ -239,7 +252,9 @@ SprayRun runSpraySequence(const SprayJob &job, Progress *progress) {
             writeGrids(paths.snow, {state.snow.density, state.snow.surface});
             snowFrame = frame;
         } else {
-            std::filesystem::remove(paths.snow);  // an earlier job's: the snow here is that of snowFrame
+            std::error_code error;  // an earlier job's file: the snow here is that of snowFrame
+            if (std::filesystem::remove(paths.snow, error), error)
+                throw WriteError("cannot remove " + paths.snow + ": " + error.message());
         }
         writeSprayState(paths.state, {fingerprints[state.frame], state.frame, state.nextId, snowFrame, state.particles});
         run.writeSeconds += secondsSince(start);

@@ -32,8 +32,10 @@ struct SavedSprayState {
 
 // Writes atomically (temporary file, then rename). Throws WriteError.
 void writeSprayState(const std::string &path, const SavedSprayState &state);
-// Throws ReadError for a missing, truncated or foreign file.
-SavedSprayState readSprayState(const std::string &path);
+// Throws ReadError for a missing, truncated or foreign file. StateRead::Header reads all but the particles (their
+// count is still checked against the file's length): what finding the frame to resume from needs.
+enum class StateRead { Whole, Header };
+SavedSprayState readSprayState(const std::string &path, StateRead what = StateRead::Whole);
 
 // A whole simulation, as the bindings hand it over.
 struct SprayJob {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "firn/spray/flight.h"
+#include "firn/spray/tracks.h"
 #include "firn/util/error.h"
 #include "firn/util/sampling.h"
 #include "slab_snow.h"
@@ -91,6 +92,35 @@ TEST(Flight, NoLumpEndsInsideAnObjectOrBelowTheSnow) {
     EXPECT_GT(onSnow, 1000u);
     EXPECT_GT(onObject, 10u);
     EXPECT_GT(particles.size(), 3000u * 0.9);  // splits added lumps
+}
+
+TEST(Flight, WithoutDepositLandedLumpsVanishAndCutAwaySnowLetsOthersFallAgain) {
+    SnowGrids snow = test::slabSnow({-0.5, -0.5, -0.3}, {0.5, 0.5, 0.0}, 0.02, 300.0f);
+    LumpSettings lumps;
+    Rng rng(2, 2);
+    SprayParticles dropped{makeLump({0.0, 0.0, 0.3}, {0.0, 0.0, 0.0}, 0, lumps, rng)};
+    std::uint64_t nextId = 1;
+    for (std::uint64_t step = 0; step < 48 && !dropped.empty(); ++step)
+        advanceParticles(dropped, {1.0 / 48.0, 1, step}, {snow.surface.get(), nullptr}, FlightSettings{}, lumps, false,
+                         nextId);
+    EXPECT_TRUE(dropped.empty());  // it landed within 1 s (a 0.3 m fall takes 0.25 s) and was taken into the snow
+
+    SprayParticles resting{makeLump({0.0, 0.0, 0.3}, {0.0, 0.0, 0.0}, 0, lumps, rng)};
+    for (std::uint64_t step = 0; step < 48; ++step)
+        advanceParticles(resting, {1.0 / 48.0, 1, step}, {snow.surface.get(), nullptr}, FlightSettings{}, lumps, true,
+                         nextId);
+    ASSERT_EQ(resting.front().state, ParticleState::OnSnow);
+    EXPECT_NEAR(resting.front().position.z, 0.0, 0.02);
+    // A groove 10 cm deep cut under it: it falls to the groove's floor.
+    const std::vector<EmitterRectangle> under{{{0.0, 0.0, -0.05}, {0.1, 0.0, 0.0}, {0.0, 0.1, 0.0}}};
+    TrackSettings track;
+    track.thickness = 0.05;
+    ASSERT_GT(carveTrack(snow, under, kDown, track, 50e6).carvedVoxels, 0u);
+    for (std::uint64_t step = 48; step < 96; ++step)
+        advanceParticles(resting, {1.0 / 48.0, 1, step}, {snow.surface.get(), nullptr}, FlightSettings{}, lumps, true,
+                         nextId);
+    EXPECT_EQ(resting.front().state, ParticleState::OnSnow);
+    EXPECT_NEAR(resting.front().position.z, -0.1, 0.02);
 }
 
 TEST(Flight, ASplitConservesMomentumAndBalls) {
