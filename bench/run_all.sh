@@ -52,6 +52,12 @@ mkdir -p "$(dirname "$report")"
     "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/grain_scales_bench.py" -- --samples 16 --width 100 --depth "$depth"
     echo
   done
+  echo "## Thrown snow: a frame with 100,000 lumps (simulate, rasterize, write)"
+  echo
+  echo '```'
+  PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/bench/spray_bench.py"
+  echo '```'
+  echo
   echo "## The UI's longest stalls during Add Snow Layer and Bake Scattering (car sample, window under Xvfb)"
   echo
   "$FIRN_ROOT/bench/ui_stall.sh"

@@ -79,16 +79,7 @@ std::shared_ptr<firn::Progress> orNew(std::shared_ptr<firn::Progress> progress) 
 void bindSettings(py::module_ &m) {
     using S = firn::SnowLayerSettings;
     py::class_<S>(m, "SnowLayerSettings", "Settings of Add Snow Layer. Lengths in m, angles in rad, densities in kg/m^3.")
-        .def(py::init([](const py::kwargs &kwargs) {
-                 S s;
-                 py::object self = py::cast(s);
-                 for (const auto &item : kwargs) {
-                     const auto key = item.first.cast<std::string>();
-                     if (!py::hasattr(self, key.c_str())) throw py::type_error("SnowLayerSettings has no '" + key + "'");
-                     py::setattr(self, key.c_str(), item.second);
-                 }
-                 return self.cast<S>();
-             }))
+        .def(py::init([](const py::kwargs &kwargs) { return settingsFromKwargs<S>(kwargs, "SnowLayerSettings"); }))
         .def_readwrite("depth", &S::depth, "m of snow on open level ground")
         .def_readwrite("max_slope", &S::maxSlope, "rad from horizontal; steeper surfaces stay bare")
         .def_readwrite("spacing", &S::spacing, "m between landing sites: small is smooth, large is uneven")

@@ -11,6 +11,7 @@ PYBIND11_MODULE(firncore, m) {
     firncore::bindSnow(m);
     firncore::bindTransport(m);
     firncore::bindGrains(m);
+    firncore::bindSpray(m);
     firncore::bindStructure(m);
     firncore::bindIo(m);
 }

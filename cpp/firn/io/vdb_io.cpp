@@ -1,13 +1,8 @@
 #include "firn/io/vdb_io.h"
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
 
-#include <unistd.h>
-
+#include "firn/io/atomic_file.h"
 #include "firn/io/vdb_layout.h"
 #include "firn/util/error.h"
 #include "firn/util/openvdb_library.h"
@@ -25,40 +20,17 @@ void shiftHalfVoxel(const openvdb::GridPtrVec &grids, double sign) {
 }
 
 // openvdb::io::File::write ignores stream errors, so a full disk would give a truncated file that the rename
-// then puts in place of a good one. This writes the same format through a stream that fails loudly.
-class CheckedFile : public openvdb::io::File {
+// then puts in place of a good one. This writes the same format through writeFileAtomically's checked stream.
+class ArchiveWriter : public openvdb::io::Archive {
   public:
-    using openvdb::io::File::File;
-
-    void writeChecked(const openvdb::GridCPtrVec &grids, const openvdb::MetaMap &meta) const {
-        std::ofstream stream;
-        stream.exceptions(std::ios_base::failbit | std::ios_base::badbit);
-        errno = 0;
-        try {
-            stream.open(filename(), std::ios_base::out | std::ios_base::binary | std::ios_base::trunc);
-            openvdb::io::Archive::write(stream, grids, /*seekable=*/true, meta);
-            stream.close();
-        } catch (const std::ios_base::failure &) {
-            // The stream's own message says nothing; the failed system call's errno does (ENOSPC, EROFS...).
-            throw std::runtime_error(errno != 0 ? std::strerror(errno) : "write failed");
-        }
+    void writeTo(std::ostream &stream, const openvdb::GridPtrVec &grids, const openvdb::MetaMap &meta) const {
+        openvdb::io::Archive::write(stream, openvdb::GridCPtrVec(grids.begin(), grids.end()), /*seekable=*/true,
+                                    meta);
     }
 };
 
-// Writes `grids` as they are to a temporary file beside `path`, then renames it over `path`; on failure the
-// temporary file is removed and `path` is left as it was.
-void writeFileAtomically(const std::string &path, const openvdb::GridPtrVec &grids, const openvdb::MetaMap &meta) {
-    const std::filesystem::path target(path);
-    const std::filesystem::path temp = target.string() + ".tmp" + std::to_string(::getpid());
-    try {
-        if (target.has_parent_path()) std::filesystem::create_directories(target.parent_path());
-        CheckedFile(temp.string()).writeChecked(openvdb::GridCPtrVec(grids.begin(), grids.end()), meta);
-        std::filesystem::rename(temp, target);
-    } catch (const std::exception &e) {
-        std::error_code ignored;
-        std::filesystem::remove(temp, ignored);
-        throw WriteError("cannot write " + path + ": " + e.what());
-    }
+void writeVdbAtomically(const std::string &path, const openvdb::GridPtrVec &grids, const openvdb::MetaMap &meta) {
+    writeFileAtomically(path, [&](std::ostream &stream) { ArchiveWriter().writeTo(stream, grids, meta); });
 }
 
 }  // namespace
@@ -77,7 +49,7 @@ void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids) {
     openvdb::MetaMap meta;
     meta.insertMeta(kShiftKey, openvdb::BoolMetadata(true));
     meta.insertMeta("creator", openvdb::StringMetadata(std::string("Firn ") + kVersion));
-    writeFileAtomically(path, copies, meta);
+    writeVdbAtomically(path, copies, meta);
 }
 
 openvdb::GridPtrVec readGrids(const std::string &path) {
@@ -158,7 +130,7 @@ std::vector<std::string> removeGrids(const std::string &path, const std::vector<
     }
     if (removed.empty()) return removed;
     if (kept.empty()) throw InvalidArgument("removing those grids would leave " + path + " empty");
-    writeFileAtomically(path, kept, *meta);
+    writeVdbAtomically(path, kept, *meta);
     return removed;
 }
 

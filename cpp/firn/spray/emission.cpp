@@ -1,0 +1,89 @@
+#include "firn/spray/emission.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <glm/geometric.hpp>
+#include <openvdb/tools/Interpolation.h>
+#include <tbb/parallel_for.h>
+
+#include "firn/util/error.h"
+#include "firn/util/sampling.h"
+
+namespace firn {
+
+namespace {
+
+constexpr int kMaxCellsPerSide = 4096;
+
+struct Cell {
+    double s0, s1, t0, t1;  // the cell's range of the rectangle's parameters
+    std::size_t count;      // lumps it throws
+};
+
+std::uint64_t cellStream(std::uint64_t emitter, std::uint64_t cell) { return mix64(emitter) ^ cell; }
+
+}  // namespace
+
+void EmissionSettings::validate() const {
+    const auto check = [](bool ok, const char *what) {
+        if (!ok) throw InvalidArgument(std::string("spray emission settings: ") + what);
+    };
+    check(rate >= 0.0 && rate < 1e9, "rate must be between 0 and 1e9 lumps per m^3 swept");
+    check(spreadAngle >= 0.0 && spreadAngle <= kPi, "spread angle must be between 0 and pi rad");
+    check(throwSpeed >= 0.0 && throwSpeed < 100.0, "throw speed must be between 0 and 100 times the emitter's");
+    check(cellSize > 1e-4 && cellSize < 100.0, "cell size must be between 0.1 mm and 100 m");
+}
+
+SprayParticles emitLumps(const EmitterRectangle &from, const EmitterRectangle &to, double dt,
+                         const openvdb::FloatGrid &surface, const glm::dvec3 &down, const EmissionSettings &e,
+                         const LumpSettings &lumps, std::uint64_t seed, std::uint64_t emitterIndex,
+                         std::uint64_t stepIndex, std::uint64_t &nextId, std::size_t maxNew) {
+    const int nu = std::clamp(int(std::ceil(2.0 * glm::length(from.halfU) / e.cellSize)), 1, kMaxCellsPerSide);
+    const int nv = std::clamp(int(std::ceil(2.0 * glm::length(from.halfV) / e.cellSize)), 1, kMaxCellsPerSide);
+    const double cellArea = from.area() / (double(nu) * nv);  // m^2
+    std::vector<Cell> cells(std::size_t(nu) * nv);
+    tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t c) {
+        const int iu = int(c % nu), iv = int(c / nu);
+        Cell &cell = cells[c];
+        cell = {-1.0 + 2.0 * iu / nu, -1.0 + 2.0 * (iu + 1) / nu, -1.0 + 2.0 * iv / nv, -1.0 + 2.0 * (iv + 1) / nv, 0};
+        const double s = 0.5 * (cell.s0 + cell.s1), t = 0.5 * (cell.t0 + cell.t1);
+        const glm::dvec3 p = from.pointAt(s, t);
+        if (openvdb::tools::BoxSampler::sample(surface.tree(), surface.worldToIndex(openvdb::Vec3d(p.x, p.y, p.z))) >= 0.0)
+            return;
+        const double speed = glm::length(to.pointAt(s, t) - p) / dt;  // m/s
+        const double expected = e.rate * speed * dt * cellArea;
+        Rng rng = sprayRng(seed, SprayStream::Emission, cellStream(emitterIndex, c), stepIndex);
+        cell.count = std::size_t(std::floor(expected + rng.uniform()));
+    });
+    std::vector<std::size_t> first(cells.size() + 1, 0);
+    for (std::size_t c = 0; c < cells.size(); ++c) first[c + 1] = first[c] + cells[c].count;
+    if (first.back() > maxNew)
+        throw BudgetExceeded("emitter " + std::to_string(emitterIndex) + " would throw " + std::to_string(first.back()) +
+                             " lumps in one sub-step, over the particle budget (" + std::to_string(maxNew) +
+                             " left): lower the emission rate or raise the budget");
+    SprayParticles out(first.back());
+    const glm::dvec3 up = -down;
+    const double cosSpread = std::cos(e.spreadAngle);
+    tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t c) {
+        const Cell &cell = cells[c];
+        if (cell.count == 0) return;
+        Rng rng = sprayRng(seed, SprayStream::Emission, cellStream(emitterIndex, c), stepIndex);
+        rng.uniform();  // the count's draw
+        for (std::size_t n = 0; n < cell.count; ++n) {
+            const double s = cell.s0 + (cell.s1 - cell.s0) * rng.uniform();
+            const double t = cell.t0 + (cell.t1 - cell.t0) * rng.uniform();
+            const glm::dvec3 p = from.pointAt(s, t);
+            const glm::dvec3 velocity = (to.pointAt(s, t) - p) / dt;  // m/s of that point of the rectangle
+            const double u1 = rng.uniform(), u2 = rng.uniform();
+            const glm::dvec3 thrown = velocity + e.throwSpeed * glm::length(velocity) *
+                                                     sampleUniformCone(up, cosSpread, u1, u2);
+            out[first[c] + n] = makeLump(p, thrown, nextId + first[c] + n, lumps, rng);
+        }
+    });
+    nextId += first.back();
+    return out;
+}
+
+}  // namespace firn

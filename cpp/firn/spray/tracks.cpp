@@ -1,0 +1,187 @@
+#include "firn/spray/tracks.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <glm/geometric.hpp>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/Prune.h>
+
+#include "firn/util/error.h"
+
+namespace firn {
+
+namespace {
+
+constexpr double kBandVoxels = 3.0;        // the snow surface's half band (snow/snow_rasterizer.cpp)
+constexpr int kMaxBoxesBetween = 256;      // positions added between two given ones, at most
+constexpr double kMinUpwardNormal = 0.25;  // cos of the steepest normal a box is raised along in full
+
+using openvdb::Vec3s;
+
+// Every snow voxel's world box, in the level set's active voxels and interior tiles: its top along `up` (m).
+double snowTop(const openvdb::FloatGrid &surface, const glm::dvec3 &up) {
+    const openvdb::CoordBBox box = surface.evalActiveVoxelBoundingBox();
+    double top = -std::numeric_limits<double>::infinity();
+    for (int corner = 0; corner < 8; ++corner) {
+        const openvdb::Coord c((corner & 1) ? box.max().x() : box.min().x(), (corner & 2) ? box.max().y() : box.min().y(),
+                               (corner & 4) ? box.max().z() : box.min().z());
+        const openvdb::Vec3d w = surface.indexToWorld(c);
+        top = std::max(top, glm::dot(glm::dvec3(w.x(), w.y(), w.z()), up));
+    }
+    return top;
+}
+
+// The rectangles given, with more between consecutive ones wherever a corner moves more than half `narrowest`.
+std::vector<EmitterRectangle> densify(const std::vector<EmitterRectangle> &given, double thickness) {
+    std::vector<EmitterRectangle> out;
+    for (std::size_t i = 0; i < given.size(); ++i) {
+        if (i > 0) {
+            const EmitterRectangle &a = given[i - 1], &b = given[i];
+            const auto ca = a.corners(), cb = b.corners();
+            double moved = 0.0;
+            for (int k = 0; k < 4; ++k) moved = std::max(moved, glm::length(cb[k] - ca[k]));
+            const double narrowest = std::min({2.0 * glm::length(a.halfU), 2.0 * glm::length(a.halfV), thickness});
+            const int n = std::clamp(int(std::ceil(moved / (0.5 * narrowest))), 1, kMaxBoxesBetween);
+            const Emitter pair{{a, b}};
+            for (int k = 1; k < n; ++k) out.push_back(emitterBetween(pair, 0, double(k) / n));
+        }
+        out.push_back(given[i]);
+    }
+    return out;
+}
+
+// The eight corners of one position's box: the rectangle lowered by `thickness` and raised to `top` along its
+// upward normal (a vertical rectangle is raised no higher than 1 / kMinUpwardNormal times the height it needs).
+std::array<Vec3s, 8> boxCorners(const EmitterRectangle &r, const glm::dvec3 &up, double thickness, double top) {
+    glm::dvec3 n = glm::normalize(glm::cross(r.halfU, r.halfV));
+    if (glm::dot(n, up) < 0.0) n = -n;
+    const auto c = r.corners();
+    double lowest = std::numeric_limits<double>::infinity();
+    for (const glm::dvec3 &p : c) lowest = std::min(lowest, glm::dot(p, up));
+    const double raise = std::max(0.0, top - lowest) / std::max(glm::dot(n, up), kMinUpwardNormal) + thickness;
+    std::array<Vec3s, 8> out;
+    for (int k = 0; k < 4; ++k) {
+        const glm::dvec3 bottom = c[k] - thickness * n, upper = c[k] + raise * n;
+        out[k] = Vec3s(float(bottom.x), float(bottom.y), float(bottom.z));
+        out[k + 4] = Vec3s(float(upper.x), float(upper.y), float(upper.z));
+    }
+    return out;
+}
+
+// Signed distance (m) to the union of the boxes, interior filled, exterior band `exteriorVoxels` wide; nullptr when
+// no box meets the snow. Throws BudgetExceeded, before allocating, when it could take more than maxVoxels voxels.
+openvdb::FloatGrid::Ptr sweptVolume(const std::vector<EmitterRectangle> &positions, const openvdb::FloatGrid &surface,
+                                    const glm::dvec3 &up, double thickness, double exteriorVoxels, double maxVoxels) {
+    const double top = snowTop(surface, up) + kBandVoxels * surface.voxelSize()[0];
+    const openvdb::BBoxd snowBox = surface.transform().indexToWorld(surface.evalActiveVoxelBoundingBox());
+    std::vector<Vec3s> points;
+    std::vector<openvdb::Vec4I> quads;
+    // Corners 0-3 the lowered rectangle, 4-7 the raised one, both counter-clockwise seen from above.
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (const EmitterRectangle &r : densify(positions, thickness)) {
+        const std::array<Vec3s, 8> corners = boxCorners(r, up, thickness, top);
+        openvdb::BBoxd box;
+        for (const Vec3s &p : corners) box.expand(openvdb::Vec3d(p));
+        if (!box.hasOverlap(snowBox)) continue;  // the emitter is away from the snow
+        const unsigned base = unsigned(points.size());
+        points.insert(points.end(), corners.begin(), corners.end());
+        for (const auto &f : faces) quads.emplace_back(base + f[0], base + f[1], base + f[2], base + f[3]);
+    }
+    if (quads.empty()) return nullptr;
+    // Its voxels are within the boxes' bounds where they meet the snow's, grown by the exterior band.
+    openvdb::BBoxd bounds;
+    for (const Vec3s &p : points) bounds.expand(openvdb::Vec3d(p));
+    const double band = exteriorVoxels * surface.voxelSize()[0];
+    openvdb::BBoxd reach(bounds.min() - openvdb::Vec3d(band), bounds.max() + openvdb::Vec3d(band));
+    reach.min() = openvdb::math::maxComponent(reach.min(), snowBox.min() - openvdb::Vec3d(band));
+    reach.max() = openvdb::math::minComponent(reach.max(), snowBox.max() + openvdb::Vec3d(band));
+    const double voxels = reach.volume() / std::pow(surface.voxelSize()[0], 3);
+    if (voxels > maxVoxels)
+        throw BudgetExceeded("an emitter's track over one frame would take about " + std::to_string(voxels) +
+                             " voxels, over the budget of " + std::to_string(maxVoxels) +
+                             ": use coarser snow voxels, a smaller emitter, or raise the voxel budget");
+    return openvdb::tools::meshToSignedDistanceField<openvdb::FloatGrid>(
+        surface.transform(), points, {}, quads, float(exteriorVoxels), std::numeric_limits<float>::max());
+}
+
+}  // namespace
+
+void TrackSettings::validate() const {
+    const auto check = [](bool ok, const char *what) {
+        if (!ok) throw InvalidArgument(std::string("spray track settings: ") + what);
+    };
+    check(thickness > 1e-4 && thickness < 10.0, "thickness must be between 0.1 mm and 10 m");
+    check(compactionDepth >= 0.0 && compactionDepth < 10.0, "compaction depth must be between 0 and 10 m");
+    check(maxDensity > 0.0 && maxDensity <= 917.0, "the compacted density must be between 0 and 917 kg/m^3");
+}
+
+TrackStats carveTrack(SnowGrids &snow, const std::vector<EmitterRectangle> &positions, const glm::dvec3 &down,
+                      const TrackSettings &s, double maxVoxels) {
+    TrackStats stats;
+    if (positions.empty() || snow.surface->activeVoxelCount() == 0) return stats;
+    const double h = snow.surface->voxelSize()[0], band = kBandVoxels * h, cube = h * h * h;
+    const glm::dvec3 up = -down;
+    const openvdb::FloatGrid::Ptr swept =
+        sweptVolume(positions, *snow.surface, up, s.thickness, std::max(kBandVoxels, s.compactionDepth / h + 2.0),
+                    maxVoxels);
+    if (!swept) return stats;
+
+    auto phi = snow.surface->getAccessor();
+    auto rho = snow.density->getAccessor();
+    // The difference: max(phi, -phi_swept), and the density of the covered part of each voxel removed.
+    for (auto it = swept->cbeginValueOn(); it; ++it) {
+        const double inSwept = *it;  // m, negative inside the swept volume
+        if (inSwept >= band) continue;
+        const openvdb::Coord ijk = it.getCoord();
+        const float before = phi.getValue(ijk), after = float(std::max(double(before), -inSwept));
+        bool changed = false;
+        if (after != before) {
+            if (after >= band) phi.setValueOff(ijk, float(band));
+            else phi.setValue(ijk, after);
+            changed = true;
+        }
+        const double covered = std::clamp(0.5 - inSwept / h, 0.0, 1.0);  // fraction of the voxel swept
+        const float density = rho.getValue(ijk);
+        if (covered > 0.0 && density > 0.0f) {
+            const float left = float(density * (1.0 - covered));
+            stats.removedMass += (double(density) - left) * cube;
+            if (left > 0.0f) rho.setValue(ijk, left);
+            else rho.setValueOff(ijk, 0.0f);
+            changed = true;
+        }
+        stats.carvedVoxels += changed;
+    }
+    // The layer under the track: snow voxels within compactionDepth of the swept volume whose nearest swept point
+    // is straight above (one voxel further up than their distance lies inside it).
+    std::vector<openvdb::Coord> layer;
+    if (s.compactionDepth > 0.0 && stats.removedMass > 0.0) {
+        const openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sample(*swept);
+        for (auto it = swept->cbeginValueOn(); it; ++it) {
+            const double distance = *it;
+            if (distance < 0.5 * h || distance > s.compactionDepth + 0.5 * h) continue;
+            if (!(rho.getValue(it.getCoord()) > 0.0f)) continue;
+            const openvdb::Vec3d w = swept->indexToWorld(it.getCoord());
+            const glm::dvec3 above = glm::dvec3(w.x(), w.y(), w.z()) + (distance + h) * up;
+            if (sample.wsSample(openvdb::Vec3d(above.x, above.y, above.z)) < 0.0) layer.push_back(it.getCoord());
+        }
+    }
+    if (!layer.empty()) {
+        const float added = float(stats.removedMass / (double(layer.size()) * cube));  // kg/m^3 each
+        for (const openvdb::Coord &ijk : layer) {
+            const float before = rho.getValue(ijk), after = std::min(before + added, float(s.maxDensity));
+            rho.setValue(ijk, after);
+            stats.compactedMass += double(after - before) * cube;
+        }
+    }
+    if (stats.carvedVoxels > 0) {
+        openvdb::tools::pruneLevelSet(snow.surface->tree());
+        openvdb::tools::pruneInactive(snow.density->tree());
+    }
+    return stats;
+}
+
+}  // namespace firn

@@ -1,0 +1,92 @@
+// Tracks: the groove an emitter cuts is its swept box, and the snow it held is compacted underneath.
+#include <gtest/gtest.h>
+
+#include "firn/spray/tracks.h"
+#include "firn/util/error.h"
+#include "slab_snow.h"
+
+namespace firn {
+namespace {
+
+constexpr double kH = 0.01;  // m, voxel
+
+// The emitter: 0.4 m x 0.1 m, horizontal, its rectangle 5 cm under the snow's top, sliding 0.6 m along x.
+std::vector<EmitterRectangle> slide() {
+    std::vector<EmitterRectangle> positions;
+    for (int k = 0; k <= 4; ++k)
+        positions.push_back({{-0.3 + 0.15 * k, 0.0, -0.05}, {0.2, 0.0, 0.0}, {0.0, 0.05, 0.0}});
+    return positions;
+}
+
+double totalMass(const SnowGrids &snow) {
+    double sum = 0.0;
+    for (auto it = snow.density->cbeginValueOn(); it; ++it) sum += *it;
+    return sum * kH * kH * kH;  // kg
+}
+
+TEST(Tracks, TheGrooveIsTheSweptBoxAndItsSnowIsCompactedBelow) {
+    SnowGrids snow = test::slabSnow({-0.8, -0.3, -0.3}, {0.8, 0.3, 0.0}, kH, 300.0f);
+    const double massBefore = totalMass(snow);
+    TrackSettings s;
+    s.thickness = 0.02;
+    s.compactionDepth = 0.05;
+    const TrackStats stats = carveTrack(snow, slide(), {0.0, 0.0, -1.0}, s, 50e6);
+    ASSERT_GT(stats.carvedVoxels, 0u);
+    const openvdb::FloatGrid &phi = *snow.surface;
+    // Swept: x in [-0.5, 0.5], y in [-0.05, 0.05], from z = -0.05 - thickness = -0.07 up through the top.
+    // Depth: along the groove's axis the level set turns negative at its bottom.
+    for (double x : {-0.4, 0.0, 0.4}) {
+        double bottom = 0.05;
+        while (test::levelSetAt(phi, x, 0.0, bottom) > 0.0) bottom -= 0.1 * kH;
+        EXPECT_NEAR(bottom, -0.07, kH) << "x = " << x;
+    }
+    // Width: across the groove halfway down, the walls stand at y = +-0.05.
+    for (double side : {-1.0, 1.0}) {
+        double y = 0.0;
+        while (test::levelSetAt(phi, 0.0, y, -0.035) > 0.0) y += side * 0.1 * kH;
+        EXPECT_NEAR(std::abs(y), 0.05, kH) << side;
+    }
+    // Length: the groove ends where the emitter's ends went.
+    double end = 0.0;
+    while (test::levelSetAt(phi, end, 0.0, -0.035) > 0.0) end += 0.1 * kH;
+    EXPECT_NEAR(end, 0.5, kH);
+    // Untouched beside it.
+    EXPECT_LT(test::levelSetAt(phi, 0.0, 0.15, -0.035), 0.0);
+
+    // The removed mass: 300 kg/m^3 x (1.0 m x 0.1 m x 0.07 m), up to the voxel ramp; all of it compacted below.
+    EXPECT_NEAR(stats.removedMass, 300.0 * 1.0 * 0.1 * 0.07, 0.1 * 300.0 * 1.0 * 0.1 * 0.07);
+    EXPECT_NEAR(stats.compactedMass, stats.removedMass, 1e-6 * stats.removedMass);
+    EXPECT_NEAR(totalMass(snow), massBefore, 1e-4 * massBefore);
+    auto rho = snow.density->getConstAccessor();
+    const auto at = [&](double x, double y, double z) {
+        return rho.getValue(openvdb::Coord::round(snow.density->worldToIndex(openvdb::Vec3d(x, y, z))));
+    };
+    EXPECT_EQ(at(0.0, 0.0, -0.03), 0.0f);   // the groove is empty
+    EXPECT_GT(at(0.0, 0.0, -0.10), 400.0f);  // the layer below holds its snow: 300 + 2.1 kg / 0.005 m^3 = 720
+    EXPECT_FLOAT_EQ(at(0.0, 0.0, -0.20), 300.0f);  // deeper, untouched
+    EXPECT_FLOAT_EQ(at(0.0, 0.2, -0.10), 300.0f);  // beside, untouched
+}
+
+TEST(Tracks, AnEmitterAboveTheSnowLeavesItAlone) {
+    SnowGrids snow = test::slabSnow({-0.5, -0.3, -0.3}, {0.5, 0.3, 0.0}, kH, 300.0f);
+    std::vector<EmitterRectangle> high = slide();
+    for (EmitterRectangle &r : high) r.centre.z = 0.2;
+    EXPECT_EQ(carveTrack(snow, high, {0.0, 0.0, -1.0}, TrackSettings{}, 50e6).carvedVoxels, 0u);
+}
+
+TEST(Tracks, ATrackOverTheVoxelBudgetIsRefusedBeforeAllocating) {
+    SnowGrids snow = test::slabSnow({-0.5, -0.3, -0.3}, {0.5, 0.3, 0.0}, kH, 300.0f);
+    EXPECT_THROW(carveTrack(snow, slide(), {0.0, 0.0, -1.0}, TrackSettings{}, 1000.0), BudgetExceeded);
+}
+
+TEST(Tracks, BadSettingsAreRefused) {
+    TrackSettings s;
+    s.thickness = 0.0;
+    EXPECT_THROW(s.validate(), InvalidArgument);
+    s = TrackSettings{};
+    s.maxDensity = 1000.0;
+    EXPECT_THROW(s.validate(), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace firn
