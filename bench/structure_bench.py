@@ -1,8 +1,8 @@
 """Render cost of snow's small-scale structure (issue 13) on the car sample: the baked car rendered plain, with
-sub-balls and glints, and with sub-balls resolved at the grain scale; each twice, alternating, in one run.
+sub-balls, with glints, with both, and (--resolve) with the grains resolved; each twice, alternating, in one run.
 Goal: sub-balls and glints at most 1.3x the plain render.
 
-bench/run.sh bench/structure_bench.py [-- --width 320 --samples 16]
+bench/run.sh bench/structure_bench.py [-- --width 240 --samples 32 --resolve]
 """
 
 import argparse
@@ -23,22 +23,24 @@ VARIANTS = (  # label, sub-balls, glints, resolve grains
     ("sub-balls", True, False, False),
     ("glints", False, True, False),
     ("sub-balls + glints", True, True, False),
-    ("+ grains resolved", True, True, True),
 )
+RESOLVED = ("+ grains resolved", True, True, True)  # with --resolve: the close-up setting, far costlier
 
 
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--width", type=int, default=320)
     parser.add_argument("--samples", type=int, default=32)
+    parser.add_argument("--resolve", action="store_true", help="also render with Resolve Grains")
     args = parser.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
     scene, targets = car.build_scene()
     snow = common.add_snow(targets, depth=0.12, spacing=0.06, voxel_size=0.02)
     common.bake([snow], quality="DRAFT")
     folder = tempfile.mkdtemp(prefix="firn_bench_")
-    times = {label: [] for label, *_ in VARIANTS}
+    variants = VARIANTS + ((RESOLVED,) if args.resolve else ())
+    times = {label: [] for label, *_ in variants}
     for repeat in range(2):
-        for label, sub_balls, glints, resolve in VARIANTS:
+        for label, sub_balls, glints, resolve in variants:
             snow.firn.sub_balls, snow.firn.glints, snow.firn.sub_ball_resolve = sub_balls, glints, resolve
             started = time.perf_counter()
             common.render(scene, os.path.join(folder, f"car_{repeat}.png"), args.width, args.samples)

@@ -206,10 +206,11 @@ def _sub_balls(nodes, links, density, y):
     return grain_density.outputs["Value"], shallow.outputs["Value"]
 
 
-def _build(tree, sub_balls, shade, shared=None):
+def _build(tree, sub_balls, shade, shared=None, camera_only=False):
     """A volume material: shade(nodes, links, extinction node, name suffix, shared) -> shader socket, fed sigma_t
     from the density. With sub-balls it is built twice, the second from the grains' density, and a Mix Shader
-    chooses by 'Firn Shallow': Cycles skips a mix's unused side, so the grains' texture costs only where they are."""
+    chooses by 'Firn Shallow': Cycles skips a mix's unused side, so the grains' texture costs only where they are.
+    `camera_only`: only camera rays see the grains (baked light: they keep its mean, so other rays need not)."""
     nodes, links = tree.nodes, tree.links
     nodes.clear()
     context = shared(nodes, links) if shared else None
@@ -218,6 +219,13 @@ def _build(tree, sub_balls, shade, shared=None):
     shader = shade(nodes, links, _extinction(nodes, links, density.outputs["Fac"], "", 300), "", context)
     if sub_balls:
         grain_density, shallow = _sub_balls(nodes, links, density.outputs["Fac"], 900)
+        if camera_only:
+            path = _new_node(nodes, "ShaderNodeLightPath", "Firn Grain Rays", "", (-550, 1300))
+            seen = _new_node(nodes, "ShaderNodeMath", "Firn Shallow Camera", "shallow, camera rays", (-350, 1300))
+            seen.operation = "MULTIPLY"
+            links.new(shallow, seen.inputs[0])
+            links.new(path.outputs["Is Camera Ray"], seen.inputs[1])
+            shallow = seen.outputs["Value"]
         grains = shade(nodes, links, _extinction(nodes, links, grain_density, " Grains", 700), " Grains", context)
         mix = _new_node(nodes, "ShaderNodeMixShader", "Firn Grain Mix", "sub-balls where they are", (400, 300))
         links.new(shallow, mix.inputs["Fac"])
@@ -307,7 +315,7 @@ def _build_single(tree, sub_balls):
 
 
 def _build_baked(tree, sub_balls):
-    _build(tree, sub_balls, _baked, _view_dependent_source)
+    _build(tree, sub_balls, _baked, _view_dependent_source, camera_only=True)
 
 
 def _build_opaque(tree, _sub_balls):
