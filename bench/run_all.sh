@@ -58,6 +58,12 @@ mkdir -p "$(dirname "$report")"
   PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/bench/spray_bench.py"
   echo '```'
   echo
+  echo "## Sub-balls and glints: render time on the car sample against the plain snow"
+  echo
+  echo '```'
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/structure_bench.py" -- --width 240 --samples 32
+  echo '```'
+  echo
   echo "## The UI's longest stalls during Add Snow Layer and Bake Scattering (car sample, window under Xvfb)"
   echo
   "$FIRN_ROOT/bench/ui_stall.sh"

@@ -61,7 +61,7 @@ def render_panels(args, stages):
 
 
 def main():
-    common.panels_sample(__file__, __doc__, render_panels)
+    common.panels_sample(__file__, __doc__, render_panels, lambda parser: parser.set_defaults(width=800))
 
 
 if __name__ == "__main__":
