@@ -13,7 +13,7 @@ import bpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sample_common as common  # noqa: E402
 
-SUN_ELEVATION = 12.0  # degrees: a low winter sun, in front of the camera
+SUN_ELEVATION = 25.0  # degrees: a low winter sun, in front of the camera
 
 
 def build_scene():
@@ -23,12 +23,15 @@ def build_scene():
     ground.data.materials.append(common.material("Soil", (0.2, 0.15, 0.1), roughness=0.9))
     common.nishita_sky(scene, sun_elevation_deg=SUN_ELEVATION, sun_rotation_deg=0.0)
     common.sun(elevation_deg=SUN_ELEVATION, rotation_deg=0.0, irradiance=3.0)  # towards +x
-    common.camera(location=(-0.7, 0.0, 0.4), look_at=(0.3, 0.0, 0.02), lens=40)
+    common.camera(location=(-0.6, 0.0, 0.6), look_at=(0.3, 0.0, 0.02), lens=40)
     return scene, [ground]
 
 
 def main():
-    args = common.parse_args(__doc__, "out/fresh_snow_glints.png")
+    # Glints are rare and tiny (facets of 0.05 mm; the real sun is 0.53° wide): a pixel shows one when one of its
+    # samples lands on a mirroring facet, so this sample takes more samples than the others.
+    args = common.parse_args(__doc__, "out/fresh_snow_glints.png",
+                             lambda parser: parser.set_defaults(width=640, samples=64))
     stages = common.Stages()
     scene, targets = stages.run("build scene", build_scene)
     snow = stages.run("add snow layer", common.add_snow, targets, depth=0.05, spacing=0.03)

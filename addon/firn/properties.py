@@ -297,15 +297,15 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
         "of fresh snow", default=False, update=_refresh_structure)
     glint_density: bpy.props.FloatProperty(
         name="Facets per m²", description="Facets per square metre of snow surface (at most 1 / (4 r²)); "
-        "of these only about Ω_sun / 25 mirror the sun towards the camera", default=5e6, min=1.0, soft_max=2e7,
+        "of these only about Ω_sun / 25 mirror the sun towards the camera", default=5e7, min=1.0, soft_max=1e8,
         precision=0, update=_refresh_structure)
     glint_size: bpy.props.FloatProperty(
         name="Facet Radius", description="Radius of a facet in metres, whatever the Unit Scale",
-        default=0.1e-3, min=1e-5, max=0.05, soft_max=3e-3, precision=5, step=0.01, update=_refresh_structure)
+        default=0.05e-3, min=1e-5, max=0.05, soft_max=3e-3, precision=5, step=0.01, update=_refresh_structure)
     glint_roughness: bpy.props.FloatProperty(
         name="Facet Roughness", description="0: perfect mirrors, each glint the sun's own brightness on a tiny "
         "area; rougher facets glint more often, each dimmer (the same light in all)", subtype="FACTOR",
-        default=0.1, min=0.0, max=0.5, update=_refresh_structure)
+        default=0.0, min=0.0, max=0.5, update=_refresh_structure)
 
     # --- bake (issue "Bake Scattering"; docs/user-guide.md) ---
     bake_quality: bpy.props.EnumProperty(

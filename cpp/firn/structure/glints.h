@@ -9,8 +9,8 @@
 namespace firn {
 
 struct GlintSettings {
-    double facetsPerSquareMetre = 5e6;  // facets the surface cuts, per m^2 of surface
-    double facetRadius = 0.1e-3;        // m
+    double facetsPerSquareMetre = 5e7;  // facets the surface cuts, per m^2 of surface
+    double facetRadius = 0.05e-3;       // m
 
     void validate() const;
 };
