@@ -78,7 +78,7 @@ EMITTER_ITEMS = (
 )
 CORE_SPRAY_SETTINGS = ("rate", "spread_angle", "throw_speed", "lump_radius", "lump_density", "balls_per_lump",
                        "break_rate", "track_thickness", "compaction_depth", "substeps", "deposit", "cut_tracks",
-                       "seed")
+                       "voxel_size", "seed")
 SPRAY_PROPERTIES = {
     "emitter": bpy.props.EnumProperty(
         name="Emitter", description="Which part of each selected object throws snow", items=EMITTER_ITEMS,
@@ -124,6 +124,9 @@ SPRAY_PROPERTIES = {
     "cut_tracks": bpy.props.BoolProperty(
         name="Cut Tracks", description="Emitters cut tracks in the snow (a second volume sequence)",
         default=_SPRAY.cut_tracks),
+    "voxel_size": bpy.props.FloatProperty(
+        name="Voxel Size", description="Voxel of the spray's grids in metres (0: the snow's); at most about the "
+        "Lump Radius to see lumps", default=_SPRAY.voxel_size, min=0.0, soft_max=0.05, precision=4, step=0.01),
     "seed": bpy.props.IntProperty(name="Seed", description="Same scene and seed, same spray", default=0, min=0),
 }
 SPRAY_ROLE_ITEMS = (

@@ -16,8 +16,9 @@ SNOW_DEPTH = 0.1  # m
 
 
 def snow_on_plane():
-    bpy.ops.mesh.primitive_plane_add(size=1.0, scale=(1.6, 0.6, 1.0))
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
     plane = bpy.context.object
+    plane.scale = (1.6, 0.6, 1.0)
     select_only(plane)
     assert bpy.ops.firn.add_snow_layer(depth=SNOW_DEPTH, spacing=0.04, voxel_size=0.01, seed=1) == {"FINISHED"}
     return bpy.context.object

@@ -27,8 +27,9 @@ def build_scene():
     if bpy.ops.firn.add_snow_layer(depth=0.1, spacing=0.05, voxel_size=0.01) != {"FINISHED"}:
         fail("Add Snow Layer failed")
     snow = bpy.context.object
-    bpy.ops.mesh.primitive_plane_add(size=1.0, scale=(0.3, 0.06, 1.0))
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
     ski = bpy.context.object
+    ski.scale = (0.3, 0.06, 1.0)
     for frame, x in ((1, -0.8), (FRAMES, 0.8)):
         ski.location = (x, 0.0, 0.05)
         ski.keyframe_insert("location", frame=frame)

@@ -6,7 +6,7 @@ from ..common.panels import panel_pair
 from ..properties import SPRAY_PROPERTIES, active_snow_layer, is_spray
 
 ADD_LABEL, BAKE_LABEL = "Add Snow Spray", "Bake Sequence"  # the jobs' labels, the panel shows their progress
-_HINTS = ("lump_radius", "track_thickness", "compaction_depth")  # metres, shown in millimetres too
+_HINTS = ("lump_radius", "track_thickness", "compaction_depth", "voxel_size")  # metres, shown in millimetres too
 
 
 def draw_spray_settings(layout, holder, names):
