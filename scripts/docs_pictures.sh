@@ -21,6 +21,9 @@ xvfb-run -a -s "-screen 0 1280x800x24" \
 for sample in car_under_snow teapot_and_ball nishita_comparison firn_vs_real_snow night_street grain_snow grain_scales grain_cube fresh_snow_glints; do
   run_blender -b --factory-startup --python "$FIRN_ROOT/blend_samples/$sample.py" -- --output "$images/$sample.png" --no-save
 done
+# The skier's animation (36 frames at 160 px); its 24th frame is the docs' picture.
+run_blender -b --factory-startup --python "$FIRN_ROOT/blend_samples/skier.py" -- --output "$(dirname "$empty")/skier/" --no-save
+cp "$(dirname "$empty")/skier/0024.png" "$images/skier.png"
 # Grain snow from the core alone (no Blender): Chrisman's accumulation and the brute-force grain renderer.
 PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/scripts/grains_picture.py" "$images/grains_red_ball.png" \
   --width 320 --samples 32 --grains 150000

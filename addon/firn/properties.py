@@ -5,6 +5,7 @@ import math
 import bpy
 
 from .bake import state as bake_state
+from .common.core import firncore
 from .material import nodes as materials, optics
 from .snow_layer import proxy
 
@@ -66,6 +67,90 @@ class FIRN_SnowLayerSettings(bpy.types.PropertyGroup):
 class FIRN_SnowTarget(bpy.types.PropertyGroup):
     object: bpy.props.PointerProperty(type=bpy.types.Object, name="Target")
 
+# Add Snow Spray (issue 14, docs/spray.md): the emitter choice, then the core's settings under the core's names
+# (CORE_SPRAY_SETTINGS go to firncore.SpraySettings as they are). Lengths are metres whatever the Unit Scale: a lump's
+# size belongs to the snow, not to the scene (as the grain radius).
+_SPRAY = firncore.SpraySettings()
+EMITTER_ITEMS = (
+    ("LOWEST_FACE", "Lowest Face", "The face whose centre is lowest at the first frame: a ski's sole, a board's base"),
+    ("VERTEX_GROUP", "Vertex Group", "The rectangle around a vertex group's vertices (a wheel's contact patch)"),
+    ("FACE", "Face", "The face of the given index"),
+)
+CORE_SPRAY_SETTINGS = ("rate", "spread_angle", "throw_speed", "lump_radius", "lump_density", "balls_per_lump",
+                       "break_rate", "track_thickness", "compaction_depth", "substeps", "deposit", "cut_tracks",
+                       "voxel_size", "seed")
+SPRAY_PROPERTIES = {
+    "emitter": bpy.props.EnumProperty(
+        name="Emitter", description="Which part of each selected object throws snow", items=EMITTER_ITEMS,
+        default="LOWEST_FACE"),
+    "vertex_group": bpy.props.StringProperty(
+        name="Vertex Group", description="Vertex group of every selected object that throws snow (its vertices' "
+        "bounding rectangle in their plane)"),
+    "face_index": bpy.props.IntProperty(
+        name="Face Index", description="Index of the face that throws snow, in every selected object", default=0,
+        min=0),
+    "rate": bpy.props.FloatProperty(
+        name="Rate (1/m³)", description="Lumps thrown per m² of emitter per metre it travels through the snow",
+        default=_SPRAY.rate, min=0.0, soft_max=200000.0),
+    "spread_angle": bpy.props.FloatProperty(
+        name="Spread", description="Half-angle of the cone around straight up that lumps are thrown in",
+        subtype="ANGLE", default=_SPRAY.spread_angle, min=0.0, max=math.pi / 2),
+    "throw_speed": bpy.props.FloatProperty(
+        name="Throw Speed", description="Speed of the throw as a fraction of the emitter's local speed",
+        default=_SPRAY.throw_speed, min=0.0, soft_max=2.0),
+    "lump_radius": bpy.props.FloatProperty(
+        name="Lump Radius", description="Mean equivalent radius of a thrown lump in metres, whatever the Unit Scale",
+        default=_SPRAY.lump_radius, min=1e-4, soft_max=0.05, precision=4, step=0.01),
+    "lump_density": bpy.props.FloatProperty(
+        name="Lump Density (kg/m³)", description="Density of a lump: packed snow thrown by a ski is 150-400",
+        default=_SPRAY.lump_density, min=10.0, max=917.0),
+    "balls_per_lump": bpy.props.IntProperty(
+        name="Balls per Lump", description="Metaballs a new lump is made of (a lump is not a sphere)",
+        default=_SPRAY.balls_per_lump, min=1, max=8),
+    "break_rate": bpy.props.FloatProperty(
+        name="Break Rate (1/s)", description="Chance per second that a flying lump splits in two",
+        default=_SPRAY.break_rate, min=0.0, soft_max=10.0),
+    "track_thickness": bpy.props.FloatProperty(
+        name="Track Depth", description="How far under its rectangle an emitter cuts the snow, in metres",
+        default=_SPRAY.track_thickness, min=0.0, soft_max=0.2, precision=3, step=0.1),
+    "compaction_depth": bpy.props.FloatProperty(
+        name="Compaction Depth", description="The layer under a track that takes the snow pushed out of it, "
+        "in metres", default=_SPRAY.compaction_depth, min=0.0, soft_max=0.5, precision=3, step=0.1),
+    "substeps": bpy.props.IntProperty(
+        name="Sub-Steps", description="Sub-steps per frame", default=_SPRAY.substeps, min=1, soft_max=32),
+    "deposit": bpy.props.BoolProperty(
+        name="Deposit", description="Lumps that come to rest stay where they lie (off: they vanish into the snow)",
+        default=_SPRAY.deposit),
+    "cut_tracks": bpy.props.BoolProperty(
+        name="Cut Tracks", description="Emitters cut tracks in the snow (a second volume sequence)",
+        default=_SPRAY.cut_tracks),
+    "voxel_size": bpy.props.FloatProperty(
+        name="Voxel Size", description="Voxel of the spray's grids in metres (0: the snow's); at most about the "
+        "Lump Radius to see lumps", default=_SPRAY.voxel_size, min=0.0, soft_max=0.05, precision=4, step=0.01),
+    "seed": bpy.props.IntProperty(name="Seed", description="Same scene and seed, same spray", default=0, min=0),
+}
+SPRAY_ROLE_ITEMS = (
+    ("NONE", "None", "Not made by Add Snow Spray"),
+    ("SPRAY", "Spray", "The thrown snow: spray_####.vdb"),
+    ("TRACKS", "Tracks", "The snow with the emitters' tracks: snow_####.vdb, shown instead of the snow it came from"),
+)
+
+
+class FIRN_SpraySettings(bpy.types.PropertyGroup):
+    """What a spray sequence was made from, kept on its Volume objects: Bake Sequence makes it again (longer,
+    resumed) from these."""
+    __annotations__ = dict(
+        SPRAY_PROPERTIES,
+        role=bpy.props.EnumProperty(name="Role", items=SPRAY_ROLE_ITEMS, default="NONE"),
+        source=bpy.props.PointerProperty(type=bpy.types.Object, name="Snow",
+                                         description="The snow layer the emitters move through"),
+        emitters=bpy.props.CollectionProperty(type=FIRN_SnowTarget, name="Emitters"),
+        frame_start=bpy.props.IntProperty(name="Start", description="First frame of the sequence (the snow as it "
+                                          "was)", default=1),
+        frame_end=bpy.props.IntProperty(name="End", description="Last frame simulated", default=1),
+        summary=bpy.props.StringProperty(name="Summary", description="What the last simulation did"),
+    )
+
 # The CUSTOM fields start where the PHYSICAL defaults lead (clean snow, 100 um grains, 250 kg/m^3).
 _DEFAULT_GRAIN_RADIUS = 100e-6  # m
 _DEFAULT_DENSITY = 250.0  # kg/m^3
@@ -124,6 +209,22 @@ def active_snow(context):
     return obj if obj is not None and obj.type == "VOLUME" and obj.firn.is_snow else None
 
 
+def is_spray(obj):
+    """A Volume sequence made by Add Snow Spray: its thrown snow or its tracked snow."""
+    return obj is not None and obj.type == "VOLUME" and obj.firn.spray.role != "NONE"
+
+
+def active_snow_layer(context):
+    """The context's snow if it is a snow layer (made by Add Snow Layer or baked), not a spray sequence."""
+    snow = active_snow(context)
+    return snow if snow is not None and not is_spray(snow) else None
+
+
+# The snow's optics (Snow Material panel): what a preset stores and what a spray copies from its snow.
+OPTICS_SETTINGS = ("optics_mode", "grain_radius", "impurity_black_carbon", "impurity_dust", "liquid_water",
+                   "absorption_enhancement", "anisotropy", "extinction_per_density", "albedo")
+
+
 class FIRN_ObjectSettings(bpy.types.PropertyGroup):
     is_snow: bpy.props.BoolProperty(
         name="Is Snow",
@@ -144,6 +245,7 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
         name="Display", description="How the snow shows in the viewport (Cycles always renders the volume)",
         items=proxy.DISPLAY_ITEMS, default="SURFACE", update=_apply_display)
     layer: bpy.props.PointerProperty(type=FIRN_SnowLayerSettings, name="Snow Layer")
+    spray: bpy.props.PointerProperty(type=FIRN_SpraySettings, name="Snow Spray")
     targets: bpy.props.CollectionProperty(type=FIRN_SnowTarget, name="Targets")
     metaballs: bpy.props.PointerProperty(
         type=bpy.types.Object, name="Metaballs", description="Point mesh of the snow's metaballs (edit, then rebuild)")
@@ -338,7 +440,7 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
     )
 
 
-classes = (FIRN_SnowLayerSettings, FIRN_SnowTarget, FIRN_ObjectSettings)
+classes = (FIRN_SnowLayerSettings, FIRN_SnowTarget, FIRN_SpraySettings, FIRN_ObjectSettings)
 
 
 def register_extras():

@@ -43,14 +43,31 @@ def folder():
     return _SESSION_FOLDER
 
 
-def snow_file(object_name):
-    """(absolute path, path to store in the Volume) for an object's snow."""
-    file_name = bpy.path.clean_name(object_name) + ".vdb"
-    absolute = os.path.join(folder(), file_name)
+def _entry(name):
+    """(absolute path, path to store in a Volume) of a file or folder `name` in the cache folder."""
+    absolute = os.path.join(folder(), name)
     prefs = preferences.get()
     if bpy.data.filepath and not (prefs and prefs.cache_folder):
-        return absolute, f"{_blend_cache_folder()}/{file_name}"
+        return absolute, f"{_blend_cache_folder()}/{name}"
     return absolute, absolute
+
+
+def snow_file(object_name):
+    """(absolute path, path to store in the Volume) for an object's snow."""
+    return _entry(bpy.path.clean_name(object_name) + ".vdb")
+
+
+def spray_folder(object_name):
+    """(absolute path, path to store) of the folder of a spray sequence's files (docs/spray.md): the spray's
+    Volume and its tracked snow's play files from it."""
+    return _entry(bpy.path.clean_name(object_name))
+
+
+def stored_file(volume, folder_name):
+    """The path to store in `volume` for its file in the cache entry `folder_name` (a file's own name: its
+    folder is the cache folder; a sequence's folder: its files are in it)."""
+    base = os.path.basename(volume.filepath)
+    return f"{_entry(folder_name)[1]}/{base}" if volume.is_sequence else _entry(base)[1]
 
 
 def check_writable(path):
@@ -135,12 +152,19 @@ def _move_session_files_on_save(*_args):
     """After the first save of a file, its snow moves from the session folder next to the .blend."""
     for volume in _snow_volumes():
         source = os.path.normpath(bpy.path.abspath(volume.filepath))  # saving made it relative: '//../..'
-        if not source.startswith(_SESSION_FOLDER) or not os.path.exists(source):
+        if not source.startswith(_SESSION_FOLDER):
             continue
-        target, stored = snow_file(os.path.splitext(os.path.basename(source))[0])
-        os.makedirs(os.path.dirname(target), exist_ok=True)
-        shutil.move(source, target)
-        volume.filepath = stored
+        if volume.is_sequence:  # a spray sequence: its folder moves (the spray and its tracked snow share it)
+            source = os.path.dirname(source)
+        name = os.path.basename(source)
+        target = _entry(name)[0]
+        if os.path.exists(source):
+            if volume.is_sequence and os.path.isdir(target):
+                shutil.rmtree(target)  # an older sequence of that name: this one replaces it
+            os.makedirs(os.path.dirname(target), exist_ok=True)
+            shutil.move(source, target)
+        if os.path.exists(target):
+            volume.filepath = stored_file(volume, name)
 
 
 @persistent
@@ -151,7 +175,9 @@ def _find_moved_files_on_load(*_args):
     for volume in _snow_volumes():
         if os.path.exists(bpy.path.abspath(volume.filepath)):
             continue
-        stored = f"{_blend_cache_folder()}/{os.path.basename(volume.filepath)}"
+        path = bpy.path.abspath(volume.filepath)
+        parts = (os.path.basename(os.path.dirname(path)),) if volume.is_sequence else ()
+        stored = "/".join((_blend_cache_folder(), *parts, os.path.basename(path)))
         if os.path.exists(bpy.path.abspath(stored)):
             volume.filepath = stored
 

@@ -11,7 +11,7 @@ import os
 import bpy
 from bl_operators.presets import AddPresetBase
 
-from ..properties import active_snow
+from ..properties import OPTICS_SETTINGS, active_snow
 from . import nodes as materials, optics
 
 PRESET_SUBDIR = os.path.join("firn", "snow_material")
@@ -68,17 +68,7 @@ class FIRN_OT_snow_material_preset_add(AddPresetBase, bpy.types.Operator):
     preset_menu = FIRN_MT_snow_material_presets.bl_idname
     preset_subdir = PRESET_SUBDIR
     preset_defines = ["firn = bpy.context.object.firn"]
-    preset_values = [
-        "firn.optics_mode",
-        "firn.grain_radius",
-        "firn.impurity_black_carbon",
-        "firn.impurity_dust",
-        "firn.liquid_water",
-        "firn.absorption_enhancement",
-        "firn.anisotropy",
-        "firn.extinction_per_density",
-        "firn.albedo",
-    ]
+    preset_values = [f"firn.{name}" for name in OPTICS_SETTINGS]
 
     @classmethod
     def poll(cls, context):

@@ -15,7 +15,7 @@ from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
 from ..material import nodes as materials
-from ..properties import SNOW_LAYER_PROPERTIES, active_snow
+from ..properties import SNOW_LAYER_PROPERTIES, active_snow_layer
 from . import proxy
 from .ui import draw_layer_settings
 
@@ -284,13 +284,13 @@ class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if active_snow(context) is None:
+        if active_snow_layer(context) is None:
             cls.poll_message_set("Select a snow object made by Add Snow Layer")
             return False
         return True
 
     def prepare(self, context):
-        snow = active_snow(context)
+        snow = active_snow_layer(context)
         targets = [item.object for item in snow.firn.targets if item.object is not None]
         if not targets:
             kept = " or Rebuild from Metaballs" if snow.firn.metaballs is not None else ""
@@ -316,14 +316,14 @@ class FIRN_OT_rebuild_from_metaballs(FirnJobMixin, bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        snow = active_snow(context)
+        snow = active_snow_layer(context)
         if snow is None or snow.firn.metaballs is None:
             cls.poll_message_set("Select a snow object that kept its metaballs")
             return False
         return True
 
     def prepare(self, context):
-        snow = active_snow(context)
+        snow = active_snow_layer(context)
         metres = scene_geometry.metres_per_unit(context.scene)
         settings = core_settings(snow.firn.layer, _max_voxels(), metres)
         path, stored_path = cache.snow_file(snow.name)

@@ -3,7 +3,7 @@
 import bpy
 
 from ..common.panels import draw_file_problem
-from ..properties import SNOW_LAYER_PROPERTIES, active_snow
+from ..properties import SNOW_LAYER_PROPERTIES, active_snow, active_snow_layer, is_spray
 
 
 def draw_layer_settings(layout, holder):
@@ -48,7 +48,8 @@ class FIRN_PT_sidebar(bpy.types.Panel):
             layout.label(text="Select objects, then Add Snow Layer")
             return
         layout.label(text=snow.name, icon="VOLUME_DATA")
-        draw_snow_layer(layout, snow)
+        if not is_spray(snow):  # a spray's own panel (Firn Snow Spray) says what it is
+            draw_snow_layer(layout, snow)
 
 
 class FIRN_PT_object_snow_layer(bpy.types.Panel):
@@ -60,10 +61,10 @@ class FIRN_PT_object_snow_layer(bpy.types.Panel):
 
     @classmethod
     def poll(cls, context):
-        return active_snow(context) is not None
+        return active_snow_layer(context) is not None
 
     def draw(self, context):
-        draw_snow_layer(self.layout, active_snow(context))
+        draw_snow_layer(self.layout, active_snow_layer(context))
 
 
 classes = (FIRN_PT_sidebar, FIRN_PT_object_snow_layer)

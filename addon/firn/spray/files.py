@@ -1,0 +1,53 @@
+"""A spray sequence's files (docs/spray.md "The sequence and its files"), made playable by Blender. No bpy here:
+the worker thread calls these after the core.
+
+The core writes snow_####.vdb only at frames whose tracks changed the snow (at the others the latest earlier one
+holds); Blender plays a Volume sequence only where every frame has its file. So each frame without one gets a hard
+link to the snow in force then (the input snow at the first frame): the same bytes, no copy. Every writer of these
+files replaces them (temporary file, then rename), so a link keeps the snow it was made from.
+"""
+
+import os
+import shutil
+
+from ..common.core import firncore
+
+
+def frame_path(directory, frame, kind):
+    """The path of a frame's file: kind "spray" or "snow"."""
+    spray, snow, _state = firncore.spray_frame_paths(directory, frame)
+    return spray if kind == "spray" else snow
+
+
+def fill_tracked_snow(directory, snow_path, first_frame, last_frame, snow_frames):
+    """Gives every frame first_frame…last_frame a snow_####.vdb: the core's where it wrote one (`snow_frames`),
+    elsewhere a link to the one in force. Returns the number of links made."""
+    written, in_force, links = set(snow_frames), snow_path, 0
+    for frame in range(first_frame, last_frame + 1):
+        path = frame_path(directory, frame, "snow")
+        if frame in written:
+            in_force = path
+            continue
+        _link(in_force, path)
+        links += 1
+    return links
+
+
+def _link(source, path):
+    """`path` becomes `source`'s bytes, atomically: a hard link (a copy where links are not possible)."""
+    staged = path + ".link"
+    if os.path.lexists(staged):
+        os.remove(staged)
+    try:
+        os.link(source, staged)
+    except OSError:  # another file system, or one without hard links
+        shutil.copyfile(source, staged)
+    os.replace(staged, path)
+
+
+def remove_sequence(directory):
+    """Deletes a spray sequence's folder and everything in it; a folder already gone is fine (OSError else)."""
+    try:
+        shutil.rmtree(directory)
+    except FileNotFoundError:
+        pass

@@ -1,0 +1,319 @@
+"""Add Snow Spray, Bake Sequence and Clear Snow Spray: snow thrown by the selected animated objects moving through
+a snow layer, and the tracks they leave, simulated by the core frame by frame (docs/spray.md, "In Blender").
+
+A spray is two Volume objects playing VDB sequences from one folder of the cache: "Snow Spray" (spray_####.vdb,
+the lumps' density) and "<snow> Tracks" (snow_####.vdb, the snow with its tracks), which takes the snow layer's
+place while the spray exists (the snow layer is hidden; Clear shows it again). Both are Firn snow (obj.firn.is_snow)
+with the optics of the snow they came from, so the Snow Material panel and its render modes apply.
+"""
+
+import os
+
+import bpy
+from mathutils import Matrix
+
+from ..bake.inputs import occluder_objects
+from ..common import cache, scene_geometry
+from ..common.core import firncore
+from ..common.errors import UserError
+from ..common.jobs import FirnJobMixin
+from ..common.modes import object_mode_poll
+from ..material import nodes as materials
+from ..properties import CORE_SPRAY_SETTINGS, OPTICS_SETTINGS, SPRAY_PROPERTIES, active_snow_layer, is_spray
+from ..snow_layer import proxy
+from ..snow_layer.operators import free_object_name, new_snow_object
+from . import emitters as emitter_rectangles, files
+from .ui import ADD_LABEL, BAKE_LABEL, draw_spray_settings
+
+FRAME_PROPERTIES = {
+    "frame_start": bpy.props.IntProperty(
+        name="Start", description="First frame: the snow as it was (default: the scene's start)", default=1, min=0),
+    "frame_end": bpy.props.IntProperty(
+        name="End", description="Last frame simulated (default: the scene's end)", default=250, min=0),
+}
+
+
+def frame_range(operator, scene, start=None):
+    """The operator's frames; where the caller did not set them, `start` (else the scene's start) and the scene's
+    end. UserError when the range holds fewer than two frames."""
+    props = operator.properties
+    first = operator.frame_start if props.is_property_set("frame_start") else scene.frame_start
+    if start is not None and not props.is_property_set("frame_start"):
+        first = start
+    last = operator.frame_end if props.is_property_set("frame_end") else scene.frame_end
+    if last <= first:
+        raise UserError(f"End frame ({last}) must come after the start frame ({first}): the spray moves from one "
+                        "frame to the next")
+    return first, last
+
+
+def core_settings(props):
+    settings = firncore.SpraySettings(**{name: getattr(props, name) for name in CORE_SPRAY_SETTINGS})
+    try:
+        settings.validate()
+    except ValueError as error:
+        raise UserError(f"Snow Spray: {error}") from error
+    return settings
+
+
+def snow_file(snow):
+    """The absolute path of a snow layer's VDB the core can read (density and surface), or UserError."""
+    problem = cache.file_problem(snow.data)
+    if problem is not None:
+        raise UserError(f"'{snow.name}': {problem}. Regenerate it first")
+    path = cache.volume_path(snow.data)
+    try:
+        names = firncore.grid_names(path)
+    except (OSError, ValueError) as error:
+        raise UserError(f"Cannot read the snow of '{snow.name}' ({error}): Regenerate it") from error
+    if not {"density", "surface"} <= set(names):
+        raise UserError(f"'{snow.name}' has no 'density' and 'surface' grids: it is not a Firn snow layer")
+    return path
+
+
+def gather_inputs(context, props, snow, emitters, frames, directory):
+    """Everything the core needs for one spray sequence, read on the main thread (the worker never touches bpy)."""
+    first, last = frames
+    rectangles = emitter_rectangles.rectangles(context, emitters, props, first, last)
+    scene = context.scene
+    current = scene.frame_current
+    scene.frame_set(first)  # obstacles are static: as they stand at the first frame
+    try:
+        obstacles = [obj for obj in occluder_objects(context.view_layer) if obj not in emitters]
+        objects = scene_geometry.world_triangles(obstacles, context.evaluated_depsgraph_get())
+    finally:
+        scene.frame_set(current)
+    cache.check_writable(os.path.join(directory, "spray.vdb"))
+    return {
+        "snow_path": snow_file(snow), "emitters": rectangles, "directory": directory, "objects": objects,
+        "fps": scene.render.fps / scene.render.fps_base, "first": first, "last": last,
+        "settings": core_settings(props), "unit_matrix": scene_geometry.unit_matrix(scene),
+    }
+
+
+def simulate(inputs, progress):
+    """Worker thread: the core simulates the frames not yet on disk (it resumes), then every frame gets its tracked
+    snow file (files.fill_tracked_snow). No bpy here."""
+    run = cache.core_write(firncore.simulate_spray, inputs["snow_path"], inputs["emitters"], inputs["directory"],
+                           inputs["fps"], inputs["first"], inputs["settings"], inputs["objects"], progress)
+    if run["snow_frames"]:
+        files.fill_tracked_snow(inputs["directory"], inputs["snow_path"], inputs["first"], inputs["last"],
+                                run["snow_frames"])
+    return run
+
+
+def summary(inputs, run):
+    frames = inputs["last"] - inputs["first"] + 1
+    resumed = f", resumed after frame {run['resumed_after']}" if run["resumed_after"] is not None else ""
+    return (f"{frames} frames ({len(run['frames_written'])} simulated{resumed}); last frame: {run['flying']:,} "
+            f"lumps flying, {run['resting']:,} resting; tracks in {len(run['snow_frames'])} frames")
+
+
+def play_sequence(obj, stored_folder, kind, first, last):
+    """Points a Volume at a spray folder's `kind` ("spray" or "snow") files as a sequence: scene frame f plays
+    the file of frame f, held before the first and after the last."""
+    volume = obj.data
+    volume.filepath = f"{stored_folder}/{os.path.basename(files.frame_path('.', first, kind))}"
+    volume.is_sequence = True
+    volume.frame_start = first
+    volume.frame_duration = last - first + 1
+    volume.frame_offset = first - 1  # Blender reads file number (scene frame - frame_start + 1) + frame_offset
+    volume.sequence_mode = "EXTEND"
+    cache.file_fixed(volume)
+    cache.reload_grids(volume)
+
+
+def show_snow(snow, shown):
+    """The snow layer is hidden while its tracked snow plays in its place (viewport and render), and shown again
+    by Clear; its viewport proxy follows its own Display and render settings."""
+    snow.hide_viewport = snow.hide_render = not shown
+    proxy_object = proxy.proxy_of(snow)
+    if proxy_object is None:
+        return
+    if shown:
+        proxy.apply_display(snow)
+        proxy.apply_render_surface(snow)
+    else:
+        proxy_object.hide_viewport = proxy_object.hide_render = True
+
+
+def sequence_objects(folder):
+    """The spray Volumes (spray and tracks) that play files of the spray folder `folder` (absolute)."""
+    return [obj for obj in bpy.data.objects if is_spray(obj)
+            and os.path.dirname(os.path.normpath(cache.volume_path(obj.data))) == os.path.normpath(folder)]
+
+
+def _new_sequence_object(context, name, role, snow, props, emitters, frames):
+    """A Volume of Firn snow for a spray sequence, with the optics of the snow it came from and the settings it
+    was made with (Bake Sequence makes it again from them)."""
+    obj = new_snow_object(context, name)
+    for setting in OPTICS_SETTINGS + ("render_mode",):
+        setattr(obj.firn, setting, getattr(snow.firn, setting))
+    obj.firn.voxel_size = snow.firn.voxel_size
+    obj.firn.display = "VOLUME"  # no viewport proxy: the volume itself shows
+    record = obj.firn.spray
+    for setting in SPRAY_PROPERTIES:
+        setattr(record, setting, getattr(props, setting))
+    record.role, record.source = role, snow
+    for emitter in emitters:
+        record.emitters.add().object = emitter
+    record.frame_start, record.frame_end = frames
+    return obj
+
+
+def _emitter_objects(context, snow):
+    emitters = [obj for obj in context.selected_objects if obj != snow and scene_geometry.is_mesh_like(obj)]
+    if not emitters:
+        raise UserError("Select the moving objects that throw snow (meshes: skis, boards, wheels), then the snow "
+                        "layer they move through last, so that it is active")
+    return emitters
+
+
+class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
+    """Snow thrown by the selected animated objects moving through the active snow layer, and the tracks they
+    leave: a Volume sequence per frame range"""
+
+    bl_idname = "firn.add_snow_spray"
+    bl_label = "Add Snow Spray"
+    bl_options = {"REGISTER", "UNDO"}
+    __annotations__ = dict(FRAME_PROPERTIES, **SPRAY_PROPERTIES)
+    job_label = ADD_LABEL
+
+    poll = classmethod(object_mode_poll)
+
+    def draw(self, _context):
+        draw_spray_settings(self.layout, self, (*FRAME_PROPERTIES, *SPRAY_PROPERTIES))
+
+    def prepare(self, context):
+        snow = active_snow_layer(context)
+        if snow is None:
+            raise UserError("Make a Firn snow layer the active object (select it last): the snow the selected "
+                            "objects move through")
+        emitters = _emitter_objects(context, snow)
+        frames = frame_range(self, context.scene)
+        name = free_object_name("Snow Spray")
+        directory, stored = cache.spray_folder(name)
+        inputs = gather_inputs(context, self, snow, emitters, frames, directory)
+        return dict(inputs, name=name, stored=stored, snow=snow.name, emitter_names=[obj.name for obj in emitters])
+
+    compute = staticmethod(simulate)
+
+    def apply(self, context, inputs, run):
+        snow = bpy.data.objects[inputs["snow"]]
+        emitters = [bpy.data.objects[name] for name in inputs["emitter_names"]]
+        frames = inputs["first"], inputs["last"]
+        spray = _new_sequence_object(context, inputs["name"], "SPRAY", snow, self, emitters, frames)
+        spray.matrix_world = Matrix(inputs["unit_matrix"].tolist())
+        spray.firn.mean_density = self.lump_density
+        spray.firn.spray.summary = summary(inputs, run)
+        play_sequence(spray, inputs["stored"], "spray", *frames)
+        materials.ensure_snow_material(spray)
+        if run["snow_frames"]:
+            tracks = _new_sequence_object(context, free_object_name(f"{snow.name} Tracks"), "TRACKS", snow, self,
+                                          emitters, frames)
+            tracks.matrix_world = snow.matrix_world
+            tracks.firn.mean_density = snow.firn.mean_density
+            play_sequence(tracks, inputs["stored"], "snow", *frames)
+            materials.ensure_snow_material(tracks)
+            show_snow(snow, False)
+        for obj in context.selected_objects:
+            obj.select_set(False)
+        spray.select_set(True)
+        context.view_layer.objects.active = spray
+        self.report({"INFO"}, f"Snow Spray: {spray.firn.spray.summary}")
+
+
+class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
+    """Simulate every Snow Spray of the scene over a frame range again: frames already on disk for the same scene
+    and settings are kept (the core resumes at the first missing one)"""
+
+    bl_idname = "firn.bake_sequence"
+    bl_label = "Bake Sequence"
+    bl_options = {"REGISTER", "UNDO"}
+    __annotations__ = dict(FRAME_PROPERTIES)
+    job_label = BAKE_LABEL
+
+    @classmethod
+    def poll(cls, context):
+        if not any(obj.firn.spray.role == "SPRAY" for obj in context.scene.objects):
+            cls.poll_message_set("The scene has no Snow Spray: use Add Snow Spray first")
+            return False
+        return True
+
+    def prepare(self, context):
+        jobs = []
+        for spray in [obj for obj in context.scene.objects if obj.firn.spray.role == "SPRAY"]:
+            record = spray.firn.spray
+            snow = record.source
+            emitters = [item.object for item in record.emitters]
+            if snow is None or None in emitters:
+                raise UserError(f"'{spray.name}': its snow layer or one of its emitters was deleted: Clear it and "
+                                "Add Snow Spray again")
+            frames = frame_range(self, context.scene, start=record.frame_start)
+            directory = os.path.dirname(cache.volume_path(spray.data))
+            inputs = gather_inputs(context, record, snow, emitters, frames, directory)
+            jobs.append(dict(inputs, name=spray.name))
+        return {"jobs": jobs, "current": 0}
+
+    def job_status(self, inputs, progress):
+        jobs = inputs["jobs"]
+        part = f"{jobs[inputs['current']]['name']} ({inputs['current'] + 1}/{len(jobs)}) " if len(jobs) > 1 else ""
+        return part + progress.stage
+
+    @staticmethod
+    def compute(inputs, progress):
+        runs = []
+        for index, job in enumerate(inputs["jobs"]):
+            inputs["current"] = index
+            runs.append(simulate(job, progress))
+        return runs
+
+    def apply(self, context, inputs, runs):
+        for job, run in zip(inputs["jobs"], runs):
+            spray = bpy.data.objects[job["name"]]
+            spray.firn.spray.summary = summary(job, run)
+            for obj in sequence_objects(job["directory"]):
+                obj.firn.spray.frame_start, obj.firn.spray.frame_end = job["first"], job["last"]
+                stored_folder = os.path.dirname(obj.data.filepath)
+                play_sequence(obj, stored_folder, "spray" if obj.firn.spray.role == "SPRAY" else "snow",
+                              job["first"], job["last"])
+            self.report({"INFO"}, f"{spray.name}: {spray.firn.spray.summary}")
+
+
+class FIRN_OT_clear_snow_spray(bpy.types.Operator):
+    """Remove the active Snow Spray, its tracked snow and their files; the snow layer shows again"""
+
+    bl_idname = "firn.clear_snow_spray"
+    bl_label = "Clear Snow Spray"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if not is_spray(context.object):
+            cls.poll_message_set("Select a Snow Spray (or its Tracks)")
+            return False
+        return True
+
+    def execute(self, context):
+        folder = os.path.dirname(cache.volume_path(context.object.data))
+        objects = sequence_objects(folder)
+        try:
+            files.remove_sequence(folder)
+        except OSError as error:
+            self.report({"ERROR"}, f"Cannot remove the spray's files in {folder} ({error}); nothing was removed")
+            return {"CANCELLED"}
+        names = []
+        for obj in objects:
+            snow = obj.firn.spray.source
+            if obj.firn.spray.role == "TRACKS" and snow is not None:
+                show_snow(snow, True)
+            names.append(obj.name)
+            volume = obj.data
+            bpy.data.objects.remove(obj)
+            if volume.users == 0:
+                bpy.data.volumes.remove(volume)
+        self.report({"INFO"}, f"Removed {', '.join(names)} and their files")
+        return {"FINISHED"}
+
+
+classes = (FIRN_OT_add_snow_spray, FIRN_OT_bake_sequence, FIRN_OT_clear_snow_spray)

@@ -1,0 +1,162 @@
+"""Add Snow Spray, Bake Sequence and Clear Snow Spray in blender -b: a ski sliding through a snow layer makes a
+Volume sequence with a density grid per frame, and a tracked snow sequence in the layer's place; same seed, same
+files; bad input is reported; Clear removes it all. The physics is the core's (tests/python/test_spray.py)."""
+
+import os
+
+import bpy
+import numpy as np
+import pytest
+
+from firn.common.core import firncore
+from scene_helpers import select_only
+
+FRAMES = (2, 6)  # not from 1: the sequence's frame numbers follow the scene's
+SNOW_DEPTH = 0.1  # m
+
+
+def snow_on_plane():
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    plane = bpy.context.object
+    plane.scale = (1.6, 0.6, 1.0)
+    select_only(plane)
+    assert bpy.ops.firn.add_snow_layer(depth=SNOW_DEPTH, spacing=0.04, voxel_size=0.01, seed=1) == {"FINISHED"}
+    return bpy.context.object
+
+
+def ski(start_x=-0.6, end_x=0.4, name="Ski"):
+    """A ski's sole (a 30 cm × 6 cm rectangle) half way down the snow, keyframed along x over FRAMES."""
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    obj = bpy.context.object
+    obj.name = name
+    obj.scale = (0.3, 0.06, 1.0)
+    for frame, x in zip(FRAMES, (start_x, end_x)):
+        obj.location = (x, 0.0, SNOW_DEPTH / 2)
+        obj.keyframe_insert("location", frame=frame)
+    for fcurve in obj.animation_data.action.fcurves:
+        for point in fcurve.keyframe_points:
+            point.interpolation = "LINEAR"
+    return obj
+
+
+def add_spray(snow, *emitters, **settings):
+    select_only(snow, *emitters)  # the first is active
+    settings = dict(dict(frame_start=FRAMES[0], frame_end=FRAMES[1], seed=0, rate=5000.0), **settings)
+    assert bpy.ops.firn.add_snow_spray(**settings) == {"FINISHED"}
+    return bpy.context.object
+
+
+def folder_of(obj):
+    return os.path.dirname(bpy.path.abspath(obj.data.filepath))
+
+
+def test_a_volume_sequence_with_a_density_grid_per_frame(clean_scene):
+    snow = snow_on_plane()
+    emitter = ski()
+    spray = add_spray(snow, emitter)
+    assert spray.type == "VOLUME" and spray.firn.is_snow and spray.firn.spray.role == "SPRAY"
+    volume = spray.data
+    assert volume.is_sequence and volume.frame_start == FRAMES[0]
+    assert volume.frame_duration == FRAMES[1] - FRAMES[0] + 1
+    folder = folder_of(spray)
+    for frame in range(FRAMES[0], FRAMES[1] + 1):
+        bpy.context.scene.frame_set(frame)
+        played = spray.evaluated_get(bpy.context.evaluated_depsgraph_get()).data.grids
+        path = firncore.spray_frame_paths(folder, frame)[0]
+        assert os.path.normpath(bpy.path.abspath(played.frame_filepath)) == os.path.normpath(path)
+        assert "density" in [grid.name for grid in played]
+    lumps = firncore.read_spray_state(firncore.spray_frame_paths(folder, FRAMES[1])[2])
+    assert len(lumps) > 0  # the ski threw snow
+    assert spray.active_material is not None and spray.firn.mean_density == pytest.approx(250.0)
+    assert [item.object for item in spray.firn.spray.emitters] == [emitter]
+    assert spray.firn.spray.source == snow
+
+
+def test_the_tracked_snow_plays_in_the_snow_layers_place(clean_scene):
+    snow = snow_on_plane()
+    spray = add_spray(snow, ski())
+    tracks = bpy.data.objects[f"{snow.name} Tracks"]
+    assert tracks.firn.spray.role == "TRACKS" and tracks.data.is_sequence
+    assert snow.hide_render and snow.hide_viewport
+    folder = folder_of(spray)
+    for frame in range(FRAMES[0], FRAMES[1] + 1):  # every frame has its file: Blender plays the sequence whole
+        assert "surface" in firncore.grid_names(firncore.spray_frame_paths(folder, frame)[1])
+    centre = np.array([[-0.1, 0.0, SNOW_DEPTH * 0.75]], np.float32)  # on the ski's path, above its sole
+    before = firncore.sample_grid(firncore.spray_frame_paths(folder, FRAMES[0])[1], "density", centre)[0]
+    after = firncore.sample_grid(firncore.spray_frame_paths(folder, FRAMES[1])[1], "density", centre)[0]
+    assert before > 50.0 and after < 0.5 * before  # the ski cut a groove there
+
+
+def test_same_seed_same_files(clean_scene):
+    snow = snow_on_plane()
+    emitter = ski()
+
+    def states(seed):
+        spray = add_spray(snow, emitter, seed=seed)
+        folder = folder_of(spray)
+        data = [open(firncore.spray_frame_paths(folder, frame)[2], "rb").read()
+                for frame in range(FRAMES[0], FRAMES[1] + 1)]
+        assert bpy.ops.firn.clear_snow_spray() == {"FINISHED"}
+        return data
+
+    first = states(3)
+    assert states(3) == first
+    assert states(4) != first
+
+
+def test_bake_sequence_resumes_and_extends(clean_scene):
+    snow = snow_on_plane()
+    spray = add_spray(snow, ski(end_x=0.6), frame_end=FRAMES[1] - 1)
+    select_only(snow)  # Bake Sequence bakes every spray of the scene, whatever is selected
+    assert bpy.ops.firn.bake_sequence(frame_end=FRAMES[1]) == {"FINISHED"}
+    assert spray.data.frame_duration == FRAMES[1] - FRAMES[0] + 1 and spray.firn.spray.frame_end == FRAMES[1]
+    assert f"resumed after frame {FRAMES[1] - 1}" in spray.firn.spray.summary
+    assert os.path.exists(firncore.spray_frame_paths(folder_of(spray), FRAMES[1])[0])
+
+
+def test_clear_removes_the_spray_its_tracks_and_files(clean_scene):
+    snow = snow_on_plane()
+    spray = add_spray(snow, ski())
+    folder = folder_of(spray)
+    assert bpy.ops.firn.clear_snow_spray() == {"FINISHED"}
+    assert not any(obj.firn.spray.role != "NONE" for obj in bpy.data.objects)
+    assert not os.path.exists(folder)
+    assert not snow.hide_render and not snow.hide_viewport
+
+
+def test_no_snow_layer_is_reported(clean_scene):
+    emitter = ski()
+    select_only(emitter)
+    with pytest.raises(RuntimeError, match="Make a Firn snow layer the active object"):
+        bpy.ops.firn.add_snow_spray(frame_start=1, frame_end=5)
+
+
+def test_an_object_that_does_not_move_is_reported(clean_scene):
+    snow = snow_on_plane()
+    bpy.ops.mesh.primitive_plane_add(size=0.2, location=(0.0, 0.0, SNOW_DEPTH / 2))
+    still = bpy.context.object
+    select_only(snow, still)
+    with pytest.raises(RuntimeError, match="does not move between frames 1 and 5"):
+        bpy.ops.firn.add_snow_spray(frame_start=1, frame_end=5)
+    assert not any(obj.firn.spray.role != "NONE" for obj in bpy.data.objects)
+
+
+def test_frame_end_before_frame_start_is_reported(clean_scene):
+    snow = snow_on_plane()
+    select_only(snow, ski())
+    with pytest.raises(RuntimeError, match=r"End frame \(3\) must come after the start frame \(5\)"):
+        bpy.ops.firn.add_snow_spray(frame_start=5, frame_end=3)
+
+
+def test_no_emitter_selected_is_reported(clean_scene):
+    snow = snow_on_plane()
+    select_only(snow)
+    with pytest.raises(RuntimeError, match="Select the moving objects that throw snow"):
+        bpy.ops.firn.add_snow_spray(frame_start=1, frame_end=5)
+
+
+def test_a_missing_vertex_group_is_reported(clean_scene):
+    snow = snow_on_plane()
+    select_only(snow, ski())
+    with pytest.raises(RuntimeError, match="'Ski' has no vertex group 'Sole'"):
+        bpy.ops.firn.add_snow_spray(frame_start=1, frame_end=5, emitter="VERTEX_GROUP", vertex_group="Sole")

@@ -1,0 +1,90 @@
+"""Blender with a window (under xvfb-run): Add Snow Spray started as a user would (INVOKE_DEFAULT) simulates in a
+worker thread with progress, and Esc cancels it leaving the scene as it was (no spray or tracks object, the snow
+layer shown). The frames already written stay in the cache: the same Add Snow Spray resumes from them.
+
+xvfb-run blender --factory-startup --enable-event-simulate --python spray_job.py   (exit code 0 = pass)
+"""
+
+import os
+import sys
+import time
+
+import addon_utils
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ui_test import HUNG, fail, job_running, passed, run_timer, window_context, worker_alive  # noqa: E402
+
+FRAMES = 400  # seconds of simulation on any machine: long enough to be cancelled half way
+state = {"phase": "start", "started": 0.0, "objects": set()}
+
+
+def build_scene():
+    addon_utils.enable("firn", default_set=True)
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    if bpy.ops.firn.add_snow_layer(depth=0.1, spacing=0.05, voxel_size=0.01) != {"FINISHED"}:
+        fail("Add Snow Layer failed")
+    snow = bpy.context.object
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    ski = bpy.context.object
+    ski.scale = (0.3, 0.06, 1.0)
+    for frame, x in ((1, -0.8), (FRAMES, 0.8)):
+        ski.location = (x, 0.0, 0.05)
+        ski.keyframe_insert("location", frame=frame)
+    snow.select_set(True)
+    bpy.context.view_layer.objects.active = snow
+    state["objects"] = {obj.name for obj in bpy.data.objects}
+    return snow
+
+
+def start_job():
+    build_scene()
+    with bpy.context.temp_override(**window_context()):
+        result = bpy.ops.firn.add_snow_spray("INVOKE_DEFAULT", frame_start=1, frame_end=FRAMES, rate=200000.0)
+    if result != {"RUNNING_MODAL"}:
+        fail(f"expected RUNNING_MODAL, got {result}")
+    if not worker_alive():
+        fail("the job did not run in a worker thread")
+    state["started"] = time.perf_counter()
+
+
+def press_esc():
+    window = bpy.context.window_manager.windows[0]
+    window.event_simulate(type="ESC", value="PRESS")
+    window.event_simulate(type="ESC", value="RELEASE")
+
+
+def step():
+    from firn.common.jobs import running_jobs
+
+    if state["phase"] == "start":
+        start_job()
+        state["phase"] = "running"
+    elif state["phase"] == "running":
+        jobs = running_jobs()
+        if not jobs:
+            fail("the job ended before it showed progress (raise FRAMES)")
+        if jobs[0].progress.fraction > 0.0:  # progress reported while frames are simulated: press Esc
+            press_esc()
+            state["phase"], state["started"] = "cancelled", time.perf_counter()
+        elif time.perf_counter() - state["started"] > HUNG:
+            fail("no progress: hung")
+    elif state["phase"] == "cancelled":
+        if not job_running():
+            print(f"Esc stopped Add Snow Spray in {time.perf_counter() - state['started']:.2f} s")
+            objects = {obj.name for obj in bpy.data.objects}
+            if objects != state["objects"]:
+                fail(f"Esc changed the scene's objects: {sorted(objects ^ state['objects'])}")
+            snow = bpy.data.objects["Snow"]
+            if snow.hide_render or snow.hide_viewport:
+                fail("a cancelled Add Snow Spray hid the snow layer")
+            passed()
+            return False
+        if time.perf_counter() - state["started"] > HUNG:
+            fail("Esc did not stop the job: hung")
+    return True
+
+
+run_timer(step)
