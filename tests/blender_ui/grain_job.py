@@ -13,7 +13,8 @@ import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, job_running, passed, run_timer, window_context, worker_alive  # noqa: E402
+from ui_test import (HUNG, esc_once_progressing, fail, job_running, passed, run_timer,  # noqa: E402
+                     window_context, worker_alive)
 
 GRAINS = 2_000_000  # seconds of accumulation on any machine: long enough to be cancelled half way
 state = {"phase": "start", "started": 0.0, "bounces": 0}
@@ -35,27 +36,12 @@ def start_job():
     state["started"] = time.perf_counter()
 
 
-def press_esc():
-    window = bpy.context.window_manager.windows[0]
-    window.event_simulate(type="ESC", value="PRESS")
-    window.event_simulate(type="ESC", value="RELEASE")
-
-
 def step():
-    from firn.common.jobs import running_jobs
-
     if state["phase"] == "start":
         start_job()
         state["phase"] = "running"
     elif state["phase"] == "running":
-        jobs = running_jobs()
-        if not jobs:
-            fail("the job ended before it showed progress (raise GRAINS)")
-        if jobs[0].progress.fraction > 0.0:  # progress reported while the grains fall: press Esc
-            press_esc()
-            state["phase"], state["started"] = "cancelled", time.perf_counter()
-        elif time.perf_counter() - state["started"] > HUNG:
-            fail("no progress: hung")
+        esc_once_progressing(state, "raise GRAINS")
     elif state["phase"] == "cancelled":
         if not job_running():
             print(f"Esc stopped Add Grain Snow in {time.perf_counter() - state['started']:.2f} s")

@@ -67,3 +67,27 @@ def run_timer(step, interval=0.05, first_interval=0.5):
             fail("exception")
 
     bpy.app.timers.register(tick, first_interval=first_interval)
+
+
+def press_esc():
+    """Esc, pressed and released as a user does, in the first window."""
+    window = bpy.context.window_manager.windows[0]
+    window.event_simulate(type="ESC", value="PRESS")
+    window.event_simulate(type="ESC", value="RELEASE")
+
+
+def esc_once_progressing(state, hint):
+    """A cancel test's 'running' phase: once the job reports progress, press Esc and go on to 'cancelled'
+    (state["started"] restarts then). `hint` says what to raise if the job ends before showing progress."""
+    import time
+
+    from firn.common.jobs import running_jobs
+
+    jobs = running_jobs()
+    if not jobs:
+        fail(f"the job ended before it showed progress ({hint})")
+    if jobs[0].progress.fraction > 0.0:
+        press_esc()
+        state["phase"], state["started"] = "cancelled", time.perf_counter()
+    elif time.perf_counter() - state["started"] > HUNG:
+        fail("no progress: hung")
