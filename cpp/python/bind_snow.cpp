@@ -154,9 +154,9 @@ input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `prog
 
     m.def(
         "snow_surface_mesh",
-        [](const std::string &path, double adaptivity, std::size_t maxTriangles,
+        [](const std::string &path, double adaptivity, std::size_t maxTriangles, double isovalue,
            std::shared_ptr<firn::Progress> progress) {
-            const firn::SurfaceMeshSettings settings{adaptivity, maxTriangles};
+            const firn::SurfaceMeshSettings settings{adaptivity, maxTriangles, isovalue};
             progress = orNew(progress);
             const firn::SurfaceMesh mesh = longCall([&] {
                 // The surface grid alone: a snow file's density is several times larger.
@@ -174,8 +174,9 @@ input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `prog
                 for (int k = 0; k < 3; ++k) f(i, k) = mesh.triangles[i][k];
             return py::make_tuple(vertices, faces);
         },
-        py::arg("path"), py::arg("adaptivity") = 0.0, py::arg("max_triangles") = 0, py::arg("progress") = nullptr,
-        R"doc(The snow surface (zero crossing of the `surface` level set in the VDB at `path`) as (vertices (N, 3)
+        py::arg("path"), py::arg("adaptivity") = 0.0, py::arg("max_triangles") = 0, py::arg("isovalue") = 0.0,
+        py::arg("progress") = nullptr,
+        R"doc(The snow surface (where the `surface` level set in the VDB at `path` crosses `isovalue` m: 0 is the surface) as (vertices (N, 3)
 float32, world m; triangles (M, 3) uint32, counter-clockwise seen from outside). `adaptivity` (0..1) merges flat
 regions; `max_triangles` (0: no budget, else at least 100) is met with more adaptivity, then coarser voxels
 (the viewport proxy). Releases the GIL; raises ValueError for bad settings or a file without a surface grid,

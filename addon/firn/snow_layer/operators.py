@@ -108,7 +108,7 @@ def compute_snow(inputs, progress):
 
 def with_meshes(inputs, result):
     """Worker thread: the viewport proxy's mesh, and the full surface mesh when asked for, from the new file."""
-    result["proxy"] = proxy.mesh_arrays(inputs["path"])
+    result["proxy"] = proxy.mesh_arrays(inputs["path"], result["voxel_size"])
     if inputs["surface_mesh"]:
         result["surface"] = firncore.snow_surface_mesh(inputs["path"])
     return result

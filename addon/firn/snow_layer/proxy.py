@@ -1,8 +1,8 @@
 """The snow's viewport proxy: its surface as a shaded mesh for Solid and Material Preview; rendered by Cycles
 only as the snow's surface in render mode OPAQUE or with glints (apply_render_surface).
 
-The core meshes the `surface` level set (firncore.snow_surface_mesh, OpenVDB's volume-to-mesh within a
-triangle budget) in world metres; the proxy is a child of the snow Volume, whose transform turns metres into
+The core meshes the `surface` level set three quarters of a voxel outside its zero crossing, where the snow's
+density ends (firncore.snow_surface_mesh, OpenVDB's volume-to-mesh within a triangle budget), in world metres; the proxy is a child of the snow Volume, whose transform turns metres into
 Blender units, so it sits exactly where the volume is drawn. While the proxy shows, the Volume is drawn as its
 bounds: Blender then never uploads the dense 3-D texture for the viewport, and Cycles still renders the volume.
 """
@@ -15,6 +15,9 @@ from ..common.core import firncore
 from ..material import nodes as materials, preview
 
 MAX_TRIANGLES = 150_000  # the proxy's budget: drawn at interactive rates, a few MB in the .blend
+# Where the proxy lies, in voxels outside the level set's zero crossing: where the density's one-voxel ramp has
+# all but ended, so glints on the proxy are not dimmed by the snow's outer half-voxel (material/preview.py).
+OUTSIDE_VOXELS = 0.75
 ADAPTIVITY = 0.0  # even triangles shade evenly; OpenVDB's adaptive merging costs more time than coarser voxels
 
 DISPLAY_ITEMS = (
@@ -24,9 +27,11 @@ DISPLAY_ITEMS = (
 )
 
 
-def mesh_arrays(path, progress=None):
-    """Worker thread: the proxy's (vertices m, triangles) from the snow's VDB file; no bpy here."""
-    return firncore.snow_surface_mesh(path, adaptivity=ADAPTIVITY, max_triangles=MAX_TRIANGLES, progress=progress)
+def mesh_arrays(path, voxel_size, progress=None):
+    """Worker thread: the proxy's (vertices m, triangles) from the snow's VDB file of voxels `voxel_size` m; no bpy
+    here."""
+    return firncore.snow_surface_mesh(path, adaptivity=ADAPTIVITY, max_triangles=MAX_TRIANGLES,
+                                      isovalue=OUTSIDE_VOXELS * voxel_size, progress=progress)
 
 
 def new_mesh(name, vertices, triangles, smooth=False):

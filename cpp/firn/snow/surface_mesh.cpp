@@ -51,8 +51,8 @@ SurfaceMesh collect(openvdb::tools::VolumeToMesh &mesher, double adaptivity, dou
     return mesh;
 }
 
-SurfaceMesh mesh(const openvdb::FloatGrid &grid, double adaptivity) {
-    openvdb::tools::VolumeToMesh mesher(0.0, adaptivity);
+SurfaceMesh mesh(const openvdb::FloatGrid &grid, double isovalue, double adaptivity) {
+    openvdb::tools::VolumeToMesh mesher(isovalue, adaptivity);
     mesher(grid);
     return collect(mesher, adaptivity, grid.voxelSize()[0]);
 }
@@ -60,6 +60,8 @@ SurfaceMesh mesh(const openvdb::FloatGrid &grid, double adaptivity) {
 void validate(const openvdb::FloatGrid &surface, const SurfaceMeshSettings &settings) {
     if (!(settings.adaptivity >= 0.0 && settings.adaptivity <= 1.0))
         throw InvalidArgument("surface mesh adaptivity must be in [0, 1]");
+    if (!(std::abs(settings.isovalue) <= 2.0 * surface.voxelSize()[0]))
+        throw InvalidArgument("surface mesh isovalue must lie within 2 voxels of the surface");
     if (settings.maxTriangles != 0 && settings.maxTriangles < kMinTriangleBudget)
         throw InvalidArgument("surface mesh triangle budget must be 0 (none) or at least " +
                               std::to_string(kMinTriangleBudget));
@@ -138,8 +140,8 @@ SurfaceMesh meshSurface(const openvdb::FloatGrid &surface, const SurfaceMeshSett
     bool first = true;
     while (true) {
         progress.throwIfCancelled();
-        SurfaceMesh next = factor == 1 ? mesh(surface, settings.adaptivity)
-                                       : mesh(*coarsen(surface, factor), settings.adaptivity);
+        SurfaceMesh next = factor == 1 ? mesh(surface, settings.isovalue, settings.adaptivity)
+                                       : mesh(*coarsen(surface, factor), settings.isovalue, settings.adaptivity);
         const bool empty = next.triangles.empty() && !first;  // too coarse for the snow's thickness
         if (!empty && (first || next.triangles.size() < best.triangles.size())) best = std::move(next);
         first = false;

@@ -15,6 +15,8 @@ namespace firn {
 struct SurfaceMeshSettings {
     double adaptivity = 0.0;       // 0..1: OpenVDB's merging of flat regions into larger polygons (0: none)
     std::size_t maxTriangles = 0;  // triangle budget; 0: none. Otherwise at least kMinTriangleBudget
+    double isovalue = 0.0;         // m: the level set's value meshed; 0 is the surface, > 0 outside it (within
+                                   // the narrow band: at most 2 voxels)
 };
 
 // Below this a budget cannot hold even a coarse closed surface of a snow layer.
@@ -27,7 +29,7 @@ struct SurfaceMesh {
     double voxelSize = 0.0;                 // m, of the level set meshed (coarser than the grid's within a budget)
 };
 
-// Meshes the level set's zero crossing with OpenVDB's volume-to-mesh at the settings' adaptivity. Within a
+// Meshes the level set's crossing of the settings' isovalue (0: the surface) with OpenVDB's volume-to-mesh at the settings' adaptivity. Within a
 // budget, large snow is meshed from the level set sampled on voxels 2, 4, 8... times coarser (its values are
 // distances in m, so the zero crossing stays the same surface, to a coarse voxel), the factor guessed from the
 // active voxels and raised until the mesh fits; the result is the first that fits, or the smallest made (a
