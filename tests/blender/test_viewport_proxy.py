@@ -56,7 +56,7 @@ def test_proxy_is_excluded_from_render(clean_scene):
 
 
 @pytest.mark.parametrize("metres", [1.0, 0.01])
-def test_proxy_lies_within_a_voxel_of_the_zero_crossing(clean_scene, metres):
+def test_proxy_lies_where_the_density_ends(clean_scene, metres):
     clean_scene.unit_settings.scale_length = metres
     ground = add_plane(size=2.0 / metres)
     select_only(ground)
@@ -64,10 +64,12 @@ def test_proxy_lies_within_a_voxel_of_the_zero_crossing(clean_scene, metres):
     snow = bpy.context.object
     bpy.context.view_layer.update()
     points = world_metres(snow_proxy.proxy_of(snow), metres)
-    # The level set is the signed distance (m) to the snow surface: 0 on it (vdb-contract.md).
+    # The level set is the signed distance (m) to the snow surface: 0 on it (vdb-contract.md). The proxy lies
+    # OUTSIDE_VOXELS outside it, where the density ends, to within a voxel.
     distance = firncore.sample_grid(bpy.path.abspath(snow.data.filepath), "surface", points)
-    assert np.abs(distance).max() <= snow.firn.voxel_size
-    assert points[:, 2].max() == pytest.approx(0.1, abs=0.02)  # the top of 10 cm of snow, in metres
+    assert np.abs(distance - snow_proxy.OUTSIDE_VOXELS * snow.firn.voxel_size).max() <= snow.firn.voxel_size
+    top = 0.1 + snow_proxy.OUTSIDE_VOXELS * snow.firn.voxel_size
+    assert points[:, 2].max() == pytest.approx(top, abs=0.02)  # the top of 10 cm of snow, in metres
 
 
 def test_proxy_follows_regenerate_and_rebuild(clean_scene):

@@ -5,7 +5,8 @@ point in every lattice cell, and the cell's random Color gives each its size or 
 the pattern adds up to (firncore.sub_ball_pattern, firncore.glint_facets), so the groups only evaluate it:
   Firn Sub-Balls: density factor 1 + strength w(depth) (K / mean K - 1), K = (1 - (d/R)^2)^3 of the nearest grain;
   Firn Glints: a mirror facet of ice where the surface cuts a cell's ball, its normal uniform over the sphere
-  (turned towards the viewer: the facets are thin plates), weighted by ice's Fresnel reflectance.
+  (turned towards the viewer: the facets are thin plates), weighted by ice's Fresnel reflectance; drawn only
+  where it mirrors the view above the surface (below, it would mirror snow as bright as its surroundings).
 """
 
 import math
@@ -18,7 +19,7 @@ SUB_BALL_GROUP = "Firn Sub-Balls"
 GLINT_GROUP = "Firn Glints"
 ICE_IOR = 1.31  # the facets' Fresnel reflectance (Warren & Brandt 2008: 1.31 across the visible)
 _TAG = "firn_structure"  # ID property: the version of a Firn-built group
-_VERSION = 1
+_VERSION = 2
 
 
 def _group(name, build):
@@ -119,8 +120,23 @@ def _build_glints(group):
     fresnel = group.nodes.new("ShaderNodeFresnel")
     fresnel.inputs["IOR"].default_value = ICE_IOR
     group.links.new(facing.outputs["Vector"], fresnel.inputs["Normal"])
+    # A facet whose mirror image of the view points into the snow shows the snow there, about as bright as the
+    # snow around it: only facets mirroring the sky (and the sun) are drawn.
+    towards = group.nodes.new("ShaderNodeVectorMath")
+    towards.operation = "SCALE"
+    towards.inputs["Scale"].default_value = -1.0
+    group.links.new(incoming, towards.inputs[0])
+    mirrored = group.nodes.new("ShaderNodeVectorMath")
+    mirrored.operation = "REFLECT"
+    group.links.new(towards.outputs["Vector"], mirrored.inputs[0])
+    group.links.new(facing.outputs["Vector"], mirrored.inputs[1])
+    rising = group.nodes.new("ShaderNodeVectorMath")
+    rising.operation = "DOT_PRODUCT"
+    group.links.new(mirrored.outputs["Vector"], rising.inputs[0])
+    group.links.new(group.nodes.new("ShaderNodeNewGeometry").outputs["Normal"], rising.inputs[1])
+    sky_facet = _math(group, "MULTIPLY", inside, _math(group, "GREATER_THAN", rising.outputs["Value"], 0.0))
     out = group.nodes.new("NodeGroupOutput").inputs
-    group.links.new(_math(group, "MULTIPLY", inside, fresnel.outputs["Fac"], label="facet × Fresnel"), out["Fac"])
+    group.links.new(_math(group, "MULTIPLY", sky_facet, fresnel.outputs["Fac"], label="facet × Fresnel"), out["Fac"])
     group.links.new(facing.outputs["Vector"], out["Normal"])
 
 
