@@ -13,8 +13,7 @@ import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import (HUNG, esc_once_progressing, fail, job_running, passed, run_timer,  # noqa: E402
-                     window_context, worker_alive)
+from ui_test import HUNG, esc_once_progressing, fail, job_running, passed, run_timer, start_modal  # noqa: E402
 
 GRAINS = 2_000_000  # seconds of accumulation on any machine: long enough to be cancelled half way
 state = {"phase": "start", "started": 0.0, "bounces": 0}
@@ -27,13 +26,7 @@ def start_job():
     bpy.ops.mesh.primitive_plane_add(size=1.0)
     bpy.context.object.select_set(True)
     state["bounces"] = bpy.context.scene.cycles.max_bounces
-    with bpy.context.temp_override(**window_context()):
-        result = bpy.ops.firn.add_grain_snow("INVOKE_DEFAULT", grain_radius=0.001, grain_count=GRAINS)
-    if result != {"RUNNING_MODAL"}:
-        fail(f"expected RUNNING_MODAL, got {result}")
-    if not worker_alive():
-        fail("the job did not run in a worker thread")
-    state["started"] = time.perf_counter()
+    start_modal(state, lambda: bpy.ops.firn.add_grain_snow("INVOKE_DEFAULT", grain_radius=0.001, grain_count=GRAINS))
 
 
 def step():

@@ -13,8 +13,7 @@ import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import (HUNG, esc_once_progressing, fail, job_running, passed, run_timer,  # noqa: E402
-                     window_context, worker_alive)
+from ui_test import HUNG, esc_once_progressing, fail, job_running, passed, run_timer, start_modal  # noqa: E402
 
 FRAMES = 400  # seconds of simulation on any machine: long enough to be cancelled half way
 state = {"phase": "start", "started": 0.0, "objects": set()}
@@ -42,13 +41,8 @@ def build_scene():
 
 def start_job():
     build_scene()
-    with bpy.context.temp_override(**window_context()):
-        result = bpy.ops.firn.add_snow_spray("INVOKE_DEFAULT", frame_start=1, frame_end=FRAMES, rate=200000.0)
-    if result != {"RUNNING_MODAL"}:
-        fail(f"expected RUNNING_MODAL, got {result}")
-    if not worker_alive():
-        fail("the job did not run in a worker thread")
-    state["started"] = time.perf_counter()
+    start_modal(state, lambda: bpy.ops.firn.add_snow_spray("INVOKE_DEFAULT", frame_start=1, frame_end=FRAMES,
+                                                           rate=200000.0))
 
 
 def step():

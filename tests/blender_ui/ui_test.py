@@ -91,3 +91,17 @@ def esc_once_progressing(state, hint):
         state["phase"], state["started"] = "cancelled", time.perf_counter()
     elif time.perf_counter() - state["started"] > HUNG:
         fail("no progress: hung")
+
+
+def start_modal(state, invoke):
+    """Starts a job as the UI does: `invoke()` calls the operator with "INVOKE_DEFAULT" (inside the window's
+    context), which must return RUNNING_MODAL with its worker thread running; state["started"] is set."""
+    import time
+
+    with bpy.context.temp_override(**window_context()):
+        result = invoke()
+    if result != {"RUNNING_MODAL"}:
+        fail(f"expected RUNNING_MODAL, got {result}")
+    if not worker_alive():
+        fail("the job did not run in a worker thread")
+    state["started"] = time.perf_counter()
