@@ -71,6 +71,8 @@ def test_render_modes_build_their_materials(clean_scene):
     assert not proxy.hide_render and proxy.visible_camera and not proxy.visible_shadow  # glints over the volume
     assert linked_from(surface["Firn Render Mix"].inputs[1]).type == "BSDF_TRANSPARENT"
     assert linked_from(surface["Firn Render Mix"].inputs["Fac"]).name == "Firn Glints"
+    assert linked_from(surface["Firn Preview Shown"].inputs["Fac"]).name == "Firn Glints"  # EEVEE's preview too
+    assert surface["Firn Preview Output"].target == "EEVEE" and surface["Firn Render Output"].target == "CYCLES"
     snow.firn.glints = False
     assert proxy.hide_render
 
