@@ -9,6 +9,7 @@ the pattern adds up to (firncore.sub_ball_pattern, firncore.glint_facets), so th
   where it mirrors the view above the surface (below, it would mirror snow as bright as its surroundings).
 """
 
+import functools
 import math
 
 import bpy
@@ -148,11 +149,17 @@ def glint_group():
     return _group(GLINT_GROUP, _build_glints)
 
 
+# The core's patterns integrate a Monte Carlo (tens of ms): the panel asks on every redraw, the material on every
+# optics change, for the same few settings.
+_sub_ball_pattern = functools.lru_cache(maxsize=64)(firncore.sub_ball_pattern)
+_glint_facets = functools.lru_cache(maxsize=64)(firncore.glint_facets)
+
+
 def sub_ball_inputs(settings, sigma_t):
     """Group input values of a snow object's sub-balls (obj.firn) in snow of extinction sigma_t (1/m).
     ValueError when the settings are out of range."""
-    pattern = firncore.sub_ball_pattern(settings.sub_ball_radius, settings.sub_ball_variation,
-                                        settings.sub_ball_depth, settings.sub_ball_strength, sigma_t)
+    pattern = _sub_ball_pattern(settings.sub_ball_radius, settings.sub_ball_variation, settings.sub_ball_depth,
+                                settings.sub_ball_strength, sigma_t)
     return {"Cells per Metre": 1.0 / pattern.cell_size, "Radius": pattern.radius, "Variation": pattern.variation,
             "Mean Kernel": pattern.mean_kernel, "Fade Start": pattern.fade_start, "Fade End": pattern.fade_end,
             "Strength": pattern.strength}
@@ -160,7 +167,7 @@ def sub_ball_inputs(settings, sigma_t):
 
 def glint_inputs(settings):
     """Group input values of a snow object's glints (obj.firn); ValueError when out of range."""
-    facets = firncore.glint_facets(settings.glint_density, settings.glint_size)
+    facets = _glint_facets(settings.glint_density, settings.glint_size)
     return {"Cells per Metre": 1.0 / facets.cell_size, "Radius": facets.radius}
 
 

@@ -68,8 +68,7 @@ def store_proxy(snow, arrays, metres):
     for collection in snow.users_collection:
         collection.objects.link(proxy)
     preview.ensure_preview_material(snow, mesh, metres)
-    _set_rendered(proxy, rendered=False)
-    apply_render_surface(snow)
+    _set_rendered(proxy, *_render_surface(snow))
     show_bake(snow)
     apply_display(snow)
     return proxy
@@ -94,9 +93,14 @@ def apply_render_surface(snow, scene=None):
     proxy = proxy_of(snow) if snow.type == "VOLUME" else None
     if proxy is None:
         return
-    opaque = snow.firn.render_mode == "OPAQUE"
-    _set_rendered(proxy, opaque or snow.firn.glints, opaque)
+    _set_rendered(proxy, *_render_surface(snow))
     refresh_preview(snow, scene or bpy.context.scene)
+
+
+def _render_surface(snow):
+    """(whether the proxy renders, whether as opaque snow)."""
+    opaque = snow.firn.render_mode == "OPAQUE"
+    return opaque or snow.firn.glints, opaque
 
 
 def remove_proxy(snow):
