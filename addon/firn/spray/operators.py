@@ -37,9 +37,10 @@ def frame_range(operator, scene, start=None):
     """The operator's frames; where the caller did not set them, `start` (else the scene's start) and the scene's
     end. UserError when the range holds fewer than two frames."""
     props = operator.properties
-    first = operator.frame_start if props.is_property_set("frame_start") else scene.frame_start
-    if start is not None and not props.is_property_set("frame_start"):
-        first = start
+    if props.is_property_set("frame_start"):
+        first = operator.frame_start
+    else:
+        first = scene.frame_start if start is None else start
     last = operator.frame_end if props.is_property_set("frame_end") else scene.frame_end
     if last <= first:
         raise UserError(f"End frame ({last}) must come after the start frame ({first}): the spray moves from one "
