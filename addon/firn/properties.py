@@ -57,6 +57,14 @@ SNOW_LAYER_PROPERTIES = {
     "surface_mesh": bpy.props.BoolProperty(
         name="Surface Mesh", description="Also make a mesh of the snow surface (viewport, EEVEE, modelling)",
         default=False),
+    # Masks (snow_layer/masks.py)
+    "only_selected_faces": bpy.props.BoolProperty(
+        name="Selected Faces Only", description="Snow only on the faces selected in Edit Mode (the others still "
+        "shelter)", default=False),
+    "vertex_group": bpy.props.StringProperty(
+        name="Vertex Group", description="Vertex group whose 0-1 weight scales the snow depth (none: full depth)"),
+    "weight_attribute": bpy.props.StringProperty(
+        name="Weight Attribute", description="Float point attribute whose 0-1 value scales the snow depth"),
 }
 
 

@@ -4,6 +4,7 @@
 
 #include "bindings.h"
 #include "firn/io/vdb_io.h"
+#include "firn/snow/snow_brush.h"
 #include "firn/snow/snow_layer.h"
 #include "firn/snow/surface_mesh.h"
 #include "firn/util/error.h"
@@ -101,19 +102,103 @@ void bindSettings(py::module_ &m) {
         .def_property_readonly("effective_voxel_size", &S::effectiveVoxelSize, "m, the voxel size that will be used");
 }
 
+firn::BrushMode brushMode(const std::string &mode) {
+    if (mode == "ADD") return firn::BrushMode::Add;
+    if (mode == "ERASE") return firn::BrushMode::Erase;
+    if (mode == "SMOOTH") return firn::BrushMode::Smooth;
+    throw firn::InvalidArgument("brush mode must be 'ADD', 'ERASE' or 'SMOOTH' (got '" + mode + "')");
+}
+
+py::dict stats(const firn::DabStats &s) {
+    py::dict out;
+    out["added"] = s.added, out["removed"] = s.removed, out["changed"] = s.changed, out["leaves"] = s.leaves;
+    return out;
+}
+
+openvdb::FloatGrid::Ptr snowGrid(const std::string &path, const char *name) {
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(firn::readGrid(path, name));
+    if (!grid) throw firn::InvalidArgument(path + " has no float '" + name + "' grid");
+    return grid;
+}
+
+void bindCanvas(py::module_ &m) {
+    using firn::SnowCanvas;
+    py::class_<SnowCanvas>(m, "SnowCanvas", R"doc(A snow layer edited by brush dabs (docs/architecture.md, Snow brush).
+SnowCanvas(metaballs, settings, path, vertices, triangles, occluders=None): the layer's metaballs (as
+generate_snow_layer returns them) and settings, the VDB file `path` they were rasterized into, its targets and
+occluders (world m, as for generate_snow_layer). Each dab rasterizes again only the leaves it changes.)doc")
+        .def(py::init([](const py::dict &metaballs, const firn::SnowLayerSettings &settings, const std::string &path,
+                         const py::object &vertices, const py::object &triangles, const py::object &occluders) {
+                 std::vector<firn::Metaball> balls = metaballsFromArrays(metaballs);
+                 const firn::TriangleMesh targets = meshFromArrays(vertices, triangles, "targets");
+                 const firn::TriangleMesh blockers = optionalMesh(occluders, "occluders");
+                 return longCall([&] {
+                     firn::SnowGrids grids{snowGrid(path, "density"), snowGrid(path, "surface")};
+                     return std::make_unique<SnowCanvas>(std::move(balls), std::move(grids), settings, targets,
+                                                         blockers);
+                 });
+             }),
+             py::arg("metaballs"), py::arg("settings"), py::arg("path"), py::arg("vertices"), py::arg("triangles"),
+             py::arg("occluders") = py::none())
+        .def(
+            "stroke",
+            [](SnowCanvas &canvas, const py::object &locations, const py::object &pressures, const std::string &mode,
+               double radius, double strength) {
+                const FloatArray at = floatArray(locations, "stroke locations");
+                const FloatArray p = floatArray(pressures, "stroke pressures");
+                if (at.size() != 3 * p.size()) throw firn::InvalidArgument("stroke: one pressure per (x, y, z) location");
+                firn::Dab dab;
+                dab.mode = brushMode(mode), dab.radius = radius, dab.strength = strength;
+                const firn::DabStats total = longCall([&] {
+                    firn::DabStats sum;
+                    for (py::ssize_t i = 0; i < p.size(); ++i) {
+                        dab.centre = {at.data()[3 * i], at.data()[3 * i + 1], at.data()[3 * i + 2]};
+                        dab.pressure = p.data()[i];
+                        const firn::DabStats one = canvas.apply(dab);
+                        sum.added += one.added, sum.removed += one.removed, sum.changed += one.changed,
+                            sum.leaves += one.leaves;
+                    }
+                    return sum;
+                });
+                return stats(total);
+            },
+            py::arg("locations"), py::arg("pressures"), py::arg("mode"), py::arg("radius"), py::arg("strength"),
+            R"doc(Dabs at `locations` ((N, 3) world m) with `pressures` ((N,) 0..1); `mode` 'ADD', 'ERASE' or 'SMOOTH',
+`radius` m, `strength` m of depth per dab. Returns a dict of balls added, removed, changed and leaves rasterized
+again (summed). Releases the GIL; ValueError for bad input.)doc")
+        .def("metaballs", [](const SnowCanvas &c) { return metaballsToArrays(c.metaballs()); },
+             "The live metaballs, as generate_snow_layer returns them.")
+        .def(
+            "write",
+            [](const SnowCanvas &c, const std::string &path) {
+                longCall([&] { firn::writeGrids(path, {c.grids().density, c.grids().surface}); });
+            },
+            py::arg("path"), "Writes the density and surface grids to the VDB file at `path` (atomically).")
+        .def_property_readonly("active_voxels", [](const SnowCanvas &c) { return c.grids().density->activeVoxelCount(); })
+        .def_property_readonly("mean_density", [](const SnowCanvas &c) { return firn::meanInteriorDensity(c.grids()); },
+                               "kg/m^3 of the voxels wholly inside the snow");
+}
+
 }  // namespace
 
 void bindSnow(py::module_ &m) {
     bindSettings(m);
+    bindCanvas(m);
     m.def(
         "generate_snow_layer",
         [](const py::object &vertices, const py::object &triangles, const py::object &occluders,
-           const firn::SnowLayerSettings &settings, const std::string &path, std::shared_ptr<firn::Progress> progress) {
+           const firn::SnowLayerSettings &settings, const std::string &path, std::shared_ptr<firn::Progress> progress,
+           const py::object &weights) {
             const firn::TriangleMesh targets = meshFromArrays(vertices, triangles, "targets");
+            std::vector<float> depthWeights;
+            if (!weights.is_none()) {
+                const FloatArray w = floatArray(weights, "weights");
+                depthWeights.assign(w.data(), w.data() + w.size());
+            }
             const firn::TriangleMesh blockers = optionalMesh(occluders, "occluders");
             progress = orNew(progress);
             const firn::SnowLayer layer = longCall([&] {
-                firn::SnowLayer made = firn::generateSnowLayer(targets, blockers, settings, progress.get());
+                firn::SnowLayer made = firn::generateSnowLayer(targets, blockers, settings, progress.get(), depthWeights);
                 firn::writeGrids(path, {made.grids.density, made.grids.surface});
                 return made;
             });
@@ -123,10 +208,10 @@ void bindSnow(py::module_ &m) {
             return out;
         },
         py::arg("vertices"), py::arg("triangles"), py::arg("occluders") = py::none(), py::arg("settings"),
-        py::arg("path"), py::arg("progress") = nullptr,
+        py::arg("path"), py::arg("progress") = nullptr, py::arg("weights") = py::none(),
         R"doc(Puts snow on the target triangles (world space, m) and writes its `density` and `surface` grids to the
 VDB file at `path` (atomically). `occluders` is None or (vertices, triangles) of everything else that shelters
-the targets. Returns a dict: metaballs (arrays centres, radii, normals, bases, depths), site_count, voxel_size,
+the targets. `weights` is None or one 0..1 per target vertex scaling the depth (a vertex group mask). Returns a dict: metaballs (arrays centres, radii, normals, bases, depths), site_count, voxel_size,
 active_voxels, mean_density (kg/m^3), bounds, dropped_triangles, open_surfaces_turned (open target surfaces
 whose downward normals were ignored: snow lies on their upper side). Releases the GIL; raises ValueError for bad
 input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `progress` is cancelled.)doc");

@@ -28,16 +28,19 @@ def unit_matrix(scene):
     return np.diag([1.0 / metres_per_unit(scene)] * 3 + [1.0])
 
 
-def _mesh_arrays(evaluated, matrix, metres):
+def _mesh_arrays(evaluated, matrix, metres, extra=None):
     """(vertices (N, 3) float32 world m, triangles (M, 3) uint32, material slot per triangle (M,) int32,
     materials by slot) of an evaluated object placed by `matrix` (Blender units). Mirroring transforms flip the
-    winding (faces keep pointing out)."""
+    winding (faces keep pointing out). With `extra`, a fifth item: extra(mesh, evaluated), read from the mesh
+    (loop triangles calculated; None for an object without a mesh)."""
     materials = [slot.material for slot in evaluated.material_slots]
     mesh = evaluated.to_mesh()
     try:
         if mesh is None:
-            return np.empty((0, 3), np.float32), np.empty((0, 3), np.uint32), np.empty(0, np.int32), materials
+            empty = np.empty((0, 3), np.float32), np.empty((0, 3), np.uint32), np.empty(0, np.int32), materials
+            return empty if extra is None else (*empty, None)
         mesh.calc_loop_triangles()
+        read = () if extra is None else (extra(mesh, evaluated),)
         local = np.empty(len(mesh.vertices) * 3, np.float32)
         mesh.vertices.foreach_get("co", local)
         corners = np.empty(len(mesh.loop_triangles) * 3, np.int32)
@@ -51,7 +54,7 @@ def _mesh_arrays(evaluated, matrix, metres):
     triangles = corners.reshape(-1, 3).astype(np.uint32)
     if np.linalg.det(linear) < 0.0:
         triangles = triangles[:, ::-1].copy()
-    return vertices, triangles, slots, materials
+    return (vertices, triangles, slots, materials, *read)
 
 
 def _owner(instance):
@@ -59,9 +62,10 @@ def _owner(instance):
     return (instance.parent if instance.is_instance else instance.object).original
 
 
-def evaluated_parts(objects, depsgraph):
+def evaluated_parts(objects, depsgraph, extra=None):
     """[(name, vertices m, triangles, slots, materials)] of everything `objects` put in the scene, evaluated:
-    each object's own surface (modifiers applied) and every instance it makes, in world space, metres."""
+    each object's own surface (modifiers applied) and every instance it makes, in world space, metres. With
+    `extra`, each part ends with extra(mesh, evaluated object) (_mesh_arrays)."""
     wanted = {obj.as_pointer(): obj for obj in objects}
     metres = metres_per_unit(depsgraph.scene)
     parts, seen = [], set()
@@ -74,13 +78,14 @@ def evaluated_parts(objects, depsgraph):
         if obj.type not in MESH_LIKE_TYPES or not (instance.is_instance or instance.show_self):
             continue  # an Empty, or an emitter that shows only its particles
         name = f"{instance.parent.name} > {obj.name}" if instance.is_instance else obj.name
-        parts.append((name, *_mesh_arrays(obj, np.array(instance.matrix_world, np.float64), metres)))
+        parts.append((name, *_mesh_arrays(obj, np.array(instance.matrix_world, np.float64), metres, extra)))
     # Objects the viewport hides are not in its depsgraph's list; their own surface still counts (a hidden
     # occluder collection, a ground hidden after the snow was made).
     for pointer, obj in wanted.items():
         if pointer not in seen and is_mesh_like(obj):
             evaluated = obj.evaluated_get(depsgraph)
-            parts.append((obj.name, *_mesh_arrays(evaluated, np.array(evaluated.matrix_world, np.float64), metres)))
+            parts.append((obj.name, *_mesh_arrays(evaluated, np.array(evaluated.matrix_world, np.float64), metres,
+                                                   extra)))
     return parts
 
 

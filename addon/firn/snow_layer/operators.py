@@ -16,7 +16,7 @@ from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
 from ..material import nodes as materials
 from ..properties import SNOW_LAYER_PROPERTIES, active_snow_layer
-from . import proxy
+from . import masks, proxy
 from .ui import draw_layer_settings
 
 LENGTH_SETTINGS = ("depth", "spacing")  # with a non-zero default, in Blender units (voxel size 0 is automatic)
@@ -53,11 +53,30 @@ def target_triangles(objects, depsgraph):
     """World triangles (m) of mesh-like objects with their instances, and of the surface of snow objects (their
     grids are in world metres already: vdb-contract.md)."""
     meshes = [scene_geometry.world_triangles([obj for obj in objects if obj.type != "VOLUME"], depsgraph)]
+    return scene_geometry.concatenate(mesh for mesh in meshes + _snow_surfaces(objects) if mesh is not None)
+
+
+def _snow_surfaces(objects):
+    meshes = []
     for obj in objects:
         path = bpy.path.abspath(obj.data.filepath) if obj.type == "VOLUME" else ""
         if os.path.exists(path):
             meshes.append(firncore.snow_surface_mesh(path))
-    return scene_geometry.concatenate(mesh for mesh in meshes if mesh is not None)
+    return meshes
+
+
+def masked_target_triangles(objects, depsgraph, props):
+    """(targets (vertices, triangles), weight per target vertex, faces the mask leaves out) in world m; earlier
+    snow is never masked."""
+    kept, weights, left_out = masks.masked_triangles([obj for obj in objects if obj.type != "VOLUME"], depsgraph,
+                                                     props)
+    surfaces = [mesh for mesh in _snow_surfaces(objects) if len(mesh[1])]
+    parts = ([kept] if kept is not None else []) + surfaces
+    if not parts:
+        return None, None, left_out
+    weights = np.concatenate(([weights] if kept is not None else []) +
+                             [np.ones(len(vertices), np.float32) for vertices, _t in surfaces])
+    return scene_geometry.concatenate(parts), weights, left_out
 
 
 def _occluder_objects(context, props, targets):
@@ -80,10 +99,16 @@ def gather_inputs(context, props, targets, object_name):
         raise UserError("Select the objects to cover with snow (meshes, curves, surfaces, text, metaballs, "
                         "collection instances or earlier snow)")
     depsgraph = context.evaluated_depsgraph_get()
-    target_arrays = target_triangles(targets, depsgraph)
+    weights, left_out = None, None
+    if masks.is_masked(props):
+        target_arrays, weights, left_out = masked_target_triangles(targets, depsgraph, props)
+    else:
+        target_arrays = target_triangles(targets, depsgraph)
     if target_arrays is None:
-        raise UserError("The selected objects have no faces to hold snow (a curve needs a bevel or extrusion)")
+        raise UserError("The selected objects have no faces to hold snow (a curve needs a bevel or extrusion"
+                        f"{'; Selected Faces Only needs faces selected in Edit Mode' if left_out else ''})")
     occluders = target_triangles(_occluder_objects(context, props, targets), depsgraph)
+    occluders = scene_geometry.concatenate(mesh for mesh in (occluders, left_out) if mesh is not None)
     path, stored_path = cache.snow_file(object_name)
     cache.check_writable(path)
     settings = core_settings(props, _max_voxels(), metres)
@@ -92,7 +117,7 @@ def gather_inputs(context, props, targets, object_name):
     except ValueError as error:
         raise UserError(f"Add Snow Layer: {error}") from error
     return {
-        "targets": target_arrays, "occluders": occluders, "settings": settings, "path": path,
+        "targets": target_arrays, "weights": weights, "occluders": occluders, "settings": settings, "path": path,
         "stored_path": stored_path, "surface_mesh": props.surface_mesh,
         "unit_matrix": scene_geometry.unit_matrix(context.scene),
     }
@@ -102,7 +127,7 @@ def compute_snow(inputs, progress):
     """Worker thread: the core generates the grids and writes the VDB; no bpy here."""
     vertices, triangles = inputs["targets"]
     result = cache.core_write(firncore.generate_snow_layer, vertices, triangles, inputs["occluders"],
-                              inputs["settings"], inputs["path"], progress)
+                              inputs["settings"], inputs["path"], progress, inputs["weights"])
     return with_meshes(inputs, result)
 
 
@@ -125,9 +150,8 @@ def input_notes(result):
     return "".join(f"; {note}" for note in notes)
 
 
-def _store_metaballs(snow, metaballs):
-    """The metaballs as a point mesh child of the snow (hidden): edit it, then Rebuild from Metaballs."""
-    name = f"{snow.name} Metaballs"
+def metaball_mesh(name, metaballs):
+    """The metaballs as a point mesh: centres as vertices (m, in the snow's space), the rest as attributes."""
     mesh = bpy.data.meshes.new(name)
     centres = metaballs["centres"]
     mesh.vertices.add(len(centres))
@@ -135,7 +159,13 @@ def _store_metaballs(snow, metaballs):
     for key in ("radii", "bases", "depths"):
         mesh.attributes.new(key, "FLOAT", "POINT").data.foreach_set("value", metaballs[key])
     mesh.attributes.new("normals", "FLOAT_VECTOR", "POINT").data.foreach_set("vector", metaballs["normals"].ravel())
-    holder = bpy.data.objects.new(name, mesh)
+    return mesh
+
+
+def _store_metaballs(snow, metaballs):
+    """The metaballs as a point mesh child of the snow (hidden): edit it, then Rebuild from Metaballs."""
+    name = f"{snow.name} Metaballs"
+    holder = bpy.data.objects.new(name, metaball_mesh(name, metaballs))
     holder.parent = snow
     holder.hide_viewport = holder.hide_render = True
     for collection in snow.users_collection:
@@ -239,7 +269,10 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
     __annotations__ = dict(SNOW_LAYER_PROPERTIES)
     job_label = "Add Snow Layer"
 
-    poll = classmethod(object_mode_poll)
+    @classmethod
+    def poll(cls, context):
+        # From Edit Mode the selected faces can be the mask; the operator returns to Object Mode.
+        return context.mode == "EDIT_MESH" or object_mode_poll(cls, context)
 
     def draw(self, _context):
         draw_layer_settings(self.layout, self)
@@ -253,6 +286,10 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
 
     def prepare(self, context):
         self.physical_defaults(scene_geometry.metres_per_unit(context.scene))
+        if context.mode == "EDIT_MESH":
+            if not self.properties.is_property_set("only_selected_faces"):
+                self.only_selected_faces = True
+            bpy.ops.object.mode_set(mode="OBJECT")  # writes the edit meshes (and their selection) back
         targets = [obj for obj in context.selected_objects if is_snow_target(obj)]
         name = free_object_name("Snow")
         return dict(gather_inputs(context, self, targets, name), name=name, targets_objects=targets)

@@ -30,6 +30,7 @@ def draw_snow_layer(layout, snow):
     row = layout.row(align=True)
     row.operator("firn.regenerate_snow", icon="FILE_REFRESH")
     row.operator("firn.rebuild_from_metaballs", icon="META_BALL")
+    layout.operator("firn.snow_brush", icon="BRUSH_DATA")
 
 
 class FIRN_PT_sidebar(bpy.types.Panel):

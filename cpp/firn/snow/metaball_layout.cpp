@@ -87,13 +87,28 @@ class ColumnTable {
 
 double metaballRadius(const MetaballLayoutSettings &s) { return s.spacing * (1.25 + 1.25 * s.smoothness); }
 
+class MetaballColumns::Table : public ColumnTable {
+    using ColumnTable::ColumnTable;
+};
+
+MetaballColumns::MetaballColumns(const MetaballLayoutSettings &s)
+    : settings_(s),
+      table_(std::make_unique<Table>(metaballRadius(s), s.spacing * s.spacing, s.depth * (1.0 + 0.5 * s.randomness))) {}
+
+MetaballColumns::~MetaballColumns() = default;
+
 std::vector<Metaball> layoutMetaballs(const std::vector<LandingSite> &sites, const MetaballLayoutSettings &s) {
+    return MetaballColumns(s).layout(sites);
+}
+
+std::vector<Metaball> MetaballColumns::layout(const std::vector<LandingSite> &sites, std::uint64_t stream) const {
+    const MetaballLayoutSettings &s = settings_;
     const double radius = metaballRadius(s);
-    const double maxDepth = s.depth * (1.0 + 0.5 * s.randomness);
-    const ColumnTable table(radius, s.spacing * s.spacing, maxDepth);
+    const ColumnTable &table = *table_;
+    const std::uint64_t streamKey = stream * 0x9E3779B97F4A7C15ull;  // 0 for stream 0: layoutMetaballs's draws
 
     auto columnDepth = [&](std::size_t i) {
-        Rng rng(s.seed ^ 0x5EEDC0FFEEull, i);
+        Rng rng(s.seed ^ 0x5EEDC0FFEEull ^ streamKey, i);
         return s.depth * sites[i].cover * (1.0 + 0.5 * s.randomness * (2.0 * rng.uniform() - 1.0));
     };
     std::vector<std::size_t> offsets(sites.size() + 1, 0);
@@ -111,7 +126,7 @@ std::vector<Metaball> layoutMetaballs(const std::vector<LandingSite> &sites, con
         if (count == 0) return;
         const double d = columnDepth(i);
         const ColumnTable::Column c = table.lookup(d);
-        Rng rng(s.seed ^ 0xBA11ull, i);
+        Rng rng(s.seed ^ 0xBA11ull ^ streamKey, i);
         for (std::size_t k = 0; k < count; ++k) {
             const double z = count == 1 ? c.zLow : c.zLow + (c.zHigh - c.zLow) * double(k) / double(count - 1);
             const double r = radius * (1.0 + 0.2 * s.randomness * (2.0 * rng.uniform() - 1.0));

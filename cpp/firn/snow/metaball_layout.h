@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -36,5 +37,19 @@ double metaballRadius(const MetaballLayoutSettings &settings);  // m, before jit
 // Columns of balls on each site, layered so that the field's iso-surface over a uniformly covered surface
 // lies at depth x site cover (the layer-averaged field of metaball.h sets the layer heights).
 std::vector<Metaball> layoutMetaballs(const std::vector<LandingSite> &sites, const MetaballLayoutSettings &settings);
+
+// The same layout with its column shapes solved once (bisections, some milliseconds) for many calls: a snow
+// brush lays out a few columns per dab. `stream` picks an independent seeded jitter (0: layoutMetaballs's).
+class MetaballColumns {
+  public:
+    explicit MetaballColumns(const MetaballLayoutSettings &settings);
+    ~MetaballColumns();
+    std::vector<Metaball> layout(const std::vector<LandingSite> &sites, std::uint64_t stream = 0) const;
+
+  private:
+    class Table;
+    MetaballLayoutSettings settings_;
+    std::unique_ptr<Table> table_;
+};
 
 }  // namespace firn

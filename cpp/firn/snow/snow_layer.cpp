@@ -82,7 +82,8 @@ RasterSettings SnowLayerSettings::raster() const {
 }
 
 SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occluders,
-                            const SnowLayerSettings &settings, Progress *progress) {
+                            const SnowLayerSettings &settings, Progress *progress,
+                            const std::vector<float> &depthWeights) {
     settings.validate();
     if (targets.empty()) throw InvalidArgument("no target triangles to put snow on (objects without faces?)");
     SnowLayer layer;
@@ -92,7 +93,8 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
     TriangleMesh oriented = targets;
     layer.openSurfaces = orientOpenSurfaces(oriented, -glm::normalize(settings.direction));
     const RayCaster shelter(merge({oriented, occluders}));
-    const auto sites = findLandingSites(oriented, shelter, settings.snowfall(), SubProgress(progress, 0.0, 0.4));
+    const auto sites = findLandingSites(oriented, shelter, settings.snowfall(), SubProgress(progress, 0.0, 0.4),
+                                        depthWeights);
     layer.siteCount = sites.size();
     layer.metaballs = layoutMetaballs(sites, settings.layout());
     const RasterSettings raster = settings.raster();

@@ -52,9 +52,11 @@ struct SnowLayer {
 // Add Snow Layer's whole computation: landing sites on `targets`, sheltered by `occluders` and by the
 // targets themselves; metaball columns; the density and surface grids. Open target surfaces take snow on their
 // upper side whatever their winding (orientOpenSurfaces); closed ones keep their normals. Checks the voxel budget before
-// allocating. Reports to and can be cancelled through `progress` (may be null).
+// allocating. Reports to and can be cancelled through `progress` (may be null). `depthWeights` (empty, or 0..1
+// per target vertex) scales the depth where snow lands (a vertex group mask: findLandingSites).
 SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occluders,
-                            const SnowLayerSettings &settings, Progress *progress);
+                            const SnowLayerSettings &settings, Progress *progress,
+                            const std::vector<float> &depthWeights = {});
 
 // Mean density (kg/m^3) of the voxels wholly inside the snow; 0 for no snow.
 double meanInteriorDensity(const SnowGrids &grids);

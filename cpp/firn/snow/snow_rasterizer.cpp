@@ -266,4 +266,79 @@ SnowGrids rasterizeSnow(const std::vector<Metaball> &balls, const RasterSettings
     return grids;
 }
 
+LeafBallIndex::LeafBallIndex(const std::vector<Metaball> &balls, double voxelSize) : voxelSize_(voxelSize) {
+    for (const auto &[key, id] : binBallsByLeaf(balls, voxelSize)) leaves_[key].push_back(id);
+}
+
+void LeafBallIndex::insert(std::uint32_t id, const Metaball &ball) {
+    const openvdb::CoordBBox box = firn::leavesOf(ball, voxelSize_).leaves;
+    for (auto it = box.begin(); it; ++it) {
+        std::vector<std::uint32_t> &ids = leaves_[leafKey(*it)];
+        ids.insert(std::lower_bound(ids.begin(), ids.end(), id), id);
+    }
+}
+
+void LeafBallIndex::erase(std::uint32_t id, const Metaball &ball) {
+    const openvdb::CoordBBox box = firn::leavesOf(ball, voxelSize_).leaves;
+    for (auto it = box.begin(); it; ++it) {
+        const auto found = leaves_.find(leafKey(*it));
+        if (found == leaves_.end()) continue;
+        std::vector<std::uint32_t> &ids = found->second;
+        const auto at = std::lower_bound(ids.begin(), ids.end(), id);
+        if (at != ids.end() && *at == id) ids.erase(at);
+        if (ids.empty()) leaves_.erase(found);
+    }
+}
+
+void LeafBallIndex::leavesOf(const Metaball &ball, std::vector<openvdb::Coord> &out) const {
+    const openvdb::CoordBBox box = firn::leavesOf(ball, voxelSize_).leaves;
+    for (auto it = box.begin(); it; ++it) {
+        const openvdb::Coord leaf = *it;
+        out.emplace_back(leaf.x() * kLeafDim, leaf.y() * kLeafDim, leaf.z() * kLeafDim);
+    }
+}
+
+const std::vector<std::uint32_t> *LeafBallIndex::ballsOf(const openvdb::Coord &leafOrigin) const {
+    const openvdb::Coord leaf(leafOrigin.x() >> 3, leafOrigin.y() >> 3, leafOrigin.z() >> 3);
+    const auto found = leaves_.find(leafKey(leaf));
+    return found == leaves_.end() ? nullptr : &found->second;
+}
+
+void rasterizeLeaves(const std::vector<Metaball> &balls, const LeafBallIndex &index,
+                     const std::vector<openvdb::Coord> &leafOrigins, const RasterSettings &s, SnowGrids &grids) {
+    const double h = s.voxelSize;
+    const float band = float(kSurfaceBandVoxels * h);
+    const std::size_t count = leafOrigins.size();
+    std::vector<std::unique_ptr<FloatLeaf>> surfaces(count), densities(count);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 4), [&](const tbb::blocked_range<std::size_t> &r) {
+        auto leafField = std::make_unique<LeafField>();
+        for (std::size_t l = r.begin(); l != r.end(); ++l) {
+            const std::vector<std::uint32_t> *ids = index.ballsOf(leafOrigins[l]);
+            if (!ids) continue;
+            *leafField = LeafField{};
+            gatherLeaf(leafOrigins[l], ids->data(), ids->size(), balls, float(h), *leafField);
+            surfaces[l] = std::make_unique<FloatLeaf>(leafOrigins[l], band, false);
+            densities[l] = std::make_unique<FloatLeaf>(leafOrigins[l], 0.0f, false);
+            finishLeaf(*leafField, s, *surfaces[l], *densities[l]);
+        }
+    });
+    // As pruneLevelSet and pruneInactive leave them: a leaf without active voxels is a tile, inside (-band) or
+    // outside (+band) by the sign of its first value; an empty density leaf is the background.
+    openvdb::FloatTree &surface = grids.surface->tree(), &density = grids.density->tree();
+    const auto setTile = [](openvdb::FloatTree &tree, const openvdb::Coord &origin, float value) {
+        if (tree.probeConstLeaf(origin) || tree.getValue(origin) != value) tree.addTile(1, origin, value, false);
+    };
+    for (std::size_t l = 0; l < count; ++l) {
+        const openvdb::Coord &origin = leafOrigins[l];
+        if (surfaces[l] && !surfaces[l]->isInactive()) {
+            surface.addLeaf(surfaces[l].release());
+        } else {
+            const bool inside = surfaces[l] && surfaces[l]->getFirstValue() < 0.0f;
+            setTile(surface, origin, inside ? -band : band);
+        }
+        if (densities[l] && !densities[l]->isInactive()) density.addLeaf(densities[l].release());
+        else setTile(density, origin, 0.0f);
+    }
+}
+
 }  // namespace firn

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 #include <openvdb/openvdb.h>
@@ -36,5 +38,29 @@ void checkVoxelBudget(double voxels, const RasterSettings &settings);
 // would hold more than maxVoxels.
 SnowGrids rasterizeSnow(const std::vector<Metaball> &balls, const RasterSettings &settings,
                         const SubProgress &progress);
+
+// Which balls reach each 8^3 leaf, by ball index in ascending order (the order rasterizeSnow sums them in, so
+// that a leaf rasterized again alone comes out as the whole grid's pass made it). Kept up to date by the snow
+// brush as balls come, go and move.
+class LeafBallIndex {
+  public:
+    LeafBallIndex(const std::vector<Metaball> &balls, double voxelSize);
+    void insert(std::uint32_t id, const Metaball &ball);  // into every leaf the ball reaches
+    void erase(std::uint32_t id, const Metaball &ball);
+    // Origins (index space) of the leaves a ball reaches, appended to `out`.
+    void leavesOf(const Metaball &ball, std::vector<openvdb::Coord> &out) const;
+    const std::vector<std::uint32_t> *ballsOf(const openvdb::Coord &leafOrigin) const;  // null: none
+
+  private:
+    double voxelSize_;  // m
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> leaves_;
+};
+
+// Rasterizes again only the leaves at `leafOrigins` (index space, unique) of grids that rasterizeSnow made, from
+// the balls `index` says reach them; the rest of the grids is kept. A leaf left without snow becomes a tile, as
+// rasterizeSnow's pruning makes it. Parallel over leaves; the grids change on the calling thread.
+void rasterizeLeaves(const std::vector<Metaball> &balls, const LeafBallIndex &index,
+                     const std::vector<openvdb::Coord> &leafOrigins, const RasterSettings &settings,
+                     SnowGrids &grids);
 
 }  // namespace firn

@@ -61,7 +61,43 @@ void checkSiteBudget(double sites, double maxSites) {
     throw BudgetExceeded(msg.str());
 }
 
+void checkDepthWeights(const std::vector<float> &weights, std::size_t vertexCount) {
+    if (weights.empty()) return;
+    if (weights.size() != vertexCount)
+        throw InvalidArgument("depth weights: " + std::to_string(weights.size()) + " for " +
+                              std::to_string(vertexCount) + " target vertices");
+    for (std::size_t i = 0; i < weights.size(); ++i)
+        if (!(weights[i] >= 0.0f && weights[i] <= 1.0f))
+            throw InvalidArgument("depth weight of vertex " + std::to_string(i) + " must be between 0 and 1 (got " +
+                                  std::to_string(weights[i]) + ")");
+}
+
+// A vertex weight linearly interpolated at barycentric coordinates `bary` of triangle t.
+float weightAt(const TriangleMesh &mesh, const std::vector<float> &weights, std::size_t t, const glm::vec3 &bary) {
+    const glm::uvec3 corners = mesh.triangles[t];
+    return bary.x * weights[corners.x] + bary.y * weights[corners.y] + bary.z * weights[corners.z];
+}
+
 }  // namespace
+
+double snowfallExposure(const glm::vec3 &origin, const glm::vec3 &normal, const RayCaster &occluders,
+                        const SnowfallSettings &settings, double shiftU, double shiftV) {
+    const glm::vec3 from = -glm::normalize(settings.direction);  // snow comes from this way
+    glm::vec3 coneT, coneB;
+    basis(from, coneT, coneB);
+    const int rays = settings.spread > 0.0 ? std::max(1, settings.exposureRays) : 1;
+    const double cosSpread = std::cos(settings.spread);
+    int open = 0;
+    for (int k = 0; k < rays; ++k) {
+        const double cosTheta = 1.0 - fract(shiftU + k * kR2a) * (1.0 - cosSpread);
+        const double sinTheta = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta));
+        const double phi = 2.0 * kPi * fract(shiftV + k * kR2b);
+        const glm::vec3 dir = glm::normalize(from * float(cosTheta) + coneT * float(sinTheta * std::cos(phi)) +
+                                             coneB * float(sinTheta * std::sin(phi)));
+        if (glm::dot(dir, normal) > 0.0f && !occluders.occluded(origin, dir)) ++open;
+    }
+    return double(open) / double(rays);
+}
 
 double slopeCover(double slope, double maxSlope) {
     if (slope >= maxSlope) return 0.0;
@@ -71,15 +107,12 @@ double slopeCover(double slope, double maxSlope) {
 }
 
 std::vector<LandingSite> findLandingSites(const TriangleMesh &targets, const RayCaster &occluders,
-                                          const SnowfallSettings &settings, const SubProgress &progress) {
+                                          const SnowfallSettings &settings, const SubProgress &progress,
+                                          const std::vector<float> &depthWeights) {
     if (!(settings.spacing > 0.0)) throw InvalidArgument("snow spacing must be positive");
-    const glm::vec3 fall = glm::normalize(settings.direction);
-    if (!std::isfinite(fall.x)) throw InvalidArgument("snowfall direction must be a non-zero vector");
-    const glm::vec3 from = -fall;  // snow comes from this way
-    glm::vec3 coneT, coneB;
-    basis(from, coneT, coneB);
-    const int rays = settings.spread > 0.0 ? std::max(1, settings.exposureRays) : 1;
-    const double cosSpread = std::cos(settings.spread);
+    checkDepthWeights(depthWeights, targets.positions.size());
+    if (!std::isfinite(glm::normalize(settings.direction).x))
+        throw InvalidArgument("snowfall direction must be a non-zero vector");
     const std::size_t nTri = targets.triangleCount();
 
     // Pass 1: how many sites each triangle gets (seeded per triangle: independent of threads), refused before
@@ -116,20 +149,13 @@ std::vector<LandingSite> findLandingSites(const TriangleMesh &targets, const Ray
             for (std::size_t i = 0; i < count; ++i) {
                 // Square to triangle with the square-root map, which keeps the sequence stratified.
                 const double su = std::sqrt(fract(shiftU + (i + 1) * kR2a)), v = fract(shiftV + (i + 1) * kR2b);
-                const glm::vec3 p = a * float(1.0 - su) + b * float(su * (1.0 - v)) + c * float(su * v);
+                const glm::vec3 bary(float(1.0 - su), float(su * (1.0 - v)), float(su * v));
+                const glm::vec3 p = a * bary.x + b * bary.y + c * bary.z;
                 const glm::vec3 origin = p + tri.normal * eps;
                 const double rayU = rng.uniform(), rayV = rng.uniform();
-                int open = 0;
-                for (int k = 0; k < rays; ++k) {
-                    const double cosTheta = 1.0 - fract(rayU + k * kR2a) * (1.0 - cosSpread);
-                    const double sinTheta = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta));
-                    const double phi = 2.0 * kPi * fract(rayV + k * kR2b);
-                    const glm::vec3 dir = glm::normalize(from * float(cosTheta) +
-                                                         coneT * float(sinTheta * std::cos(phi)) +
-                                                         coneB * float(sinTheta * std::sin(phi)));
-                    if (glm::dot(dir, tri.normal) > 0.0f && !occluders.occluded(origin, dir)) ++open;
-                }
-                sites[offsets[t] + i] = {p, tri.normal, tri.cover * float(open) / float(rays)};
+                const double open = snowfallExposure(origin, tri.normal, occluders, settings, rayU, rayV);
+                const float weight = depthWeights.empty() ? 1.0f : weightAt(targets, depthWeights, t, bary);
+                sites[offsets[t] + i] = {p, tri.normal, weight * tri.cover * float(open)};
             }
         }
         progress.report(0.05 + 0.95 * double(done += r.size()) / double(nTri));

@@ -33,12 +33,21 @@ struct LandingSite {
 // projected snowfall, easing to zero over the last 15 degrees before maxSlope (snow slides off).
 double slopeCover(double slope, double maxSlope);
 
+// Fraction of `rays` directions into the snowfall cone that leave `origin` (just off a surface of unit normal
+// `normal`, on its snow side) without meeting `occluders`: the directions a low-discrepancy pattern over the
+// cone, shifted by (shiftU, shiftV) in [0, 1) (the caller's seeded draws).
+double snowfallExposure(const glm::vec3 &origin, const glm::vec3 &normal, const RayCaster &occluders,
+                        const SnowfallSettings &settings, double shiftU, double shiftV);
+
 // Sites at a mean density of one per spacing^2 of surface (a Kronecker (R2) sequence per triangle, randomly
 // shifted: stratified and seeded); each site's exposure is the unblocked fraction of exposureRays rays cast
 // into the snowfall cone against `occluders` (which should include the targets themselves).
-// Sites that get no snow (cover below 1 %) are left out. Throws BudgetExceeded, before placing any, when the
-// expected number of sites exceeds maxSites.
+// `depthWeights` (empty, or one 0..1 per target vertex: a vertex group or attribute painted by the user) scales
+// each site's cover by its weight interpolated over the triangle. Sites that get no snow (cover below 1 %) are
+// left out. Throws BudgetExceeded, before placing any, when the expected number of sites exceeds maxSites;
+// InvalidArgument for weights of the wrong count or outside 0..1.
 std::vector<LandingSite> findLandingSites(const TriangleMesh &targets, const RayCaster &occluders,
-                                          const SnowfallSettings &settings, const SubProgress &progress);
+                                          const SnowfallSettings &settings, const SubProgress &progress,
+                                          const std::vector<float> &depthWeights = {});
 
 }  // namespace firn
