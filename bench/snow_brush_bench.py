@@ -66,7 +66,8 @@ def main():
     full_s = time.perf_counter() - start
 
     points = surface_points(args.dabs)
-    print(f"car sample: {voxels:,} active density voxels, {len(metaballs['radii']):,} metaballs; canvas made "
+    print(f"car sample: {voxels:,} active density voxels in {canvas.leaf_count:,} leaves (surface grid), "
+          f"{len(metaballs['radii']):,} metaballs; canvas made "
           f"(file read, ball index, ray caster) in {canvas_s:.2f} s; whole snow rasterized and written in "
           f"{full_s:.2f} s; {len(points)} dabs of radius {args.radius} m, strength {args.strength} m\n")
     print("| mode | median ms/dab | worst ms/dab | leaves per dab (median / most) | balls per dab (median) |")

@@ -175,6 +175,8 @@ again (summed). Releases the GIL; ValueError for bad input.)doc")
             },
             py::arg("path"), "Writes the density and surface grids to the VDB file at `path` (atomically).")
         .def_property_readonly("active_voxels", [](const SnowCanvas &c) { return c.grids().density->activeVoxelCount(); })
+        .def_property_readonly("leaf_count", [](const SnowCanvas &c) { return c.grids().surface->tree().leafCount(); },
+                               "8^3 leaves of the surface grid")
         .def_property_readonly("mean_density", [](const SnowCanvas &c) { return firn::meanInteriorDensity(c.grids()); },
                                "kg/m^3 of the voxels wholly inside the snow");
 }

@@ -33,18 +33,27 @@ MODES = (("ADD", "Add", "Add snow where the snowfall reaches, on top of the snow
          ("ERASE", "Erase", "Remove snow from the top (Ctrl while painting)"),
          ("SMOOTH", "Smooth", "Even out the snow surface (Shift while painting)"))
 MIN_REFRESH_INTERVAL = 0.2  # s between viewport refreshes during a stroke; more when a refresh takes long
-_canvases = {}  # snow object name -> (file path, metaball count, SnowCanvas): kept between strokes
+_canvases = {}  # snow object name -> (file key, metaball count, SnowCanvas): kept between strokes
+
+
+def _file_key(path):
+    """What tells a snow file apart from the one a canvas was made from or wrote: path, size, time written."""
+    try:
+        stat = os.stat(path)
+    except OSError:
+        return None
+    return path, stat.st_size, stat.st_mtime_ns
 
 
 def _snow_and_canvas(context):
     """The active snow layer and its canvas, made from its file, metaballs and targets unless the one kept still
-    matches them (an undo or a regeneration changed the file)."""
+    matches them (an undo, a regeneration or a rebuild changed the file)."""
     snow = active_snow_layer(context)
     holder = snow.firn.metaballs
     path = cache.volume_path(snow.data)
     kept = _canvases.get(snow.name)
     count = len(holder.data.vertices)
-    if kept is not None and kept[0] == path and kept[1] == count:
+    if kept is not None and kept[0] == _file_key(path) and kept[1] == count:
         return snow, kept[2]
     targets = [item.object for item in snow.firn.targets if item.object is not None]
     if not targets:
@@ -63,7 +72,7 @@ def _snow_and_canvas(context):
     except ValueError as error:
         raise UserError(f"Snow Brush: {error}") from error
     _canvases.clear()  # one canvas at a time: its grids can be large
-    _canvases[snow.name] = (path, count, canvas)
+    _canvases[snow.name] = (_file_key(path), count, canvas)
     return snow, canvas
 
 
@@ -87,7 +96,7 @@ def _show(context, snow, canvas, path, stored):
     if proxy.proxy_of(snow) is not None:
         proxy.store_proxy(snow, proxy.mesh_arrays(path, snow.firn.voxel_size),
                           scene_geometry.metres_per_unit(context.scene))
-    _canvases[snow.name] = (cache.volume_path(snow.data), _canvases[snow.name][1], canvas)
+    _canvases[snow.name] = (_file_key(cache.volume_path(snow.data)), _canvases[snow.name][1], canvas)
 
 
 def _commit(context, snow, canvas, files):
