@@ -183,3 +183,32 @@ def test_surface_mesh_refuses_bad_settings(tmp_vdb):
         firncore.snow_surface_mesh(tmp_vdb, max_triangles=10)
     with pytest.raises(TypeError):
         firncore.snow_surface_mesh(tmp_vdb, max_triangles=-1)
+
+
+def test_depth_weights_are_checked(tmp_vdb):
+    settings = firncore.SnowLayerSettings(depth=0.1)
+    with pytest.raises(ValueError, match="3 for 4 target vertices"):
+        firncore.generate_snow_layer(*plane(1.0), settings=settings, path=tmp_vdb, weights=[1.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="between 0 and 1"):
+        firncore.generate_snow_layer(*plane(1.0), settings=settings, path=tmp_vdb, weights=[1.0, 1.0, 1.5, 1.0])
+    with pytest.raises(ValueError, match="no snow lands"):  # weight 0 everywhere
+        firncore.generate_snow_layer(*plane(1.0), settings=settings, path=tmp_vdb, weights=[0.0, 0.0, 0.0, 0.0])
+
+
+def test_snow_canvas_paints_and_refuses_bad_strokes(tmp_vdb):
+    settings = firncore.SnowLayerSettings(depth=0.1)
+    layer = firncore.generate_snow_layer(*plane(2.0), settings=settings, path=tmp_vdb)
+    canvas = firncore.SnowCanvas(layer["metaballs"], settings, tmp_vdb, *plane(2.0))
+    assert canvas.active_voxels == layer["active_voxels"]
+    stats = canvas.stroke([[0.3, 0.0, 0.1]], [1.0], "ADD", 0.2, 0.05)
+    assert stats["added"] > 0 and stats["leaves"] < canvas.leaf_count
+    assert len(canvas.metaballs()["radii"]) == len(layer["metaballs"]["radii"]) + stats["added"]
+    with pytest.raises(ValueError, match="brush mode"):
+        canvas.stroke([[0.3, 0.0, 0.1]], [1.0], "PAINT", 0.2, 0.05)
+    with pytest.raises(ValueError, match="one pressure per"):
+        canvas.stroke([[0.3, 0.0, 0.1]], [1.0, 1.0], "ADD", 0.2, 0.05)
+    with pytest.raises(ValueError, match="pressure"):
+        canvas.stroke([[0.3, 0.0, 0.1]], [2.0], "ADD", 0.2, 0.05)
+    coarse = firncore.SnowLayerSettings(depth=0.1, voxel_size=0.02)
+    with pytest.raises(ValueError, match="rebuild it from its metaballs"):
+        firncore.SnowCanvas(layer["metaballs"], coarse, tmp_vdb, *plane(2.0))
