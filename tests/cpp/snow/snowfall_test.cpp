@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "firn/geometry/ray_caster.h"
+#include "firn/util/error.h"
 #include "test_geometry.h"
 
 namespace firn {
@@ -53,6 +54,17 @@ TEST(Snowfall, SitesHaveTheRequestedDensityOnOpenGround) {
         EXPECT_NEAR(site.normal.z, 1.0f, 1e-6f);
         EXPECT_LE(std::abs(site.position.x), 1.0f);
     }
+}
+
+TEST(Snowfall, DepthWeightsScaleTheCoverLinearlyOverEachTriangle) {
+    SnowfallSettings s;
+    s.spacing = 0.05;
+    const TriangleMesh ground = test::plane(2.0f);  // corners (-1,-1), (1,-1), (1,1), (-1,1)
+    // Weight 0 on the left edge, 1 on the right: linear in x over both triangles, so the cover is (x + 1) / 2.
+    const auto sites = findLandingSites(ground, RayCaster(ground), s, kNoProgress, {0.0f, 1.0f, 1.0f, 0.0f});
+    ASSERT_GT(sites.size(), 1000u);
+    for (const LandingSite &site : sites) EXPECT_NEAR(site.cover, 0.5f * (site.position.x + 1.0f), 1e-5f);
+    EXPECT_THROW(findLandingSites(ground, RayCaster(ground), s, kNoProgress, {1.0f}), InvalidArgument);
 }
 
 TEST(Snowfall, ShelterIsTheBlockedFractionOfTheSnowfallCone) {
