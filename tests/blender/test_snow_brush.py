@@ -102,3 +102,19 @@ def test_bad_brush_settings_are_reported(snowy_floor):
     snowy_floor.firn.metaballs = None
     with pytest.raises(RuntimeError, match="poll"):
         stroke([(1.2, 0.0, 0.1)])
+
+
+def test_a_reopened_blend_has_the_painted_snow(snowy_floor, tmp_path):
+    name = snowy_floor.name
+    stroke([(1.2, y, 0.1) for y in (-0.1, 0.0, 0.1)], mode="ADD", radius=0.3, strength=0.05)
+    painted = density_at(snowy_floor, (1.2, 0.0, 0.14))[0]
+    balls = len(snowy_floor.firn.metaballs.data.vertices)
+    blend = str(tmp_path / "painted.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=blend)  # the snow's file moves next to the .blend
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    snow = bpy.data.objects[name]
+    assert len(snow.firn.metaballs.data.vertices) == balls
+    assert density_at(snow, (1.2, 0.0, 0.14))[0] == painted > 50.0
+    # And the brush goes on painting the reopened snow.
+    assert stroke([(1.2, 0.0, 0.1)], mode="ERASE", radius=0.3, strength=0.5) == {"FINISHED"}
+    assert density_at(bpy.data.objects[name], (1.2, 0.0, 0.03))[0] == 0.0
