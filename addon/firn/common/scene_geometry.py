@@ -111,16 +111,16 @@ def world_triangles_by_material(objects, depsgraph):
 
 
 def concatenate(meshes):
-    """(vertices, triangles) pairs joined into one; None when none has a triangle."""
+    """(vertices, triangles) pairs joined into one; None when none has a triangle. One pair comes back as it is
+    (1M triangles: copying them cost 0.06 s)."""
+    parts = [(vertices, triangles) for vertices, triangles in meshes if len(triangles)]
+    if len(parts) <= 1:
+        return parts[0] if parts else None
     vertex_parts, triangle_parts, offset = [], [], 0
-    for vertices, triangles in meshes:
-        if len(triangles) == 0:
-            continue
+    for vertices, triangles in parts:
         vertex_parts.append(vertices)
         triangle_parts.append(triangles + np.uint32(offset))
         offset += len(vertices)
-    if not triangle_parts:
-        return None
     return np.concatenate(vertex_parts), np.concatenate(triangle_parts)
 
 

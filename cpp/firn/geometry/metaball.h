@@ -7,17 +7,20 @@ namespace firn {
 // The soft-object field of Wyvill et al. (1986), used for snow by Nishita et al. (1997): a degree-6
 // polynomial of r/R that falls from 1 at the centre to 0 (with zero slope) at radius R.
 //   f(u) = 1 - 22/9 u^2 + 17/9 u^4 - 4/9 u^6,  u = r / R <= 1
-inline double wyvillField(double uSquared) {
-    if (uSquared >= 1.0) return 0.0;
-    const double u2 = uSquared, u4 = u2 * u2, u6 = u4 * u2;
-    return 1.0 - (22.0 / 9.0) * u2 + (17.0 / 9.0) * u4 - (4.0 / 9.0) * u6;
+// Templated on the precision: double for tables, float in the rasterizer's vectorized loops.
+template <typename Real>
+inline Real wyvillField(Real uSquared) {
+    const Real u2 = uSquared, u4 = u2 * u2, u6 = u4 * u2;
+    const Real f = Real(1) - Real(22.0 / 9.0) * u2 + Real(17.0 / 9.0) * u4 - Real(4.0 / 9.0) * u6;
+    return uSquared >= Real(1) ? Real(0) : f;  // a select, not a branch: loops over voxels vectorize
 }
 
 // df/d(u^2): the gradient of the field of a ball at offset d from its centre is 2 slope(u^2) d / R^2.
-inline double wyvillFieldSlope(double uSquared) {
-    if (uSquared >= 1.0) return 0.0;
-    const double u2 = uSquared;
-    return -(22.0 / 9.0) + (34.0 / 9.0) * u2 - (12.0 / 9.0) * u2 * u2;
+template <typename Real>
+inline Real wyvillFieldSlope(Real uSquared) {
+    const Real u2 = uSquared;
+    const Real slope = Real(-22.0 / 9.0) + Real(34.0 / 9.0) * u2 - Real(12.0 / 9.0) * u2 * u2;
+    return uSquared >= Real(1) ? Real(0) : slope;
 }
 
 // Field of an infinite plane layer of balls (radius R, one per area a, m^2), at height z above it,

@@ -118,7 +118,7 @@ std::vector<std::pair<std::uint64_t, std::uint32_t>> binBallsByLeaf(const std::v
 // snow's top and of the signed distance to the surface the balls stand on (their tangent planes).
 struct LeafField {
     std::array<float, kLeafVoxels> field{};
-    std::array<glm::vec3, kLeafVoxels> gradient{};       // 1/m
+    std::array<float, kLeafVoxels> gradX{}, gradY{}, gradZ{};  // 1/m, by axis: the gather loop vectorizes
     std::array<float, kLeafVoxels> weightedDepth{};      // m x field
     std::array<float, kLeafVoxels> weightedBelowBase{};  // m x field, positive below the surface
 };
@@ -153,16 +153,24 @@ void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std:
                 if (normal.z > 0.05f) zLo = std::max(zLo, c.z + (lowest - lateral) / normal.z);
                 const int kLo = clampedIndex(std::ceil(zLo / h), zLeafLo, zLeafHi + 1);
                 const int kHi = clampedIndex(std::floor((c.z + half) / h), zLeafLo - 1, zLeafHi);
+                if (kLo > kHi) continue;
                 const int row = ((x - origin.x()) << 6) | ((y - origin.y()) << 3);
-                for (int z = kLo; z <= kHi; ++z) {
-                    const glm::vec3 offset(dx, dy, z * h - c.z);
-                    const float u2 = glm::dot(offset, offset) * invR2;
-                    const float height = lateral + normal.z * offset.z;  // m above the centre along the normal
-                    if (u2 >= 1.0f || height < lowest) continue;
-                    const int i = row + (z - zLeafLo);
-                    const float f = float(wyvillField(u2));
+                const float dxy2 = dx * dx + dy * dy;
+                // The whole column of the leaf, masked to [kLo, kHi]: a fixed, branch-free loop that vectorizes.
+                for (int k = 0; k < kLeafDim; ++k) {
+                    const int z = zLeafLo + k;
+                    const float dz = z * h - c.z;
+                    const float u2 = (dxy2 + dz * dz) * invR2;
+                    const float height = lateral + normal.z * dz;  // m above the centre along the normal
+                    // Nothing outside the ball or below its lowest height.
+                    const float reach = float((z >= kLo) & (z <= kHi) & (u2 < 1.0f) & (height >= lowest));
+                    const float f = reach * wyvillField(u2);
+                    const float slope = reach * 2.0f * wyvillFieldSlope(u2) * invR2;
+                    const int i = row + k;
                     out.field[i] += f;
-                    out.gradient[i] += float(2.0 * wyvillFieldSlope(u2)) * invR2 * offset;
+                    out.gradX[i] += slope * dx;
+                    out.gradY[i] += slope * dy;
+                    out.gradZ[i] += slope * dz;
                     out.weightedDepth[i] += f * (b.depth - height);
                     out.weightedBelowBase[i] += f * (-b.base - height);
                 }
@@ -182,7 +190,8 @@ void finishLeaf(const LeafField &in, const RasterSettings &s, FloatLeaf &surface
     const double h = s.voxelSize, band = kSurfaceBandVoxels * h;
     for (int i = 0; i < kLeafVoxels; ++i) {
         const double field = in.field[i];
-        const double toIso = (kSnowIsoValue - field) / std::max(double(glm::length(in.gradient[i])), 1e-12);
+        const double gradient = glm::length(glm::vec3(in.gradX[i], in.gradY[i], in.gradZ[i]));
+        const double toIso = (kSnowIsoValue - field) / std::max(gradient, 1e-12);
         // Half a voxel into the object, so that the voxel on its surface is whole snow: no thin gap below.
         const double belowBase = field > 0.0 ? in.weightedBelowBase[i] / field - 0.5 * h : band;
         double distance = std::clamp(std::max(toIso, belowBase), -band, band);
