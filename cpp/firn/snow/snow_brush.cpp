@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <unordered_map>
+
+#include <glm/vec2.hpp>
 
 #include <glm/geometric.hpp>
 #include <openvdb/tools/Interpolation.h>
@@ -149,6 +152,10 @@ std::vector<Metaball> SnowCanvas::landColumns(const Footprint &brush) {
 
 void SnowCanvas::change(std::uint32_t id, const Metaball &to, std::vector<openvdb::Coord> &dirty) {
     index_.leavesOf(balls_[id], dirty);
+    if (index_.sameLeaves(balls_[id], to)) {  // a new depth, a small move: the index stays as it is
+        balls_[id] = to;
+        return;
+    }
     index_.erase(id, balls_[id]);
     balls_[id] = to;
     index_.insert(id, to);
@@ -170,6 +177,67 @@ std::uint32_t SnowCanvas::add(const Metaball &ball, std::vector<openvdb::Coord> 
     return id;
 }
 
+void SnowCanvas::addSnow(const Footprint &brush, std::vector<openvdb::Coord> &dirty, DabStats &stats) {
+    const std::vector<Metaball> landed = landColumns(brush);
+    for (const Metaball &b : landed) add(b, dirty);
+    stats.added = landed.size();
+}
+
+void SnowCanvas::eraseSnow(const Footprint &brush, std::vector<openvdb::Coord> &dirty, DabStats &stats) {
+    // The top `weight` m of the snow goes: the balls that lay less deep than that, and the others rise that much
+    // nearer the top (their compaction).
+    for (const std::uint32_t id : ballsUnder(brush)) {
+        Metaball b = balls_[id];
+        const float w = float(brush.weight(b.centre));
+        if (b.depth < w) {
+            remove(id, dirty), ++stats.removed;
+        } else {
+            b.depth -= w;
+            change(id, b, dirty), ++stats.changed;
+        }
+    }
+}
+
+void SnowCanvas::smoothSnow(const Footprint &brush, std::vector<openvdb::Coord> &dirty, DabStats &stats) {
+    // Each column's top (its balls' base + depth: m above the surface along the normal) moves towards the mean top
+    // of the columns within two spacings of it across the snowfall, at most `weight` m; the balls move with it.
+    const std::vector<std::uint32_t> ids = ballsUnder(brush);
+    const double near = 2.0 * settings_.spacing;
+    // Neighbours from a grid of cells `near` wide across the snowfall: the 3 x 3 cells around a ball hold them all.
+    const auto across = [&](const glm::vec3 &p) {
+        const glm::vec3 d = p - brush.centre;
+        return glm::dvec2(glm::dot(d, brush.across1), glm::dot(d, brush.across2));
+    };
+    const auto cellOf = [&](const glm::dvec2 &a) { return glm::ivec2(int(std::floor(a.x / near)), int(std::floor(a.y / near))); };
+    const auto cellKey = [](const glm::ivec2 &c) { return (std::uint64_t(std::uint32_t(c.x)) << 32) | std::uint32_t(c.y); };
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
+    for (std::size_t i = 0; i < ids.size(); ++i) cells[cellKey(cellOf(across(balls_[ids[i]].centre)))].push_back(i);
+
+    std::vector<Metaball> moved(ids.size());
+    tbb::parallel_for(std::size_t(0), ids.size(), [&](std::size_t i) {
+        const Metaball &b = balls_[ids[i]];
+        const glm::dvec2 at = across(b.centre);
+        const glm::ivec2 cell = cellOf(at);
+        double sum = 0.0, n = 0.0;
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy) {
+                const auto found = cells.find(cellKey(cell + glm::ivec2(dx, dy)));
+                if (found == cells.end()) continue;
+                for (const std::uint32_t j : found->second) {
+                    const Metaball &o = balls_[ids[j]];
+                    const glm::dvec2 d = across(o.centre) - at;
+                    if (glm::dot(d, d) <= near * near) sum += double(o.base) + o.depth, n += 1.0;
+                }
+            }
+        const double w = brush.weight(b.centre);
+        const float shift = float(std::clamp(sum / n - (double(b.base) + b.depth), -w, w));
+        moved[i] = b;
+        moved[i].centre += b.normal * shift;
+        moved[i].base += shift;
+    });
+    for (std::size_t i = 0; i < ids.size(); ++i) change(ids[i], moved[i], dirty), ++stats.changed;
+}
+
 DabStats SnowCanvas::apply(const Dab &dab) {
     checkDab(dab);
     Footprint brush;
@@ -187,46 +255,9 @@ DabStats SnowCanvas::apply(const Dab &dab) {
     DabStats stats;
     std::vector<openvdb::Coord> dirty;
     if (brush.strength > 0.0) {
-        if (dab.mode == BrushMode::Add) {
-            const std::vector<Metaball> landed = landColumns(brush);
-            for (const Metaball &b : landed) add(b, dirty);
-            stats.added = landed.size();
-        } else if (dab.mode == BrushMode::Erase) {
-            // The top `weight` m of the snow goes: the balls that lay less deep than that, and the others rise
-            // that much nearer the top (their compaction).
-            for (const std::uint32_t id : ballsUnder(brush)) {
-                Metaball b = balls_[id];
-                const float w = float(brush.weight(b.centre));
-                if (b.depth < w) {
-                    remove(id, dirty), ++stats.removed;
-                } else {
-                    b.depth -= w;
-                    change(id, b, dirty), ++stats.changed;
-                }
-            }
-        } else {
-            // Each column's top (its balls' base + depth: m above the surface along the normal) moves towards the
-            // mean top of the columns within two spacings of it, at most `weight` m; the balls move with it.
-            const std::vector<std::uint32_t> ids = ballsUnder(brush);
-            const float near2 = float(4.0 * settings_.spacing * settings_.spacing);
-            std::vector<Metaball> moved(ids.size());
-            tbb::parallel_for(std::size_t(0), ids.size(), [&](std::size_t i) {
-                const Metaball &b = balls_[ids[i]];
-                double sum = 0.0, n = 0.0;
-                for (const std::uint32_t other : ids) {
-                    const Metaball &o = balls_[other];
-                    const glm::vec3 d = o.centre - b.centre;
-                    const float along = glm::dot(d, brush.fall);
-                    if (glm::dot(d, d) - along * along <= near2) sum += double(o.base) + o.depth, n += 1.0;
-                }
-                const double w = brush.weight(b.centre);
-                const float shift = float(std::clamp(sum / n - (double(b.base) + b.depth), -w, w));
-                moved[i] = b;
-                moved[i].centre += b.normal * shift;
-                moved[i].base += shift;
-            });
-            for (std::size_t i = 0; i < ids.size(); ++i) change(ids[i], moved[i], dirty), ++stats.changed;
-        }
+        if (dab.mode == BrushMode::Add) addSnow(brush, dirty, stats);
+        else if (dab.mode == BrushMode::Erase) eraseSnow(brush, dirty, stats);
+        else smoothSnow(brush, dirty, stats);
     }
     std::sort(dirty.begin(), dirty.end());
     dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());

@@ -57,6 +57,9 @@ class SnowCanvas {
     struct Footprint;
     std::vector<std::uint32_t> ballsUnder(const Footprint &brush) const;
     std::vector<Metaball> landColumns(const Footprint &brush);
+    void addSnow(const Footprint &brush, std::vector<openvdb::Coord> &dirty, DabStats &stats);
+    void eraseSnow(const Footprint &brush, std::vector<openvdb::Coord> &dirty, DabStats &stats);
+    void smoothSnow(const Footprint &brush, std::vector<openvdb::Coord> &dirty, DabStats &stats);
     double snowHeight(const glm::vec3 &point, const glm::vec3 &normal) const;  // m of snow above a point
     void change(std::uint32_t id, const Metaball &to, std::vector<openvdb::Coord> &dirty);
     void remove(std::uint32_t id, std::vector<openvdb::Coord> &dirty);

@@ -299,6 +299,10 @@ void LeafBallIndex::erase(std::uint32_t id, const Metaball &ball) {
     }
 }
 
+bool LeafBallIndex::sameLeaves(const Metaball &a, const Metaball &b) const {
+    return firn::leavesOf(a, voxelSize_).leaves == firn::leavesOf(b, voxelSize_).leaves;
+}
+
 void LeafBallIndex::leavesOf(const Metaball &ball, std::vector<openvdb::Coord> &out) const {
     const openvdb::CoordBBox box = firn::leavesOf(ball, voxelSize_).leaves;
     for (auto it = box.begin(); it; ++it) {

@@ -47,6 +47,7 @@ class LeafBallIndex {
     LeafBallIndex(const std::vector<Metaball> &balls, double voxelSize);
     void insert(std::uint32_t id, const Metaball &ball);  // into every leaf the ball reaches
     void erase(std::uint32_t id, const Metaball &ball);
+    bool sameLeaves(const Metaball &a, const Metaball &b) const;  // both reach exactly the same leaves
     // Origins (index space) of the leaves a ball reaches, appended to `out`.
     void leavesOf(const Metaball &ball, std::vector<openvdb::Coord> &out) const;
     const std::vector<std::uint32_t> *ballsOf(const openvdb::Coord &leafOrigin) const;  // null: none
