@@ -24,7 +24,7 @@ from mathutils import Vector
 from ..common import cache, scene_geometry
 from ..common.core import firncore
 from ..common.errors import UserError
-from ..properties import active_snow_layer
+from ..properties import SNOW_LAYER_PROPERTIES, active_snow_layer
 from . import proxy
 from .operators import _max_voxels, _occluder_objects, core_settings, metaball_mesh, read_metaballs, \
     target_triangles
@@ -33,7 +33,7 @@ MODES = (("ADD", "Add", "Add snow where the snowfall reaches, on top of the snow
          ("ERASE", "Erase", "Remove snow from the top (Ctrl while painting)"),
          ("SMOOTH", "Smooth", "Even out the snow surface (Shift while painting)"))
 MIN_REFRESH_INTERVAL = 0.2  # s between viewport refreshes during a stroke; more when a refresh takes long
-_canvases = {}  # snow object name -> (file key, metaball count, SnowCanvas): kept between strokes
+_canvases = {}  # snow object name -> (file key, metaball count, SnowCanvas, inputs key): kept between strokes
 
 
 def _file_key(path):
@@ -45,6 +45,14 @@ def _file_key(path):
     return path, stat.st_size, stat.st_mtime_ns
 
 
+def _inputs_key(snow):
+    """The snow's settings and targets as the canvas saw them: a change (a new snowfall direction, another
+    target) makes a new canvas."""
+    settings = tuple(tuple(value) if hasattr(value, "__len__") and not isinstance(value, str) else value
+                     for value in (getattr(snow.firn.layer, name) for name in SNOW_LAYER_PROPERTIES))
+    return settings, tuple(item.object.name for item in snow.firn.targets if item.object is not None)
+
+
 def _snow_and_canvas(context):
     """The active snow layer and its canvas, made from its file, metaballs and targets unless the one kept still
     matches them (an undo, a regeneration or a rebuild changed the file)."""
@@ -53,7 +61,7 @@ def _snow_and_canvas(context):
     path = cache.volume_path(snow.data)
     kept = _canvases.get(snow.name)
     count = len(holder.data.vertices)
-    if kept is not None and kept[0] == _file_key(path) and kept[1] == count:
+    if kept is not None and kept[0] == _file_key(path) and kept[1] == count and kept[3] == _inputs_key(snow):
         return snow, kept[2]
     targets = [item.object for item in snow.firn.targets if item.object is not None]
     if not targets:
@@ -72,7 +80,7 @@ def _snow_and_canvas(context):
     except ValueError as error:
         raise UserError(f"Snow Brush: {error}") from error
     _canvases.clear()  # one canvas at a time: its grids can be large
-    _canvases[snow.name] = (_file_key(path), count, canvas)
+    _canvases[snow.name] = (_file_key(path), count, canvas, _inputs_key(snow))
     return snow, canvas
 
 
@@ -96,7 +104,7 @@ def _show(context, snow, canvas, path, stored):
     if proxy.proxy_of(snow) is not None:
         proxy.store_proxy(snow, proxy.mesh_arrays(path, snow.firn.voxel_size),
                           scene_geometry.metres_per_unit(context.scene))
-    _canvases[snow.name] = (_file_key(cache.volume_path(snow.data)), _canvases[snow.name][1], canvas)
+    _canvases[snow.name] = (_file_key(cache.volume_path(snow.data)), *_canvases[snow.name][1:])
 
 
 def _commit(context, snow, canvas, files):
@@ -109,7 +117,8 @@ def _commit(context, snow, canvas, files):
     holder.data = metaball_mesh(old.name, metaballs)
     if old.users == 0:
         bpy.data.meshes.remove(old)
-    _canvases[snow.name] = (_canvases[snow.name][0], len(metaballs["radii"]), canvas)
+    kept = _canvases[snow.name]
+    _canvases[snow.name] = (kept[0], len(metaballs["radii"]), *kept[2:])
 
 
 def _paint(canvas, points, mode, radius, strength, metres):

@@ -68,6 +68,7 @@ TEST(SnowBrush, DabsKeepTheGridsWhatAFullRasterizationOfTheBallsMakes) {
     for (float x = 0.8f; x < 1.6f; x += 0.1f) canvas.apply(dabAt({x, 0.2f, 0.1f}, BrushMode::Add, 0.05));
     canvas.apply(dabAt({1.2f, -0.5f, 0.1f}, BrushMode::Erase, 0.05));
     canvas.apply(dabAt({1.0f, 0.2f, 0.2f}, BrushMode::Smooth, 0.05));
+    ASSERT_NE(canvas.metaballs().size(), scene.layer.metaballs.size());  // the dabs changed the snow
     const SnowGrids full = rasterizeSnow(canvas.metaballs(), scene.settings.raster(), SubProgress(nullptr, 0, 1));
     expectSameGrid(*canvas.grids().density, *full.density);
     expectSameGrid(*canvas.grids().surface, *full.surface);
