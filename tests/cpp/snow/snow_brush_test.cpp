@@ -85,6 +85,22 @@ TEST(SnowBrush, AddPutsSnowUnderTheBrushOnly) {
     EXPECT_NEAR(snowTopAt(canvas.grids(), 1.2, 0.6), before, 0.01);  // beyond the radius (0.3 m) and a ball
 }
 
+TEST(SnowBrush, ADabRaisesTheSnowAtItsCentreByItsStrength) {
+    // Strength is the depth a dab adds at the brush's centre: the new columns' layout puts their own iso-surface
+    // that far above the snow they stand on (metaball_layout.h); the old snow's field adds a little above it.
+    Scene scene;
+    SnowCanvas canvas = scene.canvas();
+    const auto meanTop = [&] {
+        double sum = 0.0;
+        for (double dx : {-0.02, 0.0, 0.02})
+            for (double dy : {-0.02, 0.0, 0.02}) sum += snowTopAt(canvas.grids(), 1.2 + dx, dy) / 9.0;
+        return sum;
+    };
+    const double before = meanTop();
+    canvas.apply(dabAt({1.2f, 0.0f, 0.1f}, BrushMode::Add, 0.05));
+    EXPECT_NEAR(meanTop() - before, 0.05, 0.0125);
+}
+
 TEST(SnowBrush, AddUnderATableLandsNothing) {
     Scene scene;
     SnowCanvas canvas = scene.canvas();
