@@ -9,6 +9,8 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 namespace firn {
@@ -55,6 +57,15 @@ struct EdgeUse {
 
 Reorientation orientOpenSurfaces(TriangleMesh &mesh, const glm::vec3 &up) {
     const std::size_t n = mesh.triangleCount();
+    // Nothing faces away from `up` (a terrain, a floor): nothing to turn, and no need to find the open surfaces.
+    const bool anyDown = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n), false,
+        [&](const tbb::blocked_range<std::size_t> &r, bool found) {
+            for (std::size_t t = r.begin(); t != r.end() && !found; ++t) found = glm::dot(mesh.crossNormal(t), up) < 0.0f;
+            return found;
+        },
+        [](bool a, bool b) { return a || b; });
+    if (!anyDown) return {};
     const std::vector<unsigned> welded = weldedVertices(mesh);
     std::vector<EdgeUse> uses;
     uses.reserve(3 * n);
