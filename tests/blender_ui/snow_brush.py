@@ -87,6 +87,7 @@ def tick():
                 fail("the stroke did not write a new file (undo would lose it)")
             print(f"drag added {len(snow().firn.metaballs.data.vertices) - state['balls']} metaballs, "
                   f"{painted:.0f} kg/m³ above the old top", flush=True)
+            state["painted_file"] = snow().data.filepath
             state["events"], state["phase"] = drag(ctrl=True), "erased"
         elif phase == "erased":
             if density_above_old_top() >= 1.0:
@@ -96,6 +97,12 @@ def tick():
         elif phase == "ended":
             if any(op.bl_idname == "FIRN_OT_snow_brush" for op in bpy.context.window_manager.operators[-1:]):
                 fail("the brush registered itself as a redoable operator: its strokes are the undo steps")
+            send(("Z", "PRESS", (0, 0), True))  # Ctrl+Z: the erase stroke is undone, the painted snow is back
+            send(("Z", "RELEASE", (0, 0), True))
+            state["phase"] = "undone"
+        elif phase == "undone":
+            if snow().data.filepath != state["painted_file"] or density_above_old_top() <= 50.0:
+                fail(f"Ctrl+Z did not give back the snow before the erase stroke ({snow().data.filepath})")
             passed()
             return None
         window_context()["area"].tag_redraw()

@@ -93,7 +93,18 @@ def _stroke_file(snow):
     raise UserError("Too many snow brush files: regenerate the snow")
 
 
-def _show(context, snow, canvas, path, stored):
+def _swap_mesh(obj, mesh):
+    """Gives `obj` a new mesh with the old one's materials. The object itself stays: Blender 3.4 crashes on an undo
+    that brings back a proxy object removed and made again (store_proxy) in a stroke."""
+    old = obj.data
+    for material in old.materials:
+        mesh.materials.append(material)
+    obj.data = mesh
+    if old.users == 0:
+        bpy.data.meshes.remove(old)
+
+
+def _show(snow, canvas, path, stored):
     """Writes the canvas to `path` and shows it: the Volume reads it, the proxy is meshed from it."""
     cache.check_writable(path)
     cache.core_write(canvas.write, path)
@@ -101,22 +112,21 @@ def _show(context, snow, canvas, path, stored):
     cache.file_fixed(snow.data)
     cache.reload_grids(snow.data)
     snow.firn.mean_density = canvas.mean_density
-    if proxy.proxy_of(snow) is not None:
-        proxy.store_proxy(snow, proxy.mesh_arrays(path, snow.firn.voxel_size),
-                          scene_geometry.metres_per_unit(context.scene))
+    shown = proxy.proxy_of(snow)
+    if shown is not None:
+        _swap_mesh(shown, proxy.new_mesh(shown.data.name, *proxy.mesh_arrays(path, snow.firn.voxel_size),
+                                          smooth=True))
+        proxy.show_bake(snow)  # the new file has no bake: the proxy shows the snow's optics
     _canvases[snow.name] = (_file_key(cache.volume_path(snow.data)), *_canvases[snow.name][1:])
 
 
-def _commit(context, snow, canvas, files):
+def _commit(snow, canvas, files):
     """A stroke's end: the grids in a new file (or the one its refreshes wrote to), the balls in the snow's
     metaball mesh."""
     metaballs = canvas.metaballs()
-    _show(context, snow, canvas, *files)
+    _show(snow, canvas, *files)
     holder = snow.firn.metaballs
-    old = holder.data
-    holder.data = metaball_mesh(old.name, metaballs)
-    if old.users == 0:
-        bpy.data.meshes.remove(old)
+    _swap_mesh(holder, metaball_mesh(holder.data.name, metaballs))
     kept = _canvases[snow.name]
     _canvases[snow.name] = (kept[0], len(metaballs["radii"]), *kept[2:])
 
@@ -196,7 +206,7 @@ class FIRN_OT_snow_brush(bpy.types.Operator):
             metres = scene_geometry.metres_per_unit(context.scene)
             if _paint(canvas, [(tuple(p.location), p.pressure) for p in self.stroke], self.mode, self.radius,
                       self.strength, metres):
-                _commit(context, snow, canvas, _stroke_file(snow))
+                _commit(snow, canvas, _stroke_file(snow))
         except UserError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
@@ -261,13 +271,13 @@ class FIRN_OT_snow_brush(bpy.types.Operator):
             started = time.perf_counter()
             if self.files is None:
                 self.files = _stroke_file(snow)
-            _show(context, snow, canvas, *self.files)
+            _show(snow, canvas, *self.files)
             self.next_refresh = time.perf_counter() + max(MIN_REFRESH_INTERVAL, 3.0 * (time.perf_counter() - started))
 
     def _finish_stroke(self, context):
         if self.changed:
             snow, canvas = _snow_and_canvas(context)
-            _commit(context, snow, canvas, self.files or _stroke_file(snow))
+            _commit(snow, canvas, self.files or _stroke_file(snow))
             bpy.ops.ed.undo_push(message="Snow Brush")
         self.painting, self.last_dab, self.files, self.changed = None, None, None, False
 
