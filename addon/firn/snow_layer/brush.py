@@ -219,6 +219,7 @@ class FIRN_OT_snow_brush(bpy.types.Operator):
             self.report({"ERROR"}, "Snow Brush paints in a 3D Viewport")
             return {"CANCELLED"}
         try:
+            _canvases.clear()  # the scene as it is now: objects may have moved since the last brush
             _snow_and_canvas(context)  # made now, not at the first click
         except UserError as error:
             self.report({"ERROR"}, str(error))
