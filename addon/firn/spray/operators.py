@@ -73,15 +73,27 @@ def snow_file(snow):
     return path
 
 
+def _static_obstacles(context, emitters, first, last):
+    """The objects lumps land on: the rendered, shadow-casting ones (the bake's occluders) less the emitters and
+    less whatever moves between the first and the last frame (a skier's body): the core's obstacles stand still,
+    and one kept where it stood at the first frame would stop lumps in mid-air later."""
+    scene = context.scene
+    candidates = [obj for obj in occluder_objects(context.view_layer) if obj not in emitters]
+    scene.frame_set(first)
+    placed = {obj.name: obj.matrix_world.copy() for obj in candidates}
+    scene.frame_set(last)
+    return [obj for obj in candidates if obj.matrix_world == placed[obj.name]]
+
+
 def gather_inputs(context, props, snow, emitters, frames, directory):
     """Everything the core needs for one spray sequence, read on the main thread (the worker never touches bpy)."""
     first, last = frames
     rectangles = emitter_rectangles.rectangles(context, emitters, props, first, last)
     scene = context.scene
     current = scene.frame_current
-    scene.frame_set(first)  # obstacles are static: as they stand at the first frame
     try:
-        obstacles = [obj for obj in occluder_objects(context.view_layer) if obj not in emitters]
+        obstacles = _static_obstacles(context, emitters, first, last)
+        scene.frame_set(first)
         objects = scene_geometry.world_triangles(obstacles, context.evaluated_depsgraph_get())
     finally:
         scene.frame_set(current)
@@ -107,8 +119,11 @@ def simulate(inputs, progress):
 def summary(inputs, run):
     frames = inputs["last"] - inputs["first"] + 1
     resumed = f", resumed after frame {run['resumed_after']}" if run["resumed_after"] is not None else ""
-    return (f"{frames} frames ({len(run['frames_written'])} simulated{resumed}); last frame: {run['flying']:,} "
-            f"lumps flying, {run['resting']:,} resting; tracks in {len(run['snow_frames'])} frames")
+    simulated = f"{frames} frames ({len(run['frames_written'])} simulated{resumed})"
+    if not run["frames_written"]:  # nothing ran: the core has no lump counts to give
+        return f"{simulated}; tracks in {len(run['snow_frames'])} frames"
+    return (f"{simulated}; last frame: {run['flying']:,} lumps flying, {run['resting']:,} resting; tracks in "
+            f"{len(run['snow_frames'])} frames")
 
 
 def play_sequence(obj, stored_folder, kind, first, last):

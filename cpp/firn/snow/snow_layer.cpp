@@ -8,6 +8,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include "firn/geometry/ray_caster.h"
+#include "firn/snow/snow_volume_bound.h"
 #include "firn/util/error.h"
 
 namespace firn {
@@ -92,6 +93,9 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
     TriangleMesh oriented = targets;
     layer.openSurfaces = orientOpenSurfaces(oriented, -glm::normalize(settings.direction));
     const RayCaster shelter(merge({oriented, occluders}));
+    // Sure refusals first: placing and sheltering sites grows with the area (minutes on a large plane).
+    checkVoxelBudget(snowVoxelLowerBound(oriented, shelter, settings.snowfall(), settings.depth, layer.voxelSize),
+                     settings.raster(), "at least");
     const auto sites = findLandingSites(oriented, shelter, settings.snowfall(), SubProgress(progress, 0.0, 0.4));
     layer.siteCount = sites.size();
     layer.metaballs = layoutMetaballs(sites, settings.layout());
