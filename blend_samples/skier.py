@@ -1,6 +1,7 @@
 """A skier's skis throwing snow down a slope, after Nishita et al. (1997), Fig. 7: two ski soles (rectangles) on an
-animated path with two turns down a 20° snowy slope; Add Snow Spray simulates the thrown snow and the tracks, and a
-short animation is rendered at low resolution to PNGs (out/skier/####.png). Saves skier.blend next to this script.
+animated path with two turns down a 20° snowy slope, under a simple body whose shadow moves with it; Add Snow Spray
+simulates the thrown snow and the tracks, Bake Sequence bakes the tracked snow's light at every frame, and a short
+animation is rendered at low resolution to PNGs (out/skier/####.png). Saves skier.blend next to this script.
 
 blender -b --factory-startup --python blend_samples/skier.py -- [--output out/skier/] [--width 160] [--samples 8]
                                                                 [--frames 36]
@@ -71,8 +72,13 @@ def build_scene(frames):
         ski.name = f"Ski {'Left' if side > 0 else 'Right'}"
         ski.parent = skier
         ski.location = (0.0, side * STANCE, 0.0)
-        ski.hide_render = True  # the soles are the emitters; the skier is not drawn
+        ski.hide_render = True  # the soles are the emitters, inside the groove they cut
         skis.append(ski)
+    bpy.ops.mesh.primitive_cylinder_add(radius=0.17, depth=1.1, location=(0.0, 0.0, 0.75))
+    body = bpy.context.object
+    body.name = "Body"  # casts the moving shadow the per-frame bake follows (lumps fly through it: spray.md)
+    body.parent = skier
+    body.data.materials.append(common.material("Jacket", (0.6, 0.05, 0.04), roughness=0.7))
     common.camera((5.0, -4.5, 1.2), (0.8, 0.0, -0.3), lens=35.0)
     return scene, ground, skis
 
@@ -87,6 +93,12 @@ def add_spray(snow, skis, frames):
                                    voxel_size=0.01) != {"FINISHED"}:
         raise RuntimeError("Add Snow Spray failed")
     return bpy.context.object
+
+
+def bake_light(frames):
+    """The tracked snow's light at every frame (Bake Sequence; the simulation is on disk already)."""
+    if bpy.ops.firn.bake_sequence(frame_start=1, frame_end=frames, quality="DRAFT") != {"FINISHED"}:
+        raise RuntimeError("Bake Sequence failed")
 
 
 def render_animation(scene, output, width, samples):
@@ -118,6 +130,7 @@ def main():
     scene.cycles.volume_bounces = 16  # unbaked snow is path traced: its light is many bounces deep
     spray = stages.run("add snow spray", add_spray, snow, skis, args.frames)
     print(f"firn sample: {spray.firn.spray.summary}")
+    stages.run("bake light per frame", bake_light, args.frames)
     stages.run("render animation", render_animation, scene, args.output, args.width, args.samples)
     if not args.no_save:
         stages.run("save .blend", common.save_next_to, __file__, args.blend)

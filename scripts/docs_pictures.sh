@@ -21,7 +21,7 @@ xvfb-run -a -s "-screen 0 1280x800x24" \
 xvfb-run -a -s "-screen 0 1280x800x24" \
   env BLENDER_USER_SCRIPTS="$FIRN_BUILD/blender_scripts" BLENDER_USER_CONFIG="$FIRN_BUILD/docs_config" \
   blender --factory-startup --enable-event-simulate -noaudio --python "$FIRN_ROOT/scripts/screenshot_brush.py" -- "$images"
-for sample in car_under_snow teapot_and_ball nishita_comparison firn_vs_real_snow night_street grain_snow grain_scales grain_cube fresh_snow_glints; do
+for sample in car_under_snow teapot_and_ball nishita_comparison firn_vs_real_snow night_street grain_snow grain_scales grain_cube fresh_snow_glints wheel_rut; do
   run_blender -b --factory-startup --python "$FIRN_ROOT/blend_samples/$sample.py" -- --output "$images/$sample.png" --no-save
 done
 # The skier's animation (36 frames at 160 px); its 24th frame is the docs' picture.

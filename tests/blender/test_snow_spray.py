@@ -160,3 +160,73 @@ def test_a_missing_vertex_group_is_reported(clean_scene):
     select_only(snow, ski())
     with pytest.raises(RuntimeError, match="'Ski' has no vertex group 'Sole'"):
         bpy.ops.firn.add_snow_spray(frame_start=1, frame_end=5, emitter="VERTEX_GROUP", vertex_group="Sole")
+
+
+# --- the light of the tracked snow, frame by frame (spray/light.py) ---------------------------------------------
+
+def _lit_snow_scene():
+    """A snow layer lit by a high sun, a ski and a 'body' (a 20 cm box 30 cm above the snow) moving with it, so
+    its shadow on the snow moves from frame to frame; the Tracks object's light baked over FRAMES."""
+    snow = snow_on_plane()
+    emitter = ski()
+    bpy.ops.mesh.primitive_cube_add(size=0.2)
+    body = bpy.context.object
+    body.name = "Body"
+    for frame, x in zip(FRAMES, (-0.6, 0.4)):
+        body.location = (x, 0.0, SNOW_DEPTH + 0.3)
+        body.keyframe_insert("location", frame=frame)
+    for fcurve in body.animation_data.action.fcurves:
+        for point in fcurve.keyframe_points:
+            point.interpolation = "LINEAR"
+    bpy.ops.object.light_add(type="SUN", location=(0.0, 0.0, 2.0))
+    bpy.context.object.data.energy = 3.0
+    bpy.context.object.data.angle = 0.01
+    spray = add_spray(snow, emitter)
+    return snow, spray, bpy.data.objects[f"{snow.name} Tracks"]
+
+
+def _drawn_above(lit_file, tracks, x):
+    """What Cycles draws for the baked snow seen straight down at (x, ±7 cm): beside the ski's groove, under the
+    body's shadow when it is there. W/m²/sr, green."""
+    from firn.material import optics
+
+    origins = np.array([[x, -0.07, 1.0], [x, 0.07, 1.0]], np.float64)
+    directions = np.array([[0.0, 0.0, -1.0]] * 2, np.float64)
+    return firncore.render_baked(lit_file, optics.volume_optics(tracks.firn), origins, directions)[:, 1].mean()
+
+
+def test_bake_sequence_bakes_the_tracked_snows_light_at_every_frame(clean_scene):
+    _snow, spray, tracks = _lit_snow_scene()
+    assert bpy.ops.firn.bake_sequence(quality="DRAFT") == {"FINISHED"}
+    folder = folder_of(spray)
+    lit = [os.path.join(folder, f"lit_{frame:04d}.vdb") for frame in range(FRAMES[0], FRAMES[1] + 1)]
+    assert all(set(firncore.BAKED_GRID_NAMES) <= set(firncore.grid_names(path)) for path in lit)
+    assert os.path.basename(tracks.data.filepath).startswith("lit_") and tracks.data.is_sequence
+    assert tracks.firn.bake_fingerprint and "Draft light" in tracks.firn.bake_summary
+    material = tracks.active_material
+    assert material is not None and material.get("firn_form", "").startswith("BAKED")
+    # The body's shadow: under it at the first frame, open sky at the last (it moved 1 m on), and the reverse
+    # where it ends; the sun is high, the shadow falls about straight down.
+    shaded_first, open_first = _drawn_above(lit[0], tracks, -0.6), _drawn_above(lit[0], tracks, 0.4)
+    shaded_last, open_last = _drawn_above(lit[-1], tracks, 0.4), _drawn_above(lit[-1], tracks, -0.6)
+    assert shaded_first < 0.5 * open_first and shaded_last < 0.5 * open_last
+
+
+def test_a_second_bake_keeps_lit_frames_and_one_frame_per_process_gives_the_same_light(clean_scene):
+    _snow, spray, tracks = _lit_snow_scene()
+    assert bpy.ops.firn.bake_sequence(quality="DRAFT") == {"FINISHED"}
+    folder = folder_of(spray)
+    frame = FRAMES[0] + 2
+    path = os.path.join(folder, f"lit_{frame:04d}.vdb")
+    stamp = os.stat(path).st_mtime_ns
+    whole = _drawn_above(path, tracks, -0.1)
+    assert bpy.ops.firn.bake_sequence(quality="DRAFT") == {"FINISHED"}
+    assert os.stat(path).st_mtime_ns == stamp and "(0 baked now" in tracks.firn.bake_summary
+    # A render-farm node bakes one frame: the same light as the whole range's bake (same scene and seed).
+    os.remove(path)
+    assert bpy.ops.firn.bake_sequence(frame_start=frame, frame_end=frame, quality="DRAFT") == {"FINISHED"}
+    assert "(1 baked now" in tracks.firn.bake_summary
+    assert _drawn_above(path, tracks, -0.1) == pytest.approx(whole, rel=1e-6)
+    # Bake Light off: the tracked snow renders unlit again.
+    assert bpy.ops.firn.bake_sequence(light=False) == {"FINISHED"}
+    assert os.path.basename(tracks.data.filepath).startswith("snow_") and not tracks.firn.bake_fingerprint

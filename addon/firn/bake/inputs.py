@@ -367,16 +367,16 @@ def gather_occluders(objects, depsgraph, frame):
 
 # --- everything -----------------------------------------------------------------------------------------------
 
-def gather(context, snow):
+def gather(context, snow, occluders=gather_occluders):
     """BakeInputs of one snow object. A world that is not a plain colour is left to render (`sky` None, see
-    plan_sky): bake/operators.py renders it off the main thread."""
+    plan_sky): bake/operators.py renders it off the main thread. `occluders(objects, depsgraph, frame)` gathers
+    the occluders (spray/light.py shares the ones that stand still over a frame range)."""
     depsgraph = context.evaluated_depsgraph_get()  # first: it also brings every matrix_world up to date
     frame = Frame(snow, scene_geometry.metres_per_unit(context.scene))
     view_layer = context.view_layer
     suns, lamps = gather_lights(lamp_objects(view_layer), frame, scene_geometry.metres_per_unit(context.scene))
     sky, warnings = plan_sky(context.scene)
-    occluders = gather_occluders(occluder_objects(view_layer), depsgraph, frame)
-    return BakeInputs(suns, sky, occluders, frame, warnings, lamps)
+    return BakeInputs(suns, sky, occluders(occluder_objects(view_layer), depsgraph, frame), frame, warnings, lamps)
 
 
 def add_rendered_sky(inputs, request, rendering):

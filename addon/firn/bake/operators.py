@@ -65,7 +65,8 @@ def _check_volume(obj):
     if volume.packed_file is not None:
         raise UserError(f"'{obj.name}' has its volume packed into the .blend: unpack it to bake")
     if volume.is_sequence:
-        raise UserError(f"'{obj.name}' is a volume sequence: Firn bakes single volumes")
+        raise UserError(f"'{obj.name}' is a volume sequence: bake its light frame by frame with Bake Sequence "
+                        "(Snow Spray panel)")
     problem = cache.file_problem(volume)
     if problem is not None:
         raise UserError(f"'{obj.name}': {problem}. {REBUILD_ADVICE}")
@@ -91,7 +92,7 @@ def _bake_job(job, quality, seed, progress):
     job["proxy_colours"] = proxy.baked_colours(job["staged"], job["proxy_points"])
 
 
-def _render_world(inputs, progress):
+def render_world(inputs, progress):
     """Any thread: renders the world the jobs' skies wait for (world_probe: a child Blender off the main thread)
     and completes their inputs; then the job's status moves on to the bake."""
     request = inputs["world"]
@@ -109,7 +110,8 @@ def _render_world(inputs, progress):
     inputs["world"] = None
 
 
-def _volume_optics(obj):
+def volume_optics_of(obj):
+    """The object's firncore.VolumeOptics, or UserError naming the bad setting."""
     try:
         return optics.volume_optics(obj.firn)
     except ValueError as error:
@@ -239,7 +241,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
         jobs, warnings = [], []
         for obj in bake_targets(context):
             path = _check_volume(obj)
-            volume_optics = _volume_optics(obj)
+            volume_optics = volume_optics_of(obj)
             signature = bake_inputs.signature(context, obj)
             signature["optics"] = bake_state.optics_digest(obj)
             inputs = bake_inputs.gather(context, obj)
@@ -265,7 +267,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
         failure or cancel, delete them all."""
         seconds = []
         try:
-            _render_world(inputs, progress)
+            render_world(inputs, progress)
             for index, job in enumerate(inputs["jobs"]):
                 inputs["current"] = index
                 if progress.cancelled:
@@ -323,6 +325,10 @@ class FIRN_OT_clear_bake(bpy.types.Operator):
         cleared = []
         for obj in bake_targets(context):
             if not obj.firn.bake_fingerprint:
+                continue
+            if obj.data.is_sequence:
+                self.report({"ERROR"}, f"'{obj.name}' is lit frame by frame: Bake Sequence with Bake Light off "
+                                       "clears its light")
                 continue
             try:
                 _remove_baked_grids(obj)

@@ -93,6 +93,8 @@ def changes(obj, context=None):
     then = stored(obj)
     if then is None:
         return NONE, []
+    if obj.type == "VOLUME" and obj.data.is_sequence:
+        return BAKED, []  # frame by frame (Bake Sequence): each frame's marker is checked when it bakes again
     context = context or bpy.context
     if context.view_layer is None or context.scene is None:  # no scene to compare with (e.g. while loading)
         now = {"optics": optics_digest(obj), "snow": snow_digest(obj)}

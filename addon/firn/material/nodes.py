@@ -23,6 +23,8 @@ the density by their factor before it becomes extinction, in every form.
 
 import bpy
 
+from ..common import cache
+from ..common.core import firncore
 from . import optics, structure
 
 _TAG = "firn_snow"  # ID property marking the materials Firn manages
@@ -51,7 +53,14 @@ def snow_material(obj):
 
 
 def has_baked_grids(volume):
-    """Whether the Volume's file holds the baked grids (loads the grid list if Blender has not yet)."""
+    """Whether the Volume's file holds the baked grids (loads the grid list if Blender has not yet). A sequence's
+    grids are listed only once a frame is evaluated: its first file is read instead (its frames hold the same
+    grids: spray/light.py)."""
+    if volume.is_sequence:
+        try:
+            return set(BAKED_GRIDS) <= set(firncore.grid_names(cache.volume_path(volume)))
+        except (OSError, ValueError):
+            return False
     if not volume.grids.is_loaded:
         volume.grids.load()
     return set(BAKED_GRIDS) <= {grid.name for grid in volume.grids}

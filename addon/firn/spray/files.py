@@ -14,7 +14,10 @@ from ..common.core import firncore
 
 
 def frame_path(directory, frame, kind):
-    """The path of a frame's file: kind "spray" or "snow"."""
+    """The path of a frame's file: kind "spray", "snow" (the core's) or "lit" (the tracked snow with its baked
+    light, spray/light.py)."""
+    if kind == "lit":
+        return os.path.join(directory, f"lit_{frame:04d}.vdb")
     spray, snow, _state = firncore.spray_frame_paths(directory, frame)
     return spray if kind == "spray" else snow
 

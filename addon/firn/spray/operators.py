@@ -12,17 +12,18 @@ import os
 import bpy
 from mathutils import Matrix
 
-from ..bake.inputs import occluder_objects
+from ..bake import operators as bake_operators, state as bake_state
+from ..bake.inputs import occluder_objects, world_request
 from ..common import cache, scene_geometry
 from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
 from ..common.modes import object_mode_poll
 from ..material import nodes as materials
-from ..properties import CORE_SPRAY_SETTINGS, OPTICS_SETTINGS, SPRAY_PROPERTIES, active_snow_layer, is_spray
+from ..properties import BAKE_QUALITY_ITEMS, CORE_SPRAY_SETTINGS, OPTICS_SETTINGS, SPRAY_PROPERTIES, active_snow_layer, is_spray
 from ..snow_layer import proxy
 from ..snow_layer.operators import free_object_name, new_snow_object
-from . import emitters as emitter_rectangles, files
+from . import emitters as emitter_rectangles, files, light
 from .ui import ADD_LABEL, BAKE_LABEL, draw_spray_settings
 
 FRAME_PROPERTIES = {
@@ -72,15 +73,27 @@ def snow_file(snow):
     return path
 
 
+def _static_obstacles(context, emitters, first, last):
+    """The objects lumps land on: the rendered, shadow-casting ones (the bake's occluders) less the emitters and
+    less whatever moves between the first and the last frame (a skier's body): the core's obstacles stand still,
+    and one kept where it stood at the first frame would stop lumps in mid-air later."""
+    scene = context.scene
+    candidates = [obj for obj in occluder_objects(context.view_layer) if obj not in emitters]
+    scene.frame_set(first)
+    placed = {obj.name: obj.matrix_world.copy() for obj in candidates}
+    scene.frame_set(last)
+    return [obj for obj in candidates if obj.matrix_world == placed[obj.name]]
+
+
 def gather_inputs(context, props, snow, emitters, frames, directory):
     """Everything the core needs for one spray sequence, read on the main thread (the worker never touches bpy)."""
     first, last = frames
     rectangles = emitter_rectangles.rectangles(context, emitters, props, first, last)
     scene = context.scene
     current = scene.frame_current
-    scene.frame_set(first)  # obstacles are static: as they stand at the first frame
     try:
-        obstacles = [obj for obj in occluder_objects(context.view_layer) if obj not in emitters]
+        obstacles = _static_obstacles(context, emitters, first, last)
+        scene.frame_set(first)
         objects = scene_geometry.world_triangles(obstacles, context.evaluated_depsgraph_get())
     finally:
         scene.frame_set(current)
@@ -106,8 +119,11 @@ def simulate(inputs, progress):
 def summary(inputs, run):
     frames = inputs["last"] - inputs["first"] + 1
     resumed = f", resumed after frame {run['resumed_after']}" if run["resumed_after"] is not None else ""
-    return (f"{frames} frames ({len(run['frames_written'])} simulated{resumed}); last frame: {run['flying']:,} "
-            f"lumps flying, {run['resting']:,} resting; tracks in {len(run['snow_frames'])} frames")
+    simulated = f"{frames} frames ({len(run['frames_written'])} simulated{resumed})"
+    if not run["frames_written"]:  # nothing ran: the core has no lump counts to give
+        return f"{simulated}; tracks in {len(run['snow_frames'])} frames"
+    return (f"{simulated}; last frame: {run['flying']:,} lumps flying, {run['resting']:,} resting; tracks in "
+            f"{len(run['snow_frames'])} frames")
 
 
 def play_sequence(obj, stored_folder, kind, first, last):
@@ -224,14 +240,53 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
         self.report({"INFO"}, f"Snow Spray: {spray.firn.spray.summary}")
 
 
+def baked_frames(operator, record):
+    """(simulated, lit) frame ranges of Bake Sequence for one spray: the frames asked for (default: the spray's
+    own range) are lit; the simulation runs from the spray's first frame to the last frame asked
+    for, at least to the end it already had (a render-farm node asked for one frame never shortens it)."""
+    props = operator.properties
+    start = operator.frame_start if props.is_property_set("frame_start") else record.frame_start
+    end = operator.frame_end if props.is_property_set("frame_end") else record.frame_end
+    if start < record.frame_start:
+        raise UserError(f"The spray starts at frame {record.frame_start}: Clear it and Add Snow Spray from frame "
+                        f"{start} to simulate from there")
+    if end < start:
+        raise UserError(f"End frame ({end}) must not come before the start frame ({start})")
+    simulated = record.frame_start, max(end, record.frame_end, record.frame_start + 1)
+    return simulated, (start, end)
+
+
+def _tracks_of(spray):
+    directory = os.path.dirname(cache.volume_path(spray.data))
+    return next((obj for obj in sequence_objects(directory) if obj.firn.spray.role == "TRACKS"), None)
+
+
+def _light_jobs(operator, context, spray, lit_frames):
+    """The per-frame light jobs of a spray's tracked snow (spray/light.py), or [] without tracks."""
+    tracks = _tracks_of(spray)
+    if tracks is None or not operator.light:
+        return None, []
+    return tracks.name, light.gather(context, tracks, range(lit_frames[0], lit_frames[1] + 1), operator.quality,
+                                     operator.seed)
+
+
 class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
-    """Simulate every Snow Spray of the scene over a frame range again: frames already on disk for the same scene
-    and settings are kept (the core resumes at the first missing one)"""
+    """Simulate every Snow Spray of the scene over a frame range and bake the light of its tracked snow frame by
+    frame: frames already on disk for the same scene and settings are kept (an interrupted bake resumes; render
+    farm nodes may each bake their own frames)"""
 
     bl_idname = "firn.bake_sequence"
     bl_label = "Bake Sequence"
     bl_options = {"REGISTER", "UNDO"}
-    __annotations__ = dict(FRAME_PROPERTIES)
+    __annotations__ = dict(
+        FRAME_PROPERTIES,
+        light=bpy.props.BoolProperty(
+            name="Bake Light", default=True,
+            description="Bake the light of the tracked snow at every frame (Bake Scattering, frame by frame)"),
+        quality=bpy.props.EnumProperty(name="Quality", items=BAKE_QUALITY_ITEMS, default="FINAL"),
+        seed=bpy.props.IntProperty(name="Light Seed", description="Same scene and seed, same bake", default=0,
+                                   min=0),
+    )
     job_label = BAKE_LABEL
 
     @classmethod
@@ -250,11 +305,14 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
             if snow is None or None in emitters:
                 raise UserError(f"'{spray.name}': its snow layer or one of its emitters was deleted: Clear it and "
                                 "Add Snow Spray again")
-            frames = frame_range(self, context.scene, start=record.frame_start)
+            simulated, lit = baked_frames(self, record)
             directory = os.path.dirname(cache.volume_path(spray.data))
-            inputs = gather_inputs(context, record, snow, emitters, frames, directory)
-            jobs.append(dict(inputs, name=spray.name))
-        return {"jobs": jobs, "current": 0}
+            inputs = gather_inputs(context, record, snow, emitters, simulated, directory)
+            tracks, frames = _light_jobs(self, context, spray, lit)
+            jobs.append(dict(inputs, name=spray.name, tracks=tracks, lit=lit, frames=frames))
+        unlit = [frame["inputs"].frame for job in jobs for frame in job["frames"] if frame["inputs"].sky is None]
+        world = world_request(context.scene, unlit[:1]) if unlit else None  # one world for the whole range
+        return {"jobs": jobs, "current": 0, "world": world, "quality": self.quality, "seed": self.seed}
 
     def job_status(self, inputs, progress):
         jobs = inputs["jobs"]
@@ -263,10 +321,33 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
 
     @staticmethod
     def compute(inputs, progress):
+        """Worker thread: every spray's simulation, then the light of the frames whose lit file is missing or was
+        made from other snow (the simulation may have rewritten it)."""
+        try:
+            return FIRN_OT_bake_sequence._simulate_and_light(inputs, progress)
+        finally:
+            if inputs["world"] is not None:  # not needed after all: every frame was lit already
+                inputs["world"].discard()
+
+    @staticmethod
+    def _simulate_and_light(inputs, progress):
         runs = []
         for index, job in enumerate(inputs["jobs"]):
             inputs["current"] = index
             runs.append(simulate(job, progress))
+        for index, job in enumerate(inputs["jobs"]):
+            inputs["current"] = index
+            todo = []
+            for frame in job["frames"]:
+                frame["parts"]["snow"] = light.snow_digest(frame["path"])  # as the simulation left it
+                if not light.is_lit(os.path.dirname(frame["lit"]), frame["frame"], frame["parts"]):
+                    todo.append(frame)
+            job["baked"] = [frame["frame"] for frame in todo]
+            if todo and inputs["world"] is not None:
+                bake_operators.render_world({"world": inputs["world"], "jobs": [
+                    frame for other in inputs["jobs"] for frame in other["frames"]]}, progress)
+                inputs["world"] = None
+            light.bake_frames(todo, inputs["quality"], inputs["seed"], progress)
         return runs
 
     def apply(self, context, inputs, runs):
@@ -275,10 +356,38 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
             spray.firn.spray.summary = summary(job, run)
             for obj in sequence_objects(job["directory"]):
                 obj.firn.spray.frame_start, obj.firn.spray.frame_end = job["first"], job["last"]
-                stored_folder = os.path.dirname(obj.data.filepath)
-                play_sequence(obj, stored_folder, "spray" if obj.firn.spray.role == "SPRAY" else "snow",
-                              job["first"], job["last"])
+                role = obj.firn.spray.role
+                kind = "spray" if role == "SPRAY" else "lit" if self._plays_light(obj, job) else "snow"
+                play_sequence(obj, os.path.dirname(obj.data.filepath), kind, job["first"], job["last"])
+                if kind == "lit":
+                    self._adopt_light(obj, job)
+                elif role == "TRACKS" and not self.light:  # Bake Light off: the tracked snow renders unlit
+                    obj.firn.bake_fingerprint = obj.firn.bake_summary = ""
+                    materials.ensure_snow_material(obj)
             self.report({"INFO"}, f"{spray.name}: {spray.firn.spray.summary}")
+
+    def _plays_light(self, tracks, job):
+        """The tracked snow plays its lit files when every frame has one, or when only some frames were asked
+        for (a render-farm node): then the others are said to be missing."""
+        if job["tracks"] != tracks.name:
+            return False
+        first, last = job["lit"]
+        if light.all_lit(job["directory"], job["first"], job["last"]):
+            return True
+        if (first, last) != (job["first"], job["last"]) and light.all_lit(job["directory"], first, last):
+            self.report({"WARNING"}, f"'{tracks.name}': frames outside {first}-{last} have no baked light yet and "
+                                     "show no snow until they are baked")
+            return True
+        return False
+
+    def _adopt_light(self, tracks, job):
+        frames = job["baked"]
+        optics = bake_operators.volume_optics_of(tracks)
+        tracks.firn.bake_extinction_per_density = optics.extinction_per_density
+        tracks.firn.bake_summary = (f"{self.quality.title()} light, frames {job['lit'][0]}-{job['lit'][1]} "
+                                    f"({len(frames)} baked now, the others already were)")
+        bake_state.store(tracks, {"sequence": light.sequence_digest(job["directory"], job["first"], job["last"])})
+        materials.ensure_snow_material(tracks)
 
 
 class FIRN_OT_clear_snow_spray(bpy.types.Operator):

@@ -1,5 +1,6 @@
 #include "firn/snow/snow_layer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -8,6 +9,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include "firn/geometry/ray_caster.h"
+#include "firn/snow/snow_volume_bound.h"
 #include "firn/util/error.h"
 
 namespace firn {
@@ -93,6 +95,13 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
     TriangleMesh oriented = targets;
     layer.openSurfaces = orientOpenSurfaces(oriented, -glm::normalize(settings.direction));
     const RayCaster shelter(merge({oriented, occluders}));
+    // Sure refusals first: placing and sheltering sites grows with the area (minutes on a large plane). Depth
+    // weights scale the snow down: the bound times the smallest weight stays a lower bound.
+    const float least = depthWeights.empty() ? 1.0f : *std::min_element(depthWeights.begin(), depthWeights.end());
+    const double leastWeight = least >= 0.0f && least <= 1.0f ? least : 1.0;  // bad weights: findLandingSites says so
+    checkVoxelBudget(leastWeight * snowVoxelLowerBound(oriented, shelter, settings.snowfall(), settings.depth,
+                                                       layer.voxelSize),
+                     settings.raster(), "at least");
     const auto sites = findLandingSites(oriented, shelter, settings.snowfall(), SubProgress(progress, 0.0, 0.4),
                                         depthWeights);
     layer.siteCount = sites.size();

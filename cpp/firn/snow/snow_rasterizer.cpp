@@ -84,12 +84,12 @@ std::string millions(double n) {
 
 }  // namespace
 
-void checkVoxelBudget(double voxels, const RasterSettings &s) {
+void checkVoxelBudget(double voxels, const RasterSettings &s, const char *quantifier) {
     if (voxels <= s.maxVoxels) return;
     const double suggested = s.voxelSize * std::cbrt(voxels / s.maxVoxels) * 1.1;
     std::ostringstream msg;
     msg.precision(3);
-    msg << "this snow needs about " << millions(voxels) << " voxels at voxel size " << s.voxelSize
+    msg << "this snow needs " << quantifier << " " << millions(voxels) << " voxels at voxel size " << s.voxelSize
         << " m, over the budget of " << millions(s.maxVoxels) << ": use a voxel size of at least " << suggested
         << " m (or raise the voxel budget in Firn's preferences)";
     throw BudgetExceeded(msg.str());

@@ -28,8 +28,9 @@ struct RasterSettings {
 // Active voxels the balls will need, estimated cheaply before anything is allocated.
 double estimateVoxelCount(const std::vector<Metaball> &balls, double spacing, double voxelSize);
 
-// Throws BudgetExceeded, with the voxel size that would fit, when `voxels` exceeds settings.maxVoxels.
-void checkVoxelBudget(double voxels, const RasterSettings &settings);
+// Throws BudgetExceeded, with the voxel size that would fit, when `voxels` exceeds settings.maxVoxels; the
+// message says the snow needs `quantifier` (about, at least) that many.
+void checkVoxelBudget(double voxels, const RasterSettings &settings, const char *quantifier = "about");
 
 // Sums the balls' fields on a sparse grid in one parallel, deterministic pass (each 8^3 leaf gathers the
 // balls that reach it). Snow is where the field exceeds the iso-value and which lies above the surface the

@@ -162,7 +162,8 @@ TEST(SnowLayer, VoxelBudgetIsCheckedBeforeAllocating) {
 TEST(SnowLayer, LandingSiteCountIsCheckedBeforePlacingThem) {
     SnowLayerSettings s;
     s.spacing = 0.01;
-    s.maxVoxels = 1e6;
+    s.voxelSize = 0.05;
+    s.maxVoxels = 1e11;  // the snow's volume alone (8e10 voxels) fits: the sites (1e12) do not
     try {
         generate(test::plane(1e4f), {}, s);
         FAIL() << "expected BudgetExceeded";
