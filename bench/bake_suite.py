@@ -385,7 +385,9 @@ def main():
                     print(f"    view {view}:")
                     print(np.array2string(np.round(rel[v * per:(v + 1) * per, 1].reshape(case.pixels, case.pixels)[::-1], 2),
                                           max_line_width=200))
+    print()
     print(table(rows, args.markdown))
+    print()
     worst = max(r["mean"] for r in rows)
     print(f"all cases: largest mean {100 * worst:.1f} %, worst block {100 * max(r['worst'] for r in rows):.0f} %")
 
