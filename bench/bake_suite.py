@@ -149,6 +149,8 @@ def cases():
              1000.0, 100.0, (0.98,) * 3, 0.85, views=ROUND, samples=4096))
     add(Case("ball_thin", "ball r 3 cm, tau 1 per voxel, 3 tmfp across, omega 0.999, g 0.5", ball(0.03, 0.01) * 100,
              0.01, 100.0, 100.0, (0.999,) * 3, 0.5, views=ROUND))
+    add(Case("ball_thin_forward", "ball r 3 cm, tau 1 per voxel, under 1 tmfp across, omega 0.999, g 0.85",
+             ball(0.03, 0.01) * 100, 0.01, 100.0, 100.0, (0.999,) * 3, 0.85, views=ROUND, samples=2048))
     add(Case("ball_half_tau", "ball r 8 cm, tau 0.5 per voxel, omega 0.99, g 0.3", ball(0.08, 0.01) * 100, 0.01,
              50.0, 100.0, (0.99,) * 3, 0.3, views=ROUND))
     add(Case("ball_grey", "ball r 5 cm, tau 5 per voxel, omega 0.9, g 0.6 (absorbing)", ball(0.05, 0.01) * 100, 0.01,

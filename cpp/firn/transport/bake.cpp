@@ -150,6 +150,10 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
             const SourceEstimate S = reference.sourceIn(voxels[v], samples, seed, v);
             out.source[v].l0 = glm::vec3(S.l0);
             out.source[v].l1 = glm::mat3(S.l1);
+            for (int c = 0; c < 3; ++c) {
+                const float length = glm::length(out.source[v].l1[c]), most = std::max(out.source[v].l0[c], 0.0f);
+                if (length > most) out.source[v].l1[c] *= most / length;
+            }
         }
         progress.report(double(done += range.size()) / voxels.size());
     });
