@@ -68,3 +68,17 @@ def test_sun_lit_ball_is_right_where_the_linear_form_can_hold(folder):
     c.samples = 1024
     result = bake_suite.run_case(c, folder, cache=None)
     assert all(abs(b) < 0.10 for b in result["view_bias"])
+
+
+def test_thin_snow_too_costly_to_trace_is_left_to_the_diffusion(tmp_vdb):
+    # A 40 cm cloud of voxels of optical depth 1.4 that hardly absorbs: each of its voxels is thin, but light
+    # in it scatters hundreds of times (28 mean free paths to its edge), beyond the tracing budget. The bake
+    # measures that on a few voxels first and leaves all of them to the diffusion instead of hanging.
+    density = bake_suite.ball(0.2, 0.01) * 100.0
+    bake_suite.write_density(tmp_vdb, density, 0.01)
+    optics = firncore.VolumeOptics(1.4, (1.0 - 1e-7,) * 3, 0.0)
+    stats = firncore.bake(tmp_vdb, optics, sky=firncore.Sky((1.0, 1.0, 1.0)))
+    assert stats["traced_voxels"] == 0
+    centre = (np.array(density.shape) - 1) / 2 * 0.01
+    radiance = firncore.render_baked(tmp_vdb, optics, np.array([centre + [0.0, 0.0, 1.0]]), np.array([[0.0, 0.0, -1.0]]))
+    assert 0.5 < radiance[0, 1] < 1.0  # lit by the diffusion: near the sky's 1 (conservative snow), never above

@@ -132,9 +132,27 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
     return out;
 }
 
-int tracedSamples(const Preset &preset, std::size_t voxels) {
-    if (voxels == 0) return 0;
-    return std::clamp(int(kMaxTracedPaths / double(voxels)), 16, preset.tracedSamples);
+// Paths per traced voxel: the preset's, fewer when the paths would cost more than kMaxTracedCollisions in all
+// (16 at least), or 0 (none traced: the diffusion takes them) when even 16 would. The cost per path is measured
+// on a few voxels first: thin voxels in a large cloud of thin snow still see light that scattered thousands of
+// times, and a bake must not grow into a hang.
+constexpr double kMaxTracedCollisions = 2e7;  // a few seconds on two cores
+int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
+    constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 16;
+    if (voxels.empty()) return 0;
+    const MonteCarloReference reference(scene);
+    const double budget = kMaxTracedCollisions / (double(voxels.size()) * kMinSamples);  // per path, at the least
+    double collisions = 0.0;
+    int paths = 0;
+    for (int k = 0; k < kPilotVoxels; ++k) {
+        const std::size_t v = voxels.size() * k / kPilotVoxels;
+        collisions += double(reference.sourceIn(voxels[v], kPilotSamples, seed, v).collisions);
+        paths += kPilotSamples;
+        if (collisions > budget * kPilotVoxels * kPilotSamples) return 0;  // too costly already
+    }
+    const double perPath = std::max(collisions / paths, 1.0);
+    const int affordable = int(std::min(kMaxTracedPaths, kMaxTracedCollisions / perPath) / double(voxels.size()));
+    return affordable < kMinSamples ? 0 : std::min(affordable, preset.tracedSamples);
 }
 
 // The source function of the given voxels by brute force (MonteCarloReference::sourceIn), `samples` each.
@@ -742,9 +760,11 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
 
     p.report(0.4, "Tracing thin snow");
     const std::vector<openvdb::Coord> thin = thinVoxels(*scene.medium);
-    const MonteCarloVoxels traced = traceSources(scene, thin, tracedSamples(preset, thin.size()), settings.seed ^ 0x7EACEull,
-                                                 SubProgress(&p, 0.4, 0.4));
-    local.tracedVoxels = thin.size();
+    const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
+    const MonteCarloVoxels traced =
+        traceSources(scene, samples > 0 ? thin : std::vector<openvdb::Coord>{}, samples, settings.seed ^ 0x7EACEull,
+                     SubProgress(&p, 0.4, 0.4));
+    local.tracedVoxels = traced.source.size();
     local.traceSeconds = clock.lap();
     std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
     for (auto &channel : phi) channel.assign(topo.size(), 0.0);

@@ -54,6 +54,7 @@ class PathTracer {
             if (tCollision < kInfinity) {
                 p += tCollision * d;
                 throughput *= medium_.optics().albedo;
+                ++collisions;
                 radiance += throughput * lightScattered(p, d, rng);
                 d = sampleHenyeyGreenstein(d, medium_.optics().g, rng.uniform(), rng.uniform());
             } else if (hit) {
@@ -96,6 +97,8 @@ class PathTracer {
     }
 
     double sigmaT(const glm::dvec3 &p) { return k_ * medium_.densityAt(p, accessor_); }
+
+    long collisions = 0;  // real collisions so far, all paths (what a path costs)
 
   private:
 
@@ -221,6 +224,7 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
         phi += w * samplePhi, flux += w * sampleFlux, weights += w;
     }
     SourceEstimate out;
+    out.collisions = tracer.collisions;
     if (weights <= 0.0) return out;
     const VolumeOptics &optics = medium.optics();
     for (int c = 0; c < 3; ++c) {

@@ -23,6 +23,7 @@ struct Ray {
 struct SourceEstimate {
     Rgb l0{0.0};
     glm::dmat3 l1{0.0};
+    long collisions = 0;  // real collisions of all its paths: what the estimate cost
 };
 
 struct RadianceEstimate {
