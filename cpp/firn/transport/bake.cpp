@@ -104,9 +104,10 @@ struct MonteCarloVoxels {
 
 // Voxels optically thinner than kTracedOpticalDepth (partly filled voxels of thrown snow, thin flakes, a
 // small object's thin fringe) are too thin for a voxel diffusion and take the exact fluence and flux from
-// Monte Carlo instead (bench/bake_suite.py: mean errors fell by 2-4 points on balls and sprays; voxels
-// thicker than this were better left to the diffusion and its surface radiance, for a voxel's mean
-// fluence is not what a camera sees of its first optical depth). Not next to transport-thick snow
+// Monte Carlo instead (bench/bake_suite.py: mean errors fell by 1-7 points on balls and lumps, and rose on a
+// ball under one transport mean free path at g 0.85; voxels thicker than this were better left to the
+// diffusion and its surface radiance, for a voxel's mean fluence is not what a camera sees of its first
+// optical depth). Not next to transport-thick snow
 // (sigma_tr h >= kThickReducedDepth in the least absorbing channel): that is the fringe of a thick surface,
 // whose light the diffusion carries, and paths into such snow would scatter thousands of times.
 constexpr double kTracedOpticalDepth = 1.5, kThickReducedDepth = 2.0;
@@ -168,6 +169,7 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
             const SourceEstimate S = reference.sourceIn(voxels[v], samples, seed, v);
             out.source[v].l0 = glm::vec3(S.l0);
             out.source[v].l1 = glm::mat3(S.l1);
+            // Never negative: for g > 1/3 a beam's first-order form goes below zero towards back-scattering.
             for (int c = 0; c < 3; ++c) {
                 const float length = glm::length(out.source[v].l1[c]), most = std::max(out.source[v].l0[c], 0.0f);
                 if (length > most) out.source[v].l1[c] *= most / length;
