@@ -21,6 +21,10 @@ mkdir -p "$(dirname "$report")"
   PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/bench/bake_scaling.py"
   echo '```'
   echo
+  echo "## Bake accuracy on small, thin and thick shapes against the core's Monte Carlo (bench/bake_suite.py)"
+  echo
+  PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/bench/bake_suite.py" --markdown --lobe | grep -E '^(\||firncore|all cases|$)' | cat -s
+  echo
   echo "## Baked render against Cycles brute force (same volume, same run)"
   echo
   for bounces in 256 1024; do

@@ -199,6 +199,7 @@ py::dict statsDict(const firn::BakeStats &stats) {
     py::dict d;
     d["unknowns"] = stats.unknowns;
     d["surface_voxels"] = stats.surfaceVoxels;
+    d["traced_voxels"] = stats.tracedVoxels;
     d["air_faces"] = stats.airFaces;
     d["occluder_faces"] = stats.occluderFaces;
     d["iterations"] = stats.iterations;
@@ -207,6 +208,7 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["source_scale"] = stats.sourceScale;
     py::dict seconds;
     seconds["topology"] = stats.topologySeconds, seconds["light"] = stats.lightSeconds;
+    seconds["trace"] = stats.traceSeconds;
     seconds["solve"] = stats.solveSeconds, seconds["gather"] = stats.gatherSeconds, seconds["grids"] = stats.gridSeconds;
     d["seconds"] = seconds;
     return d;

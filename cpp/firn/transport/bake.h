@@ -35,13 +35,14 @@ constexpr double kSourceBudgetBytes = 512.0 * 1024 * 1024;
 
 struct BakeStats {
     std::size_t unknowns = 0, airFaces = 0, occluderFaces = 0, surfaceVoxels = 0;
+    std::size_t tracedVoxels = 0;              // optically thin voxels lit by Monte Carlo instead of the solve
     int passes = 0;                            // diffusion solves per channel (1 + snow-to-snow bounces)
     int sourceScale = 1;                       // the source grids' voxel size in density voxels
     std::array<int, 3> iterations{};          // per colour channel, all passes
     std::array<double, 3> relativeResidual{};  // per colour channel, last pass
-    // Wall-clock seconds: voxels and faces, sun and sky tracing, diffusion solves, gathering between snow
-    // surfaces, writing the grids.
-    double topologySeconds = 0, lightSeconds = 0, solveSeconds = 0, gatherSeconds = 0, gridSeconds = 0;
+    // Wall-clock seconds: voxels and faces, sun and sky tracing, Monte Carlo in thin snow, diffusion solves,
+    // gathering between snow surfaces, writing the grids.
+    double topologySeconds = 0, lightSeconds = 0, traceSeconds = 0, solveSeconds = 0, gatherSeconds = 0, gridSeconds = 0;
 };
 
 // Computes the light scattered inside the snow, all orders, from the scene's suns and sky, with the

@@ -33,8 +33,9 @@ class PathTracer {
           k_(medium_.optics().extinctionPerDensity),
           sigmaBar_(std::max(medium_.maxSigmaT(), 1e-12)) {}
 
-    // Radiance scattered by the medium towards the camera along one camera ray, one sample.
-    Rgb sample(const Ray &camera, Rng &rng) {
+    // Radiance scattered by the medium towards the camera along one camera ray, one sample. With
+    // `unscattered`, also the sky and surfaces seen straight along the ray: all the light arriving at its origin.
+    Rgb sample(const Ray &camera, Rng &rng, bool unscattered = false) {
         glm::dvec3 p = camera.origin, d = camera.direction;
         Rgb throughput(1.0), radiance(0.0);
         bool first = true;
@@ -53,10 +54,11 @@ class PathTracer {
             if (tCollision < kInfinity) {
                 p += tCollision * d;
                 throughput *= medium_.optics().albedo;
+                ++collisions;
                 radiance += throughput * lightScattered(p, d, rng);
                 d = sampleHenyeyGreenstein(d, medium_.optics().g, rng.uniform(), rng.uniform());
             } else if (hit) {
-                if (first) return Rgb(0.0);  // a surface in front of the snow: the renderer draws it
+                if (first && !unscattered) return Rgb(0.0);  // a surface in front of the snow: the renderer draws it
                 p += tSurface * d;
                 const glm::dvec3 n = glm::dot(glm::dvec3(hit->normal), d) < 0.0 ? glm::dvec3(hit->normal)
                                                                                   : -glm::dvec3(hit->normal);
@@ -64,7 +66,7 @@ class PathTracer {
                 radiance += throughput * lightReflected(p, n, rng);
                 d = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
             } else {
-                if (!first) radiance += throughput * scene_.sky.radianceFrom(d);
+                if (!first || unscattered) radiance += throughput * scene_.sky.radianceFrom(d);
                 return radiance;
             }
             first = false;
@@ -78,8 +80,27 @@ class PathTracer {
         return radiance;
     }
 
-  private:
+    // All light arriving at p, one sample: radiance from one direction drawn uniformly over the sphere and
+    // each light's direct beam. Adds to the fluence phi (W/m^2) and the flux (column c: channel c's
+    // vector, W/m^2 along the direction light travels).
+    void sampleArriving(const glm::dvec3 &p, Rng &rng, Rgb &phi, glm::dmat3 &flux) {
+        const glm::dvec3 d = sampleUniformCone(glm::dvec3(0.0, 0.0, 1.0), -1.0, rng.uniform(), rng.uniform());
+        const Rgb L = 4.0 * kPi * sample(Ray{p, d}, rng, true);
+        phi += L;
+        for (int c = 0; c < 3; ++c) flux[c] -= L[c] * d;
+        for (std::size_t b = 0; b < lightCount(); ++b) {
+            glm::dvec3 w;
+            const Rgb E = lightIrradiance(b, p, 0.0, w, rng);
+            phi += E;
+            for (int c = 0; c < 3; ++c) flux[c] -= E[c] * w;
+        }
+    }
+
     double sigmaT(const glm::dvec3 &p) { return k_ * medium_.densityAt(p, accessor_); }
+
+    long collisions = 0;  // real collisions so far, all paths (what a path costs)
+
+  private:
 
     // Delta tracking: distance to the first real collision before tEnd, or infinity.
     double sampleCollision(const glm::dvec3 &p, const glm::dvec3 &d, double tEnd, Rng &rng) {
@@ -179,6 +200,38 @@ RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std:
     out.mean = sum / n;
     const Rgb variance = glm::max(sumSquares / n - out.mean * out.mean, Rgb(0.0));
     out.standardError = glm::sqrt(variance / std::max(n - 1.0, 1.0));
+    return out;
+}
+
+SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
+                                             std::uint64_t stream) const {
+    PathTracer tracer(scene_);
+    Rng rng(seed, stream);
+    const Medium &medium = *scene_.medium;
+    const glm::dvec3 centre = medium.voxelCentre(voxel);
+    // Points spread over the voxel, each weighted by its extinction: the renderer draws sigma_t S, so the
+    // voxel's S is the extinction-weighted mean of the light's (the fluence falls steeply in thick voxels).
+    Rgb phi(0.0);
+    glm::dmat3 flux(0.0);
+    double weights = 0.0;
+    for (int s = 0; s < samples; ++s) {
+        const glm::dvec3 p = centre + medium.voxelSize() * (glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5);
+        const double w = tracer.sigmaT(p);
+        if (w <= 0.0) continue;
+        Rgb samplePhi(0.0);
+        glm::dmat3 sampleFlux(0.0);
+        tracer.sampleArriving(p, rng, samplePhi, sampleFlux);
+        phi += w * samplePhi, flux += w * sampleFlux, weights += w;
+    }
+    SourceEstimate out;
+    out.collisions = tracer.collisions;
+    if (weights <= 0.0) return out;
+    const VolumeOptics &optics = medium.optics();
+    for (int c = 0; c < 3; ++c) {
+        const double scale = optics.albedo[c] * kInvFourPi / weights;
+        out.l0[c] = scale * phi[c];
+        out.l1[c] = 3.0 * optics.g * scale * flux[c];
+    }
     return out;
 }
 

@@ -3,7 +3,9 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
+#include <openvdb/openvdb.h>
 
 #include "firn/transport/scene.h"
 #include "firn/util/color.h"
@@ -14,6 +16,14 @@ namespace firn {
 struct Ray {
     glm::dvec3 origin;     // m, world space
     glm::dvec3 direction;  // unit
+};
+
+// The source function a voxel's snow scatters, S(w) = l0 + l1 . w per channel (w: the direction the
+// light leaves; l1 column c is channel c's vector), W/m^2/sr: the baked grids' form.
+struct SourceEstimate {
+    Rgb l0{0.0};
+    glm::dmat3 l1{0.0};
+    long collisions = 0;  // real collisions of all its paths: what the estimate cost
 };
 
 struct RadianceEstimate {
@@ -39,6 +49,12 @@ class MonteCarloReference {
     // Many rays in parallel; deterministic for a given seed. Reports to and honours `progress`.
     std::vector<RadianceEstimate> estimate(const std::vector<Ray> &rays, int samplesPerRay, std::uint64_t seed,
                                            Progress *progress = nullptr) const;
+
+    // The source function in one voxel, from `samples` points spread over it (weighted by extinction, as
+    // the renderer's emission is), each gathering the light arriving from one uniformly drawn direction,
+    // all orders, and every light's direct beam: omega / (4 pi) (phi + 3 g F . w), the Henyey-Greenstein
+    // phase function to first order in w, with the exact fluence phi and flux F.
+    SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream) const;
 
     const Scene &scene() const { return scene_; }
 

@@ -1,0 +1,398 @@
+"""The bake against the core's brute-force Monte Carlo on small, thin and thick snow shapes (docs/bake.md, Accuracy).
+
+Each case is a density grid (balls, slabs, a sharp box, a bumpy layer with a plate, a cloud of thrown lumps), one
+optics, a sun and/or a sky, and orthographic views around the object (towards the sun, across the terminator,
+against the sun, from above and below). Every pixel is one block: one camera ray through its centre, the baked
+render (`firncore.render_baked`) against `firncore.monte_carlo_radiance` (all orders, sharing none of the bake's
+approximations), all three colour channels. Pixels whose ray passes through less than optical depth 1 of snow
+are left out (the renderer's own transparency, not the bake, decides those). Reported per case: mean and worst
+|relative error| over the blocks, bias (sum of baked radiance over sum of reference radiance, minus 1), the
+reference's median relative standard error per block (its noise is part of the errors), bake time and reference
+time. The reference is cached by case under the output folder, so changing the bake reruns only the bake.
+
+With --lobe it also reports the mean error of the same grids read as a Henyey-Greenstein lobe instead of linearly
+(render_lobe: a candidate change of the grids' contract, docs/bake.md).
+
+    PYTHONPATH=build/python python3 bench/bake_suite.py [--cases a,b] [--cache DIR] [--markdown] [--fresh] [--lobe]
+"""
+
+import argparse
+import hashlib
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pyopenvdb
+
+import firncore
+
+SUN_ELEVATION = math.radians(30.0)
+
+
+@dataclass
+class Case:
+    name: str
+    what: str
+    density: np.ndarray  # kg/m^3, voxel (i, j, k) centred at (i, j, k) * voxel
+    voxel: float  # m
+    sigma_t: float  # 1/m at density `rho`
+    rho: float
+    omega: tuple
+    g: float
+    sun: float = 1.0  # W/m^2, from azimuth 0 and SUN_ELEVATION
+    sky: float = 0.05  # W/m^2/sr
+    views: list = field(default_factory=list)  # (azimuth deg, elevation deg)
+    pixels: int = 8
+    samples: int = 1024
+    occluders: list = field(default_factory=list)
+
+    @property
+    def optics(self):
+        return firncore.VolumeOptics(self.sigma_t / self.rho, self.omega, self.g)
+
+    def suns(self):
+        if self.sun <= 0.0:
+            return []
+        d = (math.cos(SUN_ELEVATION), 0.0, math.sin(SUN_ELEVATION))
+        return [firncore.SunLight(d, (self.sun,) * 3, 0.0093)]
+
+    def skies(self):
+        return firncore.Sky((self.sky,) * 3) if self.sky > 0.0 else None
+
+    def key(self):
+        h = hashlib.sha1(self.density.tobytes())
+        h.update(np.ascontiguousarray(views(self)[0]).tobytes())
+        h.update(repr((self.voxel, self.sigma_t, self.rho, self.omega, self.g, self.sun, self.sky, self.views,
+                       self.pixels, self.samples, [(v.tobytes(), t.tobytes(), a) for v, t, a in self.occluders])).encode())
+        return h.hexdigest()[:16]
+
+
+def grid(n):
+    return np.meshgrid(*[np.arange(m, dtype=float) for m in n], indexing="ij")
+
+
+def coverage(inside, shape, voxel, sub=4):
+    """Fraction of each voxel inside the shape (sub^3 points per voxel): partly filled voxels, as a rasterizer makes."""
+    out = np.zeros(shape)
+    offsets = (np.arange(sub) + 0.5) / sub - 0.5
+    X, Y, Z = grid(shape)
+    for a in offsets:
+        for b in offsets:
+            for c in offsets:
+                out += inside((X + a) * voxel, (Y + b) * voxel, (Z + c) * voxel)
+    return out / sub ** 3
+
+
+def ball(radius, voxel, pad=3):
+    n = int(math.ceil(2 * radius / voxel)) + 2 * pad
+    centre = (n - 1) / 2 * voxel
+    X, Y, Z = grid((n, n, n))
+    distance = np.sqrt((X * voxel - centre) ** 2 + (Y * voxel - centre) ** 2 + (Z * voxel - centre) ** 2) - radius
+    return np.clip(0.5 - distance / voxel, 0.0, 1.0)  # one-voxel antialiased surface
+
+
+def box(size, voxel, pad=2):
+    n = [int(round(s / voxel)) + 2 * pad for s in size]
+    fill = np.zeros(n)
+    fill[pad:-pad, pad:-pad, pad:-pad] = 1.0  # sharp edges
+    return fill
+
+
+def slab(width, layers, pad=2):
+    fill = np.zeros((width + 2 * pad, width + 2 * pad, layers + 2 * pad))
+    fill[pad:-pad, pad:-pad, pad:-pad] = 1.0
+    return fill
+
+
+def bumpy(side, depth, amplitude):
+    X, Y, Z = grid((side, side, depth + amplitude + 3))
+    top = depth + amplitude * np.sin(2 * np.pi * X / 14.0) * np.cos(2 * np.pi * Y / 11.0)
+    fill = np.clip(top - Z + 0.5, 0.0, 1.0)
+    fill[:, :, 0] = 0.0  # the ground lies under the lowest layer
+    return fill
+
+
+def spray(voxel, lumps=24, seed=3):
+    """Thrown snow: lumps of 0.5-1.5 cm radius scattered through a 14 cm cloud, rasterized with coverage."""
+    rng = np.random.default_rng(seed)
+    n = int(math.ceil(0.18 / voxel))
+    centres = rng.uniform(0.03, 0.15, size=(lumps, 3))
+    radii = rng.uniform(0.005, 0.015, size=lumps)
+
+    def inside(x, y, z):
+        hit = np.zeros(x.shape, dtype=bool)
+        for c, r in zip(centres, radii):
+            hit |= (x - c[0]) ** 2 + (y - c[1]) ** 2 + (z - c[2]) ** 2 < r * r
+        return hit
+
+    return coverage(inside, (n, n, n), voxel)
+
+
+def plate(x0, x1, y0, y1, z, albedo):
+    vertices = np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]], dtype=float)
+    return vertices, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32), albedo
+
+
+ROUND = [(0, 0), (90, 0), (180, 0), (0, 60)]  # towards the sun, terminator, against the sun, from above
+
+
+def cases():
+    out = []
+    add = out.append
+    # The issue's ball: small, moderately thick, somewhat absorbing, sun plus a dim sky.
+    add(Case("ball_issue", "ball r 5 cm, 1 cm voxels (tau 10), omega 0.98, g 0.85", ball(0.05, 0.01) * 100, 0.01,
+             1000.0, 100.0, (0.98,) * 3, 0.85, views=ROUND, samples=4096))
+    add(Case("ball_thin", "ball r 3 cm, tau 1 per voxel, 3 tmfp across, omega 0.999, g 0.5", ball(0.03, 0.01) * 100,
+             0.01, 100.0, 100.0, (0.999,) * 3, 0.5, views=ROUND))
+    add(Case("ball_thin_forward", "ball r 3 cm, tau 1 per voxel, under 1 tmfp across, omega 0.999, g 0.85",
+             ball(0.03, 0.01) * 100, 0.01, 100.0, 100.0, (0.999,) * 3, 0.85, views=ROUND, samples=2048))
+    add(Case("ball_half_tau", "ball r 8 cm, tau 0.5 per voxel, omega 0.99, g 0.3", ball(0.08, 0.01) * 100, 0.01,
+             50.0, 100.0, (0.99,) * 3, 0.3, views=ROUND))
+    add(Case("ball_grey", "ball r 5 cm, tau 5 per voxel, omega 0.9, g 0.6 (absorbing)", ball(0.05, 0.01) * 100, 0.01,
+             500.0, 100.0, (0.9,) * 3, 0.6, views=ROUND))
+    add(Case("ball_rgb", "ball r 6 cm, tau 3, omega 0.95 / 0.99 / 0.999, g 0.7", ball(0.06, 0.01) * 100, 0.01,
+             300.0, 100.0, (0.95, 0.99, 0.999), 0.7, views=ROUND))
+    add(Case("ball_snow", "ball r 8 cm, tau 20 per voxel, omega 0.9999, g 0.85 (snow)", ball(0.08, 0.01) * 300, 0.01,
+             2000.0, 300.0, (0.9999,) * 3, 0.85, views=ROUND, samples=2048))
+    add(Case("ball_clean", "ball r 4 cm, 5 mm voxels, tau 30, omega 1-1e-7, g 0.85", ball(0.04, 0.005) * 300, 0.005,
+             6000.0, 300.0, (1.0 - 1e-7,) * 3, 0.85, views=ROUND, samples=2048))
+    add(Case("ball_forward", "ball r 5 cm, tau 4, omega 0.999, g 0.9", ball(0.05, 0.01) * 100, 0.01, 400.0, 100.0,
+             (0.999,) * 3, 0.9, views=ROUND, samples=4096))
+    add(Case("ball_sky", "ball r 5 cm under sky only, tau 5, omega 0.99, g 0.7", ball(0.05, 0.01) * 100, 0.01, 500.0,
+             100.0, (0.99,) * 3, 0.7, sun=0.0, sky=1.0, views=[(0, 0), (0, 60), (0, -60)]))
+    add(Case("slab_thin", "slab 3 cm (3 voxels, tau 2 each), omega 0.99, g 0.6", slab(24, 3) * 100, 0.01, 200.0, 100.0,
+             (0.99,) * 3, 0.6, views=[(0, 60), (90, 75), (0, -60), (180, -75)]))
+    add(Case("slab_thick", "slab 20 cm (20 voxels, tau 30 each), omega 0.9999, g 0.87", slab(24, 20) * 300, 0.01,
+             3000.0, 300.0, (0.9999,) * 3, 0.87, views=[(0, 60), (180, 60), (90, 80)], samples=2048))
+    add(Case("box_sharp", "box 12 x 10 x 6 cm, sharp edges, tau 8, omega 0.995, g 0.7", box((0.12, 0.10, 0.06), 0.01) * 200,
+             0.01, 800.0, 200.0, (0.995,) * 3, 0.7, views=[(0, 30), (120, 30), (220, 30), (300, 45)]))
+    occluders = [plate(0.10, 0.20, 0.05, 0.25, 0.22, (0.2, 0.2, 0.2)), plate(-1.0, 2.0, -1.0, 2.0, 0.005, (0.6, 0.3, 0.2))]
+    add(Case("bumpy_plate", "bumpy layer 6 cm +- 3 cm, plate shadow, reddish ground, tau 15, omega 0.999, g 0.7",
+             bumpy(30, 6, 3) * 300, 0.01, 1500.0, 300.0, (0.999,) * 3, 0.7, views=[(0, 60), (180, 50)],
+             pixels=10, occluders=occluders))
+    add(Case("spray_lumps", "24 lumps r 0.5-1.5 cm on 1.5 cm voxels (partly filled), omega 0.9999, g 0.85",
+             spray(0.015) * 100, 0.015, 400.0, 100.0, (0.9999,) * 3, 0.85, views=ROUND, samples=2048))
+    add(Case("spray_dense", "the lumps on 1 cm voxels, denser (tau up to 20 per voxel), omega 0.999, g 0.85",
+             spray(0.01) * 300, 0.01, 2000.0, 300.0, (0.999,) * 3, 0.85, views=ROUND, samples=2048))
+    return out
+
+
+def write_density(path, density, voxel):
+    g = pyopenvdb.FloatGrid()
+    g.name = "density"
+    g.transform = pyopenvdb.createLinearTransform(voxelSize=voxel)
+    g.copyFromArray(density.astype(np.float32), tolerance=0.0)
+    pyopenvdb.write(path, grids=[g])
+
+
+def trilinear(density, p):
+    """Density at index-space points p (N, 3), zero outside."""
+    f = np.floor(p).astype(int)
+    t = p - f
+    out = np.zeros(len(p))
+    n = np.array(density.shape)
+    for corner in range(8):
+        o = np.array([(corner >> a) & 1 for a in range(3)])
+        c = f + o
+        ok = np.all((c >= 0) & (c < n), axis=1)
+        w = np.prod(np.where(o, t, 1.0 - t), axis=1)
+        out[ok] += w[ok] * density[c[ok, 0], c[ok, 1], c[ok, 2]]
+    return out
+
+
+def plate_hit(case, origin, direction):
+    """Distance to the first occluder (the cases' occluders are horizontal rectangles), inf if none."""
+    nearest = math.inf
+    for vertices, _, _ in case.occluders:
+        if abs(direction[2]) < 1e-12:
+            continue
+        t = (vertices[0, 2] - origin[2]) / direction[2]
+        x, y = origin[:2] + t * direction[:2]
+        lo, hi = vertices.min(0), vertices.max(0)
+        if t > 0.0 and lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]:
+            nearest = min(nearest, t)
+    return nearest
+
+
+def views(case):
+    """Orthographic camera rays around the object: origins, directions, per-ray optical depth."""
+    n = np.array(case.density.shape)
+    centre = (n - 1) / 2 * case.voxel
+    nonzero = np.argwhere(case.density > 0)
+    radius = 0.55 * np.max((nonzero.max(0) - nonzero.min(0) + 1) * case.voxel)
+    origins, directions = [], []
+    for azimuth, elevation in case.views:
+        a, e = math.radians(azimuth), math.radians(elevation)
+        back = np.array([math.cos(a) * math.cos(e), math.sin(a) * math.cos(e), math.sin(e)])  # towards the camera
+        up = np.array([0.0, 0.0, 1.0]) if abs(back[2]) < 0.99 else np.array([1.0, 0.0, 0.0])
+        right = np.cross(up, back)
+        right /= np.linalg.norm(right)
+        up = np.cross(back, right)
+        s = ((np.arange(case.pixels) + 0.5) / case.pixels * 2.0 - 1.0) * radius
+        for v in s:
+            for u in s:
+                origins.append(centre + 3.0 * radius * back + u * right + v * up)
+                directions.append(-back)
+    origins, directions = np.array(origins), np.array(directions)
+    steps = np.linspace(0.0, 6.0 * radius, int(6.0 * radius / (0.25 * case.voxel)))
+    tau = np.array([trilinear(case.density, (o + steps[steps < plate_hit(case, o, d), None] * d) / case.voxel).sum()
+                    for o, d in zip(origins, directions)]) * (steps[1] - steps[0]) * case.sigma_t / case.rho
+    return origins, directions, tau
+
+
+PAD = 5  # voxels around the density that the source grids may reach
+
+
+def baked_source(path, shape):
+    """The four baked grids as arrays over the density's index box grown by PAD: (nx, ny, nz, 3) each."""
+    grids = {g.name: g for g in pyopenvdb.readAll(path)[0]}
+    out = []
+    for name in firncore.BAKED_GRID_NAMES:
+        array = np.zeros(tuple(n + 2 * PAD for n in shape) + (3,), dtype=np.float32)
+        grids[name].copyToArray(array, ijk=(-PAD,) * 3)
+        out.append(array)
+    return out
+
+
+def render_lobe(case, source, origins, directions):
+    """What the baked grids would render if read as one Henyey-Greenstein lobe, S(w) = l0 HG(k, cos) with
+    k = |l1| / (3 l0) and cos along l1 (the linear form's zeroth and first moments, never negative, exact for a
+    single-scattered beam), instead of l0 + l1 . w: the same emission-absorption integral as render_baked."""
+    density = np.pad(case.density, PAD)
+    step = case.voxel / 16
+    out = []
+    for o, d in zip(origins, directions):
+        t = np.arange(0.0, min(plate_hit(case, o, d), 6.0 * case.voxel * max(case.density.shape)), step) + 0.5 * step
+        p = (o + t[:, None] * d) / case.voxel + PAD
+        sigma = trilinear(density, p) * case.sigma_t / case.rho
+        l0 = np.stack([trilinear(source[0][..., c], p) for c in range(3)], -1)
+        l1 = np.stack([np.stack([trilinear(source[1 + a][..., c], p) for a in range(3)], -1) for c in range(3)], 1)
+        length = np.linalg.norm(l1, axis=-1)
+        k = np.clip(length / np.maximum(3.0 * l0, 1e-30), 0.0, 0.95)
+        cos = (l1 @ -d) / np.maximum(length, 1e-30)
+        S = l0 * (1.0 - k * k) / (1.0 + k * k - 2.0 * k * cos) ** 1.5
+        opacity = 1.0 - np.exp(-sigma * step)
+        transmittance = np.concatenate([[1.0], np.cumprod(1.0 - opacity)[:-1]])
+        out.append(((transmittance * opacity)[:, None] * S).sum(0))
+    return np.array(out)
+
+
+def reference(case, path, origins, directions, cache):
+    file = os.path.join(cache, f"{case.name}_{case.key()}.npz") if cache else None
+    if file and os.path.exists(file):
+        data = np.load(file)
+        return data["mean"], data["error"], float(data["seconds"])
+    start = time.perf_counter()
+    mean, error = firncore.monte_carlo_radiance(path, case.optics, origins, directions, suns=case.suns(),
+                                                sky=case.skies(), occluders=case.occluders, samples=case.samples,
+                                                seed=11)
+    seconds = time.perf_counter() - start
+    if file:
+        np.savez(file + ".tmp.npz", mean=mean, error=error, seconds=seconds)
+        os.replace(file + ".tmp.npz", file)
+    return mean, error, seconds
+
+
+def run_case(case, folder, cache, quality="FINAL", lobe=False):
+    path = os.path.join(folder, case.name + ".vdb")
+    write_density(path, case.density, case.voxel)
+    origins, directions, tau = views(case)
+    mean, error, reference_seconds = reference(case, path, origins, directions, cache)
+    start = time.perf_counter()
+    firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders, quality=quality)
+    bake_seconds = time.perf_counter() - start
+    baked = firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)
+    seen = tau >= 1.0
+    per = case.pixels ** 2
+    view_bias = [baked[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum() /
+                 max(mean[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum(), 1e-30) - 1.0 for v in range(len(case.views))]
+    m, e, b = mean[seen], error[seen], baked[seen]
+    relative = b / np.maximum(m, 1e-30) - 1.0
+    lobe_mean = None
+    if lobe:
+        read = render_lobe(case, baked_source(path, case.density.shape), origins[seen], directions[seen])
+        lobe_mean = float(np.abs(read / np.maximum(m, 1e-30) - 1.0).mean())
+    return {
+        "lobe_mean": lobe_mean,
+        "case": case.name, "what": case.what, "blocks": int(seen.sum()) * 3,
+        "mean": float(np.abs(relative).mean()), "worst": float(np.abs(relative).max()),
+        "worst_signed": float(relative.flat[np.abs(relative).argmax()]),
+        "bias": float(b.sum() / m.sum() - 1.0), "noise": float(np.median(e / np.maximum(m, 1e-30))),
+        "bake_s": bake_seconds, "reference_s": reference_seconds,
+        "relative": relative, "view_bias": view_bias, "views": case.views,
+    }
+
+
+def worst_view(r):
+    v = int(np.argmax(np.abs(r["view_bias"])))
+    azimuth, elevation = r["views"][v]
+    return f"{100 * r['view_bias'][v]:+.0f} % ({azimuth}°, {elevation}°)"
+
+
+def table(rows, markdown):
+    head = ("case", "blocks", "mean", "worst", "bias", "worst view bias", "ref noise", "bake s", "ref s", "mean read as a lobe")
+    if markdown:
+        lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        for r in rows:
+            lobe = "—" if r["lobe_mean"] is None else f"{100 * r['lobe_mean']:.1f} %"
+            lines.append(f"| {r['case']} | {r['blocks']} | {100 * r['mean']:.1f} % | {100 * r['worst_signed']:+.0f} % | "
+                         f"{100 * r['bias']:+.1f} % | {worst_view(r)} | {100 * r['noise']:.1f} % | {r['bake_s']:.2f} | "
+                         f"{r['reference_s']:.0f} | {lobe} |")
+        return "\n".join(lines)
+    lines = [f"{'case':<14} {'blocks':>6} {'mean':>7} {'worst':>7} {'bias':>7} {'worst view bias':>22} {'noise':>6} "
+             f"{'bake s':>7} {'ref s':>7}"]
+    for r in rows:
+        lines.append(f"{r['case']:<14} {r['blocks']:>6} {100 * r['mean']:>6.1f}% {100 * r['worst_signed']:>+6.0f}% "
+                     f"{100 * r['bias']:>+6.1f}% {worst_view(r):>22} {100 * r['noise']:>5.1f}% {r['bake_s']:>7.2f} "
+                     f"{r['reference_s']:>7.1f}")
+    return "\n".join(lines)
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--cases", default="", help="comma-separated case names (default: all)")
+    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"),
+                        help="folder caching the Monte Carlo reference per case")
+    parser.add_argument("--fresh", action="store_true", help="recompute the reference")
+    parser.add_argument("--markdown", action="store_true")
+    parser.add_argument("--quality", default="FINAL")
+    parser.add_argument("--maps", action="store_true", help="print each view's per-block relative errors")
+    parser.add_argument("--lobe", action="store_true", help="also the mean error of the grids read as a lobe")
+    args = parser.parse_args()
+    chosen = [c for c in cases() if not args.cases or c.name in args.cases.split(",")]
+    cache = None if args.fresh else args.cache
+    if cache:
+        os.makedirs(cache, exist_ok=True)
+    print(f"firncore {firncore.__version__}, {firncore.hardware_threads()} threads, {args.quality} quality", flush=True)
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        for case in chosen:
+            rows.append(run_case(case, folder, cache, args.quality, args.lobe))
+            r = rows[-1]
+            print(f"  {r['case']}: {r['what']}: mean {100 * r['mean']:.1f} %, worst {100 * r['worst_signed']:+.0f} %, "
+                  f"bias {100 * r['bias']:+.1f} %; per view: " +
+                  ", ".join(f"{v} {100 * b:+.0f} %" for v, b in zip(case.views, r["view_bias"])) +
+                  ("" if r["lobe_mean"] is None else f"; read as a lobe: mean {100 * r['lobe_mean']:.1f} %"), flush=True)
+            if args.maps:
+                _, _, tau = views(case)
+                rel = np.full((len(tau), 3), np.nan)
+                rel[tau >= 1.0] = r["relative"]
+                per = case.pixels * case.pixels
+                for v, view in enumerate(case.views):
+                    print(f"    view {view}:")
+                    print(np.array2string(np.round(rel[v * per:(v + 1) * per, 1].reshape(case.pixels, case.pixels)[::-1], 2),
+                                          max_line_width=200))
+    print()
+    print(table(rows, args.markdown))
+    print()
+    worst = max(r["mean"] for r in rows)
+    print(f"all cases: largest mean {100 * worst:.1f} %, worst block {100 * max(r['worst'] for r in rows):.0f} %")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,84 @@
+"""The bake on small and thin snow shapes against the core's brute-force Monte Carlo: a reduced set of
+bench/bake_suite.py (docs/bake.md, Accuracy on small and thin shapes).
+
+Oracles: `firncore.monte_carlo_radiance` (all orders, exact Henyey-Greenstein phase function, none of the bake's
+approximations; seeded, so its noise is fixed), and for a non-absorbing medium under a uniform sky the exact
+isotropic field (every point sees the sky's radiance L from every direction, so the source function is L)."""
+
+import math
+import os
+import sys
+import tempfile
+
+import numpy as np
+import pytest
+
+import firncore
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "bench"))
+import bake_suite  # noqa: E402
+
+
+def case(name):
+    return next(c for c in bake_suite.cases() if c.name == name)
+
+
+@pytest.fixture(scope="module")
+def folder():
+    with tempfile.TemporaryDirectory() as path:
+        yield path
+
+
+def test_conservative_thin_ball_under_uniform_sky_glows_with_the_sky(tmp_vdb):
+    # omega = 1, g = 0, uniform sky L: the radiance is L everywhere in every direction (the isotropic field
+    # solves the transport equation with this boundary), so a camera ray shows L (1 - exp(-tau)) exactly.
+    # Voxels of optical depth 1: all of them take the Monte Carlo source, which here has no variance.
+    density = bake_suite.ball(0.04, 0.01) * 100.0
+    bake_suite.write_density(tmp_vdb, density, 0.01)
+    optics = firncore.VolumeOptics(1.0, (1.0, 1.0, 1.0), 0.0)  # sigma_t 100 /m
+    stats = firncore.bake(tmp_vdb, optics, sky=firncore.Sky((0.5, 0.5, 0.5)), seed=3)
+    assert stats["traced_voxels"] == int((density > 0).sum())
+    centre = (np.array(density.shape) - 1) / 2 * 0.01
+    origins = np.array([centre + [0.5, 0.0, dz] for dz in (0.0, 0.015, 0.03)])
+    directions = np.tile([-1.0, 0.0, 0.0], (3, 1))
+    radiance = firncore.render_baked(tmp_vdb, optics, origins, directions)[:, 1]
+    steps = np.linspace(0.0, 1.0, 4001)
+    tau = [bake_suite.trilinear(density, (o + steps[:, None] * d) / 0.01).sum() * (steps[1] - steps[0])
+           for o, d in zip(origins, directions)]
+    assert radiance == pytest.approx([0.5 * (1.0 - math.exp(-t)) for t in tau], rel=0.01)
+
+
+@pytest.mark.parametrize("name, mean, bias", [
+    ("ball_sky", 0.05, 0.05),       # measured 3.0 %, -2.8 % (reference noise 0.9 %)
+    ("ball_half_tau", 0.08, 0.06),  # measured 4.9 %, -3.0 % (noise 2.6 %)
+])
+def test_small_balls_match_monte_carlo(folder, name, mean, bias):
+    result = bake_suite.run_case(case(name), folder, cache=None)
+    assert result["mean"] < mean
+    assert abs(result["bias"]) < bias
+
+
+def test_sun_lit_ball_is_right_where_the_linear_form_can_hold(folder):
+    # The issue's ball (omega 0.98, g 0.85, 1 cm voxels of optical depth 10), seen from the sun's side and
+    # across the terminator: within 10 % per view (measured +3 %, -5 % against 4096 paths). Seen against the sun it is 50 %
+    # too dark at its rim, where light scattered forwards leaves in a peak that S = l0 + l1 . w cannot hold
+    # (docs/bake.md, Limits); that view is left out here.
+    c = case("ball_issue")
+    c.views = [(0, 0), (90, 0)]
+    c.samples = 1024
+    result = bake_suite.run_case(c, folder, cache=None)
+    assert all(abs(b) < 0.10 for b in result["view_bias"])
+
+
+def test_thin_snow_too_costly_to_trace_is_left_to_the_diffusion(tmp_vdb):
+    # A 40 cm cloud of voxels of optical depth 1.4 that hardly absorbs: each of its voxels is thin, but light
+    # in it scatters hundreds of times (28 mean free paths to its edge), beyond the tracing budget. The bake
+    # measures that on a few voxels first and leaves all of them to the diffusion instead of hanging.
+    density = bake_suite.ball(0.2, 0.01) * 100.0
+    bake_suite.write_density(tmp_vdb, density, 0.01)
+    optics = firncore.VolumeOptics(1.4, (1.0 - 1e-7,) * 3, 0.0)
+    stats = firncore.bake(tmp_vdb, optics, sky=firncore.Sky((1.0, 1.0, 1.0)))
+    assert stats["traced_voxels"] == 0
+    centre = (np.array(density.shape) - 1) / 2 * 0.01
+    radiance = firncore.render_baked(tmp_vdb, optics, np.array([centre + [0.0, 0.0, 1.0]]), np.array([[0.0, 0.0, -1.0]]))
+    assert 0.5 < radiance[0, 1] < 1.0  # lit by the diffusion: near the sky's 1 (conservative snow), never above
