@@ -27,7 +27,7 @@ from ..common.errors import UserError
 from ..properties import SNOW_LAYER_PROPERTIES, active_snow_layer
 from . import proxy
 from .operators import _max_voxels, _occluder_objects, core_settings, metaball_mesh, read_metaballs, \
-    target_triangles
+    snow_with_metaballs_poll, target_triangles
 
 MODES = (("ADD", "Add", "Add snow where the snowfall reaches, on top of the snow there"),
          ("ERASE", "Erase", "Remove snow from the top (Ctrl while painting)"),
@@ -190,9 +190,7 @@ class FIRN_OT_snow_brush(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        snow = active_snow_layer(context)
-        if snow is None or snow.firn.metaballs is None:
-            cls.poll_message_set("Select a snow object made by Add Snow Layer (that kept its metaballs)")
+        if not snow_with_metaballs_poll(cls, context):
             return False
         if context.mode != "OBJECT":
             cls.poll_message_set("Switch to Object Mode")

@@ -260,6 +260,16 @@ def free_object_name(base):
     raise UserError("Too many objects named Snow")
 
 
+
+def snow_with_metaballs_poll(operator, context):
+    """Poll of the operators that work on a snow layer's kept metaballs (Rebuild, the Snow Brush)."""
+    snow = active_snow_layer(context)
+    if snow is None or snow.firn.metaballs is None:
+        operator.poll_message_set("Select a snow object made by Add Snow Layer (that kept its metaballs)")
+        return False
+    return True
+
+
 class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
     """Cover the selected objects with a layer of snow where falling snow lands"""
 
@@ -353,11 +363,7 @@ class FIRN_OT_rebuild_from_metaballs(FirnJobMixin, bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        snow = active_snow_layer(context)
-        if snow is None or snow.firn.metaballs is None:
-            cls.poll_message_set("Select a snow object that kept its metaballs")
-            return False
-        return True
+        return snow_with_metaballs_poll(cls, context)
 
     def prepare(self, context):
         snow = active_snow_layer(context)
