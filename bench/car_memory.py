@@ -54,7 +54,7 @@ def main():
     from firn.common.core import firncore
 
     scene, targets = car.build_scene()
-    snow = common.add_snow(targets, depth=0.12, spacing=0.06, voxel_size=0.02)
+    snow = car.add_car_snow(targets)
     path = bpy.path.abspath(snow.data.filepath)
     voxels = firncore.grid_statistics(path, "density")["active_voxels"]
     folder = tempfile.mkdtemp(prefix="firn_bench_")

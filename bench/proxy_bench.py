@@ -47,13 +47,7 @@ def main():
     from firn.snow_layer import proxy
 
     _scene, targets = car_under_snow.build_scene()
-    bpy.ops.object.select_all(action="DESELECT")
-    for obj in targets:
-        obj.select_set(True)
-    bpy.context.view_layer.objects.active = targets[0]
-    # The car sample's snow, as bench/ui_stall.py and the sample make it.
-    assert bpy.ops.firn.add_snow_layer(depth=0.12, spacing=0.06, voxel_size=0.02) == {"FINISHED"}
-    snow = bpy.context.object
+    snow = car_under_snow.add_car_snow(targets)
     path = bpy.path.abspath(snow.data.filepath)
     core_s, arrays = fastest(args.runs, lambda: proxy.mesh_arrays(path))
     store_s, made = fastest(args.runs, lambda: proxy.store_proxy(snow, arrays, 1.0))

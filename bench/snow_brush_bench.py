@@ -47,12 +47,7 @@ def main():
     from firn.snow_layer import brush
 
     _scene, targets = car_under_snow.build_scene()
-    bpy.ops.object.select_all(action="DESELECT")
-    for obj in targets:
-        obj.select_set(True)
-    bpy.context.view_layer.objects.active = targets[0]
-    assert bpy.ops.firn.add_snow_layer(depth=0.12, spacing=0.06, voxel_size=0.02) == {"FINISHED"}
-    snow = bpy.context.object
+    snow = car_under_snow.add_car_snow(targets)
     path = bpy.path.abspath(snow.data.filepath)
     voxels = firncore.grid_statistics(path, "density")["active_voxels"]
 

@@ -111,7 +111,7 @@ def tick():
             bpy.context.view_layer.objects.active = targets[0]
             state["phase"] = "selected targets"
         elif phase == "selected targets" and settled(now):
-            start("Add Snow Layer", bpy.ops.firn.add_snow_layer, depth=0.12, spacing=0.06, voxel_size=0.02)
+            start("Add Snow Layer", bpy.ops.firn.add_snow_layer, **car_under_snow.SNOW)
             state["phase"] = "snow"
         elif phase == "snow" and measure(now):
             snow = bpy.context.active_object

@@ -59,6 +59,9 @@ def tree(location, height, bark, needles):
     return parts
 
 
+SNOW = dict(depth=0.12, spacing=0.06, voxel_size=0.02)  # m
+
+
 def build_scene():
     scene = common.new_scene()
     ground_mat = common.material("Frozen Ground", (0.25, 0.22, 0.18), roughness=0.9)
@@ -80,8 +83,13 @@ def build_scene():
     return scene, targets
 
 
+def add_car_snow(targets):
+    """The sample's snow layer on `targets` (the benches measure the same snow)."""
+    return common.add_snow(targets, **SNOW)
+
+
 def main():
-    common.snow_bake_render(__file__, __doc__, build_scene, depth=0.12, spacing=0.06, voxel_size=0.02)
+    common.snow_bake_render(__file__, __doc__, build_scene, **SNOW)
 
 
 if __name__ == "__main__":

@@ -210,6 +210,17 @@ def test_bake_sequence_bakes_the_tracked_snows_light_at_every_frame(clean_scene)
     shaded_first, open_first = _drawn_above(lit[0], tracks, -0.6), _drawn_above(lit[0], tracks, 0.4)
     shaded_last, open_last = _drawn_above(lit[-1], tracks, 0.4), _drawn_above(lit[-1], tracks, -0.6)
     assert shaded_first < 0.5 * open_first and shaded_last < 0.5 * open_last
+    # The panel's state compares the frame shown with its marker: a turned sun or a frame without light shows.
+    from firn.bake import state as bake_state
+
+    bpy.context.scene.frame_set(FRAMES[0] + 1)
+    assert bake_state.changes(tracks) == (bake_state.BAKED, [])
+    sun = next(obj for obj in bpy.data.objects if obj.type == "LIGHT")
+    sun.rotation_euler.x += 0.3
+    assert bake_state.changes(tracks) == (bake_state.OUTDATED, ["lamps"])
+    sun.rotation_euler.x -= 0.3
+    os.remove(os.path.join(folder, f"lit_{FRAMES[0] + 1:04d}.json"))
+    assert bake_state.changes(tracks) == (bake_state.OUTDATED, [f"frame {FRAMES[0] + 1} not lit"])
 
 
 def test_a_second_bake_keeps_lit_frames_and_one_frame_per_process_gives_the_same_light(clean_scene):

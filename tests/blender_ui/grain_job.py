@@ -9,22 +9,18 @@ import os
 import sys
 import time
 
-import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, esc_once_progressing, fail, job_running, passed, run_timer, start_modal  # noqa: E402
+from ui_test import (HUNG, esc_once_progressing, fail, job_running, passed, plane_alone, run_timer,  # noqa: E402
+                     start_modal)
 
 GRAINS = 2_000_000  # seconds of accumulation on any machine: long enough to be cancelled half way
 state = {"phase": "start", "started": 0.0, "bounces": 0}
 
 
 def start_job():
-    addon_utils.enable("firn", default_set=True)
-    for obj in list(bpy.data.objects):
-        bpy.data.objects.remove(obj)
-    bpy.ops.mesh.primitive_plane_add(size=1.0)
-    bpy.context.object.select_set(True)
+    plane_alone(1.0).select_set(True)
     state["bounces"] = bpy.context.scene.cycles.max_bounces
     start_modal(state, lambda: bpy.ops.firn.add_grain_snow("INVOKE_DEFAULT", grain_radius=0.001, grain_count=GRAINS))
 

@@ -1,7 +1,6 @@
 """Blender with a window (under xvfb-run): Bake Scattering as a user starts it. It runs in a worker thread while
 the UI keeps running; Esc during a second bake (while a child Blender renders the new sky world) leaves the first
 bake's file, material and fingerprint intact; a third bake under that sky completes.
-Needs the core's bake (firncore.bake): without it the script exits with 77, which CTest reports as skipped.
 
 xvfb-run blender --factory-startup --enable-event-simulate --python modal_bake.py   (exit code 0 = pass)
 """
@@ -25,11 +24,7 @@ FOLDER = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"firn_modal_bake_{os.ge
 
 def setup():
     from bake_helpers import uniform_world, volume_object, write_volume
-    from firn.common.core import firncore
 
-    if not hasattr(firncore, "bake"):
-        print("SKIP: needs firncore.bake (the core's Bake Scattering)", flush=True)
-        os._exit(77)
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj)
     os.makedirs(FOLDER, exist_ok=True)

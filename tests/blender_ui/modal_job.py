@@ -9,21 +9,16 @@ import sys
 import time
 import traceback
 
-import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, job_running, window_context, worker_alive  # noqa: E402
+from ui_test import HUNG, fail, job_running, plane_alone, window_context, worker_alive  # noqa: E402
 
 state = {"ticks": 0, "phase": "start", "started": 0.0, "while_computing": 0}
 
 
 def setup():
-    addon_utils.enable("firn", default_set=True)
-    for obj in list(bpy.data.objects):
-        bpy.data.objects.remove(obj)
-    bpy.ops.mesh.primitive_plane_add(size=4.0)
-    ground = bpy.context.object
+    ground = plane_alone(4.0)
     ground.select_set(True)
     bpy.context.view_layer.objects.active = ground
 

@@ -9,12 +9,11 @@ import os
 import sys
 import traceback
 
-import addon_utils
 import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import aim_view, fail, passed, window_context  # noqa: E402
+from ui_test import aim_view, fail, passed, plane_alone, window_context  # noqa: E402
 
 state = {"phase": "start", "events": []}
 ABOVE_OLD_TOP = (0.0, 0.0, 0.14)  # m: above the 0.1 m layer, under the painted snow
@@ -24,10 +23,7 @@ def setup():
     window = bpy.context.window_manager.windows[0]
     window.event_simulate(type="ESC", value="PRESS")  # closes the splash screen, as a user would
     window.event_simulate(type="ESC", value="RELEASE")
-    addon_utils.enable("firn", default_set=True)
-    for obj in list(bpy.data.objects):
-        bpy.data.objects.remove(obj)
-    bpy.ops.mesh.primitive_plane_add(size=4.0)
+    plane_alone(4.0)
     if bpy.ops.firn.add_snow_layer(depth=0.1) != {"FINISHED"}:
         fail("Add Snow Layer did not finish")
     context = window_context()

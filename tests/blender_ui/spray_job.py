@@ -9,21 +9,18 @@ import os
 import sys
 import time
 
-import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, esc_once_progressing, fail, job_running, passed, run_timer, start_modal  # noqa: E402
+from ui_test import (HUNG, esc_once_progressing, fail, job_running, passed, plane_alone, run_timer,  # noqa: E402
+                     start_modal)
 
 FRAMES = 400  # seconds of simulation on any machine: long enough to be cancelled half way
 state = {"phase": "start", "started": 0.0, "objects": set()}
 
 
 def build_scene():
-    addon_utils.enable("firn", default_set=True)
-    for obj in list(bpy.data.objects):
-        bpy.data.objects.remove(obj)
-    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    plane_alone(2.0)
     if bpy.ops.firn.add_snow_layer(depth=0.1, spacing=0.05, voxel_size=0.01) != {"FINISHED"}:
         fail("Add Snow Layer failed")
     snow = bpy.context.object

@@ -69,6 +69,17 @@ def run_timer(step, interval=0.05, first_interval=0.5):
     bpy.app.timers.register(tick, first_interval=first_interval)
 
 
+def plane_alone(size):
+    """Firn enabled and a scene holding only a `size` m plane, selected and active (what each test starts from)."""
+    import addon_utils
+
+    addon_utils.enable("firn", default_set=True)
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    bpy.ops.mesh.primitive_plane_add(size=size)
+    return bpy.context.object
+
+
 def press_esc():
     """Esc, pressed and released as a user does, in the first window."""
     window = bpy.context.window_manager.windows[0]

@@ -11,12 +11,11 @@ import tempfile
 import time
 import traceback
 
-import addon_utils
 import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, aim_view, fail, window_context  # noqa: E402
+from ui_test import HUNG, aim_view, fail, plane_alone, window_context  # noqa: E402
 
 GROUND = (0.3, 0.3, 0.3, 1.0)  # a mid-grey ground: white snow on it must stand out
 MIN_SNOW_PIXELS = 2000  # the snow covers a quarter of the view (about 100k pixels): far more than this
@@ -32,11 +31,7 @@ def setup():
     window = bpy.context.window_manager.windows[0]
     window.event_simulate(type="ESC", value="PRESS")  # closes the splash screen, as a user would
     window.event_simulate(type="ESC", value="RELEASE")
-    addon_utils.enable("firn", default_set=True)
-    for obj in list(bpy.data.objects):
-        bpy.data.objects.remove(obj)
-    bpy.ops.mesh.primitive_plane_add(size=4.0)
-    ground = bpy.context.object
+    ground = plane_alone(4.0)
     material = bpy.data.materials.new("Ground")
     material.diffuse_color = GROUND
     material.use_nodes = True

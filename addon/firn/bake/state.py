@@ -4,7 +4,8 @@ At bake time a fingerprint of everything the bake depends on is stored on the ob
 JSON {component: digest}); the panel compares it with the live scene at every redraw. Components: the sun lamps
 (and lamps ignored), the world, the occluders ({object name: digest of its transform, evaluated shape, modifiers
 and albedo}, so a change names the object), the optics, and the snow itself (its file's size and modification
-time, and its transform). Nothing here renders or reads grids.
+time, and its transform). A sequence baked frame by frame (Bake Sequence, spray/light.py) is compared through
+the marker of the frame it shows. Nothing here renders or reads grids.
 """
 
 import json
@@ -12,7 +13,9 @@ import os
 
 import bpy
 
+from ..common import cache
 from ..material import optics
+from ..spray import files as spray_files
 from . import inputs as bake_inputs
 
 NONE, BAKED, OUTDATED = "NONE", "BAKED", "OUTDATED"
@@ -43,6 +46,11 @@ def file_stamp(path):
     except OSError:
         return None
     return stat.st_mtime_ns, stat.st_size
+
+
+def file_digest(path):
+    """Digest of a file as it is now (size and modification time; any thread)."""
+    return bake_inputs.digest(file_stamp(path))
 
 
 def snow_path(obj):
@@ -93,13 +101,30 @@ def changes(obj, context=None):
     then = stored(obj)
     if then is None:
         return NONE, []
-    if obj.type == "VOLUME" and obj.data.is_sequence:
-        return BAKED, []  # frame by frame (Bake Sequence): each frame's marker is checked when it bakes again
     context = context or bpy.context
-    if context.view_layer is None or context.scene is None:  # no scene to compare with (e.g. while loading)
-        now = {"optics": optics_digest(obj), "snow": snow_digest(obj)}
-    else:
-        now = fingerprint(context, obj)
+    live = context.view_layer is not None and context.scene is not None  # not while loading
+    if obj.type == "VOLUME" and obj.data.is_sequence:
+        return _frame_changes(obj, context) if live else (BAKED, [])
+    now = fingerprint(context, obj) if live else {"optics": optics_digest(obj), "snow": snow_digest(obj)}
+    return _compare(then, now)
+
+
+def _frame_changes(obj, context):
+    """A sequence baked frame by frame: the marker of the frame shown now against the scene at that frame."""
+    volume, frame = obj.data, context.scene.frame_current
+    if not volume.frame_start <= frame < volume.frame_start + volume.frame_duration:
+        return BAKED, []  # the Volume shows no frame now
+    directory = os.path.dirname(cache.volume_path(volume))
+    then = spray_files.read_marker(directory, frame)
+    if then is None:
+        return OUTDATED, [f"frame {frame} not lit"]
+    now = dict(bake_inputs.signature(context, obj), optics=optics_digest(obj),
+               snow=file_digest(spray_files.frame_path(directory, frame, "snow")))
+    now["settings"] = then.get("settings")  # quality and seed are the bake's choice, not the scene's
+    return _compare(then, now)
+
+
+def _compare(then, now):
     changed = []
     for key in sorted(set(then) | set(now)):
         if key not in now or then.get(key) == now[key]:

@@ -21,6 +21,9 @@ renders nothing and the snow's surface does (snow_layer/proxy.py). Sub-balls (ma
 the density by their factor before it becomes extinction, in every form.
 """
 
+import functools
+import os
+
 import bpy
 
 from ..common import cache
@@ -58,12 +61,23 @@ def has_baked_grids(volume):
     grids: spray/light.py)."""
     if volume.is_sequence:
         try:
-            return set(BAKED_GRIDS) <= set(firncore.grid_names(cache.volume_path(volume)))
+            return set(BAKED_GRIDS) <= _file_grid_names(cache.volume_path(volume))
         except (OSError, ValueError):
             return False
     if not volume.grids.is_loaded:
         volume.grids.load()
     return set(BAKED_GRIDS) <= {grid.name for grid in volume.grids}
+
+
+def _file_grid_names(path):
+    """The grid names in a file, read again only when the file changes (panels ask on every redraw)."""
+    stat = os.stat(path)
+    return _grid_names(path, stat.st_mtime_ns, stat.st_size)
+
+
+@functools.lru_cache(maxsize=64)
+def _grid_names(path, _mtime_ns, _size):
+    return frozenset(firncore.grid_names(path))
 
 
 def material_form(obj):

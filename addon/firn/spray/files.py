@@ -7,6 +7,7 @@ link to the snow in force then (the input snow at the first frame): the same byt
 files replaces them (temporary file, then rename), so a link keeps the snow it was made from.
 """
 
+import json
 import os
 import shutil
 
@@ -20,6 +21,20 @@ def frame_path(directory, frame, kind):
         return os.path.join(directory, f"lit_{frame:04d}.vdb")
     spray, snow, _state = firncore.spray_frame_paths(directory, frame)
     return spray if kind == "spray" else snow
+
+
+def marker_path(directory, frame):
+    """The marker of a lit frame (spray/light.py): what its lit file was baked from."""
+    return os.path.splitext(frame_path(directory, frame, "lit"))[0] + ".json"
+
+
+def read_marker(directory, frame):
+    """A lit frame's marker ({component: digest}), or None when it is missing or damaged."""
+    try:
+        with open(marker_path(directory, frame), encoding="utf-8") as stream:
+            return json.load(stream)
+    except (OSError, ValueError):
+        return None
 
 
 def fill_tracked_snow(directory, snow_path, first_frame, last_frame, snow_frames):

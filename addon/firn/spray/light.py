@@ -21,43 +21,25 @@ from ..common.core import firncore
 from . import files
 
 
-def marker_path(directory, frame):
-    return os.path.splitext(files.frame_path(directory, frame, "lit"))[0] + ".json"
-
-
-def read_marker(directory, frame):
-    """A lit frame's marker ({component: digest}), or None when it is missing or damaged."""
-    try:
-        with open(marker_path(directory, frame), encoding="utf-8") as stream:
-            return json.load(stream)
-    except (OSError, ValueError):
-        return None
-
-
-def snow_digest(snow_file):
-    """Digest of a tracked snow file as it is now (size and modification time; any thread)."""
-    return bake_inputs.digest(bake_state.file_stamp(snow_file))
-
-
 def frame_parts(signature, optics_digest, quality, seed, snow_file):
     """{component: digest} of one frame's bake: the scene's (bake_inputs.signature), the optics, the settings and
     the tracked snow file it reads."""
     return dict(signature, optics=optics_digest, settings=bake_inputs.digest(quality, seed),
-                snow=snow_digest(snow_file))
+                snow=bake_state.file_digest(snow_file))
 
 
 def sequence_digest(directory, first, last):
     """Digest of the markers of frames first…last: what the Tracks object's bake fingerprint records."""
-    return bake_inputs.digest([read_marker(directory, frame) for frame in range(first, last + 1)])
+    return bake_inputs.digest([files.read_marker(directory, frame) for frame in range(first, last + 1)])
 
 
 def is_lit(directory, frame, parts):
     """Whether frame's lit file is there and was baked from exactly `parts`."""
-    return os.path.exists(files.frame_path(directory, frame, "lit")) and read_marker(directory, frame) == parts
+    return os.path.exists(files.frame_path(directory, frame, "lit")) and files.read_marker(directory, frame) == parts
 
 
 def _write_marker(directory, frame, parts):
-    path = marker_path(directory, frame)
+    path = files.marker_path(directory, frame)
     staged = path + ".tmp"
     with open(staged, "w", encoding="utf-8") as stream:
         json.dump(parts, stream, sort_keys=True)

@@ -339,7 +339,7 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
             inputs["current"] = index
             todo = []
             for frame in job["frames"]:
-                frame["parts"]["snow"] = light.snow_digest(frame["path"])  # as the simulation left it
+                frame["parts"]["snow"] = bake_state.file_digest(frame["path"])  # as the simulation left it
                 if not light.is_lit(os.path.dirname(frame["lit"]), frame["frame"], frame["parts"]):
                     todo.append(frame)
             job["baked"] = [frame["frame"] for frame in todo]
