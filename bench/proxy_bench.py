@@ -49,7 +49,7 @@ def main():
     _scene, targets = car_under_snow.build_scene()
     snow = car_under_snow.add_car_snow(targets)
     path = bpy.path.abspath(snow.data.filepath)
-    core_s, arrays = fastest(args.runs, lambda: proxy.mesh_arrays(path))
+    core_s, arrays = fastest(args.runs, lambda: proxy.mesh_arrays(path, snow.firn.voxel_size))
     store_s, made = fastest(args.runs, lambda: proxy.store_proxy(snow, arrays, 1.0))
     vertices, triangles = arrays
     with tempfile.TemporaryDirectory() as folder:
