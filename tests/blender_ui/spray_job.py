@@ -7,19 +7,16 @@ xvfb-run blender --factory-startup --enable-event-simulate --python spray_job.py
 
 import os
 import sys
-import time
 
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import (HUNG, esc_once_progressing, fail, job_running, passed, plane_alone, run_timer,  # noqa: E402
-                     start_modal)
+from ui_test import fail, plane_alone, run_cancel_test, start_modal  # noqa: E402
 
 FRAMES = 400  # seconds of simulation on any machine: long enough to be cancelled half way
-state = {"phase": "start", "started": 0.0, "objects": set()}
 
 
-def build_scene():
+def build_scene(state):
     plane_alone(2.0)
     if bpy.ops.firn.add_snow_layer(depth=0.1, spacing=0.05, voxel_size=0.01) != {"FINISHED"}:
         fail("Add Snow Layer failed")
@@ -33,35 +30,21 @@ def build_scene():
     snow.select_set(True)
     bpy.context.view_layer.objects.active = snow
     state["objects"] = {obj.name for obj in bpy.data.objects}
-    return snow
 
 
-def start_job():
-    build_scene()
+def start_job(state):
+    build_scene(state)
     start_modal(state, lambda: bpy.ops.firn.add_snow_spray("INVOKE_DEFAULT", frame_start=1, frame_end=FRAMES,
                                                            rate=200000.0))
 
 
-def step():
-    if state["phase"] == "start":
-        start_job()
-        state["phase"] = "running"
-    elif state["phase"] == "running":
-        esc_once_progressing(state, "raise FRAMES")
-    elif state["phase"] == "cancelled":
-        if not job_running():
-            print(f"Esc stopped Add Snow Spray in {time.perf_counter() - state['started']:.2f} s")
-            objects = {obj.name for obj in bpy.data.objects}
-            if objects != state["objects"]:
-                fail(f"Esc changed the scene's objects: {sorted(objects ^ state['objects'])}")
-            snow = bpy.data.objects["Snow"]
-            if snow.hide_render or snow.hide_viewport:
-                fail("a cancelled Add Snow Spray hid the snow layer")
-            passed()
-            return False
-        if time.perf_counter() - state["started"] > HUNG:
-            fail("Esc did not stop the job: hung")
-    return True
+def check_cancelled(state):
+    objects = {obj.name for obj in bpy.data.objects}
+    if objects != state["objects"]:
+        fail(f"Esc changed the scene's objects: {sorted(objects ^ state['objects'])}")
+    snow = bpy.data.objects["Snow"]
+    if snow.hide_render or snow.hide_viewport:
+        fail("a cancelled Add Snow Spray hid the snow layer")
 
 
-run_timer(step)
+run_cancel_test("Add Snow Spray", start_job, "raise FRAMES", check_cancelled)

@@ -116,3 +116,30 @@ def start_modal(state, invoke):
     if not worker_alive():
         fail("the job did not run in a worker thread")
     state["started"] = time.perf_counter()
+
+
+def run_cancel_test(name, start_job, hint, check_cancelled):
+    """A job cancelled with Esc as a user does: `start_job(state)` starts it (start_modal); once it shows progress
+    Esc is pressed; once it has ended `check_cancelled(state)` checks what it left (fail() on a fault) and the
+    test passes. `hint` says what to raise if the job ends before showing progress."""
+    import time
+
+    state = {"phase": "start", "started": 0.0}
+
+    def step():
+        if state["phase"] == "start":
+            start_job(state)
+            state["phase"] = "running"
+        elif state["phase"] == "running":
+            esc_once_progressing(state, hint)
+        elif state["phase"] == "cancelled":
+            if not job_running():
+                print(f"Esc stopped {name} in {time.perf_counter() - state['started']:.2f} s")
+                check_cancelled(state)
+                passed()
+                return False
+            if time.perf_counter() - state["started"] > HUNG:
+                fail("Esc did not stop the job: hung")
+        return True
+
+    run_timer(step)
