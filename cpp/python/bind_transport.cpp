@@ -196,6 +196,14 @@ as Image.pixels; u = 0.5 looks along +X, u = 0.25 along +Y (Environment Texture,
             py::arg("direction"), "Radiance arriving from a world direction (W/m^2/sr).");
 }
 
+// A direction from Python, made unit; InvalidArgument when it has no length.
+glm::dvec3 unitDirection(const RgbTuple &d) {
+    const glm::dvec3 v(d[0], d[1], d[2]);
+    const double length = glm::length(v);
+    if (!(length > 0.0) || !std::isfinite(length)) throw firn::InvalidArgument("direction must be finite and non-zero");
+    return v / length;
+}
+
 // Blender's Nishita Sky Texture, computed by the core (no Cycles render on Blender's main thread).
 void bindNishitaSky(py::module_ &m) {
     using S = firn::NishitaSky;
@@ -216,16 +224,16 @@ Blender's Sky Texture (Nishita) behind a Background node of `strength`, its sett
         .def_property_readonly("sun_direction", [](const S &s) { return tuple(firn::sunDirection(s)); })
         .def(
             "radiance",
-            [](const S &s, const RgbTuple &d) -> RgbTuple {
+            [](const S &s, const RgbTuple &d) {
                 firn::validate(s);
-                return tuple(firn::skyRadiance(s, glm::normalize(glm::dvec3(d[0], d[1], d[2]))));
+                return tuple(firn::skyRadiance(s, unitDirection(d)));
             },
             py::arg("direction"), "Radiance of the sky without its sun disc from a world direction (W/m^2/sr).")
         .def(
             "sun_disc_radiance",
-            [](const S &s, const RgbTuple &d) -> RgbTuple {
+            [](const S &s, const RgbTuple &d) {
                 firn::validate(s);
-                return tuple(firn::sunDiscRadiance(s, glm::normalize(glm::dvec3(d[0], d[1], d[2]))));
+                return tuple(firn::sunDiscRadiance(s, unitDirection(d)));
             },
             py::arg("direction"), "Radiance of the sun disc from a world direction (W/m^2/sr), 0 off the disc.")
         .def(

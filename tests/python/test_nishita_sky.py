@@ -160,7 +160,7 @@ def test_bad_settings_are_refused(bad):
         sky(**bad).sun()
 
 
-def test_bad_map_sizes_are_refused():
+def test_bad_map_sizes_and_directions_are_refused():
     with pytest.raises(ValueError):
         sky().map(None, 0, 4)
     with pytest.raises(ValueError):
@@ -169,3 +169,7 @@ def test_bad_map_sizes_are_refused():
         sky().map(np.eye(2), 8, 4)
     with pytest.raises(TypeError):
         firncore.NishitaSky(sun_height=1.0)
+    with pytest.raises(ValueError):
+        sky().radiance((0.0, 0.0, 0.0))
+    with pytest.raises(ValueError):
+        sky().sun_disc_radiance((float("nan"), 0.0, 1.0))
