@@ -460,8 +460,8 @@ def gather_occluders(objects, depsgraph, frame):
 # --- everything -----------------------------------------------------------------------------------------------
 
 def gather(context, snow, occluders=gather_occluders):
-    """BakeInputs of one snow object. A world that is not a plain colour is left to render (`sky` None, see
-    plan_sky): bake/operators.py renders it off the main thread. `occluders(objects, depsgraph, frame)` gathers
+    """BakeInputs of one snow object. A world that is not a plain colour is left to compute or render (`sky`
+    None, see plan_sky): bake/operators.py does it off the main thread. `occluders(objects, depsgraph, frame)` gathers
     the occluders (spray/light.py shares the ones that stand still over a frame range)."""
     depsgraph = context.evaluated_depsgraph_get()  # first: it also brings every matrix_world up to date
     frame = Frame(snow, scene_geometry.metres_per_unit(context.scene))
