@@ -15,8 +15,8 @@ namespace firn {
 
 namespace {
 
-// The atmosphere and the spectral data are those of Blender 3.4's intern/sky (Nishita et al. 1993's model
-// with the parameters of Bruneton & Neyret 2008): the sky must read as Cycles renders it.
+// The atmosphere and the spectral data are those Blender 3.4 gives Nishita et al. 1993's model (intern/sky):
+// the sky must read as Cycles renders it.
 constexpr double kEarthRadius = 6360e3;       // m
 constexpr double kAtmosphereRadius = 6420e3;  // m: the top of the atmosphere
 constexpr double kAirScaleHeight = 8e3;       // m, Rayleigh
@@ -25,8 +25,9 @@ constexpr double kDustScattering = 2e-5;      // 1/m at sea level, every wavelen
 constexpr double kDustExtinctionPerScattering = 1.11;  // dust absorbs a tenth of what it meets (albedo 0.9)
 constexpr double kDustAsymmetry = 0.76;       // Cornette-Shanks g
 constexpr int kViewSteps = 32;                // midpoint segments along the view ray, as Blender
-constexpr double kMinSunSize = 0.0005;        // rad: Cycles' smallest disc
-constexpr double kMinAltitude = 1.0, kMaxAltitude = 59999.0;  // m: Cycles clamps the altitude so
+constexpr double kMinSunSize = 0.0005;        // rad: Cycles' smallest disc (a zero Sun Size has one too)
+// m: the viewer kept 1 m above the ground (a ray from the surface itself grazes it) and below the top.
+constexpr double kMinAltitude = 1.0, kMaxAltitude = 59999.0;
 
 constexpr int kWavelengths = 21;  // 380, 400, ..., 780 nm
 constexpr double kWavelengthStep = 20.0;  // nm

@@ -14,7 +14,8 @@ namespace firn {
 // Blender's Sky Texture of type Nishita behind a Background node: the sky of Nishita et al. 1993 ("Display of
 // the Earth taking into account atmospheric scattering", SIGGRAPH), single scattering of sunlight by air
 // (Rayleigh) and dust (Mie) with ozone absorption, in a spherical atmosphere over a spherical Earth, sampled
-// at 21 wavelengths and seen in linear Rec.709 RGB, as Cycles 3.4 renders it. Angles as Blender shows them.
+// at 21 wavelengths and seen in linear Rec.709 RGB, as Cycles 3.4 renders it. Settings as the node's Python
+// properties hold them (angles in rad).
 struct NishitaSky {
     double sunElevation = 0.2617993877991494;  // rad above the horizon (Blender's default 15 deg)
     double sunRotation = 0.0;                  // rad about +Z: 0 puts the sun towards +Y, turning towards +X
