@@ -71,5 +71,9 @@ mkdir -p "$(dirname "$report")"
   echo "## The UI's longest stalls during Add Snow Layer and Bake Scattering (car sample, window under Xvfb)"
   echo
   "$FIRN_ROOT/bench/ui_stall.sh"
+  echo
+  echo "## The bake's world: main-thread step and the core's Nishita sky"
+  echo
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/world_light_bench.py"
 } | tee "$report"
 echo "firn: wrote $report"

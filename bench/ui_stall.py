@@ -8,6 +8,11 @@ measured in three phases: its invoke (main thread: reads the scene before the wo
 (main thread free: the timer should keep ticking), and the end (main thread: the result written into Blender,
 up to the first tick after the job). Goal: <= 0.1 s while the worker runs. Timings vary with the machine's load.
 
+Starting the bake: "sky ready" is when the bake's worker has its sky (its status leaves "Computing the sky" or
+"Rendering the world"), and the longest stall until then is the UI's cost of the world. The car's world is a
+Nishita sky, computed by the core; `-- --world rendered` plugs its Strength through a Value node (the same light)
+so Cycles renders it instead (bake/world_probe.py), the path of every other world.
+
 Blender's own drawing is told apart: a draw handler times each redraw of the 3D viewport (under Xvfb Blender draws
 on the CPU, and Solid mode's anti-aliasing redraws the view 8 times after any change), and "outside drawing" is
 the longest gap with no viewport redraw in it. Before each operator the bench waits until the viewport has not
@@ -31,8 +36,12 @@ from ui_test import window_context, worker_alive  # noqa: E402
 TICK = 0.01  # s
 SETTLED = 1.0  # s without a viewport redraw before an operator starts
 state = {"phase": "start", "last": 0.0, "rows": [], "draws": [], "draw_began": 0.0}
+ARGS = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+WORLD_RENDERED = ARGS[ARGS.index("--world") + 1:][:1] == ["rendered"] if "--world" in ARGS else False
+SKY_STATUSES = ("Computing the sky", "Rendering the world")  # bake/operators.py job_status
 HEADER = ("| operator | invoke (s) | longest stall while the worker runs (s) | of it outside drawing (s) | end (s) "
-          "| viewport redraws | longest redraw (s) | ticks | total (s) |\n|---|---|---|---|---|---|---|---|---|")
+          "| viewport redraws | longest redraw (s) | ticks | total (s) | sky ready (s) | longest stall until then (s) |"
+          "\n|---|---|---|---|---|---|---|---|---|---|---|")
 
 
 def _draw_began():
@@ -55,10 +64,19 @@ class Stalls:
     def __init__(self, name):
         self.name, self.invoke, self.worker, self.end, self.ticks = name, 0.0, 0.0, 0.0, 0
         self.outside_drawing, self.seconds, self.first_draw = 0.0, 0.0, len(state["draws"])
+        self.sky_ready, self.sky_stall = None, 0.0
 
     def gap(self, began, ended):
-        """A gap between ticks in the worker phase; also kept apart when no viewport redraw falls in it."""
+        """A gap between ticks in the worker phase; also kept apart when no viewport redraw falls in it, and
+        while the bake's worker makes its sky."""
         self.worker = max(self.worker, ended - began)
+        if self.sky_ready is None:
+            self.sky_stall = max(self.sky_stall, ended - began)
+            from firn.common.jobs import running_jobs  # the add-on is enabled by now
+
+            statuses = [job.status for job in running_jobs()]  # "" until the operator's first timer event
+            if statuses and all(status and not status.startswith(SKY_STATUSES) for status in statuses):
+                self.sky_ready = ended - self.began
         if not any(began <= start <= ended for start, _end in state["draws"][self.first_draw:]):
             self.outside_drawing = max(self.outside_drawing, ended - began)
 
@@ -66,7 +84,12 @@ class Stalls:
         draws = [end - start for start, end in state["draws"][self.first_draw:]]
         return (f"| {self.name} | {self.invoke:.3f} | {self.worker:.3f} | {self.outside_drawing:.3f} "
                 f"| {self.end:.3f} | {len(draws)} | {max(draws, default=0.0):.3f} | {self.ticks} "
-                f"| {self.seconds:.1f} |")
+                f"| {self.seconds:.1f} | {self._sky()} |")
+
+    def _sky(self):
+        if self.sky_ready is None or not self.name.startswith("Bake"):
+            return "– | –"
+        return f"{self.sky_ready:.2f} | {max(self.invoke, self.sky_stall):.3f}"
 
 
 def start(name, operator, **props):
@@ -98,12 +121,23 @@ def measure(now):
     return False
 
 
+def plug_strength_through_a_node(world):
+    """The same sky, no longer the exact Nishita chain the core computes: Cycles renders it."""
+    tree = world.node_tree
+    value = tree.nodes.new("ShaderNodeValue")
+    background = tree.nodes["Background"]
+    value.outputs[0].default_value = background.inputs["Strength"].default_value
+    tree.links.new(value.outputs[0], background.inputs["Strength"])
+
+
 def tick():
     try:
         now = time.perf_counter()
         phase = state["phase"]
         if phase == "start":
             addon_utils.enable("firn", default_set=True)
+            if WORLD_RENDERED:
+                plug_strength_through_a_node(bpy.context.scene.world)
             targets = [obj for obj in bpy.data.objects if obj.type == "MESH"]
             bpy.ops.object.select_all(action="DESELECT")
             for obj in targets:

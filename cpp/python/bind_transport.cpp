@@ -11,6 +11,7 @@
 #include "firn/transport/bake.h"
 #include "firn/transport/half_space.h"
 #include "firn/transport/monte_carlo.h"
+#include "firn/transport/nishita_sky.h"
 #include "firn/transport/slab.h"
 #include "firn/util/error.h"
 #include "firn/util/random.h"
@@ -195,6 +196,79 @@ as Image.pixels; u = 0.5 looks along +X, u = 0.25 along +Y (Environment Texture,
             py::arg("direction"), "Radiance arriving from a world direction (W/m^2/sr).");
 }
 
+// A direction from Python, made unit; InvalidArgument when it has no length.
+glm::dvec3 unitDirection(const RgbTuple &d) {
+    const glm::dvec3 v(d[0], d[1], d[2]);
+    const double length = glm::length(v);
+    if (!(length > 0.0) || !std::isfinite(length)) throw firn::InvalidArgument("direction must be finite and non-zero");
+    return v / length;
+}
+
+// Blender's Nishita Sky Texture, computed by the core (no Cycles render on Blender's main thread).
+void bindNishitaSky(py::module_ &m) {
+    using S = firn::NishitaSky;
+    py::class_<S>(m, "NishitaSky", R"doc(
+Blender's Sky Texture (Nishita) behind a Background node of `strength`, its settings as the node names them
+(angles in rad, altitude in m): the sky of Nishita et al. 1993 as Cycles 3.4 renders it, in W/m^2/sr.)doc")
+        .def(py::init([](const py::kwargs &kwargs) { return settingsFromKwargs<S>(kwargs, "NishitaSky"); }))
+        .def_readwrite("sun_elevation", &S::sunElevation, "rad above the horizon")
+        .def_readwrite("sun_rotation", &S::sunRotation, "rad about +Z; 0 puts the sun towards +Y, turning to +X")
+        .def_readwrite("sun_size", &S::sunSize, "rad, the disc's angular diameter")
+        .def_readwrite("sun_intensity", &S::sunIntensity, "scales the disc only")
+        .def_readwrite("sun_disc", &S::sunDisc)
+        .def_readwrite("altitude", &S::altitude, "m above sea level")
+        .def_readwrite("air_density", &S::airDensity)
+        .def_readwrite("dust_density", &S::dustDensity)
+        .def_readwrite("ozone_density", &S::ozoneDensity)
+        .def_readwrite("strength", &S::strength, "the Background node's Strength")
+        .def_property_readonly("sun_direction", [](const S &s) { return tuple(firn::sunDirection(s)); })
+        .def(
+            "radiance",
+            [](const S &s, const RgbTuple &d) {
+                firn::validate(s);
+                return tuple(firn::skyRadiance(s, unitDirection(d)));
+            },
+            py::arg("direction"), "Radiance of the sky without its sun disc from a world direction (W/m^2/sr).")
+        .def(
+            "sun_disc_radiance",
+            [](const S &s, const RgbTuple &d) {
+                firn::validate(s);
+                return tuple(firn::sunDiscRadiance(s, unitDirection(d)));
+            },
+            py::arg("direction"), "Radiance of the sun disc from a world direction (W/m^2/sr), 0 off the disc.")
+        .def(
+            "sun",
+            [](const S &s) {
+                firn::validate(s);
+                return firn::nishitaSun(s);
+            },
+            "The sun disc as a SunLight (irradiance integrated over the disc above the horizon), or None.")
+        .def(
+            "map",
+            [](const S &s, const std::optional<DoubleArray> &rotation, int width, int height, int samples) {
+                glm::dmat3 toWorld(1.0);
+                if (rotation) {
+                    if (rotation->ndim() != 2 || rotation->shape(0) != 3 || rotation->shape(1) != 3)
+                        throw firn::InvalidArgument("rotation must be a 3 x 3 array");
+                    for (int row = 0; row < 3; ++row)
+                        for (int column = 0; column < 3; ++column) toWorld[column][row] = rotation->at(row, column);
+                }
+                const std::vector<firn::Rgb> map =
+                    longCall([&] { return firn::nishitaSkyMap(s, toWorld, width, height, samples); });
+                py::array_t<float> pixels({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
+                auto out = pixels.mutable_unchecked<3>();
+                for (int row = 0; row < height; ++row)
+                    for (int column = 0; column < width; ++column)
+                        for (int c = 0; c < 3; ++c)
+                            out(row, column, c) = float(map[std::size_t(row) * width + column][c]);
+                return pixels;
+            },
+            py::arg("rotation") = py::none(), py::arg("width") = 128, py::arg("height") = 64, py::arg("samples") = 2,
+            R"doc(The sky without its disc as an equirectangular (height, width, 3) float32 map in Sky's convention
+(rows bottom to top) for a frame whose directions `rotation` (3 x 3) turns into world directions; each pixel
+the mean of samples x samples directions over it. Runs in parallel without the GIL.)doc");
+}
+
 py::dict statsDict(const firn::BakeStats &stats) {
     py::dict d;
     d["unknowns"] = stats.unknowns;
@@ -218,6 +292,7 @@ py::dict statsDict(const firn::BakeStats &stats) {
 
 void bindTransport(py::module_ &m) {
     bindLights(m);
+    bindNishitaSky(m);
     m.attr("BAKED_GRID_NAMES") = py::make_tuple(firn::BakedGrids::kNames[0], firn::BakedGrids::kNames[1],
                                                 firn::BakedGrids::kNames[2], firn::BakedGrids::kNames[3]);
 

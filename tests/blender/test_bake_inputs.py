@@ -52,12 +52,19 @@ def direction_world():
 
 
 def nishita_world(elevation, rotation):
+    """A Nishita sky whose Strength comes from a Value node: not the exact chain the core computes
+    (test_nishita_sky.py), so Cycles renders it through the world probe that these tests test."""
     world = bpy.data.worlds.new("Nishita")
     world.use_nodes = True
-    sky = world.node_tree.nodes.new("ShaderNodeTexSky")
+    tree = world.node_tree
+    sky = tree.nodes.new("ShaderNodeTexSky")
     sky.sky_type = "NISHITA"
     sky.sun_elevation, sky.sun_rotation = elevation, rotation
-    world.node_tree.links.new(sky.outputs["Color"], world.node_tree.nodes["Background"].inputs["Color"])
+    background = tree.nodes["Background"]
+    tree.links.new(sky.outputs["Color"], background.inputs["Color"])
+    strength = tree.nodes.new("ShaderNodeValue")
+    strength.outputs[0].default_value = 1.0
+    tree.links.new(strength.outputs[0], background.inputs["Strength"])
     bpy.context.scene.world = world
     return world, sky
 

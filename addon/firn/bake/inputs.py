@@ -5,11 +5,13 @@ that say "any thread"). No physics here.
 - Lamps: Point and Spot (intensity Power / 4π × Color in W/sr, Radius; a Spot's Size and Blend) and Area lamps
   (radiance Power / (4 × area) × Color in W/m²/sr, shape and size): Cycles 3.4's emission, measured in
   tests/blender/test_lamps.py. A lamp whose Volume Scatter ray visibility is off does not light the snow.
-- Sky: the scene's World. A plain Background colour × strength is read directly; anything else (Nishita sky,
-  HDRI, any node world) is rendered by Cycles (bake/world_probe.py, off the main thread when the bake runs from
-  the UI) into a small equirectangular radiance map (W/m²/sr) in the convention of cpp/firn/transport/lights.h.
-  The sun disc of a Nishita Sky Texture is measured apart and becomes a sun: a half-degree disc is far smaller
-  than a map pixel.
+- Sky: the scene's World. A plain Background colour × strength is read directly. A Nishita Sky Texture →
+  Background → World Output, nothing else, is computed by the core from the node's settings (NishitaWorld,
+  cpp/firn/transport/nishita_sky.h) in the bake's worker: its sky map and its disc as a sun. Anything else (HDRI,
+  any other node world) is rendered by Cycles (bake/world_probe.py, off the main thread when the bake runs from
+  the UI). Either way the sky becomes a small equirectangular radiance map (W/m²/sr) in the convention of
+  cpp/firn/transport/lights.h, and a Nishita sun disc becomes a sun: a half-degree disc is far smaller than a
+  map pixel.
 - Occluders: every rendered mesh-like object or collection instance that casts shadows (not snow), with what it
   instances (particles, Geometry Nodes), split by object, instance and material, each part with its diffuse
   albedo.
@@ -30,6 +32,7 @@ import numpy as np
 from mathutils import Vector
 
 from ..common import scene_geometry
+from ..common.core import firncore
 from ..common.errors import UserError
 from . import world_probe
 
@@ -77,7 +80,7 @@ class Occluder:
 @dataclass
 class BakeInputs:
     suns: list
-    sky: Sky  # None while the world is still to be rendered (add_rendered_sky)
+    sky: Sky  # None while the world is still to be rendered or computed (add_world_light)
     occluders: list
     frame: "Frame"
     warnings: list = field(default_factory=list)
@@ -270,8 +273,8 @@ def _measured_sky_suns(world):
 
 
 def plan_sky(scene):
-    """(Sky, warnings) of a world read from its settings, or (None, warnings) when it must be rendered
-    (world_request, then sky_from_rendering)."""
+    """(Sky, warnings) of a world read from its settings, or (None, warnings) when it must be rendered or
+    computed (world_request, then add_world_light)."""
     world = scene.world
     if world is not None and not world.cycles_visibility.scatter:
         return Sky(description="world hidden from volume scattering"), [
@@ -282,10 +285,97 @@ def plan_sky(scene):
     return None, _measured_sky_suns(world)[1]
 
 
+# --- a Nishita sky, computed by the core -----------------------------------------------------------------------
+
+SKY_MAP_SAMPLES = 2  # per pixel axis: the core's map averages 2 × 2 directions per pixel, as a box filter
+_NISHITA_SETTINGS = ("sun_elevation", "sun_rotation", "sun_size", "sun_intensity", "sun_disc", "altitude",
+                     "air_density", "dust_density", "ozone_density")
+_IDENTITY_MAPPING = {"translation": (0.0, 0.0, 0.0), "rotation": (0.0, 0.0, 0.0), "scale": (1.0, 1.0, 1.0),
+                     "mapping_x": "X", "mapping_y": "Y", "mapping_z": "Z", "use_min": False, "use_max": False}
+
+
+@dataclass
+class NishitaWorld:
+    """A world that is one Nishita Sky Texture → Background → World Output: the core computes its sky map and
+    sun from the node's settings (sky_from_nishita, any thread), no render. Maps are kept per orientation."""
+    world: str
+    node: str
+    parameters: dict  # firncore.NishitaSky's settings
+    maps: dict = field(default_factory=dict)
+
+    def discard(self):
+        """Nothing to remove (a world_probe.Request removes its files)."""
+
+
+def _unmapped(node):
+    mapping = node.texture_mapping
+    return all((tuple(value) if hasattr(value, "__len__") and not isinstance(value, str) else value) == expected
+               for value, expected in ((getattr(mapping, key), expected)
+                                       for key, expected in _IDENTITY_MAPPING.items()))
+
+
+def _nishita_node(world):
+    """(Sky Texture node, Background strength) when the world's surface is exactly a Nishita Sky Texture's
+    Color → Background (Strength not linked, not negative) → World Output, unmapped and unmuted, with no
+    volume; None for any other world."""
+    if world is None or not world.use_nodes or world.node_tree is None:
+        return None
+    link = _world_surface_link(world)
+    if link is None or world.node_tree.get_output_node("CYCLES").inputs["Volume"].is_linked:
+        return None
+    background = link.from_node
+    if (link.is_muted or background.type != "BACKGROUND" or background.mute
+            or background.inputs["Strength"].is_linked or not background.inputs["Color"].is_linked):
+        return None
+    colour = background.inputs["Color"].links[0]
+    node, strength = colour.from_node, background.inputs["Strength"].default_value
+    if (colour.is_muted or node.type != "TEX_SKY" or node.sky_type != "NISHITA" or node.mute
+            or node.inputs["Vector"].is_linked or not _unmapped(node) or strength < 0.0):
+        return None
+    return node, strength
+
+
+def nishita_parameters(world):
+    """firncore.NishitaSky's settings (angles in rad, altitude in m, the Background's strength) of a world that
+    is exactly a Nishita sky (_nishita_node); None for any other world (it is rendered instead)."""
+    found = _nishita_node(world)
+    if found is None:
+        return None
+    node, strength = found
+    return dict({key: getattr(node, key) for key in _NISHITA_SETTINGS}, strength=strength)
+
+
+def _nishita_world(world):
+    found = _nishita_node(world)
+    return None if found is None else NishitaWorld(world.name, found[0].name, nishita_parameters(world))
+
+
+def sky_from_nishita(request, frame):
+    """(Sky, [Sun]) in `frame` of a NishitaWorld, computed by the core (any thread; without the GIL)."""
+    try:
+        sky = firncore.NishitaSky(**request.parameters)
+        key = _rotation_key(frame)
+        if key not in request.maps:
+            request.maps[key] = sky.map(frame.rotation, *world_probe.SKY_MAP_SIZE, samples=SKY_MAP_SAMPLES)
+        sun = sky.sun()
+    except ValueError as error:
+        raise UserError(f"World '{request.world}': {error}") from error
+    sky_map = request.maps[key]
+    suns = [] if sun is None else [Sun(f"{request.world}: {request.node}", frame.direction(sun.direction),
+                                       tuple(sun.irradiance), sun.angular_diameter)]
+    height, width = sky_map.shape[:2]
+    return Sky(radiance=(1.0, 1.0, 1.0), map=sky_map, description=f"Nishita {width}×{height}"), suns
+
+
+# --- any other world, rendered by Cycles ----------------------------------------------------------------------
+
 def world_request(scene, frames):
-    """Main thread: a world_probe.Request for the scene's world seen from each Frame (one map per distinct
-    orientation). Cheap: the world is only saved; world_probe.render renders it, off the main thread if asked
-    from a worker."""
+    """Main thread: what the scene's world needs to become light in each Frame. A NishitaWorld (the settings
+    only), else a world_probe.Request (one map per distinct orientation). Cheap: the world is only saved;
+    world_probe.render renders it, off the main thread if asked from a worker."""
+    nishita = _nishita_world(scene.world)
+    if nishita is not None:
+        return nishita
     rotations = {_rotation_key(frame): frame.rotation for frame in frames}
     try:
         return world_probe.request(scene.world, scene.frame_current, list(rotations.values()),
@@ -324,6 +414,8 @@ def gather_sky(scene, frame):
     if sky is not None:
         return sky, [], warnings
     request = world_request(scene, [frame])
+    if isinstance(request, NishitaWorld):
+        return (*sky_from_nishita(request, frame), warnings)
     try:
         rendering = world_probe.render(request, cancelled=lambda: False)
     except world_probe.RenderError as error:
@@ -368,8 +460,8 @@ def gather_occluders(objects, depsgraph, frame):
 # --- everything -----------------------------------------------------------------------------------------------
 
 def gather(context, snow, occluders=gather_occluders):
-    """BakeInputs of one snow object. A world that is not a plain colour is left to render (`sky` None, see
-    plan_sky): bake/operators.py renders it off the main thread. `occluders(objects, depsgraph, frame)` gathers
+    """BakeInputs of one snow object. A world that is not a plain colour is left to compute or render (`sky`
+    None, see plan_sky): bake/operators.py does it off the main thread. `occluders(objects, depsgraph, frame)` gathers
     the occluders (spray/light.py shares the ones that stand still over a frame range)."""
     depsgraph = context.evaluated_depsgraph_get()  # first: it also brings every matrix_world up to date
     frame = Frame(snow, scene_geometry.metres_per_unit(context.scene))
@@ -379,9 +471,13 @@ def gather(context, snow, occluders=gather_occluders):
     return BakeInputs(suns, sky, occluders(occluder_objects(view_layer), depsgraph, frame), frame, warnings, lamps)
 
 
-def add_rendered_sky(inputs, request, rendering):
-    """Completes BakeInputs gathered with the world left to render (any thread)."""
-    inputs.sky, sky_suns = sky_from_rendering(request, rendering, inputs.frame)
+def add_world_light(inputs, request, rendering):
+    """Completes BakeInputs gathered with the world left to compute (a NishitaWorld, `rendering` None) or to
+    render (a world_probe.Request and its Rendering); any thread."""
+    if isinstance(request, NishitaWorld):
+        inputs.sky, sky_suns = sky_from_nishita(request, inputs.frame)
+    else:
+        inputs.sky, sky_suns = sky_from_rendering(request, rendering, inputs.frame)
     inputs.suns = inputs.suns + sky_suns
 
 

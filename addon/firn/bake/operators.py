@@ -92,21 +92,29 @@ def _bake_job(job, quality, seed, progress):
     job["proxy_colours"] = proxy.baked_colours(job["staged"], job["proxy_points"])
 
 
-def render_world(inputs, progress):
-    """Any thread: renders the world the jobs' skies wait for (world_probe: a child Blender off the main thread)
-    and completes their inputs; then the job's status moves on to the bake."""
-    request = inputs["world"]
-    if request is None:
-        return
+def _render(request, progress):
     try:
         rendering = world_probe.render(request, cancelled=lambda: progress.cancelled)
     except world_probe.RenderError as error:
         raise UserError(f"Could not render the world for the bake: {error}") from error
     if rendering is None:
         raise firncore.Cancelled("cancelled")
+    return rendering
+
+
+def render_world(inputs, progress):
+    """Any thread: computes a Nishita world in the core, or renders any other world (world_probe: a child
+    Blender off the main thread), and completes the inputs of the jobs whose sky waits for it; then the job's
+    status moves on to the bake."""
+    request = inputs["world"]
+    if request is None:
+        return
+    rendering = None if isinstance(request, bake_inputs.NishitaWorld) else _render(request, progress)
     for job in inputs["jobs"]:
         if job["inputs"].sky is None:
-            bake_inputs.add_rendered_sky(job["inputs"], request, rendering)
+            if progress.cancelled:
+                raise firncore.Cancelled("cancelled")
+            bake_inputs.add_world_light(job["inputs"], request, rendering)
     inputs["world"] = None
 
 
@@ -256,7 +264,8 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
 
     def job_status(self, inputs, progress):
         if inputs["world"] is not None:
-            return "Rendering the world"
+            return ("Computing the sky" if isinstance(inputs["world"], bake_inputs.NishitaWorld)
+                    else "Rendering the world")
         jobs = inputs["jobs"]
         part = f"{jobs[inputs['current']]['name']} ({inputs['current'] + 1}/{len(jobs)}) " if len(jobs) > 1 else ""
         return part + progress.stage

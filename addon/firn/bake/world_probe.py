@@ -1,5 +1,6 @@
 """The world as the bake's light, rendered by Cycles: a small equirectangular radiance map per snow frame and,
 for each Nishita sun, close-ups of its disc with and without it (bake/inputs.py turns them into a Sky and Suns).
+A world that is just a Nishita sky is not rendered: the core computes it (bake/inputs.py NishitaWorld).
 
 Rendering needs Blender's main thread, which the UI needs too. So the main thread only writes the world into a
 .blend of its own (`Request`, milliseconds); the bake's worker thread then has a child Blender render it
