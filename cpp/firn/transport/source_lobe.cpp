@@ -12,13 +12,20 @@
 
 namespace firn {
 
+namespace {
+
+// 4 pi HG(k, cos): mean 1 over the sphere.
+double lobe(double k, double cos) {
+    const double d = 1.0 + k * k - 2.0 * k * cos;
+    return (1.0 - k * k) / (d * std::sqrt(d));
+}
+
+}  // namespace
+
 double lobeRadiance(double l0, const glm::dvec3 &l1, const glm::dvec3 &w) {
     const double length = glm::length(l1);
     if (l0 <= 0.0 || length <= 0.0) return l0;
-    const double k = std::min(length / (3.0 * l0), kMaxLobeAnisotropy);
-    const double cos = glm::dot(w, l1) / length;
-    const double d = 1.0 + k * k - 2.0 * k * cos;
-    return l0 * (1.0 - k * k) / (d * std::sqrt(d));
+    return l0 * lobe(std::min(length / (3.0 * l0), kMaxLobeAnisotropy), glm::dot(w, l1) / length);
 }
 
 namespace {
@@ -47,9 +54,8 @@ FittedLobe fitLobe(double t, double alpha) {
             exitance += weight * ((1.0 - t) + t * c);  // the linear form's, negative parts included: its energy
         }
     if (exitance <= 0.0) return {};
-    // Relative error, floored at a tenth of the mean radiance where L nears zero.
+    // Relative error, its denominator floored (at a tenth of the exitance) where L nears zero.
     const double floor2 = 0.01 * exitance * exitance;
-    auto lobe = [](double k, double c) { const double d = 1.0 + k * k - 2.0 * k * c; return (1.0 - k * k) / (d * std::sqrt(d)); };
     auto fit = [&](double k) {
         double flux = 0.0;
         for (const Node &n : nodes) flux += n.weight * lobe(k, n.c);

@@ -24,10 +24,12 @@ struct SourceLobe {
 // L(w) = e0 + e1 . w (the surface model's linear form): axis along e1, k fitted to max(0, L) by least squares
 // in relative error weighted by projected solid angle (what cameras see of the surface), and l0 so that the
 // exitance (the flux of L through the surface, its negative parts included: the model's energy) is kept; none
-// where that is not positive. A surface's escape shape is flatter than a lobe with
-// the linear form's first moment: the escape function u = 3/7 (1 + 2 mu) reads as k = 2/3 by moments (5 times
-// too bright seen along the normal), k = 0.24 fitted (within 9 % for mu >= 0.2, +32 % at grazing views). From a table over |e1| / (e0 + |e1|) and
-// the angle between e1 and the normal, built on first use. e0 <= 0 gives no light.
+// where that is not positive. l0 stays within e0 + |e1|, the form's largest value: a lobe pointing into the
+// snow would hide most of its light where no camera looks, and the renderer interpolates l0 with the
+// neighbours'. A surface's escape shape is flatter than a lobe of the linear form's first moment: the escape
+// function u = 3/7 (1 + 2 mu) reads as k = 2/3 by moments (5 times too bright seen along the normal), k = 0.24
+// fitted (within 9 % for mu >= 0.2, +32 % at grazing views). From a table over |e1| / (e0 + |e1|) and the
+// angle between e1 and the normal, built on first use.
 SourceLobe exitLobe(double e0, const glm::dvec3 &e1, const glm::dvec3 &normal);
 
 }  // namespace firn
