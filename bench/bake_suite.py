@@ -10,10 +10,7 @@ are left out (the renderer's own transparency, not the bake, decides those). Rep
 reference's median relative standard error per block (its noise is part of the errors), bake time and reference
 time. The reference is cached by case under the output folder, so changing the bake reruns only the bake.
 
-With --lobe it also reports the mean error of the same grids read as a Henyey-Greenstein lobe instead of linearly
-(render_lobe: a candidate change of the grids' contract, docs/bake.md).
-
-    PYTHONPATH=build/python python3 bench/bake_suite.py [--cases a,b] [--cache DIR] [--markdown] [--fresh] [--lobe]
+    PYTHONPATH=build/python python3 bench/bake_suite.py [--cases a,b] [--cache DIR] [--markdown] [--fresh] [--maps]
 """
 
 import argparse
@@ -245,43 +242,6 @@ def views(case):
     return origins, directions, tau
 
 
-PAD = 5  # voxels around the density that the source grids may reach
-
-
-def baked_source(path, shape):
-    """The four baked grids as arrays over the density's index box grown by PAD: (nx, ny, nz, 3) each."""
-    grids = {g.name: g for g in pyopenvdb.readAll(path)[0]}
-    out = []
-    for name in firncore.BAKED_GRID_NAMES:
-        array = np.zeros(tuple(n + 2 * PAD for n in shape) + (3,), dtype=np.float32)
-        grids[name].copyToArray(array, ijk=(-PAD,) * 3)
-        out.append(array)
-    return out
-
-
-def render_lobe(case, source, origins, directions):
-    """What the baked grids would render if read as one Henyey-Greenstein lobe, S(w) = l0 HG(k, cos) with
-    k = |l1| / (3 l0) and cos along l1 (the linear form's zeroth and first moments, never negative, exact for a
-    single-scattered beam), instead of l0 + l1 . w: the same emission-absorption integral as render_baked."""
-    density = np.pad(case.density, PAD)
-    step = case.voxel / 16
-    out = []
-    for o, d in zip(origins, directions):
-        t = np.arange(0.0, min(plate_hit(case, o, d), 6.0 * case.voxel * max(case.density.shape)), step) + 0.5 * step
-        p = (o + t[:, None] * d) / case.voxel + PAD
-        sigma = trilinear(density, p) * case.sigma_t / case.rho
-        l0 = np.stack([trilinear(source[0][..., c], p) for c in range(3)], -1)
-        l1 = np.stack([np.stack([trilinear(source[1 + a][..., c], p) for a in range(3)], -1) for c in range(3)], 1)
-        length = np.linalg.norm(l1, axis=-1)
-        k = np.clip(length / np.maximum(3.0 * l0, 1e-30), 0.0, 0.95)
-        cos = (l1 @ -d) / np.maximum(length, 1e-30)
-        S = l0 * (1.0 - k * k) / (1.0 + k * k - 2.0 * k * cos) ** 1.5
-        opacity = 1.0 - np.exp(-sigma * step)
-        transmittance = np.concatenate([[1.0], np.cumprod(1.0 - opacity)[:-1]])
-        out.append(((transmittance * opacity)[:, None] * S).sum(0))
-    return np.array(out)
-
-
 def reference(case, path, origins, directions, cache):
     file = os.path.join(cache, f"{case.name}_{case.key()}.npz") if cache else None
     if file and os.path.exists(file):
@@ -298,7 +258,7 @@ def reference(case, path, origins, directions, cache):
     return mean, error, seconds
 
 
-def run_case(case, folder, cache, quality="FINAL", lobe=False):
+def run_case(case, folder, cache, quality="FINAL"):
     path = os.path.join(folder, case.name + ".vdb")
     write_density(path, case.density, case.voxel)
     origins, directions, tau = views(case)
@@ -313,12 +273,7 @@ def run_case(case, folder, cache, quality="FINAL", lobe=False):
                  max(mean[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum(), 1e-30) - 1.0 for v in range(len(case.views))]
     m, e, b = mean[seen], error[seen], baked[seen]
     relative = b / np.maximum(m, 1e-30) - 1.0
-    lobe_mean = None
-    if lobe:
-        read = render_lobe(case, baked_source(path, case.density.shape), origins[seen], directions[seen])
-        lobe_mean = float(np.abs(read / np.maximum(m, 1e-30) - 1.0).mean())
     return {
-        "lobe_mean": lobe_mean,
         "case": case.name, "what": case.what, "blocks": int(seen.sum()) * 3,
         "mean": float(np.abs(relative).mean()), "worst": float(np.abs(relative).max()),
         "worst_signed": float(relative.flat[np.abs(relative).argmax()]),
@@ -335,14 +290,13 @@ def worst_view(r):
 
 
 def table(rows, markdown):
-    head = ("case", "blocks", "mean", "worst", "bias", "worst view bias", "ref noise", "bake s", "ref s", "mean read as a lobe")
+    head = ("case", "blocks", "mean", "worst", "bias", "worst view bias", "ref noise", "bake s", "ref s")
     if markdown:
         lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
         for r in rows:
-            lobe = "—" if r["lobe_mean"] is None else f"{100 * r['lobe_mean']:.1f} %"
             lines.append(f"| {r['case']} | {r['blocks']} | {100 * r['mean']:.1f} % | {100 * r['worst_signed']:+.0f} % | "
                          f"{100 * r['bias']:+.1f} % | {worst_view(r)} | {100 * r['noise']:.1f} % | {r['bake_s']:.2f} | "
-                         f"{r['reference_s']:.0f} | {lobe} |")
+                         f"{r['reference_s']:.0f} |")
         return "\n".join(lines)
     lines = [f"{'case':<14} {'blocks':>6} {'mean':>7} {'worst':>7} {'bias':>7} {'worst view bias':>22} {'noise':>6} "
              f"{'bake s':>7} {'ref s':>7}"]
@@ -362,7 +316,6 @@ def main():
     parser.add_argument("--markdown", action="store_true")
     parser.add_argument("--quality", default="FINAL")
     parser.add_argument("--maps", action="store_true", help="print each view's per-block relative errors")
-    parser.add_argument("--lobe", action="store_true", help="also the mean error of the grids read as a lobe")
     args = parser.parse_args()
     chosen = [c for c in cases() if not args.cases or c.name in args.cases.split(",")]
     cache = None if args.fresh else args.cache
@@ -372,12 +325,11 @@ def main():
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         for case in chosen:
-            rows.append(run_case(case, folder, cache, args.quality, args.lobe))
+            rows.append(run_case(case, folder, cache, args.quality))
             r = rows[-1]
             print(f"  {r['case']}: {r['what']}: mean {100 * r['mean']:.1f} %, worst {100 * r['worst_signed']:+.0f} %, "
                   f"bias {100 * r['bias']:+.1f} %; per view: " +
-                  ", ".join(f"{v} {100 * b:+.0f} %" for v, b in zip(case.views, r["view_bias"])) +
-                  ("" if r["lobe_mean"] is None else f"; read as a lobe: mean {100 * r['lobe_mean']:.1f} %"), flush=True)
+                  ", ".join(f"{v} {100 * b:+.0f} %" for v, b in zip(case.views, r["view_bias"])), flush=True)
             if args.maps:
                 _, _, tau = views(case)
                 rel = np.full((len(tau), 3), np.nan)

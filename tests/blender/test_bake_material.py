@@ -35,36 +35,42 @@ def test_baked_material_nodes(clean_scene, tmp_path):
     assert extinction.operation == "MULTIPLY" and extinction.inputs[1].default_value == pytest.approx(K)
     assert linked_from(extinction.inputs[0]).attribute_name == "density"
     assert linked_from(emission.inputs["Strength"]) == extinction
-    # Color = S(w): firn_source + sum over axes of firn_source_<axis> x w.<axis>, w = Incoming in object space.
-    total = emission.inputs["Color"]
-    grids = []
-    for axis in "ZYX":
-        added = linked_from(total)
-        assert added.operation == "ADD"
-        term = linked_from(added.inputs[1])
-        assert term.operation == "SCALE"
-        grids.append(linked_from(term.inputs[0]).attribute_name)
-        component = term.inputs["Scale"].links[0]
-        assert component.from_socket.name == axis
-        unit = linked_from(linked_from(component.from_node.inputs["Vector"]).inputs[0])
-        assert (unit.vector_type, unit.convert_from, unit.convert_to) == ("VECTOR", "WORLD", "OBJECT")
-        assert unit.inputs["Vector"].links[0].from_socket.name == "Incoming"
-        total = added.inputs[0]
-    grids.append(linked_from(total).attribute_name)
-    assert sorted(grids) == sorted(materials.BAKED_GRIDS)
+    # Color = S(w), the contract's lobe: fed by the four grids and by Incoming turned into the object's frame.
+    assert linked_from(emission.inputs["Color"]) == nodes["Firn Lobe"]
+    grids = {node.attribute_name for node in nodes if node.type == "ATTRIBUTE"} - {"density"}
+    assert grids == set(materials.BAKED_GRIDS)
+    unit = nodes["Firn Incoming Object"]
+    assert (unit.vector_type, unit.convert_from, unit.convert_to) == ("VECTOR", "WORLD", "OBJECT")
+    assert unit.inputs["Vector"].links[0].from_socket.name == "Incoming"
+
+
+def lobe(l0, l1, w):
+    """The contract's source function (docs/vdb-contract.md), per channel: l0 (1 - k²) / (1 + k² - 2 k cos)^1.5,
+    k = min(|l1| / (3 l0), 0.95), cos = w . l1 / |l1|; l1 given as the x, y, z grids' RGB values."""
+    l0, l1 = np.array(l0, float), np.array(l1, float).T  # l1: one row per channel
+    length = np.linalg.norm(l1, axis=1)
+    k = np.minimum(np.divide(length, 3 * l0, out=np.zeros(3), where=l0 > 0), 0.95)
+    cos = np.divide(l1 @ np.array(w, float), length, out=np.zeros(3), where=length > 0)
+    return l0 * (1 - k * k) / (1 + k * k - 2 * k * cos) ** 1.5
+
+
+# A peaked source: green's lobe is clamped at k = 0.95, blue has none, red is moderate.
+PEAKED = ((0.2, 0.1, 0.4), (0.3, 0.0, 0.0), (0.1, 0.5, 0.0), (0.2, 0.5, 0.0))
 
 
 @pytest.mark.parametrize("towards_camera", [(0.0, 0.0, 1.0),
                                             (math.sin(math.radians(60)), 0.0, math.cos(math.radians(60))),
                                             (0.0, -math.sin(math.radians(45)), math.cos(math.radians(45)))])
-def test_snow_renders_its_source_function(clean_scene, tmp_path, towards_camera):
-    """A thick slab of an absorbing, emitting medium renders exactly S(w) = source + source_xyz . w, w towards the
-    camera, with Cycles' default settings (step rate 1, volume bounces 0): 30 optical depths per step."""
+@pytest.mark.parametrize("source", [(S, S_X, S_Y, S_Z), PEAKED])
+def test_snow_renders_its_source_function(clean_scene, tmp_path, towards_camera, source):
+    """A thick slab of an absorbing, emitting medium renders exactly the lobe S(w) of its grids, w towards the
+    camera, with Cycles' default settings (step rate 1, volume bounces 0): 30 optical depths per step. The
+    core's renderer evaluates the same lobe (lobeRadiance, tests/cpp/transport/source_lobe_test.cpp); a real bake
+    rendered both ways: test_bake_end_to_end.py."""
     black_world()
-    baked_slab(str(tmp_path), uniform_source(S, S_X, S_Y, S_Z))
+    baked_slab(str(tmp_path), uniform_source(*source))
     ortho_camera((0, 0, 0), towards_camera, scale=0.05)
-    w = np.array(towards_camera)
-    expected = np.array(S) + np.column_stack((S_X, S_Y, S_Z)) @ w
+    expected = lobe(source[0], source[1:], towards_camera)
     assert mean_pixel(render(str(tmp_path), size=(8, 8))) == pytest.approx(expected, rel=2e-3)  # measured 1e-6
 
 
@@ -75,7 +81,7 @@ def test_direction_is_taken_in_the_volume_frame(clean_scene, tmp_path):
     baked_slab(str(tmp_path), uniform_source(S, S_X, S_Y, S_Z), rotation=(0.0, 0.0, math.radians(90)))
     theta = math.radians(60)
     ortho_camera((0, 0, 0), (math.sin(theta), 0.0, math.cos(theta)), scale=0.05)
-    expected = np.array(S) - math.sin(theta) * np.array(S_Y) + math.cos(theta) * np.array(S_Z)
+    expected = lobe(S, (S_X, S_Y, S_Z), (0.0, -math.sin(theta), math.cos(theta)))
     assert mean_pixel(render(str(tmp_path), size=(8, 8))) == pytest.approx(expected, rel=2e-3)  # measured 1e-6
 
 

@@ -8,8 +8,9 @@ svm_node_principled_volume). Rendering it is brute-force volume path tracing: sl
 
 Baked (after Bake Scattering, docs/vdb-contract.md "Rendering baked snow"): no scattering at all. Volume
 Absorption with sigma_t = k × density (Color black: Cycles absorbs (1 - Color) × Density) plus Emission
-sigma_t × S(w), S(w) = firn_source + firn_source_x w.x + firn_source_y w.y + firn_source_z w.z, w = Geometry >
-Incoming turned into the object's frame (the grids' space; identity for Firn snow). An absorbing, emitting
+sigma_t × S(w), S(w) per channel the Henyey-Greenstein lobe of mean firn_source and first moment along
+(firn_source_x, firn_source_y, firn_source_z) (_view_dependent_source), w = Geometry > Incoming turned into the
+object's frame (the grids' space; identity for Firn snow). An absorbing, emitting
 volume renders its emission exactly in Cycles at any step size, and every ray sees it: camera rays (the snow's
 look) and the indirect rays of nearby surfaces (bounce light from the snow). The bake fixes the optics it was
 made with: k is the baked one (obj.firn.bake_extinction_per_density) until the next bake.
@@ -35,10 +36,11 @@ _BAKED_TAG = "firn_baked"  # ... and those showing a bake
 _FORM_TAG = "firn_form"  # the form a material was built in: OPTICS, SINGLE, BAKED or OPAQUE, "+grains" with sub-balls
 _OPTICS_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Output")
 _BAKED_NODES = ("Firn Density", "Firn Extinction", "Firn Absorption", "Firn Emission", "Firn Source",
-                "Firn Source X", "Firn Source Y", "Firn Source Z", "Firn Incoming", "Firn Output")
+                "Firn Source X", "Firn Source Y", "Firn Source Z", "Firn Incoming", "Firn Lobe", "Firn Output")
 _BRANCHES = ("", " Grains")  # the node names' suffixes: without and with sub-balls
 _SINGLE_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Absorption", "Firn Single", "Firn Output")
 BAKED_GRIDS = ("firn_source", "firn_source_x", "firn_source_y", "firn_source_z")  # docs/vdb-contract.md
+LOBE_MAX_K = 0.95  # the lobe's largest anisotropy, as the core's kMaxLobeAnisotropy (source_lobe.h)
 
 
 def is_snow_material(material):
@@ -286,36 +288,90 @@ def _single(nodes, links, extinction, suffix, _context=None):
     return single.outputs["Shader"]
 
 
+def _vector_math(nodes, links, name, operation, a, b=None, location=(0, 0)):
+    """A Vector Math node on sockets or constant vectors; returns its Vector output."""
+    node = _new_node(nodes, "ShaderNodeVectorMath", name, "", location)
+    node.operation = operation
+    for socket, value in zip(node.inputs, (a, b)):
+        if value is None:
+            continue
+        if isinstance(value, tuple):
+            socket.default_value = value
+        else:
+            links.new(value, socket)
+    return node.outputs["Vector"]
+
+
+def _per_channel_sqrt(nodes, links, name, vector, location):
+    """sqrt of each of the three components (Vector Math has no square root)."""
+    x, y = location
+    split = _new_node(nodes, "ShaderNodeSeparateXYZ", f"{name} Split", "", (x, y))
+    join = _new_node(nodes, "ShaderNodeCombineXYZ", f"{name} Join", "", (x + 400, y))
+    links.new(vector, split.inputs["Vector"])
+    for index, axis in enumerate("XYZ"):
+        root = _new_node(nodes, "ShaderNodeMath", f"{name} {axis}", "", (x + 200, y - 150 * index))
+        root.operation = "SQRT"
+        links.new(split.outputs[axis], root.inputs[0])
+        links.new(root.outputs["Value"], join.inputs[axis])
+    return join.outputs["Vector"]
+
+
 def _view_dependent_source(nodes, links):
-    """S(w) = firn_source + firn_source_x w.x + firn_source_y w.y + firn_source_z w.z (W/m²/sr per unit
-    extinction), w the direction towards the viewer in the grids' frame (World → Object, unit length)."""
-    incoming = _new_node(nodes, "ShaderNodeNewGeometry", "Firn Incoming", "w (world)", (-1400, -300))
-    to_object = _new_node(nodes, "ShaderNodeVectorTransform", "Firn Incoming Object", "w (object)", (-1200, -300))
+    """S(w) per RGB channel, one Henyey-Greenstein lobe (docs/vdb-contract.md): l0 = firn_source, l1 = (firn_source_x,
+    firn_source_y, firn_source_z), k = min(|l1| / (3 l0), 0.95), S = l0 (1 - k²) / (1 + k² - 2 k cos)^1.5 with
+    k cos = k (l1 . w) / |l1|; w the direction towards the viewer in the grids' frame (World → Object, unit
+    length). The three channels are the components of the Vector Math nodes' vectors (element-wise operations;
+    Cycles' divisions give 0 for a zero divisor: k = 0 where l0 = 0 or l1 = 0)."""
+    incoming = _new_node(nodes, "ShaderNodeNewGeometry", "Firn Incoming", "w (world)", (-2600, -300))
+    to_object = _new_node(nodes, "ShaderNodeVectorTransform", "Firn Incoming Object", "w (object)", (-2400, -300))
     to_object.vector_type, to_object.convert_from, to_object.convert_to = "VECTOR", "WORLD", "OBJECT"
-    unit = _new_node(nodes, "ShaderNodeVectorMath", "Firn Incoming Unit", "", (-1000, -300))
+    unit = _new_node(nodes, "ShaderNodeVectorMath", "Firn Incoming Unit", "", (-2200, -300))
     unit.operation = "NORMALIZE"
-    components = _new_node(nodes, "ShaderNodeSeparateXYZ", "Firn Incoming XYZ", "", (-800, -300))
+    components = _new_node(nodes, "ShaderNodeSeparateXYZ", "Firn Incoming XYZ", "", (-2000, -300))
     links.new(incoming.outputs["Incoming"], to_object.inputs["Vector"])
     links.new(to_object.outputs["Vector"], unit.inputs[0])
     links.new(unit.outputs["Vector"], components.inputs["Vector"])
-    source = _new_node(nodes, "ShaderNodeAttribute", "Firn Source", "firn_source", (-600, 0))
+    source = _new_node(nodes, "ShaderNodeAttribute", "Firn Source", "firn_source", (-1800, 0))
     source.attribute_type, source.attribute_name = "GEOMETRY", "firn_source"
-    total = source.outputs["Vector"]
+    l0 = source.outputs["Vector"]
+    along = squared = None  # per channel: l1 . w and |l1|²
     for index, axis in enumerate("XYZ"):
         y = -200 - 200 * index
         term = _new_node(nodes, "ShaderNodeAttribute", f"Firn Source {axis}", f"firn_source_{axis.lower()}",
-                         (-600, y))
+                         (-1800, y))
         term.attribute_type, term.attribute_name = "GEOMETRY", f"firn_source_{axis.lower()}"
-        scaled = _new_node(nodes, "ShaderNodeVectorMath", f"Firn Term {axis}", f"× w.{axis.lower()}", (-400, y))
+        scaled = _new_node(nodes, "ShaderNodeVectorMath", f"Firn Term {axis}", f"× w.{axis.lower()}", (-1600, y))
         scaled.operation = "SCALE"
         links.new(term.outputs["Vector"], scaled.inputs[0])
         links.new(components.outputs[axis], scaled.inputs["Scale"])
-        added = _new_node(nodes, "ShaderNodeVectorMath", f"Firn Sum {axis}", "", (-200, y))
-        added.operation = "ADD"
-        links.new(total, added.inputs[0])
-        links.new(scaled.outputs["Vector"], added.inputs[1])
-        total = added.outputs["Vector"]
-    return total
+        square = _vector_math(nodes, links, f"Firn Square {axis}", "MULTIPLY", term.outputs["Vector"],
+                              term.outputs["Vector"], (-1600, y - 800))
+        if along is None:
+            along, squared = scaled.outputs["Vector"], square
+        else:
+            along = _vector_math(nodes, links, f"Firn Sum {axis}", "ADD", along, scaled.outputs["Vector"], (-1400, y))
+            squared = _vector_math(nodes, links, f"Firn Square Sum {axis}", "ADD", squared, square, (-1400, y - 800))
+    length = _per_channel_sqrt(nodes, links, "Firn Length", squared, (-1200, -1200))
+    ratio = _vector_math(nodes, links, "Firn Lobe Ratio", "DIVIDE", length,
+                         _vector_math(nodes, links, "Firn Three l0", "SCALE", l0, location=(-1000, -100)),
+                         (-800, -600))
+    nodes["Firn Three l0"].inputs["Scale"].default_value = 3.0
+    k = _vector_math(nodes, links, "Firn Lobe k", "MINIMUM",
+                     _vector_math(nodes, links, "Firn Lobe Positive", "MAXIMUM", ratio, (0.0, 0.0, 0.0), (-600, -600)),
+                     (LOBE_MAX_K,) * 3, (-400, -600))
+    k_cos = _vector_math(nodes, links, "Firn Lobe k cos", "DIVIDE",
+                         _vector_math(nodes, links, "Firn Lobe k l1 w", "MULTIPLY", k, along, (-200, -500)), length,
+                         (0, -500))
+    k2 = _vector_math(nodes, links, "Firn Lobe k2", "MULTIPLY", k, k, (-200, -700))
+    numerator = _vector_math(nodes, links, "Firn Lobe Numerator", "MULTIPLY", l0,
+                             _vector_math(nodes, links, "Firn Lobe 1 - k2", "SUBTRACT", (1.0, 1.0, 1.0), k2, (0, -800)),
+                             (200, -800))
+    d = _vector_math(nodes, links, "Firn Lobe d", "MULTIPLY_ADD", k_cos, (-2.0, -2.0, -2.0), (200, -600))
+    links.new(_vector_math(nodes, links, "Firn Lobe 1 + k2", "ADD", (1.0, 1.0, 1.0), k2, (0, -700)),
+              nodes["Firn Lobe d"].inputs[2])
+    d15 = _vector_math(nodes, links, "Firn Lobe d^1.5", "MULTIPLY", d,
+                       _per_channel_sqrt(nodes, links, "Firn Lobe Root", d, (400, -900)), (1000, -700))
+    return _vector_math(nodes, links, "Firn Lobe", "DIVIDE", numerator, d15, (1200, -600))
 
 
 def _baked(nodes, links, extinction, suffix, source):

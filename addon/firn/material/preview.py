@@ -5,8 +5,9 @@ material shows what the optics predict of the surface: the plane albedo of a sem
 diffuse light (the white-sky albedo, per RGB) as its colour, and subsurface scattering whose radius is the
 snow's transport mean free path 1 / sigma_t' (per RGB; Blender's radius is the medium's mean free path, and
 the similarity-scaled, isotropic medium has sigma_t' = sigma_t (1 - g)), so edges and thin snow glow as they do
-in the render. After Bake Scattering the proxy shows the bake instead: the baked source function's isotropic part
-`firn_source` (W/(m² sr), vdb-contract.md), sampled at its vertices into the colour attribute BAKED_ATTRIBUTE,
+in the render. After Bake Scattering the proxy shows the bake instead: the baked source function's mean over directions
+`firn_source` (W/(m² sr), its lobe's l₀, vdb-contract.md; on a diffusely lit surface about the radiance seen 75°
+from its normal, half that seen along it), sampled at its vertices into the colour attribute BAKED_ATTRIBUTE,
 emitted as the surface's radiance (what Cycles renders of optically thick snow, seen from any side). No physics
 here: every number comes from firncore.
 

@@ -10,6 +10,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/source_lobe.h"
 #include "firn/util/error.h"
 
 namespace firn {
@@ -113,10 +114,13 @@ Rgb BakedRadiance::along(const Ray &ray, double tMax, double step) {
         const double sigmaT = k * openvdb::tools::BoxSampler::sample(density_, ijk);
         if (sigmaT <= 0.0) return true;
         const openvdb::Vec3d at = ijk * sourceIndexPerDensityIndex_;
-        openvdb::Vec3f S = openvdb::tools::BoxSampler::sample(source_[0], at);
-        for (int a = 0; a < 3; ++a) S += float(w[a]) * openvdb::tools::BoxSampler::sample(source_[1 + a], at);
+        const openvdb::Vec3f l0 = openvdb::tools::BoxSampler::sample(source_[0], at);
+        std::array<openvdb::Vec3f, 3> l1;  // per axis, RGB
+        for (int a = 0; a < 3; ++a) l1[a] = openvdb::tools::BoxSampler::sample(source_[1 + a], at);
+        Rgb S;
+        for (int c = 0; c < 3; ++c) S[c] = lobeRadiance(l0[c], glm::dvec3(l1[0][c], l1[1][c], l1[2][c]), w);
         const double opacity = 1.0 - std::exp(-sigmaT * dt);
-        radiance += transmittance * opacity * Rgb(S.x(), S.y(), S.z());
+        radiance += transmittance * opacity * S;
         transmittance *= 1.0 - opacity;
         return transmittance > 1e-6;
     });

@@ -13,10 +13,11 @@
 namespace firn {
 
 // The bake's output, written beside `density` in the snow's VDB (contract: docs/vdb-contract.md).
-// The snow's source function S, the radiance it scatters towards w per unit extinction (W/m^2/sr, RGB):
-//   S(w) = source + source_x w.x + source_y w.y + source_z w.z
-// w the world direction towards the viewer (Cycles' Geometry > Incoming). Rendered with absorption
-// sigma_t = k density and emission sigma_t S(w), it gives the snow's scattered radiance.
+// The snow's source function S, the radiance it scatters towards w per unit extinction (W/m^2/sr, RGB), per
+// channel one Henyey-Greenstein lobe of mean l0 = source and first moment 4 pi l1 / 3, l1 = (source_x,
+// source_y, source_z) (lobeRadiance, source_lobe.h), w the world direction towards the viewer (Cycles'
+// Geometry > Incoming). Rendered with absorption sigma_t = k density and emission sigma_t S(w), it gives the
+// snow's scattered radiance.
 struct BakedGrids {
     static constexpr std::array<const char *, 4> kNames{"firn_source", "firn_source_x", "firn_source_y",
                                                         "firn_source_z"};
