@@ -195,6 +195,13 @@ as Image.pixels; u = 0.5 looks along +X, u = 0.25 along +Y (Environment Texture,
             py::arg("direction"), "Radiance arriving from a world direction (W/m^2/sr).");
 }
 
+py::dict phasesDict(const firn::BakeStats::Phases &phases) {
+    py::dict d;
+    d["topology"] = phases.topology, d["light"] = phases.light, d["trace"] = phases.trace;
+    d["solve"] = phases.solve, d["gather"] = phases.gather, d["grids"] = phases.grids;
+    return d;
+}
+
 py::dict statsDict(const firn::BakeStats &stats) {
     py::dict d;
     d["unknowns"] = stats.unknowns;
@@ -206,11 +213,8 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["relative_residual"] = stats.relativeResidual;
     d["passes"] = stats.passes;
     d["source_scale"] = stats.sourceScale;
-    py::dict seconds;
-    seconds["topology"] = stats.topologySeconds, seconds["light"] = stats.lightSeconds;
-    seconds["trace"] = stats.traceSeconds;
-    seconds["solve"] = stats.solveSeconds, seconds["gather"] = stats.gatherSeconds, seconds["grids"] = stats.gridSeconds;
-    d["seconds"] = seconds;
+    d["seconds"] = phasesDict(stats.seconds);
+    d["cpu_seconds"] = phasesDict(stats.cpuSeconds);
     return d;
 }
 

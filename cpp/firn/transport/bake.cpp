@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -66,18 +67,22 @@ Preset resolve(const BakeSettings &s) {
     return p;
 }
 
-// Wall-clock time between laps (s).
+// Wall-clock and processor time (all threads: std::clock) between laps, added to a phase's seconds.
 class Stopwatch {
   public:
-    double lap() {
+    explicit Stopwatch(BakeStats &stats) : stats_(stats) {}
+    void lap(double BakeStats::Phases::*phase) {
         const auto now = std::chrono::steady_clock::now();
-        const double seconds = std::chrono::duration<double>(now - last_).count();
-        last_ = now;
-        return seconds;
+        const std::clock_t cpuNow = std::clock();
+        stats_.seconds.*phase += std::chrono::duration<double>(now - last_).count();
+        stats_.cpuSeconds.*phase += double(cpuNow - cpuLast_) / CLOCKS_PER_SEC;
+        last_ = now, cpuLast_ = cpuNow;
     }
 
   private:
+    BakeStats &stats_;
     std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+    std::clock_t cpuLast_ = std::clock();
 };
 
 // One colour channel of the optics. Lengths below are "resistances": 3 times the reduced optical depth,
@@ -734,6 +739,65 @@ int sourceScaleFor(const Medium &medium, const BakeSettings &settings) {
 
 }  // namespace
 
+namespace {
+
+// Progress when the diffusion solves are done (REFERENCE: before path tracing the surface).
+constexpr double kSolvedProgress = 0.9, kSolvedProgressReference = 0.5;
+
+// The source function of every unknown: per pass (the later ones gather the light between snow surfaces
+// first), a diffusion solve per channel. One channel at a time, its system assembled and its solver built
+// again each pass: keeping the three tripled the bake's memory, and rebuilding them costs a few per cent of a
+// solve. All the solve's data is freed on return, before the grids are written.
+std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                                 const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
+                                 int passes, Progress &p, Stopwatch &clock, BakeStats &stats) {
+    const bool reference = settings.quality == BakeQuality::Reference;
+    const double solved = reference ? kSolvedProgressReference : kSolvedProgress;
+    std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
+    for (auto &channel : phi) channel.assign(topo.size(), 0.0);
+    std::vector<glm::vec3> fromSnow;  // W/m^2 gathered from other snow (after the first pass)
+    std::vector<Source> source;
+    for (int pass = 0; pass < passes; ++pass) {
+        const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
+        if (pass > 0) {
+            // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
+            p.report(begin, "Gathering light between snow surfaces");
+            const BakedGrids previous = makeGrids(scene, topo, source, traced, preset, settings);
+            source = {};
+            fromSnow = snowIrradiance(scene, topo, light, previous, SkyRays(preset.skySamples), settings.seed ^ 0x5C1Eull,
+                                      SubProgress(&p, begin, begin));
+            clock.lap(&BakeStats::Phases::gather);
+        }
+        std::vector<SolvedVoxel> solvedVoxel(topo.size());  // after the gathering: its grids take room too
+        for (int c = 0; c < 3; ++c) {
+            const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
+            p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
+            ChannelSystem system = assemble(scene, topo, light, c, sub);
+            if (pass > 0) system.addDiffuse(fromSnow, c);
+            if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
+            if (topo.size() > 0) {
+                const MultigridSolver solver(std::move(system.A));
+                // Passes before the last only feed the gathering between surfaces: 0.1 % will do.
+                const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, 1e-3) : preset.tolerance;
+                const MultigridSolver::Result result = solver.solve(system.b, phi[c], tolerance, 500, sub);
+                stats.iterations[c] += result.iterations;
+                stats.relativeResidual[c] = result.relativeResidual;
+            }
+            solvedVoxels(scene, topo, light, system, phi[c], c, solvedVoxel);
+        }
+        std::vector<Source> surface = surfaceRadiance(topo, solvedVoxel);
+        if (reference && pass + 1 == passes) {
+            p.report(solved, "Path tracing the surface (reference)");
+            referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
+        }
+        source = composeSource(topo, solvedVoxel, surface);
+        clock.lap(&BakeStats::Phases::solve);
+    }
+    return source;
+}
+
+}  // namespace
+
 BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
     validate(scene);
     const Preset preset = resolve(settings);
@@ -741,23 +805,23 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     Progress quiet;
     Progress &p = progress ? *progress : quiet;
     const bool reference = settings.quality == BakeQuality::Reference;
-    const double solved = reference ? 0.5 : 0.9;  // progress when the diffusion solves are done
 
     BakeStats local;
-    Stopwatch clock;
+    Stopwatch clock(local);
     p.report(0.0, "Finding the snow's voxels");
     const SnowTopology topo =
         buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05), sourceScale);
-    local.topologySeconds = clock.lap();
+    clock.lap(&BakeStats::Phases::topology);
     p.report(0.05, "Tracing sun and sky light");
-    const IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
+    IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
                                                SubProgress(&p, 0.05, 0.4));
-    local.lightSeconds = clock.lap();
+    clock.lap(&BakeStats::Phases::light);
 
     local.unknowns = topo.size();
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
-    for (const SurfacePatch &patch : topo.patches) local.surfaceVoxels += patch.isSurface();
-    const bool hidden = std::any_of(light.snowRays.begin(), light.snowRays.end(), [](std::uint64_t r) { return r != 0; });
+    local.surfaceVoxels = topo.surfaceVoxels();
+    const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
+    const bool hidden = std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
     const int passes = local.passes = hidden ? 1 + preset.snowBounces : 1;
 
     p.report(0.4, "Tracing thin snow");
@@ -767,55 +831,10 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         traceSources(scene, samples > 0 ? thin : std::vector<openvdb::Coord>{}, samples, settings.seed ^ 0x7EACEull,
                      SubProgress(&p, 0.4, 0.4));
     local.tracedVoxels = traced.source.size();
-    local.traceSeconds = clock.lap();
-    std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
-    for (auto &channel : phi) channel.assign(topo.size(), 0.0);
-    std::array<ChannelSystem, 3> systems;
-    std::array<std::unique_ptr<MultigridSolver>, 3> solvers;  // the operator stays, only sources change
-    std::vector<glm::vec3> fromSnow(topo.size(), glm::vec3(0.0f));  // W/m^2 gathered so far
-    std::vector<Source> source;
-    std::vector<SolvedVoxel> solvedVoxel(topo.size());
-    for (int pass = 0; pass < passes; ++pass) {
-        const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
-        std::vector<glm::vec3> more(topo.size(), glm::vec3(0.0f));  // light from other snow new this pass
-        if (pass > 0) {
-            // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
-            p.report(begin, "Gathering light between snow surfaces");
-            const BakedGrids previous = makeGrids(scene, topo, source, traced, preset, settings);
-            const std::vector<glm::vec3> gathered = snowIrradiance(scene, topo, light, previous, SkyRays(preset.skySamples),
-                                                                   settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
-            for (std::size_t i = 0; i < topo.size(); ++i) more[i] = gathered[i] - fromSnow[i];
-            fromSnow = gathered;
-            local.gatherSeconds += clock.lap();
-        }
-        for (int c = 0; c < 3; ++c) {
-            const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
-            p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
-            if (pass == 0) {
-                systems[c] = assemble(scene, topo, light, c, sub);
-                if (c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
-                if (topo.size() > 0) solvers[c] = std::make_unique<MultigridSolver>(std::move(systems[c].A));
-            } else {
-                systems[c].addDiffuse(more, c);
-            }
-            if (solvers[c]) {
-                // Passes before the last only feed the gathering between surfaces: 0.1 % will do.
-                const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, 1e-3) : preset.tolerance;
-                const MultigridSolver::Result result = solvers[c]->solve(systems[c].b, phi[c], tolerance, 500, sub);
-                local.iterations[c] += result.iterations;
-                local.relativeResidual[c] = result.relativeResidual;
-            }
-            solvedVoxels(scene, topo, light, systems[c], phi[c], c, solvedVoxel);
-        }
-        std::vector<Source> surface = surfaceRadiance(topo, solvedVoxel);
-        if (reference && pass + 1 == passes) {
-            p.report(solved, "Path tracing the surface (reference)");
-            referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
-        }
-        source = composeSource(topo, solvedVoxel, surface);
-        local.solveSeconds += clock.lap();
-    }
-    p.report(reference ? 0.95 : solved, "Writing the grids");
+    clock.lap(&BakeStats::Phases::trace);
+    const std::vector<Source> source = solveSources(scene, topo, light, traced, preset, settings, passes, p, clock, local);
+    light = IncidentLight{};  // the grids need it no more
+    p.report(reference ? 0.95 : kSolvedProgress, "Writing the grids");
     BakedGrids grids = coarsened(makeGrids(scene, topo, source, traced, preset, settings), scene.medium->density(), sourceScale);
     local.sourceScale = sourceScale;
     // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
@@ -824,7 +843,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         for (auto it = grid->cbeginValueOn(); it; ++it)
             if (!std::isfinite(it->x() + it->y() + it->z()))
                 throw std::logic_error("the bake computed a non-finite radiance (NaN or inf); nothing was written");
-    local.gridSeconds = clock.lap();
+    clock.lap(&BakeStats::Phases::grids);
     p.report(1.0, "Done");
     if (stats) *stats = local;
     return grids;
