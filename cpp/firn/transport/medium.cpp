@@ -35,6 +35,18 @@ double axisAlignedVoxelSize(const openvdb::math::Transform &transform) {
     return h;
 }
 
+// Ray parameter (index space) where the ray eye + t dir leaves the 8^3 leaf block holding `cell`.
+double leafExit(const Vec3d &eye, const Vec3d &dir, const openvdb::Coord &cell) {
+    constexpr int kDim = int(openvdb::BoolTree::LeafNodeType::DIM);
+    double exit = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (dir[a] == 0.0) continue;
+        const int origin = cell[a] & ~(kDim - 1);
+        exit = std::min(exit, ((dir[a] > 0.0 ? origin + kDim : origin) - eye[a]) / dir[a]);
+    }
+    return exit;
+}
+
 }  // namespace
 
 Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
@@ -144,7 +156,14 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
         const double dt = span / steps;
         for (int i = 0; i < steps; ++i) {
             const Vec3d p = eye + (t0 + (i + 0.5) * dt) * dir;
-            if (support_.isValueOn(openvdb::Coord::floor(p))) sum += openvdb::tools::BoxSampler::sample(accessor_, p) * dt;
+            const openvdb::Coord cell = openvdb::Coord::floor(p);
+            if (!support_.probeConstLeaf(cell)) {
+                // No snow near this whole 8^3 block: on from the first sample past it (a little early, never late).
+                const double next = std::min((leafExit(eye, dir, cell) - t0) / dt - 0.5 - 1e-6, double(steps));
+                i = std::max(i, int(std::ceil(next)) - 1);
+                continue;
+            }
+            if (support_.isValueOn(cell)) sum += openvdb::tools::BoxSampler::sample(accessor_, p) * dt;
         }
         if (sum > sumLimit) break;
     }
