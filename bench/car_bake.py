@@ -13,7 +13,8 @@ import bake_measure
 
 
 def bake_car(folder):
-    """One FINAL bake of the car's inputs (bench/car_scene.py); firncore's stats plus the active voxels."""
+    """One FINAL bake of the car's inputs (bench/car_scene.py); firncore's stats plus the active voxels. The core
+    rewrites the density's file with the baked grids, as Bake Scattering does."""
     import numpy as np
 
     import firncore
