@@ -193,23 +193,33 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 // The diffusion system of one channel plus what the surface needs afterwards.
 struct ChannelSystem {
     StencilOperator A;
-    std::vector<double> b;                  // W: diffuse sources at the voxel nodes
-    std::vector<float> escaped;             // W: light leaving through air faces without reaching the node
-    std::vector<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
-    std::vector<std::vector<float>> sunIn;  // per beam (sun or lamp), W entering through air faces
-    std::vector<float> skyIn;               // W entering through air faces
+    std::vector<double> b;  // W: diffuse sources at the voxel nodes
+    // Surface voxels only (what crosses air faces):
+    SurfaceValues<float> escaped;             // W: light leaving through air faces without reaching the node
+    SurfaceValues<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
+    std::vector<SurfaceValues<float>> sunIn;  // per beam (sun or lamp), W entering through air faces
+    SurfaceValues<float> skyIn;               // W entering through air faces
     // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
-    // returned at once (m^2), so later passes can add light from other snow without assembling again.
-    std::vector<float> skyToNode, skyReturned;
+    // returned at once (m^2), so that light from other snow adds to the sources as sky light does.
+    SurfaceValues<float> skyToNode, skyReturned;
+    SurfaceValues<float> area;  // m^2, surface patch
+
+    ChannelSystem(const SnowTopology &topo, std::size_t beams)
+        : b(topo.size(), 0.0), escaped(surfaceZeros(topo)), outConductance(surfaceZeros(topo)),
+          sunIn(beams, surfaceZeros(topo)), skyIn(surfaceZeros(topo)), skyToNode(surfaceZeros(topo)),
+          skyReturned(surfaceZeros(topo)), area(surfaceZeros(topo)) {}
+    static SurfaceValues<float> surfaceZeros(const SnowTopology &topo) {
+        return SurfaceValues<float>(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);
+    }
 
     // Adds diffuse irradiance (W/m^2) on the surface patches.
     void addDiffuse(const std::vector<glm::vec3> &irradiance, int c) {
         for (std::size_t i = 0; i < b.size(); ++i) {
+            if (!(area[i] > 0.0f)) continue;  // not a surface voxel
             const double E = irradiance[i][c];
-            b[i] += E * skyToNode[i], escaped[i] += E * skyReturned[i], skyIn[i] += E * area[i];
+            b[i] += E * skyToNode[i], escaped.surface(i) += E * skyReturned[i], skyIn.surface(i) += E * area[i];
         }
     }
-    std::vector<float> area;  // m^2, surface patch
 };
 
 // Finite volumes with exponential fitting: every link between two unknowns, and between an unknown and
@@ -262,12 +272,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     const double h = medium.voxelSize(), h2 = h * h, aPrime = ch.reducedAlbedo();
     const double beta = std::max(ch.beta(), 1e-9);
     const std::size_t n = topo.size();
-    ChannelSystem sys;
+    ChannelSystem sys(topo, light.beams.size());
     sys.A.coord = topo.coord;
     sys.A.neighbour.resize(n), sys.A.conductance.resize(n), sys.A.diag.resize(n);
-    sys.b.assign(n, 0.0), sys.escaped.assign(n, 0.0f), sys.outConductance.assign(n, 0.0f), sys.skyIn.assign(n, 0.0f);
-    sys.skyToNode.assign(n, 0.0f), sys.skyReturned.assign(n, 0.0f), sys.area.assign(n, 0.0f);
-    sys.sunIn.assign(light.beams.size(), std::vector<float>(n, 0.0f));
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         progress.throwIfCancelled();
@@ -304,9 +311,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     if (facing > 0.0) area = h2 * facing;
                     const BoundaryLink &b = boundary[f].emplace(beta, 2.0, 3.0 * ch.sigmaTr(face.rampMass));
                     const double shareOfPatch = patch.area * patch.share[f];  // m^2
-                    sys.outConductance[i] += area * b.conductance();
-                    sys.skyToNode[i] += 4.0 * shareOfPatch * b.conductance();
-                    sys.skyReturned[i] += shareOfPatch * b.diffuseReturned();
+                    sys.outConductance.surface(i) += area * b.conductance();
+                    sys.skyToNode.surface(i) += 4.0 * shareOfPatch * b.conductance();
+                    sys.skyReturned.surface(i) += shareOfPatch * b.diffuseReturned();
                 } else {
                     // Occluder: a Lambertian surface at `distance` from the node.
                     albedo[f] = std::min(scene.occluders->albedo(face.triangle)[c], 0.99);
@@ -361,13 +368,13 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 // Into a surface voxel through its air faces: the beam scatters at mean resistance 3 mu
                 // (reduced depth mu below the surface), cut at the node; what scatters above the node
                 // partly escapes at once.
-                sys.sunIn[s][i] += patchFlow;
+                sys.sunIn[s].surface(i) += patchFlow;
                 for (int f = 0; f < 6; ++f) {
                     if (!topo.isAirFace(i, f) || patch.share[f] <= 0.0f) continue;
                     const double P = scattered * patchFlow * patch.share[f], L = boundary[f]->L;
                     const double R = 3.0 * muPatch * (1.0 - std::exp(-L / (3.0 * muPatch)));
                     source += boundary[f]->toNode(R) * P;
-                    sys.escaped[i] += boundary[f]->toBoundary(R) * P;
+                    sys.escaped.surface(i) += boundary[f]->toBoundary(R) * P;
                 }
             }
             // Light reflected by occluders under the snow enters diffusely through their faces.
@@ -377,9 +384,10 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             const double sky = light.skyOnSurface[i][c];
             sys.A.diag[i] = diag;
             sys.b[i] = source + sky * sys.skyToNode[i];
-            sys.escaped[i] += sky * sys.skyReturned[i];
-            sys.area[i] = patch.isSurface() ? patch.area : 0.0;
-            sys.skyIn[i] = sky * sys.area[i];
+            if (!patch.isSurface()) continue;
+            sys.escaped.surface(i) += sky * sys.skyReturned[i];
+            sys.area.surface(i) = patch.area;
+            sys.skyIn.surface(i) = sky * sys.area[i];
         }
     });
     return sys;
