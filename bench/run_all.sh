@@ -41,6 +41,13 @@ mkdir -p "$(dirname "$report")"
   "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/car_memory.py"
   echo '```'
   echo
+  echo "## The car sample's bake (bench/car_bake.py)"
+  echo
+  echo '```'
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/car_scene.py" -- "$FIRN_ROOT/out/car_bake_inputs" > /dev/null
+  PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/bench/car_bake.py" "$FIRN_ROOT/out/car_bake_inputs"
+  echo '```'
+  echo
   echo "## Grain snow: accumulation on the car sample, pile albedo against KZ04"
   echo
   "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/car_triangles.py" -- "$FIRN_ROOT/out/car_triangles.npz" > /dev/null

@@ -269,6 +269,13 @@ Blender's Sky Texture (Nishita) behind a Background node of `strength`, its sett
 the mean of samples x samples directions over it. Runs in parallel without the GIL.)doc");
 }
 
+py::dict phasesDict(const firn::BakeStats::Phases &phases) {
+    py::dict d;
+    d["topology"] = phases.topology, d["light"] = phases.light, d["trace"] = phases.trace;
+    d["solve"] = phases.solve, d["gather"] = phases.gather, d["grids"] = phases.grids;
+    return d;
+}
+
 py::dict statsDict(const firn::BakeStats &stats) {
     py::dict d;
     d["unknowns"] = stats.unknowns;
@@ -280,11 +287,8 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["relative_residual"] = stats.relativeResidual;
     d["passes"] = stats.passes;
     d["source_scale"] = stats.sourceScale;
-    py::dict seconds;
-    seconds["topology"] = stats.topologySeconds, seconds["light"] = stats.lightSeconds;
-    seconds["trace"] = stats.traceSeconds;
-    seconds["solve"] = stats.solveSeconds, seconds["gather"] = stats.gatherSeconds, seconds["grids"] = stats.gridSeconds;
-    d["seconds"] = seconds;
+    d["seconds"] = phasesDict(stats.seconds);
+    d["cpu_seconds"] = phasesDict(stats.cpuSeconds);
     return d;
 }
 

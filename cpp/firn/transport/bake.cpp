@@ -4,7 +4,11 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <limits>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <memory>
 #include <optional>
 #include <queue>
@@ -67,18 +71,22 @@ Preset resolve(const BakeSettings &s) {
     return p;
 }
 
-// Wall-clock time between laps (s).
+// Wall-clock and processor time (all threads: std::clock) between laps, added to a phase's seconds.
 class Stopwatch {
   public:
-    double lap() {
+    explicit Stopwatch(BakeStats &stats) : stats_(stats) {}
+    void lap(double BakeStats::Phases::*phase) {
         const auto now = std::chrono::steady_clock::now();
-        const double seconds = std::chrono::duration<double>(now - last_).count();
-        last_ = now;
-        return seconds;
+        const std::clock_t cpuNow = std::clock();
+        stats_.seconds.*phase += std::chrono::duration<double>(now - last_).count();
+        stats_.cpuSeconds.*phase += double(cpuNow - cpuLast_) / CLOCKS_PER_SEC;
+        last_ = now, cpuLast_ = cpuNow;
     }
 
   private:
+    BakeStats &stats_;
     std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+    std::clock_t cpuLast_ = std::clock();
 };
 
 // One colour channel of the optics. Lengths below are "resistances": 3 times the reduced optical depth,
@@ -189,23 +197,33 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 // The diffusion system of one channel plus what the surface needs afterwards.
 struct ChannelSystem {
     StencilOperator A;
-    std::vector<double> b;                  // W: diffuse sources at the voxel nodes
-    std::vector<float> escaped;             // W: light leaving through air faces without reaching the node
-    std::vector<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
-    std::vector<std::vector<float>> sunIn;  // per beam (sun or lamp), W entering through air faces
-    std::vector<float> skyIn;               // W entering through air faces
+    std::vector<double> b;  // W: diffuse sources at the voxel nodes
+    // Surface voxels only (what crosses air faces):
+    SurfaceValues<float> escaped;             // W: light leaving through air faces without reaching the node
+    SurfaceValues<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
+    std::vector<SurfaceValues<float>> sunIn;  // per beam (sun or lamp), W entering through air faces
+    SurfaceValues<float> skyIn;               // W entering through air faces
     // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
-    // returned at once (m^2), so later passes can add light from other snow without assembling again.
-    std::vector<float> skyToNode, skyReturned;
+    // returned at once (m^2), so that light from other snow adds to the sources as sky light does.
+    SurfaceValues<float> skyToNode, skyReturned;
+    SurfaceValues<float> area;  // m^2, surface patch
+
+    ChannelSystem(const SnowTopology &topo, std::size_t beams)
+        : b(topo.size(), 0.0), escaped(surfaceZeros(topo)), outConductance(surfaceZeros(topo)),
+          sunIn(beams, surfaceZeros(topo)), skyIn(surfaceZeros(topo)), skyToNode(surfaceZeros(topo)),
+          skyReturned(surfaceZeros(topo)), area(surfaceZeros(topo)) {}
+    static SurfaceValues<float> surfaceZeros(const SnowTopology &topo) {
+        return SurfaceValues<float>(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);
+    }
 
     // Adds diffuse irradiance (W/m^2) on the surface patches.
     void addDiffuse(const std::vector<glm::vec3> &irradiance, int c) {
         for (std::size_t i = 0; i < b.size(); ++i) {
+            if (!(area[i] > 0.0f)) continue;  // not a surface voxel
             const double E = irradiance[i][c];
-            b[i] += E * skyToNode[i], escaped[i] += E * skyReturned[i], skyIn[i] += E * area[i];
+            b[i] += E * skyToNode[i], escaped.surface(i) += E * skyReturned[i], skyIn.surface(i) += E * area[i];
         }
     }
-    std::vector<float> area;  // m^2, surface patch
 };
 
 // Finite volumes with exponential fitting: every link between two unknowns, and between an unknown and
@@ -258,12 +276,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     const double h = medium.voxelSize(), h2 = h * h, aPrime = ch.reducedAlbedo();
     const double beta = std::max(ch.beta(), 1e-9);
     const std::size_t n = topo.size();
-    ChannelSystem sys;
+    ChannelSystem sys(topo, light.beams.size());
     sys.A.coord = topo.coord;
     sys.A.neighbour.resize(n), sys.A.conductance.resize(n), sys.A.diag.resize(n);
-    sys.b.assign(n, 0.0), sys.escaped.assign(n, 0.0f), sys.outConductance.assign(n, 0.0f), sys.skyIn.assign(n, 0.0f);
-    sys.skyToNode.assign(n, 0.0f), sys.skyReturned.assign(n, 0.0f), sys.area.assign(n, 0.0f);
-    sys.sunIn.assign(light.beams.size(), std::vector<float>(n, 0.0f));
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         progress.throwIfCancelled();
@@ -300,9 +315,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     if (facing > 0.0) area = h2 * facing;
                     const BoundaryLink &b = boundary[f].emplace(beta, 2.0, 3.0 * ch.sigmaTr(face.rampMass));
                     const double shareOfPatch = patch.area * patch.share[f];  // m^2
-                    sys.outConductance[i] += area * b.conductance();
-                    sys.skyToNode[i] += 4.0 * shareOfPatch * b.conductance();
-                    sys.skyReturned[i] += shareOfPatch * b.diffuseReturned();
+                    sys.outConductance.surface(i) += area * b.conductance();
+                    sys.skyToNode.surface(i) += 4.0 * shareOfPatch * b.conductance();
+                    sys.skyReturned.surface(i) += shareOfPatch * b.diffuseReturned();
                 } else {
                     // Occluder: a Lambertian surface at `distance` from the node.
                     albedo[f] = std::min(scene.occluders->albedo(face.triangle)[c], 0.99);
@@ -357,13 +372,13 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 // Into a surface voxel through its air faces: the beam scatters at mean resistance 3 mu
                 // (reduced depth mu below the surface), cut at the node; what scatters above the node
                 // partly escapes at once.
-                sys.sunIn[s][i] += patchFlow;
+                sys.sunIn[s].surface(i) += patchFlow;
                 for (int f = 0; f < 6; ++f) {
                     if (!topo.isAirFace(i, f) || patch.share[f] <= 0.0f) continue;
                     const double P = scattered * patchFlow * patch.share[f], L = boundary[f]->L;
                     const double R = 3.0 * muPatch * (1.0 - std::exp(-L / (3.0 * muPatch)));
                     source += boundary[f]->toNode(R) * P;
-                    sys.escaped[i] += boundary[f]->toBoundary(R) * P;
+                    sys.escaped.surface(i) += boundary[f]->toBoundary(R) * P;
                 }
             }
             // Light reflected by occluders under the snow enters diffusely through their faces.
@@ -373,9 +388,10 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             const double sky = light.skyOnSurface[i][c];
             sys.A.diag[i] = diag;
             sys.b[i] = source + sky * sys.skyToNode[i];
-            sys.escaped[i] += sky * sys.skyReturned[i];
-            sys.area[i] = patch.isSurface() ? patch.area : 0.0;
-            sys.skyIn[i] = sky * sys.area[i];
+            if (!patch.isSurface()) continue;
+            sys.escaped.surface(i) += sky * sys.skyReturned[i];
+            sys.area.surface(i) = patch.area;
+            sys.skyIn.surface(i) = sky * sys.area[i];
         }
     });
     return sys;
@@ -751,6 +767,78 @@ int sourceScaleFor(const Medium &medium, const BakeSettings &settings) {
 
 }  // namespace
 
+namespace {
+
+// Hands the heap pages that large trees and lists freed (thousands of small blocks: OpenVDB leaves, per-voxel
+// lists) back to the system, so that the next phase's arrays do not come on top of them: glibc keeps them
+// otherwise, and the car sample's second pass peaked 100 bytes per voxel higher than its first.
+void releaseFreedMemory() {
+#ifdef __GLIBC__
+    malloc_trim(0);
+#endif
+}
+
+// Progress when the diffusion solves are done (REFERENCE: before path tracing the surface).
+constexpr double kSolvedProgress = 0.9, kSolvedProgressReference = 0.5;
+
+// The source function of every unknown: per pass (the later ones gather the light between snow surfaces
+// first), a diffusion solve per channel. One channel at a time, its system assembled and its solver built
+// again each pass: keeping the three tripled the bake's memory, and rebuilding them costs a few per cent of a
+// solve. All the solve's data is freed on return, before the grids are written.
+std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                                 const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
+                                 int passes, Progress &p, Stopwatch &clock, BakeStats &stats) {
+    const bool reference = settings.quality == BakeQuality::Reference;
+    const double solved = reference ? kSolvedProgressReference : kSolvedProgress;
+    std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
+    for (auto &channel : phi) channel.assign(topo.size(), 0.0);
+    std::vector<glm::vec3> fromSnow;  // W/m^2 gathered from other snow (after the first pass)
+    std::vector<Source> source;
+    for (int pass = 0; pass < passes; ++pass) {
+        const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
+        if (pass > 0) {
+            // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
+            p.report(begin, "Gathering light between snow surfaces");
+            {
+                const BakedGrids previous = makeGrids(scene, topo, source, traced, preset, settings);
+                source = {};
+                fromSnow = snowIrradiance(scene, topo, light, previous, SkyRays(preset.skySamples),
+                                          settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
+            }
+            releaseFreedMemory();  // the previous pass's grids
+            clock.lap(&BakeStats::Phases::gather);
+        }
+        std::vector<SolvedVoxel> solvedVoxel(topo.size());  // after the gathering: its grids take room too
+        for (int c = 0; c < 3; ++c) {
+            const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
+            p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
+            ChannelSystem system = assemble(scene, topo, light, c, sub);
+            if (pass > 0) system.addDiffuse(fromSnow, c);
+            if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
+            if (topo.size() > 0) {
+                const MultigridSolver solver(std::move(system.A));
+                // Passes before the last only feed the gathering between surfaces: 0.1 % will do.
+                const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, 1e-3) : preset.tolerance;
+                const MultigridSolver::Result result = solver.solve(system.b, phi[c], tolerance, 500, sub);
+                stats.iterations[c] += result.iterations;
+                stats.relativeResidual[c] = result.relativeResidual;
+            }
+            solvedVoxels(scene, topo, light, system, phi[c], c, solvedVoxel);
+        }
+        std::vector<Source> surface = surfaceRadiance(topo, solvedVoxel);
+        if (reference && pass + 1 == passes) {
+            p.report(solved, "Path tracing the surface (reference)");
+            referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
+        }
+        source = composeSource(topo, solvedVoxel, surface);
+        takeTraced(topo, traced, source);
+        clock.lap(&BakeStats::Phases::solve);
+    }
+    return source;
+}
+
+}  // namespace
+
 BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
     validate(scene);
     const Preset preset = resolve(settings);
@@ -758,23 +846,24 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     Progress quiet;
     Progress &p = progress ? *progress : quiet;
     const bool reference = settings.quality == BakeQuality::Reference;
-    const double solved = reference ? 0.5 : 0.9;  // progress when the diffusion solves are done
 
     BakeStats local;
-    Stopwatch clock;
+    Stopwatch clock(local);
     p.report(0.0, "Finding the snow's voxels");
     const SnowTopology topo =
         buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05), sourceScale);
-    local.topologySeconds = clock.lap();
+    releaseFreedMemory();  // the topology's intermediate lists
+    clock.lap(&BakeStats::Phases::topology);
     p.report(0.05, "Tracing sun and sky light");
-    const IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
+    IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
                                                SubProgress(&p, 0.05, 0.4));
-    local.lightSeconds = clock.lap();
+    clock.lap(&BakeStats::Phases::light);
 
     local.unknowns = topo.size();
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
-    for (const SurfacePatch &patch : topo.patches) local.surfaceVoxels += patch.isSurface();
-    const bool hidden = std::any_of(light.snowRays.begin(), light.snowRays.end(), [](std::uint64_t r) { return r != 0; });
+    local.surfaceVoxels = topo.surfaceVoxels();
+    const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
+    const bool hidden = std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
     const int passes = local.passes = hidden ? 1 + preset.snowBounces : 1;
 
     p.report(0.4, "Tracing thin snow");
@@ -784,56 +873,10 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         traceSources(scene, samples > 0 ? thin : std::vector<openvdb::Coord>{}, samples, settings.seed ^ 0x7EACEull,
                      SubProgress(&p, 0.4, 0.4));
     local.tracedVoxels = traced.source.size();
-    local.traceSeconds = clock.lap();
-    std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
-    for (auto &channel : phi) channel.assign(topo.size(), 0.0);
-    std::array<ChannelSystem, 3> systems;
-    std::array<std::unique_ptr<MultigridSolver>, 3> solvers;  // the operator stays, only sources change
-    std::vector<glm::vec3> fromSnow(topo.size(), glm::vec3(0.0f));  // W/m^2 gathered so far
-    std::vector<Source> source;
-    std::vector<SolvedVoxel> solvedVoxel(topo.size());
-    for (int pass = 0; pass < passes; ++pass) {
-        const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
-        std::vector<glm::vec3> more(topo.size(), glm::vec3(0.0f));  // light from other snow new this pass
-        if (pass > 0) {
-            // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
-            p.report(begin, "Gathering light between snow surfaces");
-            const BakedGrids previous = makeGrids(scene, topo, source, traced, preset, settings);
-            const std::vector<glm::vec3> gathered = snowIrradiance(scene, topo, light, previous, SkyRays(preset.skySamples),
-                                                                   settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
-            for (std::size_t i = 0; i < topo.size(); ++i) more[i] = gathered[i] - fromSnow[i];
-            fromSnow = gathered;
-            local.gatherSeconds += clock.lap();
-        }
-        for (int c = 0; c < 3; ++c) {
-            const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
-            p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
-            if (pass == 0) {
-                systems[c] = assemble(scene, topo, light, c, sub);
-                if (c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
-                if (topo.size() > 0) solvers[c] = std::make_unique<MultigridSolver>(std::move(systems[c].A));
-            } else {
-                systems[c].addDiffuse(more, c);
-            }
-            if (solvers[c]) {
-                // Passes before the last only feed the gathering between surfaces: 0.1 % will do.
-                const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, 1e-3) : preset.tolerance;
-                const MultigridSolver::Result result = solvers[c]->solve(systems[c].b, phi[c], tolerance, 500, sub);
-                local.iterations[c] += result.iterations;
-                local.relativeResidual[c] = result.relativeResidual;
-            }
-            solvedVoxels(scene, topo, light, systems[c], phi[c], c, solvedVoxel);
-        }
-        std::vector<Source> surface = surfaceRadiance(topo, solvedVoxel);
-        if (reference && pass + 1 == passes) {
-            p.report(solved, "Path tracing the surface (reference)");
-            referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
-        }
-        source = composeSource(topo, solvedVoxel, surface);
-        takeTraced(topo, traced, source);
-        local.solveSeconds += clock.lap();
-    }
-    p.report(reference ? 0.95 : solved, "Writing the grids");
+    clock.lap(&BakeStats::Phases::trace);
+    const std::vector<Source> source = solveSources(scene, topo, light, traced, preset, settings, passes, p, clock, local);
+    light = IncidentLight{};  // the grids need it no more
+    p.report(reference ? 0.95 : kSolvedProgress, "Writing the grids");
     BakedGrids grids = coarsened(makeGrids(scene, topo, source, traced, preset, settings), scene.medium->density(), sourceScale);
     local.sourceScale = sourceScale;
     // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
@@ -842,7 +885,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         for (auto it = grid->cbeginValueOn(); it; ++it)
             if (!std::isfinite(it->x() + it->y() + it->z()))
                 throw std::logic_error("the bake computed a non-finite radiance (NaN or inf); nothing was written");
-    local.gridSeconds = clock.lap();
+    clock.lap(&BakeStats::Phases::grids);
     p.report(1.0, "Done");
     if (stats) *stats = local;
     return grids;

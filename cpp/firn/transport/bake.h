@@ -40,9 +40,13 @@ struct BakeStats {
     int sourceScale = 1;                       // the source grids' voxel size in density voxels
     std::array<int, 3> iterations{};          // per colour channel, all passes
     std::array<double, 3> relativeResidual{};  // per colour channel, last pass
-    // Wall-clock seconds: voxels and faces, sun and sky tracing, Monte Carlo in thin snow, diffusion solves,
-    // gathering between snow surfaces, writing the grids.
-    double topologySeconds = 0, lightSeconds = 0, traceSeconds = 0, solveSeconds = 0, gatherSeconds = 0, gridSeconds = 0;
+    // Per phase: voxels and faces, sun and sky tracing, Monte Carlo in thin snow, diffusion solves, gathering
+    // between snow surfaces, writing the grids.
+    struct Phases {
+        double topology = 0, light = 0, trace = 0, solve = 0, gather = 0, grids = 0;
+    };
+    Phases seconds;     // wall clock
+    Phases cpuSeconds;  // processor time of all threads: what the bake cost, whatever else the machine runs
 };
 
 // Computes the light scattered inside the snow, all orders, from the scene's suns and sky, with the

@@ -210,7 +210,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
         IncidentLight::Beam beam;
         beam.atVoxel.assign(topo.size(), glm::vec3(0.0f));
-        beam.atSurface.assign(topo.size(), glm::vec3(0.0f));
+        beam.atSurface = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
         const std::uint64_t seed = settings.seed ^ (0x5A17ull + b);
         // Voxel centres nearest the light first: a voxel inside the snow whose neighbours towards the light
         // all lie behind too much snow lies behind too much snow too, and needs no ray.
@@ -246,7 +246,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                     // Snow in the way from outside the density ramp; occluders' shadow on the surface itself
                     // (half a voxel out), so shadow edges fall where they do on the snow.
                     const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
-                    beam.atSurface[i] = beamAt(scene, b, outside(i), settings.sunSamples, seed, 2 * i + 1, marcher,
+                    beam.atSurface.surface(i) = beamAt(scene, b, outside(i), settings.sunSamples, seed, 2 * i + 1, marcher,
                                                &surface, Crossing::Uncollided).irradiance;
                 }
             }
@@ -255,8 +255,8 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         progress.report((b + 1) / jobs);
     }
 
-    light.skyOnSurface.assign(topo.size(), glm::vec3(0.0f));
-    light.snowRays.assign(topo.size(), 0);
+    light.skyOnSurface = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
+    light.snowRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
     const SkyRays rays(settings.skySamples);
     light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
     const bool bounce = !scene.occluders->empty();
@@ -266,8 +266,8 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
-                light.skyOnSurface[i] = skyIrradianceAt(scene, outside(i), topo.patches[i].normal, rays, bounce,
-                                                        Crossing::Uncollided, seed, i, marcher, &light.snowRays[i]);
+                light.skyOnSurface.surface(i) = skyIrradianceAt(scene, outside(i), topo.patches[i].normal, rays, bounce,
+                                                                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i));
     });
     if (scene.sky.isBlack()) return light;
     parallelChunks(topo.faces.size(), progress, [&](const auto &range) {

@@ -20,16 +20,16 @@ struct IncidentLight {
     // sigma_tr = (1 - omega g) sigma_t: light that scattered forwards still travels with the beam) and
     // occluders (averaged over the sun's disc or the lamp).
     struct Beam {
-        std::vector<glm::vec3> atVoxel;    // at each unknown's centre
-        std::vector<glm::vec3> atSurface;  // just outside each surface voxel's patch (0 inside the snow)
+        std::vector<glm::vec3> atVoxel;      // at each unknown's centre
+        SurfaceValues<glm::vec3> atSurface;  // just outside each surface voxel's patch (0 inside the snow)
     };
     std::vector<Beam> beams;
     // W/m^2 onto each surface voxel's patch from the sky, past occluders and snow, plus sun and sky light
     // that occluders reflect once towards the snow (0 inside the snow).
-    std::vector<glm::vec3> skyOnSurface;
+    SurfaceValues<glm::vec3> skyOnSurface;
     // Per surface voxel: which of its sky rays (SkyRays, bit k for ray k) snow hides; the snow's own light
     // arrives along them instead (gathered after a first solve, bake.cpp).
-    std::vector<std::uint64_t> snowRays;
+    SurfaceValues<std::uint64_t> snowRays;
     // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
     std::vector<glm::vec3> skyUnderSnow;
 };

@@ -6,6 +6,7 @@
 #include <string>
 
 #include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/Morphology.h>
 
 #include "firn/util/error.h"
 #include "firn/util/openvdb_library.h"
@@ -32,6 +33,18 @@ double axisAlignedVoxelSize(const openvdb::math::Transform &transform) {
             if (std::abs(step[k] - (k == axis ? h : 0.0)) > 1e-9 * h) return 0.0;
     }
     return h;
+}
+
+// Ray parameter (index space) where the ray eye + t dir leaves the 8^3 leaf block holding `cell`.
+double leafExit(const Vec3d &eye, const Vec3d &dir, const openvdb::Coord &cell) {
+    constexpr int kDim = int(openvdb::BoolTree::LeafNodeType::DIM);
+    double exit = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (dir[a] == 0.0) continue;
+        const int origin = cell[a] & ~(kDim - 1);
+        exit = std::min(exit, ((dir[a] > 0.0 ? origin + kDim : origin) - eye[a]) / dir[a]);
+    }
+    return exit;
 }
 
 }  // namespace
@@ -78,6 +91,8 @@ Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
     boundsMax_ = indexToWorld(glm::dvec3(box.max().x() + 1, box.max().y() + 1, box.max().z() + 1));
     // Three face-dilations reach every voxel whose trilinear cell touches an active voxel (corners included).
     intersector_ = std::make_unique<openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0>>(*density_, 3);
+    support_ = std::make_shared<openvdb::BoolTree>(density_->tree(), false, openvdb::TopologyCopy());
+    openvdb::tools::dilateActiveValues(*support_, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
 }
 
 Medium::~Medium() = default;
@@ -105,7 +120,7 @@ double Medium::densityAt(const glm::dvec3 &world, Accessor &accessor) const {
 }
 
 Medium::ColumnMarcher::ColumnMarcher(const Medium &medium)
-    : medium_(medium), intersector_(*medium.intersector_), accessor_(medium.accessor()) {}
+    : medium_(medium), intersector_(*medium.intersector_), accessor_(medium.accessor()), support_(*medium.support_) {}
 
 double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax,
                                      double limit) {
@@ -131,14 +146,25 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
     const double tStart = i * kStep;
     const openvdb::math::Ray<double> ray(eye, dir, tStart, tEnd);
     if (!intersector_.setIndexRay(ray)) return sum * h;
-    // Beyond the first voxels a ray mostly crosses air near the surface: whole-voxel steps.
+    // Beyond the first voxels a ray mostly crosses air near the surface: whole-voxel steps, reading the
+    // density only in cells that may hold snow.
     constexpr double kLongStep = 1.0;  // voxels
     double t0 = 0.0, t1 = 0.0;
     while (intersector_.march(t0, t1)) {
         const double span = t1 - t0;
         const int steps = std::max(1, static_cast<int>(std::ceil(span / kLongStep)));
         const double dt = span / steps;
-        for (int i = 0; i < steps; ++i) sum += openvdb::tools::BoxSampler::sample(accessor_, eye + (t0 + (i + 0.5) * dt) * dir) * dt;
+        for (int i = 0; i < steps; ++i) {
+            const Vec3d p = eye + (t0 + (i + 0.5) * dt) * dir;
+            const openvdb::Coord cell = openvdb::Coord::floor(p);
+            if (!support_.probeConstLeaf(cell)) {
+                // No snow near this whole 8^3 block: on from the first sample past it (a little early, never late).
+                const double next = std::min((leafExit(eye, dir, cell) - t0) / dt - 0.5 - 1e-6, double(steps));
+                i = std::max(i, int(std::ceil(next)) - 1);
+                continue;
+            }
+            if (support_.isValueOn(cell)) sum += openvdb::tools::BoxSampler::sample(accessor_, p) * dt;
+        }
         if (sum > sumLimit) break;
     }
     return sum * h;

@@ -75,6 +75,7 @@ class Medium {
         const Medium &medium_;
         openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0> intersector_;
         Accessor accessor_;
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> support_;
     };
 
   private:
@@ -85,6 +86,9 @@ class Medium {
     double maxDensity_ = 0.0;
     glm::dvec3 boundsMin_{0.0}, boundsMax_{0.0};
     std::unique_ptr<openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0>> intersector_;
+    // Voxels c whose trilinear cell (corners c + {0, 1}^3) may hold snow: elsewhere the density is 0 without
+    // reading eight voxels. Rays from the surface to the sky cross mostly such empty cells of occupied blocks.
+    openvdb::BoolTree::Ptr support_;
 };
 
 }  // namespace firn

@@ -297,6 +297,7 @@ MultigridSolver::MultigridSolver(StencilOperator fine) : hierarchy_(std::make_un
     }
     for (Level &level : h.levels) prepare(level);
     if (h.levels.back().A.size() <= kDenseLimit) h.cholesky = denseCholesky(h.levels.back().A);
+    for (Level &level : h.levels) level.A.coord = {};  // they only placed the rows in colours and blocks
 }
 
 MultigridSolver::~MultigridSolver() = default;

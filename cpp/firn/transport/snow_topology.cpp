@@ -63,7 +63,16 @@ std::unique_ptr<std::atomic<bool>[]> leavesNearOccluders(const Medium &medium, c
 // Outward normal from the density gradient (a 3x3x3 Sobel stencil), or from the air faces where the
 // gradient is flat or points the wrong way.
 void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
-    topo.patches.assign(topo.size(), SurfacePatch{});
+    auto slot = std::make_shared<std::vector<std::int32_t>>(topo.size(), -1);
+    std::int32_t surfaceVoxels = 0;
+    for (std::size_t i = 0; i < topo.size(); ++i)
+        for (int f = 0; f < 6; ++f)
+            if (topo.isAirFace(i, f)) {
+                (*slot)[i] = surfaceVoxels++;
+                break;
+            }
+    topo.surfaceSlot = slot;
+    topo.patches = SurfaceValues<SurfacePatch>(slot, std::size_t(surfaceVoxels));
     const double h = medium.voxelSize();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         Medium::Accessor density = medium.accessor();
@@ -83,7 +92,7 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
                     }
             glm::dvec3 n = -gradient;
             if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
-            SurfacePatch &patch = topo.patches[i];
+            SurfacePatch &patch = topo.patches.surface(i);
             patch.normal = glm::length(n) > 0.0 ? glm::normalize(n) : glm::dvec3(0.0, 0.0, 1.0);
             double projected = 0.0;
             for (int f = 0; f < 6; ++f)

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -47,6 +48,28 @@ struct SurfacePatch {
     bool isSurface() const { return area > 0.0; }
 };
 
+// Values that only surface voxels have (their patch, the light arriving on it from outside), stored for them
+// alone (a fifth of the unknowns or fewer) and read by unknown index: other unknowns read `inside`.
+template <typename T>
+class SurfaceValues {
+  public:
+    SurfaceValues() = default;
+    // slot: per unknown, its surface voxel's index or -1 (SnowTopology::surfaceSlot).
+    SurfaceValues(std::shared_ptr<const std::vector<std::int32_t>> slot, std::size_t surfaceVoxels, const T &inside = T{})
+        : slot_(std::move(slot)), values_(surfaceVoxels, inside), inside_(inside) {}
+    const T &operator[](std::size_t i) const {
+        const std::int32_t s = (*slot_)[i];
+        return s < 0 ? inside_ : values_[std::size_t(s)];
+    }
+    T &surface(std::size_t i) { return values_[std::size_t((*slot_)[i])]; }  // i: a surface voxel
+    const std::vector<T> &values() const { return values_; }                  // surface voxels in unknown order
+
+  private:
+    std::shared_ptr<const std::vector<std::int32_t>> slot_;
+    std::vector<T> values_;
+    T inside_{};
+};
+
 // The unknowns of the diffusion solve: voxels optically thick enough for diffusion (sigma_t h >= 0.1) and
 // not a surface's fringe, indexed 0..n-1 in OpenVDB leaf order, each linked to its six neighbours or to a
 // boundary face.
@@ -56,7 +79,8 @@ struct SnowTopology {
     std::vector<float> density;                     // kg/m^3
     std::vector<std::array<std::int32_t, 6>> link;  // >= 0: neighbour unknown; < 0: face -1 - link
     std::vector<BoundaryFace> faces;
-    std::vector<SurfacePatch> patches;  // per unknown
+    std::shared_ptr<const std::vector<std::int32_t>> surfaceSlot;  // per unknown: index among surface voxels, or -1
+    SurfaceValues<SurfacePatch> patches;  // per unknown (area 0 inside the snow)
     // Surface voxels: the surface voxels of their 3^3 block, themselves included (CSR over unknowns).
     std::vector<std::uint32_t> neighbourhoodStart, neighbourhood;
     // Voxels just under the surface, within a few mean free paths: the surface voxel nearest to them (-1
@@ -66,6 +90,7 @@ struct SnowTopology {
     std::vector<float> shellWeight;
 
     std::size_t size() const { return coord.size(); }
+    std::size_t surfaceVoxels() const { return patches.values().size(); }
     static bool isFace(std::int32_t link) { return link < 0; }
     static std::size_t faceIndex(std::int32_t link) { return std::size_t(-1 - link); }
     bool isAirFace(std::size_t voxel, int face) const {

@@ -1,0 +1,57 @@
+"""The car sample's bake outside Blender (docs/bake.md, Performance and Memory): bake seconds, µs per active voxel,
+the phases (`stats["seconds"]`, `stats["cpu_seconds"]`) and the bake's peak memory per active voxel, FINAL quality
+on all the cores firncore sees, each bake in a fresh process (bench/bake_measure.py).
+
+    bench/run.sh bench/car_scene.py -- FOLDER          # once: writes the car's bake inputs (Blender)
+    PYTHONPATH=build/python /usr/bin/python3 bench/car_bake.py FOLDER [repeats]
+"""
+
+import os
+import sys
+
+import bake_measure
+
+
+def bake_car(folder):
+    """One FINAL bake of the car's inputs (bench/car_scene.py); firncore's stats plus the active voxels. The core
+    rewrites the density's file with the baked grids, as Bake Scattering does."""
+    import numpy as np
+
+    import firncore
+
+    inputs = np.load(os.path.join(folder, "car_inputs.npz"))
+    optics = firncore.VolumeOptics(float(inputs["optics_k"]), tuple(inputs["optics_albedo"]), float(inputs["optics_g"]))
+    suns = [firncore.SunLight(tuple(d), tuple(e), float(a)) for d, e, a in
+            zip(inputs["sun_direction"], inputs["sun_irradiance"], inputs["sun_angular_diameter"])]
+    sky = firncore.Sky(tuple(inputs["sky_radiance"]), inputs["sky_map"] if "sky_map" in inputs else None)
+    occluders = [(inputs[f"occluder_{k}_vertices"], inputs[f"occluder_{k}_triangles"],
+                  tuple(inputs[f"occluder_{k}_albedo"])) for k in range(int(inputs["occluders"]))]
+    path = os.path.join(folder, "car_density.vdb")
+    stats = firncore.bake(path, optics, suns=suns, sky=sky, occluders=occluders, quality="FINAL")
+    stats["voxels"] = firncore.grid_statistics(path, "density")["active_voxels"]
+    return stats
+
+
+def main():
+    import firncore
+
+    folder, repeats = sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 1
+    print(f"firncore {firncore.__version__}, car sample, {firncore.hardware_threads()} threads, FINAL quality")
+    print("wall: seconds on the clock; cpu: processor seconds of all threads (on a busy machine wall > cpu / threads)")
+    for _ in range(repeats):
+        load = os.getloadavg()[0]
+        r = bake_measure.measure_fresh(bake_car, folder)
+        voxels = r["voxels"]
+        print(f"{voxels} active voxels, {r['unknowns']} unknowns, {r['surface_voxels']} surface, "
+              f"{r['traced_voxels']} traced, iterations {r['iterations']}; peak {r['peak_bytes'] / voxels:.0f} bytes "
+              f"per active voxel ({r['peak_bytes'] / 1e6:.0f} MB); load average {load:.1f}")
+        print(f"{'':>5} {'total s':>8} {'us/voxel':>8}  " + " ".join(f"{name:>8}" for name in r["seconds"]))
+        # (per-phase processor time: firncore builds since bake-perf; earlier ones show the total only)
+        for label, total, phases in (("wall", r["wall_seconds"], r["seconds"]),
+                                     ("cpu", r["cpu_seconds_total"], r.get("cpu_seconds", {}))):
+            print(f"{label:>5} {total:>8.2f} {1e6 * total / voxels:>8.2f}  " +
+                  " ".join(f"{value:>8.2f}" for value in phases.values()), flush=True)
+
+
+if __name__ == "__main__":
+    main()
