@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iterator>
 #include <string>
 
 #include <glm/geometric.hpp>
@@ -50,15 +49,10 @@ TriangleMesh makeTriangleMesh(const float *positions, std::size_t vertexCount, c
 
 TriangleMesh merge(const std::vector<TriangleMesh> &meshes) {
     TriangleMesh out;
-    std::size_t vertexCount = 0, triangleCount = 0;
-    for (const TriangleMesh &m : meshes) vertexCount += m.positions.size(), triangleCount += m.triangleCount();
-    out.positions.reserve(vertexCount);
-    out.triangles.reserve(triangleCount);
     for (const TriangleMesh &m : meshes) {
         const auto offset = static_cast<unsigned>(out.positions.size());
         out.positions.insert(out.positions.end(), m.positions.begin(), m.positions.end());
-        std::transform(m.triangles.begin(), m.triangles.end(), std::back_inserter(out.triangles),
-                       [&](const glm::uvec3 &t) { return t + offset; });
+        for (const glm::uvec3 &t : m.triangles) out.triangles.push_back(t + offset);
         out.droppedDegenerate += m.droppedDegenerate;
     }
     return out;
