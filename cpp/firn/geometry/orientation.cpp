@@ -51,13 +51,14 @@ std::vector<std::uint32_t> weldedVertices(const TriangleMesh &mesh) {
 
 // The triangles around each welded vertex, in compressed rows: around(v) = ids[first[v] .. first[v + 1]).
 struct TrianglesAround {
-    std::vector<std::uint32_t> first, ids;
+    std::vector<std::size_t> first;  // offsets into ids (3 per triangle): past 32 bits beyond 1.4 G triangles
+    std::vector<std::uint32_t> ids;
     TrianglesAround(const TriangleMesh &mesh, const std::vector<std::uint32_t> &welded)
         : first(welded.size() + 1, 0), ids(3 * mesh.triangleCount()) {
         for (const glm::uvec3 &t : mesh.triangles)
             for (int k = 0; k < 3; ++k) ++first[welded[t[k]] + 1];
         for (std::size_t v = 0; v < welded.size(); ++v) first[v + 1] += first[v];
-        std::vector<std::uint32_t> next(first.begin(), first.end() - 1);
+        std::vector<std::size_t> next(first.begin(), first.end() - 1);
         for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t)
             for (int k = 0; k < 3; ++k) ids[next[welded[mesh.triangles[t][k]]]++] = t;
     }
@@ -98,7 +99,7 @@ Reorientation orientOpenSurfaces(TriangleMesh &mesh, const glm::vec3 &up) {
             for (int k = 0; k < 3; ++k) {
                 const std::uint32_t a = corner(t, k), b = corner(t, (k + 1) % 3);
                 bool shared = false;
-                for (std::uint32_t i = around.first[a]; i < around.first[a + 1]; ++i) {
+                for (std::size_t i = around.first[a]; i < around.first[a + 1]; ++i) {
                     const std::uint32_t u = around.ids[i];
                     if (u == t || !hasCorner(u, b)) continue;
                     shared = true;
