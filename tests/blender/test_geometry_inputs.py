@@ -225,6 +225,28 @@ def test_modifiers_are_applied_to_targets(clean_scene):
     assert first > 50.0 and second > 50.0 and gap == 0.0
 
 
+def test_shape_keys_and_edit_mode_edits_shape_the_targets(clean_scene):
+    # A mesh without modifiers is read in place, not copied (scene_geometry._readable_in_place): its shape keys
+    # must still apply, and in Edit Mode its unsaved edits must show, as to_mesh() gives them.
+    ground = add_plane(2.0)
+    ground.shape_key_add(name="Basis")
+    raised = ground.shape_key_add(name="Raised")
+    for point in raised.data:
+        point.co.z += 0.5
+    raised.value = 1.0
+    bpy.context.view_layer.update()
+    vertices, _triangles = scene_geometry.world_triangles([ground], bpy.context.evaluated_depsgraph_get())
+    assert np.allclose(vertices[:, 2], 0.5)
+    raised.value = 0.0
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.transform.translate(value=(0.0, 0.0, 0.25))
+    bpy.context.view_layer.update()
+    vertices, _triangles = scene_geometry.world_triangles([ground], bpy.context.evaluated_depsgraph_get())
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert np.allclose(vertices[:, 2], 0.25)
+
+
 def test_collection_instance_shelters_the_ground(clean_scene):
     ground = add_plane(4.0)
     bpy.ops.mesh.primitive_cube_add(size=1.0, scale=(1.0, 1.0, 0.05))

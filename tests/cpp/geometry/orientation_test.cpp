@@ -76,6 +76,19 @@ TEST(OrientOpenSurfaces, WeldsSplitVerticesBeforeDecidingOpenOrClosed) {
     EXPECT_EQ(changed.triangles, 2u);
 }
 
+TEST(OrientOpenSurfaces, TurnsOnlyTheDownwardTrianglesOfAnOpenSurfaceWoundBothWays) {
+    // A unit square split along its diagonal, one half wound up and one down (an inconsistent import), beside
+    // a plane facing up everywhere: one open surface, one triangle turned.
+    TriangleMesh square;
+    square.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    square.triangles = {{0, 1, 2}, {0, 3, 2}};
+    TriangleMesh mesh = merge({square, test::plane(1.0f, {0, 5, 0})});
+    const Reorientation changed = orientOpenSurfaces(mesh, kUp);
+    EXPECT_EQ(changed.surfaces, 1u);
+    EXPECT_EQ(changed.triangles, 1u);
+    EXPECT_EQ(facingUp(mesh), 4u);
+}
+
 TEST(OrientOpenSurfaces, TurnsOnlyTheOpenPartsOfAMixedSoup) {
     const TriangleMesh outward = test::box({0, 0, 0}, {1, 1, 1});
     const TriangleMesh inverted = reversed(test::box({3, 0, 0}, {4, 1, 1}));
