@@ -345,3 +345,47 @@ def test_weight_attribute_masks_the_depth_and_a_bad_one_is_reported(clean_scene)
     select_only(ground)
     with pytest.raises(RuntimeError, match="must be a Float attribute on points"):
         bpy.ops.firn.add_snow_layer(weight_attribute="colour")
+
+
+def add_ground_camera(width=200, height=112):
+    """A camera 1 m above the ground looking along +y, 200 px across a 40 degree view (3.5 mrad per pixel)."""
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    bpy.context.scene.collection.objects.link(camera)
+    camera.location = (0.0, -2.0, 1.0)
+    camera.rotation_euler = (math.radians(90.0), 0.0, 0.0)
+    bpy.context.scene.camera = camera
+    bpy.context.scene.render.resolution_x, bpy.context.scene.render.resolution_y = width, height
+    bpy.context.scene.render.resolution_percentage = 100
+    return camera
+
+
+def test_snow_over_the_budget_gets_levels_of_detail_from_the_camera(clean_scene):
+    add_ground_camera()
+    ground = add_plane(size=300.0, location=(0.0, 140.0, 0.0))  # 2 cm voxels everywhere: billions
+    select_only(ground)
+    assert bpy.ops.firn.add_snow_layer(depth=0.2, spacing=0.1, voxel_size=0.02) == {"FINISHED"}
+    bands = sorted((obj for obj in bpy.data.objects if obj.firn.is_snow), key=lambda obj: obj.firn.lod_level)
+    assert len(bands) >= 4 and bpy.context.object == bands[0] and bands[0].name == "Snow"
+    for level, snow in enumerate(bands):
+        assert snow.firn.lod_level == level and snow.firn.voxel_size == pytest.approx(0.02 * 2 ** level)
+        assert snow.active_material is not None and [item.object for item in snow.firn.targets] == [ground]
+        assert os.path.exists(bpy.path.abspath(snow.data.filepath))
+        assert snow.firn.layer.depth == pytest.approx(0.2) and snow.firn.metaballs is None
+    # Near the camera the finest band holds the snow, 100 m away a coarse one.
+    assert density_at(bands[0], (0.0, 1.0, 0.1))[0] > 100.0
+    far = next(snow for snow in bands if density_at(snow, (0.0, 98.0, 0.1))[0] > 0.0)
+    assert far.firn.lod_level >= 3
+    with pytest.raises(RuntimeError, match="levels of detail"):
+        select_only(bands[1])
+        bpy.ops.firn.regenerate_snow()
+
+
+def test_level_of_detail_on_needs_a_perspective_camera(clean_scene):
+    select_only(add_plane())
+    with pytest.raises(RuntimeError, match="perspective camera"):
+        bpy.ops.firn.add_snow_layer(level_of_detail="ON")
+    assert not any(obj.firn.is_snow for obj in bpy.data.objects)
+    add_ground_camera()
+    select_only(bpy.data.objects["Plane"])
+    assert bpy.ops.firn.add_snow_layer(level_of_detail="OFF") == {"FINISHED"}
+    assert bpy.context.object.firn.lod_level == -1
