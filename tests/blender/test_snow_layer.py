@@ -371,6 +371,17 @@ def test_snow_over_the_budget_gets_levels_of_detail_from_the_camera(clean_scene)
         assert snow.active_material is not None and [item.object for item in snow.firn.targets] == [ground]
         assert os.path.exists(bpy.path.abspath(snow.data.filepath))
         assert snow.firn.layer.depth == pytest.approx(0.2) and snow.firn.metaballs is None
+    # Bands coarser than half the depth render as their proxy's surface, of the snow's white-sky albedo.
+    from firn.material import optics
+    from firn.snow_layer import proxy
+    for snow in bands:
+        far = snow.firn.voxel_size > 0.1
+        assert snow.firn.render_mode == ("OPAQUE" if far else "BAKED"), snow.name
+        surface = proxy.proxy_of(snow)
+        assert surface.hide_render == (not far)
+        colour = surface.data.materials[0].node_tree.nodes["Firn Render Diffuse"].inputs["Color"].default_value
+        assert tuple(colour)[:3] == pytest.approx(optics.volume_optics(snow.firn).white_sky_albedo, rel=1e-6)
+    assert any(snow.firn.render_mode == "OPAQUE" for snow in bands)
     # Near the camera the finest band holds the snow, 100 m away a coarse one.
     assert density_at(bands[0], (0.0, 1.0, 0.1))[0] > 100.0
     far = next(snow for snow in bands if density_at(snow, (0.0, 98.0, 0.1))[0] > 0.0)

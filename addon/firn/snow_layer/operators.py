@@ -293,11 +293,25 @@ def write_snow(snow, inputs, result):
         proxy.store_proxy(snow, result["proxy"], 1.0 / inputs["unit_matrix"][0, 0])
 
 
+# A band whose voxels are coarser than this fraction of the depth cannot hold the layer's light transport (fewer
+# than two voxels through it); a pixel there sees only the snow's albedo: it renders as a surface.
+FAR_SURFACE_DEPTH_FRACTION = 0.5
+
+
+def is_far_surface(voxel_size, depth):
+    """Whether a band of `voxel_size` m renders as a surface for snow `depth` m deep."""
+    return voxel_size > FAR_SURFACE_DEPTH_FRACTION * depth
+
+
 def write_bands(context, inputs, result):
     """One snow object per band: the finest takes the layer's name, the others "<name> LOD <level>". Each is a
     snow layer of its own (material, bake, proxy); the metaballs are not kept (millions over a valley: the
-    brush and Rebuild work on layers without levels of detail)."""
+    brush and Rebuild work on layers without levels of detail). Far bands render as their proxy's surface (render
+    mode Opaque: the white-sky albedo of the same optics, the plane albedo a deep snowpack's volume has under a
+    uniform sky), and Cycles loads none of their grids."""
     objects = []
+    depth = inputs["settings"].depth  # m
+    density = result["bands"][0]["mean_density"]  # the snow's, measured where voxels are finest
     for band in result["bands"]:
         name = inputs["name"] if not objects else f"{inputs['name']} LOD {band['level']}"
         snow = new_snow_object(context, name)
@@ -305,21 +319,25 @@ def write_bands(context, inputs, result):
         snow.data.filepath = inputs["band_stored_pattern"].replace("{level}", str(band["level"]))
         cache.file_fixed(snow.data)
         cache.reload_grids(snow.data)
-        snow.firn.mean_density = band["mean_density"]
+        snow.firn.mean_density = density
         snow.firn.voxel_size = band["voxel_size"]
         snow.firn.lod_level = band["level"]
         materials.ensure_snow_material(snow)
         proxy.store_proxy(snow, band["proxy"], 1.0 / inputs["unit_matrix"][0, 0])
+        if is_far_surface(band["voxel_size"], depth):
+            snow.firn.render_mode = "OPAQUE"  # its update rebuilds the material and renders the proxy
         objects.append(snow)
     return objects
 
 
-def band_summary(result):
+def band_summary(result, depth):
     """The operator's report for snow with levels of detail."""
     voxels = sum(band["active_voxels"] for band in result["bands"])
     sizes = ", ".join(f"{band['voxel_size'] * 1000:.0f}" for band in result["bands"])
     reason = " (one voxel size is over the budget)" if "uniform_refusal" in result else ""
-    return (f"Snow with levels of detail{reason}: {len(result['bands'])} bands of {sizes} mm voxels, "
+    surfaces = sum(is_far_surface(band["voxel_size"], depth) for band in result["bands"])
+    far = f", the farthest {surfaces} as surfaces" if surfaces else ""
+    return (f"Snow with levels of detail{reason}: {len(result['bands'])} bands of {sizes} mm voxels{far}, "
             f"{voxels:,} voxels{input_notes(result)}")
 
 
@@ -393,7 +411,7 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
     def apply(self, context, inputs, result):
         if "bands" in result:
             layers = write_bands(context, inputs, result)
-            report = band_summary(result)
+            report = band_summary(result, inputs["settings"].depth)
         else:
             layers = [new_snow_object(context, inputs["name"])]
             write_snow(layers[0], inputs, result)
