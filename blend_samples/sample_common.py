@@ -124,6 +124,13 @@ def add_snow(targets, **settings):
     return bpy.context.object
 
 
+def add_snow_bands(targets, **settings):
+    """Add Snow Layer that may make levels of detail: every snow object it made (its bands), finest first. Set the
+    scene's camera and resolution first: they size the voxels."""
+    add_snow(targets, **settings)
+    return sorted((obj for obj in bpy.context.selected_objects if obj.firn.is_snow), key=lambda o: o.firn.lod_level)
+
+
 def render(scene, output, width, samples, aspect=(16, 9), label=None, stamp_time=False):
     """Cycles render to a PNG; `label` is written on the picture (comparison panels say what they show), and
     with `stamp_time` the render's own time (Blender's stamp measures it)."""

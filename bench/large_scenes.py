@@ -1,0 +1,160 @@
+"""The scale table of issue 16: the car sample, a street and the valley sample, each snowed, baked and rendered at
+500 × 280 (16 samples). Per scene: the area the snow lies on, its active voxels (every band), and per stage (Add
+Snow Layer, Bake Scattering, render) the wall time and the peak resident memory of this Blender process (sampled
+every 20 ms; the bake's world probe runs in a child Blender, not counted), with Cycles' own peak ("Peak" of its
+status line: the dense volume textures included).
+
+bench/run.sh bench/large_scenes.py -- [car] [street] [valley]
+"""
+
+import math
+import os
+import re
+import sys
+import tempfile
+import threading
+import time
+
+import bpy
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "blend_samples"))
+import car_under_snow as car  # noqa: E402
+import sample_common as common  # noqa: E402
+import valley  # noqa: E402
+
+WIDTH, SAMPLES = 500, 16
+
+
+class PeakMemory:
+    """Peak resident memory (MB) of this process over a stage, from /proc/self/status."""
+
+    def __init__(self):
+        self.peak, self._stop = 0.0, threading.Event()
+
+    @staticmethod
+    def resident_mb():
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) / 1024.0
+        return 0.0
+
+    def _watch(self):
+        while not self._stop.wait(0.02):
+            self.peak = max(self.peak, self.resident_mb())
+
+    def __enter__(self):
+        self.peak = self.resident_mb()
+        self._thread = threading.Thread(target=self._watch, daemon=True)
+        self._thread.start()
+        return self
+
+    def __exit__(self, *_exc):
+        self._stop.set()
+        self._thread.join()
+        self.peak = max(self.peak, self.resident_mb())
+
+
+def measured(fn, *args, **kwargs):
+    """(result, seconds, peak resident MB) of one stage."""
+    with PeakMemory() as memory:
+        started = time.perf_counter()
+        result = fn(*args, **kwargs)
+        seconds = time.perf_counter() - started
+    return result, seconds, memory.peak
+
+
+def street_scene():
+    """A street of 120 m: houses as boxes on both sides, parked cars as boxes, a camera at eye height."""
+    scene = common.new_scene()
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    ground = bpy.context.object
+    ground.scale = (40.0, 130.0, 1.0)
+    bpy.ops.object.transform_apply(scale=True)
+    targets = [ground]
+    for i in range(12):
+        for side in (-1, 1):
+            bpy.ops.mesh.primitive_cube_add(size=1.0, location=(side * 13.0, -55.0 + i * 10.0, 4.0),
+                                            scale=(8.0, 8.5, 8.0))
+            targets.append(bpy.context.object)
+    for i in range(8):
+        bpy.ops.mesh.primitive_cube_add(size=1.0, location=((-1) ** i * 5.5, -45.0 + i * 12.0, 0.75),
+                                        scale=(1.8, 4.2, 1.4))
+        targets.append(bpy.context.object)
+    common.nishita_sky(scene, sun_elevation_deg=25.0, sun_rotation_deg=200.0)
+    common.sun(elevation_deg=25.0, rotation_deg=200.0, irradiance=4.0)
+    common.camera(location=(1.5, -62.0, 1.7), look_at=(0.0, 0.0, 2.0), lens=35.0)
+    return scene, targets
+
+
+def snowed_area(objects):
+    """m² of faces facing up (the targets' area that can hold snow), world space."""
+    area = 0.0
+    for obj in objects:
+        matrix = obj.matrix_world
+        for polygon in obj.data.polygons:
+            normal = (matrix.to_3x3() @ polygon.normal)
+            if normal.z > 0.0:
+                area += polygon.area * abs(matrix.to_3x3().determinant()) ** (2 / 3)
+    return area
+
+
+SCENES = {
+    "car": (car.build_scene, dict(depth=0.12, spacing=0.06, voxel_size=0.02, level_of_detail="OFF")),
+    "street": (street_scene, dict(depth=0.1, spacing=0.05, level_of_detail="AUTO")),
+    "valley": (valley.build_scene, valley.SNOW),
+}
+
+
+def cycles_render(scene, path):
+    """Renders at WIDTH × 280 and returns Cycles' peak (MB)."""
+    peaks = []
+
+    def stats(text):
+        found = re.findall(r"Peak:([0-9.]+)M", text)
+        if found:
+            peaks.append(float(found[-1]))
+
+    bpy.app.handlers.render_stats.append(stats)
+    try:
+        common.render(scene, path, WIDTH, SAMPLES, aspect=(25, 14))
+    finally:
+        bpy.app.handlers.render_stats.remove(stats)
+    return max(peaks) if peaks else math.nan
+
+
+def run(name, folder):
+    from firn.common.core import firncore
+
+    build, settings = SCENES[name]
+    scene, targets = build()
+    scene.render.resolution_x, scene.render.resolution_y = WIDTH, WIDTH * 14 // 25
+    area = snowed_area(targets)
+    bands, add_s, add_mb = measured(common.add_snow_bands, targets, **settings)
+    voxels = sum(firncore.grid_statistics(bpy.path.abspath(s.data.filepath), "density")["active_voxels"]
+                 for s in bands)
+    volumes = valley.volume_bands(bands)
+    _, bake_s, bake_mb = measured(common.bake, volumes)
+    cycles_mb, render_s, render_mb = measured(cycles_render, scene, os.path.join(folder, f"{name}.png"))
+    print(f"| {name} | {area:,.0f} | {len(bands)} ({len(volumes)} volumes) | {voxels / 1e6:.1f} M | "
+          f"{add_s:.1f} s, {add_mb / 1024:.2f} GB | {bake_s:.1f} s, {bake_mb / 1024:.2f} GB | "
+          f"{render_s:.1f} s, {render_mb / 1024:.2f} GB (Cycles {cycles_mb / 1024:.2f} GB) | "
+          f"{add_s + bake_s + render_s:.0f} s |", flush=True)
+
+
+def main():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    names = argv or list(SCENES)
+    folder = tempfile.mkdtemp(prefix="firn_bench_")
+    load = os.getloadavg()
+    print(f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} cores, load average "
+          f"{load[0]:.1f} at the start; {WIDTH} × 280 px, {SAMPLES} samples")
+    print("| scene | snowed area m² | snow objects | active voxels | add snow: time, peak RSS | bake: time, peak RSS "
+          "| render: time, peak RSS | end to end |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name in names:
+        run(name, folder)
+
+
+main()
