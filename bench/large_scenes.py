@@ -10,6 +10,7 @@ bench/run.sh bench/large_scenes.py -- [car] [street] [valley]
 import math
 import os
 import re
+import resource
 import sys
 import tempfile
 import threading
@@ -56,13 +57,25 @@ class PeakMemory:
         self.peak = max(self.peak, self.resident_mb())
 
 
-def measured(fn, *args, **kwargs):
-    """(result, seconds, peak resident MB) of one stage."""
-    with PeakMemory() as memory:
-        started = time.perf_counter()
-        result = fn(*args, **kwargs)
-        seconds = time.perf_counter() - started
-    return result, seconds, memory.peak
+def cpu_seconds():
+    """Processor time of this process and its finished children (the world probe), s: what the stage would take
+    alone on one core, whatever else the machine runs."""
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+class Stage:
+    """Wall time (s), processor time (s) and peak resident memory (MB) of one stage."""
+
+    def __init__(self, fn, *args, **kwargs):
+        with PeakMemory() as memory:
+            started, cpu = time.perf_counter(), cpu_seconds()
+            self.result = fn(*args, **kwargs)
+            self.seconds, self.cpu = time.perf_counter() - started, cpu_seconds() - cpu
+        self.peak_gb = memory.peak / 1024.0
+
+    def cell(self):
+        return f"{self.seconds:.0f} s ({self.cpu:.0f} s CPU), {self.peak_gb:.2f} GB"
 
 
 def street_scene():
@@ -111,8 +124,8 @@ def cycles_render(scene, path):
     """Renders at WIDTH × 280 and returns Cycles' peak (MB)."""
     peaks = []
 
-    def stats(text):
-        found = re.findall(r"Peak:([0-9.]+)M", text)
+    def stats(text, *_):
+        found = re.findall(r"Peak:([0-9.]+)M", text) if isinstance(text, str) else None
         if found:
             peaks.append(float(found[-1]))
 
@@ -124,6 +137,18 @@ def cycles_render(scene, path):
     return max(peaks) if peaks else math.nan
 
 
+def dense_mb(snows):
+    """MB Cycles copies densely for the volume bands: 4 bytes per box voxel of density and 16 per box voxel of the
+    four RGB source grids, 2x coarser (docs/bake.md, Memory)."""
+    from firn.common.core import firncore
+
+    total = 0.0
+    for snow in snows:
+        box = firncore.grid_statistics(bpy.path.abspath(snow.data.filepath), "density")["box_voxels"]
+        total += box[0] * box[1] * box[2] * (4 + 4 * 16 / 8) / 1e6
+    return total
+
+
 def run(name, folder):
     from firn.common.core import firncore
 
@@ -131,16 +156,17 @@ def run(name, folder):
     scene, targets = build()
     scene.render.resolution_x, scene.render.resolution_y = WIDTH, WIDTH * 14 // 25
     area = snowed_area(targets)
-    bands, add_s, add_mb = measured(common.add_snow_bands, targets, **settings)
+    add = Stage(common.add_snow_bands, targets, **settings)
+    bands = add.result
     voxels = sum(firncore.grid_statistics(bpy.path.abspath(s.data.filepath), "density")["active_voxels"]
                  for s in bands)
     volumes = valley.volume_bands(bands)
-    _, bake_s, bake_mb = measured(common.bake, volumes)
-    cycles_mb, render_s, render_mb = measured(cycles_render, scene, os.path.join(folder, f"{name}.png"))
-    print(f"| {name} | {area:,.0f} | {len(bands)} ({len(volumes)} volumes) | {voxels / 1e6:.1f} M | "
-          f"{add_s:.1f} s, {add_mb / 1024:.2f} GB | {bake_s:.1f} s, {bake_mb / 1024:.2f} GB | "
-          f"{render_s:.1f} s, {render_mb / 1024:.2f} GB (Cycles {cycles_mb / 1024:.2f} GB) | "
-          f"{add_s + bake_s + render_s:.0f} s |", flush=True)
+    bake = Stage(common.bake, volumes)
+    render = Stage(cycles_render, scene, os.path.join(folder, f"{name}.png"))
+    print(f"| {name} | {area:,.0f} | {len(bands)} ({len(volumes)} volumes) | {voxels / 1e6:.1f} M | {add.cell()} | "
+          f"{bake.cell()} | {render.cell()}; Cycles {render.result / 1024:.2f} GB, dense grids "
+          f"{dense_mb(volumes) / 1024:.2f} GB | {add.seconds + bake.seconds + render.seconds:.0f} s "
+          f"({add.cpu + bake.cpu + render.cpu:.0f} s CPU) |", flush=True)
 
 
 def main():
@@ -150,7 +176,7 @@ def main():
     load = os.getloadavg()
     print(f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} cores, load average "
           f"{load[0]:.1f} at the start; {WIDTH} × 280 px, {SAMPLES} samples")
-    print("| scene | snowed area m² | snow objects | active voxels | add snow: time, peak RSS | bake: time, peak RSS "
+    print("| scene | target area m² | snow objects | active voxels | add snow: time, peak RSS | bake: time, peak RSS "
           "| render: time, peak RSS | end to end |")
     print("|---|---|---|---|---|---|---|---|")
     for name in names:

@@ -400,3 +400,23 @@ def test_level_of_detail_on_needs_a_perspective_camera(clean_scene):
     select_only(bpy.data.objects["Plane"])
     assert bpy.ops.firn.add_snow_layer(level_of_detail="OFF") == {"FINISHED"}
     assert bpy.context.object.firn.lod_level == -1
+
+
+def test_camera_footprint_is_the_lens_angle_over_the_pixels(clean_scene):
+    from firn.snow_layer.operators import camera_footprint
+
+    camera = add_ground_camera(width=200, height=112)
+    camera.data.lens, camera.data.sensor_width, camera.data.sensor_fit = 50.0, 36.0, "AUTO"
+
+    def footprint(metres=1.0, mode="AUTO"):
+        return camera_footprint(clean_scene, bpy.context.evaluated_depsgraph_get(), metres, mode)
+
+    pixel_angle = 2 * math.atan(18.0 / 50.0) / 200  # the longer side spans the 36 mm sensor
+    assert footprint().pixel_angle == pytest.approx(pixel_angle)
+    assert footprint().position == pytest.approx((0.0, -2.0, 1.0))
+    assert footprint().forward == pytest.approx((0.0, 1.0, 0.0), abs=1e-6)
+    clean_scene.render.resolution_percentage = 50
+    assert footprint().pixel_angle == pytest.approx(2 * pixel_angle)
+    assert footprint(metres=0.01, mode="ON").position == pytest.approx((0.0, -0.02, 0.01))  # a centimetre scene
+    camera.data.type = "ORTHO"
+    assert footprint() is None and footprint(mode="OFF") is None

@@ -123,15 +123,15 @@ def gather_inputs(context, props, targets, object_name):
         "stored_path": stored_path, "surface_mesh": props.surface_mesh,
         "unit_matrix": scene_geometry.unit_matrix(context.scene),
         "level_of_detail": props.level_of_detail,
-        "camera": camera_footprint(context.scene, metres, props.level_of_detail),
+        "camera": camera_footprint(context.scene, depsgraph, metres, props.level_of_detail),
         "band_pattern": band_path[:-len(".vdb")] + "_{level}.vdb",
         "band_stored_pattern": band_stored[:-len(".vdb")] + "_{level}.vdb",
     }
 
 
-def camera_footprint(scene, metres, mode):
-    """firncore.CameraFootprint of the scene camera (world m), or None: levels of detail off, or automatic in a
-    scene without a perspective camera."""
+def camera_footprint(scene, depsgraph, metres, mode):
+    """firncore.CameraFootprint of the scene camera as evaluated now (world m), or None: levels of detail off, or
+    automatic in a scene without a perspective camera."""
     if mode == "OFF":
         return None
     camera = scene.camera
@@ -150,7 +150,7 @@ def camera_footprint(scene, metres, mode):
         angle = data.angle
     half = math.tan(0.5 * angle)
     diagonal = math.atan(half * math.hypot(1.0, other / pixels))  # the view's corners, half-angle
-    matrix = camera.matrix_world
+    matrix = camera.evaluated_get(depsgraph).matrix_world
     forward = (matrix.to_3x3() @ Vector((0.0, 0.0, -1.0))).normalized()
     return firncore.CameraFootprint(
         position=tuple(matrix.translation * metres), forward=tuple(forward), pixel_angle=angle / pixels,
