@@ -7,6 +7,7 @@ status line: the dense volume textures included).
 bench/run.sh bench/large_scenes.py -- [car] [street] [valley]
 """
 
+import ctypes
 import math
 import os
 import re
@@ -121,20 +122,22 @@ SCENES = {
 
 
 def cycles_render(scene, path):
-    """Renders at WIDTH × 280 and returns Cycles' peak (MB)."""
-    peaks = []
-
-    def stats(text, *_):
-        found = re.findall(r"Peak:([0-9.]+)M", text) if isinstance(text, str) else None
-        if found:
-            peaks.append(float(found[-1]))
-
-    bpy.app.handlers.render_stats.append(stats)
-    try:
-        common.render(scene, path, WIDTH, SAMPLES, aspect=(25, 14))
-    finally:
-        bpy.app.handlers.render_stats.remove(stats)
-    return max(peaks) if peaks else math.nan
+    """Renders at WIDTH × 280 and returns Cycles' peak (MB): the "Peak" of the status lines Blender prints (in
+    background mode its render_stats handlers get no text), read from this process's standard output."""
+    libc = ctypes.CDLL(None)
+    with tempfile.TemporaryFile() as log:
+        saved = os.dup(1)
+        libc.fflush(None)
+        os.dup2(log.fileno(), 1)
+        try:
+            common.render(scene, path, WIDTH, SAMPLES, aspect=(25, 14))
+        finally:
+            libc.fflush(None)
+            os.dup2(saved, 1)
+            os.close(saved)
+        log.seek(0)
+        peaks = re.findall(r"Peak:([0-9.]+)M", log.read().decode(errors="replace"))
+    return max(float(peak) for peak in peaks) if peaks else math.nan
 
 
 def dense_mb(snows):
