@@ -126,10 +126,12 @@ BandTargets splitTargetsByBand(const TriangleMesh &targets, const std::vector<fl
                 continue;
             }
             const bool oneBand = level(farthest) == k;
-            const bool inView = camera.mayView(s.centre, 0.0) &&
-                                (camera.viewHalfAngle >= kPi || s.radius <= kViewEdgeFraction * nearest);
+            // In view, and small against its distance where it may cross the view's edge: what it holds out of
+            // view costs little.
+            const bool settled = camera.viewHalfAngle >= kPi ||
+                                 (camera.mayView(s.centre, 0.0) && s.radius <= kViewEdgeFraction * nearest);
             const bool small = s.radius <= kStraddleSpacings * bands[k].spacing;
-            if (small || (oneBand && (inView || camera.viewHalfAngle >= kPi))) {
+            if (small || (oneBand && settled)) {
                 positions[k].insert(positions[k].end(), p.p.begin(), p.p.end());
                 pieceWeights[k].insert(pieceWeights[k].end(), p.w.begin(), p.w.end());
             } else {
