@@ -127,8 +127,10 @@ def add_snow(targets, **settings):
 def add_snow_bands(targets, **settings):
     """Add Snow Layer that may make levels of detail: every snow object it made (its bands), finest first. Set the
     scene's camera and resolution first: they size the voxels."""
+    before = set(bpy.data.objects)
     add_snow(targets, **settings)
-    return sorted((obj for obj in bpy.context.selected_objects if obj.firn.is_snow), key=lambda o: o.firn.lod_level)
+    made = (obj for obj in bpy.data.objects if obj not in before and obj.firn.is_snow)
+    return sorted(made, key=lambda obj: obj.firn.lod_level)
 
 
 def render(scene, output, width, samples, aspect=(16, 9), label=None, stamp_time=False):

@@ -382,6 +382,7 @@ def test_snow_over_the_budget_gets_levels_of_detail_from_the_camera(clean_scene)
         colour = surface.data.materials[0].node_tree.nodes["Firn Render Diffuse"].inputs["Color"].default_value
         assert tuple(colour)[:3] == pytest.approx(optics.volume_optics(snow.firn).white_sky_albedo, rel=1e-6)
     assert any(snow.firn.render_mode == "OPAQUE" for snow in bands)
+    assert [snow for snow in bands if snow.select_get()] == [snow for snow in bands if snow.firn.voxel_size <= 0.1]
     # Near the camera the finest band holds the snow, 100 m away a coarse one.
     assert density_at(bands[0], (0.0, 1.0, 0.1))[0] > 100.0
     far = next(snow for snow in bands if density_at(snow, (0.0, 98.0, 0.1))[0] > 0.0)

@@ -423,8 +423,8 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
                 snow.firn.targets.add().object = obj
         for obj in context.selected_objects:
             obj.select_set(False)
-        for snow in layers:
-            snow.select_set(True)
+        for snow in layers:  # left selected: what Bake Scattering bakes next (surface bands need no bake)
+            snow.select_set(snow.firn.render_mode != "OPAQUE")
         context.view_layer.objects.active = layers[0]
         self.report({"INFO"}, report)
 
