@@ -7,10 +7,7 @@ status line: the dense volume textures included).
 bench/run.sh bench/large_scenes.py -- [car] [street] [valley]
 """
 
-import ctypes
-import math
 import os
-import re
 import resource
 import sys
 import tempfile
@@ -121,25 +118,6 @@ SCENES = {
 }
 
 
-def cycles_render(scene, path):
-    """Renders at WIDTH × 280 and returns Cycles' peak (MB): the "Peak" of the status lines Blender prints (in
-    background mode its render_stats handlers get no text), read from this process's standard output."""
-    libc = ctypes.CDLL(None)
-    with tempfile.TemporaryFile() as log:
-        saved = os.dup(1)
-        libc.fflush(None)
-        os.dup2(log.fileno(), 1)
-        try:
-            common.render(scene, path, WIDTH, SAMPLES, aspect=(25, 14))
-        finally:
-            libc.fflush(None)
-            os.dup2(saved, 1)
-            os.close(saved)
-        log.seek(0)
-        peaks = re.findall(r"Peak:([0-9.]+)M", log.read().decode(errors="replace"))
-    return max(float(peak) for peak in peaks) if peaks else math.nan
-
-
 def dense_mb(snows):
     """MB Cycles copies densely for the volume bands: 4 bytes per box voxel of density and 16 per box voxel of the
     four RGB source grids, 2x coarser (docs/bake.md, Memory)."""
@@ -165,7 +143,7 @@ def run(name, folder):
                  for s in bands)
     volumes = valley.volume_bands(bands)
     bake = Stage(common.bake, volumes)
-    render = Stage(cycles_render, scene, os.path.join(folder, f"{name}.png"))
+    render = Stage(common.render_peak_mb, scene, os.path.join(folder, f"{name}.png"), WIDTH, SAMPLES, (25, 14))
     print(f"| {name} | {area:,.0f} | {len(bands)} ({len(volumes)} volumes) | {voxels / 1e6:.1f} M | {add.cell()} | "
           f"{bake.cell()} | {render.cell()}; Cycles {render.result / 1024:.2f} GB, dense grids "
           f"{dense_mb(volumes) / 1024:.2f} GB | {add.seconds + bake.seconds + render.seconds:.0f} s "

@@ -151,6 +151,29 @@ def render(scene, output, width, samples, aspect=(16, 9), label=None, stamp_time
     bpy.ops.render.render(write_still=True)
 
 
+def render_peak_mb(scene, output, width, samples, aspect=(16, 9)):
+    """`render`, returning Cycles' own peak memory (MB): the "Peak" of the status lines Blender prints, read from
+    this process's standard output (in background mode render_stats handlers get no text); nan if none."""
+    import ctypes
+    import re
+    import tempfile
+
+    libc = ctypes.CDLL(None)
+    with tempfile.TemporaryFile() as log:
+        saved = os.dup(1)
+        libc.fflush(None)
+        os.dup2(log.fileno(), 1)
+        try:
+            render(scene, output, width, samples, aspect)
+        finally:
+            libc.fflush(None)
+            os.dup2(saved, 1)
+            os.close(saved)
+        log.seek(0)
+        peaks = re.findall(r"Peak:([0-9.]+)M", log.read().decode(errors="replace"))
+    return max(float(peak) for peak in peaks) if peaks else math.nan
+
+
 def stamp_label(scene, label):
     """Blender's render stamp, burnt into the image, with the note `label` alone (no date, frame, etc.)."""
     r = scene.render
