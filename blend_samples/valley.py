@@ -18,7 +18,7 @@ import sample_common as common  # noqa: E402
 
 SIZE = 1000.0  # m, the terrain's side
 CELLS = 160    # terrain quads per side (6.25 m)
-SNOW = dict(depth=0.15, spacing=0.05, level_of_detail="ON")
+SNOW = dict(depth=0.1, spacing=0.05, level_of_detail="ON")  # 1 cm voxels near the camera
 
 
 def height(x, y):

@@ -181,7 +181,8 @@ def compute_bands(inputs, progress):
                               inputs["settings"], inputs["camera"], inputs["band_pattern"], progress,
                               inputs["weights"])
     for band in result["bands"]:
-        band["proxy"] = proxy.mesh_arrays(band["path"], band["voxel_size"])
+        far = is_far_surface(band["voxel_size"], inputs["settings"].depth)
+        band["proxy"] = (proxy.far_surface_arrays if far else proxy.mesh_arrays)(band["path"], band["voxel_size"])
     return result
 
 
