@@ -6,7 +6,6 @@ bench/run.sh bench/car_memory.py
 """
 
 import os
-import re
 import sys
 import tempfile
 import time
@@ -21,19 +20,7 @@ import sample_common as common  # noqa: E402
 
 def cycles_peak_mb(scene, path):
     """Renders one sample at 500 × 281 and returns Cycles' peak memory (MB)."""
-    peaks = []
-
-    def stats(text):
-        found = re.findall(r"Peak:([0-9.]+)M", text)
-        if found:
-            peaks.append(float(found[-1]))
-
-    bpy.app.handlers.render_stats.append(stats)
-    try:
-        common.render(scene, path, 500, 1)
-    finally:
-        bpy.app.handlers.render_stats.remove(stats)
-    return max(peaks)
+    return common.render_peak_mb(scene, path, 500, 1)
 
 
 def bake_with_source_scale(snow, scale):

@@ -75,6 +75,14 @@ mkdir -p "$(dirname "$report")"
   "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/structure_bench.py" -- --width 240 --samples 32
   echo '```'
   echo
+  echo "## Large scenes: the car, a street, the valley (levels of detail)"
+  echo
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/large_scenes.py" -- car street valley
+  echo
+  echo '```'
+  "$FIRN_ROOT/bench/run.sh" "$FIRN_ROOT/bench/far_surface_seam.py"
+  echo '```'
+  echo
   echo "## The UI's longest stalls during Add Snow Layer and Bake Scattering (car sample, window under Xvfb)"
   echo
   "$FIRN_ROOT/bench/ui_stall.sh"

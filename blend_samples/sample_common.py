@@ -124,6 +124,15 @@ def add_snow(targets, **settings):
     return bpy.context.object
 
 
+def add_snow_bands(targets, **settings):
+    """Add Snow Layer that may make levels of detail: every snow object it made (its bands), finest first. Set the
+    scene's camera and resolution first: they size the voxels."""
+    before = set(bpy.data.objects)
+    add_snow(targets, **settings)
+    made = (obj for obj in bpy.data.objects if obj not in before and obj.firn.is_snow)
+    return sorted(made, key=lambda obj: obj.firn.lod_level)
+
+
 def render(scene, output, width, samples, aspect=(16, 9), label=None, stamp_time=False):
     """Cycles render to a PNG; `label` is written on the picture (comparison panels say what they show), and
     with `stamp_time` the render's own time (Blender's stamp measures it)."""
@@ -140,6 +149,29 @@ def render(scene, output, width, samples, aspect=(16, 9), label=None, stamp_time
     scene.render.use_stamp_render_time = stamp_time and label is not None
     os.makedirs(os.path.dirname(scene.render.filepath), exist_ok=True)
     bpy.ops.render.render(write_still=True)
+
+
+def render_peak_mb(scene, output, width, samples, aspect=(16, 9)):
+    """`render`, returning Cycles' own peak memory (MB): the "Peak" of the status lines Blender prints, read from
+    this process's standard output (in background mode render_stats handlers get no text); nan if none."""
+    import ctypes
+    import re
+    import tempfile
+
+    libc = ctypes.CDLL(None)
+    with tempfile.TemporaryFile() as log:
+        saved = os.dup(1)
+        libc.fflush(None)
+        os.dup2(log.fileno(), 1)
+        try:
+            render(scene, output, width, samples, aspect)
+        finally:
+            libc.fflush(None)
+            os.dup2(saved, 1)
+            os.close(saved)
+        log.seek(0)
+        peaks = re.findall(r"Peak:([0-9.]+)M", log.read().decode(errors="replace"))
+    return max(float(peak) for peak in peaks) if peaks else math.nan
 
 
 def stamp_label(scene, label):

@@ -47,6 +47,14 @@ SNOW_LAYER_PROPERTIES = {
     "voxel_size": bpy.props.FloatProperty(
         name="Voxel Size", description="Resolution of the snow volume (0: automatic, 12 voxels through the depth)",
         subtype="DISTANCE", unit="LENGTH", default=0.0, min=0.0, soft_max=0.1, precision=4),
+    "level_of_detail": bpy.props.EnumProperty(
+        name="Level of Detail", description="Voxels sized by the scene camera's pixel footprint: fine near the "
+        "camera, coarser with distance, one snow object per band of distances (docs/large-scenes.md)",
+        items=(("AUTO", "Automatic", "Levels of detail when the snow would exceed the voxel budget at one voxel size "
+                "and the scene has a perspective camera"),
+               ("ON", "On", "Levels of detail from the scene camera"),
+               ("OFF", "Off", "One voxel size everywhere")),
+        default="AUTO"),
     "occluders": bpy.props.EnumProperty(
         name="Occluders", description="What shelters the targets from snowfall",
         items=(("VISIBLE", "Visible Objects", "Every visible object shelters the targets"),
@@ -260,6 +268,9 @@ class FIRN_ObjectSettings(bpy.types.PropertyGroup):
     voxel_size: bpy.props.FloatProperty(
         name="Voxel Size", description="Voxel size of the snow volume in metres (whatever the Unit Scale)",
         default=0.0, min=0.0)
+    lod_level: bpy.props.IntProperty(
+        name="Level of Detail", description="The band of distances this snow holds (0: nearest the camera, each "
+        "level doubles the voxel size); -1: one voxel size everywhere", default=-1, min=-1)
 
     # --- optics: how the snow's density grid becomes light transport (docs/optics.md) ---
     optics_mode: bpy.props.EnumProperty(

@@ -117,9 +117,13 @@ void bindIo(py::module_ &m) {
             out["active_voxels"] = grid->activeVoxelCount();
             out["min"] = range.min(), out["max"] = range.max();
             out["voxel_size"] = grid->voxelSize()[0];
+            const openvdb::Coord box = grid->evalActiveVoxelDim();  // what a dense copy of the grid holds
+            out["box_voxels"] = py::make_tuple(box.x(), box.y(), box.z());
             return out;
         },
-        py::arg("path"), py::arg("name"), "Active voxel count, min and max value and voxel size (m) of a float grid.");
+        py::arg("path"), py::arg("name"),
+        "Active voxel count, min and max value, voxel size (m) and box_voxels (the active voxels' bounding box in "
+        "voxels: what Cycles copies densely) of a float grid.");
 }
 
 }  // namespace firncore

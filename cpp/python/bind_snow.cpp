@@ -4,6 +4,7 @@
 
 #include "bindings.h"
 #include "firn/io/vdb_io.h"
+#include "firn/snow/snow_bands.h"
 #include "firn/snow/snow_brush.h"
 #include "firn/snow/snow_layer.h"
 #include "firn/snow/surface_mesh.h"
@@ -102,6 +103,39 @@ void bindSettings(py::module_ &m) {
         .def_property_readonly("effective_voxel_size", &S::effectiveVoxelSize, "m, the voxel size that will be used");
 }
 
+void bindCamera(py::module_ &m) {
+    using C = firn::CameraFootprint;
+    const auto vec = [](const glm::dvec3 &v) { return py::make_tuple(v.x, v.y, v.z); };
+    py::class_<C>(m, "CameraFootprint",
+                  "The camera that sizes the voxels of snow with levels of detail. Lengths in m, angles in rad.")
+        .def(py::init([](const py::kwargs &kwargs) { return settingsFromKwargs<C>(kwargs, "CameraFootprint"); }))
+        .def_property(
+            "position", [vec](const C &c) { return vec(c.position); },
+            [](C &c, const std::array<double, 3> &p) { c.position = {p[0], p[1], p[2]}; }, "m, world space")
+        .def_property(
+            "forward", [vec](const C &c) { return vec(c.forward); },
+            [](C &c, const std::array<double, 3> &d) { c.forward = {d[0], d[1], d[2]}; }, "unit view direction")
+        .def_readwrite("pixel_angle", &C::pixelAngle, "rad per pixel: field of view over pixels across")
+        .def_readwrite("view_half_angle", &C::viewHalfAngle,
+                       "rad, a cone around forward holding the whole view (pi or more: all around)")
+        .def("validate", &C::validate, "Raises ValueError naming the first field out of range.");
+    m.def(
+        "lod_voxel_size",
+        [](double distance, const C &camera, double fineVoxel, int bands) {
+            return firn::lodVoxelSize(firn::lodLevel(distance, camera, fineVoxel, bands), fineVoxel);
+        },
+        py::arg("distance"), py::arg("camera"), py::arg("fine_voxel"), py::arg("bands") = 16,
+        "Voxel size (m) of snow `distance` m from the camera: fine_voxel x 2^k within a pixel's footprint.");
+}
+
+// `pattern` with "{level}" replaced by the band's level: one VDB file per band.
+std::string bandPath(const std::string &pattern, int level) {
+    const std::string key = "{level}";
+    const std::size_t at = pattern.find(key);
+    if (at == std::string::npos) throw firn::InvalidArgument("band path pattern needs '{level}': " + pattern);
+    return pattern.substr(0, at) + std::to_string(level) + pattern.substr(at + key.size());
+}
+
 firn::BrushMode brushMode(const std::string &mode) {
     if (mode == "ADD") return firn::BrushMode::Add;
     if (mode == "ERASE") return firn::BrushMode::Erase;
@@ -186,6 +220,7 @@ again (summed). Releases the GIL; ValueError for bad input.)doc")
 void bindSnow(py::module_ &m) {
     bindSettings(m);
     bindCanvas(m);
+    bindCamera(m);
     m.def(
         "generate_snow_layer",
         [](const py::object &vertices, const py::object &triangles, const py::object &occluders,
@@ -217,6 +252,55 @@ the targets. `weights` is None or one 0..1 per target vertex scaling the depth (
 active_voxels, mean_density (kg/m^3), bounds, dropped_triangles, open_surfaces_turned (open target surfaces
 whose downward normals were ignored: snow lies on their upper side). Releases the GIL; raises ValueError for bad
 input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `progress` is cancelled.)doc");
+
+    m.def(
+        "generate_snow_bands",
+        [](const py::object &vertices, const py::object &triangles, const py::object &occluders,
+           const firn::SnowLayerSettings &settings, const firn::CameraFootprint &camera, const std::string &pattern,
+           std::shared_ptr<firn::Progress> progress, const py::object &weights) {
+            bandPath(pattern, 0);  // a bad pattern before any work
+            const firn::TriangleMesh targets = meshFromArrays(vertices, triangles, "targets");
+            std::vector<float> depthWeights;
+            if (!weights.is_none()) {
+                const FloatArray w = floatArray(weights, "weights");
+                depthWeights.assign(w.data(), w.data() + w.size());
+            }
+            const firn::TriangleMesh blockers = optionalMesh(occluders, "occluders");
+            progress = orNew(progress);
+            const firn::SnowBands snow = longCall([&] {
+                firn::SnowBands made =
+                    firn::generateSnowBands(targets, blockers, settings, camera, progress.get(), depthWeights);
+                for (const firn::SnowBand &b : made.bands)
+                    firn::writeGrids(bandPath(pattern, b.band.level), {b.grids.density, b.grids.surface});
+                return made;
+            });
+            py::list bands;
+            for (const firn::SnowBand &b : snow.bands) {
+                firn::SnowLayer layer;  // describe() reads the grids and voxel size; the balls are shared, below
+                layer.grids = b.grids, layer.voxelSize = b.band.voxelSize, layer.siteCount = b.siteCount;
+                py::dict band = describe(layer);
+                band.attr("pop")("metaballs");
+                band["level"] = b.band.level, band["path"] = bandPath(pattern, b.band.level);
+                band["near_distance"] = b.band.nearDistance, band["far_distance"] = b.band.farDistance;
+                band["spacing"] = b.band.spacing;
+                bands.append(band);
+            }
+            py::dict out;
+            out["bands"] = bands;
+            out["metaballs"] = metaballsToArrays(snow.metaballs);
+            out["out_of_view"] = snow.outOfView;
+            out["dropped_triangles"] = targets.droppedDegenerate + blockers.droppedDegenerate;
+            out["open_surfaces_turned"] = snow.openSurfaces.surfaces;
+            return out;
+        },
+        py::arg("vertices"), py::arg("triangles"), py::arg("occluders") = py::none(), py::arg("settings"),
+        py::arg("camera"), py::arg("path_pattern"), py::arg("progress") = nullptr, py::arg("weights") = py::none(),
+        R"doc(Add Snow Layer with levels of detail by distance to `camera` (a CameraFootprint): as generate_snow_layer,
+but one VDB file per band of distances, `path_pattern` with '{level}' replaced by the band's level (0: the
+finest, settings.effective_voxel_size; each level doubles the voxel and the spacing). Returns a dict: bands (a
+list, finest first, of dicts: level, path, voxel_size, spacing, near_distance, far_distance (m from the camera),
+site_count, active_voxels, mean_density, bounds), metaballs (all bands'), out_of_view (target pieces left out),
+dropped_triangles, open_surfaces_turned. Errors as generate_snow_layer.)doc");
 
     m.def(
         "rasterize_metaballs",

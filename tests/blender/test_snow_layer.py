@@ -345,3 +345,79 @@ def test_weight_attribute_masks_the_depth_and_a_bad_one_is_reported(clean_scene)
     select_only(ground)
     with pytest.raises(RuntimeError, match="must be a Float attribute on points"):
         bpy.ops.firn.add_snow_layer(weight_attribute="colour")
+
+
+def add_ground_camera(width=200, height=112):
+    """A camera 1 m above the ground looking along +y, 200 px across a 40 degree view (3.5 mrad per pixel)."""
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    bpy.context.scene.collection.objects.link(camera)
+    camera.location = (0.0, -2.0, 1.0)
+    camera.rotation_euler = (math.radians(90.0), 0.0, 0.0)
+    bpy.context.scene.camera = camera
+    bpy.context.scene.render.resolution_x, bpy.context.scene.render.resolution_y = width, height
+    bpy.context.scene.render.resolution_percentage = 100
+    return camera
+
+
+def test_snow_over_the_budget_gets_levels_of_detail_from_the_camera(clean_scene):
+    add_ground_camera()
+    ground = add_plane(size=300.0, location=(0.0, 140.0, 0.0))  # 2 cm voxels everywhere: billions
+    select_only(ground)
+    assert bpy.ops.firn.add_snow_layer(depth=0.2, spacing=0.1, voxel_size=0.02) == {"FINISHED"}
+    bands = sorted((obj for obj in bpy.data.objects if obj.firn.is_snow), key=lambda obj: obj.firn.lod_level)
+    assert len(bands) >= 4 and bpy.context.object == bands[0] and bands[0].name == "Snow"
+    for level, snow in enumerate(bands):
+        assert snow.firn.lod_level == level and snow.firn.voxel_size == pytest.approx(0.02 * 2 ** level)
+        assert snow.active_material is not None and [item.object for item in snow.firn.targets] == [ground]
+        assert os.path.exists(bpy.path.abspath(snow.data.filepath))
+        assert snow.firn.layer.depth == pytest.approx(0.2) and snow.firn.metaballs is None
+    # Bands coarser than half the depth render as their proxy's surface, of the snow's white-sky albedo.
+    from firn.material import optics
+    from firn.snow_layer import proxy
+    for snow in bands:
+        far = snow.firn.voxel_size > 0.1
+        assert snow.firn.render_mode == ("OPAQUE" if far else "BAKED"), snow.name
+        surface = proxy.proxy_of(snow)
+        assert surface.hide_render == (not far)
+        colour = surface.data.materials[0].node_tree.nodes["Firn Render Diffuse"].inputs["Color"].default_value
+        assert tuple(colour)[:3] == pytest.approx(optics.volume_optics(snow.firn).white_sky_albedo, rel=1e-6)
+    assert any(snow.firn.render_mode == "OPAQUE" for snow in bands)
+    assert [snow for snow in bands if snow.select_get()] == [snow for snow in bands if snow.firn.voxel_size <= 0.1]
+    # Near the camera the finest band holds the snow, 100 m away a coarse one.
+    assert density_at(bands[0], (0.0, 1.0, 0.1))[0] > 100.0
+    far = next(snow for snow in bands if density_at(snow, (0.0, 98.0, 0.1))[0] > 0.0)
+    assert far.firn.lod_level >= 3
+    with pytest.raises(RuntimeError, match="levels of detail"):
+        select_only(bands[1])
+        bpy.ops.firn.regenerate_snow()
+
+
+def test_level_of_detail_on_needs_a_perspective_camera(clean_scene):
+    select_only(add_plane())
+    with pytest.raises(RuntimeError, match="perspective camera"):
+        bpy.ops.firn.add_snow_layer(level_of_detail="ON")
+    assert not any(obj.firn.is_snow for obj in bpy.data.objects)
+    add_ground_camera()
+    select_only(bpy.data.objects["Plane"])
+    assert bpy.ops.firn.add_snow_layer(level_of_detail="OFF") == {"FINISHED"}
+    assert bpy.context.object.firn.lod_level == -1
+
+
+def test_camera_footprint_is_the_lens_angle_over_the_pixels(clean_scene):
+    from firn.snow_layer.operators import camera_footprint
+
+    camera = add_ground_camera(width=200, height=112)
+    camera.data.lens, camera.data.sensor_width, camera.data.sensor_fit = 50.0, 36.0, "AUTO"
+
+    def footprint(metres=1.0, mode="AUTO"):
+        return camera_footprint(clean_scene, bpy.context.evaluated_depsgraph_get(), metres, mode)
+
+    pixel_angle = 2 * math.atan(18.0 / 50.0) / 200  # the longer side spans the 36 mm sensor
+    assert footprint().pixel_angle == pytest.approx(pixel_angle)
+    assert footprint().position == pytest.approx((0.0, -2.0, 1.0))
+    assert footprint().forward == pytest.approx((0.0, 1.0, 0.0), abs=1e-6)
+    clean_scene.render.resolution_percentage = 50
+    assert footprint().pixel_angle == pytest.approx(2 * pixel_angle)
+    assert footprint(metres=0.01, mode="ON").position == pytest.approx((0.0, -0.02, 0.01))  # a centimetre scene
+    camera.data.type = "ORTHO"
+    assert footprint() is None and footprint(mode="OFF") is None

@@ -212,3 +212,50 @@ def test_snow_canvas_paints_and_refuses_bad_strokes(tmp_vdb):
     coarse = firncore.SnowLayerSettings(depth=0.1, voxel_size=0.02)
     with pytest.raises(ValueError, match="rebuild it from its metaballs"):
         firncore.SnowCanvas(layer["metaballs"], coarse, tmp_vdb, *plane(2.0))
+
+
+def ground_camera(pixel_angle=4e-3, half_angle=0.3):
+    return firncore.CameraFootprint(position=(0.0, -2.0, 1.0), forward=(0.0, 1.0, 0.0), pixel_angle=pixel_angle,
+                                    view_half_angle=half_angle)
+
+
+def test_snow_bands_one_file_per_band_with_doubling_voxels(tmp_path):
+    vertices, triangles = plane(60.0)
+    vertices[:, 1] += 28.0  # ahead of the camera
+    settings = firncore.SnowLayerSettings(depth=0.2, spacing=0.1, voxel_size=0.02, exposure_rays=4)
+    pattern = str(tmp_path / "snow_{level}.vdb")
+    result = firncore.generate_snow_bands(vertices, triangles, settings=settings, camera=ground_camera(),
+                                          path_pattern=pattern)
+    bands = result["bands"]
+    assert [band["level"] for band in bands] == list(range(len(bands))) and len(bands) >= 3
+    for band in bands:
+        assert band["voxel_size"] == pytest.approx(0.02 * 2 ** band["level"])
+        assert band["spacing"] == pytest.approx(0.1 * 2 ** band["level"])
+        assert firncore.grid_statistics(band["path"], "density")["active_voxels"] == band["active_voxels"] > 0
+        # A pixel spans the band's voxel where the band starts (4 mrad per pixel).
+        assert band["near_distance"] == pytest.approx(band["voxel_size"] / 4e-3 if band["level"] else 0.0)
+    assert sorted(os.listdir(tmp_path)) == sorted(f"snow_{band['level']}.vdb" for band in bands)
+    assert result["out_of_view"] > 0 and len(result["metaballs"]["radii"]) > 0
+
+
+def test_snow_bands_need_a_level_in_the_path_and_a_sane_camera(tmp_path):
+    settings = firncore.SnowLayerSettings(depth=0.2, spacing=0.1, voxel_size=0.02)
+    with pytest.raises(ValueError, match="needs '\\{level\\}'"):
+        firncore.generate_snow_bands(*plane(), settings=settings, camera=ground_camera(),
+                                     path_pattern=str(tmp_path / "snow.vdb"))
+    with pytest.raises(ValueError, match="pixel angle"):
+        firncore.generate_snow_bands(*plane(), settings=settings, camera=ground_camera(pixel_angle=0.0),
+                                     path_pattern=str(tmp_path / "snow_{level}.vdb"))
+    behind = firncore.CameraFootprint(position=(0.0, 10.0, 1.0), forward=(0.0, 1.0, 0.0), pixel_angle=1e-3,
+                                      view_half_angle=0.3)
+    with pytest.raises(ValueError, match="camera's view"):
+        firncore.generate_snow_bands(*plane(), settings=settings, camera=behind,
+                                     path_pattern=str(tmp_path / "snow_{level}.vdb"))
+    assert os.listdir(tmp_path) == []
+
+
+def test_lod_voxel_size_follows_the_pixel_footprint():
+    camera = ground_camera(pixel_angle=1e-3)
+    assert firncore.lod_voxel_size(1.0, camera, 0.01) == 0.01
+    assert firncore.lod_voxel_size(25.0, camera, 0.01) == 0.02   # 2.5 cm per pixel
+    assert firncore.lod_voxel_size(700.0, camera, 0.01) == 0.64  # 70 cm per pixel

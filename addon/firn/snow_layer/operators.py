@@ -3,11 +3,12 @@
 Selected snow objects are targets too: a new layer lies on their surface (layers stack).
 """
 
+import math
 import os
 
 import bpy
 import numpy as np
-from mathutils import Matrix
+from mathutils import Matrix, Vector
 
 from ..common import cache, preferences, scene_geometry
 from ..common.modes import object_mode_poll
@@ -116,19 +117,73 @@ def gather_inputs(context, props, targets, object_name):
         settings.validate()
     except ValueError as error:
         raise UserError(f"Add Snow Layer: {error}") from error
+    band_path, band_stored = cache.snow_file(f"{object_name} LOD")
     return {
         "targets": target_arrays, "weights": weights, "occluders": occluders, "settings": settings, "path": path,
         "stored_path": stored_path, "surface_mesh": props.surface_mesh,
         "unit_matrix": scene_geometry.unit_matrix(context.scene),
+        "level_of_detail": props.level_of_detail,
+        "camera": camera_footprint(context.scene, depsgraph, metres, props.level_of_detail),
+        "band_pattern": band_path[:-len(".vdb")] + "_{level}.vdb",
+        "band_stored_pattern": band_stored[:-len(".vdb")] + "_{level}.vdb",
     }
 
 
+def camera_footprint(scene, depsgraph, metres, mode):
+    """firncore.CameraFootprint of the scene camera as evaluated now (world m), or None: levels of detail off, or
+    automatic in a scene without a perspective camera."""
+    if mode == "OFF":
+        return None
+    camera = scene.camera
+    if camera is None or camera.type != "CAMERA" or camera.data.type != "PERSP":
+        if mode == "ON":
+            raise UserError("Level of Detail sizes voxels by the scene camera's pixels: set a perspective camera "
+                            "as the scene's camera (Scene Properties > Camera), or turn Level of Detail off")
+        return None
+    render, data = scene.render, camera.data
+    scale = render.resolution_percentage / 100.0
+    width, height = render.resolution_x * scale, render.resolution_y * scale
+    # The lens's angle spans the sensor's fitted side (Auto: the longer side of the image).
+    fit = data.sensor_fit if data.sensor_fit != "AUTO" else ("HORIZONTAL" if width >= height else "VERTICAL")
+    angle, pixels, other = ((data.angle_x, width, height) if fit == "HORIZONTAL" else (data.angle_y, height, width))
+    if data.sensor_fit == "AUTO":
+        angle = data.angle
+    half = math.tan(0.5 * angle)
+    diagonal = math.atan(half * math.hypot(1.0, other / pixels))  # the view's corners, half-angle
+    matrix = camera.evaluated_get(depsgraph).matrix_world
+    forward = (matrix.to_3x3() @ Vector((0.0, 0.0, -1.0))).normalized()
+    return firncore.CameraFootprint(
+        position=tuple(matrix.translation * metres), forward=tuple(forward), pixel_angle=angle / pixels,
+        view_half_angle=diagonal + 0.1 + math.hypot(data.shift_x, data.shift_y) * angle)
+
+
 def compute_snow(inputs, progress):
-    """Worker thread: the core generates the grids and writes the VDB; no bpy here."""
+    """Worker thread: the core generates the grids and writes the VDB; no bpy here. Levels of detail when asked
+    for, or when automatic and one voxel size is over the budget (the core refuses at once when it surely is)."""
     vertices, triangles = inputs["targets"]
-    result = cache.core_write(firncore.generate_snow_layer, vertices, triangles, inputs["occluders"],
-                              inputs["settings"], inputs["path"], progress, inputs["weights"])
+    camera = inputs.get("camera")
+    if camera is not None and inputs["level_of_detail"] == "ON":
+        return compute_bands(inputs, progress)
+    try:
+        result = cache.core_write(firncore.generate_snow_layer, vertices, triangles, inputs["occluders"],
+                                  inputs["settings"], inputs["path"], progress, inputs["weights"])
+    except firncore.BudgetError as error:
+        if camera is None:
+            raise
+        return dict(compute_bands(inputs, progress), uniform_refusal=str(error))
     return with_meshes(inputs, result)
+
+
+def compute_bands(inputs, progress):
+    """Worker thread: snow with levels of detail, one VDB per band, and each band's viewport proxy."""
+    vertices, triangles = inputs["targets"]
+    result = cache.core_write(firncore.generate_snow_bands, vertices, triangles, inputs["occluders"],
+                              inputs["settings"], inputs["camera"], inputs["band_pattern"], progress,
+                              inputs["weights"])
+    for band in result["bands"]:
+        far = is_far_surface(band["voxel_size"], inputs["settings"].depth)
+        band["proxy"] = (proxy.far_surface_arrays if far else proxy.mesh_arrays)(band["path"], band["voxel_size"])
+    return result
 
 
 def with_meshes(inputs, result):
@@ -239,6 +294,54 @@ def write_snow(snow, inputs, result):
         proxy.store_proxy(snow, result["proxy"], 1.0 / inputs["unit_matrix"][0, 0])
 
 
+# A band whose voxels are coarser than this fraction of the depth cannot hold the layer's light transport (fewer
+# than two voxels through it); a pixel there sees only the snow's albedo: it renders as a surface.
+FAR_SURFACE_DEPTH_FRACTION = 0.5
+
+
+def is_far_surface(voxel_size, depth):
+    """Whether a band of `voxel_size` m renders as a surface for snow `depth` m deep."""
+    return voxel_size > FAR_SURFACE_DEPTH_FRACTION * depth
+
+
+def write_bands(context, inputs, result):
+    """One snow object per band: the finest takes the layer's name, the others "<name> LOD <level>". Each is a
+    snow layer of its own (material, bake, proxy); the metaballs are not kept (millions over a valley: the
+    brush and Rebuild work on layers without levels of detail). Far bands render as their proxy's surface (render
+    mode Opaque: the white-sky albedo of the same optics, the plane albedo a deep snowpack's volume has under a
+    uniform sky), and Cycles loads none of their grids."""
+    objects = []
+    depth = inputs["settings"].depth  # m
+    density = result["bands"][0]["mean_density"]  # the snow's, measured where voxels are finest
+    for band in result["bands"]:
+        name = inputs["name"] if not objects else f"{inputs['name']} LOD {band['level']}"
+        snow = new_snow_object(context, name)
+        snow.matrix_world = Matrix(inputs["unit_matrix"].tolist())
+        snow.data.filepath = inputs["band_stored_pattern"].replace("{level}", str(band["level"]))
+        cache.file_fixed(snow.data)
+        cache.reload_grids(snow.data)
+        snow.firn.mean_density = density
+        snow.firn.voxel_size = band["voxel_size"]
+        snow.firn.lod_level = band["level"]
+        materials.ensure_snow_material(snow)
+        proxy.store_proxy(snow, band["proxy"], 1.0 / inputs["unit_matrix"][0, 0])
+        if is_far_surface(band["voxel_size"], depth):
+            snow.firn.render_mode = "OPAQUE"  # its update rebuilds the material and renders the proxy
+        objects.append(snow)
+    return objects
+
+
+def band_summary(result, depth):
+    """The operator's report for snow with levels of detail."""
+    voxels = sum(band["active_voxels"] for band in result["bands"])
+    sizes = ", ".join(f"{band['voxel_size'] * 1000:.0f}" for band in result["bands"])
+    reason = " (one voxel size is over the budget)" if "uniform_refusal" in result else ""
+    surfaces = sum(is_far_surface(band["voxel_size"], depth) for band in result["bands"])
+    far = f", the farthest {surfaces} as surfaces" if surfaces else ""
+    return (f"Snow with levels of detail{reason}: {len(result['bands'])} bands of {sizes} mm voxels{far}, "
+            f"{voxels:,} voxels{input_notes(result)}")
+
+
 def new_snow_object(context, name):
     volume = bpy.data.volumes.new(name)
     volume.render.precision = "FULL"  # half floats cut thin snow (cycles-volumes notes)
@@ -307,18 +410,24 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
     compute = staticmethod(compute_snow)
 
     def apply(self, context, inputs, result):
-        snow = new_snow_object(context, inputs["name"])
-        copy_settings(self, snow.firn.layer)
-        for obj in inputs["targets_objects"]:
-            snow.firn.targets.add().object = obj
-        write_snow(snow, inputs, result)
+        if "bands" in result:
+            layers = write_bands(context, inputs, result)
+            report = band_summary(result, inputs["settings"].depth)
+        else:
+            layers = [new_snow_object(context, inputs["name"])]
+            write_snow(layers[0], inputs, result)
+            report = (f"Snow on {len(inputs['targets_objects'])} objects: {result['active_voxels']:,} voxels of "
+                      f"{result['voxel_size'] * 1000:.1f} mm{input_notes(result)}")
+        for snow in layers:
+            copy_settings(self, snow.firn.layer)
+            for obj in inputs["targets_objects"]:
+                snow.firn.targets.add().object = obj
         for obj in context.selected_objects:
             obj.select_set(False)
-        snow.select_set(True)
-        context.view_layer.objects.active = snow
-        self.report({"INFO"}, f"Snow on {len(inputs['targets_objects'])} objects: "
-                              f"{result['active_voxels']:,} voxels of {result['voxel_size'] * 1000:.1f} mm"
-                              f"{input_notes(result)}")
+        for snow in layers:  # left selected: what Bake Scattering bakes next (surface bands need no bake)
+            snow.select_set(snow.firn.render_mode != "OPAQUE")
+        context.view_layer.objects.active = layers[0]
+        self.report({"INFO"}, report)
 
 
 class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
@@ -338,11 +447,15 @@ class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
 
     def prepare(self, context):
         snow = active_snow_layer(context)
+        if snow.firn.lod_level >= 0:
+            raise UserError(f"'{snow.name}' is one band of snow with levels of detail: delete its bands and use "
+                            "Add Snow Layer again (bands are made together)")
         targets = [item.object for item in snow.firn.targets if item.object is not None]
         if not targets:
             kept = " or Rebuild from Metaballs" if snow.firn.metaballs is not None else ""
             raise UserError(f"'{snow.name}' has no target objects left: use Add Snow Layer{kept} instead")
-        return dict(gather_inputs(context, snow.firn.layer, targets, snow.name), name=snow.name)
+        # One voxel size: a layer made with levels of detail is refused above.
+        return dict(gather_inputs(context, snow.firn.layer, targets, snow.name), name=snow.name, camera=None)
 
     compute = staticmethod(compute_snow)
 

@@ -34,6 +34,19 @@ def mesh_arrays(path, voxel_size, progress=None):
                                       isovalue=OUTSIDE_VOXELS * voxel_size, progress=progress)
 
 
+# A far band renders as its proxy (snow_layer/operators.py, levels of detail): meshed at the band's own voxels, flat
+# regions merged (OpenVDB's adaptivity), within a budget large enough that the layer, often under two voxels
+# thick there, is never sampled on coarser voxels (which would open holes in it).
+FAR_SURFACE_ADAPTIVITY = 0.5
+FAR_SURFACE_MAX_TRIANGLES = 4_000_000
+
+
+def far_surface_arrays(path, voxel_size, progress=None):
+    """Worker thread: a far band's rendered surface (vertices m, triangles) from its VDB file; no bpy here."""
+    return firncore.snow_surface_mesh(path, adaptivity=FAR_SURFACE_ADAPTIVITY, max_triangles=FAR_SURFACE_MAX_TRIANGLES,
+                                      isovalue=OUTSIDE_VOXELS * voxel_size, progress=progress)
+
+
 def new_mesh(name, vertices, triangles, smooth=False):
     """A Blender mesh of (vertices (N, 3), triangles (M, 3)) arrays."""
     mesh = bpy.data.meshes.new(name)

@@ -95,11 +95,8 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
     TriangleMesh oriented = targets;
     layer.openSurfaces = orientOpenSurfaces(oriented, -glm::normalize(settings.direction));
     const RayCaster shelter(merge({oriented, occluders}));
-    // Sure refusals first: placing and sheltering sites grows with the area (minutes on a large plane). Depth
-    // weights scale the snow down: the bound times the smallest weight stays a lower bound.
-    const float least = depthWeights.empty() ? 1.0f : *std::min_element(depthWeights.begin(), depthWeights.end());
-    const double leastWeight = least >= 0.0f && least <= 1.0f ? least : 1.0;  // bad weights: findLandingSites says so
-    checkVoxelBudget(leastWeight * snowVoxelLowerBound(oriented, shelter, settings.snowfall(), settings.depth,
+    // Sure refusals first: placing and sheltering sites grows with the area (minutes on a large plane).
+    checkVoxelBudget(leastDepthWeight(depthWeights) * snowVoxelLowerBound(oriented, shelter, settings.snowfall(), settings.depth,
                                                        layer.voxelSize),
                      settings.raster(), "at least");
     const auto sites = findLandingSites(oriented, shelter, settings.snowfall(), SubProgress(progress, 0.0, 0.4),
@@ -109,14 +106,24 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
     const RasterSettings raster = settings.raster();
     const double estimate = estimateVoxelCount(layer.metaballs, settings.spacing, raster.voxelSize);
     checkVoxelBudget(estimate, raster);
-    if (layer.metaballs.empty()) throw InvalidArgument(
-        "no snow lands on the targets: every surface is sheltered, steeper than the maximum slope or the underside "
-        "of a closed object (if a closed object's normals point inward, recalculate them: Mesh > Normals > "
-        "Recalculate Outside)");
+    requireLandedSnow(layer.metaballs);
     if (progress) progress->report(0.45, "building the snow volume");
     layer.grids = rasterizeSnow(layer.metaballs, raster, SubProgress(progress, 0.45, 1.0));
     if (progress) progress->report(1.0, "done");
     return layer;
+}
+
+double leastDepthWeight(const std::vector<float> &depthWeights) {
+    if (depthWeights.empty()) return 1.0;
+    const float least = *std::min_element(depthWeights.begin(), depthWeights.end());
+    return least >= 0.0f && least <= 1.0f ? least : 1.0;
+}
+
+void requireLandedSnow(const std::vector<Metaball> &balls) {
+    if (balls.empty()) throw InvalidArgument(
+        "no snow lands on the targets: every surface is sheltered, steeper than the maximum slope or the underside "
+        "of a closed object (if a closed object's normals point inward, recalculate them: Mesh > Normals > "
+        "Recalculate Outside)");
 }
 
 double meanInteriorDensity(const SnowGrids &grids) {

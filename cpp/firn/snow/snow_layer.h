@@ -58,6 +58,13 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
                             const SnowLayerSettings &settings, Progress *progress,
                             const std::vector<float> &depthWeights = {});
 
+// The smallest depth weight (1 for none, or for weights out of 0..1: findLandingSites refuses those): the
+// lower bound of snow_volume_bound.h times it stays a lower bound.
+double leastDepthWeight(const std::vector<float> &depthWeights);
+
+// Throws InvalidArgument, saying why snow may not land, when there are no balls.
+void requireLandedSnow(const std::vector<Metaball> &balls);
+
 // Mean density (kg/m^3) of the voxels wholly inside the snow; 0 for no snow.
 double meanInteriorDensity(const SnowGrids &grids);
 
