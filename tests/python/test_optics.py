@@ -196,13 +196,16 @@ def test_docs_preset_tables_match_the_core():
 def test_far_surface_albedo_is_the_volumes_plane_albedo_under_a_uniform_sky(grain_radius, black_carbon):
     """Far snow renders as a diffuse surface of the white-sky albedo (snow_layer/operators.py write_bands, render
     mode Opaque). The volume it replaces, a deep layer of the same optics, reflects of a uniform sky the photon
-    Monte Carlo's reflectance (the core's independent oracle): equal within 2 % in every channel, also for 50 cm
-    of snow at 200 kg/m³ over black ground."""
+    Monte Carlo's reflectance (the core's independent oracle): equal within 2 % in every channel. 50 cm of snow at
+    200 kg/m³ over black ground reflects less (light leaves through the bottom: +2.0 % in blue at 0.5 mm grains,
+    measured), within 3 % and never more than the surface beyond the oracle's noise."""
     optics = firncore.optics(grain_radius=grain_radius, density=200.0, black_carbon=black_carbon)
-    for depth in (float("inf"), 0.5):  # m
+    for depth, below, above in ((float("inf"), -0.02, 0.02), (0.5, 0.0, 0.03)):  # m; surface / volume - 1
         tau = optics.sigma_t(200.0) * depth
         for channel in range(3):
             slab = firncore.slab_monte_carlo(omega=optics.albedo[channel], g=optics.g, tau=tau, mu0=-1.0,
-                                             photons=4000, seed=channel)
-            assert optics.white_sky_albedo[channel] == pytest.approx(slab["reflectance"], rel=0.02), (depth, channel)
-            assert 3 * slab["reflectance_error"] < 0.01  # the oracle's own noise is well inside the 2 %
+                                             photons=16000, seed=channel)
+            noise = 3 * slab["reflectance_error"]
+            assert noise < 0.01  # the oracle's own noise is well inside the tolerances
+            excess = optics.white_sky_albedo[channel] / slab["reflectance"] - 1.0
+            assert below - noise <= excess <= above, (depth, channel)
