@@ -215,6 +215,13 @@ again (summed). Releases the GIL; ValueError for bad input.)doc")
                                "kg/m^3 of the voxels wholly inside the snow");
 }
 
+// A vertex group mask from Python: None, or one 0..1 per target vertex.
+std::vector<float> optionalWeights(const py::object &weights) {
+    if (weights.is_none()) return {};
+    const FloatArray w = floatArray(weights, "weights");
+    return std::vector<float>(w.data(), w.data() + w.size());
+}
+
 }  // namespace
 
 void bindSnow(py::module_ &m) {
@@ -227,11 +234,7 @@ void bindSnow(py::module_ &m) {
            const firn::SnowLayerSettings &settings, const std::string &path, std::shared_ptr<firn::Progress> progress,
            const py::object &weights) {
             const firn::TriangleMesh targets = meshFromArrays(vertices, triangles, "targets");
-            std::vector<float> depthWeights;
-            if (!weights.is_none()) {
-                const FloatArray w = floatArray(weights, "weights");
-                depthWeights.assign(w.data(), w.data() + w.size());
-            }
+            const std::vector<float> depthWeights = optionalWeights(weights);
             const firn::TriangleMesh blockers = optionalMesh(occluders, "occluders");
             progress = orNew(progress);
             const firn::SnowLayer layer = longCall([&] {
@@ -260,11 +263,7 @@ input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `prog
            std::shared_ptr<firn::Progress> progress, const py::object &weights) {
             bandPath(pattern, 0);  // a bad pattern before any work
             const firn::TriangleMesh targets = meshFromArrays(vertices, triangles, "targets");
-            std::vector<float> depthWeights;
-            if (!weights.is_none()) {
-                const FloatArray w = floatArray(weights, "weights");
-                depthWeights.assign(w.data(), w.data() + w.size());
-            }
+            const std::vector<float> depthWeights = optionalWeights(weights);
             const firn::TriangleMesh blockers = optionalMesh(occluders, "occluders");
             progress = orNew(progress);
             const firn::SnowBands snow = longCall([&] {
