@@ -9,7 +9,6 @@ import argparse
 import os
 import sys
 import tempfile
-import time
 
 import addon_utils
 import bpy
@@ -18,6 +17,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "blend_samples"))
 import car_under_snow  # noqa: E402
 
+sys.path.insert(0, HERE)
+from timing import fastest  # noqa: E402
+
 
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
@@ -25,14 +27,6 @@ def parse_args():
     parser.add_argument("--runs", type=int, default=3)
     return parser.parse_args(argv)
 
-
-def fastest(runs, work):
-    best, result = float("inf"), None
-    for _ in range(runs):
-        start = time.perf_counter()
-        result = work()
-        best = min(best, time.perf_counter() - start)
-    return best, result
 
 
 def blend_size(folder, name):

@@ -12,7 +12,6 @@ import argparse
 import os
 import sys
 import tempfile
-import time
 
 import addon_utils
 import bpy
@@ -21,17 +20,10 @@ import numpy as np
 addon_utils.enable("firn", default_set=True)
 from firn.bake import inputs as bake_inputs  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from timing import fastest  # noqa: E402
+
 HDRI_SIZES = ((2048, 1024), (4096, 2048))
-
-
-def fastest(runs, work):
-    """(fastest seconds, last result) of `runs` calls of work()."""
-    best, result = float("inf"), None
-    for _ in range(runs):
-        began = time.perf_counter()
-        result = work()
-        best = min(best, time.perf_counter() - began)
-    return best, result
 
 
 def nishita_world(scene):

@@ -27,10 +27,11 @@ K = 10.0  # m^2/kg: sigma_t = 3000 /m at 300 kg/m^3 (real snow); diffusion lengt
 RHO = 300.0
 
 
-def snow_slab(directory, half, depth, voxel=0.01, name="Slab"):
-    """A Volume object (not yet Firn snow) reading a uniform slab, top at z = 0, with custom optics."""
+def snow_slab(directory, half, depth, voxel=0.01, name="Slab", density=RHO):
+    """A Volume object (not yet Firn snow) reading a uniform slab of `density` kg/m³, top at z = 0, with custom
+    optics."""
     path = write_volume(os.path.join(directory, f"{name}.vdb"), voxel, (-half, -half, -depth + 1),
-                        (half - 1, half - 1, 0), RHO)
+                        (half - 1, half - 1, 0), density)
     obj = volume_object(path, name)
     obj.firn.optics_mode = "CUSTOM"
     obj.firn.extinction_per_density = K
@@ -224,13 +225,7 @@ def test_thin_snow_lobes_render_as_the_core_says(clean_scene, tmp_path, towards_
     firncore.render_baked integrates along the same rays."""
     black_world()
     add_sun(math.radians(50), strength=3.0)
-    path = write_volume(os.path.join(str(tmp_path), "Thin.vdb"), 0.01, (-12, -12, -2), (11, 11, 0), 10.0)
-    slab = volume_object(path, "Thin")
-    slab.firn.optics_mode = "CUSTOM"
-    slab.firn.extinction_per_density = K
-    slab.firn.albedo = (OMEGA, OMEGA, OMEGA)
-    slab.firn.anisotropy = G
-    slab.select_set(True)
+    slab = snow_slab(str(tmp_path), half=12, depth=3, name="Thin", density=10.0)
     assert bpy.ops.firn.bake_scattering(quality="FINAL") == {"FINISHED"}
     bpy.context.view_layer.update()
     ortho_camera((0, 0, -0.01), towards_camera, scale=0.04)
