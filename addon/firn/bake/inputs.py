@@ -339,15 +339,19 @@ def nishita_parameters(world):
     """firncore.NishitaSky's settings (angles in rad, altitude in m, the Background's strength) of a world that
     is exactly a Nishita sky (_nishita_node); None for any other world (it is rendered instead)."""
     found = _nishita_node(world)
-    if found is None:
-        return None
-    node, strength = found
+    return None if found is None else _node_parameters(*found)
+
+
+def _node_parameters(node, strength):
     return dict({key: getattr(node, key) for key in _NISHITA_SETTINGS}, strength=strength)
 
 
 def _nishita_world(world):
     found = _nishita_node(world)
-    return None if found is None else NishitaWorld(world.name, found[0].name, nishita_parameters(world))
+    if found is None:
+        return None
+    node, strength = found
+    return NishitaWorld(world.name, node.name, _node_parameters(node, strength))
 
 
 def sky_from_nishita(request, frame):
