@@ -35,12 +35,12 @@ def _readable_in_place(evaluated, extra):
     return extra is None and evaluated.type == "MESH" and not evaluated.modifiers and not evaluated.data.is_editmode
 
 
-def _mesh_arrays(evaluated, matrix, metres, extra=None, slots=True):
+def _mesh_arrays(evaluated, matrix, metres, extra=None, with_slots=True):
     """(vertices (N, 3) float32 world m, triangles (M, 3) uint32, material slot per triangle (M,) int32,
     materials by slot) of an evaluated object placed by `matrix` (Blender units). Mirroring transforms flip the
     winding (faces keep pointing out). With `extra`, a fifth item: extra(mesh, evaluated), read from the mesh
-    (loop triangles calculated; None for an object without a mesh). Without `slots` the slots are None: reading
-    them costs a third of the transfer (Blender reads loop triangles item by item, 0.1 s per million)."""
+    (loop triangles calculated; None for an object without a mesh). Without `with_slots` the slots are None:
+    reading them costs a third of the transfer (Blender reads loop triangles item by item, 0.1 s per million)."""
     materials = [slot.material for slot in evaluated.material_slots]
     in_place = _readable_in_place(evaluated, extra)
     mesh = evaluated.data if in_place else evaluated.to_mesh()
@@ -54,11 +54,10 @@ def _mesh_arrays(evaluated, matrix, metres, extra=None, slots=True):
         mesh.vertices.foreach_get("co", local)
         corners = np.empty(len(mesh.loop_triangles) * 3, np.int32)
         mesh.loop_triangles.foreach_get("vertices", corners)
-        if slots:
+        slots = None
+        if with_slots:
             slots = np.empty(len(mesh.loop_triangles), np.int32)
             mesh.loop_triangles.foreach_get("material_index", slots)
-        else:
-            slots = None
     finally:
         if not in_place:
             evaluated.to_mesh_clear()
@@ -75,10 +74,10 @@ def _owner(instance):
     return (instance.parent if instance.is_instance else instance.object).original
 
 
-def evaluated_parts(objects, depsgraph, extra=None, slots=True):
+def evaluated_parts(objects, depsgraph, extra=None, with_slots=True):
     """[(name, vertices m, triangles, slots, materials)] of everything `objects` put in the scene, evaluated:
     each object's own surface (modifiers applied) and every instance it makes, in world space, metres. With
-    `extra`, each part ends with extra(mesh, evaluated object); without `slots` the slots are None
+    `extra`, each part ends with extra(mesh, evaluated object); without `with_slots` the slots are None
     (_mesh_arrays)."""
     wanted = {obj.as_pointer(): obj for obj in objects}
     metres = metres_per_unit(depsgraph.scene)
@@ -92,14 +91,15 @@ def evaluated_parts(objects, depsgraph, extra=None, slots=True):
         if obj.type not in MESH_LIKE_TYPES or not (instance.is_instance or instance.show_self):
             continue  # an Empty, or an emitter that shows only its particles
         name = f"{instance.parent.name} > {obj.name}" if instance.is_instance else obj.name
-        parts.append((name, *_mesh_arrays(obj, np.array(instance.matrix_world, np.float64), metres, extra, slots)))
+        matrix = np.array(instance.matrix_world, np.float64)
+        parts.append((name, *_mesh_arrays(obj, matrix, metres, extra, with_slots)))
     # Objects the viewport hides are not in its depsgraph's list; their own surface still counts (a hidden
     # occluder collection, a ground hidden after the snow was made).
     for pointer, obj in wanted.items():
         if pointer not in seen and is_mesh_like(obj):
             evaluated = obj.evaluated_get(depsgraph)
             parts.append((obj.name, *_mesh_arrays(evaluated, np.array(evaluated.matrix_world, np.float64), metres,
-                                                   extra, slots)))
+                                                   extra, with_slots)))
     return parts
 
 
@@ -107,7 +107,7 @@ def world_triangles(objects, depsgraph):
     """(vertices (N, 3) float32 m, triangles (M, 3) uint32) of the evaluated objects and their instances joined
     into one, in world space; None when none has a triangle."""
     return concatenate((vertices, triangles) for _name, vertices, triangles, _slots, _materials
-                       in evaluated_parts(objects, depsgraph, slots=False))
+                       in evaluated_parts(objects, depsgraph, with_slots=False))
 
 
 def world_triangles_by_material(objects, depsgraph):

@@ -69,7 +69,7 @@ def masked_triangles(objects, depsgraph, props):
     evaluated objects, world m; a part is None when it has no triangle."""
     kept, left_out, weights = [], [], []
     for _name, vertices, triangles, _slots, _materials, mask in scene_geometry.evaluated_parts(
-            objects, depsgraph, extra=reader(props), slots=False):
+            objects, depsgraph, extra=reader(props), with_slots=False):
         if mask is None:
             continue
         keep, vertex_weights = mask
