@@ -13,6 +13,7 @@
 #include "firn/transport/monte_carlo.h"
 #include "firn/transport/nishita_sky.h"
 #include "firn/transport/slab.h"
+#include "firn/transport/source_lobe.h"
 #include "firn/util/error.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
@@ -299,6 +300,7 @@ void bindTransport(py::module_ &m) {
     bindNishitaSky(m);
     m.attr("BAKED_GRID_NAMES") = py::make_tuple(firn::BakedGrids::kNames[0], firn::BakedGrids::kNames[1],
                                                 firn::BakedGrids::kNames[2], firn::BakedGrids::kNames[3]);
+    m.attr("LOBE_MAX_ANISOTROPY") = firn::kMaxLobeAnisotropy;  // the baked lobe's largest k (source_lobe.h)
 
     m.def(
         "bake",

@@ -40,7 +40,6 @@ _BAKED_NODES = ("Firn Density", "Firn Extinction", "Firn Absorption", "Firn Emis
 _BRANCHES = ("", " Grains")  # the node names' suffixes: without and with sub-balls
 _SINGLE_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Absorption", "Firn Single", "Firn Output")
 BAKED_GRIDS = ("firn_source", "firn_source_x", "firn_source_y", "firn_source_z")  # docs/vdb-contract.md
-LOBE_MAX_K = 0.95  # the lobe's largest anisotropy, as the core's kMaxLobeAnisotropy (source_lobe.h)
 
 
 def is_snow_material(material):
@@ -358,7 +357,7 @@ def _view_dependent_source(nodes, links):
     nodes["Firn Three l0"].inputs["Scale"].default_value = 3.0
     k = _vector_math(nodes, links, "Firn Lobe k", "MINIMUM",
                      _vector_math(nodes, links, "Firn Lobe Positive", "MAXIMUM", ratio, (0.0, 0.0, 0.0), (-600, -600)),
-                     (LOBE_MAX_K,) * 3, (-400, -600))
+                     (firncore.LOBE_MAX_ANISOTROPY,) * 3, (-400, -600))
     k_cos = _vector_math(nodes, links, "Firn Lobe k cos", "DIVIDE",
                          _vector_math(nodes, links, "Firn Lobe k l1 w", "MULTIPLY", k, along, (-200, -500)), length,
                          (0, -500))

@@ -11,7 +11,7 @@ namespace firn {
 // that is l0 4 pi HG(k, cos): the same mean (l0) and first moment (4 pi l1 / 3) as the linear form l0 + l1 . w,
 // never negative, and exact for light scattered once from a beam (l1 = 3 g l0 towards the beam's travel, k = g).
 // w is the unit direction towards the viewer.
-constexpr double kMaxLobeAnisotropy = 0.95;  // the add-on's material clamps k the same way
+constexpr double kMaxLobeAnisotropy = 0.95;  // firncore.LOBE_MAX_ANISOTROPY: the add-on's material clamps k with it
 double lobeRadiance(double l0, const glm::dvec3 &l1, const glm::dvec3 &w);
 
 // What the grids store for a lobe of mean l0 and anisotropy k about the unit axis m: l1 = 3 k l0 m.
