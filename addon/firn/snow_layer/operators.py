@@ -363,7 +363,6 @@ def free_object_name(base):
     raise UserError("Too many objects named Snow")
 
 
-
 def snow_with_metaballs_poll(operator, context):
     """Poll of the operators that work on a snow layer's kept metaballs (Rebuild, the Snow Brush)."""
     snow = active_snow_layer(context)
