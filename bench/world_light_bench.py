@@ -4,7 +4,7 @@ bench/run.sh bench/world_light_bench.py [-- --runs N]   (blender -b with the add
 
 Main thread (bake/inputs.py world_request, run by the operator's invoke): a Nishita sky has its node settings
 read; any other world is saved alone into a .blend for the child Blender that renders it, here an equirect
-HDRI (random float pixels) on disk and packed. Worker: the core's Nishita map and sun (sky_from_nishita).
+HDRI (random float pixels) on disk and packed. Worker: the core's Nishita map and sun (NishitaWorld.light).
 Prints markdown rows; the fastest of N runs. Timings vary with the machine's load.
 """
 
@@ -52,7 +52,7 @@ def hdri_world(scene, width, height, folder):
 def request_row(name, scene, frame, runs):
     def request():
         made = bake_inputs.world_request(scene, [frame])
-        size = os.path.getsize(made.blend) if hasattr(made, "blend") else 0
+        size = os.path.getsize(made.request.blend) if hasattr(made, "request") else 0
         made.discard()
         return size
 
@@ -72,8 +72,7 @@ def main():
     rows = []
     nishita_world(scene)
     rows.append(request_row("Nishita sky (node settings read)", scene, frame, runs))
-    sky_seconds, _ = fastest(runs, lambda: bake_inputs.sky_from_nishita(bake_inputs.world_request(scene, [frame]),
-                                                                       frame))
+    sky_seconds, _ = fastest(runs, lambda: bake_inputs.world_request(scene, [frame]).light(frame))
     with tempfile.TemporaryDirectory() as folder:
         for width, height in HDRI_SIZES:
             image = hdri_world(scene, width, height, folder)

@@ -256,10 +256,11 @@ def test_a_child_blender_renders_the_world_as_the_main_thread_does(clean_scene):
     nishita_world(math.radians(30), math.radians(40))
     frame = identity_frame()
     here_sky, here_suns, _ = bake_inputs.gather_sky(bpy.context.scene, frame)
-    request = bake_inputs.world_request(bpy.context.scene, [frame])
-    outcome = render_in_worker(request)
-    assert not os.path.exists(request.folder)
-    sky, suns = bake_inputs.sky_from_rendering(request, outcome["rendering"], frame)
+    world = bake_inputs.world_request(bpy.context.scene, [frame])
+    outcome = render_in_worker(world.request)
+    assert not os.path.exists(world.request.folder)
+    world.rendering = outcome["rendering"]
+    sky, suns = world.light(frame)
     # Cycles seeds each pixel alone: the same world, samples and seed give the same pixels in any process.
     assert np.allclose(sky.map, here_sky.map, rtol=1e-5, atol=1e-7)
     assert len(suns) == len(here_suns) == 1
@@ -269,11 +270,11 @@ def test_a_child_blender_renders_the_world_as_the_main_thread_does(clean_scene):
 
 def test_a_child_render_stops_on_cancel_and_says_why_it_failed(clean_scene):
     direction_world()
-    request = bake_inputs.world_request(bpy.context.scene, [identity_frame()])
+    request = bake_inputs.world_request(bpy.context.scene, [identity_frame()]).request
     assert render_in_worker(request, cancelled=lambda: True) == {"rendering": None}
     assert not os.path.exists(request.folder)
 
-    request = bake_inputs.world_request(bpy.context.scene, [identity_frame()])
+    request = bake_inputs.world_request(bpy.context.scene, [identity_frame()]).request
     request.world = "Not There"
     error = render_in_worker(request)["error"]
     assert "Not There" in str(error) and "missing" in str(error)

@@ -8,7 +8,7 @@ import bpy
 import pytest
 
 from bake_helpers import S, add_contract_grids, baked_slab, uniform_source, uniform_world, write_volume
-from firn.bake import operators as bake, state as bake_state, ui as bake_ui
+from firn.bake import inputs as bake_inputs, operators as bake, state as bake_state, ui as bake_ui
 from firn.material import nodes as materials
 from firn.common.core import firncore
 from test_snow_material import RecordingLayout
@@ -253,7 +253,10 @@ def test_status_names_the_object_being_baked(clean_scene):
     jobs = [{"name": "Snow"}, {"name": "Roof"}]
     assert status(None, {"jobs": jobs, "current": 1, "world": None}, progress) == "Roof (2/2) "
     assert status(None, {"jobs": jobs[:1], "current": 0, "world": None}, progress) == ""
-    assert status(None, {"jobs": jobs, "current": 0, "world": "a request"}, progress) == "Rendering the world"
+    rendered = bake_inputs.RenderedWorld(request=None)
+    assert status(None, {"jobs": jobs, "current": 0, "world": rendered}, progress) == "Rendering the world"
+    nishita = bake_inputs.NishitaWorld("World", "Sky Texture", {})
+    assert status(None, {"jobs": jobs, "current": 0, "world": nishita}, progress) == "Computing the sky"
 
 
 def test_a_bake_is_still_baked_after_saving_and_reopening(clean_scene, tmp_path):

@@ -136,7 +136,7 @@ def test_a_nishita_world_is_computed_without_rendering(clean_scene):
     scenes_before = len(bpy.data.scenes)
     request = bake_inputs.world_request(bpy.context.scene, [frame])
     assert isinstance(request, bake_inputs.NishitaWorld)
-    sky, suns = bake_inputs.sky_from_nishita(request, frame)
+    sky, suns = request.light(frame)
     assert len(bpy.data.scenes) == scenes_before
     assert sky.map.shape == (world_probe.SKY_MAP_SIZE[1], world_probe.SKY_MAP_SIZE[0], 3)
     assert sky.radiance == (1.0, 1.0, 1.0) and sky.description.startswith("Nishita")

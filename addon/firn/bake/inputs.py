@@ -297,14 +297,35 @@ _IDENTITY_MAPPING = {"translation": (0.0, 0.0, 0.0), "rotation": (0.0, 0.0, 0.0)
 @dataclass
 class NishitaWorld:
     """A world that is one Nishita Sky Texture → Background → World Output: the core computes its sky map and
-    sun from the node's settings (sky_from_nishita, any thread), no render. Maps are kept per orientation."""
+    sun from the node's settings (light, any thread), no render. Maps are kept per orientation."""
     world: str
     node: str
     parameters: dict  # firncore.NishitaSky's settings
     maps: dict = field(default_factory=dict)
+    status = "Computing the sky"
+
+    def prepare(self, cancelled):
+        """Nothing to render: the core computes the light in light(). True: ready."""
+        return True
+
+    def light(self, frame):
+        """(Sky, [Sun]) in `frame`, computed by the core (any thread; without the GIL)."""
+        try:
+            sky = firncore.NishitaSky(**self.parameters)
+            key = _rotation_key(frame)
+            if key not in self.maps:
+                self.maps[key] = sky.map(frame.rotation, *world_probe.SKY_MAP_SIZE, samples=SKY_MAP_SAMPLES)
+            sun = sky.sun()
+        except ValueError as error:
+            raise UserError(f"World '{self.world}': {error}") from error
+        sky_map = self.maps[key]
+        suns = [] if sun is None else [Sun(f"{self.world}: {self.node}", frame.direction(sun.direction),
+                                           tuple(sun.irradiance), sun.angular_diameter)]
+        height, width = sky_map.shape[:2]
+        return Sky(radiance=(1.0, 1.0, 1.0), map=sky_map, description=f"Nishita {width}×{height}"), suns
 
     def discard(self):
-        """Nothing to remove (a world_probe.Request removes its files)."""
+        """Nothing to remove (a RenderedWorld removes its files)."""
 
 
 def _unmapped(node):
@@ -354,36 +375,19 @@ def _nishita_world(world):
     return NishitaWorld(world.name, node.name, _node_parameters(node, strength))
 
 
-def sky_from_nishita(request, frame):
-    """(Sky, [Sun]) in `frame` of a NishitaWorld, computed by the core (any thread; without the GIL)."""
-    try:
-        sky = firncore.NishitaSky(**request.parameters)
-        key = _rotation_key(frame)
-        if key not in request.maps:
-            request.maps[key] = sky.map(frame.rotation, *world_probe.SKY_MAP_SIZE, samples=SKY_MAP_SAMPLES)
-        sun = sky.sun()
-    except ValueError as error:
-        raise UserError(f"World '{request.world}': {error}") from error
-    sky_map = request.maps[key]
-    suns = [] if sun is None else [Sun(f"{request.world}: {request.node}", frame.direction(sun.direction),
-                                       tuple(sun.irradiance), sun.angular_diameter)]
-    height, width = sky_map.shape[:2]
-    return Sky(radiance=(1.0, 1.0, 1.0), map=sky_map, description=f"Nishita {width}×{height}"), suns
-
-
 # --- any other world, rendered by Cycles ----------------------------------------------------------------------
 
 def world_request(scene, frames):
-    """Main thread: what the scene's world needs to become light in each Frame. A NishitaWorld (the settings
-    only), else a world_probe.Request (one map per distinct orientation). Cheap: the world is only saved;
-    world_probe.render renders it, off the main thread if asked from a worker."""
+    """Main thread: what the scene's world needs to become light in each Frame: a NishitaWorld (the settings
+    only), else a RenderedWorld (one map per distinct orientation). Cheap: the world is only saved; prepare()
+    renders it, off the main thread if called from a worker; light(frame) then gives (Sky, [Sun])."""
     nishita = _nishita_world(scene.world)
     if nishita is not None:
         return nishita
     rotations = {_rotation_key(frame): frame.rotation for frame in frames}
     try:
-        return world_probe.request(scene.world, scene.frame_current, list(rotations.values()),
-                                   _measured_sky_suns(scene.world)[0])
+        return RenderedWorld(world_probe.request(scene.world, scene.frame_current, list(rotations.values()),
+                                                 _measured_sky_suns(scene.world)[0]))
     except world_probe.RenderError as error:
         raise UserError(f"Could not render the world for the bake: {error}") from error
 
@@ -392,23 +396,43 @@ def _rotation_key(frame):
     return tuple(np.round(frame.rotation, 6).ravel())
 
 
-def sky_from_rendering(request, rendering, frame):
-    """(Sky, [Sun]) in `frame` from a world rendered for `request` (numpy only: any thread)."""
-    keys = [tuple(np.round(np.asarray(r), 6).ravel()) for r in request.rotations]
-    sky_map = rendering.maps[keys.index(_rotation_key(frame))]
-    if not np.all(np.isfinite(sky_map)):
-        raise UserError(f"World '{request.world}' renders non-finite radiance")
-    sky_map = np.maximum(sky_map, 0.0)  # node worlds can go negative; radiance cannot
-    height, width = sky_map.shape[:2]
-    suns = []
-    for (name, direction, diameter), (with_disc, without_disc) in zip(request.suns, rendering.discs):
-        # The disc alone: the sky with it minus the sky without it, integrated over the close-up.
-        field_of_view = world_probe.disc_field_of_view(diameter)
-        irradiance = np.maximum(sun_irradiance(with_disc - without_disc, field_of_view), 0.0)
-        if irradiance.max() > 0.0:
-            suns.append(Sun(f"{request.world}: {name}", frame.direction(direction),
-                            tuple(float(e) for e in irradiance), diameter))
-    return Sky(radiance=(1.0, 1.0, 1.0), map=sky_map, description=f"map {width}×{height}"), suns
+@dataclass
+class RenderedWorld:
+    """Any other world: rendered by Cycles (world_probe: in place on the main thread, else by a child Blender)
+    before its light is read."""
+    request: world_probe.Request
+    rendering: world_probe.Rendering = None
+    status = "Rendering the world"
+
+    def prepare(self, cancelled):
+        """Renders the world and removes its files; False once `cancelled()` turns true."""
+        try:
+            self.rendering = world_probe.render(self.request, cancelled)
+        except world_probe.RenderError as error:
+            raise UserError(f"Could not render the world for the bake: {error}") from error
+        return self.rendering is not None
+
+    def light(self, frame):
+        """(Sky, [Sun]) in `frame` from the rendering (numpy only: any thread)."""
+        request, rendering = self.request, self.rendering
+        keys = [tuple(np.round(np.asarray(r), 6).ravel()) for r in request.rotations]
+        sky_map = rendering.maps[keys.index(_rotation_key(frame))]
+        if not np.all(np.isfinite(sky_map)):
+            raise UserError(f"World '{request.world}' renders non-finite radiance")
+        sky_map = np.maximum(sky_map, 0.0)  # node worlds can go negative; radiance cannot
+        height, width = sky_map.shape[:2]
+        suns = []
+        for (name, direction, diameter), (with_disc, without_disc) in zip(request.suns, rendering.discs):
+            # The disc alone: the sky with it minus the sky without it, integrated over the close-up.
+            field_of_view = world_probe.disc_field_of_view(diameter)
+            irradiance = np.maximum(sun_irradiance(with_disc - without_disc, field_of_view), 0.0)
+            if irradiance.max() > 0.0:
+                suns.append(Sun(f"{request.world}: {name}", frame.direction(direction),
+                                tuple(float(e) for e in irradiance), diameter))
+        return Sky(radiance=(1.0, 1.0, 1.0), map=sky_map, description=f"map {width}×{height}"), suns
+
+    def discard(self):
+        self.request.discard()
 
 
 def gather_sky(scene, frame):
@@ -417,14 +441,9 @@ def gather_sky(scene, frame):
     sky, warnings = plan_sky(scene)
     if sky is not None:
         return sky, [], warnings
-    request = world_request(scene, [frame])
-    if isinstance(request, NishitaWorld):
-        return (*sky_from_nishita(request, frame), warnings)
-    try:
-        rendering = world_probe.render(request, cancelled=lambda: False)
-    except world_probe.RenderError as error:
-        raise UserError(f"Could not render the world for the bake: {error}") from error
-    return (*sky_from_rendering(request, rendering, frame), warnings)
+    world = world_request(scene, [frame])
+    world.prepare(cancelled=lambda: False)
+    return (*world.light(frame), warnings)
 
 
 # --- occluders ------------------------------------------------------------------------------------------------
@@ -475,13 +494,10 @@ def gather(context, snow, occluders=gather_occluders):
     return BakeInputs(suns, sky, occluders(occluder_objects(view_layer), depsgraph, frame), frame, warnings, lamps)
 
 
-def add_world_light(inputs, request, rendering):
-    """Completes BakeInputs gathered with the world left to compute (a NishitaWorld, `rendering` None) or to
-    render (a world_probe.Request and its Rendering); any thread."""
-    if isinstance(request, NishitaWorld):
-        inputs.sky, sky_suns = sky_from_nishita(request, inputs.frame)
-    else:
-        inputs.sky, sky_suns = sky_from_rendering(request, rendering, inputs.frame)
+def add_world_light(inputs, world):
+    """Completes BakeInputs gathered with the world left to compute or render (a NishitaWorld, or a RenderedWorld
+    once prepared); any thread."""
+    inputs.sky, sky_suns = world.light(inputs.frame)
     inputs.suns = inputs.suns + sky_suns
 
 

@@ -21,7 +21,7 @@ from ..common.jobs import FirnJobMixin, running_jobs
 from ..material import nodes as materials, optics
 from ..properties import BAKE_QUALITY_ITEMS
 from ..snow_layer import proxy
-from . import inputs as bake_inputs, state as bake_state, world_probe
+from . import inputs as bake_inputs, state as bake_state
 
 BAKE_LABEL = "Bake Scattering"
 REBUILD_ADVICE = ("Regenerate the snow (Firn Snow Layer panel) to write it again, or put the .blend's firn_cache "
@@ -92,29 +92,20 @@ def _bake_job(job, quality, seed, progress):
     job["proxy_colours"] = proxy.baked_colours(job["staged"], job["proxy_points"])
 
 
-def _render(request, progress):
-    try:
-        rendering = world_probe.render(request, cancelled=lambda: progress.cancelled)
-    except world_probe.RenderError as error:
-        raise UserError(f"Could not render the world for the bake: {error}") from error
-    if rendering is None:
-        raise firncore.Cancelled("cancelled")
-    return rendering
-
-
 def render_world(inputs, progress):
     """Any thread: computes a Nishita world in the core, or renders any other world (world_probe: a child
     Blender off the main thread), and completes the inputs of the jobs whose sky waits for it; then the job's
     status moves on to the bake."""
-    request = inputs["world"]
-    if request is None:
+    world = inputs["world"]
+    if world is None:
         return
-    rendering = None if isinstance(request, bake_inputs.NishitaWorld) else _render(request, progress)
+    if not world.prepare(cancelled=lambda: progress.cancelled):
+        raise firncore.Cancelled("cancelled")
     for job in inputs["jobs"]:
         if job["inputs"].sky is None:
             if progress.cancelled:
                 raise firncore.Cancelled("cancelled")
-            bake_inputs.add_world_light(job["inputs"], request, rendering)
+            bake_inputs.add_world_light(job["inputs"], world)
     inputs["world"] = None
 
 
@@ -264,8 +255,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
 
     def job_status(self, inputs, progress):
         if inputs["world"] is not None:
-            return ("Computing the sky" if isinstance(inputs["world"], bake_inputs.NishitaWorld)
-                    else "Rendering the world")
+            return inputs["world"].status
         jobs = inputs["jobs"]
         part = f"{jobs[inputs['current']]['name']} ({inputs['current'] + 1}/{len(jobs)}) " if len(jobs) > 1 else ""
         return part + progress.stage
