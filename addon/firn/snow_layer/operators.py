@@ -93,8 +93,9 @@ def _occluder_objects(context, props, targets):
     return [obj for obj in candidates if scene_geometry.makes_geometry(obj) and obj not in targets]
 
 
-def gather_inputs(context, props, targets, object_name):
-    """Everything the core needs, read from Blender on the main thread."""
+def gather_inputs(context, props, targets, object_name, level_of_detail):
+    """Everything the core needs, read from Blender on the main thread; `level_of_detail` (OFF, ON, AUTOMATIC)
+    says whether the camera's footprint is read."""
     metres = scene_geometry.metres_per_unit(context.scene)
     if not targets:
         raise UserError("Select the objects to cover with snow (meshes, curves, surfaces, text, metaballs, "
@@ -122,8 +123,8 @@ def gather_inputs(context, props, targets, object_name):
         "targets": target_arrays, "weights": weights, "occluders": occluders, "settings": settings, "path": path,
         "stored_path": stored_path, "surface_mesh": props.surface_mesh,
         "unit_matrix": scene_geometry.unit_matrix(context.scene),
-        "level_of_detail": props.level_of_detail,
-        "camera": camera_footprint(context.scene, depsgraph, metres, props.level_of_detail),
+        "level_of_detail": level_of_detail,
+        "camera": camera_footprint(context.scene, depsgraph, metres, level_of_detail),
         "band_pattern": band_path[:-len(".vdb")] + "_{level}.vdb",
         "band_stored_pattern": band_stored[:-len(".vdb")] + "_{level}.vdb",
     }
@@ -404,7 +405,8 @@ class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
             bpy.ops.object.mode_set(mode="OBJECT")  # writes the edit meshes (and their selection) back
         targets = [obj for obj in context.selected_objects if is_snow_target(obj)]
         name = free_object_name("Snow")
-        return dict(gather_inputs(context, self, targets, name), name=name, targets_objects=targets)
+        return dict(gather_inputs(context, self, targets, name, self.level_of_detail), name=name,
+                    targets_objects=targets)
 
     compute = staticmethod(compute_snow)
 
@@ -454,7 +456,7 @@ class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
             kept = " or Rebuild from Metaballs" if snow.firn.metaballs is not None else ""
             raise UserError(f"'{snow.name}' has no target objects left: use Add Snow Layer{kept} instead")
         # One voxel size: a layer made with levels of detail is refused above.
-        return dict(gather_inputs(context, snow.firn.layer, targets, snow.name), name=snow.name, camera=None)
+        return dict(gather_inputs(context, snow.firn.layer, targets, snow.name, "OFF"), name=snow.name)
 
     compute = staticmethod(compute_snow)
 
