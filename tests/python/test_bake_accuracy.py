@@ -58,7 +58,9 @@ def test_conservative_thin_ball_under_uniform_sky_glows_with_the_sky(tmp_vdb):
     ("ball_thin_forward", 0.20, 0.05),
 ])
 def test_small_balls_match_monte_carlo(folder, name, mean, bias):
-    result = bake_suite.run_case(case(name), folder, cache=None)
+    c = case(name)
+    c.samples = min(c.samples, 2048)  # the suite's references take up to 16384 paths (less noise); these suffice here
+    result = bake_suite.run_case(c, folder, cache=None)
     assert result["mean"] < mean
     assert abs(result["bias"]) < bias
 
