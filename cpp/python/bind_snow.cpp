@@ -1,6 +1,9 @@
 // Add Snow Layer from Python: settings, generation, regeneration from kept metaballs, the surface mesh.
+#include <optional>
+
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
+#include <tbb/task_group.h>
 
 #include "bindings.h"
 #include "firn/io/vdb_io.h"
@@ -222,6 +225,59 @@ std::vector<float> optionalWeights(const py::object &weights) {
     return std::vector<float>(w.data(), w.data() + w.size());
 }
 
+// (vertices (N, 3) float32, triangles (M, 3) uint32) of a surface mesh, for Python.
+py::tuple meshArrays(const firn::SurfaceMesh &mesh) {
+    auto vertices = rows<float>(mesh.vertices.size(), 3);
+    auto faces = rows<unsigned>(mesh.triangles.size(), 3);
+    auto v = vertices.mutable_unchecked<2>();
+    auto f = faces.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+        for (int k = 0; k < 3; ++k) v(i, k) = mesh.vertices[i][k];
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+        for (int k = 0; k < 3; ++k) f(i, k) = mesh.triangles[i][k];
+    return py::make_tuple(vertices, faces);
+}
+
+// The proxy's meshing from Python: None, or a dict of snow_surface_mesh's settings (adaptivity, max_triangles,
+// isovalue), each optional.
+std::optional<firn::SurfaceMeshSettings> optionalMeshSettings(const py::object &settings) {
+    if (settings.is_none()) return std::nullopt;
+    const py::dict d = settings.cast<py::dict>();
+    for (const auto &item : d) {
+        const auto key = item.first.cast<std::string>();
+        if (key != "adaptivity" && key != "max_triangles" && key != "isovalue")
+            throw firn::InvalidArgument("proxy_mesh: unknown setting '" + key + "'");
+    }
+    firn::SurfaceMeshSettings s;
+    if (d.contains("adaptivity")) s.adaptivity = d["adaptivity"].cast<double>();
+    if (d.contains("max_triangles")) s.maxTriangles = d["max_triangles"].cast<std::size_t>();
+    if (d.contains("isovalue")) s.isovalue = d["isovalue"].cast<double>();
+    return s;
+}
+
+// Writes the grids to `path` while meshing their surface from memory (when `settings` asks for it): the write
+// is serial (OpenVDB compresses leaf by leaf), the meshing parallel, so the two share the cores, and the mesh
+// needs no read of the file back.
+std::optional<firn::SurfaceMesh> writeMeshing(const std::string &path, const firn::SnowGrids &grids,
+                                              const std::optional<firn::SurfaceMeshSettings> &settings,
+                                              firn::Progress *progress) {
+    if (!settings) {
+        firn::writeGrids(path, {grids.density, grids.surface});
+        return std::nullopt;
+    }
+    tbb::task_group writing;
+    writing.run([&] { firn::writeGrids(path, {grids.density, grids.surface}); });
+    std::optional<firn::SurfaceMesh> mesh;
+    try {
+        mesh = firn::meshSurface(*grids.surface, *settings, firn::SubProgress(progress, 1.0, 1.0));
+    } catch (...) {
+        writing.wait();  // the write reads the grids: it ends before they go
+        throw;
+    }
+    writing.wait();  // rethrows the write's error
+    return mesh;
+}
+
 }  // namespace
 
 void bindSnow(py::module_ &m) {
@@ -232,28 +288,36 @@ void bindSnow(py::module_ &m) {
         "generate_snow_layer",
         [](const py::object &vertices, const py::object &triangles, const py::object &occluders,
            const firn::SnowLayerSettings &settings, const std::string &path, std::shared_ptr<firn::Progress> progress,
-           const py::object &weights) {
+           const py::object &weights, const py::object &proxyMesh) {
             const firn::TriangleMesh targets = meshFromArrays(vertices, triangles, "targets");
             const std::vector<float> depthWeights = optionalWeights(weights);
             const firn::TriangleMesh blockers = optionalMesh(occluders, "occluders");
+            const std::optional<firn::SurfaceMeshSettings> meshing = optionalMeshSettings(proxyMesh);
             progress = orNew(progress);
+            std::optional<firn::SurfaceMesh> proxy;
             const firn::SnowLayer layer = longCall([&] {
                 firn::SnowLayer made = firn::generateSnowLayer(targets, blockers, settings, progress.get(), depthWeights);
-                firn::writeGrids(path, {made.grids.density, made.grids.surface});
+                proxy = writeMeshing(path, made.grids, meshing, progress.get());
                 return made;
             });
             py::dict out = describe(layer);
             out["dropped_triangles"] = targets.droppedDegenerate + blockers.droppedDegenerate;
             out["open_surfaces_turned"] = layer.openSurfaces.surfaces;
+            if (proxy) out["proxy"] = meshArrays(*proxy);
             return out;
         },
         py::arg("vertices"), py::arg("triangles"), py::arg("occluders") = py::none(), py::arg("settings"),
         py::arg("path"), py::arg("progress") = nullptr, py::arg("weights") = py::none(),
+        py::arg("proxy_mesh") = py::none(),
         R"doc(Puts snow on the target triangles (world space, m) and writes its `density` and `surface` grids to the
 VDB file at `path` (atomically). `occluders` is None or (vertices, triangles) of everything else that shelters
-the targets. `weights` is None or one 0..1 per target vertex scaling the depth (a vertex group mask). Returns a dict: metaballs (arrays centres, radii, normals, bases, depths), site_count, voxel_size,
-active_voxels, mean_density (kg/m^3), bounds, dropped_triangles, open_surfaces_turned (open target surfaces
-whose downward normals were ignored: snow lies on their upper side). Releases the GIL; raises ValueError for bad
+the targets. `weights` is None or one 0..1 per target vertex scaling the depth (a vertex group mask). `proxy_mesh`
+is None or a dict of snow_surface_mesh's settings (adaptivity, max_triangles, isovalue): the surface is then
+meshed from memory while the file is written, as snow_surface_mesh would mesh the file. Returns a dict:
+metaballs (arrays centres, radii, normals, bases, depths), site_count, voxel_size, active_voxels, mean_density
+(kg/m^3), bounds, dropped_triangles, open_surfaces_turned (open target surfaces whose downward normals were
+ignored: snow lies on their upper side), and with proxy_mesh, proxy: (vertices, triangles) as
+snow_surface_mesh returns them. Releases the GIL; raises ValueError for bad
 input, firncore.BudgetError over the voxel budget, firncore.Cancelled when `progress` is cancelled.)doc");
 
     m.def(
@@ -304,23 +368,29 @@ dropped_triangles, open_surfaces_turned. Errors as generate_snow_layer.)doc");
     m.def(
         "rasterize_metaballs",
         [](const py::dict &metaballs, const firn::SnowLayerSettings &settings, const std::string &path,
-           std::shared_ptr<firn::Progress> progress) {
+           std::shared_ptr<firn::Progress> progress, const py::object &proxyMesh) {
             settings.validate();
             firn::SnowLayer layer;
             layer.metaballs = metaballsFromArrays(metaballs);
             if (layer.metaballs.empty()) throw firn::InvalidArgument("no metaballs to rasterize");
             layer.voxelSize = settings.effectiveVoxelSize();
             layer.siteCount = 0;
+            const std::optional<firn::SurfaceMeshSettings> meshing = optionalMeshSettings(proxyMesh);
             progress = orNew(progress);
+            std::optional<firn::SurfaceMesh> proxy;
             longCall([&] {
                 layer.grids = firn::rasterizeSnow(layer.metaballs, settings.raster(),
                                                   firn::SubProgress(progress.get(), 0.0, 1.0));
-                firn::writeGrids(path, {layer.grids.density, layer.grids.surface});
+                proxy = writeMeshing(path, layer.grids, meshing, progress.get());
             });
-            return describe(layer);
+            py::dict out = describe(layer);
+            if (proxy) out["proxy"] = meshArrays(*proxy);
+            return out;
         },
         py::arg("metaballs"), py::arg("settings"), py::arg("path"), py::arg("progress") = nullptr,
-        "Rebuilds the grids from (possibly edited) metaballs, as returned by generate_snow_layer, into `path`.");
+        py::arg("proxy_mesh") = py::none(),
+        "Rebuilds the grids from (possibly edited) metaballs, as returned by generate_snow_layer, into `path`; "
+        "proxy_mesh as for generate_snow_layer.");
 
     m.def(
         "snow_surface_mesh",
@@ -334,15 +404,7 @@ dropped_triangles, open_surfaces_turned. Errors as generate_snow_layer.)doc");
                 if (!surface) throw firn::InvalidArgument(path + " has no float 'surface' grid");
                 return firn::meshSurface(*surface, settings, firn::SubProgress(progress.get(), 0.0, 1.0));
             });
-            auto vertices = rows<float>(mesh.vertices.size(), 3);
-            auto faces = rows<unsigned>(mesh.triangles.size(), 3);
-            auto v = vertices.mutable_unchecked<2>();
-            auto f = faces.mutable_unchecked<2>();
-            for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
-                for (int k = 0; k < 3; ++k) v(i, k) = mesh.vertices[i][k];
-            for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
-                for (int k = 0; k < 3; ++k) f(i, k) = mesh.triangles[i][k];
-            return py::make_tuple(vertices, faces);
+            return meshArrays(mesh);
         },
         py::arg("path"), py::arg("adaptivity") = 0.0, py::arg("max_triangles") = 0, py::arg("isovalue") = 0.0,
         py::arg("progress") = nullptr,

@@ -53,6 +53,22 @@ def test_surface_mesh_is_closed_and_above_the_ground(tmp_vdb):
     assert np.all(counts == 2)
 
 
+def test_proxy_meshed_in_memory_is_the_files_mesh(tmp_path):
+    # The mesh made while the file is written is the one snow_surface_mesh makes from the file, exactly.
+    settings = firncore.SnowLayerSettings(depth=0.1, seed=2)
+    meshing = {"adaptivity": 0.0, "max_triangles": 2000, "isovalue": 0.75 * settings.effective_voxel_size}
+    first, second = os.fspath(tmp_path / "a.vdb"), os.fspath(tmp_path / "b.vdb")
+    result = firncore.generate_snow_layer(*plane(1.0), settings=settings, path=first, proxy_mesh=meshing)
+    rebuilt = firncore.rasterize_metaballs(result["metaballs"], settings, second, proxy_mesh=meshing)
+    from_file = firncore.snow_surface_mesh(first, **meshing)
+    assert 100 < len(from_file[1]) <= 2000
+    for made in (result["proxy"], rebuilt["proxy"]):
+        assert all(np.array_equal(a, b) for a, b in zip(made, from_file))
+    assert "proxy" not in firncore.generate_snow_layer(*plane(1.0), settings=settings, path=first)
+    with pytest.raises(ValueError, match="unknown setting 'budget'"):
+        firncore.generate_snow_layer(*plane(1.0), settings=settings, path=first, proxy_mesh={"budget": 10})
+
+
 def test_reports_progress(tmp_vdb):
     seen = []
     progress = firncore.Progress(lambda fraction, stage: seen.append((fraction, stage)))

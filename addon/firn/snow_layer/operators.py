@@ -166,8 +166,10 @@ def compute_snow(inputs, progress):
     if camera is not None and inputs["level_of_detail"] == "ON":
         return compute_bands(inputs, progress)
     try:
-        result = cache.core_write(firncore.generate_snow_layer, vertices, triangles, inputs["occluders"],
-                                  inputs["settings"], inputs["path"], progress, inputs["weights"])
+        settings = inputs["settings"]
+        result = cache.core_write(firncore.generate_snow_layer, vertices, triangles, inputs["occluders"], settings,
+                                  inputs["path"], progress, inputs["weights"],
+                                  proxy.mesh_settings(settings.effective_voxel_size))
     except firncore.BudgetError as error:
         if camera is None:
             raise
@@ -188,8 +190,10 @@ def compute_bands(inputs, progress):
 
 
 def with_meshes(inputs, result):
-    """Worker thread: the viewport proxy's mesh, and the full surface mesh when asked for, from the new file."""
-    result["proxy"] = proxy.mesh_arrays(inputs["path"], result["voxel_size"])
+    """Worker thread: the viewport proxy's mesh (unless the core made it with the file), and the full surface mesh
+    when asked for, from the new file."""
+    if "proxy" not in result:
+        result["proxy"] = proxy.mesh_arrays(inputs["path"], result["voxel_size"])
     if inputs["surface_mesh"]:
         result["surface"] = firncore.snow_surface_mesh(inputs["path"])
     return result
@@ -491,8 +495,9 @@ class FIRN_OT_rebuild_from_metaballs(FirnJobMixin, bpy.types.Operator):
 
     @staticmethod
     def compute(inputs, progress):
-        result = cache.core_write(firncore.rasterize_metaballs, inputs["metaballs"], inputs["settings"],
-                                  inputs["path"], progress)
+        settings = inputs["settings"]
+        result = cache.core_write(firncore.rasterize_metaballs, inputs["metaballs"], settings, inputs["path"],
+                                  progress, proxy.mesh_settings(settings.effective_voxel_size))
         return with_meshes(inputs, result)
 
     def apply(self, context, inputs, result):

@@ -27,11 +27,16 @@ DISPLAY_ITEMS = (
 )
 
 
+def mesh_settings(voxel_size):
+    """The proxy's meshing of snow of voxels `voxel_size` m: firncore.snow_surface_mesh's settings (generate_snow_layer
+    takes them as proxy_mesh, to mesh the new snow from memory while its file is written)."""
+    return {"adaptivity": ADAPTIVITY, "max_triangles": MAX_TRIANGLES, "isovalue": OUTSIDE_VOXELS * voxel_size}
+
+
 def mesh_arrays(path, voxel_size, progress=None):
     """Worker thread: the proxy's (vertices m, triangles) from the snow's VDB file of voxels `voxel_size` m; no bpy
     here."""
-    return firncore.snow_surface_mesh(path, adaptivity=ADAPTIVITY, max_triangles=MAX_TRIANGLES,
-                                      isovalue=OUTSIDE_VOXELS * voxel_size, progress=progress)
+    return firncore.snow_surface_mesh(path, progress=progress, **mesh_settings(voxel_size))
 
 
 # A far band renders as its proxy (snow_layer/operators.py, levels of detail): meshed at the band's own voxels, flat

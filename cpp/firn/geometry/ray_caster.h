@@ -20,7 +20,7 @@ class RayCaster {
         glm::vec3 normal;     // unit geometric normal, counter-clockwise winding
     };
 
-    explicit RayCaster(const TriangleMesh &mesh);
+    explicit RayCaster(TriangleMesh mesh);  // kept (moved in: pass a temporary to spare a copy)
     ~RayCaster();
     RayCaster(const RayCaster &) = delete;
     RayCaster &operator=(const RayCaster &) = delete;

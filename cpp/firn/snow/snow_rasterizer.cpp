@@ -127,6 +127,9 @@ struct LeafField {
 // ball's base or normal may put its z-range anywhere (UBSan: float-to-int overflow).
 int clampedIndex(float x, int lo, int hi) { return x >= float(lo) ? (x <= float(hi) ? int(x) : hi) : lo; }
 
+// An AVX2 clone picked at load time where the processor has it: a leaf column of 8 floats is one register. AVX2
+// alone, without FMA, so both clones round every operation alike and the grids come out bit-identical.
+__attribute__((target_clones("avx2", "default")))
 void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std::size_t count,
                 const std::vector<Metaball> &balls, float h, LeafField &out) {
     const int zLeafLo = origin.z(), zLeafHi = origin.z() + kLeafDim - 1;
@@ -186,8 +189,11 @@ void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std:
 // Clamped to +-band. The density follows
 // the compaction profile at the field-weighted depth, times the voxel's coverage by snow: a one-voxel ramp
 // centred on the surface, so that Cycles' trilinear density crosses half at the snow's surface.
+// `surface` and `density` are new leaves (inactive background): their buffers and masks are written whole.
 void finishLeaf(const LeafField &in, const RasterSettings &s, FloatLeaf &surface, FloatLeaf &density) {
     const double h = s.voxelSize, band = kSurfaceBandVoxels * h;
+    float *distances = surface.buffer().data(), *densities = density.buffer().data();
+    FloatLeaf::NodeMaskType nearSurface, snow;
     for (int i = 0; i < kLeafVoxels; ++i) {
         const double field = in.field[i];
         const double gradient = glm::length(glm::vec3(in.gradX[i], in.gradY[i], in.gradZ[i]));
@@ -196,13 +202,16 @@ void finishLeaf(const LeafField &in, const RasterSettings &s, FloatLeaf &surface
         const double belowBase = field > 0.0 ? in.weightedBelowBase[i] / field - 0.5 * h : band;
         double distance = std::clamp(std::max(toIso, belowBase), -band, band);
         if (std::isnan(distance)) distance = band;  // float sums of absurd (edited) balls overflowed: no snow
-        surface.setValueOnly(i, float(distance));
-        surface.setActiveState(i, std::abs(distance) < band);
+        distances[i] = float(distance);
+        nearSurface.set(i, std::abs(distance) < band);
         const double coverage = std::clamp(0.5 - distance / h, 0.0, 1.0);
         if (coverage < 1e-4) continue;  // rounding at the ramp's foot: no snow
         const double depth = field > 0.0 ? std::max(0.0, in.weightedDepth[i] / field) : 0.0;
-        density.setValueOn(i, float(coverage * s.compaction.density(depth)));
+        densities[i] = float(coverage * s.compaction.density(depth));
+        snow.setOn(i);
     }
+    surface.setValueMask(nearSurface);
+    density.setValueMask(snow);
 }
 
 openvdb::FloatGrid::Ptr makeGrid(const std::string &name, double h) {
