@@ -127,9 +127,16 @@ struct LeafField {
 // ball's base or normal may put its z-range anywhere (UBSan: float-to-int overflow).
 int clampedIndex(float x, int lo, int hi) { return x >= float(lo) ? (x <= float(hi) ? int(x) : hi) : lo; }
 
-// An AVX2 clone picked at load time where the processor has it: a leaf column of 8 floats is one register. AVX2
-// alone, without FMA, so both clones round every operation alike and the grids come out bit-identical.
-__attribute__((target_clones("avx2", "default")))
+// An AVX2 clone picked at load time where the processor has it (GCC/Clang on x86): a leaf column of 8 floats is
+// one register. AVX2 alone, without FMA, so both clones round every operation alike and the grids come out
+// bit-identical.
+#if defined(__GNUC__) && defined(__x86_64__)
+#define FIRN_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#else
+#define FIRN_AVX2_CLONE
+#endif
+
+FIRN_AVX2_CLONE
 void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std::size_t count,
                 const std::vector<Metaball> &balls, float h, LeafField &out) {
     const int zLeafLo = origin.z(), zLeafHi = origin.z() + kLeafDim - 1;
