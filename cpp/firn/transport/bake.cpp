@@ -404,8 +404,8 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     return sys;
 }
 
-// What the solve yields per unknown, per channel: the source function inside, and for surface voxels the
-// light leaving through their patch, as power times angular shape (W; radiance after dividing by pi A).
+// What the solve yields for surface voxels, per channel: the light leaving through their patch, as power
+// times angular shape (W; radiance after dividing by pi A).
 struct SurfaceLight {
     // What returns of the light that entered there, over and above the escape function's share of it
     // (sharp: it follows shadows) ...
@@ -414,42 +414,54 @@ struct SurfaceLight {
     // but spread unevenly over a voxel staircase).
     glm::vec3 leaving{0.0f};
 };
-struct SolvedVoxels {
-    std::vector<Source> inside;       // S = omega / (4 pi) (phi + 3 g F . w) plus the beams, F = -D grad phi
-    SurfaceValues<SurfaceLight> surface;  // surface voxels only
 
-    explicit SolvedVoxels(const SnowTopology &topo)
-        : inside(topo.size()), surface(topo.surfaceSlot, topo.surfaceVoxels()) {}
-};
+// The source function inside every unknown from the three channels' fluence: S = omega / (4 pi) (phi + 3 g
+// F . w) plus the beams, F = -D grad phi. After the solves (during them it would take 48 bytes per unknown).
+std::vector<Source> insideSource(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                                 const std::array<std::vector<double>, 3> &phi) {
+    const Medium &medium = *scene.medium;
+    const VolumeOptics &optics = medium.optics();
+    const double h = medium.voxelSize();
+    std::vector<Source> out(topo.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (int c = 0; c < 3; ++c) {
+            const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                glm::dvec3 gradient(0.0);
+                for (int axis = 0; axis < 3; ++axis) {
+                    const std::int32_t lo = topo.link[i][2 * axis], hi = topo.link[i][2 * axis + 1];
+                    const double pLo = lo >= 0 ? phi[c][lo] : phi[c][i], pHi = hi >= 0 ? phi[c][hi] : phi[c][i];
+                    const int span = (lo >= 0) + (hi >= 0);
+                    gradient[axis] = span ? (pHi - pLo) / (span * h) : 0.0;
+                }
+                const double D = 1.0 / (3.0 * ch.sigmaTr(topo.density[i]));
+                double j0 = phi[c][i];
+                glm::dvec3 j1 = -3.0 * ch.g * D * gradient;
+                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+                for (std::size_t s = 0; s < light.beams.size(); ++s) {
+                    const double beam = light.beams[s].atVoxel[i][c];
+                    j0 += beam;
+                    if (beam > 0.0) j1 -= 3.0 * ch.g * beam * towardsBeam(scene, s, centre);
+                }
+                out[i].l0[c] = ch.omega * kInvFourPi * j0;
+                out[i].l1[c] = ch.omega * kInvFourPi * j1;
+            }
+        }
+    });
+    return out;
+}
 
-void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                  const ChannelSystem &sys, const std::vector<double> &phi, int c, SolvedVoxels &out) {
+// Channel c's light leaving each surface voxel, from its solve.
+void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
+                  const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
-    const double h = medium.voxelSize();
     const double y = absorptionParameter(ch.omega, ch.g);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            glm::dvec3 gradient(0.0);
-            for (int axis = 0; axis < 3; ++axis) {
-                const std::int32_t lo = topo.link[i][2 * axis], hi = topo.link[i][2 * axis + 1];
-                const double pLo = lo >= 0 ? phi[lo] : phi[i], pHi = hi >= 0 ? phi[hi] : phi[i];
-                const int span = (lo >= 0) + (hi >= 0);
-                gradient[axis] = span ? (pHi - pLo) / (span * h) : 0.0;
-            }
-            const double D = 1.0 / (3.0 * ch.sigmaTr(topo.density[i]));
-            double j0 = phi[i];
-            glm::dvec3 j1 = -3.0 * ch.g * D * gradient;
-            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
-            for (std::size_t s = 0; s < light.beams.size(); ++s) {
-                const double beam = light.beams[s].atVoxel[i][c];
-                j0 += beam;
-                if (beam > 0.0) j1 -= 3.0 * ch.g * beam * towardsBeam(scene, s, centre);
-            }
-            out.inside[i].l0[c] = ch.omega * kInvFourPi * j0;
-            out.inside[i].l1[c] = ch.omega * kInvFourPi * j1;
             if (!topo.patches[i].isSurface()) continue;
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
 
             // Sun light that entered returns as a half-space of this snow returns it, with the sun lobe's
             // albedo and shape; sky light isotropically (a non-absorbing half-space returns uniform sky light
@@ -473,7 +485,7 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 r0 += returned * (lobe.a - 3.0 / 7.0);
                 r1 += returned * (lobe.b * patch.normal + lobe.c * t - escape1);
             }
-            SurfaceLight &surface = out.surface.surface(i);
+            SurfaceLight &surface = out.surface(i);
             surface.returned.l0[c] = r0;
             surface.returned.l1[c] = r1;
             surface.leaving[c] = float(leaving);
@@ -486,7 +498,7 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
 // of its 3^3 block facing the same way, weighted by the cosine between the normals, by area): a voxel
 // staircase spreads the diffusion's outflow unevenly between steps, though the light itself varies only
 // over a few transport mean free paths. The shape follows the voxel's own normal.
-SurfaceValues<Source> surfaceRadiance(const SnowTopology &topo, const SolvedVoxels &solved) {
+SurfaceValues<Source> surfaceRadiance(const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved) {
     SurfaceValues<Source> out(topo.surfaceSlot, topo.surfaceVoxels());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -497,12 +509,12 @@ SurfaceValues<Source> surfaceRadiance(const SnowTopology &topo, const SolvedVoxe
             for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
                 const std::uint32_t j = topo.neighbourhood[k];
                 const double w = std::max(0.0, glm::dot(n, topo.patches[j].normal));
-                leaving += w * glm::dvec3(solved.surface[j].leaving);
+                leaving += w * glm::dvec3(solved[j].leaving);
                 area += w * topo.patches[j].area;
             }
             const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
             const double own = kPi * topo.patches[i].area;
-            const Source &returned = solved.surface[i].returned;
+            const Source &returned = solved[i].returned;
             for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
                 const SourceLobe lobe = exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
                                                  glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
@@ -517,9 +529,9 @@ SurfaceValues<Source> surfaceRadiance(const SnowTopology &topo, const SolvedVoxe
 // Inside the snow, within a few mean free paths of the surface, a camera ray still sees its surface
 // voxel's radiance: those voxels take it over (SnowTopology's shell), so where the ray reaches optical
 // depth 1 does not matter; deeper voxels keep their own source function, which only thin snow shows.
-// In place: `solved` becomes the source function.
-std::vector<Source> composeSource(const SnowTopology &topo, SolvedVoxels &&solved, const SurfaceValues<Source> &surface) {
-    std::vector<Source> out = std::move(solved.inside);
+// In place: `inside` (insideSource) becomes the source function.
+std::vector<Source> composeSource(const SnowTopology &topo, std::vector<Source> &&inside, const SurfaceValues<Source> &surface) {
+    std::vector<Source> out = std::move(inside);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const std::int32_t owner = topo.shellOwner[i];
@@ -633,7 +645,7 @@ struct LeafValues {
         for (std::size_t l = 0; l < then.size(); ++l) {
             values.insert(values.end(), first.values.begin() + first.start[l], first.values.begin() + first.start[l + 1]);
             values.insert(values.end(), then[l].begin(), then[l].end());
-            then[l] = {};
+            then[l] = std::vector<VoxelValue>();  // (= {} would keep its capacity)
             start.push_back(values.size());
         }
     }
@@ -928,12 +940,12 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
                 const GridValues values = gridValues(scene, topo, source, traced, preset, settings);
                 fromSnow = snowIrradiance(scene, topo, light, source, traced, values, SkyRays(preset.skySamples),
                                           settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
-                source = {};
+                source = std::vector<Source>();  // freed (= {} would keep its capacity)
             }
             releaseFreedMemory();  // the previous pass's values
             clock.lap(&BakeStats::Phases::gather);
         }
-        SolvedVoxels solvedVoxel(topo);  // after the gathering: its grids take room too
+        SurfaceValues<SurfaceLight> leaving(topo.surfaceSlot, topo.surfaceVoxels());
         for (int c = 0; c < 3; ++c) {
             const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
             p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
@@ -948,14 +960,14 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
                 stats.iterations[c] += result.iterations;
                 stats.relativeResidual[c] = result.relativeResidual;
             }
-            solvedVoxels(scene, topo, light, system, phi[c], c, solvedVoxel);
+            surfaceLight(scene, topo, light, system, phi[c], c, leaving);
         }
-        SurfaceValues<Source> surface = surfaceRadiance(topo, solvedVoxel);
+        SurfaceValues<Source> surface = surfaceRadiance(topo, leaving);
         if (reference && pass + 1 == passes) {
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
         }
-        source = composeSource(topo, std::move(solvedVoxel), surface);
+        source = composeSource(topo, insideSource(scene, topo, light, phi), surface);
         takeTraced(topo, traced, source);
         clock.lap(&BakeStats::Phases::solve);
     }
