@@ -218,7 +218,7 @@ struct ChannelSystem {
     }
 
     // Adds diffuse irradiance (W/m^2) on the surface patches.
-    void addDiffuse(const std::vector<glm::vec3> &irradiance, int c) {
+    void addDiffuse(const SurfaceValues<glm::vec3> &irradiance, int c) {
         for (std::size_t i = 0; i < b.size(); ++i) {
             if (!(area[i] > 0.0f)) continue;  // not a surface voxel
             const double E = irradiance[i][c];
@@ -860,11 +860,11 @@ class BakedValuesSampler {
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
 // of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch), read
 // from the bake's values as its grids would hold them.
-std::vector<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
                                       const std::vector<Source> &source, const MonteCarloVoxels &traced,
                                       const GridValues &values, const SkyRays &rays, std::uint64_t seed,
                                       const SubProgress &progress) {
-    std::vector<glm::vec3> out(topo.size(), glm::vec3(0.0f));
+    SurfaceValues<glm::vec3> out(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);
@@ -881,7 +881,7 @@ std::vector<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &to
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
                 sum += bakedRadianceAlong(scene, marcher, density, baked, Ray{p, w}, tMax, 0.5);
             }
-            out[i] = glm::vec3(kPi * sum / double(rays.count()));
+            out.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
         }
     });
     return out;
@@ -929,7 +929,7 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
     const double solved = reference ? kSolvedProgressReference : kSolvedProgress;
     std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
     for (auto &channel : phi) channel.assign(topo.size(), 0.0);
-    std::vector<glm::vec3> fromSnow;  // W/m^2 gathered from other snow (after the first pass)
+    SurfaceValues<glm::vec3> fromSnow;  // W/m^2 gathered from other snow onto surface patches (after the first pass)
     std::vector<Source> source;
     for (int pass = 0; pass < passes; ++pass) {
         const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
