@@ -320,17 +320,18 @@ void bindTransport(py::module_ &m) {
             firn::BakeStats stats;
             longCall([&] {
                 openvdb::GridPtrVec grids = firn::readGrids(path);
+                // An earlier bake's grids are replaced: not held through this one (the car: 50 bytes per voxel).
+                grids.erase(std::remove_if(grids.begin(), grids.end(),
+                                           [](const openvdb::GridBase::Ptr &grid) {
+                                               return std::find(firn::BakedGrids::kNames.begin(),
+                                                                firn::BakedGrids::kNames.end(),
+                                                                grid->getName()) != firn::BakedGrids::kNames.end();
+                                           }),
+                            grids.end());
                 const firn::Scene scene = sceneFrom(grids, path, optics, suns, lamps, sky, std::move(blockers));
                 const firn::BakedGrids baked = firn::bakeScattering(scene, settings, progress.get(), &stats);
-                openvdb::GridPtrVec out;
-                for (const auto &grid : grids) {
-                    const std::string name = grid->getName();
-                    if (std::find(firn::BakedGrids::kNames.begin(), firn::BakedGrids::kNames.end(), name) ==
-                        firn::BakedGrids::kNames.end())
-                        out.push_back(grid);
-                }
-                for (const auto &grid : baked.grids()) out.push_back(grid);
-                firn::writeGrids(outputPath.value_or(path), out);
+                for (const auto &grid : baked.grids()) grids.push_back(grid);
+                firn::writeGrids(outputPath.value_or(path), grids);
             });
             return statsDict(stats);
         },

@@ -196,7 +196,8 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 
 // The diffusion system of one channel plus what the surface needs afterwards.
 struct ChannelSystem {
-    StencilOperator A;
+    Stencil<float> A;              // what the solver keeps of the operator (MultigridSolver)
+    std::vector<float> remainder;  // diag minus the conductances, summed in double
     std::vector<double> b;  // W: diffuse sources at the voxel nodes
     // Surface voxels only (what crosses air faces):
     SurfaceValues<float> escaped;             // W: light leaving through air faces without reaching the node
@@ -217,7 +218,7 @@ struct ChannelSystem {
     }
 
     // Adds diffuse irradiance (W/m^2) on the surface patches.
-    void addDiffuse(const std::vector<glm::vec3> &irradiance, int c) {
+    void addDiffuse(const SurfaceValues<glm::vec3> &irradiance, int c) {
         for (std::size_t i = 0; i < b.size(); ++i) {
             if (!(area[i] > 0.0f)) continue;  // not a surface voxel
             const double E = irradiance[i][c];
@@ -278,7 +279,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     const std::size_t n = topo.size();
     ChannelSystem sys(topo, light.beams.size());
     sys.A.coord = topo.coord;
-    sys.A.neighbour.resize(n), sys.A.conductance.resize(n), sys.A.diag.resize(n);
+    sys.A.neighbour.resize(n), sys.A.conductance.resize(n), sys.A.diag.resize(n), sys.remainder.resize(n);
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         progress.throwIfCancelled();
@@ -290,14 +291,14 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             std::array<double, 6> mass{};     // absorption each side lends the node
             std::array<std::optional<BoundaryLink>, 6> boundary;
             std::array<double, 6> albedo{};   // occluder faces
+            std::array<double, 6> conductance{};  // to the neighbours
             for (int f = 0; f < 6; ++f) {
                 const std::int32_t link = topo.link[i][f];
                 sys.A.neighbour[i][f] = StencilOperator::kNone;
-                sys.A.conductance[i][f] = 0.0;
                 if (!SnowTopology::isFace(link)) {
                     const Link L = interiorLink(beta, 1.5 * h * (sigmaTr + ch.sigmaTr(topo.density[link])));
                     sys.A.neighbour[i][f] = std::uint32_t(link);
-                    sys.A.conductance[i][f] = h2 * L.conductance;
+                    conductance[f] = h2 * L.conductance;
                     diag += h2 * L.conductance;
                     mass[f] = h2 * L.halfMass;
                     continue;
@@ -386,7 +387,13 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 if (groundLight[f] > 0.0)
                     source += 4.0 * groundLight[f] / (1.0 - albedo[f]) * h2 * boundary[f]->conductance();
             const double sky = light.skyOnSurface[i][c];
-            sys.A.diag[i] = diag;
+            double remainder = diag;
+            for (int f = 0; f < 6; ++f) {
+                sys.A.conductance[i][f] = float(conductance[f]);
+                if (sys.A.neighbour[i][f] != StencilOperator::kNone) remainder -= conductance[f];
+            }
+            sys.A.diag[i] = float(diag);
+            sys.remainder[i] = float(remainder);
             sys.b[i] = source + sky * sys.skyToNode[i];
             if (!patch.isSurface()) continue;
             sys.escaped.surface(i) += sky * sys.skyReturned[i];
@@ -397,46 +404,64 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     return sys;
 }
 
-// What the solve yields per unknown, per channel: the source function inside, and for surface voxels the
-// light leaving through their patch, as power times angular shape (W; radiance after dividing by pi A).
-struct SolvedVoxel {
-    Source inside;  // S = omega / (4 pi) (phi + 3 g F . w) plus the beams, F = -D grad phi
-    // Surface voxels only: what returns of the light that entered there, over and above the escape
-    // function's share of it (sharp: it follows shadows) ...
+// What the solve yields for surface voxels, per channel: the light leaving through their patch, as power
+// times angular shape (W; radiance after dividing by pi A).
+struct SurfaceLight {
+    // What returns of the light that entered there, over and above the escape function's share of it
+    // (sharp: it follows shadows) ...
     Source returned;
     // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
     // but spread unevenly over a voxel staircase).
     glm::vec3 leaving{0.0f};
 };
 
-void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                  const ChannelSystem &sys, const std::vector<double> &phi, int c, std::vector<SolvedVoxel> &out) {
+// The source function inside every unknown from the three channels' fluence: S = omega / (4 pi) (phi + 3 g
+// F . w) plus the beams, F = -D grad phi. After the solves (during them it would take 48 bytes per unknown).
+std::vector<Source> insideSource(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                                 const std::array<std::vector<double>, 3> &phi) {
+    const Medium &medium = *scene.medium;
+    const VolumeOptics &optics = medium.optics();
+    const double h = medium.voxelSize();
+    std::vector<Source> out(topo.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (int c = 0; c < 3; ++c) {
+            const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                glm::dvec3 gradient(0.0);
+                for (int axis = 0; axis < 3; ++axis) {
+                    const std::int32_t lo = topo.link[i][2 * axis], hi = topo.link[i][2 * axis + 1];
+                    const double pLo = lo >= 0 ? phi[c][lo] : phi[c][i], pHi = hi >= 0 ? phi[c][hi] : phi[c][i];
+                    const int span = (lo >= 0) + (hi >= 0);
+                    gradient[axis] = span ? (pHi - pLo) / (span * h) : 0.0;
+                }
+                const double D = 1.0 / (3.0 * ch.sigmaTr(topo.density[i]));
+                double j0 = phi[c][i];
+                glm::dvec3 j1 = -3.0 * ch.g * D * gradient;
+                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+                for (std::size_t s = 0; s < light.beams.size(); ++s) {
+                    const double beam = light.beams[s].atVoxel[i][c];
+                    j0 += beam;
+                    if (beam > 0.0) j1 -= 3.0 * ch.g * beam * towardsBeam(scene, s, centre);
+                }
+                out[i].l0[c] = ch.omega * kInvFourPi * j0;
+                out[i].l1[c] = ch.omega * kInvFourPi * j1;
+            }
+        }
+    });
+    return out;
+}
+
+// Channel c's light leaving each surface voxel, from its solve.
+void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
+                  const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
-    const double h = medium.voxelSize();
     const double y = absorptionParameter(ch.omega, ch.g);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            glm::dvec3 gradient(0.0);
-            for (int axis = 0; axis < 3; ++axis) {
-                const std::int32_t lo = topo.link[i][2 * axis], hi = topo.link[i][2 * axis + 1];
-                const double pLo = lo >= 0 ? phi[lo] : phi[i], pHi = hi >= 0 ? phi[hi] : phi[i];
-                const int span = (lo >= 0) + (hi >= 0);
-                gradient[axis] = span ? (pHi - pLo) / (span * h) : 0.0;
-            }
-            const double D = 1.0 / (3.0 * ch.sigmaTr(topo.density[i]));
-            double j0 = phi[i];
-            glm::dvec3 j1 = -3.0 * ch.g * D * gradient;
-            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
-            for (std::size_t s = 0; s < light.beams.size(); ++s) {
-                const double beam = light.beams[s].atVoxel[i][c];
-                j0 += beam;
-                if (beam > 0.0) j1 -= 3.0 * ch.g * beam * towardsBeam(scene, s, centre);
-            }
-            out[i].inside.l0[c] = ch.omega * kInvFourPi * j0;
-            out[i].inside.l1[c] = ch.omega * kInvFourPi * j1;
             if (!topo.patches[i].isSurface()) continue;
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
 
             // Sun light that entered returns as a half-space of this snow returns it, with the sun lobe's
             // albedo and shape; sky light isotropically (a non-absorbing half-space returns uniform sky light
@@ -460,9 +485,10 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 r0 += returned * (lobe.a - 3.0 / 7.0);
                 r1 += returned * (lobe.b * patch.normal + lobe.c * t - escape1);
             }
-            out[i].returned.l0[c] = r0;
-            out[i].returned.l1[c] = r1;
-            out[i].leaving[c] = float(leaving);
+            SurfaceLight &surface = out.surface(i);
+            surface.returned.l0[c] = r0;
+            surface.returned.l1[c] = r1;
+            surface.leaving[c] = float(leaving);
         }
     });
 }
@@ -472,8 +498,8 @@ void solvedVoxels(const Scene &scene, const SnowTopology &topo, const IncidentLi
 // of its 3^3 block facing the same way, weighted by the cosine between the normals, by area): a voxel
 // staircase spreads the diffusion's outflow unevenly between steps, though the light itself varies only
 // over a few transport mean free paths. The shape follows the voxel's own normal.
-std::vector<Source> surfaceRadiance(const SnowTopology &topo, const std::vector<SolvedVoxel> &solved) {
-    std::vector<Source> out(topo.size());
+SurfaceValues<Source> surfaceRadiance(const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved) {
+    SurfaceValues<Source> out(topo.surfaceSlot, topo.surfaceVoxels());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
@@ -488,11 +514,12 @@ std::vector<Source> surfaceRadiance(const SnowTopology &topo, const std::vector<
             }
             const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
             const double own = kPi * topo.patches[i].area;
+            const Source &returned = solved[i].returned;
             for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
-                const SourceLobe lobe = exitLobe(solved[i].returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
-                                                 glm::dvec3(solved[i].returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
-                out[i].l0[c] = float(lobe.l0);
-                out[i].l1[c] = glm::vec3(lobe.l1);
+                const SourceLobe lobe = exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
+                                                 glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
+                out.surface(i).l0[c] = float(lobe.l0);
+                out.surface(i).l1[c] = glm::vec3(lobe.l1);
             }
         }
     });
@@ -502,18 +529,16 @@ std::vector<Source> surfaceRadiance(const SnowTopology &topo, const std::vector<
 // Inside the snow, within a few mean free paths of the surface, a camera ray still sees its surface
 // voxel's radiance: those voxels take it over (SnowTopology's shell), so where the ray reaches optical
 // depth 1 does not matter; deeper voxels keep their own source function, which only thin snow shows.
-std::vector<Source> composeSource(const SnowTopology &topo, const std::vector<SolvedVoxel> &solved,
-                                  const std::vector<Source> &surface) {
-    std::vector<Source> out(topo.size());
+// In place: `inside` (insideSource) becomes the source function.
+std::vector<Source> composeSource(const SnowTopology &topo, std::vector<Source> &&inside, const SurfaceValues<Source> &surface) {
+    std::vector<Source> out = std::move(inside);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const std::int32_t owner = topo.shellOwner[i];
             const float w = topo.shellWeight[i];
-            if (owner < 0) {
-                out[i] = solved[i].inside;
-            } else {
-                out[i].l0 = w * surface[owner].l0 + (1.0f - w) * solved[i].inside.l0;
-                out[i].l1 = w * surface[owner].l1 + (1.0f - w) * solved[i].inside.l1;
+            if (owner >= 0) {
+                out[i].l0 = w * surface[owner].l0 + (1.0f - w) * out[i].l0;
+                out[i].l1 = w * surface[owner].l1 + (1.0f - w) * out[i].l1;
             }
         }
     });
@@ -531,7 +556,7 @@ void takeTraced(const SnowTopology &topo, const MonteCarloVoxels &traced, std::v
 // REFERENCE quality: the radiance leaving each surface voxel, path traced from 12 directions around
 // its normal, fitted by least squares with a linear form, stored as that form's fitted lobe.
 void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples, std::uint64_t seed,
-                      std::vector<Source> &out, const SubProgress &progress) {
+                      SurfaceValues<Source> &out, const SubProgress &progress) {
     const MonteCarloReference reference(scene);
     const double h = scene.medium->voxelSize();
     std::vector<std::size_t> surface;
@@ -562,8 +587,8 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
                 const glm::dvec4 coefficients = inverse * v;
                 const SourceLobe lobe = exitLobe(coefficients[0], glm::dvec3(coefficients[1], coefficients[2], coefficients[3]),
                                                  topo.patches[i].normal);
-                out[i].l0[c] = float(lobe.l0);
-                out[i].l1[c] = glm::vec3(lobe.l1);
+                out.surface(i).l0[c] = float(lobe.l0);
+                out.surface(i).l1[c] = glm::vec3(lobe.l1);
             }
             progress.report(double(++done) / surface.size());
         }
@@ -604,30 +629,69 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
     return true;
 }
 
-// The four source grids over the snow's voxels and a margin of three. Unknowns hold their source
-// function. Outside them (the density ramp and surface fringes) the radiance of the nearest surface
-// voxels is carried out two voxels, so the renderer's trilinear ramp sees a constant ratio of emission
-// to extinction; voxels too thin for the solve, away from any surface, hold their single scattering; the
-// outermost ring holds zeros (Cycles reads Vec3 grids' edges wrongly).
-BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::vector<Source> &source,
-                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings) {
+using VoxelValue = std::pair<openvdb::Index, Source>;  // offset in its leaf, value
+
+// Values by leaf of the grids' topology: leaf l's lie at [start[l], start[l + 1]).
+struct LeafValues {
+    std::vector<VoxelValue> values;
+    std::vector<std::size_t> start;
+
+    explicit LeafValues(std::size_t leaves) : start(leaves + 1, 0) {}
+    // Leaf by leaf, first's values and then `then`'s (consumed).
+    LeafValues(const LeafValues &first, std::vector<std::vector<VoxelValue>> &&then) : start{0} {
+        std::size_t total = first.values.size();
+        for (const auto &leaf : then) total += leaf.size();
+        values.reserve(total);
+        for (std::size_t l = 0; l < then.size(); ++l) {
+            values.insert(values.end(), first.values.begin() + first.start[l], first.values.begin() + first.start[l + 1]);
+            values.insert(values.end(), then[l].begin(), then[l].end());
+            then[l] = std::vector<VoxelValue>();  // (= {} would keep its capacity)
+            start.push_back(values.size());
+        }
+    }
+};
+
+// at: the topology's voxels -> their place in `values`.
+void placeValues(const LeafValues &values, openvdb::Int32Tree &at) {
+    openvdb::tree::LeafManager<openvdb::Int32Tree> leaves(at);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        for (std::size_t l = range.begin(); l != range.end(); ++l)
+            for (std::size_t k = values.start[l]; k < values.start[l + 1]; ++k)
+                leaves.leaf(l).setValueOnly(values.values[k].first, std::int32_t(k));
+    });
+}
+
+// Grid k of BakedGrids' value from a source function: l0, then l1's x, y and z (RGB).
+openvdb::Vec3f sourceComponent(const Source &S, int k) {
+    return k == 0 ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z) : openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1]);
+}
+
+// What the four source grids hold, worked out once so that the grids can be written one at a time (a grid at
+// the density's resolution takes 12 bytes for every voxel of its leaves: the four took ~250 bytes per unknown on
+// the car sample, docs/bake.md Memory).
+// Over the snow's voxels and a margin of three: unknowns hold their source function. Outside them (the
+// density ramp and surface fringes) the radiance of the nearest surface voxels is carried out two voxels, so
+// the renderer's trilinear ramp sees a constant ratio of emission to extinction; voxels too thin for the
+// solve, away from any surface, hold their single scattering; the outermost ring holds zeros (Cycles reads
+// Vec3 grids' edges wrongly).
+struct GridValues {
+    openvdb::BoolTree::Ptr topology;  // the snow's voxels and the margin
+    // Voxels other than the unknowns (traced unknowns among them), leaf by leaf: those holding a surface's
+    // radiance or a traced source, then those one voxel further out and thin snow on its own.
+    std::optional<LeafValues> beyond;
+    openvdb::Int32Tree::Ptr at;  // voxel -> its place in beyond, -1 elsewhere
+};
+
+GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::vector<Source> &source,
+                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
-    openvdb::BoolTree topology(medium.density().tree(), false, openvdb::TopologyCopy());
-    openvdb::tools::dilateActiveValues(topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
-    std::array<openvdb::Vec3fTree::Ptr, 4> trees;
-    for (auto &tree : trees)
-        tree = std::make_shared<openvdb::Vec3fTree>(topology, openvdb::Vec3f(0.0f), openvdb::TopologyCopy());
-    openvdb::BoolTree carried(topology, false, openvdb::TopologyCopy());  // voxels holding a surface's radiance
-    openvdb::tree::LeafManager<openvdb::Vec3fTree> leaves(*trees[0]);
+    GridValues out;
+    out.topology = std::make_shared<openvdb::BoolTree>(medium.density().tree(), false, openvdb::TopologyCopy());
+    openvdb::tools::dilateActiveValues(*out.topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    openvdb::tree::LeafManager<const openvdb::BoolTree> leaves(*out.topology);
+    using Pairs = std::vector<std::vector<VoxelValue>>;
 
-    auto write = [&](std::size_t l, openvdb::Index pos, const Source &S) {
-        const openvdb::Coord origin = leaves.leaf(l).origin();
-        leaves.leaf(l).setValueOnly(pos, openvdb::Vec3f(float(S.l0.x), float(S.l0.y), float(S.l0.z)));
-        for (int a = 0; a < 3; ++a)
-            trees[1 + a]->probeLeaf(origin)->setValueOnly(
-                pos, openvdb::Vec3f(float(S.l1[0][a]), float(S.l1[1][a]), float(S.l1[2][a])));
-    };
     // Average of the 26 neighbours accepted by `take`, read by `value`; false if none.
     auto average = [](const openvdb::Coord &c, const auto &take, const auto &value, Source &S) {
         int count = 0;
@@ -642,55 +706,40 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::ve
         if (count) S.l0 /= double(count), S.l1 /= double(count);
         return count > 0;
     };
-    // First: unknowns, and the voxels next to surface voxels.
+    // First: traced voxels, and the voxels next to surface voxels (unknowns hold their own source).
+    Pairs perLeaf(leaves.leafCount());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
-        openvdb::tree::ValueAccessor<openvdb::BoolTree> mark(carried);
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
         for (std::size_t l = range.begin(); l != range.end(); ++l)
-            for (auto it = leaves.leaf(l).beginValueOn(); it; ++it) {
+            for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
-                const std::int32_t i = index.getValue(c), t = tracedIndex.getValue(c);
+                const std::int32_t t = tracedIndex.getValue(c);
                 Source S;
-                if (t >= 0) {
-                    S = traced.source[t];
-                    mark.setValueOnly(c, true);
-                } else if (i >= 0) {
-                    S = source[i];
-                } else if (facingAverage(topo, c, index, source, S)) {
-                    mark.setValueOnly(c, true);
-                } else {
-                    continue;
-                }
-                write(l, it.pos(), S);
+                if (t >= 0) S = traced.source[t];
+                else if (index.getValue(c) >= 0 || !facingAverage(topo, c, index, source, S)) continue;
+                perLeaf[l].emplace_back(it.pos(), S);
             }
     });
+    const LeafValues carried(LeafValues(leaves.leafCount()), std::move(perLeaf));
+    out.at = std::make_shared<openvdb::Int32Tree>(*out.topology, -1, openvdb::TopologyCopy());
+    placeValues(carried, *out.at);
     // Then: one voxel further out, and thin snow on its own.
+    perLeaf = Pairs(leaves.leafCount());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
-        openvdb::tree::ValueAccessor<const openvdb::BoolTree> mark(carried);
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> carriedSlot(*out.at);
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
-        using Reader = openvdb::tree::ValueAccessor<const openvdb::Vec3fTree>;
-        std::array<Reader, 4> read{Reader(*trees[0]), Reader(*trees[1]), Reader(*trees[2]), Reader(*trees[3])};
         Medium::Accessor density = medium.accessor();
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t l = range.begin(); l != range.end(); ++l)
-            for (auto it = leaves.leaf(l).beginValueOn(); it; ++it) {
+            for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
-                if (index.getValue(c) >= 0 || mark.getValue(c)) continue;
+                if (index.getValue(c) >= 0 || carriedSlot.getValue(c) >= 0) continue;
                 Source S;
                 const bool near = average(c, [&](const openvdb::Coord &n) {
-                    return mark.getValue(n) && (index.getValue(n) < 0 || tracedIndex.getValue(n) >= 0); },
-                                          [&](const openvdb::Coord &n) {
-                                              Source v;
-                                              const openvdb::Vec3f l0 = read[0].getValue(n);
-                                              v.l0 = glm::dvec3(l0.x(), l0.y(), l0.z());
-                                              for (int a = 0; a < 3; ++a) {
-                                                  const openvdb::Vec3f l1 = read[1 + a].getValue(n);
-                                                  for (int ch = 0; ch < 3; ++ch) v.l1[ch][a] = l1[ch];
-                                              }
-                                              return v;
-                                          },
+                    return carriedSlot.getValue(n) >= 0 && (index.getValue(n) < 0 || tracedIndex.getValue(n) >= 0); },
+                                          [&](const openvdb::Coord &n) { return carried.values[carriedSlot.getValue(n)].second; },
                                           S);
                 if (!near && density.getValue(c) > 0.0f) {
                     const glm::dvec3 centre = medium.voxelCentre(c);
@@ -703,39 +752,125 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::ve
                         for (int ch = 0; ch < 3; ++ch) S.l1[ch] -= 3.0 * optics.g * beam[ch] * w;
                     }
                 }
-                if (near || density.getValue(c) > 0.0f) write(l, it.pos(), S);
+                if (near || density.getValue(c) > 0.0f) perLeaf[l].emplace_back(it.pos(), S);
             }
     });
+    out.beyond.emplace(carried, std::move(perLeaf));
+    placeValues(*out.beyond, *out.at);
+    return out;
+}
+
+// Grid k of BakedGrids (l0, then l1's x, y and z) at the density's resolution.
+openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology &topo, const std::vector<Source> &source,
+                                   const MonteCarloVoxels &traced, int k) {
+    auto tree = std::make_shared<openvdb::Vec3fTree>(*values.topology, openvdb::Vec3f(0.0f), openvdb::TopologyCopy());
+    openvdb::tree::LeafManager<openvdb::Vec3fTree> leaves(*tree);  // in the topology's leaf order
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
+        for (std::size_t l = range.begin(); l != range.end(); ++l) {
+            auto &leaf = leaves.leaf(l);
+            for (auto it = leaf.beginValueOn(); it; ++it) {
+                const openvdb::Coord c = it.getCoord();
+                if (const std::int32_t i = index.getValue(c); i >= 0 && tracedIndex.getValue(c) < 0)
+                    it.setValue(sourceComponent(source[i], k));
+            }
+            const LeafValues &beyond = *values.beyond;
+            for (std::size_t m = beyond.start[l]; m < beyond.start[l + 1]; ++m)
+                leaf.setValueOnly(beyond.values[m].first, sourceComponent(beyond.values[m].second, k));
+        }
+    });
+    return tree;
+}
+
+// Grid k of BakedGrids from its tree, `scale` times the density's voxel size.
+openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scale, const Medium &medium,
+                                   const BakeSettings &settings) {
+    auto grid = openvdb::Vec3fGrid::create(std::move(tree));
+    grid->setTransform(medium.density().transform().copy());
+    if (scale > 1) grid->transform().preScale(double(scale));
+    grid->setName(BakedGrids::kNames[k]);
+    grid->setVectorType(openvdb::VEC_INVARIANT);
+    grid->insertMeta("firn_units", openvdb::StringMetadata("W/m^2/sr (source function: emission / extinction)"));
+    grid->insertMeta("firn_extinction_per_density", openvdb::DoubleMetadata(medium.optics().extinctionPerDensity));
+    grid->insertMeta("firn_bake_quality",
+                     openvdb::StringMetadata(settings.quality == BakeQuality::Draft   ? "DRAFT"
+                                             : settings.quality == BakeQuality::Final ? "FINAL"
+                                                                                      : "REFERENCE"));
+    grid->insertMeta("firn_bake_seed", openvdb::Int64Metadata(openvdb::Int64(settings.seed)));
+    grid->insertMeta("firn_version", openvdb::StringMetadata(kVersion));
+    return grid;
+}
+
+// The four source grids at `scale` times the density's voxel size, one at a time: each grid at the density's
+// resolution is coarsened and freed before the next is written.
+BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::vector<Source> &source,
+                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
+    GridValues values = gridValues(scene, topo, source, traced, preset, settings);
+    values.at = nullptr;  // only BakedValuesSampler reads it
     BakedGrids out;
-    for (std::size_t k = 0; k < 4; ++k) {
-        auto grid = openvdb::Vec3fGrid::create(trees[k]);
-        grid->setTransform(medium.density().transform().copy());
-        grid->setName(BakedGrids::kNames[k]);
-        grid->setVectorType(openvdb::VEC_INVARIANT);
-        grid->insertMeta("firn_units", openvdb::StringMetadata("W/m^2/sr (source function: emission / extinction)"));
-        grid->insertMeta("firn_extinction_per_density", openvdb::DoubleMetadata(optics.extinctionPerDensity));
-        grid->insertMeta("firn_bake_quality",
-                         openvdb::StringMetadata(settings.quality == BakeQuality::Draft   ? "DRAFT"
-                                                 : settings.quality == BakeQuality::Final ? "FINAL"
-                                                                                          : "REFERENCE"));
-        grid->insertMeta("firn_bake_seed", openvdb::Int64Metadata(openvdb::Int64(settings.seed)));
-        grid->insertMeta("firn_version", openvdb::StringMetadata(kVersion));
-        out.source[k] = grid;
+    openvdb::BoolTree::Ptr lit;  // fine voxels with a value (firn_source nonzero)
+    for (int k = 0; k < 4; ++k) {
+        openvdb::Vec3fTree::Ptr tree = sourceTree(values, topo, source, traced, k);
+        if (scale > 1) {
+            if (k == 0) lit = litVoxels(*tree);
+            tree = coarsenedSource(*tree, *lit, scene.medium->density().tree(), scale);
+        }
+        out.source[k] = sourceGrid(std::move(tree), k, scale, *scene.medium, settings);
     }
     return out;
 }
 
-}  // namespace
+// BakedGrids' four values at a point of the density's index space before the grids are written: read from the
+// unknowns' source and the values beyond them, trilinear as BoxSampler reads a grid (the same values, bit for
+// bit). One per thread.
+class BakedValuesSampler {
+  public:
+    BakedValuesSampler(const SnowTopology &topo, const std::vector<Source> &source, const MonteCarloVoxels &traced,
+                       const GridValues &values)
+        : source_(source), beyond_(*values.beyond), index_(*topo.index), traced_(*traced.index), at_(*values.at) {}
+
+    std::array<openvdb::Vec3f, 4> operator()(const openvdb::Vec3d &ijk) {
+        const openvdb::Vec3i lower = openvdb::tools::local_util::floorVec3(ijk);
+        const openvdb::Vec3R uvw = ijk - lower;
+        openvdb::Vec3f corners[4][2][2][2];
+        for (int a = 0; a < 2; ++a)
+            for (int b = 0; b < 2; ++b)
+                for (int c = 0; c < 2; ++c) {
+                    const Source &S = valueAt(openvdb::Coord(lower.x() + a, lower.y() + b, lower.z() + c));
+                    for (int g = 0; g < 4; ++g) corners[g][a][b][c] = sourceComponent(S, g);
+                }
+        std::array<openvdb::Vec3f, 4> out;
+        for (int g = 0; g < 4; ++g) out[g] = openvdb::tools::BoxSampler::trilinearInterpolation(corners[g], uvw);
+        return out;
+    }
+
+  private:
+    const Source &valueAt(const openvdb::Coord &c) {
+        static const Source kNone{};
+        if (const std::int32_t i = index_.getValue(c); i >= 0 && traced_.getValue(c) < 0) return source_[i];
+        const std::int32_t k = at_.getValue(c);
+        return k >= 0 ? beyond_.values[k].second : kNone;
+    }
+
+    const std::vector<Source> &source_;
+    const LeafValues &beyond_;
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_, traced_, at_;
+};
 
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
-// of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch).
-std::vector<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                                      const BakedGrids &baked, const SkyRays &rays, std::uint64_t seed,
+// of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch), read
+// from the bake's values as its grids would hold them.
+SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                                      const std::vector<Source> &source, const MonteCarloVoxels &traced,
+                                      const GridValues &values, const SkyRays &rays, std::uint64_t seed,
                                       const SubProgress &progress) {
-    std::vector<glm::vec3> out(topo.size(), glm::vec3(0.0f));
+    SurfaceValues<glm::vec3> out(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
-        BakedRadiance radiance(scene, baked);
+        Medium::ColumnMarcher marcher(*scene.medium);
+        Medium::Accessor density = scene.medium->accessor();
+        BakedValuesSampler baked(topo, source, traced, values);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!light.snowRays[i]) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i);
@@ -744,13 +879,16 @@ std::vector<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &to
                 if (!(light.snowRays[i] >> k & 1)) continue;
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
-                sum += radiance.along(Ray{p, w}, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), 0.5);
+                const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
+                sum += bakedRadianceAlong(scene, marcher, density, baked, Ray{p, w}, tMax, 0.5);
             }
-            out[i] = glm::vec3(kPi * sum / double(rays.count()));
+            out.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
         }
     });
     return out;
 }
+
+}  // namespace
 
 namespace {
 
@@ -792,7 +930,7 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
     const double solved = reference ? kSolvedProgressReference : kSolvedProgress;
     std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
     for (auto &channel : phi) channel.assign(topo.size(), 0.0);
-    std::vector<glm::vec3> fromSnow;  // W/m^2 gathered from other snow (after the first pass)
+    SurfaceValues<glm::vec3> fromSnow;  // W/m^2 gathered from other snow onto surface patches (after the first pass)
     std::vector<Source> source;
     for (int pass = 0; pass < passes; ++pass) {
         const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
@@ -800,15 +938,15 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
             // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
             p.report(begin, "Gathering light between snow surfaces");
             {
-                const BakedGrids previous = makeGrids(scene, topo, source, traced, preset, settings);
-                source = {};
-                fromSnow = snowIrradiance(scene, topo, light, previous, SkyRays(preset.skySamples),
+                const GridValues values = gridValues(scene, topo, source, traced, preset, settings);
+                fromSnow = snowIrradiance(scene, topo, light, source, traced, values, SkyRays(preset.skySamples),
                                           settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
+                source = std::vector<Source>();  // freed (= {} would keep its capacity)
             }
-            releaseFreedMemory();  // the previous pass's grids
+            releaseFreedMemory();  // the previous pass's values
             clock.lap(&BakeStats::Phases::gather);
         }
-        std::vector<SolvedVoxel> solvedVoxel(topo.size());  // after the gathering: its grids take room too
+        SurfaceValues<SurfaceLight> leaving(topo.surfaceSlot, topo.surfaceVoxels());
         for (int c = 0; c < 3; ++c) {
             const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
             p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
@@ -816,21 +954,21 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
             if (pass > 0) system.addDiffuse(fromSnow, c);
             if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
             if (topo.size() > 0) {
-                const MultigridSolver solver(std::move(system.A));
+                const MultigridSolver solver(std::move(system.A), std::move(system.remainder));
                 // Passes before the last only feed the gathering between surfaces: 0.1 % will do.
                 const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, 1e-3) : preset.tolerance;
-                const MultigridSolver::Result result = solver.solve(system.b, phi[c], tolerance, 500, sub);
+                const MultigridSolver::Result result = solver.solve(std::move(system.b), phi[c], tolerance, 500, sub);
                 stats.iterations[c] += result.iterations;
                 stats.relativeResidual[c] = result.relativeResidual;
             }
-            solvedVoxels(scene, topo, light, system, phi[c], c, solvedVoxel);
+            surfaceLight(scene, topo, light, system, phi[c], c, leaving);
         }
-        std::vector<Source> surface = surfaceRadiance(topo, solvedVoxel);
+        SurfaceValues<Source> surface = surfaceRadiance(topo, leaving);
         if (reference && pass + 1 == passes) {
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
         }
-        source = composeSource(topo, solvedVoxel, surface);
+        source = composeSource(topo, insideSource(scene, topo, light, phi), surface);
         takeTraced(topo, traced, source);
         clock.lap(&BakeStats::Phases::solve);
     }
@@ -877,7 +1015,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     const std::vector<Source> source = solveSources(scene, topo, light, traced, preset, settings, passes, p, clock, local);
     light = IncidentLight{};  // the grids need it no more
     p.report(reference ? 0.95 : kSolvedProgress, "Writing the grids");
-    BakedGrids grids = coarsened(makeGrids(scene, topo, source, traced, preset, settings), scene.medium->density(), sourceScale);
+    BakedGrids grids = makeGrids(scene, topo, source, traced, preset, settings, sourceScale);
     local.sourceScale = sourceScale;
     // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
     // (Cycles would render black or white voxels). Not InvalidArgument: the fuzz driver must see it as a bug.

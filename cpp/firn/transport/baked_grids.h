@@ -1,13 +1,16 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <string>
 
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
 
 #include "firn/transport/medium.h"
 #include "firn/transport/monte_carlo.h"
 #include "firn/transport/scene.h"
+#include "firn/transport/source_lobe.h"
 #include "firn/util/color.h"
 
 namespace firn {
@@ -28,27 +31,68 @@ struct BakedGrids {
     static BakedGrids find(const openvdb::GridPtrVec &grids);
 };
 
-// The source grids at `factor` (>= 1) times the density's voxel size: a coarse voxel holds the extinction-
-// weighted mean of its factor^3 voxels where there is snow, elsewhere the mean of the values the bake extends
-// beyond the snow, and a ring of zeros surrounds them (Cycles holds a Vec3 grid's edge value half a voxel
-// further). Cycles stores a grid densely over its bounding box: a factor of 2 keeps 1/8 of the source's memory.
-BakedGrids coarsened(const BakedGrids &fine, const openvdb::FloatGrid &density, int factor);
+// One source grid's tree at `factor` (>= 2) times the density's voxel size: a coarse voxel holds the
+// extinction-weighted mean of its factor^3 voxels where there is snow, elsewhere the mean of the values the bake
+// extends beyond the snow (`lit`: the fine voxels with a value, litVoxels of firn_source), and a ring of zeros
+// surrounds them (Cycles holds a Vec3 grid's edge value half a voxel further). Cycles stores a grid densely over
+// its bounding box: a factor of 2 keeps 1/8 of the source's memory. The grid's transform is the density's
+// scaled by `factor`.
+openvdb::Vec3fTree::Ptr coarsenedSource(const openvdb::Vec3fTree &fine, const openvdb::BoolTree &lit,
+                                        const openvdb::FloatTree &density, int factor);
+// The active voxels of `source` whose value is not zero (active, value true).
+openvdb::BoolTree::Ptr litVoxels(const openvdb::Vec3fTree &source);
 
-// Integrates the baked emission along rays, as the renderer does; one per thread.
-class BakedRadiance {
+// Integrates the baked emission along a ray as the renderer does: the radiance the baked snow sends back along
+// it (towards its origin) from t = 0 to tMax (m), in steps of at most `step` voxels with the exact exponential of
+// each step. sourceAt(ijk) gives the four grids' values (BakedGrids' order) at a point of the density's index
+// space: SourceGridsSampler, or the bake's own values before it writes its grids.
+template <typename SourceAt>
+Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Medium::Accessor &density,
+                       SourceAt &sourceAt, const Ray &ray, double tMax, double step) {
+    const double k = scene.medium->optics().extinctionPerDensity;
+    const glm::dvec3 w = -ray.direction;  // towards the viewer
+    Rgb radiance(0.0);
+    double transmittance = 1.0;
+    marcher.march(ray.origin, ray.direction, tMax, step, [&](const openvdb::Vec3d &ijk, double dt) {
+        const double sigmaT = k * openvdb::tools::BoxSampler::sample(density, ijk);
+        if (sigmaT <= 0.0) return true;
+        const std::array<openvdb::Vec3f, 4> source = sourceAt(ijk);  // l0, then l1 per axis, RGB
+        Rgb S;
+        for (int c = 0; c < 3; ++c)
+            S[c] = lobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]), w);
+        const double opacity = 1.0 - std::exp(-sigmaT * dt);
+        radiance += transmittance * opacity * S;
+        transmittance *= 1.0 - opacity;
+        return transmittance > 1e-6;
+    });
+    return radiance;
+}
+
+// The four source grids' values at a point, trilinear as the renderer reads them; one per thread.
+class SourceGridsSampler {
   public:
-    BakedRadiance(const Scene &scene, const BakedGrids &baked);
-    // Radiance the baked snow sends back along the ray (towards its origin) from t = 0 to tMax (m),
-    // integrated in steps of at most `step` voxels with the exact exponential of each step.
-    Rgb along(const Ray &ray, double tMax, double step);
+    SourceGridsSampler(const Medium &medium, const BakedGrids &baked);
+    std::array<openvdb::Vec3f, 4> operator()(const openvdb::Vec3d &ijk);  // ijk: the density's index space
 
   private:
     using Reader = openvdb::tree::ValueAccessor<const openvdb::Vec3fTree>;
+    std::array<Reader, 4> source_;
+    double sourceIndexPerDensityIndex_;  // the source grids may be coarser than the density
+};
+
+// bakedRadianceAlong through BakedGrids; one per thread.
+class BakedRadiance {
+  public:
+    BakedRadiance(const Scene &scene, const BakedGrids &baked);
+    Rgb along(const Ray &ray, double tMax, double step) {
+        return bakedRadianceAlong(scene_, marcher_, density_, source_, ray, tMax, step);
+    }
+
+  private:
     const Scene &scene_;
     Medium::ColumnMarcher marcher_;
     Medium::Accessor density_;
-    std::array<Reader, 4> source_;
-    double sourceIndexPerDensityIndex_;  // the source grids may be coarser than the density
+    SourceGridsSampler source_;
 };
 
 // What Cycles draws for the snow along a camera ray with the contract's material: the integral of

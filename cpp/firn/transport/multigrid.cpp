@@ -271,25 +271,41 @@ struct Interrupter {
 
 }  // namespace
 
-MultigridSolver::MultigridSolver(StencilOperator fine) : hierarchy_(std::make_unique<Hierarchy>()) {
-    Hierarchy &h = *hierarchy_;
-    const std::size_t n = fine.size();
-    h.levels.emplace_back();
-    Stencil<float> &top = h.levels.back().A;
-    top.coord = std::move(fine.coord);
-    top.neighbour = std::move(fine.neighbour);
-    top.conductance.resize(n), top.diag.resize(n);
-    h.remainder.resize(n);
-    parallelRows(n, [&](std::size_t i) {
-        double rest = fine.diag[i];
-        for (int k = 0; k < 6; ++k) {
-            top.conductance[i][k] = float(fine.conductance[i][k]);
-            if (top.neighbour[i][k] != StencilOperator::kNone) rest -= fine.conductance[i][k];
-        }
-        top.diag[i] = float(fine.diag[i]);
-        h.remainder[i] = float(rest);
+namespace {
+
+// Row i's remainder: diag minus the conductances, summed in double, stored in float.
+std::vector<float> remainderOf(const StencilOperator &A) {
+    std::vector<float> out(A.size());
+    parallelRows(A.size(), [&](std::size_t i) {
+        double rest = A.diag[i];
+        for (int k = 0; k < 6; ++k)
+            if (A.neighbour[i][k] != StencilOperator::kNone) rest -= A.conductance[i][k];
+        out[i] = float(rest);
     });
-    fine = StencilOperator{};
+    return out;
+}
+
+Stencil<float> singlePrecision(const StencilOperator &A) {
+    Stencil<float> out;
+    out.coord = A.coord, out.neighbour = A.neighbour;
+    out.conductance.resize(A.size()), out.diag.resize(A.size());
+    parallelRows(A.size(), [&](std::size_t i) {
+        for (int k = 0; k < 6; ++k) out.conductance[i][k] = float(A.conductance[i][k]);
+        out.diag[i] = float(A.diag[i]);
+    });
+    return out;
+}
+
+}  // namespace
+
+MultigridSolver::MultigridSolver(StencilOperator fine) : MultigridSolver(singlePrecision(fine), remainderOf(fine)) {}
+
+MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remainder)
+    : hierarchy_(std::make_unique<Hierarchy>()) {
+    Hierarchy &h = *hierarchy_;
+    h.levels.emplace_back();
+    h.levels.back().A = std::move(fine);
+    h.remainder = std::move(remainder);
     while (h.levels.back().A.size() > kDenseLimit) {
         Level next;
         if (!coarsen(h.levels.back(), next)) break;
@@ -297,20 +313,22 @@ MultigridSolver::MultigridSolver(StencilOperator fine) : hierarchy_(std::make_un
     }
     for (Level &level : h.levels) prepare(level);
     if (h.levels.back().A.size() <= kDenseLimit) h.cholesky = denseCholesky(h.levels.back().A);
-    for (Level &level : h.levels) level.A.coord = {};  // they only placed the rows in colours and blocks
+    for (Level &level : h.levels) level.A.coord = std::vector<openvdb::Coord>();  // they only placed the rows in colours and blocks
 }
 
 MultigridSolver::~MultigridSolver() = default;
 
 int MultigridSolver::levelCount() const { return int(hierarchy_->levels.size()); }
 
-MultigridSolver::Result MultigridSolver::solve(const std::vector<double> &b, std::vector<double> &x,
+MultigridSolver::Result MultigridSolver::solve(std::vector<double> b, std::vector<double> &x,
                                                double relativeTolerance, int maxIterations,
                                                const SubProgress &progress) const {
     const std::size_t n = b.size();
     PcgVector bv{openvdb::math::pcg::SizeType(n)}, xv{openvdb::math::pcg::SizeType(n)};
     std::copy(b.begin(), b.end(), bv.data());
     std::copy(x.begin(), x.end(), xv.data());
+    // Freed meanwhile (the bake's largest solves: 16 bytes per unknown); `= {}` would keep their capacity.
+    b = std::vector<double>(), x = std::vector<double>();
     VCycle preconditioner(*hierarchy_);
     const FineOperator A{hierarchy_->levels.front().A, hierarchy_->remainder};
     openvdb::math::pcg::State termination = openvdb::math::pcg::terminationDefaults<double>();
@@ -325,7 +343,7 @@ MultigridSolver::Result MultigridSolver::solve(const std::vector<double> &b, std
         progress.throwIfCancelled();
         throw;
     }
-    std::copy(xv.data(), xv.data() + n, x.begin());
+    x.assign(xv.data(), xv.data() + n);
     return {state.iterations, state.relativeError};
 }
 

@@ -37,6 +37,9 @@ using StencilOperator = Stencil<double>;
 class MultigridSolver {
   public:
     explicit MultigridSolver(StencilOperator fine);
+    // The same from the operator already in single precision and its remainder (diag minus the conductances,
+    // summed in double): what the solver keeps of it (the bake assembles them so, without a double copy).
+    MultigridSolver(Stencil<float> fine, std::vector<float> remainder);
     ~MultigridSolver();
 
     struct Result {
@@ -47,9 +50,11 @@ class MultigridSolver {
     // rounding noise ends in 0/0 (NaN everywhere). Smaller tolerances are raised to it.
     static constexpr double kFinestTolerance = 1e-12;
 
-    // x holds the initial guess on entry. Throws Cancelled when progress is cancelled.
-    Result solve(const std::vector<double> &b, std::vector<double> &x, double relativeTolerance,
-                 int maxIterations, const SubProgress &progress) const;
+    // x holds the initial guess on entry. b and x are copied into the iteration's vectors and freed meanwhile
+    // (b is taken: pass it with std::move where it is not needed after). Throws Cancelled when progress is
+    // cancelled (x is then empty).
+    Result solve(std::vector<double> b, std::vector<double> &x, double relativeTolerance, int maxIterations,
+                 const SubProgress &progress) const;
 
     int levelCount() const;
 
