@@ -35,16 +35,31 @@ double axisAlignedVoxelSize(const openvdb::math::Transform &transform) {
     return h;
 }
 
-// Ray parameter (index space) where the ray eye + t dir leaves the 8^3 leaf block holding `cell`.
-double leafExit(const Vec3d &eye, const Vec3d &dir, const openvdb::Coord &cell) {
-    constexpr int kDim = int(openvdb::BoolTree::LeafNodeType::DIM);
+// Ray parameter (index space) where the ray leaves the aligned block of dim^3 cells holding `cell`.
+double blockExit(const openvdb::math::Ray<double> &ray, const openvdb::Coord &cell, int dim) {
     double exit = std::numeric_limits<double>::infinity();
     for (int a = 0; a < 3; ++a) {
-        if (dir[a] == 0.0) continue;
-        const int origin = cell[a] & ~(kDim - 1);
-        exit = std::min(exit, ((dir[a] > 0.0 ? origin + kDim : origin) - eye[a]) / dir[a]);
+        if (ray.dir()[a] == 0.0) continue;
+        const int origin = cell[a] & ~(dim - 1);
+        exit = std::min(exit, ((ray.dir()[a] > 0.0 ? origin + dim : origin) - ray.eye()[a]) * ray.invDir()[a]);
     }
     return exit;
+}
+
+// Edge (cells) of the largest aligned block holding `cell` in which no cell of the 8^3 `leaf`'s mask is on:
+// 4 or 2; 1 if only the cell itself is off, 0 if it is on. The mask's word x holds the 8x8 cells of slice x,
+// bit 8 y + z (OpenVDB's leaf offset 64 x + 8 y + z).
+int emptyBlockEdge(const openvdb::util::NodeMask<3> &mask, const openvdb::Coord &cell) {
+    using Word = openvdb::Index64;
+    const int x = cell.x() & 7, y = cell.y() & 7, z = cell.z() & 7;
+    if (mask.getWord<Word>(x) >> (8 * y + z) & 1) return 0;
+    const int x4 = x & 4, shift4 = 8 * (y & 4) + (z & 4);
+    const Word slices4 = mask.getWord<Word>(x4) | mask.getWord<Word>(x4 + 1) | mask.getWord<Word>(x4 + 2) |
+                         mask.getWord<Word>(x4 + 3);
+    if (!(slices4 & (Word(0x0F0F0F0F) << shift4))) return 4;
+    const int x2 = x & 6, shift2 = 8 * (y & 6) + (z & 6);
+    if (!((mask.getWord<Word>(x2) | mask.getWord<Word>(x2 + 1)) & (Word(0x0303) << shift2))) return 2;
+    return 1;
 }
 
 }  // namespace
@@ -159,7 +174,7 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
             const openvdb::Coord cell = openvdb::Coord::floor(p);
             if (!support_.probeConstLeaf(cell)) {
                 // No snow near this whole 8^3 block: on from the first sample past it (a little early, never late).
-                const double next = std::min((leafExit(eye, dir, cell) - t0) / dt - 0.5 - 1e-6, double(steps));
+                const double next = std::min((blockExit(ray, cell, 8) - t0) / dt - 0.5 - 1e-6, double(steps));
                 i = std::max(i, int(std::ceil(next)) - 1);
                 continue;
             }
@@ -168,6 +183,18 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
         if (sum > sumLimit) break;
     }
     return sum * h;
+}
+
+int Medium::ColumnMarcher::lastEmptySample(const openvdb::math::Ray<double> &ray, const Vec3d &p, double t0, double dt,
+                                           int i, int steps) {
+    const openvdb::Coord cell = openvdb::Coord::floor(p);
+    const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell);
+    const int edge = leaf ? emptyBlockEdge(leaf->getValueMask(), cell) : int(openvdb::BoolTree::LeafNodeType::DIM);
+    if (edge == 0) return i - 1;
+    if (edge == 1) return i;
+    // The samples before the ray leaves the block (a little early, never late: rounding).
+    const double last = std::min((blockExit(ray, cell, edge) - t0) / dt - 0.5 - 1e-6, double(steps));
+    return std::max(i, int(std::ceil(last)) - 1);
 }
 
 }  // namespace firn

@@ -45,7 +45,8 @@ class Medium {
     Accessor accessor() const { return density_->getConstAccessor(); }
     double densityAt(const glm::dvec3 &world, Accessor &accessor) const;  // kg/m^3, trilinear
 
-    // Integrates the density along rays (kg/m^2), skipping empty 8^3 blocks. One per thread (cheap copies).
+    // Integrates the density along rays (kg/m^2), skipping cells and 8^3 blocks without snow. One per thread
+    // (cheap copies).
     class ColumnMarcher {
       public:
         explicit ColumnMarcher(const Medium &medium);
@@ -53,8 +54,9 @@ class Medium {
         // half-voxel steps; stops once the column exceeds `limit` (kg/m^2) and returns what it has.
         double column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double limit);
 
-        // Walks the ray from t = 0 to tMax (m) where the density may be non-zero, in steps of at most
-        // `step` voxels, calling visit(midpoint in index space, step length in m); stops when it returns false.
+        // Walks the ray from t = 0 to tMax (m) in steps of at most `step` voxels, calling visit(midpoint in index
+        // space, step length in m) where the density may be non-zero (the midpoints in cells without snow are
+        // skipped, whole empty 2^3, 4^3 and 8^3 blocks at a time); stops when visit returns false.
         template <typename Visit>
         void march(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double step, Visit &&visit) {
             const glm::dvec3 start = medium_.worldToIndex(origin);
@@ -66,12 +68,26 @@ class Medium {
             while (intersector_.march(t0, t1)) {
                 const int steps = std::max(1, int(std::ceil((t1 - t0) / step)));
                 const double dt = (t1 - t0) / steps;
-                for (int i = 0; i < steps; ++i)
-                    if (!visit(ray(t0 + (i + 0.5) * dt), dt * medium_.voxelSize())) return;
+                for (int i = 0; i < steps; ++i) {
+                    const openvdb::Vec3d p = ray(t0 + (i + 0.5) * dt);
+                    const int empty = lastEmptySample(ray, p, t0, dt, i, steps);
+                    if (empty >= i) {
+                        i = empty;
+                        continue;
+                    }
+                    if (!visit(p, dt * medium_.voxelSize())) return;
+                }
             }
         }
 
       private:
+        // Samples ray(t0 + (j + 0.5) dt) of a walk (index space): if sample i, at p, lies in a cell without
+        // snow, the last sample j >= i (below `steps`) still inside the largest empty aligned block (8^3, 4^3,
+        // 2^3 or the cell) that holds p, so that the walk goes on after it; else i - 1. The samples skipped
+        // would add nothing: the walk's values do not change.
+        int lastEmptySample(const openvdb::math::Ray<double> &ray, const openvdb::Vec3d &p, double t0, double dt, int i,
+                            int steps);
+
         const Medium &medium_;
         openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0> intersector_;
         Accessor accessor_;
