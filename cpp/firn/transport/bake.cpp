@@ -410,6 +410,9 @@ struct SurfaceLight {
     // What returns of the light that entered there, over and above the escape function's share of it
     // (sharp: it follows shadows) ...
     Source returned;
+    // ... the beams' light that crosses the snow and leaves through the patch on its far side: a lobe of
+    // k = g (l0 in W per channel) about the mean of the beams' directions (per voxel; length <= 1) ...
+    glm::vec3 crossing{0.0f}, crossingAxis{0.0f};
     // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
     // but spread unevenly over a voxel staircase).
     glm::vec3 leaving{0.0f};
@@ -485,7 +488,22 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 r0 += returned * (lobe.a - 3.0 / 7.0);
                 r1 += returned * (lobe.b * patch.normal + lobe.c * t - escape1);
             }
+            // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
+            // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)).
+            const double k = std::min(ch.g, kMaxLobeAnisotropy);
+            double crossing = 0.0;
+            glm::dvec3 axis(0.0);
+            for (std::size_t s = 0; s < light.beams.size(); ++s) {
+                const double beam = light.beams[s].atVoxel[i][c];
+                const glm::dvec3 d = -towardsBeam(scene, s, centre);
+                const double cos = glm::dot(d, patch.normal);
+                if (beam <= 0.0 || cos <= 0.0) continue;
+                const double l0 = beam * cos * patch.area / (kPi * (1.0 + 3.0 * k * cos));
+                crossing += l0, axis += l0 * d;
+            }
             SurfaceLight &surface = out.surface(i);
+            surface.crossing[c] = float(crossing);
+            if (crossing > 0.0) surface.crossingAxis = glm::vec3(axis / crossing);
             surface.returned.l0[c] = r0;
             surface.returned.l1[c] = r1;
             surface.leaving[c] = float(leaving);
@@ -498,7 +516,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
 // of its 3^3 block facing the same way, weighted by the cosine between the normals, by area): a voxel
 // staircase spreads the diffusion's outflow unevenly between steps, though the light itself varies only
 // over a few transport mean free paths. The shape follows the voxel's own normal.
-SurfaceValues<Source> surfaceRadiance(const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved) {
+SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
+                                      const SurfaceValues<SurfaceLight> &solved) {
     SurfaceValues<Source> out(topo.surfaceSlot, topo.surfaceVoxels());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -518,8 +537,10 @@ SurfaceValues<Source> surfaceRadiance(const SnowTopology &topo, const SurfaceVal
             for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
                 const SourceLobe lobe = exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
                                                  glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
-                out.surface(i).l0[c] = float(lobe.l0);
-                out.surface(i).l1[c] = glm::vec3(lobe.l1);
+                const double crossing = solved[i].crossing[c] / topo.patches[i].area;  // its lobe's l0 (radiance)
+                out.surface(i).l0[c] = float(lobe.l0 + crossing);
+                out.surface(i).l1[c] = glm::vec3(lobe.l1 + 3.0 * std::min(optics.g, kMaxLobeAnisotropy) * crossing *
+                                                                glm::dvec3(solved[i].crossingAxis));
             }
         }
     });
@@ -963,7 +984,7 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
             }
             surfaceLight(scene, topo, light, system, phi[c], c, leaving);
         }
-        SurfaceValues<Source> surface = surfaceRadiance(topo, leaving);
+        SurfaceValues<Source> surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
         if (reference && pass + 1 == passes) {
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
