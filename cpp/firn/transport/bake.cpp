@@ -387,13 +387,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 if (groundLight[f] > 0.0)
                     source += 4.0 * groundLight[f] / (1.0 - albedo[f]) * h2 * boundary[f]->conductance();
             const double sky = light.skyOnSurface[i][c];
-            double remainder = diag;
-            for (int f = 0; f < 6; ++f) {
-                sys.A.conductance[i][f] = float(conductance[f]);
-                if (sys.A.neighbour[i][f] != StencilOperator::kNone) remainder -= conductance[f];
-            }
+            for (int f = 0; f < 6; ++f) sys.A.conductance[i][f] = float(conductance[f]);
             sys.A.diag[i] = float(diag);
-            sys.remainder[i] = float(remainder);
+            sys.remainder[i] = float(rowRemainder(diag, conductance, sys.A.neighbour[i]));
             sys.b[i] = source + sky * sys.skyToNode[i];
             if (!patch.isSurface()) continue;
             sys.escaped.surface(i) += sky * sys.skyReturned[i];
@@ -454,6 +450,10 @@ std::vector<Source> insideSource(const Scene &scene, const SnowTopology &topo, c
     return out;
 }
 
+// The anisotropy of the lobe a beam leaves by where it crosses the snow to a far surface: the snow's g, within
+// what a stored lobe holds.
+double crossingAnisotropy(double g) { return std::min(g, kMaxLobeAnisotropy); }
+
 // Channel c's light leaving each surface voxel, from its solve.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
                   const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
@@ -490,7 +490,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             }
             // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
             // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)).
-            const double k = std::min(ch.g, kMaxLobeAnisotropy);
+            const double k = crossingAnisotropy(ch.g);
             double crossing = 0.0;
             glm::dvec3 axis(0.0);
             for (std::size_t s = 0; s < light.beams.size(); ++s) {
@@ -539,8 +539,8 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
                                                  glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
                 const double crossing = solved[i].crossing[c] / topo.patches[i].area;  // its lobe's l0 (radiance)
                 out.surface(i).l0[c] = float(lobe.l0 + crossing);
-                out.surface(i).l1[c] = glm::vec3(lobe.l1 + 3.0 * std::min(optics.g, kMaxLobeAnisotropy) * crossing *
-                                                                glm::dvec3(solved[i].crossingAxis));
+                out.surface(i).l1[c] =
+                    glm::vec3(lobe.l1 + 3.0 * crossingAnisotropy(optics.g) * crossing * glm::dvec3(solved[i].crossingAxis));
             }
         }
     });

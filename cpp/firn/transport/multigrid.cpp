@@ -273,15 +273,10 @@ struct Interrupter {
 
 namespace {
 
-// Row i's remainder: diag minus the conductances, summed in double, stored in float.
+// Every row's remainder (rowRemainder), stored in float.
 std::vector<float> remainderOf(const StencilOperator &A) {
     std::vector<float> out(A.size());
-    parallelRows(A.size(), [&](std::size_t i) {
-        double rest = A.diag[i];
-        for (int k = 0; k < 6; ++k)
-            if (A.neighbour[i][k] != StencilOperator::kNone) rest -= A.conductance[i][k];
-        out[i] = float(rest);
-    });
+    parallelRows(A.size(), [&](std::size_t i) { out[i] = float(rowRemainder(A.diag[i], A.conductance[i], A.neighbour[i])); });
     return out;
 }
 

@@ -28,6 +28,16 @@ struct Stencil {
 };
 using StencilOperator = Stencil<double>;
 
+// A row's remainder: diag minus the conductances to its neighbours, summed in double. The solver keeps it apart
+// (in float), so the operator's nearly cancelling row sums are not left to a float diagonal's rounding.
+inline double rowRemainder(double diag, const std::array<double, 6> &conductance,
+                           const std::array<std::uint32_t, 6> &neighbour) {
+    double rest = diag;
+    for (int k = 0; k < 6; ++k)
+        if (neighbour[k] != StencilOperator::kNone) rest -= conductance[k];
+    return rest;
+}
+
 // Solves A x = b by conjugate gradients (OpenVDB's pcg) preconditioned with one symmetric V-cycle of
 // aggregation multigrid: 2x2x2 voxel blocks per coarser level, coarse operators summed from the fine one
 // (conductances halved, as rediscretizing at twice the spacing would give), red-black Gauss-Seidel
