@@ -60,6 +60,20 @@ std::unique_ptr<std::atomic<bool>[]> leavesNearOccluders(const Medium &medium, c
     return near;
 }
 
+// Whether voxel i lies on a sharp edge: two of its air faces at right angles, each going on flat past the
+// edge (the neighbour inwards from either face has the other face in air too). A staircase's steps fail
+// this: on a voxelized plane one of the two runs is a single voxel, so the smooth patch stands there.
+bool onSharpEdge(const SnowTopology &topo, std::size_t i) {
+    for (int f = 0; f < 6; ++f)
+        for (int g = f + 1; g < 6; ++g) {
+            if (f / 2 == g / 2 || !topo.isAirFace(i, f) || !topo.isAirFace(i, g)) continue;
+            const std::int32_t underG = topo.link[i][g ^ 1], underF = topo.link[i][f ^ 1];
+            if (underG >= 0 && underF >= 0 && topo.isAirFace(std::size_t(underG), f) && topo.isAirFace(std::size_t(underF), g))
+                return true;
+        }
+    return false;
+}
+
 // Outward normal from the density gradient (a 3x3x3 Sobel stencil), or from the air faces where the
 // gradient is flat or points the wrong way.
 void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
@@ -94,6 +108,12 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
             SurfacePatch &patch = topo.patches.surface(i);
             patch.normal = glm::length(n) > 0.0 ? glm::normalize(n) : glm::dvec3(0.0, 0.0, 1.0);
+            if ((patch.sharp = onSharpEdge(topo, i))) {
+                for (int f = 0; f < 6; ++f)
+                    if (topo.isAirFace(i, f)) patch.share[f] = 1.0f / float(airFaces);
+                patch.area = h * h * airFaces;
+                continue;
+            }
             double projected = 0.0;
             for (int f = 0; f < 6; ++f)
                 if (topo.isAirFace(i, f)) projected += std::max(0.0, glm::dot(patch.normal, faceNormal(f)));
