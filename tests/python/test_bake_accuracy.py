@@ -109,7 +109,7 @@ def test_sharp_box_edges_take_and_give_light_face_by_face(folder):
     # its edges from (120°, 30°) and (220°, 30°), against the core's Monte Carlo (2048 paths per block, noise
     # 2.7 %). With one smooth patch per edge voxel (a diagonal normal: on the edge between the sunlit top and a
     # side facing away, the top's sun never entered) 8.9 % mean, worst +47 %; with the edge voxels taking light
-    # in and out through each air face (SurfacePatch::sharp, edgeLobe) 6.7 %, worst +26 % (docs/bake.md).
+    # in and out through each air face (SurfacePatch::sharp, edgeLobe) 6.8 %, worst +26 % (docs/bake.md).
     c = case("box_sharp")
     c.views = [(120, 30), (220, 30)]
     c.samples = 2048
