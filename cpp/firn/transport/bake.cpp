@@ -551,8 +551,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 double leaving = 0.0, area = 0.0;
                 for (std::size_t m = topo.neighbourhoodStart[i]; m < topo.neighbourhoodStart[i + 1]; ++m) {
                     const std::uint32_t j = topo.neighbourhood[m];
-                    const double w = topo.patches[j].sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, topo.patches[j].normal));
-                    leaving += w * out[j].leaving[c], area += w * topo.patches[j].area;
+                    const SurfacePatch &other = topo.patches[j];
+                    const double w = other.sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, other.normal));
+                    leaving += w * out[j].leaving[c], area += w * other.area;
                 }
                 const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
                 faces.push_back({n, r0 / own + exitance * (3.0 / 7.0 / kPi), r1 / own + exitance * 6.0 / 7.0 / kPi * n});

@@ -118,7 +118,8 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
             SurfacePatch &patch = topo.patches.surface(i);
             patch.normal = glm::length(n) > 0.0 ? glm::normalize(n) : glm::dvec3(0.0, 0.0, 1.0);
-            if ((patch.sharp = onSharpEdge(topo, i))) {
+            patch.sharp = onSharpEdge(topo, i);
+            if (patch.sharp) {
                 for (int f = 0; f < 6; ++f)
                     if (topo.isAirFace(i, f)) patch.share[f] = 1.0f / float(airFaces);
                 patch.area = h * h * airFaces;

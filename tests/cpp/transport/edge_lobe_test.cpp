@@ -21,7 +21,8 @@ double fluxThroughFaces(const std::vector<FaceExit> &faces, const Radiance &L, i
         for (int j = 0; j < n; ++j) {
             const double mu = -1.0 + 2.0 * (i + 0.5) / n, phi = 2.0 * kPi * (j + 0.5) / n, s = std::sqrt(1.0 - mu * mu);
             const glm::dvec3 w(s * std::cos(phi), s * std::sin(phi), mu);
-            for (const FaceExit &face : faces) out += std::max(0.0, glm::dot(face.normal, w)) * L(w, face) * 4.0 * kPi / (double(n) * n);
+            for (const FaceExit &face : faces)
+                out += std::max(0.0, glm::dot(face.normal, w)) * L(w, face) * 4.0 * kPi / (double(n) * n);
         }
     return out;
 }
@@ -33,8 +34,10 @@ TEST(EdgeLobe, KeepsTheLightLeavingThroughTheFaces) {
     // the two faces let out, within the quadrature of its 256 directions.
     const std::vector<FaceExit> faces{{{0.0, 0.0, 1.0}, 0.3, {0.0, 0.0, 0.1}}, {{-1.0, 0.0, 0.0}, 0.05, {0.0, 0.0, 0.0}}};
     const SourceLobe lobe = edgeLobe(faces);
-    const double exact = fluxThroughFaces(faces, [](const glm::dvec3 &w, const FaceExit &f) { return f.e0 + glm::dot(f.e1, w); });
-    const double stored = fluxThroughFaces(faces, [&](const glm::dvec3 &w, const FaceExit &) { return lobeRadiance(lobe.l0, lobe.l1, w); });
+    const double exact =
+        fluxThroughFaces(faces, [](const glm::dvec3 &w, const FaceExit &f) { return f.e0 + glm::dot(f.e1, w); });
+    const double stored =
+        fluxThroughFaces(faces, [&](const glm::dvec3 &w, const FaceExit &) { return lobeRadiance(lobe.l0, lobe.l1, w); });
     EXPECT_NEAR(stored, exact, 0.03 * exact);
 }
 
