@@ -634,7 +634,8 @@ void takeTraced(const SnowTopology &topo, const MonteCarloVoxels &traced, std::v
 }
 
 // REFERENCE quality: the radiance leaving each surface voxel, path traced from 12 directions around
-// its normal, fitted by least squares with a linear form, stored as that form's fitted lobe.
+// its normal, fitted by least squares with a linear form, stored as that form's fitted lobe; on a sharp edge
+// from 12 directions around each air face's normal, stored as the lobe fitted to the faces' forms (edgeLobe).
 void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples, std::uint64_t seed,
                       SurfaceValues<Source> &out, const SubProgress &progress) {
     const MonteCarloReference reference(scene);
@@ -648,27 +649,50 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
             progress.throwIfCancelled();
             const std::size_t i = surface[k];
             const glm::dvec3 centre = scene.medium->voxelCentre(topo.coord[i]);
-            glm::dmat4 normal(0.0);
-            glm::dmat4x3 rhs(0.0);  // column m: basis function m against the three channels
-            int d = 0;
-            for (double mu : {0.95, 0.7, 0.35})
-                for (int a = 0; a < 4; ++a, ++d) {
-                    const glm::dvec3 w = directionAround(topo.patches[i].normal, mu, kPi * (0.5 * a + 0.25 * (mu < 0.5)));
-                    const Ray ray{centre + 3.0 * h * w, -w};
-                    const Rgb L = reference.estimate(ray, samples, seed, i * 12 + d).mean;
-                    const glm::dvec4 basis(1.0, w.x, w.y, w.z);
-                    normal += glm::outerProduct(basis, basis);
-                    for (int m = 0; m < 4; ++m) rhs[m] += basis[m] * L;
+            // The linear form e0 + e1 . w of each channel fitted to the radiance seen from 12 directions around n.
+            auto fitAround = [&](const glm::dvec3 &n, std::uint64_t stream) {
+                glm::dmat4 normal(0.0);
+                glm::dmat4x3 rhs(0.0);  // column m: basis function m against the three channels
+                int d = 0;
+                for (double mu : {0.95, 0.7, 0.35})
+                    for (int a = 0; a < 4; ++a, ++d) {
+                        const glm::dvec3 w = directionAround(n, mu, kPi * (0.5 * a + 0.25 * (mu < 0.5)));
+                        const Ray ray{centre + 3.0 * h * w, -w};
+                        const Rgb L = reference.estimate(ray, samples, seed, stream * 12 + d).mean;
+                        const glm::dvec4 basis(1.0, w.x, w.y, w.z);
+                        normal += glm::outerProduct(basis, basis);
+                        for (int m = 0; m < 4; ++m) rhs[m] += basis[m] * L;
+                    }
+                const glm::dmat4 inverse = glm::inverse(normal);
+                std::array<glm::dvec4, 3> out;
+                for (int c = 0; c < 3; ++c) {
+                    glm::dvec4 v;
+                    for (int m = 0; m < 4; ++m) v[m] = rhs[m][c];
+                    out[c] = inverse * v;
                 }
-            const glm::dmat4 inverse = glm::inverse(normal);
-            for (int c = 0; c < 3; ++c) {
-                glm::dvec4 v;
-                for (int m = 0; m < 4; ++m) v[m] = rhs[m][c];
-                const glm::dvec4 coefficients = inverse * v;
-                const SourceLobe lobe = exitLobe(coefficients[0], glm::dvec3(coefficients[1], coefficients[2], coefficients[3]),
-                                                 topo.patches[i].normal);
-                out.surface(i).l0[c] = float(lobe.l0);
-                out.surface(i).l1[c] = glm::vec3(lobe.l1);
+                return out;
+            };
+            const SurfacePatch &patch = topo.patches[i];
+            if (patch.sharp) {  // each air face's own form, then the lobe of what cameras see of them (edgeLobe)
+                std::array<std::vector<FaceExit>, 3> faces;
+                for (int f = 0; f < 6; ++f) {
+                    if (patch.share[f] <= 0.0f) continue;
+                    const auto form = fitAround(faceNormal(f), topo.size() + i * 6 + std::uint64_t(f));  // streams of its own
+                    for (int c = 0; c < 3; ++c)
+                        faces[c].push_back({faceNormal(f), form[c][0], glm::dvec3(form[c][1], form[c][2], form[c][3])});
+                }
+                for (int c = 0; c < 3; ++c) {
+                    const SourceLobe lobe = edgeLobe(faces[c]);
+                    out.surface(i).l0[c] = float(lobe.l0);
+                    out.surface(i).l1[c] = glm::vec3(lobe.l1);
+                }
+            } else {
+                const auto form = fitAround(patch.normal, i);
+                for (int c = 0; c < 3; ++c) {
+                    const SourceLobe lobe = exitLobe(form[c][0], glm::dvec3(form[c][1], form[c][2], form[c][3]), patch.normal);
+                    out.surface(i).l0[c] = float(lobe.l0);
+                    out.surface(i).l1[c] = glm::vec3(lobe.l1);
+                }
             }
             progress.report(double(++done) / surface.size());
         }
