@@ -630,6 +630,7 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
                 out.surface(i).l0[c] = float(lobe.l0);
                 out.surface(i).l1[c] = glm::vec3(lobe.l1);
             }
+            out.surface(i).peak0 = out.surface(i).peak1 = glm::vec3(0.0f);  // the traced radiance holds all
             progress.report(double(++done) / surface.size());
         }
     });
