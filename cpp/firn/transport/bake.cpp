@@ -552,13 +552,14 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
             for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
                 const SourceLobe lobe = exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
                                                  glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
-                out.surface(i).l0[c] = float(lobe.l0);
-                out.surface(i).l1[c] = glm::vec3(lobe.l1);
+                // The crossing beams, added by their moments: light scattered forwards many times is broader
+                // than one scattering's peak (in the peaked lobe, k = g: ball_forward 17.6 % against 17.1 %, seen
+                // against the sun -29 % against -21 %; spray_lumps 20.1 % against 19.7 %; docs/bake.md).
+                const double crossing = solved[i].crossing[c] / topo.patches[i].area;  // its lobe's l0 (radiance)
+                out.surface(i).l0[c] = float(lobe.l0 + crossing);
+                out.surface(i).l1[c] =
+                    glm::vec3(lobe.l1 + 3.0 * crossingAnisotropy(optics.g) * crossing * glm::dvec3(solved[i].crossingAxis));
             }
-            // The crossing beams: the peaked lobe (its l0 a radiance).
-            const glm::dvec3 crossing = glm::dvec3(solved[i].crossing) / double(topo.patches[i].area);
-            if (crossing.x + crossing.y + crossing.z > 0.0)
-                out.surface(i).addPeak(crossing, crossingAnisotropy(optics.g), glm::dvec3(solved[i].crossingAxis));
         }
     });
     return out;
@@ -630,7 +631,6 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
                 out.surface(i).l0[c] = float(lobe.l0);
                 out.surface(i).l1[c] = glm::vec3(lobe.l1);
             }
-            out.surface(i).peak0 = out.surface(i).peak1 = glm::vec3(0.0f);  // the traced radiance holds all
             progress.report(double(++done) / surface.size());
         }
     });
