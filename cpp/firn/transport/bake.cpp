@@ -100,11 +100,22 @@ struct Channel {
     double beta() const { return std::sqrt((1.0 - omega) / (3.0 * (1.0 - omega * g))); }  // kappa D
 };
 
-// The source function in one voxel, per channel (W/m^2/sr): the lobe of mean l0 and first moment 4 pi l1 / 3
-// (source_lobe.h), as the grids store it.
+// The anisotropy of the peaked lobe a beam's light keeps where it scatters once or crosses the snow to a far
+// surface: the snow's g, within what a stored lobe holds.
+double crossingAnisotropy(double g) { return std::min(g, kMaxLobeAnisotropy); }
+
+// The source function in one voxel, per channel (W/m^2/sr), as the grids store it: the broad lobe of mean l0
+// and first moment 4 pi l1 / 3, and the peaked lobe of mean peak0 and grey first moment peak1 (source_lobe.h).
 struct Source {
     glm::vec3 l0{0.0f};
     glm::mat3 l1{0.0f};  // column c: the vector for channel c
+    glm::vec3 peak0{0.0f}, peak1{0.0f};
+
+    // Adds a peaked lobe of mean l0 per channel and anisotropy k about the unit axis m (where its light goes).
+    void addPeak(const glm::dvec3 &mean, double k, const glm::dvec3 &m) {
+        peak0 += glm::vec3(mean);
+        peak1 += glm::vec3(k * (mean.x + mean.y + mean.z) * m);  // 3 k m (the channels' mean)
+    }
 };
 
 // Voxels whose source function comes from Monte Carlo (snow too thin for the diffusion), not from the solve.
@@ -178,11 +189,19 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
         progress.throwIfCancelled();
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
             const SourceEstimate S = reference.sourceIn(voxels[v], samples, seed, v);
-            out.source[v].l0 = glm::vec3(S.l0);
-            out.source[v].l1 = glm::mat3(S.l1);
-            // |l1| <= l0, a lobe of k <= 1/3: one lobe holds a beam's single scattering (k = g) or the broad
-            // light around it, not both; measured on bench/bake_suite.py against k <= g (the exact moments,
-            // |F| <= phi): the thin g = 0.85 ball 16 % mean error against 26 %, the lumps 24 % either way.
+            // The direct beams' single scattering is the peaked lobe (k = g about the beams' mean direction,
+            // by moments), the light scattered more often the broad one.
+            out.source[v].l0 = glm::vec3(S.l0 - S.beamL0);
+            out.source[v].l1 = glm::mat3(S.l1 - S.beamL1);
+            const glm::dvec3 beamL1 = (S.beamL1[0] + S.beamL1[1] + S.beamL1[2]) / 3.0, peak = S.beamL0;
+            const double g = scene.medium->optics().g, peakMean = (peak.x + peak.y + peak.z) / 3.0;
+            if (peakMean > 0.0 && g > 0.0)
+                out.source[v].addPeak(peak, glm::length(beamL1) / (3.0 * g * peakMean) * crossingAnisotropy(g),
+                                      glm::normalize(beamL1));
+            else
+                out.source[v].peak0 = glm::vec3(peak);
+            // |l1| <= l0, a broad lobe of k <= 1/3 (measured on bench/bake_suite.py against the exact moments,
+            // k <= g, when one lobe held all: the thin g = 0.85 ball 16 % mean error against 26 %).
             for (int c = 0; c < 3; ++c) {
                 const float length = glm::length(out.source[v].l1[c]), most = std::max(out.source[v].l0[c], 0.0f);
                 if (length > most) out.source[v].l1[c] *= most / length;
@@ -425,7 +444,7 @@ struct SurfaceLight {
 };
 
 // The source function inside every unknown from the three channels' fluence: S = omega / (4 pi) (phi + 3 g
-// F . w) plus the beams, F = -D grad phi. After the solves (during them it would take 48 bytes per unknown).
+// F . w), F = -D grad phi, plus the beams scattered once (the peaked lobe). After the solves (during them it would take 48 bytes per unknown).
 std::vector<Source> insideSource(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
                                  const std::array<std::vector<double>, 3> &phi) {
     const Medium &medium = *scene.medium;
@@ -444,25 +463,21 @@ std::vector<Source> insideSource(const Scene &scene, const SnowTopology &topo, c
                     gradient[axis] = span ? (pHi - pLo) / (span * h) : 0.0;
                 }
                 const double D = 1.0 / (3.0 * ch.sigmaTr(topo.density[i]));
-                double j0 = phi[c][i];
-                glm::dvec3 j1 = -3.0 * ch.g * D * gradient;
+                out[i].l0[c] = ch.omega * kInvFourPi * phi[c][i];
+                out[i].l1[c] = ch.omega * kInvFourPi * -3.0 * ch.g * D * gradient;
+                if (c < 2) continue;
+                // The beams scattered once: the peaked lobe, all channels at once.
                 const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
                 for (std::size_t s = 0; s < light.beams.size(); ++s) {
-                    const double beam = light.beams[s].atVoxel[i][c];
-                    j0 += beam;
-                    if (beam > 0.0) j1 -= 3.0 * ch.g * beam * towardsBeam(scene, s, centre);
+                    const glm::dvec3 beam = glm::dvec3(light.beams[s].atVoxel[i]) * glm::dvec3(optics.albedo) * kInvFourPi;
+                    if (beam.x + beam.y + beam.z > 0.0)
+                        out[i].addPeak(beam, crossingAnisotropy(optics.g), -towardsBeam(scene, s, centre));
                 }
-                out[i].l0[c] = ch.omega * kInvFourPi * j0;
-                out[i].l1[c] = ch.omega * kInvFourPi * j1;
             }
         }
     });
     return out;
 }
-
-// The anisotropy of the lobe a beam leaves by where it crosses the snow to a far surface: the snow's g, within
-// what a stored lobe holds.
-double crossingAnisotropy(double g) { return std::min(g, kMaxLobeAnisotropy); }
 
 // Channel c's light leaving each surface voxel, from its solve.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
@@ -596,6 +611,9 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
                     topo.patches[i].sharp ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
                                           : exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
                                                      glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
+                // The crossing beams, added by their moments: light scattered forwards many times is broader
+                // than one scattering's peak (in the peaked lobe, k = g: ball_forward 17.6 % against 17.1 %, seen
+                // against the sun -29 % against -21 %; spray_lumps 20.1 % against 19.7 %; docs/bake.md).
                 const double crossing = solved[i].crossing[c] / topo.patches[i].area;  // its lobe's l0 (radiance)
                 out.surface(i).l0[c] = float(lobe.l0 + crossing);
                 out.surface(i).l1[c] =
@@ -619,6 +637,8 @@ std::vector<Source> composeSource(const SnowTopology &topo, std::vector<Source> 
             if (owner >= 0) {
                 out[i].l0 = w * surface[owner].l0 + (1.0f - w) * out[i].l0;
                 out[i].l1 = w * surface[owner].l1 + (1.0f - w) * out[i].l1;
+                out[i].peak0 = w * surface[owner].peak0 + (1.0f - w) * out[i].peak0;
+                out[i].peak1 = w * surface[owner].peak1 + (1.0f - w) * out[i].peak1;
             }
         }
     });
@@ -707,7 +727,7 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                    Source &S) {
     double total = 0.0;
     int count = 0;
-    glm::dvec3 l0(0.0);
+    glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0);
     glm::dmat3 l1(0.0);
     for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
@@ -716,6 +736,7 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 if (j < 0 || !topo.patches[j].isSurface()) continue;
                 const double w = std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
                 l0 += w * glm::dvec3(source[j].l0), l1 += w * glm::dmat3(source[j].l1);
+                peak0 += w * glm::dvec3(source[j].peak0), peak1 += w * glm::dvec3(source[j].peak1);
                 total += w, ++count;
             }
     if (count == 0) return false;
@@ -726,10 +747,12 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                     const std::int32_t j = index.getValue(c.offsetBy(dx, dy, dz));
                     if (j < 0 || !topo.patches[j].isSurface()) continue;
                     l0 += glm::dvec3(source[j].l0), l1 += glm::dmat3(source[j].l1), total += 1.0;
+                    peak0 += glm::dvec3(source[j].peak0), peak1 += glm::dvec3(source[j].peak1);
                 }
     }
     S.l0 = glm::vec3(l0 / total);
     S.l1 = glm::mat3(l1 / total);
+    S.peak0 = glm::vec3(peak0 / total), S.peak1 = glm::vec3(peak1 / total);
     return true;
 }
 
@@ -765,13 +788,16 @@ void placeValues(const LeafValues &values, openvdb::Int32Tree &at) {
     });
 }
 
-// Grid k of BakedGrids' value from a source function: l0, then l1's x, y and z (RGB).
+// Grid k of BakedGrids' value from a source function: l0, l1's x, y and z (RGB), then the peaked lobe's p0 and p1.
 openvdb::Vec3f sourceComponent(const Source &S, int k) {
-    return k == 0 ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z) : openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1]);
+    return k == 0   ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z)
+           : k <= 3 ? openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1])
+           : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
+                    : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
 }
 
-// What the four source grids hold, worked out once so that the grids can be written one at a time (a grid at
-// the density's resolution takes 12 bytes for every voxel of its leaves: the four took ~250 bytes per unknown on
+// What the source grids hold, worked out once so that the grids can be written one at a time (a grid at
+// the density's resolution takes 12 bytes for every voxel of its leaves: the four of one lobe took ~250 bytes per unknown on
 // the car sample, docs/bake.md Memory).
 // Over the snow's voxels and a margin of three: unknowns hold their source function. Outside them (the
 // density ramp and surface fringes) the radiance of the nearest surface voxels is carried out two voxels, so
@@ -805,9 +831,9 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
                     const openvdb::Coord n = c.offsetBy(dx, dy, dz);
                     if (!take(n)) continue;
                     const Source v = value(n);
-                    S.l0 += v.l0, S.l1 += v.l1, ++count;
+                    S.l0 += v.l0, S.l1 += v.l1, S.peak0 += v.peak0, S.peak1 += v.peak1, ++count;
                 }
-        if (count) S.l0 /= double(count), S.l1 /= double(count);
+        if (count) S.l0 /= double(count), S.l1 /= double(count), S.peak0 /= double(count), S.peak1 /= double(count);
         return count > 0;
     };
     // First: traced voxels, and the voxels next to surface voxels (unknowns hold their own source).
@@ -851,9 +877,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
                         const glm::dvec3 beam = glm::dvec3(beamAt(scene, b, centre, preset.sunSamples, settings.seed,
                                                                   std::uint64_t(l), marcher).irradiance) *
                                                 optics.albedo * kInvFourPi;
-                        const glm::dvec3 w = towardsBeam(scene, b, centre);
-                        S.l0 += beam;
-                        for (int ch = 0; ch < 3; ++ch) S.l1[ch] -= 3.0 * optics.g * beam[ch] * w;
+                        S.addPeak(beam, crossingAnisotropy(optics.g), -towardsBeam(scene, b, centre));
                     }
                 }
                 if (near || density.getValue(c) > 0.0f) perLeaf[l].emplace_back(it.pos(), S);
@@ -906,7 +930,7 @@ openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scal
     return grid;
 }
 
-// The four source grids at `scale` times the density's voxel size, one at a time: each grid at the density's
+// The source grids at `scale` times the density's voxel size, one at a time: each grid at the density's
 // resolution is coarsened and freed before the next is written.
 BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::vector<Source> &source,
                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
@@ -914,7 +938,7 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::ve
     values.at = nullptr;  // only BakedValuesSampler reads it
     BakedGrids out;
     openvdb::BoolTree::Ptr lit;  // fine voxels with a value (firn_source nonzero)
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < int(BakedGrids::kCount); ++k) {
         openvdb::Vec3fTree::Ptr tree = sourceTree(values, topo, source, traced, k);
         if (scale > 1) {
             if (k == 0) lit = litVoxels(*tree);
@@ -925,7 +949,7 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::ve
     return out;
 }
 
-// BakedGrids' four values at a point of the density's index space before the grids are written: read from the
+// BakedGrids' values at a point of the density's index space before the grids are written: read from the
 // unknowns' source and the values beyond them, trilinear as BoxSampler reads a grid (the same values, bit for
 // bit). One per thread.
 class BakedValuesSampler {
@@ -934,18 +958,18 @@ class BakedValuesSampler {
                        const GridValues &values)
         : source_(source), beyond_(*values.beyond), index_(*topo.index), traced_(*traced.index), at_(*values.at) {}
 
-    std::array<openvdb::Vec3f, 4> operator()(const openvdb::Vec3d &ijk) {
+    BakedGrids::Values operator()(const openvdb::Vec3d &ijk) {
         const openvdb::Vec3i lower = openvdb::tools::local_util::floorVec3(ijk);
         const openvdb::Vec3R uvw = ijk - lower;
-        openvdb::Vec3f corners[4][2][2][2];
+        openvdb::Vec3f corners[BakedGrids::kCount][2][2][2];
         for (int a = 0; a < 2; ++a)
             for (int b = 0; b < 2; ++b)
                 for (int c = 0; c < 2; ++c) {
                     const Source &S = valueAt(openvdb::Coord(lower.x() + a, lower.y() + b, lower.z() + c));
-                    for (int g = 0; g < 4; ++g) corners[g][a][b][c] = sourceComponent(S, g);
+                    for (int g = 0; g < int(BakedGrids::kCount); ++g) corners[g][a][b][c] = sourceComponent(S, g);
                 }
-        std::array<openvdb::Vec3f, 4> out;
-        for (int g = 0; g < 4; ++g) out[g] = openvdb::tools::BoxSampler::trilinearInterpolation(corners[g], uvw);
+        BakedGrids::Values out;
+        for (int g = 0; g < int(BakedGrids::kCount); ++g) out[g] = openvdb::tools::BoxSampler::trilinearInterpolation(corners[g], uvw);
         return out;
     }
 
@@ -1003,7 +1027,7 @@ int sourceScaleFor(const Medium &medium, const BakeSettings &settings) {
     const openvdb::Coord extent = medium.density().evalActiveVoxelBoundingBox().dim();
     const double boxVoxels = double(extent.x() + 6) * double(extent.y() + 6) * double(extent.z() + 6);  // + extension, ring
     int scale = 1;
-    while (scale < 4 && 4 * 16.0 * boxVoxels / (scale * scale * scale) > kSourceBudgetBytes) ++scale;
+    while (scale < 4 && BakedGrids::kCount * 16.0 * boxVoxels / (scale * scale * scale) > kSourceBudgetBytes) ++scale;
     return scale;
 }
 
