@@ -1007,6 +1007,7 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
             if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
             if (topo.size() > 0) {
                 const MultigridSolver solver(std::move(system.A), std::move(system.remainder));
+                releaseFreedMemory();  // what building the hierarchy freed, before CG's vectors
                 // Passes before the last only feed the gathering between surfaces: 0.1 % will do.
                 const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, 1e-3) : preset.tolerance;
                 const MultigridSolver::Result result = solver.solve(std::move(system.b), phi[c], tolerance, 500, sub);
