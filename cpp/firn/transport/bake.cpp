@@ -123,25 +123,34 @@ struct Source : BroadLobe {
     }
 };
 
-// The source function of every unknown, its peaked lobe held only where it is not zero: the beams' single
-// scattering lies beneath the shell that takes the surface's radiance (composeSource) and above where the snow
-// blocks the beams, 17 of the car sample's 2.7 M unknowns (24 bytes per unknown held for all).
-struct SourceValues {
+// Source functions' peaked lobes where they are not zero, by key (an unknown, a place among the grids' values):
+// the beams' single scattering lies beneath the shell that takes the surface's radiance (composeSource) and
+// above where the snow blocks the beams, 17 of the car sample's 2.7 M unknowns (24 bytes each held for all).
+struct PeakedLobes {
     struct Peak {
-        std::uint32_t unknown;
+        std::uint32_t key;
         glm::vec3 peak0, peak1;
     };
-    std::vector<BroadLobe> broad;  // per unknown
-    std::vector<Peak> peaked;      // in unknown order
+    std::vector<Peak> peaks;  // in key order
 
-    Source operator[](std::size_t i) const {
+    void add(std::size_t key, const Source &S) {  // keys in increasing order
+        if (S.peak0 != glm::vec3(0.0f) || S.peak1 != glm::vec3(0.0f)) peaks.push_back({std::uint32_t(key), S.peak0, S.peak1});
+    }
+    Source with(const BroadLobe &broad, std::size_t key) const {  // the source function of that broad lobe and key
         Source S;
-        static_cast<BroadLobe &>(S) = broad[i];
-        const auto it = std::lower_bound(peaked.begin(), peaked.end(), i,
-                                         [](const Peak &p, std::size_t unknown) { return p.unknown < unknown; });
-        if (it != peaked.end() && it->unknown == i) S.peak0 = it->peak0, S.peak1 = it->peak1;
+        static_cast<BroadLobe &>(S) = broad;
+        const auto it = std::lower_bound(peaks.begin(), peaks.end(), key, [](const Peak &p, std::size_t k) { return p.key < k; });
+        if (it != peaks.end() && it->key == key) S.peak0 = it->peak0, S.peak1 = it->peak1;
         return S;
     }
+};
+
+// The source function of every unknown.
+struct SourceValues {
+    std::vector<BroadLobe> broad;  // per unknown
+    PeakedLobes peaked;            // by unknown
+
+    Source operator[](std::size_t i) const { return peaked.with(broad[i], i); }
 };
 
 // Voxels whose source function comes from Monte Carlo (snow too thin for the diffusion), not from the solve.
@@ -678,7 +687,7 @@ SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const 
     constexpr std::size_t kBlock = 1024;
     SourceValues out;
     out.broad.resize(topo.size());
-    std::vector<std::vector<SourceValues::Peak>> peaked((topo.size() + kBlock - 1) / kBlock);
+    std::vector<PeakedLobes> peaked((topo.size() + kBlock - 1) / kBlock);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, peaked.size(), 1), [&](const auto &blocks) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
         std::vector<Source> values;
@@ -691,12 +700,12 @@ SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const 
                 Source &S = values[i - range.begin()];
                 if (const std::int32_t t = tracedIndex.getValue(topo.coord[i]); t >= 0) S = traced.source[t];
                 out.broad[i] = S;
-                if (S.peak0 != glm::vec3(0.0f) || S.peak1 != glm::vec3(0.0f))
-                    peaked[b].push_back({std::uint32_t(i), S.peak0, S.peak1});
+                peaked[b].add(i, S);
             }
         }
     });
-    for (const auto &block : peaked) out.peaked.insert(out.peaked.end(), block.begin(), block.end());
+    for (const PeakedLobes &block : peaked)
+        out.peaked.peaks.insert(out.peaked.peaks.end(), block.peaks.begin(), block.peaks.end());
     return out;
 }
 
@@ -805,23 +814,41 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
     return true;
 }
 
-using VoxelValue = std::pair<openvdb::Index, Source>;  // offset in its leaf, value
+using VoxelValue = std::pair<openvdb::Index, BroadLobe>;  // offset in its leaf, value
+
+// Source functions at voxels, in order: broad lobes, with the peaked lobes by place (PeakedLobes).
+struct VoxelValues {
+    std::vector<VoxelValue> values;
+    PeakedLobes peaked;
+
+    void add(openvdb::Index offset, const Source &S) {
+        peaked.add(values.size(), S);
+        values.emplace_back(offset, S);
+    }
+    void append(const VoxelValues &other, std::size_t begin, std::size_t end) {  // other's values [begin, end)
+        const auto it = std::lower_bound(other.peaked.peaks.begin(), other.peaked.peaks.end(), begin,
+                                         [](const PeakedLobes::Peak &p, std::size_t k) { return p.key < k; });
+        for (auto peak = it; peak != other.peaked.peaks.end() && peak->key < end; ++peak)
+            peaked.peaks.push_back({std::uint32_t(values.size() + peak->key - begin), peak->peak0, peak->peak1});
+        values.insert(values.end(), other.values.begin() + begin, other.values.begin() + end);
+    }
+    Source operator[](std::size_t k) const { return peaked.with(values[k].second, k); }
+};
 
 // Values by leaf of the grids' topology: leaf l's lie at [start[l], start[l + 1]).
-struct LeafValues {
-    std::vector<VoxelValue> values;
+struct LeafValues : VoxelValues {
     std::vector<std::size_t> start;
 
     explicit LeafValues(std::size_t leaves) : start(leaves + 1, 0) {}
     // Leaf by leaf, first's values and then `then`'s (consumed).
-    LeafValues(const LeafValues &first, std::vector<std::vector<VoxelValue>> &&then) : start{0} {
+    LeafValues(const LeafValues &first, std::vector<VoxelValues> &&then) : start{0} {
         std::size_t total = first.values.size();
-        for (const auto &leaf : then) total += leaf.size();
+        for (const auto &leaf : then) total += leaf.values.size();
         values.reserve(total);
         for (std::size_t l = 0; l < then.size(); ++l) {
-            values.insert(values.end(), first.values.begin() + first.start[l], first.values.begin() + first.start[l + 1]);
-            values.insert(values.end(), then[l].begin(), then[l].end());
-            then[l] = std::vector<VoxelValue>();  // (= {} would keep its capacity)
+            append(first, first.start[l], first.start[l + 1]);
+            append(then[l], 0, then[l].values.size());
+            then[l] = VoxelValues();  // (= {} would keep its capacity)
             start.push_back(values.size());
         }
     }
@@ -888,7 +915,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     out.topology = std::make_shared<openvdb::BoolTree>(medium.density().tree(), false, openvdb::TopologyCopy());
     openvdb::tools::dilateActiveValues(*out.topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
     openvdb::tree::LeafManager<const openvdb::BoolTree> leaves(*out.topology);
-    using Pairs = std::vector<std::vector<VoxelValue>>;
+    using Pairs = std::vector<VoxelValues>;
 
     // Average of the 26 neighbours accepted by `take`, read by `value`; false if none.
     auto average = [](const openvdb::Coord &c, const auto &take, const auto &value, Source &S) {
@@ -916,7 +943,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 Source S;
                 if (t >= 0) S = traced.source[t];
                 else if (index.getValue(c) >= 0 || !facingAverage(topo, c, index, source, S)) continue;
-                perLeaf[l].emplace_back(it.pos(), S);
+                perLeaf[l].add(it.pos(), S);
             }
     });
     const LeafValues carried(LeafValues(leaves.leafCount()), std::move(perLeaf));
@@ -938,7 +965,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 Source S;
                 const bool near = average(c, [&](const openvdb::Coord &n) {
                     return carriedSlot.getValue(n) >= 0 && (index.getValue(n) < 0 || tracedIndex.getValue(n) >= 0); },
-                                          [&](const openvdb::Coord &n) { return carried.values[carriedSlot.getValue(n)].second; },
+                                          [&](const openvdb::Coord &n) { return carried[carriedSlot.getValue(n)]; },
                                           S);
                 if (!near && density.getValue(c) > 0.0f) {
                     const glm::dvec3 centre = medium.voxelCentre(c);
@@ -949,7 +976,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                         S.addPeak(beam, crossingAnisotropy(optics.g), -towardsBeam(scene, b, centre));
                     }
                 }
-                if (near || density.getValue(c) > 0.0f) perLeaf[l].emplace_back(it.pos(), S);
+                if (near || density.getValue(c) > 0.0f) perLeaf[l].add(it.pos(), S);
             }
     });
     out.beyond.emplace(carried, std::move(perLeaf));
@@ -974,7 +1001,7 @@ openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology 
             }
             const LeafValues &beyond = *values.beyond;
             for (std::size_t m = beyond.start[l]; m < beyond.start[l + 1]; ++m)
-                leaf.setValueOnly(beyond.values[m].first, sourceComponent(beyond.values[m].second, k));
+                leaf.setValueOnly(beyond.values[m].first, sourceComponent(beyond[m], k));
         }
     });
     return tree;
@@ -1046,7 +1073,7 @@ class BakedValuesSampler {
     Source valueAt(const openvdb::Coord &c) {
         if (const std::int32_t i = index_.getValue(c); i >= 0 && traced_.getValue(c) < 0) return source_[i];
         const std::int32_t k = at_.getValue(c);
-        return k >= 0 ? beyond_.values[k].second : Source{};
+        return k >= 0 ? beyond_[k] : Source{};
     }
 
     const SourceValues &source_;
