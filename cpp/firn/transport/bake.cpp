@@ -125,7 +125,8 @@ struct Source : BroadLobe {
 
 // Source functions' peaked lobes where they are not zero, by key (an unknown, a place among the grids' values):
 // the beams' single scattering lies beneath the shell that takes the surface's radiance (composeSource) and
-// above where the snow blocks the beams, 17 of the car sample's 2.7 M unknowns (24 bytes each held for all).
+// above where the snow blocks the beams (17 of 2.7 M unknowns on the car sample's density; held for all, they
+// took 24 bytes per unknown while the source is gathered and written).
 struct PeakedLobes {
     struct Peak {
         std::uint32_t key;
