@@ -881,12 +881,15 @@ bool besideSnow(Medium::Accessor &density, const openvdb::Coord &c) {
     return false;
 }
 
-// Grid k of BakedGrids' value from a source function: l0, l1's x, y and z (RGB), then the peaked lobe's p0 and p1.
+// Grid k < 4 of BakedGrids' value from a broad lobe: l0, then l1's x, y and z (RGB).
+openvdb::Vec3f broadComponent(const BroadLobe &S, int k) {
+    return k == 0 ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z) : openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1]);
+}
+
+// Grid k of BakedGrids' value from a source function: the broad lobe's four, then the peaked lobe's p0 and p1.
 openvdb::Vec3f sourceComponent(const Source &S, int k) {
-    return k == 0   ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z)
-           : k <= 3 ? openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1])
-           : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
-                    : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
+    return k < 4 ? broadComponent(S, k) : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
+                                                 : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
 }
 
 // What the source grids hold, worked out once so that the grids can be written one at a time (a grid at
@@ -998,11 +1001,12 @@ openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology 
             for (auto it = leaf.beginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
                 if (const std::int32_t i = index.getValue(c); i >= 0 && tracedIndex.getValue(c) < 0)
-                    it.setValue(sourceComponent(source[i], k));
+                    it.setValue(k < 4 ? broadComponent(source.broad[i], k) : sourceComponent(source[i], k));
             }
             const LeafValues &beyond = *values.beyond;
             for (std::size_t m = beyond.start[l]; m < beyond.start[l + 1]; ++m)
-                leaf.setValueOnly(beyond.values[m].first, sourceComponent(beyond[m], k));
+                leaf.setValueOnly(beyond.values[m].first, k < 4 ? broadComponent(beyond.values[m].second, k)
+                                                                : sourceComponent(beyond[m], k));
         }
     });
     return tree;
