@@ -298,8 +298,11 @@ py::dict statsDict(const firn::BakeStats &stats) {
 void bindTransport(py::module_ &m) {
     bindLights(m);
     bindNishitaSky(m);
-    m.attr("BAKED_GRID_NAMES") = py::make_tuple(firn::BakedGrids::kNames[0], firn::BakedGrids::kNames[1],
-                                                firn::BakedGrids::kNames[2], firn::BakedGrids::kNames[3]);
+    {
+        py::tuple names(firn::BakedGrids::kCount);
+        for (std::size_t k = 0; k < firn::BakedGrids::kCount; ++k) names[k] = firn::BakedGrids::kNames[k];
+        m.attr("BAKED_GRID_NAMES") = names;
+    }
     m.attr("LOBE_MAX_ANISOTROPY") = firn::kMaxLobeAnisotropy;  // the baked lobe's largest k (source_lobe.h)
 
     m.def(

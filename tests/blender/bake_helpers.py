@@ -94,8 +94,8 @@ def volume_object(path, name="Snow", location=(0, 0, 0), rotation=(0, 0, 0)):
     return obj
 
 
-def uniform_source(s, s_x=(0, 0, 0), s_y=(0, 0, 0), s_z=(0, 0, 0)):
-    return dict(zip(materials.BAKED_GRIDS, (s, s_x, s_y, s_z)))
+def uniform_source(s, s_x=(0, 0, 0), s_y=(0, 0, 0), s_z=(0, 0, 0), peak=(0, 0, 0), peak_l1=(0, 0, 0)):
+    return dict(zip(materials.BAKED_GRIDS, (s, s_x, s_y, s_z, peak, peak_l1)))
 
 
 def black_world():

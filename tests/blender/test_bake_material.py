@@ -35,8 +35,8 @@ def test_baked_material_nodes(clean_scene, tmp_path):
     assert extinction.operation == "MULTIPLY" and extinction.inputs[1].default_value == pytest.approx(K)
     assert linked_from(extinction.inputs[0]).attribute_name == "density"
     assert linked_from(emission.inputs["Strength"]) == extinction
-    # Color = S(w), the contract's lobe: fed by the four grids and by Incoming turned into the object's frame.
-    assert linked_from(emission.inputs["Color"]) == nodes["Firn Lobe"]
+    # Color = S(w), the contract's two lobes: fed by the six grids and by Incoming turned into the object's frame.
+    assert linked_from(emission.inputs["Color"]) == nodes["Firn Lobes"]
     grids = {node.attribute_name for node in nodes if node.type == "ATTRIBUTE"} - {"density"}
     assert grids == set(materials.BAKED_GRIDS)
     unit = nodes["Firn Incoming Object"]
@@ -54,23 +54,41 @@ def lobe(l0, l1, w):
     return l0 * (1 - k * k) / (1 + k * k - 2 * k * cos) ** 1.5
 
 
+def peak(p0, p1, w):
+    """The contract's peaked lobe: p0 (1 - k²) / (1 + k² - 2 k cos)^1.5 per channel, one k = min(|p1| / (3 mean(p0)),
+    0.95) and cos = w . p1 / |p1| for all channels."""
+    p0, p1 = np.array(p0, float), np.array(p1, float)
+    length, mean = np.linalg.norm(p1), p0.mean()
+    k = min(length / (3 * mean), 0.95) if mean > 0 else 0.0
+    cos = p1 @ np.array(w, float) / length if length > 0 else 0.0
+    return p0 * (1 - k * k) / (1 + k * k - 2 * k * cos) ** 1.5
+
+
+def source_function(source, w):
+    """Both lobes of the grids' values in BAKED_GRIDS' order (the peaked one absent: zero)."""
+    source = tuple(source) + ((0.0, 0.0, 0.0),) * (6 - len(source))
+    return lobe(source[0], source[1:4], w) + peak(source[4], source[5], w)
+
+
 # A peaked source: green's lobe is clamped at k = 0.95, blue has none, red is moderate.
 PEAKED = ((0.2, 0.1, 0.4), (0.3, 0.0, 0.0), (0.1, 0.5, 0.0), (0.2, 0.5, 0.0))
+# Both lobes: the broad one above, and a peaked one of k 0.62 along (0.53, 0.27, -0.80).
+TWO_LOBES = PEAKED + ((0.3, 0.2, 0.1), (0.2, 0.1, -0.3))
 
 
 @pytest.mark.parametrize("towards_camera", [(0.0, 0.0, 1.0),
                                             (math.sin(math.radians(60)), 0.0, math.cos(math.radians(60))),
                                             (0.0, -math.sin(math.radians(45)), math.cos(math.radians(45)))])
-@pytest.mark.parametrize("source", [(S, S_X, S_Y, S_Z), PEAKED])
+@pytest.mark.parametrize("source", [(S, S_X, S_Y, S_Z), PEAKED, TWO_LOBES])
 def test_snow_renders_its_source_function(clean_scene, tmp_path, towards_camera, source):
-    """A thick slab of an absorbing, emitting medium renders exactly the lobe S(w) of its grids, w towards the
+    """A thick slab of an absorbing, emitting medium renders exactly the lobes S(w) of its grids, w towards the
     camera, with Cycles' default settings (step rate 1, volume bounces 0): 30 optical depths per step. The
-    core's renderer evaluates the same lobe (lobeRadiance, tests/cpp/transport/source_lobe_test.cpp); a real bake
+    core's renderer evaluates the same lobes (lobeRadiance, peakRadiance, tests/cpp/transport/source_lobe_test.cpp); a real bake
     rendered both ways: test_bake_end_to_end.py."""
     black_world()
     baked_slab(str(tmp_path), uniform_source(*source))
     ortho_camera((0, 0, 0), towards_camera, scale=0.05)
-    expected = lobe(source[0], source[1:], towards_camera)
+    expected = source_function(source, towards_camera)
     assert mean_pixel(render(str(tmp_path), size=(8, 8))) == pytest.approx(expected, rel=2e-3)  # measured 1e-6
 
 

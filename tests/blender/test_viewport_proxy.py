@@ -154,8 +154,10 @@ def test_proxy_shows_the_bake_until_it_is_cleared(clean_scene):
     mesh.attributes[preview.BAKED_ATTRIBUTE].data.foreach_get("color", colours)
     points = np.empty(len(mesh.vertices) * 3, np.float32)
     mesh.vertices.foreach_get("co", points)
-    # The proxy's vertices are in the grids' metres: its colours are firn_source there (vdb-contract.md).
-    expected = firncore.sample_color_grid(bpy.path.abspath(snow.data.filepath), "firn_source", points.reshape(-1, 3))
+    # The proxy's vertices are in the grids' metres: its colours are firn_source + firn_source_peak there.
+    path = bpy.path.abspath(snow.data.filepath)
+    expected = sum(firncore.sample_color_grid(path, name, points.reshape(-1, 3))
+                   for name in ("firn_source", "firn_source_peak"))
     assert np.allclose(colours.reshape(-1, 4)[:, :3], expected, rtol=1e-6, atol=1e-7)
     assert expected.mean() > 0.0  # a white sky lights the snow: its top glows
     assert bpy.ops.firn.clear_bake() == {"FINISHED"}

@@ -8,8 +8,9 @@ svm_node_principled_volume). Rendering it is brute-force volume path tracing: sl
 
 Baked (after Bake Scattering, docs/vdb-contract.md "Rendering baked snow"): no scattering at all. Volume
 Absorption with sigma_t = k × density (Color black: Cycles absorbs (1 - Color) × Density) plus Emission
-sigma_t × S(w), S(w) per channel the Henyey-Greenstein lobe of mean firn_source and first moment along
-(firn_source_x, firn_source_y, firn_source_z) (_view_dependent_source), w = Geometry > Incoming turned into the
+sigma_t × S(w), S(w) per channel two Henyey-Greenstein lobes: the broad one of mean firn_source and first moment
+along (firn_source_x, firn_source_y, firn_source_z), the peaked one of mean firn_source_peak and one axis and k for
+all channels from firn_source_peak_l1 (_view_dependent_source), w = Geometry > Incoming turned into the
 object's frame (the grids' space; identity for Firn snow). An absorbing, emitting
 volume renders its emission exactly in Cycles at any step size, and every ray sees it: camera rays (the snow's
 look) and the indirect rays of nearby surfaces (bounce light from the snow). The bake fixes the optics it was
@@ -36,10 +37,12 @@ _BAKED_TAG = "firn_baked"  # ... and those showing a bake
 _FORM_TAG = "firn_form"  # the form a material was built in: OPTICS, SINGLE, BAKED or OPAQUE, "+grains" with sub-balls
 _OPTICS_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Output")
 _BAKED_NODES = ("Firn Density", "Firn Extinction", "Firn Absorption", "Firn Emission", "Firn Source",
-                "Firn Source X", "Firn Source Y", "Firn Source Z", "Firn Incoming", "Firn Lobe", "Firn Output")
+                "Firn Source X", "Firn Source Y", "Firn Source Z", "Firn Incoming", "Firn Lobe", "Firn Source Peak",
+                "Firn Source Peak L1", "Firn Peak", "Firn Lobes", "Firn Output")
 _BRANCHES = ("", " Grains")  # the node names' suffixes: without and with sub-balls
 _SINGLE_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Absorption", "Firn Single", "Firn Output")
-BAKED_GRIDS = ("firn_source", "firn_source_x", "firn_source_y", "firn_source_z")  # docs/vdb-contract.md
+BAKED_GRIDS = ("firn_source", "firn_source_x", "firn_source_y", "firn_source_z", "firn_source_peak",
+               "firn_source_peak_l1")  # docs/vdb-contract.md
 
 
 def is_snow_material(material):
@@ -301,6 +304,20 @@ def _vector_math(nodes, links, name, operation, a, b=None, location=(0, 0)):
     return node.outputs["Vector"]
 
 
+def _math(nodes, links, name, operation, a, b=None, location=(0, 0)):
+    """A Math node on sockets or constant values; returns its Value output."""
+    node = _new_node(nodes, "ShaderNodeMath", name, "", location)
+    node.operation = operation
+    for socket, value in zip(node.inputs, (a, b)):
+        if value is None:
+            continue
+        if isinstance(value, float):
+            socket.default_value = value
+        else:
+            links.new(value, socket)
+    return node.outputs["Value"]
+
+
 def _per_channel_sqrt(nodes, links, name, vector, location):
     """sqrt of each of the three components (Vector Math has no square root)."""
     x, y = location
@@ -315,12 +332,55 @@ def _per_channel_sqrt(nodes, links, name, vector, location):
     return join.outputs["Vector"]
 
 
+def _peak_lobe(nodes, links, w):
+    """The peaked lobe (docs/vdb-contract.md): p0 = firn_source_peak (RGB), p1 = firn_source_peak_l1, one k and axis
+    for the three channels, k = min(|p1| / (3 mean(p0)), 0.95), S = p0 (1 - k²) / (1 + k² - 2 k cos)^1.5 with
+    k cos = k (p1 . w) / |p1| (Cycles' divisions give 0 for a zero divisor: k = 0 where p0 = 0 or p1 = 0)."""
+    p0 = _new_node(nodes, "ShaderNodeAttribute", "Firn Source Peak", "firn_source_peak", (-1800, -1800))
+    p0.attribute_type, p0.attribute_name = "GEOMETRY", "firn_source_peak"
+    p1 = _new_node(nodes, "ShaderNodeAttribute", "Firn Source Peak L1", "firn_source_peak_l1", (-1800, -2000))
+    p1.attribute_type, p1.attribute_name = "GEOMETRY", "firn_source_peak_l1"
+    mean = _new_node(nodes, "ShaderNodeVectorMath", "Firn Peak Three Mean", "3 mean(p0)", (-1600, -1800))
+    mean.operation = "DOT_PRODUCT"
+    links.new(p0.outputs["Vector"], mean.inputs[0])
+    mean.inputs[1].default_value = (1.0, 1.0, 1.0)
+    length = _new_node(nodes, "ShaderNodeVectorMath", "Firn Peak Length", "|p1|", (-1600, -2000))
+    length.operation = "LENGTH"
+    links.new(p1.outputs["Vector"], length.inputs[0])
+    along = _new_node(nodes, "ShaderNodeVectorMath", "Firn Peak Along", "p1 . w", (-1600, -2200))
+    along.operation = "DOT_PRODUCT"
+    links.new(p1.outputs["Vector"], along.inputs[0])
+    links.new(w, along.inputs[1])
+    ratio = _math(nodes, links, "Firn Peak Ratio", "DIVIDE", length.outputs["Value"], mean.outputs["Value"],
+                  (-1400, -1900))
+    k = _math(nodes, links, "Firn Peak k", "MINIMUM",
+              _math(nodes, links, "Firn Peak Positive", "MAXIMUM", ratio, 0.0, (-1200, -1900)),
+              float(firncore.LOBE_MAX_ANISOTROPY), (-1000, -1900))
+    k_cos = _math(nodes, links, "Firn Peak k cos", "DIVIDE",
+                  _math(nodes, links, "Firn Peak k p1 w", "MULTIPLY", k, along.outputs["Value"], (-800, -2100)),
+                  length.outputs["Value"], (-600, -2100))
+    k2 = _math(nodes, links, "Firn Peak k2", "MULTIPLY", k, k, (-800, -1900))
+    d = _math(nodes, links, "Firn Peak d", "SUBTRACT", _math(nodes, links, "Firn Peak 1 + k2", "ADD", 1.0, k2,
+                                                              (-600, -1900)),
+              _math(nodes, links, "Firn Peak 2 k cos", "MULTIPLY", k_cos, 2.0, (-400, -2100)), (-200, -1900))
+    d15 = _math(nodes, links, "Firn Peak d^1.5", "MULTIPLY", d,
+                _math(nodes, links, "Firn Peak Root", "SQRT", d, location=(0, -2100)), (200, -1900))
+    hg = _math(nodes, links, "Firn Peak Shape", "DIVIDE",
+               _math(nodes, links, "Firn Peak 1 - k2", "SUBTRACT", 1.0, k2, (0, -1800)), d15, (400, -1900))
+    peak = _new_node(nodes, "ShaderNodeVectorMath", "Firn Peak", "p0 × shape", (600, -1800))
+    peak.operation = "SCALE"
+    links.new(p0.outputs["Vector"], peak.inputs[0])
+    links.new(hg, peak.inputs["Scale"])
+    return peak.outputs["Vector"]
+
+
 def _view_dependent_source(nodes, links):
-    """S(w) per RGB channel, one Henyey-Greenstein lobe (docs/vdb-contract.md): l0 = firn_source, l1 = (firn_source_x,
-    firn_source_y, firn_source_z), k = min(|l1| / (3 l0), 0.95), S = l0 (1 - k²) / (1 + k² - 2 k cos)^1.5 with
-    k cos = k (l1 . w) / |l1|; w the direction towards the viewer in the grids' frame (World → Object, unit
-    length). The three channels are the components of the Vector Math nodes' vectors (element-wise operations;
-    Cycles' divisions give 0 for a zero divisor: k = 0 where l0 = 0 or l1 = 0)."""
+    """S(w) per RGB channel, two Henyey-Greenstein lobes (docs/vdb-contract.md). The broad one: l0 = firn_source,
+    l1 = (firn_source_x, firn_source_y, firn_source_z), k = min(|l1| / (3 l0), 0.95), S = l0 (1 - k²) /
+    (1 + k² - 2 k cos)^1.5 with k cos = k (l1 . w) / |l1|; w the direction towards the viewer in the grids' frame
+    (World → Object, unit length). The three channels are the components of the Vector Math nodes' vectors
+    (element-wise operations; Cycles' divisions give 0 for a zero divisor: k = 0 where l0 = 0 or l1 = 0). Plus the
+    peaked one (_peak_lobe)."""
     incoming = _new_node(nodes, "ShaderNodeNewGeometry", "Firn Incoming", "w (world)", (-2600, -300))
     to_object = _new_node(nodes, "ShaderNodeVectorTransform", "Firn Incoming Object", "w (object)", (-2400, -300))
     to_object.vector_type, to_object.convert_from, to_object.convert_to = "VECTOR", "WORLD", "OBJECT"
@@ -370,7 +430,9 @@ def _view_dependent_source(nodes, links):
               nodes["Firn Lobe d"].inputs[2])
     d15 = _vector_math(nodes, links, "Firn Lobe d^1.5", "MULTIPLY", d,
                        _per_channel_sqrt(nodes, links, "Firn Lobe Root", d, (400, -900)), (1000, -700))
-    return _vector_math(nodes, links, "Firn Lobe", "DIVIDE", numerator, d15, (1200, -600))
+    broad = _vector_math(nodes, links, "Firn Lobe", "DIVIDE", numerator, d15, (1200, -600))
+    return _vector_math(nodes, links, "Firn Lobes", "ADD", broad, _peak_lobe(nodes, links, unit.outputs["Vector"]),
+                        (1400, -600))
 
 
 def _baked(nodes, links, extinction, suffix, source):

@@ -5,11 +5,11 @@ material shows what the optics predict of the surface: the plane albedo of a sem
 diffuse light (the white-sky albedo, per RGB) as its colour, and subsurface scattering whose radius is the
 snow's transport mean free path 1 / sigma_t' (per RGB; Blender's radius is the medium's mean free path, and
 the similarity-scaled, isotropic medium has sigma_t' = sigma_t (1 - g)), so edges and thin snow glow as they do
-in the render. After Bake Scattering the proxy shows the bake instead: the baked source function's mean over directions
-`firn_source` (W/(m² sr), its lobe's l₀, vdb-contract.md; on a diffusely lit surface about the radiance seen 75°
-from its normal, half that seen along it), sampled at its vertices into the colour attribute BAKED_ATTRIBUTE,
-emitted as the surface's radiance (what Cycles renders of optically thick snow, seen from any side). No physics
-here: every number comes from firncore.
+in the render. After Bake Scattering the proxy shows the bake instead: the baked source function's mean over
+directions `firn_source` + `firn_source_peak` (W/(m² sr), its two lobes' means, vdb-contract.md; on a diffusely
+lit surface about the radiance seen 75° from its normal, half that seen along it), sampled at its vertices into
+the colour attribute BAKED_ATTRIBUTE, emitted as the surface's radiance (what Cycles renders of optically thick
+snow, seen from any side). No physics here: every number comes from firncore.
 
 The same material holds the proxy's face for Cycles (its own output, target CYCLES), used when the proxy renders
 (proxy.apply_render_surface): in render mode OPAQUE a diffuse surface of the white-sky albedo, else a transparent
@@ -25,7 +25,7 @@ _TAG = "firn_preview"  # ID property marking the proxy materials Firn manages
 _NODES = ("Firn Preview BSDF", "Firn Preview Output", "Firn Preview Baked", "Firn Preview Emission",
           "Firn Preview Shown", "Firn Render Mix", "Firn Render Output", "Firn Render Diffuse",
           "Firn Render Transparent", "Firn Glints", "Firn Glint Glossy")
-BAKED_ATTRIBUTE = "firn_baked"  # colour per proxy vertex: firn_source there
+BAKED_ATTRIBUTE = "firn_baked"  # colour per proxy vertex: firn_source + firn_source_peak there
 _FALLBACK_ALBEDO = (0.9, 0.9, 0.9)  # shown while the optics settings are invalid (the panel says why)
 
 

@@ -148,8 +148,12 @@ def vertex_positions(snow):
 
 
 def baked_colours(path, points):
-    """Any thread (no bpy): the baked source function firn_source of the file at `path`, at the proxy's vertices."""
-    return None if points is None else firncore.sample_color_grid(path, "firn_source", points)
+    """Any thread (no bpy): the baked source function's mean over directions at the proxy's vertices, the means of its
+    two lobes firn_source + firn_source_peak (docs/vdb-contract.md) in the file at `path`."""
+    if points is None:
+        return None
+    return (firncore.sample_color_grid(path, "firn_source", points)
+            + firncore.sample_color_grid(path, "firn_source_peak", points))
 
 
 def show_bake(snow, colours=None):

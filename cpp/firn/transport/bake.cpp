@@ -23,6 +23,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/edge_lobe.h"
 #include "firn/transport/half_space.h"
 #include "firn/transport/incident_light.h"
 #include "firn/transport/monte_carlo.h"
@@ -99,11 +100,22 @@ struct Channel {
     double beta() const { return std::sqrt((1.0 - omega) / (3.0 * (1.0 - omega * g))); }  // kappa D
 };
 
-// The source function in one voxel, per channel (W/m^2/sr): the lobe of mean l0 and first moment 4 pi l1 / 3
-// (source_lobe.h), as the grids store it.
+// The anisotropy of the peaked lobe a beam's light keeps where it scatters once or crosses the snow to a far
+// surface: the snow's g, within what a stored lobe holds.
+double crossingAnisotropy(double g) { return std::min(g, kMaxLobeAnisotropy); }
+
+// The source function in one voxel, per channel (W/m^2/sr), as the grids store it: the broad lobe of mean l0
+// and first moment 4 pi l1 / 3, and the peaked lobe of mean peak0 and grey first moment peak1 (source_lobe.h).
 struct Source {
     glm::vec3 l0{0.0f};
     glm::mat3 l1{0.0f};  // column c: the vector for channel c
+    glm::vec3 peak0{0.0f}, peak1{0.0f};
+
+    // Adds a peaked lobe of mean l0 per channel and anisotropy k about the unit axis m (where its light goes).
+    void addPeak(const glm::dvec3 &mean, double k, const glm::dvec3 &m) {
+        peak0 += glm::vec3(mean);
+        peak1 += glm::vec3(k * (mean.x + mean.y + mean.z) * m);  // 3 k m (the channels' mean)
+    }
 };
 
 // Voxels whose source function comes from Monte Carlo (snow too thin for the diffusion), not from the solve.
@@ -177,11 +189,19 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
         progress.throwIfCancelled();
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
             const SourceEstimate S = reference.sourceIn(voxels[v], samples, seed, v);
-            out.source[v].l0 = glm::vec3(S.l0);
-            out.source[v].l1 = glm::mat3(S.l1);
-            // |l1| <= l0, a lobe of k <= 1/3: one lobe holds a beam's single scattering (k = g) or the broad
-            // light around it, not both; measured on bench/bake_suite.py against k <= g (the exact moments,
-            // |F| <= phi): the thin g = 0.85 ball 16 % mean error against 26 %, the lumps 24 % either way.
+            // The direct beams' single scattering is the peaked lobe (k = g about the beams' mean direction,
+            // by moments), the light scattered more often the broad one.
+            out.source[v].l0 = glm::vec3(S.l0 - S.beamL0);
+            out.source[v].l1 = glm::mat3(S.l1 - S.beamL1);
+            const glm::dvec3 beamL1 = (S.beamL1[0] + S.beamL1[1] + S.beamL1[2]) / 3.0, peak = S.beamL0;
+            const double g = scene.medium->optics().g, peakMean = (peak.x + peak.y + peak.z) / 3.0;
+            if (peakMean > 0.0 && g > 0.0)
+                out.source[v].addPeak(peak, glm::length(beamL1) / (3.0 * g * peakMean) * crossingAnisotropy(g),
+                                      glm::normalize(beamL1));
+            else
+                out.source[v].peak0 = glm::vec3(peak);
+            // |l1| <= l0, a broad lobe of k <= 1/3 (measured on bench/bake_suite.py against the exact moments,
+            // k <= g, when one lobe held all: the thin g = 0.85 ball 16 % mean error against 26 %).
             for (int c = 0; c < 3; ++c) {
                 const float length = glm::length(out.source[v].l1[c]), most = std::max(out.source[v].l0[c], 0.0f);
                 if (length > most) out.source[v].l1[c] *= most / length;
@@ -313,7 +333,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     // A face on the patch's side counts with its projection on the smooth surface: a
                     // staircase has more face than the surface has area.
                     const double facing = glm::dot(patch.normal, faceNormal(f));
-                    if (facing > 0.0) area = h2 * facing;
+                    if (facing > 0.0 && !patch.sharp) area = h2 * facing;
                     const BoundaryLink &b = boundary[f].emplace(beta, 2.0, 3.0 * ch.sigmaTr(face.rampMass));
                     const double shareOfPatch = patch.area * patch.share[f];  // m^2
                     sys.outConductance.surface(i) += area * b.conductance();
@@ -347,10 +367,18 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 const double Bv = beam.atVoxel[i][c], Bs = beam.atSurface[i][c];  // W/m^2
                 if (Bv <= 0.0 && Bs <= 0.0) continue;
                 const glm::dvec3 w = towardsBeam(scene, s, centre);
-                // Through the surface patch (facing the light: in, else out) and through the voxel's other faces.
-                const double muPatch = glm::dot(patch.normal, w);
-                const double patchFlow = !patch.isSurface() ? 0.0 : muPatch * patch.area * (muPatch > 0.0 ? Bs : Bv);
-                double in = std::max(patchFlow, 0.0), out = std::max(-patchFlow, 0.0);
+                // Through the surface patch (facing the light: in, else out; at a sharp edge face by face) and
+                // through the voxel's other faces. Per air face: W entering, and the cosine it enters at.
+                std::array<double, 6> entering{}, muIn{};
+                double in = 0.0, out = 0.0;
+                for (int f = 0; f < 6 && patch.isSurface(); ++f) {
+                    if (patch.share[f] <= 0.0f) continue;
+                    const double mu = glm::dot(patch.sharp ? faceNormal(f) : patch.normal, w);
+                    const double flow = mu * patch.area * patch.share[f] * (mu > 0.0 ? Bs : Bv);
+                    (flow > 0.0 ? in : out) += std::abs(flow);
+                    if (flow > 0.0) entering[f] = flow, muIn[f] = mu;
+                }
+                const double patchIn = in;
                 std::array<double, 6> flow{};  // W through each link and occluder face, positive inwards
                 for (int f = 0; f < 6; ++f) {
                     const double mu = glm::dot(faceNormal(f), w);
@@ -369,15 +397,15 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 const double scattered = aPrime * std::max(0.0, in - out) / in;
                 for (int f = 0; f < 6; ++f)
                     if (flow[f] > 0.0) source += scattered * flow[f];
-                if (patchFlow <= 0.0) continue;
+                if (patchIn <= 0.0) continue;
                 // Into a surface voxel through its air faces: the beam scatters at mean resistance 3 mu
                 // (reduced depth mu below the surface), cut at the node; what scatters above the node
                 // partly escapes at once.
-                sys.sunIn[s].surface(i) += patchFlow;
+                sys.sunIn[s].surface(i) += patchIn;
                 for (int f = 0; f < 6; ++f) {
-                    if (!topo.isAirFace(i, f) || patch.share[f] <= 0.0f) continue;
-                    const double P = scattered * patchFlow * patch.share[f], L = boundary[f]->L;
-                    const double R = 3.0 * muPatch * (1.0 - std::exp(-L / (3.0 * muPatch)));
+                    if (entering[f] <= 0.0) continue;
+                    const double P = scattered * entering[f], L = boundary[f]->L;
+                    const double R = 3.0 * muIn[f] * (1.0 - std::exp(-L / (3.0 * muIn[f])));
                     source += boundary[f]->toNode(R) * P;
                     sys.escaped.surface(i) += boundary[f]->toBoundary(R) * P;
                 }
@@ -404,7 +432,8 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
 // times angular shape (W; radiance after dividing by pi A).
 struct SurfaceLight {
     // What returns of the light that entered there, over and above the escape function's share of it
-    // (sharp: it follows shadows) ...
+    // (sharp: it follows shadows; on a sharp edge, SurfacePatch::sharp, the voxel's exit lobe instead, its
+    // faces' light fitted already) ...
     Source returned;
     // ... the beams' light that crosses the snow and leaves through the patch on its far side: a lobe of
     // k = g (l0 in W per channel) about the mean of the beams' directions (per voxel; length <= 1) ...
@@ -415,7 +444,7 @@ struct SurfaceLight {
 };
 
 // The source function inside every unknown from the three channels' fluence: S = omega / (4 pi) (phi + 3 g
-// F . w) plus the beams, F = -D grad phi. After the solves (during them it would take 48 bytes per unknown).
+// F . w), F = -D grad phi, plus the beams scattered once (the peaked lobe). After the solves (during them it would take 48 bytes per unknown).
 std::vector<Source> insideSource(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
                                  const std::array<std::vector<double>, 3> &phi) {
     const Medium &medium = *scene.medium;
@@ -434,25 +463,21 @@ std::vector<Source> insideSource(const Scene &scene, const SnowTopology &topo, c
                     gradient[axis] = span ? (pHi - pLo) / (span * h) : 0.0;
                 }
                 const double D = 1.0 / (3.0 * ch.sigmaTr(topo.density[i]));
-                double j0 = phi[c][i];
-                glm::dvec3 j1 = -3.0 * ch.g * D * gradient;
+                out[i].l0[c] = ch.omega * kInvFourPi * phi[c][i];
+                out[i].l1[c] = ch.omega * kInvFourPi * -3.0 * ch.g * D * gradient;
+                if (c < 2) continue;
+                // The beams scattered once: the peaked lobe, all channels at once.
                 const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
                 for (std::size_t s = 0; s < light.beams.size(); ++s) {
-                    const double beam = light.beams[s].atVoxel[i][c];
-                    j0 += beam;
-                    if (beam > 0.0) j1 -= 3.0 * ch.g * beam * towardsBeam(scene, s, centre);
+                    const glm::dvec3 beam = glm::dvec3(light.beams[s].atVoxel[i]) * glm::dvec3(optics.albedo) * kInvFourPi;
+                    if (beam.x + beam.y + beam.z > 0.0)
+                        out[i].addPeak(beam, crossingAnisotropy(optics.g), -towardsBeam(scene, s, centre));
                 }
-                out[i].l0[c] = ch.omega * kInvFourPi * j0;
-                out[i].l1[c] = ch.omega * kInvFourPi * j1;
             }
         }
     });
     return out;
 }
-
-// The anisotropy of the lobe a beam leaves by where it crosses the snow to a far surface: the snow's g, within
-// what a stored lobe holds.
-double crossingAnisotropy(double g) { return std::min(g, kMaxLobeAnisotropy); }
 
 // Channel c's light leaving each surface voxel, from its solve.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
@@ -461,52 +486,96 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
     const double y = absorptionParameter(ch.omega, ch.g);
+    // Sun light that entered returns as a half-space of this snow returns it, with the sun lobe's albedo and
+    // shape; sky light isotropically (a non-absorbing half-space returns uniform sky light so; absorption takes
+    // the escape function's shape from it, by reciprocity with ART's plane albedo). What the diffusion says
+    // beyond that (absorbed sky light, light gone elsewhere, light from deep inside, from the ground or from
+    // neighbouring snow) takes the escape function's u(mu) = 3/7 + 6/7 mu. So: leaving = sum returned
+    // (shape - u) + out u. The returned part (W, moments of a linear form) through a surface of normal n
+    // taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's:
+    auto returnedThrough = [&](std::size_t i, const glm::dvec3 &n, double skyShare, const auto &beamShare) {
+        const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
+        const double sky = skyShare * sys.skyIn[i];
+        double r0 = sky * (1.0 - 3.0 / 7.0);
+        glm::dvec3 r1 = -sky * escape1;
+        for (std::size_t s = 0; s < light.beams.size(); ++s) {
+            const double P = sys.sunIn[s][i] * beamShare(s);
+            if (P <= 0.0) continue;
+            const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
+            const SunLobe lobe = sunLobe(ch.g, std::clamp(-glm::dot(d, n), 0.05, 1.0), y);
+            glm::dvec3 t = d - glm::dot(d, n) * n;
+            t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
+            const double returned = P * lobe.albedo;
+            r0 += returned * (lobe.a - 3.0 / 7.0);
+            r1 += returned * (lobe.b * n + lobe.c * t - escape1);
+        }
+        return std::pair{r0, r1};
+    };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
-
-            // Sun light that entered returns as a half-space of this snow returns it, with the sun lobe's
-            // albedo and shape; sky light isotropically (a non-absorbing half-space returns uniform sky light
-            // so; absorption takes the escape function's shape from it, by reciprocity with ART's plane
-            // albedo). What the diffusion says beyond that (absorbed sky light, light gone elsewhere, light
-            // from deep inside, from the ground or from neighbouring snow) takes the escape function's
-            // u(mu) = 3/7 + 6/7 mu. So: leaving = sum returned (shape - u) + out u.
             const SurfacePatch &patch = topo.patches[i];
-            const glm::dvec3 escape1 = 6.0 / 7.0 * patch.normal;
             const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
-            double r0 = sys.skyIn[i] * (1.0 - 3.0 / 7.0);
-            glm::dvec3 r1 = -double(sys.skyIn[i]) * escape1;
-            for (std::size_t s = 0; s < light.beams.size(); ++s) {
-                const double P = sys.sunIn[s][i];
-                if (P <= 0.0) continue;
-                const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
-                const SunLobe lobe = sunLobe(ch.g, std::clamp(-glm::dot(d, patch.normal), 0.05, 1.0), y);
-                glm::dvec3 t = d - glm::dot(d, patch.normal) * patch.normal;
-                t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
-                const double returned = P * lobe.albedo;
-                r0 += returned * (lobe.a - 3.0 / 7.0);
-                r1 += returned * (lobe.b * patch.normal + lobe.c * t - escape1);
-            }
+            const auto [r0, r1] = returnedThrough(i, patch.normal, 1.0, [](std::size_t) { return 1.0; });
             // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
-            // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)).
+            // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
+            // through the smooth surface or, at a sharp edge, through each air face.
             const double k = crossingAnisotropy(ch.g);
             double crossing = 0.0;
             glm::dvec3 axis(0.0);
             for (std::size_t s = 0; s < light.beams.size(); ++s) {
                 const double beam = light.beams[s].atVoxel[i][c];
                 const glm::dvec3 d = -towardsBeam(scene, s, centre);
-                const double cos = glm::dot(d, patch.normal);
-                if (beam <= 0.0 || cos <= 0.0) continue;
-                const double l0 = beam * cos * patch.area / (kPi * (1.0 + 3.0 * k * cos));
-                crossing += l0, axis += l0 * d;
+                for (int f = 0; f < 6 && beam > 0.0; ++f) {
+                    const double cos = glm::dot(d, patch.sharp ? faceNormal(f) : patch.normal);
+                    if (patch.share[f] <= 0.0f || cos <= 0.0) continue;
+                    const double l0 = beam * cos * patch.area * patch.share[f] / (kPi * (1.0 + 3.0 * k * cos));
+                    crossing += l0, axis += l0 * d;
+                }
             }
             SurfaceLight &surface = out.surface(i);
             surface.crossing[c] = float(crossing);
             if (crossing > 0.0) surface.crossingAxis = glm::vec3(axis / crossing);
-            surface.returned.l0[c] = r0;
-            surface.returned.l1[c] = r1;
+            surface.returned.l0[c] = float(r0);
+            surface.returned.l1[c] = glm::vec3(r1);
             surface.leaving[c] = float(leaving);
+        }
+    });
+    // Sharp edges: each air face's own exit radiance (the light returned through it, the exitance of the
+    // surface voxels facing its way, other edge voxels left out as in surfaceRadiance), and the one lobe
+    // fitted to what cameras see of them (edgeLobe).
+    const double h = medium.voxelSize();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        std::vector<FaceExit> faces;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const SurfacePatch &patch = topo.patches[i];
+            if (!patch.sharp) continue;
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+            faces.clear();
+            for (int f = 0; f < 6; ++f) {
+                if (patch.share[f] <= 0.0f) continue;
+                const glm::dvec3 n = faceNormal(f);
+                const auto [r0, r1] = returnedThrough(i, n, patch.share[f], [&](std::size_t s) {
+                    const glm::dvec3 w = towardsBeam(scene, s, centre);  // the beam entered each face by its cosine
+                    double total = 0.0;
+                    for (int g = 0; g < 6; ++g)
+                        if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
+                    return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
+                });
+                double leaving = 0.0, area = 0.0;
+                for (std::size_t m = topo.neighbourhoodStart[i]; m < topo.neighbourhoodStart[i + 1]; ++m) {
+                    const std::uint32_t j = topo.neighbourhood[m];
+                    const SurfacePatch &other = topo.patches[j];
+                    const double w = other.sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, other.normal));
+                    leaving += w * out[j].leaving[c], area += w * other.area;
+                }
+                const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
+                faces.push_back({n, r0 / own + exitance * (3.0 / 7.0 / kPi), r1 / own + exitance * 6.0 / 7.0 / kPi * n});
+            }
+            const SourceLobe lobe = edgeLobe(faces);
+            out.surface(i).returned.l0[c] = float(lobe.l0);
+            out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);
         }
     });
 }
@@ -515,7 +584,10 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
 // light leaving in the escape function's shape is averaged over the voxel's neighbourhood (surface voxels
 // of its 3^3 block facing the same way, weighted by the cosine between the normals, by area): a voxel
 // staircase spreads the diffusion's outflow unevenly between steps, though the light itself varies only
-// over a few transport mean free paths. The shape follows the voxel's own normal.
+// over a few transport mean free paths. The shape follows the voxel's own normal. Voxels on a sharp edge
+// are left out of their neighbours' averages: their outflow leaves through two or three faces at once (the
+// lit top's light spread down a shadowed side a voxel or two, bench/bake_suite.py box_sharp: 8.7 % mean
+// error with them, 5.4 % without).
 SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
                                       const SurfaceValues<SurfaceLight> &solved) {
     SurfaceValues<Source> out(topo.surfaceSlot, topo.surfaceVoxels());
@@ -527,7 +599,7 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
             double area = 0.0;
             for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
                 const std::uint32_t j = topo.neighbourhood[k];
-                const double w = std::max(0.0, glm::dot(n, topo.patches[j].normal));
+                const double w = topo.patches[j].sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, topo.patches[j].normal));
                 leaving += w * glm::dvec3(solved[j].leaving);
                 area += w * topo.patches[j].area;
             }
@@ -535,8 +607,13 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
             const double own = kPi * topo.patches[i].area;
             const Source &returned = solved[i].returned;
             for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
-                const SourceLobe lobe = exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
-                                                 glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
+                const SourceLobe lobe =
+                    topo.patches[i].sharp ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
+                                          : exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
+                                                     glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
+                // The crossing beams, added by their moments: light scattered forwards many times is broader
+                // than one scattering's peak (in the peaked lobe, k = g: ball_forward 17.6 % against 17.1 %, seen
+                // against the sun -29 % against -21 %; spray_lumps 20.1 % against 19.7 %; docs/bake.md).
                 const double crossing = solved[i].crossing[c] / topo.patches[i].area;  // its lobe's l0 (radiance)
                 out.surface(i).l0[c] = float(lobe.l0 + crossing);
                 out.surface(i).l1[c] =
@@ -560,6 +637,8 @@ std::vector<Source> composeSource(const SnowTopology &topo, std::vector<Source> 
             if (owner >= 0) {
                 out[i].l0 = w * surface[owner].l0 + (1.0f - w) * out[i].l0;
                 out[i].l1 = w * surface[owner].l1 + (1.0f - w) * out[i].l1;
+                out[i].peak0 = w * surface[owner].peak0 + (1.0f - w) * out[i].peak0;
+                out[i].peak1 = w * surface[owner].peak1 + (1.0f - w) * out[i].peak1;
             }
         }
     });
@@ -575,7 +654,8 @@ void takeTraced(const SnowTopology &topo, const MonteCarloVoxels &traced, std::v
 }
 
 // REFERENCE quality: the radiance leaving each surface voxel, path traced from 12 directions around
-// its normal, fitted by least squares with a linear form, stored as that form's fitted lobe.
+// its normal, fitted by least squares with a linear form, stored as that form's fitted lobe; on a sharp edge
+// from 12 directions around each air face's normal, stored as the lobe fitted to the faces' forms (edgeLobe).
 void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples, std::uint64_t seed,
                       SurfaceValues<Source> &out, const SubProgress &progress) {
     const MonteCarloReference reference(scene);
@@ -589,27 +669,50 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
             progress.throwIfCancelled();
             const std::size_t i = surface[k];
             const glm::dvec3 centre = scene.medium->voxelCentre(topo.coord[i]);
-            glm::dmat4 normal(0.0);
-            glm::dmat4x3 rhs(0.0);  // column m: basis function m against the three channels
-            int d = 0;
-            for (double mu : {0.95, 0.7, 0.35})
-                for (int a = 0; a < 4; ++a, ++d) {
-                    const glm::dvec3 w = directionAround(topo.patches[i].normal, mu, kPi * (0.5 * a + 0.25 * (mu < 0.5)));
-                    const Ray ray{centre + 3.0 * h * w, -w};
-                    const Rgb L = reference.estimate(ray, samples, seed, i * 12 + d).mean;
-                    const glm::dvec4 basis(1.0, w.x, w.y, w.z);
-                    normal += glm::outerProduct(basis, basis);
-                    for (int m = 0; m < 4; ++m) rhs[m] += basis[m] * L;
+            // The linear form e0 + e1 . w of each channel fitted to the radiance seen from 12 directions around n.
+            auto fitAround = [&](const glm::dvec3 &n, std::uint64_t stream) {
+                glm::dmat4 normal(0.0);
+                glm::dmat4x3 rhs(0.0);  // column m: basis function m against the three channels
+                int d = 0;
+                for (double mu : {0.95, 0.7, 0.35})
+                    for (int a = 0; a < 4; ++a, ++d) {
+                        const glm::dvec3 w = directionAround(n, mu, kPi * (0.5 * a + 0.25 * (mu < 0.5)));
+                        const Ray ray{centre + 3.0 * h * w, -w};
+                        const Rgb L = reference.estimate(ray, samples, seed, stream * 12 + d).mean;
+                        const glm::dvec4 basis(1.0, w.x, w.y, w.z);
+                        normal += glm::outerProduct(basis, basis);
+                        for (int m = 0; m < 4; ++m) rhs[m] += basis[m] * L;
+                    }
+                const glm::dmat4 inverse = glm::inverse(normal);
+                std::array<glm::dvec4, 3> out;
+                for (int c = 0; c < 3; ++c) {
+                    glm::dvec4 v;
+                    for (int m = 0; m < 4; ++m) v[m] = rhs[m][c];
+                    out[c] = inverse * v;
                 }
-            const glm::dmat4 inverse = glm::inverse(normal);
-            for (int c = 0; c < 3; ++c) {
-                glm::dvec4 v;
-                for (int m = 0; m < 4; ++m) v[m] = rhs[m][c];
-                const glm::dvec4 coefficients = inverse * v;
-                const SourceLobe lobe = exitLobe(coefficients[0], glm::dvec3(coefficients[1], coefficients[2], coefficients[3]),
-                                                 topo.patches[i].normal);
-                out.surface(i).l0[c] = float(lobe.l0);
-                out.surface(i).l1[c] = glm::vec3(lobe.l1);
+                return out;
+            };
+            const SurfacePatch &patch = topo.patches[i];
+            if (patch.sharp) {  // each air face's own form, then the lobe of what cameras see of them (edgeLobe)
+                std::array<std::vector<FaceExit>, 3> faces;
+                for (int f = 0; f < 6; ++f) {
+                    if (patch.share[f] <= 0.0f) continue;
+                    const auto form = fitAround(faceNormal(f), topo.size() + i * 6 + std::uint64_t(f));  // streams of its own
+                    for (int c = 0; c < 3; ++c)
+                        faces[c].push_back({faceNormal(f), form[c][0], glm::dvec3(form[c][1], form[c][2], form[c][3])});
+                }
+                for (int c = 0; c < 3; ++c) {
+                    const SourceLobe lobe = edgeLobe(faces[c]);
+                    out.surface(i).l0[c] = float(lobe.l0);
+                    out.surface(i).l1[c] = glm::vec3(lobe.l1);
+                }
+            } else {
+                const auto form = fitAround(patch.normal, i);
+                for (int c = 0; c < 3; ++c) {
+                    const SourceLobe lobe = exitLobe(form[c][0], glm::dvec3(form[c][1], form[c][2], form[c][3]), patch.normal);
+                    out.surface(i).l0[c] = float(lobe.l0);
+                    out.surface(i).l1[c] = glm::vec3(lobe.l1);
+                }
             }
             progress.report(double(++done) / surface.size());
         }
@@ -624,7 +727,7 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                    Source &S) {
     double total = 0.0;
     int count = 0;
-    glm::dvec3 l0(0.0);
+    glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0);
     glm::dmat3 l1(0.0);
     for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
@@ -633,6 +736,7 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 if (j < 0 || !topo.patches[j].isSurface()) continue;
                 const double w = std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
                 l0 += w * glm::dvec3(source[j].l0), l1 += w * glm::dmat3(source[j].l1);
+                peak0 += w * glm::dvec3(source[j].peak0), peak1 += w * glm::dvec3(source[j].peak1);
                 total += w, ++count;
             }
     if (count == 0) return false;
@@ -643,10 +747,12 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                     const std::int32_t j = index.getValue(c.offsetBy(dx, dy, dz));
                     if (j < 0 || !topo.patches[j].isSurface()) continue;
                     l0 += glm::dvec3(source[j].l0), l1 += glm::dmat3(source[j].l1), total += 1.0;
+                    peak0 += glm::dvec3(source[j].peak0), peak1 += glm::dvec3(source[j].peak1);
                 }
     }
     S.l0 = glm::vec3(l0 / total);
     S.l1 = glm::mat3(l1 / total);
+    S.peak0 = glm::vec3(peak0 / total), S.peak1 = glm::vec3(peak1 / total);
     return true;
 }
 
@@ -682,13 +788,16 @@ void placeValues(const LeafValues &values, openvdb::Int32Tree &at) {
     });
 }
 
-// Grid k of BakedGrids' value from a source function: l0, then l1's x, y and z (RGB).
+// Grid k of BakedGrids' value from a source function: l0, l1's x, y and z (RGB), then the peaked lobe's p0 and p1.
 openvdb::Vec3f sourceComponent(const Source &S, int k) {
-    return k == 0 ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z) : openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1]);
+    return k == 0   ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z)
+           : k <= 3 ? openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1])
+           : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
+                    : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
 }
 
-// What the four source grids hold, worked out once so that the grids can be written one at a time (a grid at
-// the density's resolution takes 12 bytes for every voxel of its leaves: the four took ~250 bytes per unknown on
+// What the source grids hold, worked out once so that the grids can be written one at a time (a grid at
+// the density's resolution takes 12 bytes for every voxel of its leaves: the four of one lobe took ~250 bytes per unknown on
 // the car sample, docs/bake.md Memory).
 // Over the snow's voxels and a margin of three: unknowns hold their source function. Outside them (the
 // density ramp and surface fringes) the radiance of the nearest surface voxels is carried out two voxels, so
@@ -722,9 +831,9 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
                     const openvdb::Coord n = c.offsetBy(dx, dy, dz);
                     if (!take(n)) continue;
                     const Source v = value(n);
-                    S.l0 += v.l0, S.l1 += v.l1, ++count;
+                    S.l0 += v.l0, S.l1 += v.l1, S.peak0 += v.peak0, S.peak1 += v.peak1, ++count;
                 }
-        if (count) S.l0 /= double(count), S.l1 /= double(count);
+        if (count) S.l0 /= double(count), S.l1 /= double(count), S.peak0 /= double(count), S.peak1 /= double(count);
         return count > 0;
     };
     // First: traced voxels, and the voxels next to surface voxels (unknowns hold their own source).
@@ -768,9 +877,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
                         const glm::dvec3 beam = glm::dvec3(beamAt(scene, b, centre, preset.sunSamples, settings.seed,
                                                                   std::uint64_t(l), marcher).irradiance) *
                                                 optics.albedo * kInvFourPi;
-                        const glm::dvec3 w = towardsBeam(scene, b, centre);
-                        S.l0 += beam;
-                        for (int ch = 0; ch < 3; ++ch) S.l1[ch] -= 3.0 * optics.g * beam[ch] * w;
+                        S.addPeak(beam, crossingAnisotropy(optics.g), -towardsBeam(scene, b, centre));
                     }
                 }
                 if (near || density.getValue(c) > 0.0f) perLeaf[l].emplace_back(it.pos(), S);
@@ -823,7 +930,7 @@ openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scal
     return grid;
 }
 
-// The four source grids at `scale` times the density's voxel size, one at a time: each grid at the density's
+// The source grids at `scale` times the density's voxel size, one at a time: each grid at the density's
 // resolution is coarsened and freed before the next is written.
 BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::vector<Source> &source,
                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
@@ -831,7 +938,7 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::ve
     values.at = nullptr;  // only BakedValuesSampler reads it
     BakedGrids out;
     openvdb::BoolTree::Ptr lit;  // fine voxels with a value (firn_source nonzero)
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < int(BakedGrids::kCount); ++k) {
         openvdb::Vec3fTree::Ptr tree = sourceTree(values, topo, source, traced, k);
         if (scale > 1) {
             if (k == 0) lit = litVoxels(*tree);
@@ -842,7 +949,7 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::ve
     return out;
 }
 
-// BakedGrids' four values at a point of the density's index space before the grids are written: read from the
+// BakedGrids' values at a point of the density's index space before the grids are written: read from the
 // unknowns' source and the values beyond them, trilinear as BoxSampler reads a grid (the same values, bit for
 // bit). The last cell's corners are kept: the gathering's half-voxel steps read each cell about twice. One per
 // thread.
@@ -852,20 +959,21 @@ class BakedValuesSampler {
                        const GridValues &values)
         : source_(source), beyond_(*values.beyond), index_(*topo.index), traced_(*traced.index), at_(*values.at) {}
 
-    std::array<openvdb::Vec3f, 4> operator()(const openvdb::Vec3d &ijk) {
+    BakedGrids::Values operator()(const openvdb::Vec3d &ijk) {
         const openvdb::Coord lower = floorCoord(ijk);
         if (!cached_ || lower != cell_) {
             for (int a = 0; a < 2; ++a)
                 for (int b = 0; b < 2; ++b)
                     for (int c = 0; c < 2; ++c) {
                         const Source &S = valueAt(lower.offsetBy(a, b, c));
-                        for (int g = 0; g < 4; ++g) corners_[g][a][b][c] = sourceComponent(S, g);
+                        for (int g = 0; g < int(BakedGrids::kCount); ++g) corners_[g][a][b][c] = sourceComponent(S, g);
                     }
             cell_ = lower, cached_ = true;
         }
         const openvdb::Vec3R uvw = ijk - lower.asVec3d();
-        std::array<openvdb::Vec3f, 4> out;
-        for (int g = 0; g < 4; ++g) out[g] = openvdb::tools::BoxSampler::trilinearInterpolation(corners_[g], uvw);
+        BakedGrids::Values out;
+        for (int g = 0; g < int(BakedGrids::kCount); ++g)
+            out[g] = openvdb::tools::BoxSampler::trilinearInterpolation(corners_[g], uvw);
         return out;
     }
 
@@ -882,7 +990,7 @@ class BakedValuesSampler {
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_, traced_, at_;
     bool cached_ = false;
     openvdb::Coord cell_;  // the cell whose corners corners_ holds
-    openvdb::Vec3f corners_[4][2][2][2];
+    openvdb::Vec3f corners_[BakedGrids::kCount][2][2][2];
 };
 
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
@@ -925,7 +1033,7 @@ int sourceScaleFor(const Medium &medium, const BakeSettings &settings) {
     const openvdb::Coord extent = medium.density().evalActiveVoxelBoundingBox().dim();
     const double boxVoxels = double(extent.x() + 6) * double(extent.y() + 6) * double(extent.z() + 6);  // + extension, ring
     int scale = 1;
-    while (scale < 4 && 4 * 16.0 * boxVoxels / (scale * scale * scale) > kSourceBudgetBytes) ++scale;
+    while (scale < 4 && BakedGrids::kCount * 16.0 * boxVoxels / (scale * scale * scale) > kSourceBudgetBytes) ++scale;
     return scale;
 }
 

@@ -29,7 +29,7 @@ struct BakeSettings {
     int sourceScale = 0;
 };
 
-// What Cycles (dense volume textures, no NanoVDB) may allocate for the four source grids: 16 bytes per voxel
+// What Cycles (dense volume textures, no NanoVDB) may allocate for the six source grids: 16 bytes per voxel
 // of their bounding box each.
 constexpr double kSourceBudgetBytes = 512.0 * 1024 * 1024;
 

@@ -13,7 +13,7 @@
 
 namespace firn {
 
-openvdb::GridPtrVec BakedGrids::grids() const { return {source[0], source[1], source[2], source[3]}; }
+openvdb::GridPtrVec BakedGrids::grids() const { return openvdb::GridPtrVec(source.begin(), source.end()); }
 
 BakedGrids BakedGrids::find(const openvdb::GridPtrVec &grids) {
     BakedGrids out;
@@ -84,13 +84,13 @@ openvdb::Vec3fTree::Ptr coarsenedSource(const openvdb::Vec3fTree &fine, const op
 
 SourceGridsSampler::SourceGridsSampler(const Medium &medium, const BakedGrids &baked)
     : source_{Reader(baked.source[0]->tree()), Reader(baked.source[1]->tree()), Reader(baked.source[2]->tree()),
-              Reader(baked.source[3]->tree())},
+              Reader(baked.source[3]->tree()), Reader(baked.source[4]->tree()), Reader(baked.source[5]->tree())},
       sourceIndexPerDensityIndex_(medium.voxelSize() / baked.source[0]->voxelSize()[0]) {}
 
-std::array<openvdb::Vec3f, 4> SourceGridsSampler::operator()(const openvdb::Vec3d &ijk) {
+BakedGrids::Values SourceGridsSampler::operator()(const openvdb::Vec3d &ijk) {
     const openvdb::Vec3d at = ijk * sourceIndexPerDensityIndex_;
-    std::array<openvdb::Vec3f, 4> out;
-    for (int g = 0; g < 4; ++g) out[g] = openvdb::tools::BoxSampler::sample(source_[g], at);
+    BakedGrids::Values out;
+    for (std::size_t g = 0; g < out.size(); ++g) out[g] = openvdb::tools::BoxSampler::sample(source_[g], at);
     return out;
 }
 

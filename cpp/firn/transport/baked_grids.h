@@ -17,17 +17,20 @@ namespace firn {
 
 // The bake's output, written beside `density` in the snow's VDB (contract: docs/vdb-contract.md).
 // The snow's source function S, the radiance it scatters towards w per unit extinction (W/m^2/sr, RGB), per
-// channel one Henyey-Greenstein lobe of mean l0 = source and first moment 4 pi l1 / 3, l1 = (source_x,
-// source_y, source_z) (lobeRadiance, source_lobe.h), w the world direction towards the viewer (Cycles'
+// channel two Henyey-Greenstein lobes: a broad one of mean l0 = source and first moment 4 pi l1 / 3, l1 =
+// (source_x, source_y, source_z) (lobeRadiance, source_lobe.h), and a peaked one of mean p0 = source_peak and
+// grey first moment p1 = source_peak_l1 (peakRadiance), w the world direction towards the viewer (Cycles'
 // Geometry > Incoming). Rendered with absorption sigma_t = k density and emission sigma_t S(w), it gives the
 // snow's scattered radiance.
 struct BakedGrids {
-    static constexpr std::array<const char *, 4> kNames{"firn_source", "firn_source_x", "firn_source_y",
-                                                        "firn_source_z"};
-    std::array<openvdb::Vec3fGrid::Ptr, 4> source;  // in kNames' order
+    static constexpr std::array<const char *, 6> kNames{"firn_source",   "firn_source_x",    "firn_source_y",
+                                                        "firn_source_z", "firn_source_peak", "firn_source_peak_l1"};
+    static constexpr std::size_t kCount = kNames.size();
+    using Values = std::array<openvdb::Vec3f, kCount>;  // the grids' values at a point, in kNames' order
+    std::array<openvdb::Vec3fGrid::Ptr, kCount> source;  // in kNames' order
 
     openvdb::GridPtrVec grids() const;
-    // Picks the four grids out of a file's grids by name. Throws InvalidArgument if one is missing.
+    // Picks the six grids out of a file's grids by name. Throws InvalidArgument if one is missing.
     static BakedGrids find(const openvdb::GridPtrVec &grids);
 };
 
@@ -44,7 +47,7 @@ openvdb::BoolTree::Ptr litVoxels(const openvdb::Vec3fTree &source);
 
 // Integrates the baked emission along a ray as the renderer does: the radiance the baked snow sends back along
 // it (towards its origin) from t = 0 to tMax (m), in steps of at most `step` voxels with the exact exponential of
-// each step. sourceAt(ijk) gives the four grids' values (BakedGrids' order) at a point of the density's index
+// each step. sourceAt(ijk) gives the grids' values (BakedGrids::Values) at a point of the density's index
 // space: SourceGridsSampler, or the bake's own values before it writes its grids.
 template <typename SourceAt>
 Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, SourceAt &sourceAt, const Ray &ray,
@@ -56,10 +59,13 @@ Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Sourc
     marcher.march(ray.origin, ray.direction, tMax, step, [&](const openvdb::Vec3d &ijk, double dt) {
         const double sigmaT = k * marcher.densityAt(ijk);
         if (sigmaT <= 0.0) return true;
-        const std::array<openvdb::Vec3f, 4> source = sourceAt(ijk);  // l0, then l1 per axis, RGB
+        const BakedGrids::Values source = sourceAt(ijk);  // l0, l1 per axis, p0 (RGB), then p1
+        const glm::dvec3 p1(source[5][0], source[5][1], source[5][2]);
+        const double p0Mean = (double(source[4][0]) + source[4][1] + source[4][2]) / 3.0;
         Rgb S;
         for (int c = 0; c < 3; ++c)
-            S[c] = lobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]), w);
+            S[c] = lobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]), w) +
+                   peakRadiance(source[4][c], p0Mean, p1, w);
         const double opacity = 1.0 - std::exp(-sigmaT * dt);
         radiance += transmittance * opacity * S;
         transmittance *= 1.0 - opacity;
@@ -68,15 +74,15 @@ Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Sourc
     return radiance;
 }
 
-// The four source grids' values at a point, trilinear as the renderer reads them; one per thread.
+// The source grids' values at a point, trilinear as the renderer reads them; one per thread.
 class SourceGridsSampler {
   public:
     SourceGridsSampler(const Medium &medium, const BakedGrids &baked);
-    std::array<openvdb::Vec3f, 4> operator()(const openvdb::Vec3d &ijk);  // ijk: the density's index space
+    BakedGrids::Values operator()(const openvdb::Vec3d &ijk);  // ijk: the density's index space
 
   private:
     using Reader = openvdb::tree::ValueAccessor<const openvdb::Vec3fTree>;
-    std::array<Reader, 4> source_;
+    std::array<Reader, BakedGrids::kCount> source_;
     double sourceIndexPerDensityIndex_;  // the source grids may be coarser than the density
 };
 

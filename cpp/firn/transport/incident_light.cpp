@@ -246,7 +246,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             Medium::ColumnMarcher marcher(medium);
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
-                if (topo.patches[i].isSurface() && glm::dot(topo.patches[i].normal, towardsBeam(scene, b, centre)) > 0.0) {
+                if (topo.patches[i].isSurface() && topo.patches[i].facesTowards(towardsBeam(scene, b, centre))) {
                     // Snow in the way from outside the density ramp; occluders' shadow on the surface itself
                     // (half a voxel out), so shadow edges fall where they do on the snow.
                     const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;

@@ -83,7 +83,9 @@ class PathTracer {
     // All light arriving at p, one sample: radiance from one direction drawn uniformly over the sphere and
     // each light's direct beam. Adds to the fluence phi (W/m^2) and the flux (column c: channel c's
     // vector, W/m^2 along the direction light travels).
-    void sampleArriving(const glm::dvec3 &p, Rng &rng, Rgb &phi, glm::dmat3 &flux) {
+    // Fluence and flux arriving at p: from one drawn direction (all orders, scattered light only) plus the
+    // lights' direct beams (phiBeam, fluxBeam).
+    void sampleArriving(const glm::dvec3 &p, Rng &rng, Rgb &phi, glm::dmat3 &flux, Rgb &phiBeam, glm::dmat3 &fluxBeam) {
         const glm::dvec3 d = sampleUniformCone(glm::dvec3(0.0, 0.0, 1.0), -1.0, rng.uniform(), rng.uniform());
         const Rgb L = 4.0 * kPi * sample(Ray{p, d}, rng, true);
         phi += L;
@@ -91,8 +93,8 @@ class PathTracer {
         for (std::size_t b = 0; b < lightCount(); ++b) {
             glm::dvec3 w;
             const Rgb E = lightIrradiance(b, p, 0.0, w, rng);
-            phi += E;
-            for (int c = 0; c < 3; ++c) flux[c] -= E[c] * w;
+            phiBeam += E;
+            for (int c = 0; c < 3; ++c) fluxBeam[c] -= E[c] * w;
         }
     }
 
@@ -211,17 +213,18 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     const glm::dvec3 centre = medium.voxelCentre(voxel);
     // Points spread over the voxel, each weighted by its extinction: the renderer draws sigma_t S, so the
     // voxel's S is the extinction-weighted mean of the light's (the fluence falls steeply in thick voxels).
-    Rgb phi(0.0);
-    glm::dmat3 flux(0.0);
+    Rgb phi(0.0), phiBeam(0.0);
+    glm::dmat3 flux(0.0), fluxBeam(0.0);
     double weights = 0.0;
     for (int s = 0; s < samples; ++s) {
         const glm::dvec3 p = centre + medium.voxelSize() * (glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5);
         const double w = tracer.sigmaT(p);
         if (w <= 0.0) continue;
-        Rgb samplePhi(0.0);
-        glm::dmat3 sampleFlux(0.0);
-        tracer.sampleArriving(p, rng, samplePhi, sampleFlux);
+        Rgb samplePhi(0.0), sampleBeam(0.0);
+        glm::dmat3 sampleFlux(0.0), sampleBeamFlux(0.0);
+        tracer.sampleArriving(p, rng, samplePhi, sampleFlux, sampleBeam, sampleBeamFlux);
         phi += w * samplePhi, flux += w * sampleFlux, weights += w;
+        phiBeam += w * sampleBeam, fluxBeam += w * sampleBeamFlux;
     }
     SourceEstimate out;
     out.collisions = tracer.collisions;
@@ -229,8 +232,10 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     const VolumeOptics &optics = medium.optics();
     for (int c = 0; c < 3; ++c) {
         const double scale = optics.albedo[c] * kInvFourPi / weights;
-        out.l0[c] = scale * phi[c];
-        out.l1[c] = 3.0 * optics.g * scale * flux[c];
+        out.beamL0[c] = scale * phiBeam[c];
+        out.beamL1[c] = 3.0 * optics.g * scale * fluxBeam[c];
+        out.l0[c] = scale * phi[c] + out.beamL0[c];
+        out.l1[c] = 3.0 * optics.g * scale * flux[c] + out.beamL1[c];
     }
     return out;
 }

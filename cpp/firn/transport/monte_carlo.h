@@ -18,11 +18,13 @@ struct Ray {
     glm::dvec3 direction;  // unit
 };
 
-// The source function a voxel's snow scatters, S(w) = l0 + l1 . w per channel (w: the direction the
-// light leaves; l1 column c is channel c's vector), W/m^2/sr: the baked grids' form.
+// The moments of the source function a voxel's snow scatters, per channel: mean l0 and first moment 4 pi l1 / 3
+// (w: the direction the light leaves; l1 column c is channel c's vector), W/m^2/sr: the baked grids' form.
 struct SourceEstimate {
     Rgb l0{0.0};
     glm::dmat3 l1{0.0};
+    Rgb beamL0{0.0};         // of which the suns' and lamps' direct beams scattered once
+    glm::dmat3 beamL1{0.0};  // (the baked grids' peaked lobe)
     long collisions = 0;  // real collisions of all its paths: what the estimate cost
 };
 
@@ -53,7 +55,7 @@ class MonteCarloReference {
     // The source function in one voxel, from `samples` points spread over it (weighted by extinction, as
     // the renderer's emission is), each gathering the light arriving from one uniformly drawn direction,
     // all orders, and every light's direct beam: omega / (4 pi) (phi + 3 g F . w), the Henyey-Greenstein
-    // phase function to first order in w, with the exact fluence phi and flux F.
+    // phase function to first order in w, with the exact fluence phi and flux F; the direct beams' share apart.
     SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream) const;
 
     const Scene &scene() const { return scene_; }

@@ -60,6 +60,30 @@ std::unique_ptr<std::atomic<bool>[]> leavesNearOccluders(const Medium &medium, c
     return near;
 }
 
+// Whether face f goes on flat past voxel i for `voxels` voxels inwards from its face g (each has f in air).
+bool flatPast(const SnowTopology &topo, std::size_t i, int f, int g, int voxels) {
+    for (int k = 0; k < voxels; ++k) {
+        const std::int32_t next = topo.link[i][g ^ 1];
+        if (next < 0 || !topo.isAirFace(std::size_t(next), f)) return false;
+        i = std::size_t(next);
+    }
+    return true;
+}
+
+// Whether voxel i lies on a sharp edge or corner: two of its air faces at right angles, each going on flat
+// for two voxels past the edge. Measured on bench/bake_suite.py: with one voxel, 30 % of a 5-voxel ball's
+// surface voxels and the lumps' counted as edges (a voxel staircase makes such corners) and the lumps' bias
+// went from -1 % to -11 %; with two, only the 5-voxel ball keeps a few (its flat caps), and a box and a
+// slab keep all their edges.
+bool onSharpEdge(const SnowTopology &topo, std::size_t i) {
+    for (int f = 0; f < 6; ++f)
+        for (int g = f + 1; g < 6; ++g)
+            if (f / 2 != g / 2 && topo.isAirFace(i, f) && topo.isAirFace(i, g) && flatPast(topo, i, f, g, 2) &&
+                flatPast(topo, i, g, f, 2))
+                return true;
+    return false;
+}
+
 // Outward normal from the density gradient (a 3x3x3 Sobel stencil), or from the air faces where the
 // gradient is flat or points the wrong way.
 void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
@@ -94,6 +118,13 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
             SurfacePatch &patch = topo.patches.surface(i);
             patch.normal = glm::length(n) > 0.0 ? glm::normalize(n) : glm::dvec3(0.0, 0.0, 1.0);
+            patch.sharp = onSharpEdge(topo, i);
+            if (patch.sharp) {
+                for (int f = 0; f < 6; ++f)
+                    if (topo.isAirFace(i, f)) patch.share[f] = 1.0f / float(airFaces);
+                patch.area = h * h * airFaces;
+                continue;
+            }
             double projected = 0.0;
             for (int f = 0; f < 6; ++f)
                 if (topo.isAirFace(i, f)) projected += std::max(0.0, glm::dot(patch.normal, faceNormal(f)));

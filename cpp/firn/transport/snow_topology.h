@@ -5,6 +5,7 @@
 #include <memory>
 #include <vector>
 
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 #include <openvdb/openvdb.h>
 
@@ -41,11 +42,23 @@ struct BoundaryFace {
 // The smooth surface through a surface voxel (one with air faces): outward normal from the density
 // gradient, and the area of that surface inside the voxel (its air faces projected onto it, m^2).
 // Light enters and leaves the snow through these patches rather than through the voxels' staircase.
+// A voxel on a sharp edge or corner between flat faces (a box's, a layer's cut side) is `sharp`: no smooth
+// surface passes through it, and light enters and leaves through each of its air faces on its own (area:
+// the faces', share: equal).
 struct SurfacePatch {
     glm::dvec3 normal{0.0, 0.0, 1.0};
     double area = 0.0;  // 0 for voxels inside the snow
     std::array<float, 6> share{};  // of the patch's light crossing each air face (sums to 1)
+    bool sharp = false;
     bool isSurface() const { return area > 0.0; }
+    // Whether light travelling against w enters the snow here: through the smooth surface, or at a sharp
+    // edge through any of its air faces.
+    bool facesTowards(const glm::dvec3 &w) const {
+        if (!sharp) return glm::dot(normal, w) > 0.0;
+        for (int f = 0; f < 6; ++f)
+            if (share[f] > 0.0f && glm::dot(faceNormal(f), w) > 0.0) return true;
+        return false;
+    }
 };
 
 // Values that only surface voxels have (their patch, the light arriving on it from outside), stored for them

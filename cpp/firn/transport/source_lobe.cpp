@@ -28,6 +28,10 @@ double lobeRadiance(double l0, const glm::dvec3 &l1, const glm::dvec3 &w) {
     return l0 * lobe(std::min(length / (3.0 * l0), kMaxLobeAnisotropy), glm::dot(w, l1) / length);
 }
 
+double peakRadiance(double p0, double p0Mean, const glm::dvec3 &p1, const glm::dvec3 &w) {
+    return p0Mean > 0.0 ? p0 / p0Mean * lobeRadiance(p0Mean, p1, w) : 0.0;
+}
+
 namespace {
 
 // The fitted lobe of a normalized exit radiance L(w) = max(0, (1 - t) + t m . w) on the hemisphere around z,

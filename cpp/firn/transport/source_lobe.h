@@ -14,6 +14,14 @@ namespace firn {
 constexpr double kMaxLobeAnisotropy = 0.95;  // firncore.LOBE_MAX_ANISOTROPY: the add-on's material clamps k with it
 double lobeRadiance(double l0, const glm::dvec3 &l1, const glm::dvec3 &w);
 
+// The second, peaked lobe of the source function (docs/vdb-contract.md): the light that keeps a beam's
+// direction (single scattering of the suns' and lamps' beams, beams crossing the snow to a far surface), beside
+// the broad lobe above, which one lobe cannot hold together with it. Per channel its mean p0 (firn_source_peak),
+// for all channels one axis and k from the grey first moment p1 = 3 k m mean(p0) (firn_source_peak_l1):
+//   S_peak(w) = p0 / mean(p0) lobeRadiance(mean(p0), p1, w)   (0 where mean(p0) <= 0),
+// mean(p0) = (p0.r + p0.g + p0.b) / 3. Moments sum: peaks along different axes add to one of smaller k.
+double peakRadiance(double p0, double p0Mean, const glm::dvec3 &p1, const glm::dvec3 &w);
+
 // What the grids store for a lobe of mean l0 and anisotropy k about the unit axis m: l1 = 3 k l0 m.
 struct SourceLobe {
     double l0 = 0.0;

@@ -51,6 +51,22 @@ TEST(SourceLobe, IsSingleScatteringOfABeam) {
     EXPECT_DOUBLE_EQ(lobeRadiance(0.0, d, d), 0.0);              // no light
 }
 
+TEST(SourceLobe, PeakedLobeIsEachChannelsSingleScatteringOfABeam) {
+    // A beam of colour (1, 0.5, 0.2) scattered once along d: each channel's S(w) = p0_c 4 pi HG(g, w . d), stored
+    // as p0 per channel and one grey moment p1 = 3 g d mean(p0) (vdb-contract.md).
+    const double g = 0.7;
+    const glm::dvec3 p0(1.0, 0.5, 0.2), d = glm::normalize(glm::dvec3(-1.0, 0.5, 2.0));
+    const double mean = (p0.x + p0.y + p0.z) / 3.0;
+    for (double c : {-1.0, 0.0, 0.7, 1.0}) {
+        const glm::dvec3 w = c * d + std::sqrt(1.0 - c * c) * glm::normalize(glm::cross(d, glm::dvec3(0.0, 1.0, 0.0)));
+        const double hg = (1.0 - g * g) / std::pow(1.0 + g * g - 2.0 * g * c, 1.5);  // 4 pi HG
+        for (int ch = 0; ch < 3; ++ch)
+            EXPECT_NEAR(peakRadiance(p0[ch], mean, 3.0 * g * mean * d, w), p0[ch] * hg, 1e-9 * hg) << c << " " << ch;
+    }
+    EXPECT_DOUBLE_EQ(peakRadiance(0.5, mean, glm::dvec3(0.0), d), 0.5);  // no moment: isotropic
+    EXPECT_DOUBLE_EQ(peakRadiance(0.0, 0.0, d, d), 0.0);                 // no light
+}
+
 TEST(SourceLobe, SurfaceLobeKeepsTheExitanceAndTheShape) {
     const glm::dvec3 n(0.0, 0.0, 1.0);
     // An isotropic exit radiance stays isotropic.

@@ -1,0 +1,89 @@
+#include "firn/transport/edge_lobe.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include <glm/geometric.hpp>
+
+#include "firn/util/sampling.h"
+
+namespace firn {
+
+namespace {
+
+constexpr int kDirections = 128, kCoarseSteps = 10, kFineSteps = 4;
+
+// Directions spread evenly over the sphere (a Fibonacci lattice): equal solid angle each.
+const std::array<glm::dvec3, kDirections> &sphereDirections() {
+    static const auto directions = [] {
+        std::array<glm::dvec3, kDirections> out;
+        const double golden = kPi * (3.0 - std::sqrt(5.0));
+        for (int i = 0; i < kDirections; ++i) {
+            const double z = 1.0 - (2.0 * i + 1.0) / kDirections, r = std::sqrt(1.0 - z * z);
+            out[i] = glm::dvec3(r * std::cos(golden * i), r * std::sin(golden * i), z);
+        }
+        return out;
+    }();
+    return directions;
+}
+
+}  // namespace
+
+SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
+    struct Node {
+        double cos, T, weight;  // to the lobe's axis; the mix seen towards w; the faces' projected area seen from w
+    };
+    std::array<Node, kDirections> nodes;
+    std::array<glm::dvec3, kDirections> directions;
+    int count = 0;
+    double flux = 0.0, most = 0.0, seen = 0.0;  // flux: the linear forms', negative parts included (their energy)
+    glm::dvec3 moment(0.0);
+    for (const glm::dvec3 &w : sphereDirections()) {
+        double weight = 0.0, mixed = 0.0;
+        for (const FaceExit &face : faces) {
+            const double c = glm::dot(face.normal, w);
+            if (c <= 0.0) continue;
+            const double L = face.e0 + glm::dot(face.e1, w);
+            weight += c, mixed += c * std::max(0.0, L), flux += c * L;
+        }
+        if (weight <= 0.0) continue;
+        directions[count] = w, nodes[count++] = {0.0, mixed / weight, weight};
+        most = std::max(most, mixed / weight), seen += weight, moment += mixed * w;
+    }
+    if (flux <= 0.0 || most <= 0.0) return {};
+    glm::dvec3 axis = moment;
+    for (const FaceExit &face : faces) axis += 1e-9 * most * face.normal;  // where T is even: out of the edge
+    axis = glm::normalize(axis);
+    for (int n = 0; n < count; ++n) nodes[n].cos = glm::dot(axis, directions[n]);
+    // Relative error, its denominator floored (at a tenth of the mean) where T nears zero. For the lobe of mean 1,
+    // L_k, scaled to keep the flux (l0 = flux / sum w L_k), the error is l0^2 sum w L_k^2 / D - 2 l0 sum w L_k T / D
+    // + sum w T^2 / D, D = T^2 + floor^2: one pass over the nodes per k.
+    const double floor2 = 0.01 * (flux / seen) * (flux / seen);
+    auto fit = [&](double k) {
+        double lobeFlux = 0.0, lobe2 = 0.0, lobeT = 0.0, T2 = 0.0;
+        for (int n = 0; n < count; ++n) {
+            const Node &node = nodes[n];
+            const double d = 1.0 + k * k - 2.0 * k * node.cos, L = (1.0 - k * k) / (d * std::sqrt(d));  // 4 pi HG
+            const double w = node.weight / (node.T * node.T + floor2);
+            lobeFlux += node.weight * L, lobe2 += w * L * L, lobeT += w * L * node.T, T2 += w * node.T * node.T;
+        }
+        const double l0 = flux / lobeFlux;
+        return std::pair{l0 > most ? std::numeric_limits<double>::infinity() : l0 * l0 * lobe2 - 2.0 * l0 * lobeT + T2, l0};
+    };
+    // k on a coarse grid, then finer around the best.
+    double bestK = 0.0, least = std::numeric_limits<double>::infinity(), l0 = 0.0;
+    auto consider = [&](double k) {
+        const auto [error, scale] = fit(k);
+        if (error < least) least = error, bestK = k, l0 = scale;
+    };
+    const double coarse = kMaxLobeAnisotropy / kCoarseSteps;
+    for (int step = 0; step <= kCoarseSteps; ++step) consider(coarse * step);
+    const double around = bestK;
+    for (int step = -kFineSteps; step <= kFineSteps; ++step)
+        consider(std::clamp(around + coarse * step / (kFineSteps + 1), 0.0, kMaxLobeAnisotropy));
+    return {l0, 3.0 * bestK * l0 * axis};
+}
+
+}  // namespace firn
