@@ -322,17 +322,18 @@ void bindTransport(py::module_ &m) {
             OccluderArrays blockers = occludersFrom(occluders);
             firn::BakeStats stats;
             longCall([&] {
-                openvdb::GridPtrVec grids = firn::readGrids(path);
-                // An earlier bake's grids are replaced: not held through this one (the car: 50 bytes per voxel).
-                grids.erase(std::remove_if(grids.begin(), grids.end(),
-                                           [](const openvdb::GridBase::Ptr &grid) {
-                                               return std::find(firn::BakedGrids::kNames.begin(),
-                                                                firn::BakedGrids::kNames.end(),
-                                                                grid->getName()) != firn::BakedGrids::kNames.end();
-                                           }),
-                            grids.end());
-                const firn::Scene scene = sceneFrom(grids, path, optics, suns, lamps, sky, std::move(blockers));
+                // The bake holds the density alone: the file's other grids are read when it is written back (the
+                // car's surface grid: 14 bytes per voxel), and an earlier bake's grids are replaced, never read.
+                const openvdb::GridBase::Ptr density = firn::readGrid(path, "density");
+                const firn::Scene scene = sceneFrom(density ? openvdb::GridPtrVec{density} : openvdb::GridPtrVec{}, path,
+                                                    optics, suns, lamps, sky, std::move(blockers));
                 const firn::BakedGrids baked = firn::bakeScattering(scene, settings, progress.get(), &stats);
+                openvdb::GridPtrVec grids;
+                for (const std::string &name : firn::gridNames(path))
+                    if (name == "density") grids.push_back(density);
+                    else if (std::find(firn::BakedGrids::kNames.begin(), firn::BakedGrids::kNames.end(), name) ==
+                             firn::BakedGrids::kNames.end())
+                        grids.push_back(firn::readGrid(path, name));
                 for (const auto &grid : baked.grids()) grids.push_back(grid);
                 firn::writeGrids(outputPath.value_or(path), grids);
             });

@@ -299,7 +299,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     const std::size_t n = topo.size();
     ChannelSystem sys(topo, light.beams.size());
     sys.A.coord = topo.coord;
-    sys.A.neighbour.resize(n), sys.A.conductance.resize(n), sys.A.diag.resize(n), sys.remainder.resize(n);
+    // The topology's links, not a copy: the topology outlives the solver (an aliasing pointer owning nothing).
+    sys.A.neighbour = std::shared_ptr<const Stencil<float>::Neighbours>(std::shared_ptr<void>(), &topo.link);
+    sys.A.conductance.resize(n), sys.A.diag.resize(n), sys.remainder.resize(n);
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         progress.throwIfCancelled();
@@ -314,10 +316,8 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             std::array<double, 6> conductance{};  // to the neighbours
             for (int f = 0; f < 6; ++f) {
                 const std::int32_t link = topo.link[i][f];
-                sys.A.neighbour[i][f] = StencilOperator::kNone;
                 if (!SnowTopology::isFace(link)) {
                     const Link L = interiorLink(beta, 1.5 * h * (sigmaTr + ch.sigmaTr(topo.density[link])));
-                    sys.A.neighbour[i][f] = std::uint32_t(link);
                     conductance[f] = h2 * L.conductance;
                     diag += h2 * L.conductance;
                     mass[f] = h2 * L.halfMass;
@@ -417,7 +417,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             const double sky = light.skyOnSurface[i][c];
             for (int f = 0; f < 6; ++f) sys.A.conductance[i][f] = float(conductance[f]);
             sys.A.diag[i] = float(diag);
-            sys.remainder[i] = float(rowRemainder(diag, conductance, sys.A.neighbour[i]));
+            sys.remainder[i] = float(rowRemainder(diag, conductance, topo.link[i]));
             sys.b[i] = source + sky * sys.skyToNode[i];
             if (!patch.isSurface()) continue;
             sys.escaped.surface(i) += sky * sys.skyReturned[i];
@@ -778,14 +778,30 @@ struct LeafValues {
     }
 };
 
-// at: the topology's voxels -> their place in `values`.
-void placeValues(const LeafValues &values, openvdb::Int32Tree &at) {
-    openvdb::tree::LeafManager<openvdb::Int32Tree> leaves(at);
+// at: the voxels with values -> their place in `values` (by leaf of `leaves`), with leaves only where values are
+// (over all the grids' leaves it took 17 bytes per unknown on the car).
+void placeValues(const LeafValues &values, const openvdb::tree::LeafManager<const openvdb::BoolTree> &leaves,
+                 openvdb::Int32Tree &at) {
+    for (std::size_t l = 0; l < leaves.leafCount(); ++l)
+        if (values.start[l] < values.start[l + 1]) at.touchLeaf(leaves.leaf(l).origin());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
-        for (std::size_t l = range.begin(); l != range.end(); ++l)
+        for (std::size_t l = range.begin(); l != range.end(); ++l) {
+            if (values.start[l] == values.start[l + 1]) continue;
+            openvdb::Int32Tree::LeafNodeType &leaf = *at.probeLeaf(leaves.leaf(l).origin());
             for (std::size_t k = values.start[l]; k < values.start[l + 1]; ++k)
-                leaves.leaf(l).setValueOnly(values.values[k].first, std::int32_t(k));
+                leaf.setValueOnly(values.values[k].first, std::int32_t(k));
+        }
     });
+}
+
+// Whether voxel c is a corner of a cell where the trilinear density can be non-zero: elsewhere the gathering
+// reads no value (bakedRadianceAlong skips samples without snow).
+bool besideSnow(Medium::Accessor &density, const openvdb::Coord &c) {
+    for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dz = -1; dz <= 1; ++dz)
+                if (density.getValue(c.offsetBy(dx, dy, dz)) > 0.0f) return true;
+    return false;
 }
 
 // Grid k of BakedGrids' value from a source function: l0, l1's x, y and z (RGB), then the peaked lobe's p0 and p1.
@@ -812,8 +828,11 @@ struct GridValues {
     openvdb::Int32Tree::Ptr at;  // voxel -> its place in beyond, -1 elsewhere
 };
 
+// gathering: the values the gathering reads alone (those beside snow, besideSnow: the grids carry the surface's
+// radiance two voxels out, the gathering needs one).
 GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::vector<Source> &source,
-                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings) {
+                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
+                      bool gathering) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     GridValues out;
@@ -852,8 +871,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
             }
     });
     const LeafValues carried(LeafValues(leaves.leafCount()), std::move(perLeaf));
-    out.at = std::make_shared<openvdb::Int32Tree>(*out.topology, -1, openvdb::TopologyCopy());
-    placeValues(carried, *out.at);
+    out.at = std::make_shared<openvdb::Int32Tree>(-1);
+    placeValues(carried, leaves, *out.at);
     // Then: one voxel further out, and thin snow on its own.
     perLeaf = Pairs(leaves.leafCount());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
@@ -866,6 +885,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
                 if (index.getValue(c) >= 0 || carriedSlot.getValue(c) >= 0) continue;
+                if (gathering && !besideSnow(density, c)) continue;
                 Source S;
                 const bool near = average(c, [&](const openvdb::Coord &n) {
                     return carriedSlot.getValue(n) >= 0 && (index.getValue(n) < 0 || tracedIndex.getValue(n) >= 0); },
@@ -884,7 +904,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
             }
     });
     out.beyond.emplace(carried, std::move(perLeaf));
-    placeValues(*out.beyond, *out.at);
+    placeValues(*out.beyond, leaves, *out.at);
     return out;
 }
 
@@ -934,7 +954,7 @@ openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scal
 // resolution is coarsened and freed before the next is written.
 BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::vector<Source> &source,
                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
-    GridValues values = gridValues(scene, topo, source, traced, preset, settings);
+    GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
     values.at = nullptr;  // only BakedValuesSampler reads it
     BakedGrids out;
     openvdb::BoolTree::Ptr lit;  // fine voxels with a value (firn_source nonzero)
@@ -1050,6 +1070,17 @@ void releaseFreedMemory() {
 #endif
 }
 
+// The grids read the topology's index and surface patches alone (gridValues, sourceTree): the rest (links,
+// coordinates, densities, faces, neighbourhoods and shell) is freed before they are written. size() is 0 after.
+void keepIndexAndPatches(SnowTopology &topo) {
+    SnowTopology kept;
+    kept.index = std::move(topo.index);
+    kept.surfaceSlot = std::move(topo.surfaceSlot);
+    kept.patches = std::move(topo.patches);
+    topo = std::move(kept);
+    releaseFreedMemory();
+}
+
 // Progress when the diffusion solves are done (REFERENCE: before path tracing the surface).
 constexpr double kSolvedProgress = 0.9, kSolvedProgressReference = 0.5;
 
@@ -1072,7 +1103,7 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
             // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
             p.report(begin, "Gathering light between snow surfaces");
             {
-                const GridValues values = gridValues(scene, topo, source, traced, preset, settings);
+                const GridValues values = gridValues(scene, topo, source, traced, preset, settings, true);
                 fromSnow = snowIrradiance(scene, topo, light, source, traced, values, SkyRays(preset.skySamples),
                                           settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
                 source = std::vector<Source>();  // freed (= {} would keep its capacity)
@@ -1089,6 +1120,7 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
             if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
             if (topo.size() > 0) {
                 const MultigridSolver solver(std::move(system.A), std::move(system.remainder));
+                releaseFreedMemory();  // what building the hierarchy freed, before CG's vectors
                 // Passes before the last only feed the gathering between surfaces: 0.1 % will do.
                 const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, 1e-3) : preset.tolerance;
                 const MultigridSolver::Result result = solver.solve(std::move(system.b), phi[c], tolerance, 500, sub);
@@ -1122,7 +1154,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     BakeStats local;
     Stopwatch clock(local);
     p.report(0.0, "Finding the snow's voxels");
-    const SnowTopology topo =
+    SnowTopology topo =
         buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05), sourceScale);
     releaseFreedMemory();  // the topology's intermediate lists
     clock.lap(&BakeStats::Phases::topology);
@@ -1148,6 +1180,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     clock.lap(&BakeStats::Phases::trace);
     const std::vector<Source> source = solveSources(scene, topo, light, traced, preset, settings, passes, p, clock, local);
     light = IncidentLight{};  // the grids need it no more
+    keepIndexAndPatches(topo);
     p.report(reference ? 0.95 : kSolvedProgress, "Writing the grids");
     BakedGrids grids = makeGrids(scene, topo, source, traced, preset, settings, sourceScale);
     local.sourceScale = sourceScale;

@@ -2,19 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include "firn/util/error.h"
 
 namespace firn {
 
 namespace {
-
-using Matrix = openvdb::math::pcg::SparseStencilMatrix<double, 7>;
-using PcgVector = openvdb::math::pcg::Vector<double>;
 
 constexpr std::size_t kDenseLimit = 512;  // rows solved directly at the bottom of the hierarchy
 constexpr int kSweeps = 2;                // red-black Gauss-Seidel sweeps before and after the coarse solve
@@ -31,13 +30,17 @@ void parallelRows(std::size_t n, const Body &body) {
 }  // namespace
 
 template <typename T>
+T Stencil<T>::row(std::size_t i, const T *x) const {
+    const std::array<std::int32_t, 6> &N = (*neighbour)[i];
+    T sum = diag[i] * x[i];
+    for (int k = 0; k < 6; ++k)
+        if (N[k] >= 0) sum -= conductance[i][k] * x[N[k]];
+    return sum;
+}
+
+template <typename T>
 void Stencil<T>::apply(const T *x, T *y) const {
-    parallelRows(size(), [&](std::size_t i) {
-        T sum = diag[i] * x[i];
-        for (int k = 0; k < 6; ++k)
-            if (neighbour[i][k] != kNone) sum -= conductance[i][k] * x[neighbour[i][k]];
-        y[i] = sum;
-    });
+    parallelRows(size(), [&](std::size_t i) { y[i] = row(i, x); });
 }
 template struct Stencil<double>;
 template struct Stencil<float>;
@@ -46,9 +49,8 @@ struct MultigridSolver::Hierarchy {
     struct Level {
         Stencil<float> A;
         std::vector<std::uint32_t> rowsByColour[2];  // voxel parity (i + j + k) & 1
-        std::vector<std::uint32_t> aggregate;        // row -> row of the next level
         std::vector<std::uint32_t> membersStart, members;  // next level's rows -> rows here (CSR)
-        mutable std::vector<float> b, x, r;
+        mutable std::vector<float> b, x;
     };
     std::vector<Level> levels;
     std::vector<double> cholesky;  // lower factor of the bottom level, dense row-major
@@ -56,14 +58,14 @@ struct MultigridSolver::Hierarchy {
 
     void sweep(const Level &level, int colour) const {
         const Stencil<float> &A = level.A;
+        const Stencil<float>::Neighbours &N = *A.neighbour;
         const auto &rows = level.rowsByColour[colour];
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size(), 4096), [&](const auto &range) {
             for (std::size_t n = range.begin(); n != range.end(); ++n) {
                 const std::uint32_t i = rows[n];
                 float sum = level.b[i];
                 for (int k = 0; k < 6; ++k)
-                    if (A.neighbour[i][k] != StencilOperator::kNone)
-                        sum += A.conductance[i][k] * level.x[A.neighbour[i][k]];
+                    if (N[i][k] >= 0) sum += A.conductance[i][k] * level.x[N[i][k]];
                 level.x[i] = sum / A.diag[i];
             }
         });
@@ -96,16 +98,20 @@ struct MultigridSolver::Hierarchy {
             return;
         }
         for (int s = 0; s < kSweeps; ++s) sweep(level, 0), sweep(level, 1);
-        level.A.apply(level.x.data(), level.r.data());
         const Level &coarse = levels[l + 1];
+        // The residual b - A x restricted to the blocks and the correction brought back, block by block (the
+        // residual is not stored: 4 bytes per row).
         parallelRows(coarse.A.size(), [&](std::size_t I) {
             double sum = 0.0;
             for (std::uint32_t m = level.membersStart[I]; m < level.membersStart[I + 1]; ++m)
-                sum += level.b[level.members[m]] - level.r[level.members[m]];
+                sum += level.b[level.members[m]] - level.A.row(level.members[m], level.x.data());
             coarse.b[I] = sum;
         });
         vcycle(l + 1);
-        parallelRows(level.A.size(), [&](std::size_t i) { level.x[i] += coarse.x[level.aggregate[i]]; });
+        parallelRows(coarse.A.size(), [&](std::size_t I) {
+            for (std::uint32_t m = level.membersStart[I]; m < level.membersStart[I + 1]; ++m)
+                level.x[level.members[m]] += coarse.x[I];
+        });
         for (int s = 0; s < kSweeps; ++s) sweep(level, 1), sweep(level, 0);
     }
 };
@@ -121,16 +127,17 @@ void prepare(Level &level) {
         const openvdb::Coord &c = level.A.coord[i];
         level.rowsByColour[(c.x() + c.y() + c.z()) & 1].push_back(std::uint32_t(i));
     }
-    level.b.assign(n, 0.0), level.x.assign(n, 0.0), level.r.assign(n, 0.0);
+    level.b.assign(n, 0.0), level.x.assign(n, 0.0);
 }
 
 // The next level: 2x2x2 blocks of this one; returns false when that would barely shrink it.
 bool coarsen(Level &fine, Level &coarse) {
     const Stencil<float> &A = fine.A;
+    const Stencil<float>::Neighbours &N = *A.neighbour;
     const std::size_t n = A.size();
     openvdb::Int32Tree index(-1);
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> access(index);
-    fine.aggregate.resize(n);
+    std::vector<std::uint32_t> aggregate(n);  // row -> row of the next level
     Stencil<float> &C = coarse.A;
     for (std::size_t i = 0; i < n; ++i) {
         const openvdb::Coord &c = A.coord[i];
@@ -141,7 +148,7 @@ bool coarsen(Level &fine, Level &coarse) {
             access.setValue(cc, id);
             C.coord.push_back(cc);
         }
-        fine.aggregate[i] = std::uint32_t(id);
+        aggregate[i] = std::uint32_t(id);
     }
     const std::size_t nc = C.coord.size();
     if (nc > n * 3 / 4) return false;
@@ -149,13 +156,13 @@ bool coarsen(Level &fine, Level &coarse) {
 
     // Members of each block, in fine order (CSR).
     fine.membersStart.assign(nc + 1, 0);
-    for (std::uint32_t a : fine.aggregate) ++fine.membersStart[a + 1];
+    for (std::uint32_t a : aggregate) ++fine.membersStart[a + 1];
     for (std::size_t I = 0; I < nc; ++I) fine.membersStart[I + 1] += fine.membersStart[I];
     fine.members.resize(n);
     std::vector<std::uint32_t> fill(fine.membersStart.begin(), fine.membersStart.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) fine.members[fill[fine.aggregate[i]]++] = std::uint32_t(i);
+    for (std::size_t i = 0; i < n; ++i) fine.members[fill[aggregate[i]]++] = std::uint32_t(i);
 
-    C.neighbour.assign(nc, {});
+    auto neighbour = std::make_shared<Stencil<float>::Neighbours>(nc);
     C.conductance.assign(nc, {});
     C.diag.assign(nc, 0.0);
     static const openvdb::Coord kStep[6] = {openvdb::Coord(-1, 0, 0), openvdb::Coord(1, 0, 0),
@@ -170,22 +177,23 @@ bool coarsen(Level &fine, Level &coarse) {
                 const std::uint32_t i = fine.members[m];
                 remainder += A.diag[i];
                 for (int k = 0; k < 6; ++k) {
-                    const std::uint32_t j = A.neighbour[i][k];
-                    if (j == StencilOperator::kNone) continue;
+                    const std::int32_t j = N[i][k];
+                    if (j < 0) continue;
                     remainder -= A.conductance[i][k];
-                    if (fine.aggregate[j] != I) crossing[k] += A.conductance[i][k];
+                    if (aggregate[j] != I) crossing[k] += A.conductance[i][k];
                 }
             }
             double diag = remainder;
             for (int k = 0; k < 6; ++k) {
                 const int id = look.getValue(C.coord[I] + kStep[k]);
-                C.neighbour[I][k] = id < 0 ? StencilOperator::kNone : std::uint32_t(id);
+                (*neighbour)[I][k] = id < 0 ? StencilOperator::kNone : id;
                 C.conductance[I][k] = float(id < 0 ? 0.0 : 0.5 * crossing[k]);
                 diag += C.conductance[I][k];
             }
             C.diag[I] = float(diag);
         }
     });
+    C.neighbour = std::move(neighbour);
     return true;
 }
 
@@ -195,7 +203,7 @@ std::vector<double> denseCholesky(const Stencil<float> &A) {
     for (std::size_t i = 0; i < n; ++i) {
         L[i * n + i] = A.diag[i];
         for (int k = 0; k < 6; ++k)
-            if (A.neighbour[i][k] != StencilOperator::kNone) L[i * n + A.neighbour[i][k]] -= A.conductance[i][k];
+            if ((*A.neighbour)[i][k] >= 0) L[i * n + (*A.neighbour)[i][k]] -= A.conductance[i][k];
     }
     for (std::size_t j = 0; j < n; ++j) {
         double d = L[j * n + j];
@@ -215,59 +223,70 @@ std::vector<double> denseCholesky(const Stencil<float> &A) {
     return L;
 }
 
-// The operator for OpenVDB's conjugate gradients: the finest level's single-precision coefficients,
-// applied in double precision (the coefficients' rounding perturbs the system by 1e-7, far below the
-// solve's tolerance; one copy of the operator serves both the iteration and its preconditioner).
+// The operator for conjugate gradients: the finest level's single-precision coefficients, applied in double
+// precision (the coefficients' rounding perturbs the system by 1e-7, far below the solve's tolerance; one copy of
+// the operator serves both the iteration and its preconditioner).
 struct FineOperator {
-    using ValueType = double;
     const Stencil<float> &A;
     const std::vector<float> &remainder;  // diag - sum of conductances: the absorption and boundary terms
-    openvdb::math::pcg::SizeType numRows() const { return openvdb::math::pcg::SizeType(A.size()); }
     // remainder x_i + sum_k c_ik (x_i - x_k): the same operator, without the rounding of a large diagonal
     // swamping a small absorption (clean snow's blue: 1e-5 of the diagonal).
-    void vectorMultiply(const double *x, double *y) const {
+    void multiply(const double *x, double *y) const {
+        const Stencil<float>::Neighbours &N = *A.neighbour;
         parallelRows(A.size(), [&](std::size_t i) {
             double sum = double(remainder[i]) * x[i];
             for (int k = 0; k < 6; ++k)
-                if (A.neighbour[i][k] != StencilOperator::kNone) sum += double(A.conductance[i][k]) * (x[i] - x[A.neighbour[i][k]]);
+                if (N[i][k] >= 0) sum += double(A.conductance[i][k]) * (x[i] - x[N[i][k]]);
             y[i] = sum;
         });
     }
-    void vectorMultiply(const PcgVector &x, PcgVector &y) const { vectorMultiply(x.data(), y.data()); }
 };
 
-class VCycle : public openvdb::math::pcg::Preconditioner<double> {
-  public:
-    explicit VCycle(const MultigridSolver::Hierarchy &hierarchy)
-        : openvdb::math::pcg::Preconditioner<double>(Matrix(1)), hierarchy_(hierarchy) {}
-    void apply(const PcgVector &r, PcgVector &z) override {
-        const auto &top = hierarchy_.levels.front();
-        // Scaled into float's range (the bake's sources span many decades between scenes).
-        const double scale = std::max(r.infNorm(), 1e-300);
-        const double *in = r.data();
-        double *out = z.data();
-        parallelRows(top.b.size(), [&](std::size_t i) { top.b[i] = float(in[i] / scale); });
-        hierarchy_.vcycle(0);
-        parallelRows(top.x.size(), [&](std::size_t i) { out[i] = double(top.x[i]) * scale; });
+// Conjugate gradients' reductions as OpenVDB's pcg::Vector computes them, so that the iterates are those of its
+// pcg::solve bit for bit: <a, b> summed in 100 fixed segments added in order (serially below 1024 entries), the
+// same whatever the threads; the largest |a_i|.
+double dot(const std::vector<double> &a, const std::vector<double> &b) {
+    const std::size_t n = a.size();
+    double sum = 0.0;
+    if (n < 1024) {
+        for (std::size_t i = 0; i < n; ++i) sum += a[i] * b[i];
+        return sum;
     }
-
-  private:
-    const MultigridSolver::Hierarchy &hierarchy_;
-};
-
-struct Interrupter {
-    const SubProgress *progress;
-    void start(const char * = nullptr) {}
-    void end() {}
-    bool wasInterrupted(int = -1) const {
-        try {
-            progress->throwIfCancelled();
-        } catch (const Cancelled &) {
-            return true;
+    constexpr std::size_t kSegments = 100;
+    std::array<double, kSegments> partial;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kSegments), [&](const auto &range) {
+        for (std::size_t s = range.begin(); s != range.end(); ++s) {
+            const std::size_t begin = s * (n / kSegments), end = s + 1 == kSegments ? n : begin + n / kSegments;
+            double part = 0.0;
+            for (std::size_t i = begin; i < end; ++i) part += a[i] * b[i];
+            partial[s] = part;
         }
-        return false;
-    }
-};
+    });
+    for (double part : partial) sum += part;
+    return sum;
+}
+double infNorm(const std::vector<double> &a) {
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, a.size()), 0.0,
+        [&](const auto &range, double most) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i) most = std::max(most, std::abs(a[i]));
+            return most;
+        },
+        [](double a, double b) { return std::max(a, b); });
+}
+// z = one V-cycle applied to r, scaled into float's range (the bake's sources span many decades between scenes).
+void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector<double> &r, std::vector<double> &z) {
+    const auto &top = hierarchy.levels.front();
+    const double scale = std::max(infNorm(r), 1e-300);
+    parallelRows(top.b.size(), [&](std::size_t i) { top.b[i] = float(r[i] / scale); });
+    hierarchy.vcycle(0);
+    parallelRows(top.x.size(), [&](std::size_t i) { z[i] = double(top.x[i]) * scale; });
+}
+
+// y = a x + y.
+void axpy(double a, const std::vector<double> &x, std::vector<double> &y) {
+    parallelRows(y.size(), [&](std::size_t i) { y[i] = a * x[i] + y[i]; });
+}
 
 }  // namespace
 
@@ -276,7 +295,7 @@ namespace {
 // Every row's remainder (rowRemainder), stored in float.
 std::vector<float> remainderOf(const StencilOperator &A) {
     std::vector<float> out(A.size());
-    parallelRows(A.size(), [&](std::size_t i) { out[i] = float(rowRemainder(A.diag[i], A.conductance[i], A.neighbour[i])); });
+    parallelRows(A.size(), [&](std::size_t i) { out[i] = float(rowRemainder(A.diag[i], A.conductance[i], (*A.neighbour)[i])); });
     return out;
 }
 
@@ -319,27 +338,45 @@ MultigridSolver::Result MultigridSolver::solve(std::vector<double> b, std::vecto
                                                double relativeTolerance, int maxIterations,
                                                const SubProgress &progress) const {
     const std::size_t n = b.size();
-    PcgVector bv{openvdb::math::pcg::SizeType(n)}, xv{openvdb::math::pcg::SizeType(n)};
-    std::copy(b.begin(), b.end(), bv.data());
-    std::copy(x.begin(), x.end(), xv.data());
-    // Freed meanwhile (the bake's largest solves: 16 bytes per unknown); `= {}` would keep their capacity.
-    b = std::vector<double>(), x = std::vector<double>();
-    VCycle preconditioner(*hierarchy_);
+    if (x.size() != n || hierarchy_->levels.front().A.size() != n)
+        throw InvalidArgument("multigrid solve: the operator, b and x differ in size");
+    Result result;
+    if (n == 0) return result;
+    // Preconditioned conjugate gradients, the steps of OpenVDB's pcg::solve in its order (the same iterates), in
+    // b and x rather than in copies: r takes b's place, A p takes z's (32 bytes per unknown, against 48).
     const FineOperator A{hierarchy_->levels.front().A, hierarchy_->remainder};
-    openvdb::math::pcg::State termination = openvdb::math::pcg::terminationDefaults<double>();
-    termination.iterations = maxIterations;
-    termination.relativeError = std::max(relativeTolerance, kFinestTolerance);
-    termination.absoluteError = 0.0;
-    Interrupter interrupter{&progress};
-    openvdb::math::pcg::State state;
-    try {
-        state = openvdb::math::pcg::solve(A, bv, xv, preconditioner, interrupter, termination);
-    } catch (const openvdb::RuntimeError &) {
+    const double tolerance = std::max(relativeTolerance, kFinestTolerance);
+    const double largestB = infNorm(b), normB = largestB == 0.0 ? 1.0 : largestB;
+    std::vector<double> &r = b, p(n), z(n);  // z: M^-1 r, then A p
+    A.multiply(x.data(), z.data());
+    axpy(-1.0, z, r);  // r = b - A x
+    result.relativeResidual = infNorm(r) / normB;
+    if (result.relativeResidual <= tolerance) return result;
+    double rDotZPrevious = 1.0, leastL2 = std::numeric_limits<double>::max();
+    for (int iteration = 0; iteration < maxIterations; ++iteration) {
         progress.throwIfCancelled();
-        throw;
+        result.iterations = iteration + 1;
+        precondition(*hierarchy_, r, z);
+        const double rDotZ = dot(r, z);
+        if (iteration == 0) p = z;
+        else {
+            const double beta = rDotZ / rDotZPrevious;
+            parallelRows(n, [&](std::size_t i) { p[i] = beta * p[i] + z[i]; });
+        }
+        std::vector<double> &q = z;
+        A.multiply(p.data(), q.data());
+        const double alpha = rDotZ / dot(p, q);
+        rDotZPrevious = rDotZ;
+        axpy(alpha, p, x);
+        axpy(-alpha, q, r);
+        const double l2 = std::sqrt(dot(r, r));
+        leastL2 = std::min(l2, leastL2);
+        const double largest = infNorm(r);
+        result.relativeResidual = largest / normB;
+        // Diverging, not finite, or converged.
+        if (l2 > 2.0 * leastL2 || !std::isfinite(largest) || result.relativeResidual <= tolerance) break;
     }
-    x.assign(xv.data(), xv.data() + n);
-    return {state.iterations, state.relativeError};
+    return result;
 }
 
 }  // namespace firn

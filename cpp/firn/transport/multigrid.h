@@ -5,7 +5,6 @@
 #include <memory>
 #include <vector>
 
-#include <openvdb/math/ConjGradient.h>
 #include <openvdb/openvdb.h>
 
 #include "firn/util/progress.h"
@@ -17,29 +16,33 @@ namespace firn {
 // with row i reading  diag_i x_i - sum_k conductance_ik x_neighbour(i,k)  (conductance >= 0, diag >= sum).
 template <typename T>
 struct Stencil {
-    static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
-    std::vector<openvdb::Coord> coord;                     // voxel per row (axis neighbours differ by 1)
-    std::vector<std::array<std::uint32_t, 6>> neighbour;  // -x, +x, -y, +y, -z, +z, or kNone
+    // Per row, its neighbours -x, +x, -y, +y, -z, +z: a row, or negative for none (SnowTopology::link's layout,
+    // so that the bake's finest level reads the topology's links rather than a copy of them: 24 bytes per row).
+    using Neighbours = std::vector<std::array<std::int32_t, 6>>;
+    static constexpr std::int32_t kNone = -1;
+    std::vector<openvdb::Coord> coord;  // voxel per row (axis neighbours differ by 1)
+    std::shared_ptr<const Neighbours> neighbour;
     std::vector<std::array<T, 6>> conductance;
     std::vector<T> diag;
 
     std::size_t size() const { return diag.size(); }
-    void apply(const T *x, T *y) const;  // y = A x, parallel
+    T row(std::size_t i, const T *x) const;  // (A x)_i
+    void apply(const T *x, T *y) const;      // y = A x, parallel
 };
 using StencilOperator = Stencil<double>;
 
 // A row's remainder: diag minus the conductances to its neighbours, summed in double. The solver keeps it apart
 // (in float), so the operator's nearly cancelling row sums are not left to a float diagonal's rounding.
 inline double rowRemainder(double diag, const std::array<double, 6> &conductance,
-                           const std::array<std::uint32_t, 6> &neighbour) {
+                           const std::array<std::int32_t, 6> &neighbour) {
     double rest = diag;
     for (int k = 0; k < 6; ++k)
-        if (neighbour[k] != StencilOperator::kNone) rest -= conductance[k];
+        if (neighbour[k] >= 0) rest -= conductance[k];
     return rest;
 }
 
-// Solves A x = b by conjugate gradients (OpenVDB's pcg) preconditioned with one symmetric V-cycle of
-// aggregation multigrid: 2x2x2 voxel blocks per coarser level, coarse operators summed from the fine one
+// Solves A x = b by conjugate gradients (OpenVDB's pcg, in the caller's b and x) preconditioned with one
+// symmetric V-cycle of aggregation multigrid: 2x2x2 voxel blocks per coarser level, coarse operators summed from the fine one
 // (conductances halved, as rediscretizing at twice the spacing would give), red-black Gauss-Seidel
 // smoothing, a dense Cholesky solve at the bottom. The V-cycle works in single precision (it only has to
 // precondition; the iteration itself is double), halving its memory traffic. Work per iteration is linear in the voxel count and
@@ -60,9 +63,9 @@ class MultigridSolver {
     // rounding noise ends in 0/0 (NaN everywhere). Smaller tolerances are raised to it.
     static constexpr double kFinestTolerance = 1e-12;
 
-    // x holds the initial guess on entry. b and x are copied into the iteration's vectors and freed meanwhile
-    // (b is taken: pass it with std::move where it is not needed after). Throws Cancelled when progress is
-    // cancelled (x is then empty).
+    // x holds the initial guess on entry and is iterated in place; b is taken (pass it with std::move where it
+    // is not needed after) and holds the residual meanwhile. Throws Cancelled when progress is cancelled (x then
+    // holds the last iterate).
     Result solve(std::vector<double> b, std::vector<double> &x, double relativeTolerance, int maxIterations,
                  const SubProgress &progress) const;
 

@@ -24,17 +24,19 @@ StencilOperator ballProblem(int r, double mass) {
                     A.coord.emplace_back(i, j, k);
                 }
     const std::size_t n = A.coord.size();
-    A.neighbour.resize(n), A.conductance.resize(n), A.diag.assign(n, mass);
+    auto neighbour = std::make_shared<StencilOperator::Neighbours>(n);
+    A.conductance.resize(n), A.diag.assign(n, mass);
     const openvdb::Coord step[6] = {openvdb::Coord(-1, 0, 0), openvdb::Coord(1, 0, 0), openvdb::Coord(0, -1, 0),
                                     openvdb::Coord(0, 1, 0),  openvdb::Coord(0, 0, -1), openvdb::Coord(0, 0, 1)};
     for (std::size_t i = 0; i < n; ++i)
         for (int f = 0; f < 6; ++f) {
             const int j = access.getValue(A.coord[i] + step[f]);
-            A.neighbour[i][f] = j < 0 ? StencilOperator::kNone : std::uint32_t(j);
+            (*neighbour)[i][f] = j;  // -1 (kNone) outside the ball
             const double c = j < 0 ? 0.5 : (A.coord[i].x() > 0 && A.coord[j].x() > 0 ? 100.0 : 1.0);
             A.conductance[i][f] = j < 0 ? 0.0 : c;
             A.diag[i] += c;
         }
+    A.neighbour = std::move(neighbour);
     return A;
 }
 
