@@ -61,11 +61,10 @@ bool visitTriangle(RTCPointQueryFunctionArguments *args) {
 
 }  // namespace
 
-RayCaster::RayCaster(TriangleMesh mesh, Rays rays) : impl_(std::make_unique<Impl>()), empty_(mesh.empty()) {
+RayCaster::RayCaster(TriangleMesh mesh) : impl_(std::make_unique<Impl>()), empty_(mesh.empty()) {
     RTCDevice device = impl_->embree.device;
-    // Few rays per triangle: a fast build (Morton) beats a better tree.
-    const RTCBuildQuality quality = rays == Rays::Few ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_HIGH;
-    rtcSetSceneBuildQuality(impl_->embree.scene, quality);
+    // Few rays per triangle here: a fast build (Morton) beats a better tree.
+    rtcSetSceneBuildQuality(impl_->embree.scene, RTC_BUILD_QUALITY_LOW);
     if (!empty_) {
         RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         auto *vertices = static_cast<float *>(rtcSetNewGeometryBuffer(
@@ -75,7 +74,7 @@ RayCaster::RayCaster(TriangleMesh mesh, Rays rays) : impl_(std::make_unique<Impl
         throwOnEmbreeError(device, "allocate the scene (out of memory?)");
         // The scene's quality alone leaves its one geometry's BVH at MEDIUM (SAH): 4x slower to build on 1M
         // triangles (0.33 s against 0.09 s, bench/snow_layer_bench.py's scene).
-        rtcSetGeometryBuildQuality(geometry, quality);
+        rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_LOW);
         // Copied in parallel: a million triangles' buffers and normals take as long as the BVH's build.
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.positions.size()),
                           [&](const tbb::blocked_range<std::size_t> &r) {

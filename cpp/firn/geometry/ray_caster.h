@@ -20,12 +20,7 @@ class RayCaster {
         glm::vec3 normal;     // unit geometric normal, counter-clockwise winding
     };
 
-    // How the BVH is built: for few rays per triangle (Morton: 4x faster to build on 1M triangles, Snow Layer's
-    // meshes) or for many (SAH at high quality: the bake's occluders take ~20M rays on the car sample, whose sky
-    // rays it traces 10 % faster).
-    enum class Rays { Few, Many };
-    // The mesh is kept (moved in: pass a temporary to spare a copy).
-    explicit RayCaster(TriangleMesh mesh, Rays rays = Rays::Few);
+    explicit RayCaster(TriangleMesh mesh);  // kept (moved in: pass a temporary to spare a copy)
     ~RayCaster();
     RayCaster(const RayCaster &) = delete;
     RayCaster &operator=(const RayCaster &) = delete;

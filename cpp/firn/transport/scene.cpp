@@ -16,7 +16,7 @@ Occluders::Occluders(TriangleMesh mesh, std::vector<Rgb> albedo)
         for (int c = 0; c < 3; ++c)
             if (!std::isfinite(a[c]) || a[c] < 0.0 || a[c] > 1.0)
                 throw InvalidArgument("occluder albedo must lie in [0, 1] per channel");
-    caster_ = std::make_shared<RayCaster>(mesh_, RayCaster::Rays::Many);  // every surface voxel's sky and sun rays
+    caster_ = std::make_shared<RayCaster>(mesh_);
 }
 
 void validate(const Scene &scene) {
