@@ -290,32 +290,28 @@ def _single(nodes, links, extinction, suffix, _context=None):
     return single.outputs["Shader"]
 
 
-def _vector_math(nodes, links, name, operation, a, b=None, location=(0, 0)):
-    """A Vector Math node on sockets or constant vectors; returns its Vector output."""
-    node = _new_node(nodes, "ShaderNodeVectorMath", name, "", location)
+def _operation(nodes, links, node_type, output, name, operation, operands, location):
+    """A Math or Vector Math node on sockets or constants (a float or a tuple); returns its output socket."""
+    node = _new_node(nodes, node_type, name, "", location)
     node.operation = operation
-    for socket, value in zip(node.inputs, (a, b)):
+    for socket, value in zip(node.inputs, operands):
         if value is None:
             continue
-        if isinstance(value, tuple):
+        if isinstance(value, (float, tuple)):
             socket.default_value = value
         else:
             links.new(value, socket)
-    return node.outputs["Vector"]
+    return node.outputs[output]
+
+
+def _vector_math(nodes, links, name, operation, a, b=None, location=(0, 0)):
+    """A Vector Math node on sockets or constant vectors; returns its Vector output."""
+    return _operation(nodes, links, "ShaderNodeVectorMath", "Vector", name, operation, (a, b), location)
 
 
 def _math(nodes, links, name, operation, a, b=None, location=(0, 0)):
     """A Math node on sockets or constant values; returns its Value output."""
-    node = _new_node(nodes, "ShaderNodeMath", name, "", location)
-    node.operation = operation
-    for socket, value in zip(node.inputs, (a, b)):
-        if value is None:
-            continue
-        if isinstance(value, float):
-            socket.default_value = value
-        else:
-            links.new(value, socket)
-    return node.outputs["Value"]
+    return _operation(nodes, links, "ShaderNodeMath", "Value", name, operation, (a, b), location)
 
 
 def _per_channel_sqrt(nodes, links, name, vector, location):

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <sstream>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <openvdb/tools/Prune.h>
 #include <tbb/blocked_range.h>
@@ -48,6 +49,31 @@ LeafRange leavesOf(const Metaball &b, double h) {
     const auto toLeaf = [](double x) { return int(std::floor(std::floor(x) / kLeafDim)); };
     return {openvdb::CoordBBox(openvdb::Coord(toLeaf(lo.x), toLeaf(lo.y), toLeaf(lo.z)),
                                openvdb::Coord(toLeaf(hi.x + 1), toLeaf(hi.y + 1), toLeaf(hi.z + 1)))};
+}
+
+// Whether ball b can add anything to the leaf at leaf coordinates `leaf` (gatherLeaf adds only inside the sphere
+// and above the ball's lowest height): its sphere meets the box of the leaf's voxels, and the box's highest corner
+// along the normal is not below that height. In double, with a thousandth of a voxel to spare for the gather's
+// float rounding. Of the leaves a ball's box spans, some 45 % fail (corners outside the sphere, leaves under the
+// surface the ball stands on).
+bool reaches(const Metaball &b, const openvdb::Coord &leaf, double h) {
+    const double margin = 1e-3 * h;
+    const glm::dvec3 lo = glm::dvec3(leaf.x(), leaf.y(), leaf.z()) * double(kLeafDim) * h;
+    const glm::dvec3 hi = lo + double(kLeafDim - 1) * h;
+    const glm::dvec3 c(b.centre), n(b.normal);
+    const glm::dvec3 nearest = glm::clamp(c, lo, hi) - c;
+    const double reach = double(b.radius) + margin;
+    if (glm::dot(nearest, nearest) >= reach * reach) return false;
+    const glm::dvec3 highest(n.x >= 0.0 ? hi.x : lo.x, n.y >= 0.0 ? hi.y : lo.y, n.z >= 0.0 ? hi.z : lo.z);
+    return glm::dot(n, highest - c) >= -double(b.base) - 1.5 * h - margin;
+}
+
+// Calls f(leaf coordinates) for each leaf ball b reaches.
+template <typename F>
+void forEachLeafReached(const Metaball &b, double h, F f) {
+    const openvdb::CoordBBox box = leavesOf(b, h).leaves;
+    for (auto it = box.begin(); it; ++it)
+        if (reaches(b, *it, h)) f(*it);
 }
 
 // Balls from a user's edits may hold anything: every value finite, radius positive, every ball inside the
@@ -100,14 +126,15 @@ namespace {
 // (leaf key, ball index) pairs, sorted: each leaf's balls in a fixed order, whatever the thread count.
 std::vector<std::pair<std::uint64_t, std::uint32_t>> binBallsByLeaf(const std::vector<Metaball> &balls, double h) {
     std::vector<std::size_t> offsets(balls.size() + 1, 0);
-    tbb::parallel_for(std::size_t(0), balls.size(),
-                      [&](std::size_t i) { offsets[i + 1] = leavesOf(balls[i], h).leaves.volume(); });
+    tbb::parallel_for(std::size_t(0), balls.size(), [&](std::size_t i) {
+        forEachLeafReached(balls[i], h, [&](const openvdb::Coord &) { ++offsets[i + 1]; });
+    });
     std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
     std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs(offsets.back());
     tbb::parallel_for(std::size_t(0), balls.size(), [&](std::size_t i) {
         std::size_t at = offsets[i];
-        const openvdb::CoordBBox box = leavesOf(balls[i], h).leaves;
-        for (auto it = box.begin(); it; ++it) pairs[at++] = {leafKey(*it), std::uint32_t(i)};
+        forEachLeafReached(balls[i], h,
+                           [&](const openvdb::Coord &leaf) { pairs[at++] = {leafKey(leaf), std::uint32_t(i)}; });
     });
     tbb::parallel_sort(pairs.begin(), pairs.end());
     return pairs;
@@ -296,35 +323,33 @@ LeafBallIndex::LeafBallIndex(const std::vector<Metaball> &balls, double voxelSiz
 }
 
 void LeafBallIndex::insert(std::uint32_t id, const Metaball &ball) {
-    const openvdb::CoordBBox box = firn::leavesOf(ball, voxelSize_).leaves;
-    for (auto it = box.begin(); it; ++it) {
-        std::vector<std::uint32_t> &ids = leaves_[leafKey(*it)];
+    forEachLeafReached(ball, voxelSize_, [&](const openvdb::Coord &leaf) {
+        std::vector<std::uint32_t> &ids = leaves_[leafKey(leaf)];
         ids.insert(std::lower_bound(ids.begin(), ids.end(), id), id);
-    }
+    });
 }
 
 void LeafBallIndex::erase(std::uint32_t id, const Metaball &ball) {
-    const openvdb::CoordBBox box = firn::leavesOf(ball, voxelSize_).leaves;
-    for (auto it = box.begin(); it; ++it) {
-        const auto found = leaves_.find(leafKey(*it));
-        if (found == leaves_.end()) continue;
+    forEachLeafReached(ball, voxelSize_, [&](const openvdb::Coord &leaf) {
+        const auto found = leaves_.find(leafKey(leaf));
+        if (found == leaves_.end()) return;
         std::vector<std::uint32_t> &ids = found->second;
         const auto at = std::lower_bound(ids.begin(), ids.end(), id);
         if (at != ids.end() && *at == id) ids.erase(at);
         if (ids.empty()) leaves_.erase(found);
-    }
+    });
 }
 
 bool LeafBallIndex::sameLeaves(const Metaball &a, const Metaball &b) const {
-    return firn::leavesOf(a, voxelSize_).leaves == firn::leavesOf(b, voxelSize_).leaves;
+    std::vector<openvdb::Coord> leavesA, leavesB;
+    leavesOf(a, leavesA), leavesOf(b, leavesB);
+    return leavesA == leavesB;
 }
 
 void LeafBallIndex::leavesOf(const Metaball &ball, std::vector<openvdb::Coord> &out) const {
-    const openvdb::CoordBBox box = firn::leavesOf(ball, voxelSize_).leaves;
-    for (auto it = box.begin(); it; ++it) {
-        const openvdb::Coord leaf = *it;
+    forEachLeafReached(ball, voxelSize_, [&](const openvdb::Coord &leaf) {
         out.emplace_back(leaf.x() * kLeafDim, leaf.y() * kLeafDim, leaf.z() * kLeafDim);
-    }
+    });
 }
 
 const std::vector<std::uint32_t> *LeafBallIndex::ballsOf(const openvdb::Coord &leafOrigin) const {

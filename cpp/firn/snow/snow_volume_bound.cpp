@@ -5,6 +5,8 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
@@ -17,12 +19,15 @@ constexpr float kLift = 1e-4f;  // m: sample points leave the surface before the
 
 // Slope cover (snowfall.h) of each triangle times its area (m^2): where snow can lie, and how deep.
 std::vector<double> coveredAreas(const TriangleMesh &targets, double maxSlope) {
-    std::vector<double> covered(targets.triangleCount());
-    for (std::size_t t = 0; t < covered.size(); ++t) {
-        const glm::dvec3 n = glm::normalize(glm::dvec3(targets.crossNormal(t)));
-        if (!std::isfinite(n.z)) continue;  // degenerate: no area
-        covered[t] = targets.area(t) * slopeCover(std::acos(std::clamp(n.z, -1.0, 1.0)), maxSlope);
-    }
+    std::vector<double> covered(targets.triangleCount(), 0.0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, covered.size()), [&](const tbb::blocked_range<std::size_t> &r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            const glm::vec3 cross = targets.crossNormal(t);
+            const glm::dvec3 n = glm::normalize(glm::dvec3(cross));
+            if (!std::isfinite(n.z)) continue;  // degenerate: no area
+            covered[t] = 0.5 * glm::length(cross) * slopeCover(std::acos(std::clamp(n.z, -1.0, 1.0)), maxSlope);
+        }
+    });
     return covered;
 }
 

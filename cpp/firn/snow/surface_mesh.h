@@ -32,8 +32,8 @@ struct SurfaceMesh {
 // Meshes the level set's crossing of the settings' isovalue (0: the surface) with OpenVDB's volume-to-mesh at the settings' adaptivity. Within a
 // budget, large snow is meshed from the level set sampled on voxels 2, 4, 8... times coarser (its values are
 // distances in m, so the zero crossing stays the same surface, to a coarse voxel), the factor guessed from the
-// active voxels and raised until the mesh fits; the result is the first that fits, or the smallest made (a
-// budget too small for the snow's shape). Throws InvalidArgument for a grid that is not a level set with a
+// active voxels and raised until the mesh fits (without adaptivity the search counts triangles and meshes once);
+// the result is the first that fits, or the smallest made (a budget too small for the snow's shape). Throws InvalidArgument for a grid that is not a level set with a
 // uniform linear transform, or a budget below kMinTriangleBudget; Cancelled when `progress` is cancelled
 // between attempts.
 SurfaceMesh meshSurface(const openvdb::FloatGrid &surface, const SurfaceMeshSettings &settings,

@@ -1052,7 +1052,8 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceV
 
 // BakedGrids' values at a point of the density's index space before the grids are written: read from the
 // unknowns' source and the values beyond them, trilinear as BoxSampler reads a grid (the same values, bit for
-// bit). One per thread.
+// bit). The last cell's corners are kept: the gathering's half-voxel steps read each cell about twice. One per
+// thread.
 class BakedValuesSampler {
   public:
     BakedValuesSampler(const SnowTopology &topo, const SourceValues &source, const MonteCarloVoxels &traced,
@@ -1060,17 +1061,20 @@ class BakedValuesSampler {
         : source_(source), beyond_(*values.beyond), index_(*topo.index), traced_(*traced.index), at_(*values.at) {}
 
     BakedGrids::Values operator()(const openvdb::Vec3d &ijk) {
-        const openvdb::Vec3i lower = openvdb::tools::local_util::floorVec3(ijk);
-        const openvdb::Vec3R uvw = ijk - lower;
-        openvdb::Vec3f corners[BakedGrids::kCount][2][2][2];
-        for (int a = 0; a < 2; ++a)
-            for (int b = 0; b < 2; ++b)
-                for (int c = 0; c < 2; ++c) {
-                    const Source S = valueAt(openvdb::Coord(lower.x() + a, lower.y() + b, lower.z() + c));
-                    for (int g = 0; g < int(BakedGrids::kCount); ++g) corners[g][a][b][c] = sourceComponent(S, g);
-                }
+        const openvdb::Coord lower = floorCoord(ijk);
+        if (!cached_ || lower != cell_) {
+            for (int a = 0; a < 2; ++a)
+                for (int b = 0; b < 2; ++b)
+                    for (int c = 0; c < 2; ++c) {
+                        const Source S = valueAt(lower.offsetBy(a, b, c));
+                        for (int g = 0; g < int(BakedGrids::kCount); ++g) corners_[g][a][b][c] = sourceComponent(S, g);
+                    }
+            cell_ = lower, cached_ = true;
+        }
+        const openvdb::Vec3R uvw = ijk - lower.asVec3d();
         BakedGrids::Values out;
-        for (int g = 0; g < int(BakedGrids::kCount); ++g) out[g] = openvdb::tools::BoxSampler::trilinearInterpolation(corners[g], uvw);
+        for (int g = 0; g < int(BakedGrids::kCount); ++g)
+            out[g] = openvdb::tools::BoxSampler::trilinearInterpolation(corners_[g], uvw);
         return out;
     }
 
@@ -1084,6 +1088,9 @@ class BakedValuesSampler {
     const SourceValues &source_;
     const LeafValues &beyond_;
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_, traced_, at_;
+    bool cached_ = false;
+    openvdb::Coord cell_;  // the cell whose corners corners_ holds
+    openvdb::Vec3f corners_[BakedGrids::kCount][2][2][2];
 };
 
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
@@ -1097,7 +1104,6 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);
-        Medium::Accessor density = scene.medium->accessor();
         BakedValuesSampler baked(topo, source, traced, values);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!light.snowRays[i]) continue;
@@ -1108,7 +1114,7 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
-                sum += bakedRadianceAlong(scene, marcher, density, baked, Ray{p, w}, tMax, 0.5);
+                sum += bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
             }
             out.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
         }

@@ -95,7 +95,7 @@ BakedGrids::Values SourceGridsSampler::operator()(const openvdb::Vec3d &ijk) {
 }
 
 BakedRadiance::BakedRadiance(const Scene &scene, const BakedGrids &baked)
-    : scene_(scene), marcher_(*scene.medium), density_(scene.medium->accessor()), source_(*scene.medium, baked) {}
+    : scene_(scene), marcher_(*scene.medium), source_(*scene.medium, baked) {}
 
 Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray) {
     double tMax = std::numeric_limits<double>::infinity();

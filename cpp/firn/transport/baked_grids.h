@@ -50,14 +50,14 @@ openvdb::BoolTree::Ptr litVoxels(const openvdb::Vec3fTree &source);
 // each step. sourceAt(ijk) gives the grids' values (BakedGrids::Values) at a point of the density's index
 // space: SourceGridsSampler, or the bake's own values before it writes its grids.
 template <typename SourceAt>
-Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Medium::Accessor &density,
-                       SourceAt &sourceAt, const Ray &ray, double tMax, double step) {
+Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, SourceAt &sourceAt, const Ray &ray,
+                       double tMax, double step) {
     const double k = scene.medium->optics().extinctionPerDensity;
     const glm::dvec3 w = -ray.direction;  // towards the viewer
     Rgb radiance(0.0);
     double transmittance = 1.0;
     marcher.march(ray.origin, ray.direction, tMax, step, [&](const openvdb::Vec3d &ijk, double dt) {
-        const double sigmaT = k * openvdb::tools::BoxSampler::sample(density, ijk);
+        const double sigmaT = k * marcher.densityAt(ijk);
         if (sigmaT <= 0.0) return true;
         const BakedGrids::Values source = sourceAt(ijk);  // l0, l1 per axis, p0 (RGB), then p1
         const glm::dvec3 p1(source[5][0], source[5][1], source[5][2]);
@@ -91,13 +91,12 @@ class BakedRadiance {
   public:
     BakedRadiance(const Scene &scene, const BakedGrids &baked);
     Rgb along(const Ray &ray, double tMax, double step) {
-        return bakedRadianceAlong(scene_, marcher_, density_, source_, ray, tMax, step);
+        return bakedRadianceAlong(scene_, marcher_, source_, ray, tMax, step);
     }
 
   private:
     const Scene &scene_;
     Medium::ColumnMarcher marcher_;
-    Medium::Accessor density_;
     SourceGridsSampler source_;
 };
 

@@ -22,6 +22,10 @@ double columnLimit(const glm::dvec3 &reduced) {
     return std::log(1.0 / kMinTransmittance) / std::max(1e-12, std::min({reduced.x, reduced.y, reduced.z}));
 }
 
+// exp(-extinction column) per channel; exactly 1 without the exponentials where no snow is crossed (most sky rays).
+glm::dvec3 transmittance(const glm::dvec3 &extinction, double column) {
+    return column > 0.0 ? glm::exp(-extinction * column) : glm::dvec3(1.0);
+}
 
 glm::dvec3 extinction(const VolumeOptics &optics, Crossing crossing) {
     return crossing == Crossing::Beam ? reducedExtinctionPerDensity(optics) : glm::dvec3(optics.extinctionPerDensity);
@@ -42,7 +46,7 @@ glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const gl
     const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
     if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
         const double column = marcher.column(p, w, std::numeric_limits<double>::infinity(), limit);
-        if (column < limit) irradiance += kPi * scene.sky.radianceFrom(w) * glm::exp(-reduced * column);
+        if (column < limit) irradiance += kPi * scene.sky.radianceFrom(w) * transmittance(reduced, column);
     }
     return albedo * irradiance / kPi;
 }
@@ -74,7 +78,7 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
         } else {
             continue;
         }
-        sum += kPi * radiance * glm::exp(-reduced * column);
+        sum += kPi * radiance * transmittance(reduced, column);
     }
     if (snowRays) *snowRays = hidden;
     return glm::vec3(sum / double(rays.count()));
@@ -180,7 +184,7 @@ BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, in
             if (!caster.occluded(from, glm::vec3(l.direction), 1e-5f, float(l.distance * (1.0 - 1e-6)))) sum += l.irradiance;
         }
     }
-    out.irradiance = glm::vec3(glm::exp(-reduced * column) * sum / double(samples));
+    out.irradiance = glm::vec3(transmittance(reduced, column) * sum / double(samples));
     return out;
 }
 

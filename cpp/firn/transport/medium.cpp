@@ -135,7 +135,10 @@ double Medium::densityAt(const glm::dvec3 &world, Accessor &accessor) const {
 }
 
 Medium::ColumnMarcher::ColumnMarcher(const Medium &medium)
-    : medium_(medium), intersector_(*medium.intersector_), accessor_(medium.accessor()), support_(*medium.support_) {}
+    : medium_(medium), intersector_(*medium.intersector_), accessor_(medium.accessor()), support_(*medium.support_),
+      cell_(0) {
+    openvdb::tools::BoxSampler::getValues(corners_, accessor_, cell_);
+}
 
 double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax,
                                      double limit) {
@@ -153,7 +156,7 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
     for (; i < kPlainSteps; ++i) {
         const double t = (i + 0.5) * kStep;
         if (t >= tEnd) return sum * h;
-        const double rho = openvdb::tools::BoxSampler::sample(accessor_, eye + t * dir);
+        const double rho = densityAt(eye + t * dir);
         if (rho <= 0.0) break;
         sum += rho * kStep;
         if (sum > sumLimit) return sum * h;
@@ -171,14 +174,15 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
         const double dt = span / steps;
         for (int i = 0; i < steps; ++i) {
             const Vec3d p = eye + (t0 + (i + 0.5) * dt) * dir;
-            const openvdb::Coord cell = openvdb::Coord::floor(p);
-            if (!support_.probeConstLeaf(cell)) {
+            const openvdb::Coord cell = floorCoord(p);
+            const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell);
+            if (!leaf) {
                 // No snow near this whole 8^3 block: on from the first sample past it (a little early, never late).
                 const double next = std::min((blockExit(ray, cell, 8) - t0) / dt - 0.5 - 1e-6, double(steps));
                 i = std::max(i, int(std::ceil(next)) - 1);
                 continue;
             }
-            if (support_.isValueOn(cell)) sum += openvdb::tools::BoxSampler::sample(accessor_, p) * dt;
+            if (leaf->isValueOn(cell)) sum += densityIn(cell, p) * dt;
         }
         if (sum > sumLimit) break;
     }
@@ -187,7 +191,7 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
 
 int Medium::ColumnMarcher::lastEmptySample(const openvdb::math::Ray<double> &ray, const Vec3d &p, double t0, double dt,
                                            int i, int steps) {
-    const openvdb::Coord cell = openvdb::Coord::floor(p);
+    const openvdb::Coord cell = floorCoord(p);
     const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell);
     const int edge = leaf ? emptyBlockEdge(leaf->getValueMask(), cell) : int(openvdb::BoolTree::LeafNodeType::DIM);
     if (edge == 0) return i - 1;

@@ -6,12 +6,23 @@
 
 #include <glm/vec3.hpp>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/RayIntersector.h>
 
 #include "firn/optics/transport_scales.h"  // validate(VolumeOptics)
 #include "firn/optics/volume_optics.h"
 
 namespace firn {
+
+// The cell (voxel index) holding a point of index space: floor of each coordinate, without std::floor's
+// rounding-mode work (marches call it for every sample).
+inline openvdb::Coord floorCoord(const openvdb::Vec3d &ijk) {
+    auto floorInt = [](double x) {
+        const int i = int(x);
+        return i - int(x < double(i));
+    };
+    return openvdb::Coord(floorInt(ijk.x()), floorInt(ijk.y()), floorInt(ijk.z()));
+}
 
 // The snow as light sees it: sigma_t(x) = k * density(x) (1/m), with the density interpolated trilinearly
 // between voxel centres in world space, exactly as Cycles reads the grid. Every transport code in Firn
@@ -50,6 +61,10 @@ class Medium {
     class ColumnMarcher {
       public:
         explicit ColumnMarcher(const Medium &medium);
+        // The density (kg/m^3) at a point of index space, trilinear as BoxSampler::sample reads it (the same
+        // value bit for bit), from the last cell's eight values when the point lies in the same cell: walks in
+        // half-voxel steps read each cell about twice.
+        double densityAt(const openvdb::Vec3d &ijk) { return densityIn(floorCoord(ijk), ijk); }
         // Mass column between t = 0 and tMax (m) along origin + t * direction (unit), midpoint rule on
         // half-voxel steps; stops once the column exceeds `limit` (kg/m^2) and returns what it has.
         double column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double limit);
@@ -81,6 +96,14 @@ class Medium {
         }
 
       private:
+        double densityIn(const openvdb::Coord &cell, const openvdb::Vec3d &ijk) {
+            if (cell != cell_) {
+                cell_ = cell;
+                openvdb::tools::BoxSampler::getValues(corners_, accessor_, cell);
+            }
+            return openvdb::tools::BoxSampler::trilinearInterpolation(corners_, ijk - cell.asVec3d());
+        }
+
         // Samples ray(t0 + (j + 0.5) dt) of a walk (index space): if sample i, at p, lies in a cell without
         // snow, the last sample j >= i (below `steps`) still inside the largest empty aligned block (8^3, 4^3,
         // 2^3 or the cell) that holds p, so that the walk goes on after it; else i - 1. The samples skipped
@@ -92,6 +115,8 @@ class Medium {
         openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0> intersector_;
         Accessor accessor_;
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> support_;
+        openvdb::Coord cell_;  // the cell whose eight density values corners_ holds
+        float corners_[2][2][2];
     };
 
   private:

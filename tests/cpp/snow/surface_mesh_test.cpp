@@ -1,5 +1,6 @@
 #include "firn/snow/surface_mesh.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -58,6 +59,28 @@ TEST(SurfaceMesh, MeetsTheTriangleBudget) {
         // Still the sphere, within a voxel of the level set it was made from (coarser when rebuilt).
         for (const openvdb::Vec3s &p : m.vertices) EXPECT_NEAR((p - c).length(), r, m.voxelSize);
         EXPECT_NEAR(enclosedVolume(m), 4.0 / 3.0 * kPi * r * r * r, 0.1 * 4.0 / 3.0 * kPi * r * r * r);
+    }
+}
+
+// The budget's search counts triangles (one quad per edge crossing the isovalue) and meshes once: a budget of
+// exactly the full mesh's triangles keeps it, one less makes it coarser.
+TEST(SurfaceMesh, CountsTheTrianglesItWouldMake) {
+    const openvdb::FloatGrid::Ptr grid = sphere(0.5f, openvdb::Vec3f(0.1f, 0.0f, -0.2f), 0.01f);
+    for (const double isovalue : {0.0, 0.0075}) {
+        const SurfaceMesh full = meshSurface(*grid, {0.0, 0, isovalue}, kNoProgress);
+        const SurfaceMesh kept = meshSurface(*grid, {0.0, full.triangles.size(), isovalue}, kNoProgress);
+        EXPECT_EQ(kept.voxelSize, full.voxelSize);
+        EXPECT_EQ(kept.triangles, full.triangles);
+        EXPECT_EQ(kept.vertices, full.vertices);
+        const SurfaceMesh coarser = meshSurface(*grid, {0.0, full.triangles.size() - 1, isovalue}, kNoProgress);
+        EXPECT_GT(coarser.voxelSize, full.voxelSize);
+        // At twice the voxel size too: a budget the search reaches from the full mesh in one step (a quarter of
+        // it or more) and that holds the coarser mesh ends there, with the triangles counted.
+        EXPECT_DOUBLE_EQ(coarser.voxelSize, 2.0 * full.voxelSize);
+        const std::size_t budget = std::max(coarser.triangles.size(), (full.triangles.size() + 3) / 4);
+        const SurfaceMesh again = meshSurface(*grid, {0.0, budget, isovalue}, kNoProgress);
+        EXPECT_EQ(again.voxelSize, coarser.voxelSize);
+        EXPECT_EQ(again.triangles, coarser.triangles);
     }
 }
 
