@@ -104,11 +104,16 @@ struct Channel {
 // surface: the snow's g, within what a stored lobe holds.
 double crossingAnisotropy(double g) { return std::min(g, kMaxLobeAnisotropy); }
 
-// The source function in one voxel, per channel (W/m^2/sr), as the grids store it: the broad lobe of mean l0
-// and first moment 4 pi l1 / 3, and the peaked lobe of mean peak0 and grey first moment peak1 (source_lobe.h).
-struct Source {
+// The broad lobe per channel (W/m^2/sr): mean l0 and first moment 4 pi l1 / 3 (source_lobe.h). A surface's
+// radiance has no other (the peaked lobe is the beams' light inside the snow).
+struct BroadLobe {
     glm::vec3 l0{0.0f};
     glm::mat3 l1{0.0f};  // column c: the vector for channel c
+};
+
+// The source function in one voxel, per channel (W/m^2/sr), as the grids store it: the broad lobe and the
+// peaked lobe of mean peak0 and grey first moment peak1 (source_lobe.h).
+struct Source : BroadLobe {
     glm::vec3 peak0{0.0f}, peak1{0.0f};
 
     // Adds a peaked lobe of mean l0 per channel and anisotropy k about the unit axis m (where its light goes).
@@ -116,6 +121,37 @@ struct Source {
         peak0 += glm::vec3(mean);
         peak1 += glm::vec3(k * (mean.x + mean.y + mean.z) * m);  // 3 k m (the channels' mean)
     }
+};
+
+// Source functions' peaked lobes where they are not zero, by key (an unknown, a place among the grids' values):
+// the beams' single scattering lies beneath the shell that takes the surface's radiance (composeSource) and
+// above where the snow blocks the beams (17 of 2.7 M unknowns on the car sample's density; held for all, they
+// took 24 bytes per unknown while the source is gathered and written).
+struct PeakedLobes {
+    struct Peak {
+        std::uint32_t key;
+        glm::vec3 peak0, peak1;
+    };
+    std::vector<Peak> peaks;  // in key order
+
+    void add(std::size_t key, const Source &S) {  // keys in increasing order
+        if (S.peak0 != glm::vec3(0.0f) || S.peak1 != glm::vec3(0.0f)) peaks.push_back({std::uint32_t(key), S.peak0, S.peak1});
+    }
+    Source with(const BroadLobe &broad, std::size_t key) const {  // the source function of that broad lobe and key
+        Source S;
+        static_cast<BroadLobe &>(S) = broad;
+        const auto it = std::lower_bound(peaks.begin(), peaks.end(), key, [](const Peak &p, std::size_t k) { return p.key < k; });
+        if (it != peaks.end() && it->key == key) S.peak0 = it->peak0, S.peak1 = it->peak1;
+        return S;
+    }
+};
+
+// The source function of every unknown.
+struct SourceValues {
+    std::vector<BroadLobe> broad;  // per unknown
+    PeakedLobes peaked;            // by unknown
+
+    Source operator[](std::size_t i) const { return peaked.with(broad[i], i); }
 };
 
 // Voxels whose source function comes from Monte Carlo (snow too thin for the diffusion), not from the solve.
@@ -434,7 +470,7 @@ struct SurfaceLight {
     // What returns of the light that entered there, over and above the escape function's share of it
     // (sharp: it follows shadows; on a sharp edge, SurfacePatch::sharp, the voxel's exit lobe instead, its
     // faces' light fitted already) ...
-    Source returned;
+    BroadLobe returned;
     // ... the beams' light that crosses the snow and leaves through the patch on its far side: a lobe of
     // k = g (l0 in W per channel) about the mean of the beams' directions (per voxel; length <= 1) ...
     glm::vec3 crossing{0.0f}, crossingAxis{0.0f};
@@ -443,40 +479,39 @@ struct SurfaceLight {
     glm::vec3 leaving{0.0f};
 };
 
-// The source function inside every unknown from the three channels' fluence: S = omega / (4 pi) (phi + 3 g
-// F . w), F = -D grad phi, plus the beams scattered once (the peaked lobe). After the solves (during them it would take 48 bytes per unknown).
-std::vector<Source> insideSource(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                                 const std::array<std::vector<double>, 3> &phi) {
+// The source function inside unknowns `range` (out[i - range.begin()], zero on entry) from the three channels'
+// fluence: S = omega / (4 pi) (phi + 3 g F . w), F = -D grad phi, plus the beams scattered once (the peaked
+// lobe). After the solves (during them it would take 48 bytes per unknown).
+void insideSource(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                  const std::array<std::vector<double>, 3> &phi, const tbb::blocked_range<std::size_t> &range,
+                  Source *out) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const double h = medium.voxelSize();
-    std::vector<Source> out(topo.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        for (int c = 0; c < 3; ++c) {
-            const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
-            for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                glm::dvec3 gradient(0.0);
-                for (int axis = 0; axis < 3; ++axis) {
-                    const std::int32_t lo = topo.link[i][2 * axis], hi = topo.link[i][2 * axis + 1];
-                    const double pLo = lo >= 0 ? phi[c][lo] : phi[c][i], pHi = hi >= 0 ? phi[c][hi] : phi[c][i];
-                    const int span = (lo >= 0) + (hi >= 0);
-                    gradient[axis] = span ? (pHi - pLo) / (span * h) : 0.0;
-                }
-                const double D = 1.0 / (3.0 * ch.sigmaTr(topo.density[i]));
-                out[i].l0[c] = ch.omega * kInvFourPi * phi[c][i];
-                out[i].l1[c] = ch.omega * kInvFourPi * -3.0 * ch.g * D * gradient;
-                if (c < 2) continue;
-                // The beams scattered once: the peaked lobe, all channels at once.
-                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
-                for (std::size_t s = 0; s < light.beams.size(); ++s) {
-                    const glm::dvec3 beam = glm::dvec3(light.beams[s].atVoxel[i]) * glm::dvec3(optics.albedo) * kInvFourPi;
-                    if (beam.x + beam.y + beam.z > 0.0)
-                        out[i].addPeak(beam, crossingAnisotropy(optics.g), -towardsBeam(scene, s, centre));
-                }
+    for (int c = 0; c < 3; ++c) {
+        const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            glm::dvec3 gradient(0.0);
+            for (int axis = 0; axis < 3; ++axis) {
+                const std::int32_t lo = topo.link[i][2 * axis], hi = topo.link[i][2 * axis + 1];
+                const double pLo = lo >= 0 ? phi[c][lo] : phi[c][i], pHi = hi >= 0 ? phi[c][hi] : phi[c][i];
+                const int span = (lo >= 0) + (hi >= 0);
+                gradient[axis] = span ? (pHi - pLo) / (span * h) : 0.0;
+            }
+            const double D = 1.0 / (3.0 * ch.sigmaTr(topo.density[i]));
+            Source &S = out[i - range.begin()];
+            S.l0[c] = ch.omega * kInvFourPi * phi[c][i];
+            S.l1[c] = ch.omega * kInvFourPi * -3.0 * ch.g * D * gradient;
+            if (c < 2) continue;
+            // The beams scattered once: the peaked lobe, all channels at once.
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+            for (std::size_t s = 0; s < light.beams.size(); ++s) {
+                const glm::dvec3 beam = glm::dvec3(light.beams[s].atVoxel[i]) * glm::dvec3(optics.albedo) * kInvFourPi;
+                if (beam.x + beam.y + beam.z > 0.0)
+                    S.addPeak(beam, crossingAnisotropy(optics.g), -towardsBeam(scene, s, centre));
             }
         }
-    });
-    return out;
+    }
 }
 
 // Channel c's light leaving each surface voxel, from its solve.
@@ -588,9 +623,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
 // are left out of their neighbours' averages: their outflow leaves through two or three faces at once (the
 // lit top's light spread down a shadowed side a voxel or two, bench/bake_suite.py box_sharp: 8.7 % mean
 // error with them, 5.4 % without).
-SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
-                                      const SurfaceValues<SurfaceLight> &solved) {
-    SurfaceValues<Source> out(topo.surfaceSlot, topo.surfaceVoxels());
+SurfaceValues<BroadLobe> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
+                                         const SurfaceValues<SurfaceLight> &solved) {
+    SurfaceValues<BroadLobe> out(topo.surfaceSlot, topo.surfaceVoxels());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
@@ -605,7 +640,7 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
             }
             const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
             const double own = kPi * topo.patches[i].area;
-            const Source &returned = solved[i].returned;
+            const BroadLobe &returned = solved[i].returned;
             for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
                 const SourceLobe lobe =
                     topo.patches[i].sharp ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
@@ -627,37 +662,59 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
 // Inside the snow, within a few mean free paths of the surface, a camera ray still sees its surface
 // voxel's radiance: those voxels take it over (SnowTopology's shell), so where the ray reaches optical
 // depth 1 does not matter; deeper voxels keep their own source function, which only thin snow shows.
-// In place: `inside` (insideSource) becomes the source function.
-std::vector<Source> composeSource(const SnowTopology &topo, std::vector<Source> &&inside, const SurfaceValues<Source> &surface) {
-    std::vector<Source> out = std::move(inside);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            const std::int32_t owner = topo.shellOwner[i];
-            const float w = topo.shellWeight[i];
-            if (owner >= 0) {
-                out[i].l0 = w * surface[owner].l0 + (1.0f - w) * out[i].l0;
-                out[i].l1 = w * surface[owner].l1 + (1.0f - w) * out[i].l1;
-                out[i].peak0 = w * surface[owner].peak0 + (1.0f - w) * out[i].peak0;
-                out[i].peak1 = w * surface[owner].peak1 + (1.0f - w) * out[i].peak1;
+// In place: out (insideSource's for unknowns `range`) becomes the source function; the surface has no peaked lobe.
+void composeSource(const SnowTopology &topo, const SurfaceValues<BroadLobe> &surface,
+                   const tbb::blocked_range<std::size_t> &range, Source *out) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        const std::int32_t owner = topo.shellOwner[i];
+        const float w = topo.shellWeight[i];
+        Source &S = out[i - range.begin()];
+        if (owner >= 0) {
+            S.l0 = w * surface[owner].l0 + (1.0f - w) * S.l0;
+            S.l1 = w * surface[owner].l1 + (1.0f - w) * S.l1;
+            S.peak0 = (1.0f - w) * S.peak0;
+            S.peak1 = (1.0f - w) * S.peak1;
+        }
+    }
+}
+
+// The source function of every unknown: inside (insideSource) composed with the surface's (composeSource), a
+// block of unknowns at a time. Traced voxels hold their Monte Carlo source instead of the diffusion's, also
+// where a surface's values are carried beyond the snow: a thin object's surface voxels are traced, and its rim
+// shows their light.
+SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                            const std::array<std::vector<double>, 3> &phi, const SurfaceValues<BroadLobe> &surface,
+                            const MonteCarloVoxels &traced) {
+    constexpr std::size_t kBlock = 1024;
+    SourceValues out;
+    out.broad.resize(topo.size());
+    std::vector<PeakedLobes> peaked((topo.size() + kBlock - 1) / kBlock);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, peaked.size(), 1), [&](const auto &blocks) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
+        std::vector<Source> values;
+        for (std::size_t b = blocks.begin(); b != blocks.end(); ++b) {
+            const tbb::blocked_range<std::size_t> range(b * kBlock, std::min(topo.size(), (b + 1) * kBlock));
+            values.assign(range.size(), Source{});
+            insideSource(scene, topo, light, phi, range, values.data());
+            composeSource(topo, surface, range, values.data());
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                Source &S = values[i - range.begin()];
+                if (const std::int32_t t = tracedIndex.getValue(topo.coord[i]); t >= 0) S = traced.source[t];
+                out.broad[i] = S;
+                peaked[b].add(i, S);
             }
         }
     });
+    for (const PeakedLobes &block : peaked)
+        out.peaked.peaks.insert(out.peaked.peaks.end(), block.peaks.begin(), block.peaks.end());
     return out;
-}
-
-// Traced voxels hold their Monte Carlo source instead of the diffusion's, also where a surface's values are
-// carried beyond the snow: a thin object's surface voxels are traced, and its rim shows their light.
-void takeTraced(const SnowTopology &topo, const MonteCarloVoxels &traced, std::vector<Source> &source) {
-    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
-    for (auto it = traced.index->cbeginValueOn(); it; ++it)
-        if (const std::int32_t i = index.getValue(it.getCoord()); i >= 0 && *it >= 0) source[i] = traced.source[*it];
 }
 
 // REFERENCE quality: the radiance leaving each surface voxel, path traced from 12 directions around
 // its normal, fitted by least squares with a linear form, stored as that form's fitted lobe; on a sharp edge
 // from 12 directions around each air face's normal, stored as the lobe fitted to the faces' forms (edgeLobe).
 void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples, std::uint64_t seed,
-                      SurfaceValues<Source> &out, const SubProgress &progress) {
+                      SurfaceValues<BroadLobe> &out, const SubProgress &progress) {
     const MonteCarloReference reference(scene);
     const double h = scene.medium->voxelSize();
     std::vector<std::size_t> surface;
@@ -723,7 +780,7 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
 // weighted by how much their surface faces c (a voxel beside an edge takes the side's, one above it the
 // top's). False if no surface voxel is near.
 bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
-                   openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const std::vector<Source> &source,
+                   openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const SourceValues &source,
                    Source &S) {
     double total = 0.0;
     int count = 0;
@@ -735,8 +792,9 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 const std::int32_t j = index.getValue(c.offsetBy(-dx, -dy, -dz));
                 if (j < 0 || !topo.patches[j].isSurface()) continue;
                 const double w = std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
-                l0 += w * glm::dvec3(source[j].l0), l1 += w * glm::dmat3(source[j].l1);
-                peak0 += w * glm::dvec3(source[j].peak0), peak1 += w * glm::dvec3(source[j].peak1);
+                const Source v = source[j];
+                l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
+                peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
                 total += w, ++count;
             }
     if (count == 0) return false;
@@ -746,8 +804,9 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 for (int dz = -1; dz <= 1; ++dz) {
                     const std::int32_t j = index.getValue(c.offsetBy(dx, dy, dz));
                     if (j < 0 || !topo.patches[j].isSurface()) continue;
-                    l0 += glm::dvec3(source[j].l0), l1 += glm::dmat3(source[j].l1), total += 1.0;
-                    peak0 += glm::dvec3(source[j].peak0), peak1 += glm::dvec3(source[j].peak1);
+                    const Source v = source[j];
+                    l0 += glm::dvec3(v.l0), l1 += glm::dmat3(v.l1), total += 1.0;
+                    peak0 += glm::dvec3(v.peak0), peak1 += glm::dvec3(v.peak1);
                 }
     }
     S.l0 = glm::vec3(l0 / total);
@@ -756,23 +815,41 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
     return true;
 }
 
-using VoxelValue = std::pair<openvdb::Index, Source>;  // offset in its leaf, value
+using VoxelValue = std::pair<openvdb::Index, BroadLobe>;  // offset in its leaf, value
+
+// Source functions at voxels, in order: broad lobes, with the peaked lobes by place (PeakedLobes).
+struct VoxelValues {
+    std::vector<VoxelValue> values;
+    PeakedLobes peaked;
+
+    void add(openvdb::Index offset, const Source &S) {
+        peaked.add(values.size(), S);
+        values.emplace_back(offset, S);
+    }
+    void append(const VoxelValues &other, std::size_t begin, std::size_t end) {  // other's values [begin, end)
+        const auto it = std::lower_bound(other.peaked.peaks.begin(), other.peaked.peaks.end(), begin,
+                                         [](const PeakedLobes::Peak &p, std::size_t k) { return p.key < k; });
+        for (auto peak = it; peak != other.peaked.peaks.end() && peak->key < end; ++peak)
+            peaked.peaks.push_back({std::uint32_t(values.size() + peak->key - begin), peak->peak0, peak->peak1});
+        values.insert(values.end(), other.values.begin() + begin, other.values.begin() + end);
+    }
+    Source operator[](std::size_t k) const { return peaked.with(values[k].second, k); }
+};
 
 // Values by leaf of the grids' topology: leaf l's lie at [start[l], start[l + 1]).
-struct LeafValues {
-    std::vector<VoxelValue> values;
+struct LeafValues : VoxelValues {
     std::vector<std::size_t> start;
 
     explicit LeafValues(std::size_t leaves) : start(leaves + 1, 0) {}
     // Leaf by leaf, first's values and then `then`'s (consumed).
-    LeafValues(const LeafValues &first, std::vector<std::vector<VoxelValue>> &&then) : start{0} {
+    LeafValues(const LeafValues &first, std::vector<VoxelValues> &&then) : start{0} {
         std::size_t total = first.values.size();
-        for (const auto &leaf : then) total += leaf.size();
+        for (const auto &leaf : then) total += leaf.values.size();
         values.reserve(total);
         for (std::size_t l = 0; l < then.size(); ++l) {
-            values.insert(values.end(), first.values.begin() + first.start[l], first.values.begin() + first.start[l + 1]);
-            values.insert(values.end(), then[l].begin(), then[l].end());
-            then[l] = std::vector<VoxelValue>();  // (= {} would keep its capacity)
+            append(first, first.start[l], first.start[l + 1]);
+            append(then[l], 0, then[l].values.size());
+            then[l] = VoxelValues();  // (= {} would keep its capacity)
             start.push_back(values.size());
         }
     }
@@ -804,12 +881,15 @@ bool besideSnow(Medium::Accessor &density, const openvdb::Coord &c) {
     return false;
 }
 
-// Grid k of BakedGrids' value from a source function: l0, l1's x, y and z (RGB), then the peaked lobe's p0 and p1.
+// Grid k < 4 of BakedGrids' value from a broad lobe: l0, then l1's x, y and z (RGB).
+openvdb::Vec3f broadComponent(const BroadLobe &S, int k) {
+    return k == 0 ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z) : openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1]);
+}
+
+// Grid k of BakedGrids' value from a source function: the broad lobe's four, then the peaked lobe's p0 and p1.
 openvdb::Vec3f sourceComponent(const Source &S, int k) {
-    return k == 0   ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z)
-           : k <= 3 ? openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1])
-           : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
-                    : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
+    return k < 4 ? broadComponent(S, k) : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
+                                                 : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
 }
 
 // What the source grids hold, worked out once so that the grids can be written one at a time (a grid at
@@ -830,7 +910,7 @@ struct GridValues {
 
 // gathering: the values the gathering reads alone (those beside snow, besideSnow: the grids carry the surface's
 // radiance two voxels out, the gathering needs one).
-GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::vector<Source> &source,
+GridValues gridValues(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
                       const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
                       bool gathering) {
     const Medium &medium = *scene.medium;
@@ -839,7 +919,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
     out.topology = std::make_shared<openvdb::BoolTree>(medium.density().tree(), false, openvdb::TopologyCopy());
     openvdb::tools::dilateActiveValues(*out.topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
     openvdb::tree::LeafManager<const openvdb::BoolTree> leaves(*out.topology);
-    using Pairs = std::vector<std::vector<VoxelValue>>;
+    using Pairs = std::vector<VoxelValues>;
 
     // Average of the 26 neighbours accepted by `take`, read by `value`; false if none.
     auto average = [](const openvdb::Coord &c, const auto &take, const auto &value, Source &S) {
@@ -867,7 +947,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
                 Source S;
                 if (t >= 0) S = traced.source[t];
                 else if (index.getValue(c) >= 0 || !facingAverage(topo, c, index, source, S)) continue;
-                perLeaf[l].emplace_back(it.pos(), S);
+                perLeaf[l].add(it.pos(), S);
             }
     });
     const LeafValues carried(LeafValues(leaves.leafCount()), std::move(perLeaf));
@@ -889,7 +969,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
                 Source S;
                 const bool near = average(c, [&](const openvdb::Coord &n) {
                     return carriedSlot.getValue(n) >= 0 && (index.getValue(n) < 0 || tracedIndex.getValue(n) >= 0); },
-                                          [&](const openvdb::Coord &n) { return carried.values[carriedSlot.getValue(n)].second; },
+                                          [&](const openvdb::Coord &n) { return carried[carriedSlot.getValue(n)]; },
                                           S);
                 if (!near && density.getValue(c) > 0.0f) {
                     const glm::dvec3 centre = medium.voxelCentre(c);
@@ -900,7 +980,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
                         S.addPeak(beam, crossingAnisotropy(optics.g), -towardsBeam(scene, b, centre));
                     }
                 }
-                if (near || density.getValue(c) > 0.0f) perLeaf[l].emplace_back(it.pos(), S);
+                if (near || density.getValue(c) > 0.0f) perLeaf[l].add(it.pos(), S);
             }
     });
     out.beyond.emplace(carried, std::move(perLeaf));
@@ -909,7 +989,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const std::v
 }
 
 // Grid k of BakedGrids (l0, then l1's x, y and z) at the density's resolution.
-openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology &topo, const std::vector<Source> &source,
+openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology &topo, const SourceValues &source,
                                    const MonteCarloVoxels &traced, int k) {
     auto tree = std::make_shared<openvdb::Vec3fTree>(*values.topology, openvdb::Vec3f(0.0f), openvdb::TopologyCopy());
     openvdb::tree::LeafManager<openvdb::Vec3fTree> leaves(*tree);  // in the topology's leaf order
@@ -921,11 +1001,12 @@ openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology 
             for (auto it = leaf.beginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
                 if (const std::int32_t i = index.getValue(c); i >= 0 && tracedIndex.getValue(c) < 0)
-                    it.setValue(sourceComponent(source[i], k));
+                    it.setValue(k < 4 ? broadComponent(source.broad[i], k) : sourceComponent(source[i], k));
             }
             const LeafValues &beyond = *values.beyond;
             for (std::size_t m = beyond.start[l]; m < beyond.start[l + 1]; ++m)
-                leaf.setValueOnly(beyond.values[m].first, sourceComponent(beyond.values[m].second, k));
+                leaf.setValueOnly(beyond.values[m].first, k < 4 ? broadComponent(beyond.values[m].second, k)
+                                                                : sourceComponent(beyond[m], k));
         }
     });
     return tree;
@@ -952,7 +1033,7 @@ openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scal
 
 // The source grids at `scale` times the density's voxel size, one at a time: each grid at the density's
 // resolution is coarsened and freed before the next is written.
-BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::vector<Source> &source,
+BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
     GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
     values.at = nullptr;  // only BakedValuesSampler reads it
@@ -975,7 +1056,7 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const std::ve
 // thread.
 class BakedValuesSampler {
   public:
-    BakedValuesSampler(const SnowTopology &topo, const std::vector<Source> &source, const MonteCarloVoxels &traced,
+    BakedValuesSampler(const SnowTopology &topo, const SourceValues &source, const MonteCarloVoxels &traced,
                        const GridValues &values)
         : source_(source), beyond_(*values.beyond), index_(*topo.index), traced_(*traced.index), at_(*values.at) {}
 
@@ -985,7 +1066,7 @@ class BakedValuesSampler {
             for (int a = 0; a < 2; ++a)
                 for (int b = 0; b < 2; ++b)
                     for (int c = 0; c < 2; ++c) {
-                        const Source &S = valueAt(lower.offsetBy(a, b, c));
+                        const Source S = valueAt(lower.offsetBy(a, b, c));
                         for (int g = 0; g < int(BakedGrids::kCount); ++g) corners_[g][a][b][c] = sourceComponent(S, g);
                     }
             cell_ = lower, cached_ = true;
@@ -998,14 +1079,13 @@ class BakedValuesSampler {
     }
 
   private:
-    const Source &valueAt(const openvdb::Coord &c) {
-        static const Source kNone{};
+    Source valueAt(const openvdb::Coord &c) {
         if (const std::int32_t i = index_.getValue(c); i >= 0 && traced_.getValue(c) < 0) return source_[i];
         const std::int32_t k = at_.getValue(c);
-        return k >= 0 ? beyond_.values[k].second : kNone;
+        return k >= 0 ? beyond_[k] : Source{};
     }
 
-    const std::vector<Source> &source_;
+    const SourceValues &source_;
     const LeafValues &beyond_;
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_, traced_, at_;
     bool cached_ = false;
@@ -1017,7 +1097,7 @@ class BakedValuesSampler {
 // of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch), read
 // from the bake's values as its grids would hold them.
 SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                                      const std::vector<Source> &source, const MonteCarloVoxels &traced,
+                                      const SourceValues &source, const MonteCarloVoxels &traced,
                                       const GridValues &values, const SkyRays &rays, std::uint64_t seed,
                                       const SubProgress &progress) {
     SurfaceValues<glm::vec3> out(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
@@ -1088,7 +1168,7 @@ constexpr double kSolvedProgress = 0.9, kSolvedProgressReference = 0.5;
 // first), a diffusion solve per channel. One channel at a time, its system assembled and its solver built
 // again each pass: keeping the three tripled the bake's memory, and rebuilding them costs a few per cent of a
 // solve. All the solve's data is freed on return, before the grids are written.
-std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
                                  const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
                                  int passes, Progress &p, Stopwatch &clock, BakeStats &stats) {
     const bool reference = settings.quality == BakeQuality::Reference;
@@ -1096,7 +1176,7 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
     std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
     for (auto &channel : phi) channel.assign(topo.size(), 0.0);
     SurfaceValues<glm::vec3> fromSnow;  // W/m^2 gathered from other snow onto surface patches (after the first pass)
-    std::vector<Source> source;
+    SourceValues source;
     for (int pass = 0; pass < passes; ++pass) {
         const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
         if (pass > 0) {
@@ -1106,7 +1186,7 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
                 const GridValues values = gridValues(scene, topo, source, traced, preset, settings, true);
                 fromSnow = snowIrradiance(scene, topo, light, source, traced, values, SkyRays(preset.skySamples),
                                           settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
-                source = std::vector<Source>();  // freed (= {} would keep its capacity)
+                source = SourceValues();  // freed (= {} would keep its vectors' capacity)
             }
             releaseFreedMemory();  // the previous pass's values
             clock.lap(&BakeStats::Phases::gather);
@@ -1129,13 +1209,12 @@ std::vector<Source> solveSources(const Scene &scene, const SnowTopology &topo, c
             }
             surfaceLight(scene, topo, light, system, phi[c], c, leaving);
         }
-        SurfaceValues<Source> surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
+        SurfaceValues<BroadLobe> surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
         if (reference && pass + 1 == passes) {
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
         }
-        source = composeSource(topo, insideSource(scene, topo, light, phi), surface);
-        takeTraced(topo, traced, source);
+        source = sourceFunction(scene, topo, light, phi, surface, traced);
         clock.lap(&BakeStats::Phases::solve);
     }
     return source;
@@ -1178,7 +1257,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                      SubProgress(&p, 0.4, 0.4));
     local.tracedVoxels = traced.source.size();
     clock.lap(&BakeStats::Phases::trace);
-    const std::vector<Source> source = solveSources(scene, topo, light, traced, preset, settings, passes, p, clock, local);
+    const SourceValues source = solveSources(scene, topo, light, traced, preset, settings, passes, p, clock, local);
     light = IncidentLight{};  // the grids need it no more
     keepIndexAndPatches(topo);
     p.report(reference ? 0.95 : kSolvedProgress, "Writing the grids");
