@@ -137,10 +137,13 @@ struct PeakedLobes {
     void add(std::size_t key, const Source &S) {  // keys in increasing order
         if (S.peak0 != glm::vec3(0.0f) || S.peak1 != glm::vec3(0.0f)) peaks.push_back({std::uint32_t(key), S.peak0, S.peak1});
     }
+    std::vector<Peak>::const_iterator from(std::size_t key) const {  // the first peak of key >= key
+        return std::lower_bound(peaks.begin(), peaks.end(), key, [](const Peak &p, std::size_t k) { return p.key < k; });
+    }
     Source with(const BroadLobe &broad, std::size_t key) const {  // the source function of that broad lobe and key
         Source S;
         static_cast<BroadLobe &>(S) = broad;
-        const auto it = std::lower_bound(peaks.begin(), peaks.end(), key, [](const Peak &p, std::size_t k) { return p.key < k; });
+        const auto it = from(key);
         if (it != peaks.end() && it->key == key) S.peak0 = it->peak0, S.peak1 = it->peak1;
         return S;
     }
@@ -514,6 +517,24 @@ void insideSource(const Scene &scene, const SnowTopology &topo, const IncidentLi
     }
 }
 
+// The light leaving voxel i's neighbourhood towards n (leavingOf(j), W) and its area (m^2): the surface voxels
+// of its 3^3 block weighted by the cosine between n and their normals, voxels on a sharp edge other than i left
+// out (surfaceRadiance says why).
+template <typename T, typename LeavingOf>
+std::pair<T, double> neighbourhoodOutflow(const SnowTopology &topo, std::size_t i, const glm::dvec3 &n,
+                                          const LeavingOf &leavingOf) {
+    T leaving(0.0);
+    double area = 0.0;
+    for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
+        const std::uint32_t j = topo.neighbourhood[k];
+        const SurfacePatch &other = topo.patches[j];
+        const double w = other.sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, other.normal));
+        leaving += w * leavingOf(j);
+        area += w * other.area;
+    }
+    return {leaving, area};
+}
+
 // Channel c's light leaving each surface voxel, from its solve.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
                   const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
@@ -598,13 +619,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                         if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
                     return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
                 });
-                double leaving = 0.0, area = 0.0;
-                for (std::size_t m = topo.neighbourhoodStart[i]; m < topo.neighbourhoodStart[i + 1]; ++m) {
-                    const std::uint32_t j = topo.neighbourhood[m];
-                    const SurfacePatch &other = topo.patches[j];
-                    const double w = other.sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, other.normal));
-                    leaving += w * out[j].leaving[c], area += w * other.area;
-                }
+                const auto [leaving, area] =
+                    neighbourhoodOutflow<double>(topo, i, n, [&](std::size_t j) { return double(out[j].leaving[c]); });
                 const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
                 faces.push_back({n, r0 / own + exitance * (3.0 / 7.0 / kPi), r1 / own + exitance * 6.0 / 7.0 / kPi * n});
             }
@@ -630,14 +646,8 @@ SurfaceValues<BroadLobe> surfaceRadiance(const VolumeOptics &optics, const SnowT
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
             const glm::dvec3 &n = topo.patches[i].normal;
-            glm::dvec3 leaving(0.0);
-            double area = 0.0;
-            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
-                const std::uint32_t j = topo.neighbourhood[k];
-                const double w = topo.patches[j].sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, topo.patches[j].normal));
-                leaving += w * glm::dvec3(solved[j].leaving);
-                area += w * topo.patches[j].area;
-            }
+            const auto [leaving, area] =
+                neighbourhoodOutflow<glm::dvec3>(topo, i, n, [&](std::size_t j) { return glm::dvec3(solved[j].leaving); });
             const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
             const double own = kPi * topo.patches[i].area;
             const BroadLobe &returned = solved[i].returned;
@@ -827,9 +837,7 @@ struct VoxelValues {
         values.emplace_back(offset, S);
     }
     void append(const VoxelValues &other, std::size_t begin, std::size_t end) {  // other's values [begin, end)
-        const auto it = std::lower_bound(other.peaked.peaks.begin(), other.peaked.peaks.end(), begin,
-                                         [](const PeakedLobes::Peak &p, std::size_t k) { return p.key < k; });
-        for (auto peak = it; peak != other.peaked.peaks.end() && peak->key < end; ++peak)
+        for (auto peak = other.peaked.from(begin); peak != other.peaked.peaks.end() && peak->key < end; ++peak)
             peaked.peaks.push_back({std::uint32_t(values.size() + peak->key - begin), peak->peak0, peak->peak1});
         values.insert(values.end(), other.values.begin() + begin, other.values.begin() + end);
     }
