@@ -41,8 +41,7 @@ _BAKED_NODES = ("Firn Density", "Firn Extinction", "Firn Absorption", "Firn Emis
                 "Firn Source Peak L1", "Firn Peak", "Firn Lobes", "Firn Output")
 _BRANCHES = ("", " Grains")  # the node names' suffixes: without and with sub-balls
 _SINGLE_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Absorption", "Firn Single", "Firn Output")
-BAKED_GRIDS = ("firn_source", "firn_source_x", "firn_source_y", "firn_source_z", "firn_source_peak",
-               "firn_source_peak_l1")  # docs/vdb-contract.md
+BAKED_GRIDS = firncore.BAKED_GRID_NAMES  # the core's names (docs/vdb-contract.md), not a copy of them
 
 
 def is_snow_material(material):
