@@ -175,7 +175,7 @@ def cases():
     add(Case("spray_lumps", "24 lumps r 0.5-1.5 cm on 1.5 cm voxels (partly filled), omega 0.9999, g 0.85",
              spray(0.015) * 100, 0.015, 400.0, 100.0, (0.9999,) * 3, 0.85, views=ROUND, samples=16384))
     add(Case("spray_dense", "the lumps on 1 cm voxels, denser (tau up to 20 per voxel), omega 0.999, g 0.85",
-             spray(0.01) * 300, 0.01, 2000.0, 300.0, (0.999,) * 3, 0.85, views=ROUND, samples=2048))
+             spray(0.01) * 300, 0.01, 2000.0, 300.0, (0.999,) * 3, 0.85, views=ROUND, samples=16384))
     return out
 
 
