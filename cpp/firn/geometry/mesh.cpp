@@ -15,11 +15,6 @@
 
 namespace firn {
 
-glm::vec3 TriangleMesh::crossNormal(std::size_t t) const {
-    const glm::vec3 a = vertex(t, 0), b = vertex(t, 1), c = vertex(t, 2);
-    return glm::cross(b - a, c - a);
-}
-
 double TriangleMesh::area(std::size_t t) const { return 0.5 * glm::length(crossNormal(t)); }
 
 namespace {
