@@ -230,6 +230,10 @@ void finishLeaf(const LeafField &in, const RasterSettings &s, FloatLeaf &surface
     FloatLeaf::NodeMaskType nearSurface, snow;
     for (int i = 0; i < kLeafVoxels; ++i) {
         const double field = in.field[i];
+        if (field == 0.0) {  // no ball reaches it: outside (+band), no snow, as the general case below gives
+            distances[i] = float(band);
+            continue;
+        }
         const double gradient = glm::length(glm::vec3(in.gradX[i], in.gradY[i], in.gradZ[i]));
         const double toIso = (kSnowIsoValue - field) / std::max(gradient, 1e-12);
         // Half a voxel into the object, so that the voxel on its surface is whole snow: no thin gap below.
