@@ -46,7 +46,7 @@ def _struct_array(items, words):
     stride = 4 * words
     if first == 0 or last - first != stride * (count - 1) or (count > 1 and items[1].as_pointer() - first != stride):
         return None
-    return np.ctypeslib.as_array((ctypes.c_uint32 * (words * count)).from_address(first)).reshape(count, words)
+    return np.frombuffer((ctypes.c_uint32 * (words * count)).from_address(first), np.uint32).reshape(count, words)
 
 
 def _loop_triangle_corners(mesh):
