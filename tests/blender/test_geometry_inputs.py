@@ -247,6 +247,24 @@ def test_shape_keys_and_edit_mode_edits_shape_the_targets(clean_scene):
     assert np.allclose(vertices[:, 2], 0.25)
 
 
+def test_triangle_corners_read_in_place_are_blenders_own(clean_scene):
+    # The corners are read from Blender's MLoopTri and MLoop arrays in place (scene_geometry._loop_triangle_corners):
+    # they must be the loop triangles' `vertices` as Blender gives them, for n-gons and for a modifier's to_mesh().
+    bpy.ops.mesh.primitive_cylinder_add(vertices=7)  # 7-gon caps
+    bpy.ops.mesh.primitive_monkey_add(location=(3.0, 0.0, 0.0))
+    bpy.context.object.modifiers.new("Subdivision", "SUBSURF")
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    for obj in bpy.context.scene.objects:
+        evaluated = obj.evaluated_get(depsgraph)
+        for mesh in (evaluated.data, evaluated.to_mesh()):
+            mesh.calc_loop_triangles()
+            expected = np.empty(len(mesh.loop_triangles) * 3, np.int32)
+            mesh.loop_triangles.foreach_get("vertices", expected)
+            assert scene_geometry._struct_array(mesh.loop_triangles, 4) is not None  # the in-place path is taken
+            assert np.array_equal(scene_geometry._loop_triangle_corners(mesh), expected)
+        evaluated.to_mesh_clear()
+
+
 def test_collection_instance_shelters_the_ground(clean_scene):
     ground = add_plane(4.0)
     bpy.ops.mesh.primitive_cube_add(size=1.0, scale=(1.0, 1.0, 0.05))

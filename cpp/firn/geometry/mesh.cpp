@@ -15,11 +15,6 @@
 
 namespace firn {
 
-glm::vec3 TriangleMesh::crossNormal(std::size_t t) const {
-    const glm::vec3 a = vertex(t, 0), b = vertex(t, 1), c = vertex(t, 2);
-    return glm::cross(b - a, c - a);
-}
-
 double TriangleMesh::area(std::size_t t) const { return 0.5 * glm::length(crossNormal(t)); }
 
 namespace {
@@ -90,15 +85,18 @@ TriangleMesh makeTriangleMesh(const float *positions, std::size_t vertexCount, c
     return mesh;
 }
 
+namespace {
+
 // Each mesh's triangles offset in parallel (a million: 0.03 s serial, on the way to Embree).
-TriangleMesh merge(const std::vector<TriangleMesh> &meshes) {
+TriangleMesh joined(const std::vector<const TriangleMesh *> &meshes) {
     TriangleMesh out;
     std::size_t vertices = 0, triangles = 0;
-    for (const TriangleMesh &m : meshes) vertices += m.positions.size(), triangles += m.triangles.size();
+    for (const TriangleMesh *m : meshes) vertices += m->positions.size(), triangles += m->triangles.size();
     out.positions.reserve(vertices);
     out.triangles.resize(triangles);
     std::size_t at = 0;
-    for (const TriangleMesh &m : meshes) {
+    for (const TriangleMesh *part : meshes) {
+        const TriangleMesh &m = *part;
         const auto offset = static_cast<unsigned>(out.positions.size());
         out.positions.insert(out.positions.end(), m.positions.begin(), m.positions.end());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.triangles.size()),
@@ -110,6 +108,16 @@ TriangleMesh merge(const std::vector<TriangleMesh> &meshes) {
         out.droppedDegenerate += m.droppedDegenerate;
     }
     return out;
+}
+
+}  // namespace
+
+TriangleMesh merge(std::initializer_list<const TriangleMesh *> meshes) { return joined(meshes); }
+
+TriangleMesh merge(const std::vector<TriangleMesh> &meshes) {
+    std::vector<const TriangleMesh *> parts;
+    for (const TriangleMesh &m : meshes) parts.push_back(&m);
+    return joined(parts);
 }
 
 }  // namespace firn

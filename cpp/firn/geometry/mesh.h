@@ -1,8 +1,10 @@
 #pragma once
 
 #include <cstddef>
+#include <initializer_list>
 #include <vector>
 
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
 namespace firn {
@@ -17,8 +19,12 @@ struct TriangleMesh {
     std::size_t triangleCount() const { return triangles.size(); }
     bool empty() const { return triangles.empty(); }
     glm::vec3 vertex(std::size_t triangle, int corner) const { return positions[triangles[triangle][corner]]; }
-    // Unnormalized geometric normal (length = 2 * area, m^2), counter-clockwise winding.
-    glm::vec3 crossNormal(std::size_t triangle) const;
+    // Unnormalized geometric normal (length = 2 * area, m^2), counter-clockwise winding. Inline: passes over
+    // a million triangles call it several times each.
+    glm::vec3 crossNormal(std::size_t triangle) const {
+        const glm::vec3 a = vertex(triangle, 0), b = vertex(triangle, 1), c = vertex(triangle, 2);
+        return glm::cross(b - a, c - a);
+    }
     double area(std::size_t triangle) const;  // m^2
 };
 
@@ -27,7 +33,9 @@ struct TriangleMesh {
 TriangleMesh makeTriangleMesh(const float *positions, std::size_t vertexCount, const unsigned *indices,
                               std::size_t triangleCount);
 
-// Joins meshes (targets of one snow layer, or every occluder) into one.
+// Joins meshes (targets of one snow layer, or every occluder) into one. By pointer: a list of meshes
+// ({a, b}) would copy each first (a million triangles: 18 MB, serial).
+TriangleMesh merge(std::initializer_list<const TriangleMesh *> meshes);
 TriangleMesh merge(const std::vector<TriangleMesh> &meshes);
 
 }  // namespace firn

@@ -78,7 +78,7 @@ SnowBands generateSnowBands(const TriangleMesh &targets, const TriangleMesh &occ
     SnowBands out;
     TriangleMesh oriented = targets;
     out.openSurfaces = orientOpenSurfaces(oriented, -glm::normalize(settings.direction));
-    const RayCaster shelter(merge({oriented, occluders}));
+    const RayCaster shelter(merge({&oriented, &occluders}));
     const double fine = settings.effectiveVoxelSize();
     const std::vector<LodBand> bands =
         lodBands(camera, fine, settings.spacing, farthestVertex(oriented, camera.position), kMaxBands);

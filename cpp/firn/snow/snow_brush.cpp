@@ -59,7 +59,7 @@ SnowCanvas::SnowCanvas(std::vector<Metaball> balls, SnowGrids grids, const SnowL
                        const TriangleMesh &targets, const TriangleMesh &occluders)
     : settings_((settings.validate(), settings)), raster_(settings.raster()), columns_(settings.layout()),
       balls_(std::move(balls)), live_(balls_.size(), true), index_(balls_, raster_.voxelSize),
-      grids_(std::move(grids)), targetTriangles_(targets.triangleCount()), scene_(merge({targets, occluders})) {
+      grids_(std::move(grids)), targetTriangles_(targets.triangleCount()), scene_(merge({&targets, &occluders})) {
     if (!grids_.density || !grids_.surface) throw InvalidArgument("the snow needs its density and surface grids");
     const double h = grids_.surface->voxelSize()[0];
     if (std::abs(h - raster_.voxelSize) > 1e-6 * raster_.voxelSize)

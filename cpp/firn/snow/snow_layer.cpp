@@ -94,7 +94,7 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
 
     TriangleMesh oriented = targets;
     layer.openSurfaces = orientOpenSurfaces(oriented, -glm::normalize(settings.direction));
-    const RayCaster shelter(merge({oriented, occluders}));
+    const RayCaster shelter(merge({&oriented, &occluders}));
     // Sure refusals first: placing and sheltering sites grows with the area (minutes on a large plane).
     checkVoxelBudget(leastDepthWeight(depthWeights) * snowVoxelLowerBound(oriented, shelter, settings.snowfall(), settings.depth,
                                                        layer.voxelSize),

@@ -151,8 +151,9 @@ struct LeafField {
 };
 
 // floor or ceil of a voxel coordinate, clamped to [lo, hi] before the conversion to int (NaN gives lo): an edited
-// ball's base or normal may put its z-range anywhere (UBSan: float-to-int overflow).
-int clampedIndex(float x, int lo, int hi) { return x >= float(lo) ? (x <= float(hi) ? int(x) : hi) : lo; }
+// ball's base or normal may put its z-range anywhere (UBSan: float-to-int overflow). As selects (std::max(lo, NaN)
+// is lo), so that a row of columns vectorizes.
+int clampedIndex(float x, int lo, int hi) { return int(std::min(float(hi), std::max(float(lo), x))); }
 
 // An AVX2 clone picked at load time where the processor has it (GCC/Clang on x86): a leaf column of 8 floats is
 // one register. AVX2 alone, without FMA, so both clones round every operation alike and the grids come out
@@ -177,21 +178,31 @@ void gatherLeaf(const openvdb::Coord &origin, const std::uint32_t *ballIds, std:
         const int xHi = std::min(origin.x() + kLeafDim - 1, int(std::floor((c.x + b.radius) / h)));
         const int yLo = std::max(origin.y(), int(std::ceil((c.y - b.radius) / h)));
         const int yHi = std::min(origin.y() + kLeafDim - 1, int(std::floor((c.y + b.radius) / h)));
+        const bool onBase = normal.z > 0.05f;  // else steep: the base does not cut the columns
         for (int x = xLo; x <= xHi; ++x) {
             const float dx = x * h - c.x;
-            for (int y = yLo; y <= yHi; ++y) {
-                const float dy = y * h - c.y;
+            // Each of the row's 8 columns at once (one register a quantity): the z-range inside the sphere and
+            // not far below the ball's surface, as voxel indices. A column outside the sphere gets an empty range.
+            std::array<float, kLeafDim> dyOf, lateralOf;
+            std::array<int, kLeafDim> kLoOf, kHiOf;
+            for (int j = 0; j < kLeafDim; ++j) {
+                const float dy = (origin.y() + j) * h - c.y;
                 const float rest = r2 - dx * dx - dy * dy;
-                if (rest <= 0.0f) continue;
-                // The z-range inside the sphere and not far below the ball's surface (unless that is steep).
-                const float half = std::sqrt(rest);
-                float zLo = c.z - half;
+                const float half = std::sqrt(std::max(rest, 0.0f));
                 const float lateral = normal.x * dx + normal.y * dy;
-                if (normal.z > 0.05f) zLo = std::max(zLo, c.z + (lowest - lateral) / normal.z);
+                const float base = c.z + (lowest - lateral) / normal.z;
+                const float zLo = onBase ? std::max(c.z - half, base) : c.z - half;
                 const int kLo = clampedIndex(std::ceil(zLo / h), zLeafLo, zLeafHi + 1);
-                const int kHi = clampedIndex(std::floor((c.z + half) / h), zLeafLo - 1, zLeafHi);
+                dyOf[j] = dy, lateralOf[j] = lateral;
+                kLoOf[j] = rest > 0.0f ? kLo : zLeafHi + 1;
+                kHiOf[j] = clampedIndex(std::floor((c.z + half) / h), zLeafLo - 1, zLeafHi);
+            }
+            for (int y = yLo; y <= yHi; ++y) {
+                const int j = y - origin.y();
+                const int kLo = kLoOf[j], kHi = kHiOf[j];
                 if (kLo > kHi) continue;
-                const int row = ((x - origin.x()) << 6) | ((y - origin.y()) << 3);
+                const float dy = dyOf[j], lateral = lateralOf[j];
+                const int row = ((x - origin.x()) << 6) | (j << 3);
                 const float dxy2 = dx * dx + dy * dy;
                 // The whole column of the leaf, masked to [kLo, kHi]: a fixed, branch-free loop that vectorizes.
                 for (int k = 0; k < kLeafDim; ++k) {
@@ -230,6 +241,10 @@ void finishLeaf(const LeafField &in, const RasterSettings &s, FloatLeaf &surface
     FloatLeaf::NodeMaskType nearSurface, snow;
     for (int i = 0; i < kLeafVoxels; ++i) {
         const double field = in.field[i];
+        if (field == 0.0) {  // no ball reaches it: outside (+band), no snow, as the general case below gives
+            distances[i] = float(band);
+            continue;
+        }
         const double gradient = glm::length(glm::vec3(in.gradX[i], in.gradY[i], in.gradZ[i]));
         const double toIso = (kSnowIsoValue - field) / std::max(gradient, 1e-12);
         // Half a voxel into the object, so that the voxel on its surface is whole snow: no thin gap below.

@@ -57,10 +57,9 @@ std::pair<double, double> openFraction(const TriangleMesh &targets, const RayCas
 
 double snowVoxelLowerBound(const TriangleMesh &targets, const RayCaster &shelter, const SnowfallSettings &snowfall,
                            double depth, double voxelSize, int samples) {
-    const std::vector<double> covered = coveredAreas(targets, snowfall.maxSlope);
-    std::vector<double> cdf(covered.size());
+    std::vector<double> cdf = coveredAreas(targets, snowfall.maxSlope);  // summed in place
     double sum = 0.0;
-    for (std::size_t t = 0; t < covered.size(); ++t) cdf[t] = sum += covered[t];
+    for (double &c : cdf) c = sum += c;
     if (!(sum > 0.0)) return 0.0;
     const auto [f, error] = openFraction(targets, shelter, snowfall, cdf, samples);
     return sum * std::max(0.0, f - 3.0 * error) * depth / (voxelSize * voxelSize * voxelSize);

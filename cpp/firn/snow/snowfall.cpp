@@ -46,11 +46,29 @@ struct TriangleSetup {
     float cover;  // slope part only
 };
 
-TriangleSetup setupTriangle(const TriangleMesh &mesh, std::size_t t, double maxSlope) {
-    const glm::vec3 n = glm::normalize(mesh.crossNormal(t));
+TriangleSetup setupTriangle(const glm::vec3 &cross, double maxSlope) {
+    const glm::vec3 n = glm::normalize(cross);
     const double cosUp = std::clamp(static_cast<double>(glm::dot(n, kUp)), -1.0, 1.0);
     return {n, static_cast<float>(slopeCover(std::acos(cosUp), maxSlope))};
 }
+
+// Whether setupTriangle(cross, maxSlope).cover is not <= 0, as it would say, but without its acos and cos
+// where the slope is clearly below or above maxSlope (1e-6 in cosine: far wider than their rounding, and a
+// cover surely above zero there). Most triangles of a large scene are one or the other.
+class SnowSlope {
+  public:
+    explicit SnowSlope(double maxSlope) : maxSlope_(maxSlope), cosMax_(std::cos(maxSlope)) {}
+    bool holds(const glm::vec3 &cross) const {
+        constexpr double kSure = 1e-6;
+        const double cosUp = static_cast<double>(glm::dot(glm::normalize(cross), kUp));
+        if (cosUp >= std::max(cosMax_, 0.0) + kSure) return true;
+        if (cosUp <= cosMax_ - kSure) return false;
+        return !(setupTriangle(cross, maxSlope_).cover <= 0.0f);  // near maxSlope, or not finite
+    }
+
+  private:
+    double maxSlope_, cosMax_;
+};
 
 void checkSiteBudget(double sites, double maxSites) {
     if (sites <= maxSites) return;
@@ -118,16 +136,22 @@ std::vector<LandingSite> findLandingSites(const TriangleMesh &targets, const Ray
     // Pass 1: how many sites each triangle gets (seeded per triangle: independent of threads), refused before
     // anything is placed when a huge surface or a tiny spacing would make more than the budget allows.
     std::vector<double> expected(nTri, 0.0);
+    const SnowSlope snowSlope(settings.maxSlope);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nTri), [&](const tbb::blocked_range<std::size_t> &r) {
-        for (std::size_t t = r.begin(); t != r.end(); ++t)
-            if (!(setupTriangle(targets, t, settings.maxSlope).cover <= 0.0f))
-                expected[t] = targets.area(t) / (settings.spacing * settings.spacing);
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            const glm::vec3 cross = targets.crossNormal(t);
+            if (snowSlope.holds(cross))
+                expected[t] = 0.5 * glm::length(cross) / (settings.spacing * settings.spacing);  // area / spacing^2
+        }
     });
     checkSiteBudget(std::accumulate(expected.begin(), expected.end(), 0.0), settings.maxSites);
     std::vector<std::size_t> offsets(nTri + 1, 0);
-    tbb::parallel_for(std::size_t(0), nTri, [&](std::size_t t) {
-        Rng rng(settings.seed, t);
-        offsets[t + 1] = siteCount(expected[t], rng);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nTri), [&](const tbb::blocked_range<std::size_t> &r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            if (expected[t] == 0.0) continue;  // it draws none: siteCount(0) is 0 whatever the draw
+            Rng rng(settings.seed, t);
+            offsets[t + 1] = siteCount(expected[t], rng);
+        }
     });
     std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
     std::vector<LandingSite> sites(offsets.back());
@@ -141,7 +165,7 @@ std::vector<LandingSite> findLandingSites(const TriangleMesh &targets, const Ray
         for (std::size_t t = r.begin(); t != r.end(); ++t) {
             const std::size_t count = offsets[t + 1] - offsets[t];
             if (count == 0) continue;
-            const TriangleSetup tri = setupTriangle(targets, t, settings.maxSlope);
+            const TriangleSetup tri = setupTriangle(targets.crossNormal(t), settings.maxSlope);
             Rng rng(settings.seed, t);
             siteCount(expected[t], rng);  // replay pass 1's draw
             const double shiftU = rng.uniform(), shiftV = rng.uniform();
