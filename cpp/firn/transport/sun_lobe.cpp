@@ -90,6 +90,9 @@ Reflection halfSpaceReflection(double g, double mu0, double y, long photons, std
     return out;
 }
 
+// The linear form's basis functions beside the constant: mu - 2/3 and t . w (no flux of their own).
+std::array<double, 2> linearBasis(const Reflection::Bin &bin) { return {bin.mu - 2.0 / 3.0, bin.forward}; }
+
 // Least squares in relative error of R / A - 1 - sum_j x_j f_j(bin) over the bins, weighted by projected solid
 // angle and reweighted by the current fit rather than by the noisy bins (weighting by 1 / R_bin^2 would favour
 // bins that happen to have few photons). Returns the relative error's weighted sum of squares.
@@ -100,8 +103,9 @@ double fitRelative(const Reflection &r, const Basis &basis, std::array<double, N
     for (int iteration = 0; iteration < 8; ++iteration) {
         std::array<std::array<double, N + 1>, N> m{};  // normal equations, right-hand side last
         error = 0.0;
-        for (const Reflection::Bin &bin : r.bins) {
-            const std::array<double, N> f = basis(bin);
+        for (std::size_t b = 0; b < r.bins.size(); ++b) {
+            const Reflection::Bin &bin = r.bins[b];
+            const std::array<double, N> f = basis(b);
             double fit = 1.0;
             for (int j = 0; j < N; ++j) fit += x[j] * f[j];
             fit = std::max(0.05, fit);
@@ -124,24 +128,50 @@ double fitRelative(const Reflection &r, const Basis &basis, std::array<double, N
     return error;
 }
 
-// The peak's shape, normalized to exitance 1 (over pi) through the surface: lobeRadiance(1, 3 k m, w) over its
-// exitance / pi, m at `elevation` above the horizon towards the sun's travel.
+// The peaks the fit chooses from: k and elevation on a grid.
+constexpr int kPeakKs = 14, kPeakElevations = 13;
+double peakK(int i) { return 0.3 + 0.05 * i; }
+double peakElevation(int j) { return (kMinPeakElevationDegrees + 5.0 * j) * kPi / 180.0; }
+
+// A peak's shape over the bins, scaled to exitance 1 (over pi): bin b's mean radiance (over projected solid
+// angle) of lobeRadiance(mean, 3 k m, w), m at `elevation` above the horizon towards the sun's travel. Bin means
+// (8 x 8 points a bin), as the Monte Carlo's counts are, so that a sharp lobe near the horizon keeps its flux.
 struct PeakShape {
-    double k, elevation, exitance;  // exitance / pi of the lobe of l0 = 1
-    glm::dvec3 axis;
-    double operator()(const Reflection::Bin &bin) const {
-        const glm::dvec3 w(bin.forward, std::sqrt(std::max(0.0, 1.0 - bin.mu * bin.mu - bin.forward * bin.forward)), bin.mu);
-        return lobeRadiance(1.0, 3.0 * k * axis, w) / exitance;
-    }
+    double k = 0.0, elevation = 0.0, mean = 0.0;
+    std::vector<double> bins;
 };
 
-PeakShape peakShape(const Reflection &r, double k, double elevation) {
-    PeakShape shape{k, elevation, 0.0, glm::dvec3(std::cos(elevation), 0.0, std::sin(elevation))};
-    double exitance = 0.0;  // over the bins' centres (the fit's own quadrature; the side y >= 0 mirrors y <= 0)
-    shape.exitance = 1.0;
-    for (const Reflection::Bin &bin : r.bins) exitance += bin.measure * shape(bin);
-    shape.exitance = exitance;
-    return shape;
+const std::vector<PeakShape> &peakShapes() {
+    static const std::vector<PeakShape> shapes = [] {
+        constexpr int kSub = 8;
+        const double dPhi = kPi / kPhiBins;
+        std::vector<PeakShape> out;
+        for (int i = 0; i < kPeakKs; ++i)
+            for (int j = 0; j < kPeakElevations; ++j) {
+                PeakShape shape{peakK(i), peakElevation(j), 0.0, {}};
+                const glm::dvec3 l1 = 3.0 * shape.k * glm::dvec3(std::cos(shape.elevation), 0.0, std::sin(shape.elevation));
+                double exitance = 0.0;  // over pi, of the lobe of l0 = 1
+                for (int m = 0; m < kMuBins; ++m)
+                    for (int p = 0; p < kPhiBins; ++p) {
+                        double sum = 0.0, weight = 0.0;
+                        for (int a = 0; a < kSub; ++a)
+                            for (int b = 0; b < kSub; ++b) {
+                                const double mu = (m + (a + 0.5) / kSub) / kMuBins, phi = (p + (b + 0.5) / kSub) * dPhi;
+                                const double s = std::sqrt(1.0 - mu * mu);
+                                sum += mu * lobeRadiance(1.0, l1, glm::dvec3(s * std::cos(phi), s * std::sin(phi), mu));
+                                weight += mu;
+                            }
+                        const double muLo = double(m) / kMuBins, muHi = double(m + 1) / kMuBins;
+                        shape.bins.push_back(sum / weight);
+                        exitance += 2.0 * dPhi * 0.5 * (muHi * muHi - muLo * muLo) / kPi * sum / weight;
+                    }
+                for (double &v : shape.bins) v /= exitance;
+                shape.mean = 1.0 / exitance;
+                out.push_back(std::move(shape));
+            }
+        return out;
+    }();
+    return shapes;
 }
 }  // namespace
 
@@ -151,13 +181,13 @@ SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t s
     lobe.albedo = r.albedo;
     if (r.albedo <= 0.0) return lobe;
     std::array<double, 2> x{};
-    fitRelative<2>(r, [](const Reflection::Bin &bin) { return std::array<double, 2>{bin.mu - 2.0 / 3.0, bin.forward}; }, x);
+    fitRelative<2>(r, [&](std::size_t b) { return linearBasis(r.bins[b]); }, x);
     lobe.b = x[0], lobe.c = x[1];
     lobe.a = 1.0 - 2.0 * lobe.b / 3.0;
     return lobe;
 }
 
-constexpr bool kSolid = false;
+constexpr bool kSolid = true;
 SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t seed) {
     const Reflection r = halfSpaceReflection(g, mu0, y, photons, seed);
     SunPeak best;
@@ -167,28 +197,26 @@ SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t s
     double least = std::numeric_limits<double>::infinity();
     {
         std::array<double, 2> x{};
-        least = fitRelative<2>(r, [](const Reflection::Bin &bin) { return std::array<double, 2>{bin.mu - 2.0 / 3.0, bin.forward}; }, x, kSolid);
+        least = fitRelative<2>(r, [&](std::size_t b) { return linearBasis(r.bins[b]); }, x, kSolid);
         best.b = x[0], best.c = x[1];
     }
-    constexpr double kDegree = kPi / 180.0;
-    for (int ik = 0; ik <= 13; ++ik)
-        for (int ie = 0; ie <= 12; ++ie) {
-            const PeakShape peak = peakShape(r, 0.3 + 0.05 * ik, (kMinPeakElevationDegrees + 5.0 * ie) * kDegree);
-            std::array<double, 3> x{};
-            const double error = fitRelative<3>(r, [&](const Reflection::Bin &bin) {
-                return std::array<double, 3>{peak(bin) - 1.0, bin.mu - 2.0 / 3.0, bin.forward};
-            }, x, kSolid);
-            if (x[0] <= 0.0 || x[0] >= kMaxPeakShare || error >= least) continue;
-            // The linear rest must not be negative anywhere (it would be cut at zero, and the light lost).
-            const bool negative = std::any_of(r.bins.begin(), r.bins.end(), [&](const Reflection::Bin &bin) {
-                return 1.0 - x[0] + x[1] * (bin.mu - 2.0 / 3.0) + x[2] * bin.forward < 0.0;
-            });
-            if (negative) continue;
-            least = error;
-            best.share = x[0], best.k = peak.k, best.elevation = peak.elevation;
-            best.mean = x[0] / peak.exitance;
-            best.b = x[1] / (1.0 - x[0]), best.c = x[2] / (1.0 - x[0]);
-        }
+    for (const PeakShape &peak : peakShapes()) {
+        std::array<double, 3> x{};
+        const double error = fitRelative<3>(r, [&](std::size_t b) {
+            const std::array<double, 2> linear = linearBasis(r.bins[b]);
+            return std::array<double, 3>{peak.bins[b] - 1.0, linear[0], linear[1]};
+        }, x, kSolid);
+        if (x[0] <= 0.0 || x[0] >= kMaxPeakShare || error >= least) continue;
+        // The linear rest must not be negative anywhere (it would be cut at zero, and the light lost).
+        const bool negative = std::any_of(r.bins.begin(), r.bins.end(), [&](const Reflection::Bin &bin) {
+            return 1.0 - x[0] + x[1] * (bin.mu - 2.0 / 3.0) + x[2] * bin.forward < 0.0;
+        });
+        if (negative) continue;
+        least = error;
+        best.share = x[0], best.k = peak.k, best.elevation = peak.elevation;
+        best.mean = x[0] * peak.mean;
+        best.b = x[1] / (1.0 - x[0]), best.c = x[2] / (1.0 - x[0]);
+    }
     return best;
 }
 

@@ -94,7 +94,7 @@ TEST(SunPeak, KeepsTheFluxAndHoldsTheGrazingForwardReturn) {
     auto split = [&](double mu, double phi) {  // R / A towards (mu, phi), phi from the sun's travel
         const double s = std::sqrt(1.0 - mu * mu);
         const glm::dvec3 w(s * std::cos(phi), s * std::sin(phi), mu);
-        return lobeRadiance(peak.mean, 3.0 * peak.k * axis, w) + (1.0 - peak.share) * (peak.a() + peak.b * mu + peak.c * w.x);
+        return lobeRadiance(peak.mean, 3.0 * peak.k * peak.mean * axis, w) + (1.0 - peak.share) * (peak.a() + peak.b * mu + peak.c * w.x);
     };
     auto linear = [&](double mu, double phi) { return lobe.a + lobe.b * mu + lobe.c * std::sqrt(1.0 - mu * mu) * std::cos(phi); };
     // Means over the hemisphere (flux) and over the grazing forward region, weighted by projected solid angle.
