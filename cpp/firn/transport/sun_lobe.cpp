@@ -97,7 +97,7 @@ std::array<double, 2> linearBasis(const Reflection::Bin &bin) { return {bin.mu -
 // angle and reweighted by the current fit rather than by the noisy bins (weighting by 1 / R_bin^2 would favour
 // bins that happen to have few photons). Returns the relative error's weighted sum of squares.
 template <int N, typename Basis>
-double fitRelative(const Reflection &r, const Basis &basis, std::array<double, N> &x, bool solidAngle = false) {
+double fitRelative(const Reflection &r, const Basis &basis, std::array<double, N> &x) {
     x.fill(0.0);
     double error = 0.0;
     for (int iteration = 0; iteration < 8; ++iteration) {
@@ -109,9 +109,8 @@ double fitRelative(const Reflection &r, const Basis &basis, std::array<double, N
             double fit = 1.0;
             for (int j = 0; j < N; ++j) fit += x[j] * f[j];
             fit = std::max(0.05, fit);
-            const double weight = solidAngle ? bin.measure / std::sqrt(bin.mu) : bin.measure;
-            const double w = iteration == 0 ? weight : weight / (fit * fit), res = bin.R - 1.0;
-            error += weight * (bin.R - fit) * (bin.R - fit) / (fit * fit);
+            const double w = iteration == 0 ? bin.measure : bin.measure / (fit * fit), res = bin.R - 1.0;
+            error += bin.measure * (bin.R - fit) * (bin.R - fit) / (fit * fit);
             for (int j = 0; j < N; ++j) {
                 for (int l = 0; l < N; ++l) m[j][l] += w * f[j] * f[l];
                 m[j][N] += w * f[j] * res;
@@ -187,7 +186,6 @@ SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t s
     return lobe;
 }
 
-constexpr bool kSolid = true;
 SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t seed) {
     const Reflection r = halfSpaceReflection(g, mu0, y, photons, seed);
     SunPeak best;
@@ -197,7 +195,7 @@ SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t s
     double least = std::numeric_limits<double>::infinity();
     {
         std::array<double, 2> x{};
-        least = fitRelative<2>(r, [&](std::size_t b) { return linearBasis(r.bins[b]); }, x, kSolid);
+        least = fitRelative<2>(r, [&](std::size_t b) { return linearBasis(r.bins[b]); }, x);
         best.b = x[0], best.c = x[1];
     }
     for (const PeakShape &peak : peakShapes()) {
@@ -205,7 +203,7 @@ SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t s
         const double error = fitRelative<3>(r, [&](std::size_t b) {
             const std::array<double, 2> linear = linearBasis(r.bins[b]);
             return std::array<double, 3>{peak.bins[b] - 1.0, linear[0], linear[1]};
-        }, x, kSolid);
+        }, x);
         if (x[0] <= 0.0 || x[0] >= kMaxPeakShare || error >= least) continue;
         // The linear rest must not be negative anywhere (it would be cut at zero, and the light lost).
         const bool negative = std::any_of(r.bins.begin(), r.bins.end(), [&](const Reflection::Bin &bin) {
@@ -252,6 +250,13 @@ SunPeak sunPeak(double g, double mu0, double y) {
     const std::array<double, 6> v = interpolate<6>(kSunPeakTable, g, mu0, y);
     SunPeak peak;
     peak.share = v[0], peak.mean = v[1], peak.k = v[2], peak.elevation = v[3], peak.b = v[4], peak.c = v[5];
+    // Towards high sun the split gives way to the sun lobe alone (what the peak holds there is small and noisy).
+    const double s = std::clamp((kPeakFadeEnd - mu0) / (kPeakFadeEnd - kPeakFadeStart), 0.0, 1.0);
+    const SunLobe lobe = sunLobe(g, mu0, y);
+    const double rest = 1.0 - s * peak.share;
+    peak.b = (s * (1.0 - peak.share) * peak.b + (1.0 - s) * lobe.b) / rest;
+    peak.c = (s * (1.0 - peak.share) * peak.c + (1.0 - s) * lobe.c) / rest;
+    peak.share *= s, peak.mean *= s;
     return peak;
 }
 

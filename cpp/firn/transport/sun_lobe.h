@@ -36,6 +36,8 @@ struct SunPeak {
 constexpr double kMinPeakElevationDegrees = 5.0;  // the axis above the horizon: a lobe pointing into the snow
                                                   // hides its mean where no camera looks
 constexpr double kMaxPeakShare = 0.9;
+// sunPeak fades the split into the sun lobe alone (share 0, SunLobe's b and c) between these sun cosines.
+constexpr double kPeakFadeStart = 0.3, kPeakFadeEnd = 0.6;
 
 // The similarity parameter of absorption, y = 4 sqrt((1 - omega) / (3 (1 - g))) (Kokhanovsky & Zege 2004:
 // the spherical albedo of a weakly absorbing half-space is exp(-y)); the table's third axis.
