@@ -19,15 +19,15 @@ struct SunLobe {
     double albedo = 1.0;  // A(mu0)
 };
 
-// The returned sun split in two (sun_lobe.h's reflection function R / A, normalized to exitance 1):
+// The returned sun split in two (the half-space's reflection function R over its albedo A, exitance 1):
 //   R(w) / A = share P(w) + (1 - share) (a + b (n . w) + c (t . w)),   a + 2b/3 = 1,
 // P a peaked Henyey-Greenstein lobe of anisotropy k about the axis `elevation` above the horizon towards t,
 // scaled to exitance 1: share P(w) = lobeRadiance(mean, 3 k m, w) (source_lobe.h, m unit), so that a surface
 // returning exitance M stores the peaked lobe of l0 = mean M / pi. At grazing sun a half-space returns light
 // sharply forwards, towards grazing exit (R / A 3 at grazing forward exit for mu0 = 0.5, 13-16 for mu0 = 0.28
 // at g 0.85, omega 0.98), which neither the linear form nor a broad lobe holds; the grids' second, peaked lobe
-// holds it, the broad lobe the rest. Fitted like the sun lobe (relative error, projected solid angle), k and
-// elevation by search; share 0 where no peak fits better than the linear form alone.
+// holds it, the broad lobe the rest. Fitted like the sun lobe (relative error, projected solid angle; 40,000
+// photons per entry), k and elevation by search; share 0 where no peak fits better than the linear form alone.
 struct SunPeak {
     double share = 0.0, mean = 0.0, k = 0.0, elevation = 0.0;  // elevation in radians
     double b = 0.0, c = 0.0;
