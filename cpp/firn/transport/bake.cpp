@@ -477,6 +477,9 @@ struct SurfaceLight {
     // ... the beams' light that crosses the snow and leaves through the patch on its far side: a lobe of
     // k = g (l0 in W per channel) about the mean of the beams' directions (per voxel; length <= 1) ...
     glm::vec3 crossing{0.0f}, crossingAxis{0.0f};
+    // ... the suns' light returned sharply forwards (smooth patches; SunPeak), the peaked lobe's p0 per channel
+    // and grey first moment p1 (radiance, source_lobe.h) ...
+    glm::vec3 peak0{0.0f}, peak1{0.0f};
     // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
     // but spread unevenly over a voxel staircase).
     glm::vec3 leaving{0.0f};
@@ -548,8 +551,11 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // beyond that (absorbed sky light, light gone elsewhere, light from deep inside, from the ground or from
     // neighbouring snow) takes the escape function's u(mu) = 3/7 + 6/7 mu. So: leaving = sum returned
     // (shape - u) + out u. The returned part (W, moments of a linear form) through a surface of normal n
-    // taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's:
-    auto returnedThrough = [&](std::size_t i, const glm::dvec3 &n, double skyShare, const auto &beamShare) {
+    // taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's; with `peak` (a smooth patch),
+    // the suns' light returned sharply forwards leaves as the peaked lobe instead (SunPeak: at grazing sun the
+    // lit rim seen against the sun, bench/bake_halfspace.py), added to `peak` (radiance), the rest linear:
+    auto returnedThrough = [&](std::size_t i, const glm::dvec3 &n, double skyShare, const auto &beamShare,
+                               SurfaceLight *peak) {
         const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
         const double sky = skyShare * sys.skyIn[i];
         double r0 = sky * (1.0 - 3.0 / 7.0);
@@ -558,12 +564,23 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const double P = sys.sunIn[s][i] * beamShare(s);
             if (P <= 0.0) continue;
             const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
-            const SunLobe lobe = sunLobe(ch.g, std::clamp(-glm::dot(d, n), 0.05, 1.0), y);
+            const double mu0 = std::clamp(-glm::dot(d, n), 0.05, 1.0);
+            const SunLobe lobe = sunLobe(ch.g, mu0, y);
             glm::dvec3 t = d - glm::dot(d, n) * n;
             t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
             const double returned = P * lobe.albedo;
-            r0 += returned * (lobe.a - 3.0 / 7.0);
-            r1 += returned * (lobe.b * n + lobe.c * t - escape1);
+            if (!peak) {
+                r0 += returned * (lobe.a - 3.0 / 7.0);
+                r1 += returned * (lobe.b * n + lobe.c * t - escape1);
+                continue;
+            }
+            const SunPeak split = sunPeak(ch.g, mu0, y);
+            r0 += returned * ((1.0 - split.share) * split.a() - 3.0 / 7.0);
+            r1 += returned * ((1.0 - split.share) * (split.b * n + split.c * t) - escape1);
+            const double p0 = split.mean * returned / (kPi * topo.patches[i].area);
+            const glm::dvec3 m = std::cos(split.elevation) * t + std::sin(split.elevation) * n;
+            peak->peak0[c] += float(p0);
+            peak->peak1 += glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part
         }
         return std::pair{r0, r1};
     };
@@ -573,7 +590,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
             const SurfacePatch &patch = topo.patches[i];
             const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
-            const auto [r0, r1] = returnedThrough(i, patch.normal, 1.0, [](std::size_t) { return 1.0; });
+            SurfaceLight &surface = out.surface(i);
+            const auto [r0, r1] = returnedThrough(i, patch.normal, 1.0, [](std::size_t) { return 1.0; },
+                                                  patch.sharp ? nullptr : &surface);
             // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
             // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
             // through the smooth surface or, at a sharp edge, through each air face.
@@ -590,7 +609,6 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     crossing += l0, axis += l0 * d;
                 }
             }
-            SurfaceLight &surface = out.surface(i);
             surface.crossing[c] = float(crossing);
             if (crossing > 0.0) surface.crossingAxis = glm::vec3(axis / crossing);
             surface.returned.l0[c] = float(r0);
@@ -618,7 +636,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     for (int g = 0; g < 6; ++g)
                         if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
                     return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
-                });
+                }, nullptr);
                 const auto [leaving, area] =
                     neighbourhoodOutflow<double>(topo, i, n, [&](std::size_t j) { return double(out[j].leaving[c]); });
                 const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
@@ -639,9 +657,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
 // are left out of their neighbours' averages: their outflow leaves through two or three faces at once (the
 // lit top's light spread down a shadowed side a voxel or two, bench/bake_suite.py box_sharp: 8.7 % mean
 // error with them, 5.4 % without).
-SurfaceValues<BroadLobe> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
-                                         const SurfaceValues<SurfaceLight> &solved) {
-    SurfaceValues<BroadLobe> out(topo.surfaceSlot, topo.surfaceVoxels());
+SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
+                                      const SurfaceValues<SurfaceLight> &solved) {
+    SurfaceValues<Source> out(topo.surfaceSlot, topo.surfaceVoxels());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
@@ -664,6 +682,7 @@ SurfaceValues<BroadLobe> surfaceRadiance(const VolumeOptics &optics, const SnowT
                 out.surface(i).l1[c] =
                     glm::vec3(lobe.l1 + 3.0 * crossingAnisotropy(optics.g) * crossing * glm::dvec3(solved[i].crossingAxis));
             }
+            out.surface(i).peak0 = solved[i].peak0, out.surface(i).peak1 = solved[i].peak1;
         }
     });
     return out;
@@ -672,8 +691,8 @@ SurfaceValues<BroadLobe> surfaceRadiance(const VolumeOptics &optics, const SnowT
 // Inside the snow, within a few mean free paths of the surface, a camera ray still sees its surface
 // voxel's radiance: those voxels take it over (SnowTopology's shell), so where the ray reaches optical
 // depth 1 does not matter; deeper voxels keep their own source function, which only thin snow shows.
-// In place: out (insideSource's for unknowns `range`) becomes the source function; the surface has no peaked lobe.
-void composeSource(const SnowTopology &topo, const SurfaceValues<BroadLobe> &surface,
+// In place: out (insideSource's for unknowns `range`) becomes the source function.
+void composeSource(const SnowTopology &topo, const SurfaceValues<Source> &surface,
                    const tbb::blocked_range<std::size_t> &range, Source *out) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
         const std::int32_t owner = topo.shellOwner[i];
@@ -682,8 +701,8 @@ void composeSource(const SnowTopology &topo, const SurfaceValues<BroadLobe> &sur
         if (owner >= 0) {
             S.l0 = w * surface[owner].l0 + (1.0f - w) * S.l0;
             S.l1 = w * surface[owner].l1 + (1.0f - w) * S.l1;
-            S.peak0 = (1.0f - w) * S.peak0;
-            S.peak1 = (1.0f - w) * S.peak1;
+            S.peak0 = w * surface[owner].peak0 + (1.0f - w) * S.peak0;
+            S.peak1 = w * surface[owner].peak1 + (1.0f - w) * S.peak1;
         }
     }
 }
@@ -693,7 +712,7 @@ void composeSource(const SnowTopology &topo, const SurfaceValues<BroadLobe> &sur
 // where a surface's values are carried beyond the snow: a thin object's surface voxels are traced, and its rim
 // shows their light.
 SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                            const std::array<std::vector<double>, 3> &phi, const SurfaceValues<BroadLobe> &surface,
+                            const std::array<std::vector<double>, 3> &phi, const SurfaceValues<Source> &surface,
                             const MonteCarloVoxels &traced) {
     constexpr std::size_t kBlock = 1024;
     SourceValues out;
@@ -724,7 +743,7 @@ SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const 
 // its normal, fitted by least squares with a linear form, stored as that form's fitted lobe; on a sharp edge
 // from 12 directions around each air face's normal, stored as the lobe fitted to the faces' forms (edgeLobe).
 void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples, std::uint64_t seed,
-                      SurfaceValues<BroadLobe> &out, const SubProgress &progress) {
+                      SurfaceValues<Source> &out, const SubProgress &progress) {
     const MonteCarloReference reference(scene);
     const double h = scene.medium->voxelSize();
     std::vector<std::size_t> surface;
@@ -781,6 +800,7 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
                     out.surface(i).l1[c] = glm::vec3(lobe.l1);
                 }
             }
+            out.surface(i).peak0 = out.surface(i).peak1 = glm::vec3(0.0f);  // the traced radiance is all of it
             progress.report(double(++done) / surface.size());
         }
     });
@@ -1217,7 +1237,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             }
             surfaceLight(scene, topo, light, system, phi[c], c, leaving);
         }
-        SurfaceValues<BroadLobe> surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
+        SurfaceValues<Source> surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
         if (reference && pass + 1 == passes) {
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));

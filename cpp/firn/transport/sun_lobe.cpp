@@ -4,9 +4,13 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <vector>
 
+#include <glm/vec3.hpp>
+
 #include "firn/transport/half_space.h"
+#include "firn/transport/source_lobe.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
 
@@ -14,6 +18,7 @@ namespace firn {
 
 namespace {
 #include "firn/transport/sun_lobe_table.inc"
+#include "firn/transport/sun_peak_table.inc"
 
 constexpr int kMuBins = 20, kPhiBins = 18;  // outgoing cos(zenith) in [0, 1], |azimuth| in [0, pi]
 constexpr double kDeepTransportPaths = 30.0;
@@ -35,7 +40,18 @@ double absorptionParameter(double omega, double g) {
     return 4.0 * std::sqrt(std::max(0.0, 1.0 - omega) / (3.0 * (1.0 - g)));
 }
 
-SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t seed) {
+namespace {
+// The reflection function of a half-space (sun_lobe.h's Monte Carlo) over outgoing bins, over its plane albedo.
+struct Reflection {
+    struct Bin {
+        double R, measure;  // R / A; projected solid angle / pi (both signs of the azimuth)
+        double mu, forward;  // bin centre: cos(zenith) and t . w
+    };
+    double albedo = 0.0;
+    std::vector<Bin> bins;
+};
+
+Reflection halfSpaceReflection(double g, double mu0, double y, long photons, std::uint64_t seed) {
     Rng rng(seed, 0);
     const std::function<double()> uniform = [&rng] { return rng.uniform(); };
     const double omega = omegaOf(y, g);
@@ -58,60 +74,190 @@ SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t s
             });
 
     // Reflection function per bin: flux fraction / (projected solid angle / pi); deep photons add u(mu).
-    struct Bin {
-        double R, measure, f1, f2;  // R / A - 1 = b f1 + c f2 for the lobe
-    };
-    SunLobe lobe;
-    lobe.albedo = deepReturn / photons;
-    for (double n : counts) lobe.albedo += n / photons;
-    if (lobe.albedo <= 0.0) return lobe;
-    std::vector<Bin> bins;
+    Reflection out;
+    out.albedo = deepReturn / photons;
+    for (double n : counts) out.albedo += n / photons;
+    if (out.albedo <= 0.0) return out;
     const double dPhi = kPi / kPhiBins;
     for (int m = 0; m < kMuBins; ++m) {
         const double muLo = double(m) / kMuBins, muHi = double(m + 1) / kMuBins, mu = 0.5 * (muLo + muHi);
         const double measure = 2.0 * dPhi * 0.5 * (muHi * muHi - muLo * muLo) / kPi;  // both signs of phi
         for (int p = 0; p < kPhiBins; ++p) {
             const double R = counts[m * kPhiBins + p] / photons / measure + deepReturn / photons * escapeFunction(mu);
-            bins.push_back({R / lobe.albedo, measure, mu - 2.0 / 3.0,
-                            std::sqrt(1.0 - mu * mu) * std::cos((p + 0.5) * dPhi)});
+            out.bins.push_back({R / out.albedo, measure, mu, std::sqrt(1.0 - mu * mu) * std::cos((p + 0.5) * dPhi)});
         }
     }
-    // Least squares in relative error, reweighted by the current fit rather than by the noisy bins
-    // (weighting by 1 / R_bin^2 would favour bins that happen to have few photons).
+    return out;
+}
+
+// The linear form's basis functions beside the constant: mu - 2/3 and t . w (no flux of their own).
+std::array<double, 2> linearBasis(const Reflection::Bin &bin) { return {bin.mu - 2.0 / 3.0, bin.forward}; }
+
+// Least squares in relative error of R / A - 1 - sum_j x_j f_j(bin) over the bins, weighted by projected solid
+// angle and reweighted by the current fit rather than by the noisy bins (weighting by 1 / R_bin^2 would favour
+// bins that happen to have few photons). Returns the relative error's weighted sum of squares.
+template <int N, typename Basis>
+double fitRelative(const Reflection &r, const Basis &basis, std::array<double, N> &x) {
+    x.fill(0.0);
+    double error = 0.0;
     for (int iteration = 0; iteration < 8; ++iteration) {
-        double m11 = 0, m12 = 0, m22 = 0, v1 = 0, v2 = 0;
-        for (const Bin &bin : bins) {
-            const double fit = std::max(0.05, 1.0 + lobe.b * bin.f1 + lobe.c * bin.f2);
-            const double w = iteration == 0 ? bin.measure : bin.measure / (fit * fit), r = bin.R - 1.0;
-            m11 += w * bin.f1 * bin.f1, m12 += w * bin.f1 * bin.f2, m22 += w * bin.f2 * bin.f2;
-            v1 += w * bin.f1 * r, v2 += w * bin.f2 * r;
+        std::array<std::array<double, N + 1>, N> m{};  // normal equations, right-hand side last
+        error = 0.0;
+        for (std::size_t b = 0; b < r.bins.size(); ++b) {
+            const Reflection::Bin &bin = r.bins[b];
+            const std::array<double, N> f = basis(b);
+            double fit = 1.0;
+            for (int j = 0; j < N; ++j) fit += x[j] * f[j];
+            fit = std::max(0.05, fit);
+            const double w = iteration == 0 ? bin.measure : bin.measure / (fit * fit), res = bin.R - 1.0;
+            error += bin.measure * (bin.R - fit) * (bin.R - fit) / (fit * fit);
+            for (int j = 0; j < N; ++j) {
+                for (int l = 0; l < N; ++l) m[j][l] += w * f[j] * f[l];
+                m[j][N] += w * f[j] * res;
+            }
         }
-        const double det = m11 * m22 - m12 * m12;
-        lobe.b = (v1 * m22 - v2 * m12) / det;
-        lobe.c = (m11 * v2 - m12 * v1) / det;
+        for (int j = 0; j < N; ++j)  // Gauss-Jordan (the normal matrix is symmetric positive definite)
+            for (int l = 0; l < N; ++l) {
+                if (l == j) continue;
+                const double factor = m[l][j] / m[j][j];
+                for (int q = 0; q <= N; ++q) m[l][q] -= factor * m[j][q];
+            }
+        for (int j = 0; j < N; ++j) x[j] = m[j][N] / m[j][j];
     }
+    return error;
+}
+
+// The peaks the fit chooses from: k and elevation on a grid.
+constexpr int kPeakKs = 14, kPeakElevations = 13;
+double peakK(int i) { return 0.3 + 0.05 * i; }
+double peakElevation(int j) { return (kMinPeakElevationDegrees + 5.0 * j) * kPi / 180.0; }
+
+// A peak's shape over the bins, scaled to exitance 1 (over pi): bin b's mean radiance (over projected solid
+// angle) of lobeRadiance(mean, 3 k m, w), m at `elevation` above the horizon towards the sun's travel. Bin means
+// (8 x 8 points a bin), as the Monte Carlo's counts are, so that a sharp lobe near the horizon keeps its flux.
+struct PeakShape {
+    double k = 0.0, elevation = 0.0, mean = 0.0;
+    std::vector<double> bins;
+};
+
+const std::vector<PeakShape> &peakShapes() {
+    static const std::vector<PeakShape> shapes = [] {
+        constexpr int kSub = 8;
+        const double dPhi = kPi / kPhiBins;
+        std::vector<PeakShape> out;
+        for (int i = 0; i < kPeakKs; ++i)
+            for (int j = 0; j < kPeakElevations; ++j) {
+                PeakShape shape{peakK(i), peakElevation(j), 0.0, {}};
+                const glm::dvec3 l1 = 3.0 * shape.k * glm::dvec3(std::cos(shape.elevation), 0.0, std::sin(shape.elevation));
+                double exitance = 0.0;  // over pi, of the lobe of l0 = 1
+                for (int m = 0; m < kMuBins; ++m)
+                    for (int p = 0; p < kPhiBins; ++p) {
+                        double sum = 0.0, weight = 0.0;
+                        for (int a = 0; a < kSub; ++a)
+                            for (int b = 0; b < kSub; ++b) {
+                                const double mu = (m + (a + 0.5) / kSub) / kMuBins, phi = (p + (b + 0.5) / kSub) * dPhi;
+                                const double s = std::sqrt(1.0 - mu * mu);
+                                sum += mu * lobeRadiance(1.0, l1, glm::dvec3(s * std::cos(phi), s * std::sin(phi), mu));
+                                weight += mu;
+                            }
+                        const double muLo = double(m) / kMuBins, muHi = double(m + 1) / kMuBins;
+                        shape.bins.push_back(sum / weight);
+                        exitance += 2.0 * dPhi * 0.5 * (muHi * muHi - muLo * muLo) / kPi * sum / weight;
+                    }
+                for (double &v : shape.bins) v /= exitance;
+                shape.mean = 1.0 / exitance;
+                out.push_back(std::move(shape));
+            }
+        return out;
+    }();
+    return shapes;
+}
+}  // namespace
+
+SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t seed) {
+    const Reflection r = halfSpaceReflection(g, mu0, y, photons, seed);
+    SunLobe lobe;
+    lobe.albedo = r.albedo;
+    if (r.albedo <= 0.0) return lobe;
+    std::array<double, 2> x{};
+    fitRelative<2>(r, [&](std::size_t b) { return linearBasis(r.bins[b]); }, x);
+    lobe.b = x[0], lobe.c = x[1];
     lobe.a = 1.0 - 2.0 * lobe.b / 3.0;
     return lobe;
 }
 
-SunLobe sunLobe(double g, double mu0, double y) {
+SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t seed) {
+    const Reflection r = halfSpaceReflection(g, mu0, y, photons, seed);
+    SunPeak best;
+    if (r.albedo <= 0.0) return best;
+    // R / A = share peak + (1 - share) (a + b (mu - 2/3) + c t . w), with a = 1: linear in share, (1 - share) b
+    // and (1 - share) c for each peak (k, elevation), which a search over both chooses.
+    double least = std::numeric_limits<double>::infinity();
+    {
+        std::array<double, 2> x{};
+        least = fitRelative<2>(r, [&](std::size_t b) { return linearBasis(r.bins[b]); }, x);
+        best.b = x[0], best.c = x[1];
+    }
+    for (const PeakShape &peak : peakShapes()) {
+        std::array<double, 3> x{};
+        const double error = fitRelative<3>(r, [&](std::size_t b) {
+            const std::array<double, 2> linear = linearBasis(r.bins[b]);
+            return std::array<double, 3>{peak.bins[b] - 1.0, linear[0], linear[1]};
+        }, x);
+        if (x[0] <= 0.0 || x[0] >= kMaxPeakShare || error >= least) continue;
+        // The linear rest must not be negative anywhere (it would be cut at zero, and the light lost).
+        const bool negative = std::any_of(r.bins.begin(), r.bins.end(), [&](const Reflection::Bin &bin) {
+            return 1.0 - x[0] + x[1] * (bin.mu - 2.0 / 3.0) + x[2] * bin.forward < 0.0;
+        });
+        if (negative) continue;
+        least = error;
+        best.share = x[0], best.k = peak.k, best.elevation = peak.elevation;
+        best.mean = x[0] * peak.mean;
+        best.b = x[1] / (1.0 - x[0]), best.c = x[2] / (1.0 - x[0]);
+    }
+    return best;
+}
+
+namespace {
+// Trilinear in (y, g, mu0) between a table's entries of K values.
+template <std::size_t K, typename Table>
+std::array<double, K> interpolate(const Table &table, double g, double mu0, double y) {
     int iy, ig, im;
     double ty, tg, tm;
     locate(kSunLobeY, y, iy, ty);
     locate(kSunLobeG, g, ig, tg);
     locate(kSunLobeMu0, mu0, im, tm);
-    std::array<double, 3> v{};  // b, c, A
+    std::array<double, K> v{};
     for (int dy = 0; dy < 2; ++dy)
         for (int dg = 0; dg < 2; ++dg)
             for (int dm = 0; dm < 2; ++dm) {
                 const double w = (dy ? ty : 1 - ty) * (dg ? tg : 1 - tg) * (dm ? tm : 1 - tm);
-                for (int k = 0; k < 3; ++k) v[k] += w * kSunLobeTable[iy + dy][ig + dg][im + dm][k];
+                for (std::size_t k = 0; k < K; ++k) v[k] += w * table[iy + dy][ig + dg][im + dm][k];
             }
+    return v;
+}
+}  // namespace
+
+SunLobe sunLobe(double g, double mu0, double y) {
+    const std::array<double, 3> v = interpolate<3>(kSunLobeTable, g, mu0, y);  // b, c, A
     SunLobe lobe;
     lobe.b = v[0], lobe.c = v[1], lobe.albedo = v[2];
     lobe.a = 1.0 - 2.0 * lobe.b / 3.0;
     return lobe;
 }
 
+SunPeak sunPeak(double g, double mu0, double y) {
+    const std::array<double, 6> v = interpolate<6>(kSunPeakTable, g, mu0, y);
+    SunPeak peak;
+    peak.share = v[0], peak.mean = v[1], peak.k = v[2], peak.elevation = v[3], peak.b = v[4], peak.c = v[5];
+    // Towards high sun the split gives way to the sun lobe alone (what the peak holds there is small and noisy).
+    const double s = std::clamp((kPeakFadeEnd - mu0) / (kPeakFadeEnd - kPeakFadeStart), 0.0, 1.0);
+    const SunLobe lobe = sunLobe(g, mu0, y);
+    const double rest = 1.0 - s * peak.share;
+    peak.b = (s * (1.0 - peak.share) * peak.b + (1.0 - s) * lobe.b) / rest;
+    peak.c = (s * (1.0 - peak.share) * peak.c + (1.0 - s) * lobe.c) / rest;
+    peak.share *= s, peak.mean *= s;
+    return peak;
+}
 
 }  // namespace firn

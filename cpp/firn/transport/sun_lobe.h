@@ -19,6 +19,26 @@ struct SunLobe {
     double albedo = 1.0;  // A(mu0)
 };
 
+// The returned sun split in two (the half-space's reflection function R over its albedo A, exitance 1):
+//   R(w) / A = share P(w) + (1 - share) (a + b (n . w) + c (t . w)),   a + 2b/3 = 1,
+// P a peaked Henyey-Greenstein lobe of anisotropy k about the axis `elevation` above the horizon towards t,
+// scaled to exitance 1: share P(w) = lobeRadiance(mean, 3 k m, w) (source_lobe.h, m unit), so that a surface
+// returning exitance M stores the peaked lobe of l0 = mean M / pi. At grazing sun a half-space returns light
+// sharply forwards, towards grazing exit (R / A 3 at grazing forward exit for mu0 = 0.5, 13-16 for mu0 = 0.28
+// at g 0.85, omega 0.98), which neither the linear form nor a broad lobe holds; the grids' second, peaked lobe
+// holds it, the broad lobe the rest. Fitted like the sun lobe (relative error, projected solid angle; 40,000
+// photons per entry), k and elevation by search; share 0 where no peak fits better than the linear form alone.
+struct SunPeak {
+    double share = 0.0, mean = 0.0, k = 0.0, elevation = 0.0;  // elevation in radians
+    double b = 0.0, c = 0.0;
+    double a() const { return 1.0 - 2.0 * b / 3.0; }
+};
+constexpr double kMinPeakElevationDegrees = 5.0;  // the axis above the horizon: a lobe pointing into the snow
+                                                  // hides its mean where no camera looks
+constexpr double kMaxPeakShare = 0.9;
+// sunPeak fades the split into the sun lobe alone (share 0, SunLobe's b and c) between these sun cosines.
+constexpr double kPeakFadeStart = 0.3, kPeakFadeEnd = 0.6;
+
 // The similarity parameter of absorption, y = 4 sqrt((1 - omega) / (3 (1 - g))) (Kokhanovsky & Zege 2004:
 // the spherical albedo of a weakly absorbing half-space is exp(-y)); the table's third axis.
 double absorptionParameter(double omega, double g);
@@ -27,9 +47,13 @@ double absorptionParameter(double omega, double g);
 // y to [0, 4] (omega down to 0.75 at g = 0.85).
 SunLobe sunLobe(double g, double mu0, double y = 0.0);
 
+// Interpolated in (y, g, mu0) like sunLobe, from sun_peak_table.inc.
+SunPeak sunPeak(double g, double mu0, double y);
+
 // The table's source: 1D Monte Carlo of a half-space with analog absorption; photons deeper than 30 transport
 // mean free paths return with diffusion's probability exp(-kappa (z + z_b)) in the escape function's shape.
 // Used by tools/sun_lobe_table.cpp.
 SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t seed);
+SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t seed);
 
 }  // namespace firn
