@@ -108,6 +108,34 @@ Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
     intersector_ = std::make_unique<openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0>>(*density_, 3);
     support_ = std::make_shared<openvdb::BoolTree>(density_->tree(), false, openvdb::TopologyCopy());
     openvdb::tools::dilateActiveValues(*support_, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    markOccupiedBlocks();
+}
+
+void Medium::markOccupiedBlocks() {
+    openvdb::CoordBBox box;
+    support_->evalLeafBoundingBox(box);
+    blocksOrigin_ = box.min() & ~(kBlockEdges[2] - 1);
+    for (int level = 0; level < 3; ++level) {
+        const openvdb::Coord &n = blockCounts_[level] =
+            ((box.max() - blocksOrigin_) >> kBlockLog2[level]) + openvdb::Coord(1);
+        blockOccupied_[level].assign(std::size_t(n.x()) * n.y() * n.z(), 0);
+        for (auto leaf = support_->cbeginLeaf(); leaf; ++leaf) {
+            if (leaf->isEmpty()) continue;
+            const openvdb::Coord b = (leaf->origin() - blocksOrigin_) >> kBlockLog2[level];  // holds the whole leaf
+            blockOccupied_[level][(std::size_t(b.x()) * n.y() + b.y()) * n.z() + b.z()] = 1;
+        }
+    }
+}
+
+int Medium::clearBlockEdge(const openvdb::Coord &cell) const {
+    for (int level = 2; level >= 0; --level) {
+        const openvdb::Coord b = (cell - blocksOrigin_) >> kBlockLog2[level];
+        const openvdb::Coord &n = blockCounts_[level];
+        if (b.x() < 0 || b.y() < 0 || b.z() < 0 || b.x() >= n.x() || b.y() >= n.y() || b.z() >= n.z())
+            return kBlockEdges[level];  // beyond the support's box
+        if (!blockOccupied_[level][(std::size_t(b.x()) * n.y() + b.y()) * n.z() + b.z()]) return kBlockEdges[level];
+    }
+    return 0;
 }
 
 Medium::~Medium() = default;
@@ -147,8 +175,8 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
     const Vec3d eye(start.x, start.y, start.z), dir(direction.x, direction.y, direction.z);
     constexpr double kStep = 0.5;  // voxels
     const double sumLimit = limit / h, tEnd = tMax / h;
-    // Most rays start in snow and reach the limit within a few voxels: plain steps first; the hierarchical
-    // walk over occupied 8^3 blocks only for rays that get further.
+    // Most rays start in snow and reach the limit within a few voxels: plain steps first; the walk below only
+    // for rays that get further.
     // A ray that meets empty space (it started outside, or left the snow) goes over to the walk at once.
     constexpr int kPlainSteps = 16;
     double sum = 0.0;  // kg/m^3 * voxels
@@ -161,30 +189,30 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
         sum += rho * kStep;
         if (sum > sumLimit) return sum * h;
     }
-    const double tStart = i * kStep;
-    const openvdb::math::Ray<double> ray(eye, dir, tStart, tEnd);
-    if (!intersector_.setIndexRay(ray)) return sum * h;
-    // Beyond the first voxels a ray mostly crosses air near the surface: whole-voxel steps, reading the
-    // density only in cells that may hold snow.
+    // Beyond the first voxels a ray mostly crosses air near the surface: whole-voxel steps up to where it leaves
+    // the bounds, reading the density only in cells that may hold snow, and from a cell in an 8^3 block without
+    // any on to where it leaves that block, or the 16^3, 32^3 or 64^3 block around it that has none.
+    const openvdb::math::Ray<double> ray(eye, dir);
     constexpr double kLongStep = 1.0;  // voxels
-    double t0 = 0.0, t1 = 0.0;
-    while (intersector_.march(t0, t1)) {
-        const double span = t1 - t0;
-        const int steps = std::max(1, static_cast<int>(std::ceil(span / kLongStep)));
-        const double dt = span / steps;
-        for (int i = 0; i < steps; ++i) {
-            const Vec3d p = eye + (t0 + (i + 0.5) * dt) * dir;
-            const openvdb::Coord cell = floorCoord(p);
-            const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell);
-            if (!leaf) {
-                // No snow near this whole 8^3 block: on from the first sample past it (a little early, never late).
-                const double next = std::min((blockExit(ray, cell, 8) - t0) / dt - 0.5 - 1e-6, double(steps));
-                i = std::max(i, int(std::ceil(next)) - 1);
-                continue;
+    double tBoundsIn = 0.0, tBoundsOut = 0.0;
+    if (!medium_.clipToBounds(origin, direction, tBoundsIn, tBoundsOut)) return sum * h;
+    const double tLast = std::min(tMax, tBoundsOut) / h;  // no snow beyond (index space)
+    for (double t = i * kStep; t < tLast;) {
+        const double dt = std::min(kLongStep, tLast - t);
+        const Vec3d p = ray(t + 0.5 * dt);
+        const openvdb::Coord cell = floorCoord(p);
+        if (const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell)) {
+            if (leaf->isValueOn(cell)) {
+                sum += densityIn(cell, p) * dt;
+                if (sum > sumLimit) break;
             }
-            if (leaf->isValueOn(cell)) sum += densityIn(cell, p) * dt;
+            t += dt;
+            continue;
         }
-        if (sum > sumLimit) break;
+        const int edge = std::max(medium_.clearBlockEdge(cell), int(openvdb::BoolTree::LeafNodeType::DIM));
+        const double next = std::max(t + 0.5 * dt, blockExit(ray, cell, edge));
+        if (!(next > t)) break;  // a last step too short to move t
+        t = next;
     }
     return sum * h;
 }

@@ -1,8 +1,11 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 #include <glm/vec3.hpp>
 #include <openvdb/openvdb.h>
@@ -56,7 +59,11 @@ class Medium {
     Accessor accessor() const { return density_->getConstAccessor(); }
     double densityAt(const glm::dvec3 &world, Accessor &accessor) const;  // kg/m^3, trilinear
 
-    // Integrates the density along rays (kg/m^2), skipping cells and 8^3 blocks without snow. One per thread
+    // Edge (cells) of the largest aligned block of 64^3, 32^3 or 16^3 cells that holds `cell` and no cell that may
+    // hold snow; 0 if the 16^3 block holds one.
+    int clearBlockEdge(const openvdb::Coord &cell) const;
+
+    // Integrates the density along rays (kg/m^2), skipping cells and blocks without snow. One per thread
     // (cheap copies).
     class ColumnMarcher {
       public:
@@ -66,7 +73,8 @@ class Medium {
         // half-voxel steps read each cell about twice.
         double densityAt(const openvdb::Vec3d &ijk) { return densityIn(floorCoord(ijk), ijk); }
         // Mass column between t = 0 and tMax (m) along origin + t * direction (unit), midpoint rule on
-        // half-voxel steps; stops once the column exceeds `limit` (kg/m^2) and returns what it has.
+        // half-voxel steps while the ray starts in snow, whole-voxel steps beyond; stops once the column exceeds
+        // `limit` (kg/m^2) and returns what it has.
         double column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double limit);
 
         // Walks the ray from t = 0 to tMax (m) in steps of at most `step` voxels, calling visit(midpoint in index
@@ -130,6 +138,13 @@ class Medium {
     // Voxels c whose trilinear cell (corners c + {0, 1}^3) may hold snow: elsewhere the density is 0 without
     // reading eight voxels. Rays from the surface to the sky cross mostly such empty cells of occupied blocks.
     openvdb::BoolTree::Ptr support_;
+    // Per level (blocks of 16^3, 32^3, 64^3 cells from blocksOrigin_): 1 where a block holds a leaf of support_,
+    // a byte per block over the support's bounding box: rays leave the snow's neighbourhood in a few jumps.
+    void markOccupiedBlocks();
+    static constexpr std::array<int, 3> kBlockEdges{16, 32, 64}, kBlockLog2{4, 5, 6};
+    openvdb::Coord blocksOrigin_;
+    std::array<openvdb::Coord, 3> blockCounts_;
+    std::array<std::vector<std::uint8_t>, 3> blockOccupied_;
 };
 
 }  // namespace firn
