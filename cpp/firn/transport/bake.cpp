@@ -233,26 +233,29 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
     return out;
 }
 
-// Paths per traced voxel: the preset's, fewer when the paths would cost more than kMaxTracedCollisions in all
+// Paths per traced voxel: the preset's, fewer when the paths would cost more than kMaxTracedSteps in all
 // (16 at least), or 0 (none traced: the diffusion takes them) when even 16 would. The cost per path is measured
 // on a few voxels first: thin voxels in a large cloud of thin snow still see light that scattered thousands of
-// times, and a bake must not grow into a hang.
-constexpr double kMaxTracedCollisions = 2e7;  // a few seconds on two cores
+// times, lumps of 20 optical depths per voxel take thousands of tracking steps per path (their shadow rays
+// included), and a bake must not grow into a hang. A path costs its tracking steps plus kStepsPerPath for
+// its start (the gathering's fixed cost: 1.5 us per path on ball_half_tau, at 16 M steps per processor
+// second, as spray_dense's long paths).
+constexpr double kMaxTracedSteps = 5e7, kStepsPerPath = 20.0;  // about 3 processor seconds
 int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 16;
     if (voxels.empty()) return 0;
     const MonteCarloReference reference(scene);
-    const double budget = kMaxTracedCollisions / (double(voxels.size()) * kMinSamples);  // per path, at the least
-    double collisions = 0.0;
+    const double budget = kMaxTracedSteps / (double(voxels.size()) * kMinSamples);  // per path, at the least
+    double steps = 0.0;
     int paths = 0;
     for (int k = 0; k < kPilotVoxels; ++k) {
         const std::size_t v = voxels.size() * k / kPilotVoxels;
-        collisions += double(reference.sourceIn(voxels[v], kPilotSamples, seed, v).collisions);
+        steps += double(reference.sourceIn(voxels[v], kPilotSamples, seed, v).steps) + kStepsPerPath * kPilotSamples;
         paths += kPilotSamples;
-        if (collisions > budget * kPilotVoxels * kPilotSamples) return 0;  // too costly already
+        if (steps > budget * kPilotVoxels * kPilotSamples) return 0;  // too costly already
     }
-    const double perPath = std::max(collisions / paths, 1.0);
-    const int affordable = int(std::min(kMaxTracedPaths, kMaxTracedCollisions / perPath) / double(voxels.size()));
+    const double perPath = steps / paths;
+    const int affordable = int(std::min(kMaxTracedPaths, kMaxTracedSteps / perPath) / double(voxels.size()));
     return affordable < kMinSamples ? 0 : std::min(affordable, preset.tracedSamples);
 }
 

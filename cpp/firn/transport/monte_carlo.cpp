@@ -74,7 +74,6 @@ class PathTracer {
             if (tCollision < kInfinity) {
                 p += tCollision * d;
                 throughput *= medium_.optics().albedo;
-                ++collisions;
                 radiance += throughput * lightScattered(p, d, rng);
                 d = sampleHenyeyGreenstein(d, medium_.optics().g, rng.uniform(), rng.uniform());
             } else if (hit) {
@@ -115,7 +114,7 @@ class PathTracer {
 
     double sigmaT(const glm::dvec3 &p) { return k_ * medium_.densityAt(p, accessor_); }
 
-    long collisions = 0;  // real collisions so far, all paths (what a path costs)
+    long steps = 0;  // tracking steps so far (density lookups), all paths and shadow rays: what a path costs
 
   private:
 
@@ -124,7 +123,7 @@ class PathTracer {
         double t0, t1;
         if (!medium_.clipToBounds(p, d, t0, t1)) return kInfinity;
         t1 = std::min(t1, tEnd);
-        for (double t = t0;;) {
+        for (double t = t0;; ++steps) {
             t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
             if (t >= t1) return kInfinity;
             if (rng.uniform() * sigmaBar_ < sigmaT(p + t * d)) return t;
@@ -137,7 +136,7 @@ class PathTracer {
         if (!medium_.clipToBounds(p, d, t0, t1)) return 1.0;
         t1 = std::min(t1, tEnd);
         double T = 1.0;
-        for (double t = t0;;) {
+        for (double t = t0;; ++steps) {
             t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
             if (t >= t1) return T;
             T *= 1.0 - sigmaT(p + t * d) / sigmaBar_;
@@ -238,7 +237,7 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
         weights += w;
     }
     SourceEstimate out;
-    out.collisions = tracer.collisions;
+    out.steps = tracer.steps;
     if (weights <= 0.0) return out;
     const VolumeOptics &optics = medium.optics();
     for (int c = 0; c < 3; ++c) {

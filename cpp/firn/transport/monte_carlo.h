@@ -32,7 +32,7 @@ struct SourceEstimate {
     // keeps g^n of the arriving light's n-th Legendre moment about any axis: how peaked the source is.
     glm::dmat3 second{0.0};
     std::array<glm::dmat3, 3> third{};
-    long collisions = 0;  // real collisions of all its paths: what the estimate cost
+    long steps = 0;  // tracking steps (density lookups) of all its paths and shadow rays: what the estimate cost
 };
 
 struct RadianceEstimate {
