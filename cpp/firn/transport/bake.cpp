@@ -171,17 +171,19 @@ struct MonteCarloVoxels {
 // optical depth). Not next to transport-thick snow
 // (sigma_tr h >= kThickReducedDepth in the least absorbing channel): that is the fringe of a thick surface,
 // whose light the diffusion carries, and paths into such snow would scatter thousands of times.
-// Small pieces of snow (at most kSmallPieceVoxels connected voxels: thrown lumps) are traced whole, however
-// thick: a diffusion over a few voxels has no inside, and its surfaces' escape function is a half-space's
-// (bench/bake_suite.py: spray_lumps 19.7 -> 12.2 %, spray_dense, lumps of up to 20 optical depths per voxel,
-// 34.8 -> 26.6 %; the balls of 5 cm on 1 cm voxels, 500+ voxels, stay with the diffusion: ball_forward traced
-// whole was 19.7 % against 17.1 %).
+// Small pieces of snow (at most kSmallPieceVoxels voxels connected through faces, edges or corners: thrown
+// lumps, a cloud of them) are traced whole, however thick: a diffusion over a few voxels has no inside, and its
+// surfaces' escape function is a half-space's (bench/bake_suite.py: spray_lumps 19.7 -> 11.9 %, spray_dense,
+// lumps of up to 20 optical depths per voxel, 34.8 -> 27.0 %; the balls of 5 cm on 1 cm voxels, 500+ voxels,
+// stay with the diffusion: ball_forward traced whole was 19.7 % against 17.1 %). Connected through faces only,
+// 167 voxels of bits beside the car sample's snow counted as pieces and took 12 s to trace, and the lumps
+// of spray_lumps, touching at edges, made pieces of over 125 voxels.
 constexpr double kTracedOpticalDepth = 1.5, kThickReducedDepth = 2.0;
-constexpr int kSmallPieceVoxels = 125;
+constexpr int kSmallPieceVoxels = 343;  // 7^3
 // At most this many paths in all: beyond it, fewer per voxel (a bake must not grow into a hang).
 constexpr double kMaxTracedPaths = 2e7;
 
-// Whether the connected snow (6-neighbours of non-zero density) around `seed` holds at most `most` voxels; marks
+// Whether the connected snow (26-neighbours of non-zero density) around `seed` holds at most `most` voxels; marks
 // what it visits in `done` (1: small, 2: large). A fill that meets a large piece's voxel stops: each voxel is
 // visited a bounded number of times, however large the snow.
 bool smallPiece(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb::Int32Tree> &done, const openvdb::Coord &seed, int most) {
@@ -191,15 +193,13 @@ bool smallPiece(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb:
     while (!stack.empty() && small) {
         const openvdb::Coord c = stack.back();
         stack.pop_back();
-        for (int axis = 0; axis < 3 && small; ++axis)
-            for (int side = -1; side <= 1 && small; side += 2) {
-                openvdb::Coord n = c;
-                n[axis] += side;
-                if (!(density.getValue(n) > 0.0f)) continue;
-                const std::int32_t mark = done.getValue(n);
-                if (mark == 2 || (mark == 0 && int(piece.size()) >= most)) small = false;
-                else if (mark == 0) done.setValue(n, 1), piece.push_back(n), stack.push_back(n);
-            }
+        for (int i = 0; i < 27 && small; ++i) {
+            const openvdb::Coord n = c.offsetBy(i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1);
+            if (i == 13 || !(density.getValue(n) > 0.0f)) continue;
+            const std::int32_t mark = done.getValue(n);
+            if (mark == 2 || (mark == 0 && int(piece.size()) >= most)) small = false;
+            else if (mark == 0) done.setValue(n, 1), piece.push_back(n), stack.push_back(n);
+        }
     }
     if (!small)
         for (const openvdb::Coord &c : piece) done.setValue(c, 2);
@@ -239,8 +239,10 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
 // times, lumps of 20 optical depths per voxel take thousands of tracking steps per path (their shadow rays
 // included), and a bake must not grow into a hang. A path costs its tracking steps plus kStepsPerPath for
 // its start (the gathering's fixed cost: 1.5 us per path on ball_half_tau, at 16 M steps per processor
-// second, as spray_dense's long paths).
-constexpr double kMaxTracedSteps = 5e7, kStepsPerPath = 20.0;  // about 3 processor seconds
+// second, as spray_dense's long paths). The budget: a ski spray's frame (774 traced voxels of lumps, 2552
+// steps per path; docs/spray.md) takes 101 paths per voxel, 12.8 % mean error per block (24.9 %, worst
+// +210 %, with 25 paths at 5e7; 11.3 % with 256 at 8e8).
+constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 processor seconds
 int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 16;
     if (voxels.empty()) return 0;
