@@ -149,7 +149,7 @@ def test_thin_forward_ball_holds_light_scattered_a_few_times_in_its_peaked_lobe(
 
 def test_thrown_lumps_are_traced_whole(folder):
     # 24 lumps of 0.5-1.5 cm radius on 1.5 cm voxels (partly filled, up to optical depth 6 per voxel; omega
-    # 0.9999, g 0.85). Pieces of snow of at most 125 voxels are traced whole instead of diffused (a diffusion
+    # 0.9999, g 0.85). Pieces of snow of at most 343 connected voxels are traced whole, not diffused (a diffusion
     # over a few voxels has no inside): against the suite's 16384 paths 19.7 % mean, +29 % seen across the
     # light before, 11.9 %, per view -1 %, +6 %, +7 %, +5 % after (with the fitted lobes).
     c = case("spray_lumps")
