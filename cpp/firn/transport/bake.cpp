@@ -234,17 +234,17 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
 }
 
 // Paths per traced voxel: the preset's, fewer when the paths would cost more than kMaxTracedSteps in all
-// (16 at least), or 0 (none traced: the diffusion takes them) when even 16 would. The cost per path is measured
+// (64 at least), or 0 (none traced: the diffusion takes them) when even 64 would. The cost per path is measured
 // on a few voxels first: thin voxels in a large cloud of thin snow still see light that scattered thousands of
 // times, lumps of 20 optical depths per voxel take thousands of tracking steps per path (their shadow rays
 // included), and a bake must not grow into a hang. A path costs its tracking steps plus kStepsPerPath for
 // its start (the gathering's fixed cost: 1.5 us per path on ball_half_tau, at 16 M steps per processor
-// second, as spray_dense's long paths). The budget: a ski spray's frame (774 traced voxels of lumps, 2552
-// steps per path; docs/spray.md) takes 101 paths per voxel, 12.8 % mean error per block (24.9 %, worst
-// +210 %, with 25 paths at 5e7; 11.3 % with 256 at 8e8).
+// second, as spray_dense's long paths). The budget: a ski spray's frame (774 traced voxels of lumps, 2585
+// steps per path; docs/spray.md) takes 99 paths per voxel, 13.0 % mean error per block (24.9 %, worst
+// +210 %, with 25 paths per voxel: hence 64 at least; 11.3 % with 256).
 constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 processor seconds
 int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
-    constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 16;
+    constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
     if (voxels.empty()) return 0;
     const MonteCarloReference reference(scene);
     const double budget = kMaxTracedSteps / (double(voxels.size()) * kMinSamples);  // per path, at the least

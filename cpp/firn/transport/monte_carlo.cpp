@@ -123,7 +123,8 @@ class PathTracer {
         double t0, t1;
         if (!medium_.clipToBounds(p, d, t0, t1)) return kInfinity;
         t1 = std::min(t1, tEnd);
-        for (double t = t0;; ++steps) {
+        for (double t = t0;;) {
+            ++steps;
             t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
             if (t >= t1) return kInfinity;
             if (rng.uniform() * sigmaBar_ < sigmaT(p + t * d)) return t;
@@ -136,7 +137,8 @@ class PathTracer {
         if (!medium_.clipToBounds(p, d, t0, t1)) return 1.0;
         t1 = std::min(t1, tEnd);
         double T = 1.0;
-        for (double t = t0;; ++steps) {
+        for (double t = t0;;) {
+            ++steps;
             t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
             if (t >= t1) return T;
             T *= 1.0 - sigmaT(p + t * d) / sigmaBar_;
