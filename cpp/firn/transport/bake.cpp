@@ -290,8 +290,8 @@ std::optional<LobePair> lobePair(double a0, double a1, double a2, double a3) {
 
 // The source of a traced voxel as the two lobes the grids hold, fitted to its first four Legendre moments about
 // the direct beams' axis m (lobePair): at g 0.85 light scattered a few times is peaked too, and the peaked
-// lobe takes it with the beams' single scattering (bench/bake_suite.py: ball_thin_forward 15.4 -> 9.4 %, per
-// view -17, +17, -10, -16 % -> -3, +8, -1, -2 %). About the grey first moment's axis instead (tilted from the
+// lobe takes it with the beams' single scattering (bench/bake_suite.py: ball_thin_forward 15.4 -> 9.1 %, per
+// view -17, +17, -10, -16 % -> -3, +6, -0, -2 %). About the grey first moment's axis instead (tilted from the
 // beams by the light leaving the object, and a beam's peak is sharp): +20 % seen against the sun. Per channel
 // the two lobes keep that channel's mean and first moment along m; the broad lobe also takes the first moment
 // across m. Where the moments are no pair's (or no beam reaches the voxel), the beams' single scattering alone
