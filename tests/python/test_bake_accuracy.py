@@ -54,9 +54,11 @@ def test_conservative_thin_ball_under_uniform_sky_glows_with_the_sky(tmp_vdb):
     # Thin balls, every voxel traced. Read as one lobe, the traced source took them from 14.0 % (g 0.5) and 43.8 %
     # (g 0.85, under one transport mean free path) with the linear form to 8.8 % and 16.3 %; with the beams'
     # single scattering in the second, peaked lobe to 4.8 % (the goal) and 15.4 %, bias -2.1 % and -7.1 %
-    # against the suite's 16384-path references. ball_thin_forward stays short of the goal, guarded.
+    # against the suite's 16384-path references. ball_thin_forward stays short of the goal, guarded: 15.4 %, bias
+    # -7.1 % with the peaked lobe holding the beams' single scattering only, 9.1 %, +0.2 % with the two lobes
+    # fitted to the source's first four Legendre moments (bake.cpp, tracedSource).
     ("ball_thin", 0.06, 0.05),
-    ("ball_thin_forward", 0.20, 0.10),
+    ("ball_thin_forward", 0.12, 0.05),
 ])
 def test_small_balls_match_monte_carlo(folder, name, mean, bias):
     c = case(name)
@@ -148,3 +150,28 @@ def test_sharp_box_edges_take_and_give_light_face_by_face(folder):
     result = bake_suite.run_case(c, folder, cache=None)
     assert result["mean"] < 0.075
     assert result["worst"] < 0.35
+
+
+def test_thin_forward_ball_holds_light_scattered_a_few_times_in_its_peaked_lobe(folder):
+    # A ball under one transport mean free path across (voxels of optical depth 1, all traced; omega 0.999,
+    # g 0.85) from the sun's side, across, against the sun and from above. At g 0.85 light scattered a few times
+    # is itself peaked: with the peaked lobe holding the beams' single scattering only and the rest in the broad
+    # lobe (k <= 1/3) the views were -17 %, +17 %, -10 %, -16 % against the suite's 16384 paths; with the two
+    # lobes fitted to the source's first four Legendre moments about the beam (the core's Monte Carlo gathers
+    # them in each traced voxel) -3 %, +6 %, -0 %, -2 %.
+    c = case("ball_thin_forward")
+    c.samples = 2048
+    result = bake_suite.run_case(c, folder, cache=None)
+    assert all(abs(b) < 0.10 for b in result["view_bias"]), result["view_bias"]
+
+
+def test_thrown_lumps_are_traced_whole(folder):
+    # 24 lumps of 0.5-1.5 cm radius on 1.5 cm voxels (partly filled, up to optical depth 6 per voxel; omega
+    # 0.9999, g 0.85). Pieces of snow of at most 343 connected voxels are traced whole, not diffused (a diffusion
+    # over a few voxels has no inside): against the suite's 16384 paths 19.7 % mean, +29 % seen across the
+    # light before, 11.9 %, per view -1 %, +6 %, +7 %, +5 % after (with the fitted lobes).
+    c = case("spray_lumps")
+    c.samples = 2048
+    result = bake_suite.run_case(c, folder, cache=None)
+    assert result["mean"] < 0.15
+    assert all(abs(b) < 0.12 for b in result["view_bias"]), result["view_bias"]

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -22,6 +23,25 @@ constexpr double kSurfaceEpsilon = 1e-5;  // m: rays leaving a surface start thi
 constexpr long kMaxEvents = 10'000'000;   // a safety net only; paths end by escaping or roulette
 
 double maxComponent(const Rgb &c) { return std::max({c.x, c.y, c.z}); }
+
+// Light arriving at the points of a voxel, summed: fluence (W/m^2) and flux (column c: channel c's vector, W/m^2
+// along the direction light travels), scattered light and the lights' direct beams apart, and the second and
+// third moments of the directions t light travels, weighted by what the snow scatters of it (albedo, grey).
+struct ArrivingLight {
+    Rgb phi{0.0}, phiBeam{0.0};
+    glm::dmat3 flux{0.0}, fluxBeam{0.0};
+    glm::dmat3 second{0.0};            // sum of mean(albedo phi) t t^T
+    std::array<glm::dmat3, 3> third{};  // sum of mean(albedo phi) t_i t t^T
+
+    void add(const Rgb &fluence, const glm::dvec3 &travel, Rgb &toPhi, glm::dmat3 &toFlux, const Rgb &albedo) {
+        toPhi += fluence;
+        for (int c = 0; c < 3; ++c) toFlux[c] += fluence[c] * travel;
+        const double grey = glm::dot(albedo, fluence) / 3.0;
+        const glm::dmat3 tt = grey * glm::outerProduct(travel, travel);
+        second += tt;
+        for (int i = 0; i < 3; ++i) third[i] += travel[i] * tt;
+    }
+};
 
 // One path tracer per thread: holds a density accessor.
 class PathTracer {
@@ -54,7 +74,6 @@ class PathTracer {
             if (tCollision < kInfinity) {
                 p += tCollision * d;
                 throughput *= medium_.optics().albedo;
-                ++collisions;
                 radiance += throughput * lightScattered(p, d, rng);
                 d = sampleHenyeyGreenstein(d, medium_.optics().g, rng.uniform(), rng.uniform());
             } else if (hit) {
@@ -80,27 +99,22 @@ class PathTracer {
         return radiance;
     }
 
-    // All light arriving at p, one sample: radiance from one direction drawn uniformly over the sphere and
-    // each light's direct beam. Adds to the fluence phi (W/m^2) and the flux (column c: channel c's
-    // vector, W/m^2 along the direction light travels).
-    // Fluence and flux arriving at p: from one drawn direction (all orders, scattered light only) plus the
-    // lights' direct beams (phiBeam, fluxBeam).
-    void sampleArriving(const glm::dvec3 &p, Rng &rng, Rgb &phi, glm::dmat3 &flux, Rgb &phiBeam, glm::dmat3 &fluxBeam) {
+    // All light arriving at p, one sample: radiance from one direction drawn uniformly over the sphere (all
+    // orders, scattered light only) and each light's direct beam, added with weight w.
+    void sampleArriving(const glm::dvec3 &p, double w, Rng &rng, ArrivingLight &sum) {
         const glm::dvec3 d = sampleUniformCone(glm::dvec3(0.0, 0.0, 1.0), -1.0, rng.uniform(), rng.uniform());
         const Rgb L = 4.0 * kPi * sample(Ray{p, d}, rng, true);
-        phi += L;
-        for (int c = 0; c < 3; ++c) flux[c] -= L[c] * d;
+        sum.add(w * L, -d, sum.phi, sum.flux, medium_.optics().albedo);
         for (std::size_t b = 0; b < lightCount(); ++b) {
-            glm::dvec3 w;
-            const Rgb E = lightIrradiance(b, p, 0.0, w, rng);
-            phiBeam += E;
-            for (int c = 0; c < 3; ++c) fluxBeam[c] -= E[c] * w;
+            glm::dvec3 towards;
+            const Rgb E = lightIrradiance(b, p, 0.0, towards, rng);
+            if (E != Rgb(0.0)) sum.add(w * E, -towards, sum.phiBeam, sum.fluxBeam, medium_.optics().albedo);
         }
     }
 
     double sigmaT(const glm::dvec3 &p) { return k_ * medium_.densityAt(p, accessor_); }
 
-    long collisions = 0;  // real collisions so far, all paths (what a path costs)
+    long steps = 0;  // tracking steps so far (density lookups), all paths and shadow rays: what a path costs
 
   private:
 
@@ -110,6 +124,7 @@ class PathTracer {
         if (!medium_.clipToBounds(p, d, t0, t1)) return kInfinity;
         t1 = std::min(t1, tEnd);
         for (double t = t0;;) {
+            ++steps;
             t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
             if (t >= t1) return kInfinity;
             if (rng.uniform() * sigmaBar_ < sigmaT(p + t * d)) return t;
@@ -123,6 +138,7 @@ class PathTracer {
         t1 = std::min(t1, tEnd);
         double T = 1.0;
         for (double t = t0;;) {
+            ++steps;
             t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
             if (t >= t1) return T;
             T *= 1.0 - sigmaT(p + t * d) / sigmaBar_;
@@ -213,30 +229,29 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     const glm::dvec3 centre = medium.voxelCentre(voxel);
     // Points spread over the voxel, each weighted by its extinction: the renderer draws sigma_t S, so the
     // voxel's S is the extinction-weighted mean of the light's (the fluence falls steeply in thick voxels).
-    Rgb phi(0.0), phiBeam(0.0);
-    glm::dmat3 flux(0.0), fluxBeam(0.0);
+    ArrivingLight sum;
     double weights = 0.0;
     for (int s = 0; s < samples; ++s) {
         const glm::dvec3 p = centre + medium.voxelSize() * (glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5);
         const double w = tracer.sigmaT(p);
         if (w <= 0.0) continue;
-        Rgb samplePhi(0.0), sampleBeam(0.0);
-        glm::dmat3 sampleFlux(0.0), sampleBeamFlux(0.0);
-        tracer.sampleArriving(p, rng, samplePhi, sampleFlux, sampleBeam, sampleBeamFlux);
-        phi += w * samplePhi, flux += w * sampleFlux, weights += w;
-        phiBeam += w * sampleBeam, fluxBeam += w * sampleBeamFlux;
+        tracer.sampleArriving(p, w, rng, sum);
+        weights += w;
     }
     SourceEstimate out;
-    out.collisions = tracer.collisions;
+    out.steps = tracer.steps;
     if (weights <= 0.0) return out;
     const VolumeOptics &optics = medium.optics();
     for (int c = 0; c < 3; ++c) {
         const double scale = optics.albedo[c] * kInvFourPi / weights;
-        out.beamL0[c] = scale * phiBeam[c];
-        out.beamL1[c] = 3.0 * optics.g * scale * fluxBeam[c];
-        out.l0[c] = scale * phi[c] + out.beamL0[c];
-        out.l1[c] = 3.0 * optics.g * scale * flux[c] + out.beamL1[c];
+        out.beamL0[c] = scale * sum.phiBeam[c];
+        out.beamL1[c] = 3.0 * optics.g * scale * sum.fluxBeam[c];
+        out.l0[c] = scale * sum.phi[c] + out.beamL0[c];
+        out.l1[c] = 3.0 * optics.g * scale * sum.flux[c] + out.beamL1[c];
     }
+    const double greyScale = kInvFourPi / weights;
+    out.second = greyScale * sum.second;
+    for (int i = 0; i < 3; ++i) out.third[i] = greyScale * sum.third[i];
     return out;
 }
 

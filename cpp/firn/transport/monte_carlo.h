@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -25,7 +26,13 @@ struct SourceEstimate {
     glm::dmat3 l1{0.0};
     Rgb beamL0{0.0};         // of which the suns' and lamps' direct beams scattered once
     glm::dmat3 beamL1{0.0};  // (the baked grids' peaked lobe)
-    long collisions = 0;  // real collisions of all its paths: what the estimate cost
+    // The directions t the arriving light travels (beams included), weighted by what the snow scatters of it
+    // as l0 is and averaged over the channels: their second and third moments, mean(l0) E[t t^T] and
+    // mean(l0) E[t_i t t^T] (third[i]); the first is mean(l1) / (3 g). Light scattered by Henyey-Greenstein
+    // keeps g^n of the arriving light's n-th Legendre moment about any axis: how peaked the source is.
+    glm::dmat3 second{0.0};
+    std::array<glm::dmat3, 3> third{};
+    long steps = 0;  // tracking steps (density lookups) of all its paths and shadow rays: what the estimate cost
 };
 
 struct RadianceEstimate {
@@ -55,7 +62,8 @@ class MonteCarloReference {
     // The source function in one voxel, from `samples` points spread over it (weighted by extinction, as
     // the renderer's emission is), each gathering the light arriving from one uniformly drawn direction,
     // all orders, and every light's direct beam: omega / (4 pi) (phi + 3 g F . w), the Henyey-Greenstein
-    // phase function to first order in w, with the exact fluence phi and flux F; the direct beams' share apart.
+    // phase function to first order in w, with the exact fluence phi and flux F; the direct beams' share apart;
+    // and the higher moments of the directions the light travels, which tell how peaked the source is.
     SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream) const;
 
     const Scene &scene() const { return scene_; }
