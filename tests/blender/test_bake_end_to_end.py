@@ -230,8 +230,10 @@ def test_thin_snow_lobes_render_as_the_core_says(clean_scene, tmp_path, towards_
     bpy.context.view_layer.update()
     ortho_camera((0, 0, -0.01), towards_camera, scale=0.04)
     rendered = mean_pixel(render(str(tmp_path), size=(8, 8)))
-    origins, directions = footprint_rays(np.array(towards_camera) / np.linalg.norm(towards_camera), 0.04)
+    origins, directions = footprint_rays(np.array(towards_camera) / np.linalg.norm(towards_camera), 0.04, count=16)
     origins += (0.0, 0.0, -0.01)
     drawn = firncore.render_baked(bake_state.snow_path(slab), firncore.VolumeOptics(K, (OMEGA,) * 3, G), origins,
                                   directions).mean(axis=0)
-    assert rendered == pytest.approx(drawn, rel=0.01)  # measured +0.3 % (0.224 above, 0.763 towards the sun)
+    # 16 x 16 rays over the view, as the 8 x 8 pixels' samples cover it: the traced voxels' lobes vary from voxel to
+    # voxel (each fitted to its own Monte Carlo moments), and 4 x 4 rays read them +2.2 % off the pixels' mean.
+    assert rendered == pytest.approx(drawn, rel=0.01)  # measured +0.1 % (0.173 above), +0.7 % (1.27 towards the sun)
