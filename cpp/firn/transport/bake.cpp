@@ -672,7 +672,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 r1 += returned * (lobe.b * n + lobe.c * t - escape1);
                 continue;
             }
-            const SunPeak split = sunPeak(ch.g, mu0, y);
+            const SunPeak split = sunPeak(ch.g, mu0, y, lobe);
             r0 += returned * ((1.0 - split.share) * split.a() - 3.0 / 7.0);
             r1 += returned * ((1.0 - split.share) * (split.b * n + split.c * t) - escape1);
             const double p0 = split.mean * returned / (kPi * topo.patches[i].area);

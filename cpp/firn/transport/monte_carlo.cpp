@@ -33,8 +33,10 @@ struct ArrivingLight {
     glm::dmat3 second{0.0};            // sum of mean(albedo phi) t t^T
     std::array<glm::dmat3, 3> third{};  // sum of mean(albedo phi) t_i t t^T
 
-    void add(const Rgb &fluence, const glm::dvec3 &travel, Rgb &toPhi, glm::dmat3 &toFlux, const Rgb &albedo) {
-        toPhi += fluence;
+    // Light of `fluence` travelling along `travel`: a direct beam's, or scattered light's.
+    void add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const Rgb &albedo) {
+        (beam ? phiBeam : phi) += fluence;
+        glm::dmat3 &toFlux = beam ? fluxBeam : flux;
         for (int c = 0; c < 3; ++c) toFlux[c] += fluence[c] * travel;
         const double grey = glm::dot(albedo, fluence) / 3.0;
         const glm::dmat3 tt = grey * glm::outerProduct(travel, travel);
@@ -104,11 +106,11 @@ class PathTracer {
     void sampleArriving(const glm::dvec3 &p, double w, Rng &rng, ArrivingLight &sum) {
         const glm::dvec3 d = sampleUniformCone(glm::dvec3(0.0, 0.0, 1.0), -1.0, rng.uniform(), rng.uniform());
         const Rgb L = 4.0 * kPi * sample(Ray{p, d}, rng, true);
-        sum.add(w * L, -d, sum.phi, sum.flux, medium_.optics().albedo);
+        sum.add(w * L, -d, false, medium_.optics().albedo);
         for (std::size_t b = 0; b < lightCount(); ++b) {
             glm::dvec3 towards;
             const Rgb E = lightIrradiance(b, p, 0.0, towards, rng);
-            if (E != Rgb(0.0)) sum.add(w * E, -towards, sum.phiBeam, sum.fluxBeam, medium_.optics().albedo);
+            if (E != Rgb(0.0)) sum.add(w * E, -towards, true, medium_.optics().albedo);
         }
     }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -127,6 +128,13 @@ double fitRelative(const Reflection &r, const Basis &basis, std::array<double, N
     return error;
 }
 
+// The linear form alone (b, c) and its error.
+std::pair<std::array<double, 2>, double> fitLinear(const Reflection &r) {
+    std::array<double, 2> x{};
+    const double error = fitRelative<2>(r, [&](std::size_t b) { return linearBasis(r.bins[b]); }, x);
+    return {x, error};
+}
+
 // The peaks the fit chooses from: k and elevation on a grid.
 constexpr int kPeakKs = 14, kPeakElevations = 13;
 double peakK(int i) { return 0.3 + 0.05 * i; }
@@ -179,8 +187,7 @@ SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t s
     SunLobe lobe;
     lobe.albedo = r.albedo;
     if (r.albedo <= 0.0) return lobe;
-    std::array<double, 2> x{};
-    fitRelative<2>(r, [&](std::size_t b) { return linearBasis(r.bins[b]); }, x);
+    const std::array<double, 2> x = fitLinear(r).first;
     lobe.b = x[0], lobe.c = x[1];
     lobe.a = 1.0 - 2.0 * lobe.b / 3.0;
     return lobe;
@@ -192,12 +199,8 @@ SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t s
     if (r.albedo <= 0.0) return best;
     // R / A = share peak + (1 - share) (a + b (mu - 2/3) + c t . w), with a = 1: linear in share, (1 - share) b
     // and (1 - share) c for each peak (k, elevation), which a search over both chooses.
-    double least = std::numeric_limits<double>::infinity();
-    {
-        std::array<double, 2> x{};
-        least = fitRelative<2>(r, [&](std::size_t b) { return linearBasis(r.bins[b]); }, x);
-        best.b = x[0], best.c = x[1];
-    }
+    auto [linear, least] = fitLinear(r);
+    best.b = linear[0], best.c = linear[1];
     for (const PeakShape &peak : peakShapes()) {
         std::array<double, 3> x{};
         const double error = fitRelative<3>(r, [&](std::size_t b) {
@@ -246,13 +249,12 @@ SunLobe sunLobe(double g, double mu0, double y) {
     return lobe;
 }
 
-SunPeak sunPeak(double g, double mu0, double y) {
+SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe) {
     const std::array<double, 6> v = interpolate<6>(kSunPeakTable, g, mu0, y);
     SunPeak peak;
     peak.share = v[0], peak.mean = v[1], peak.k = v[2], peak.elevation = v[3], peak.b = v[4], peak.c = v[5];
     // Towards high sun the split gives way to the sun lobe alone (what the peak holds there is small and noisy).
     const double s = std::clamp((kPeakFadeEnd - mu0) / (kPeakFadeEnd - kPeakFadeStart), 0.0, 1.0);
-    const SunLobe lobe = sunLobe(g, mu0, y);
     const double rest = 1.0 - s * peak.share;
     peak.b = (s * (1.0 - peak.share) * peak.b + (1.0 - s) * lobe.b) / rest;
     peak.c = (s * (1.0 - peak.share) * peak.c + (1.0 - s) * lobe.c) / rest;

@@ -47,8 +47,9 @@ double absorptionParameter(double omega, double g);
 // y to [0, 4] (omega down to 0.75 at g = 0.85).
 SunLobe sunLobe(double g, double mu0, double y = 0.0);
 
-// Interpolated in (y, g, mu0) like sunLobe, from sun_peak_table.inc.
-SunPeak sunPeak(double g, double mu0, double y);
+// Interpolated in (y, g, mu0) like sunLobe, from sun_peak_table.inc; `lobe` = sunLobe(g, mu0, y), which the
+// split fades into (the caller has it already).
+SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe);
 
 // The table's source: 1D Monte Carlo of a half-space with analog absorption; photons deeper than 30 transport
 // mean free paths return with diffusion's probability exp(-kappa (z + z_b)) in the escape function's shape.
