@@ -1,16 +1,19 @@
 """The light of a ski spray's lumps baked per frame (docs/spray.md "Light"): the last frame of a 12-frame ski spray
 (the default SpraySettings, seed 5, through a 2 m x 1 m snow layer 15 cm deep at 2 cm voxels), lit by a sun and a
-uniform sky, baked as Bake Sequence bakes it: the lumps and the tracked snow as ONE medium (firncore.bake_joint),
-against the core's Monte Carlo of that medium (firncore.monte_carlo_radiance of firncore.union_density: all orders,
-exact Henyey-Greenstein phase function, none of the bake's approximations).
+uniform sky, baked as Bake Sequence bakes it (spray/light.py): the tracked snow with the lumps in it as one medium
+(firncore.bake_joint), the lumps over the snow's surface mesh (one voxel under the surface: lumps resting in the
+groove stay outside it) as an occluder of the snow's white-sky albedo (firncore.bake), against the core's Monte Carlo of lumps and snow as one medium (firncore.monte_carlo_radiance of
+firncore.union_density: all orders, exact Henyey-Greenstein phase function, none of the bake's approximations).
 
-PYTHONPATH=build/python /usr/bin/python3 bench/spray_light_bench.py [--samples 256] [--pixels 48] [--folder DIR]
+PYTHONPATH=build/python /usr/bin/python3 bench/spray_light_bench.py [--samples 256] [--above-samples 64]
+    [--pixels 48] [--adaptivity 0.5] [--folder DIR]
 Views (orthographic): "side", from -y over the spray above the snow (the lumps alone in view; 4 x 4-pixel blocks
 as /work/draft/spraybake/measure.py); "above", looking down on the snow beside and under the spray (the spray's
-shadow on the snow; the lumps and the snow in view). Rows: the joint bake; the lumps baked alone (no snow under
-them: what the bake gave before, against the same reference) and the tracked snow baked alone (what Bake
-Sequence baked before). Bake times are processor seconds (stats["cpu_seconds"], all phases): compare those, as
-wall seconds vary with the machine's load.
+shadow on the snow; the lumps and the snow in view). Rows besides Bake Sequence's: the lumps' part of the joint
+medium's bake (their paths enter the snow: the bake's budget leaves them untraced), the lumps baked alone (no
+snow under them: what the bake gave before) and the tracked snow baked alone (what Bake Sequence baked before).
+Bake times are processor seconds (stats["cpu_seconds"], all phases): compare those, as wall seconds vary with the
+machine's load. The references are kept in the folder (same seeds: the same values) for the next run.
 """
 
 import argparse
@@ -93,6 +96,8 @@ def monte_carlo(saved, medium, origins, directions, samples):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--samples", type=int, default=256, help="Monte Carlo paths per pixel")
+    parser.add_argument("--above-samples", type=int, default=64, help="paths per pixel of the view from above")
+    parser.add_argument("--adaptivity", type=float, default=0.5, help="of the snow surface the lumps see")
     parser.add_argument("--pixels", type=int, default=48, help="columns of a view (rows: half)")
     parser.add_argument("--folder", default=None, help="keep the files here (default: a temporary folder)")
     args = parser.parse_args()
@@ -102,30 +107,38 @@ def main():
     path = lambda name: os.path.join(folder, name)
     print(f"frame {FRAMES}: lumps {firncore.spray_frame_paths(folder, FRAMES)[0]}")
     print("bakes (FINAL, seed 0):")
-    timed("joint (Bake Sequence)", lambda: firncore.bake_joint(
-        [tracked, spray], [path("lit_snow.vdb"), path("lit_spray.vdb")], OPTICS, suns=SUNS, sky=SKY))
+    timed("tracked snow, lumps in it", lambda: firncore.bake_joint(
+        [tracked, spray], [path("lit_snow.vdb"), None], OPTICS, suns=SUNS, sky=SKY))
+    start = time.time()
+    voxel = firncore.grid_statistics(tracked, "surface")["voxel_size"]
+    surface = firncore.snow_surface_mesh(tracked, adaptivity=args.adaptivity, isovalue=-voxel)
+    print(f"  {'snow surface mesh':<28} {time.time() - start:6.1f} s wall, {len(surface[1])} triangles "
+          f"(adaptivity {args.adaptivity})")
+    timed("lumps over the snow surface", lambda: firncore.bake(
+        spray, OPTICS, suns=SUNS, sky=SKY, occluders=[(*surface, OPTICS.white_sky_albedo)],
+        output_path=path("lit_spray.vdb")))
+    timed("lumps in the joint medium", lambda: firncore.bake_joint(
+        [tracked, spray], [None, path("joint_spray.vdb")], OPTICS, suns=SUNS, sky=SKY))
     timed("lumps alone", lambda: firncore.bake(spray, OPTICS, suns=SUNS, sky=SKY, output_path=path("alone.vdb")))
     timed("tracked snow alone", lambda: firncore.bake(tracked, OPTICS, suns=SUNS, sky=SKY,
                                                        output_path=path("snow_alone.vdb")))
     firncore.union_density([tracked, spray], path("union.vdb"))
     firncore.bake(path("union.vdb"), OPTICS, suns=SUNS, sky=SKY, output_path=path("union_lit.vdb"))
-    for name in ("side", "above"):
+    for name, samples in (("side", args.samples), ("above", args.above_samples)):
         origins, directions, shape = view(name, args.pixels)
         start = time.time()
-        reference = monte_carlo(path(f"reference_{name}_{args.pixels}_{args.samples}.npy"), path("union.vdb"),
-                                origins, directions, args.samples)
-        print(f"{name} view, {shape[1]} x {shape[0]} pixels, reference {args.samples} paths per pixel "
+        reference = monte_carlo(path(f"reference_{name}_{args.pixels}_{samples}.npy"), path("union.vdb"),
+                                origins, directions, samples)
+        print(f"{name} view, {shape[1]} x {shape[0]} pixels, reference {samples} paths per pixel "
               f"({time.time() - start:.0f} s):")
-        if name == "side":  # the lumps alone in view: each file renders by itself
-            compare("joint: lumps' lit file", firncore.render_baked(path("lit_spray.vdb"), OPTICS, origins,
-                                                                    directions), reference, shape)
-            compare("lumps baked alone", firncore.render_baked(path("alone.vdb"), OPTICS, origins, directions),
-                    reference, shape)
-        else:  # lumps and snow in view: the union with the joint bake's grids (the two files drawn together)
-            compare("joint (union rendered)", firncore.render_baked(path("union_lit.vdb"), OPTICS, origins,
-                                                                    directions), reference, shape)
-            compare("tracked snow baked alone", firncore.render_baked(path("snow_alone.vdb"), OPTICS, origins,
-                                                                      directions), reference, shape)
+        drawn = lambda file: firncore.render_baked(path(file), OPTICS, origins, directions)
+        if name == "side":  # the lumps alone in view: their file renders by itself
+            compare("lumps over the snow surface", drawn("lit_spray.vdb"), reference, shape)
+            compare("lumps in the joint medium", drawn("joint_spray.vdb"), reference, shape)
+            compare("lumps alone", drawn("alone.vdb"), reference, shape)
+        else:  # lumps and snow in view: the union with the joint bake's grids (its snow part is lit_snow.vdb's)
+            compare("snow and lumps, one medium", drawn("union_lit.vdb"), reference, shape)
+            compare("tracked snow alone", drawn("snow_alone.vdb"), reference, shape)
 
 
 if __name__ == "__main__":
