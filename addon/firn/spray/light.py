@@ -1,10 +1,10 @@
-"""The light of a spray baked frame by frame (docs/spray.md "Light"): at each frame the thrown lumps and the
-tracked snow under them are baked together as one medium (firncore.bake_joint: the spray's shadow on the snow,
-the snow's light under the lumps, lumps resting in the groove), with the lamps, world and objects as they stand at
-that frame (the skier's shadow moves with the skier); the tracked snow's light goes to lit_####.vdb and the
-lumps' to lit_spray_####.vdb beside the sequence's files, and the Tracks and Snow Spray objects play those once
-they are there. A spray without tracks (Cut Tracks off) is baked over the snow layer's own file: the lumps get
-the snow's light and shadow, the snow layer keeps its own bake.
+"""The light of a spray baked frame by frame (docs/spray.md "Light"), with the lamps, world and objects as they
+stand at each frame (the skier's shadow moves with the skier): the tracked snow with the frame's lumps in it as
+one medium (firncore.bake_joint: the spray's shadow on the snow, lumps resting in the groove) into lit_####.vdb,
+and the lumps over the snow's surface (an occluder of the snow's albedo: its light under them) into
+lit_spray_####.vdb, beside the sequence's files; the Tracks and Snow Spray objects play those once they are
+there. A spray without tracks (Cut Tracks off) has its lumps baked over the snow layer's own file; the snow layer
+keeps its own bake.
 
 A lit frame's marker (lit_####.json) records what it was baked from: the scene at that frame (bake/inputs.py
 signature), the optics, quality and seed, and the snow and lumps files it read (size and time). A frame whose
