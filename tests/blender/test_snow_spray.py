@@ -155,6 +155,16 @@ def test_no_emitter_selected_is_reported(clean_scene):
         bpy.ops.firn.add_snow_spray(frame_start=1, frame_end=5)
 
 
+def test_lumps_with_other_optics_than_their_snow_are_reported(clean_scene):
+    """The lumps and the snow are baked as one snow (spray/light.py): one optics."""
+    snow = snow_on_plane()
+    spray = add_spray(snow, ski())
+    spray.firn.grain_radius *= 2.0
+    with pytest.raises(RuntimeError, match="different Snow Material optics"):
+        bpy.ops.firn.bake_sequence(quality="DRAFT")
+    assert bpy.ops.firn.bake_sequence(light=False) == {"FINISHED"}  # the simulation alone needs no optics
+
+
 def test_a_missing_vertex_group_is_reported(clean_scene):
     snow = snow_on_plane()
     select_only(snow, ski())
