@@ -2,8 +2,9 @@
 (the default SpraySettings, seed 5, through a 2 m x 1 m snow layer 15 cm deep at 2 cm voxels), lit by a sun and a
 uniform sky, baked as Bake Sequence bakes it (spray/light.py): the tracked snow with the lumps in it as one medium
 (firncore.bake_joint), the lumps over the snow's surface mesh (one voxel under the surface: lumps resting in the
-groove stay outside it) as an occluder of the snow's white-sky albedo (firncore.bake), against the core's Monte Carlo of lumps and snow as one medium (firncore.monte_carlo_radiance of
-firncore.union_density: all orders, exact Henyey-Greenstein phase function, none of the bake's approximations).
+groove stay outside it) as an occluder of the snow's white-sky albedo (firncore.bake), against the core's Monte
+Carlo of lumps and snow as one medium (firncore.monte_carlo_radiance of firncore.union_density: all orders, exact
+Henyey-Greenstein phase function, none of the bake's approximations).
 
 PYTHONPATH=build/python /usr/bin/python3 bench/spray_light_bench.py [--samples 256] [--above-samples 64]
     [--pixels 48] [--adaptivity 0.5] [--folder DIR]
@@ -71,8 +72,9 @@ def compare(label, baked, reference, shape):
     b, m = blocks(baked.mean(1), shape), blocks(reference.mean(1), shape)
     lit = m > 0.05 * m.max()
     error = (b[lit] - m[lit]) / m[lit]
+    bias = b[lit].sum() / m[lit].sum() - 1
     print(f"  {label:<28} {lit.sum():4d} blocks  mean |err| {100 * np.abs(error).mean():5.1f} %  "
-          f"worst {100 * error[np.argmax(np.abs(error))]:+6.1f} %  bias {100 * (b[lit].sum() / m[lit].sum() - 1):+5.1f} %")
+          f"worst {100 * error[np.argmax(np.abs(error))]:+6.1f} %  bias {100 * bias:+5.1f} %")
 
 
 def timed(label, bake):

@@ -394,7 +394,8 @@ firncore.WriteError (an OSError) when the result cannot be written. Returns the 
                 for (const std::string &path : paths) densities.push_back(jointDensity(path));
                 const openvdb::FloatGrid::Ptr joint =
                     firn::unionDensity(std::vector<openvdb::FloatGrid::ConstPtr>(densities.begin(), densities.end()));
-                const firn::Scene scene = sceneFrom({joint}, paths.front(), optics, suns, lamps, sky, std::move(blockers));
+                const firn::Scene scene =
+                    sceneFrom({joint}, paths.front(), optics, suns, lamps, sky, std::move(blockers));
                 const firn::BakedGrids baked = firn::bakeScattering(scene, settings, progress.get(), &stats);
                 for (std::size_t i = 0; i < paths.size(); ++i)
                     if (outputPaths[i])

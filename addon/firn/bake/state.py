@@ -5,7 +5,8 @@ JSON {component: digest}); the panel compares it with the live scene at every re
 (and lamps ignored), the world, the occluders ({object name: digest of its transform, evaluated shape, modifiers
 and albedo}, so a change names the object), the optics, and the snow itself (its file's size and modification
 time, and its transform). A sequence baked frame by frame (Bake Sequence, spray/light.py: a spray's lumps and
-its tracked snow, baked together) is compared through the marker of the frame it shows. Nothing here renders or reads grids.
+its tracked snow, baked together) is compared through the marker of the frame it shows. Nothing here renders or
+reads grids.
 """
 
 import json
