@@ -1,6 +1,7 @@
 """A skier's skis throwing snow down a slope, after Nishita et al. (1997), Fig. 7: two ski soles (rectangles) on an
 animated path with two turns down a 20° snowy slope, under a simple body whose shadow moves with it; Add Snow Spray
-simulates the thrown snow and the tracks, Bake Sequence bakes the tracked snow's light at every frame, and a short
+simulates the thrown snow and the tracks, Bake Sequence bakes the light of the lumps and the tracked snow at every
+frame (lit together: the spray's shadow on the snow, the snow's light under the lumps), and a short
 animation is rendered at low resolution to PNGs (out/skier/####.png). Saves skier.blend next to this script.
 
 blender -b --factory-startup --python blend_samples/skier.py -- [--output out/skier/] [--width 160] [--samples 8]
@@ -96,7 +97,7 @@ def add_spray(snow, skis, frames):
 
 
 def bake_light(frames):
-    """The tracked snow's light at every frame (Bake Sequence; the simulation is on disk already)."""
+    """The light of the lumps and the tracked snow at every frame (Bake Sequence; the simulation is on disk)."""
     if bpy.ops.firn.bake_sequence(frame_start=1, frame_end=frames, quality="DRAFT") != {"FINISHED"}:
         raise RuntimeError("Bake Sequence failed")
 

@@ -1,7 +1,7 @@
 """Headless frame-range bake of the Snow Sprays of a .blend, for scripts and render farms (docs/user-guide.md,
 "Snow Spray on a render farm"): opens the file with Firn enabled, runs Bake Sequence (the simulation up to --end,
-resumed at the first frame missing on disk; the tracked snow's light of frames --start…--end), then renders the
-frames asked for with the file's render settings.
+resumed at the first frame missing on disk; the light of the lumps and the tracked snow at frames --start…--end),
+then renders the frames asked for with the file's render settings.
 
 blender -b --factory-startup --python scripts/spray_frames.py -- FILE.blend --end 120 [--start 1] [--render 1 120]
     [--no-light]

@@ -10,6 +10,7 @@
 #include "firn/io/vdb_io.h"
 #include "firn/transport/bake.h"
 #include "firn/transport/half_space.h"
+#include "firn/transport/joint_medium.h"
 #include "firn/transport/monte_carlo.h"
 #include "firn/transport/nishita_sky.h"
 #include "firn/transport/slab.h"
@@ -270,6 +271,38 @@ Blender's Sky Texture (Nishita) behind a Background node of `strength`, its sett
 the mean of samples x samples directions over it. Runs in parallel without the GIL.)doc");
 }
 
+firn::BakeSettings bakeSettings(const std::string &quality, std::uint64_t seed, int skySamples, int sunSamples,
+                               int referenceSamples, int sourceScale) {
+    firn::BakeSettings settings;
+    settings.quality = parseQuality(quality);
+    settings.seed = seed;
+    settings.skySamples = skySamples;
+    settings.sunSamples = sunSamples;
+    settings.referenceSamples = referenceSamples;
+    settings.sourceScale = sourceScale;
+    return settings;
+}
+
+// Writes `output`: the grids of `path` with `density` in its density's place and `baked` in place of any earlier
+// bake's grids (the car's surface grid is read only now: 14 bytes per voxel).
+void writeBaked(const std::string &path, const openvdb::GridBase::Ptr &density, const firn::BakedGrids &baked,
+                const std::string &output) {
+    openvdb::GridPtrVec grids;
+    for (const std::string &name : firn::gridNames(path))
+        if (name == "density") grids.push_back(density);
+        else if (std::find(firn::BakedGrids::kNames.begin(), firn::BakedGrids::kNames.end(), name) ==
+                 firn::BakedGrids::kNames.end())
+            grids.push_back(firn::readGrid(path, name));
+    for (const auto &grid : baked.grids()) grids.push_back(grid);
+    firn::writeGrids(output, grids);
+}
+
+// The 'density' grid of one of a joint bake's files (read alone). Throws InvalidArgument when it has none.
+openvdb::FloatGrid::Ptr jointDensity(const std::string &path) {
+    const openvdb::GridBase::Ptr grid = firn::readGrid(path, "density");
+    return densityGrid(grid ? openvdb::GridPtrVec{grid} : openvdb::GridPtrVec{}, path);
+}
+
 py::dict phasesDict(const firn::BakeStats::Phases &phases) {
     py::dict d;
     d["topology"] = phases.topology, d["light"] = phases.light, d["trace"] = phases.trace;
@@ -312,13 +345,8 @@ void bindTransport(py::module_ &m) {
            std::uint64_t seed, std::shared_ptr<firn::Progress> progress, int skySamples, int sunSamples,
            int referenceSamples, const std::optional<std::string> &outputPath, const std::vector<firn::Lamp> &lamps,
            int sourceScale) {
-            firn::BakeSettings settings;
-            settings.quality = parseQuality(quality);
-            settings.seed = seed;
-            settings.skySamples = skySamples;
-            settings.sunSamples = sunSamples;
-            settings.referenceSamples = referenceSamples;
-            settings.sourceScale = sourceScale;
+            const firn::BakeSettings settings =
+                bakeSettings(quality, seed, skySamples, sunSamples, referenceSamples, sourceScale);
             OccluderArrays blockers = occludersFrom(occluders);
             firn::BakeStats stats;
             longCall([&] {
@@ -328,14 +356,7 @@ void bindTransport(py::module_ &m) {
                 const firn::Scene scene = sceneFrom(density ? openvdb::GridPtrVec{density} : openvdb::GridPtrVec{}, path,
                                                     optics, suns, lamps, sky, std::move(blockers));
                 const firn::BakedGrids baked = firn::bakeScattering(scene, settings, progress.get(), &stats);
-                openvdb::GridPtrVec grids;
-                for (const std::string &name : firn::gridNames(path))
-                    if (name == "density") grids.push_back(density);
-                    else if (std::find(firn::BakedGrids::kNames.begin(), firn::BakedGrids::kNames.end(), name) ==
-                             firn::BakedGrids::kNames.end())
-                        grids.push_back(firn::readGrid(path, name));
-                for (const auto &grid : baked.grids()) grids.push_back(grid);
-                firn::writeGrids(outputPath.value_or(path), grids);
+                writeBaked(path, density, baked, outputPath.value_or(path));
             });
             return statsDict(stats);
         },
@@ -355,6 +376,57 @@ defaults when non-zero. source_scale: the baked grids' voxel size in density vox
 density; 2: an eighth of the memory Cycles needs for them; 0: the finest within 512 MB of Cycles' memory). Releases the GIL; raises firncore.Cancelled if `progress` is
 cancelled, ValueError for bad input, firncore.ReadError (an OSError) when `vdb_path` is missing or damaged,
 firncore.WriteError (an OSError) when the result cannot be written. Returns the solve's statistics.)doc");
+
+    m.def(
+        "bake_joint",
+        [](const std::vector<std::string> &paths, const std::vector<std::optional<std::string>> &outputPaths,
+           const firn::VolumeOptics &optics, const std::vector<firn::SunLight> &suns,
+           const std::optional<firn::Sky> &sky, const py::list &occluders, const std::string &quality,
+           std::uint64_t seed, std::shared_ptr<firn::Progress> progress, const std::vector<firn::Lamp> &lamps,
+           int sourceScale) {
+            if (paths.empty() || outputPaths.size() != paths.size())
+                throw firn::InvalidArgument("bake_joint: one output path (or None) per VDB path, and at least one");
+            const firn::BakeSettings settings = bakeSettings(quality, seed, 0, 0, 0, sourceScale);
+            OccluderArrays blockers = occludersFrom(occluders);
+            firn::BakeStats stats;
+            longCall([&] {
+                std::vector<openvdb::FloatGrid::Ptr> densities;
+                for (const std::string &path : paths) densities.push_back(jointDensity(path));
+                const openvdb::FloatGrid::Ptr joint =
+                    firn::unionDensity(std::vector<openvdb::FloatGrid::ConstPtr>(densities.begin(), densities.end()));
+                const firn::Scene scene =
+                    sceneFrom({joint}, paths.front(), optics, suns, lamps, sky, std::move(blockers));
+                const firn::BakedGrids baked = firn::bakeScattering(scene, settings, progress.get(), &stats);
+                for (std::size_t i = 0; i < paths.size(); ++i)
+                    if (outputPaths[i])
+                        writeBaked(paths[i], densities[i], firn::bakedGridsOf(baked, *densities[i]), *outputPaths[i]);
+            });
+            return statsDict(stats);
+        },
+        py::arg("vdb_paths"), py::arg("output_paths"), py::arg("optics"),
+        py::arg("suns") = std::vector<firn::SunLight>{}, py::arg("sky") = py::none(), py::arg("occluders") = py::list(),
+        py::arg("quality") = "FINAL", py::arg("seed") = 0, py::arg("progress") = nullptr,
+        py::arg("lamps") = std::vector<firn::Lamp>{}, py::arg("source_scale") = 0, R"doc(
+Bakes several snow objects lit as one medium (transport/joint_medium.h: a spray's lumps and the tracked snow
+they fly over shade and light each other): the 'density' grids of `vdb_paths` summed on the first one's voxels
+are baked as `bake` does, then each output_paths[i] that is not None gets the grids of vdb_paths[i] with the
+union's baked grids on its own voxels (docs/vdb-contract.md: each object renders its own density times the
+shared source, and the objects add up to the union). A file may hold an empty density (a frame without lumps).
+Every file written atomically, none before the bake is done. Arguments, errors and statistics as `bake`'s.)doc");
+
+    m.def(
+        "union_density",
+        [](const std::vector<std::string> &paths, const std::string &outputPath) {
+            longCall([&] {
+                std::vector<openvdb::FloatGrid::ConstPtr> densities;
+                for (const std::string &path : paths) densities.push_back(jointDensity(path));
+                firn::writeGrids(outputPath, {firn::unionDensity(densities)});
+            });
+        },
+        py::arg("vdb_paths"), py::arg("output_path"), R"doc(
+Writes the medium `bake_joint` bakes: the 'density' grids of `vdb_paths` summed on the first one's voxels, as
+the only grid of `output_path` (atomically). For references: monte_carlo_radiance of that file is what the
+objects baked together should render.)doc");
 
     m.def(
         "render_baked",

@@ -221,3 +221,38 @@ def test_occluders_of_the_wrong_kind_are_value_errors(slab):
         firncore.bake(slab, SNOW, occluders=[(*triangle, "red")])
     with pytest.raises(ValueError, match="albedo"):
         firncore.bake(slab, SNOW, occluders=[(*triangle, (0.5, None, 0.5))])
+
+
+def test_objects_baked_as_one_medium_each_get_the_unions_light_on_their_own_voxels(tmp_path):
+    """bake_joint (transport/joint_medium.h): a narrow slab inside a wide one. Each output keeps its own density and
+    holds the source grids of the union baked alone (union_density, then bake: same settings, same seed) where it
+    has snow; the narrow one's grids stop a few voxels past its snow. Oracle: the union's own bake."""
+    wide, narrow, union = (os.fspath(tmp_path / name) for name in ("wide.vdb", "narrow.vdb", "union.vdb"))
+    firncore.write_slab_vdb(wide, voxel_size=0.01, width=32, layers=8, density=150.0)
+    firncore.write_slab_vdb(narrow, voxel_size=0.01, width=8, layers=8, density=150.0)
+    lit = [os.fspath(tmp_path / "wide_lit.vdb"), os.fspath(tmp_path / "narrow_lit.vdb")]
+    light = dict(sky=firncore.Sky((1.0, 1.0, 1.0)), quality="DRAFT", seed=3)
+    firncore.bake_joint([wide, narrow], lit, SNOW, **light)
+    firncore.union_density([wide, narrow], union)
+    firncore.bake(union, SNOW, **light)
+    inside, outside = [0.0, 0.0, -0.03], [0.12, 0.0, -0.03]  # in both slabs; in the wide one only
+    points = np.array([inside, outside], np.float32)
+    assert firncore.sample_grid(union, "density", points) == pytest.approx([300.0, 150.0])
+    assert firncore.sample_grid(lit[0], "density", points) == pytest.approx([150.0, 150.0])
+    assert firncore.sample_grid(lit[1], "density", points) == pytest.approx([150.0, 0.0])
+    for name in firncore.BAKED_GRID_NAMES:
+        shared = firncore.sample_color_grid(union, name, points)
+        np.testing.assert_allclose(firncore.sample_color_grid(lit[0], name, points), shared, rtol=1e-6, atol=1e-9)
+        np.testing.assert_allclose(firncore.sample_color_grid(lit[1], name, points[:1]), shared[:1], rtol=1e-6,
+                                   atol=1e-9)
+        assert not firncore.sample_color_grid(lit[1], name, points[1:]).any()
+    assert firncore.sample_color_grid(union, "firn_source", points).min() > 0.0  # lit where both are compared
+    # Where the wide slab is alone, it renders as the union does.
+    origins, directions = down([(0.12, 0.0)])
+    np.testing.assert_allclose(firncore.render_baked(lit[0], SNOW, origins, directions),
+                               firncore.render_baked(union, SNOW, origins, directions), rtol=1e-6)
+
+
+def test_a_joint_bake_needs_an_output_per_file(slab):
+    with pytest.raises(ValueError, match="one output path"):
+        firncore.bake_joint([slab, slab], [None], SNOW)

@@ -41,20 +41,24 @@ def baking():
     return any(job.label == BAKE_LABEL for job in running_jobs())
 
 
-def core_bake(path, output, volume_optics, inputs, quality, seed, progress):
-    """The one call into the core's bake (cpp/python/bind_transport.cpp): it reads `path` once, bakes its `density`
-    and writes its grids with the baked ones added to `output`, atomically. Raises firncore.ReadError when `path`
-    cannot be read, another OSError when `output` cannot be written."""
+def core_light(inputs):
+    """BakeInputs as the core's bake calls take them: suns, lamps, sky and occluders keyword arguments."""
     sky = inputs.sky
-    firncore.bake(
-        path, volume_optics, output_path=output,
+    return dict(
         suns=[firncore.SunLight(sun.direction, sun.irradiance, sun.angular_diameter) for sun in inputs.suns],
         lamps=[firncore.Lamp(lamp.shape, lamp.position, lamp.emission, axis=lamp.axis, tangent=lamp.tangent,
                              radius=lamp.radius, spot_angle=lamp.spot_angle, spot_blend=lamp.spot_blend,
                              size=lamp.size) for lamp in inputs.lamps],
         sky=firncore.Sky(radiance=tuple(sky.radiance), map=sky.map),  # map: (H, W, 3), rows bottom to top
-        occluders=[(o.vertices, o.triangles, o.albedo) for o in inputs.occluders],
-        quality=quality, seed=seed, progress=progress)
+        occluders=[(o.vertices, o.triangles, o.albedo) for o in inputs.occluders])
+
+
+def core_bake(path, output, volume_optics, inputs, quality, seed, progress):
+    """The one call into the core's bake (cpp/python/bind_transport.cpp): it reads `path` once, bakes its `density`
+    and writes its grids with the baked ones added to `output`, atomically. Raises firncore.ReadError when `path`
+    cannot be read, another OSError when `output` cannot be written."""
+    firncore.bake(path, volume_optics, output_path=output, quality=quality, seed=seed, progress=progress,
+                  **core_light(inputs))
 
 
 def _check_volume(obj):

@@ -4,8 +4,9 @@ At bake time a fingerprint of everything the bake depends on is stored on the ob
 JSON {component: digest}); the panel compares it with the live scene at every redraw. Components: the sun lamps
 (and lamps ignored), the world, the occluders ({object name: digest of its transform, evaluated shape, modifiers
 and albedo}, so a change names the object), the optics, and the snow itself (its file's size and modification
-time, and its transform). A sequence baked frame by frame (Bake Sequence, spray/light.py) is compared through
-the marker of the frame it shows. Nothing here renders or reads grids.
+time, and its transform). A sequence baked frame by frame (Bake Sequence, spray/light.py: a spray's lumps and
+its tracked snow, baked together) is compared through the marker of the frame it shows. Nothing here renders or
+reads grids.
 """
 
 import json
@@ -118,8 +119,10 @@ def _frame_changes(obj, context):
     then = spray_files.read_marker(directory, frame)
     if then is None:
         return OUTDATED, [f"frame {frame} not lit"]
-    now = dict(bake_inputs.signature(context, obj), optics=optics_digest(obj),
-               snow=file_digest(spray_files.frame_path(directory, frame, "snow")))
+    source = obj.firn.spray.source
+    snow, spray = spray_files.medium_paths(directory, frame, cache.volume_path(source.data) if source else "")
+    now = dict(bake_inputs.signature(context, obj), optics=optics_digest(obj), snow=file_digest(snow),
+               spray=file_digest(spray))
     now["settings"] = then.get("settings")  # quality and seed are the bake's choice, not the scene's
     return _compare(then, now)
 

@@ -14,17 +14,27 @@ import shutil
 from ..common.core import firncore
 
 
+LIT_NAMES = {"lit": "lit_{frame:04d}.vdb", "lit_spray": "lit_spray_{frame:04d}.vdb"}
+
+
 def frame_path(directory, frame, kind):
-    """The path of a frame's file: kind "spray", "snow" (the core's) or "lit" (the tracked snow with its baked
-    light, spray/light.py)."""
-    if kind == "lit":
-        return os.path.join(directory, f"lit_{frame:04d}.vdb")
+    """The path of a frame's file: kind "spray", "snow" (the core's), "lit" (the tracked snow with its baked
+    light) or "lit_spray" (the lumps with theirs, spray/light.py)."""
+    if kind in LIT_NAMES:
+        return os.path.join(directory, LIT_NAMES[kind].format(frame=frame))
     spray, snow, _state = firncore.spray_frame_paths(directory, frame)
     return spray if kind == "spray" else snow
 
 
+def medium_paths(directory, frame, snow_layer_path):
+    """(snow, lumps) files a frame's light is baked from: its tracked snow, or the snow layer's own file where
+    the spray has no tracks (Cut Tracks off), and its lumps."""
+    tracked = frame_path(directory, frame, "snow")
+    return (tracked if os.path.exists(tracked) else snow_layer_path), frame_path(directory, frame, "spray")
+
+
 def marker_path(directory, frame):
-    """The marker of a lit frame (spray/light.py): what its lit file was baked from."""
+    """The marker of a lit frame (spray/light.py): what its lit files were baked from."""
     return os.path.splitext(frame_path(directory, frame, "lit"))[0] + ".json"
 
 

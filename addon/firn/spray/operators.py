@@ -262,17 +262,18 @@ def _tracks_of(spray):
 
 
 def _light_jobs(operator, context, spray, lit_frames):
-    """The per-frame light jobs of a spray's tracked snow (spray/light.py), or [] without tracks."""
+    """The per-frame light jobs of a spray's lumps and tracked snow (spray/light.py), or [] with Bake Light off."""
     tracks = _tracks_of(spray)
-    if tracks is None or not operator.light:
+    if not operator.light:
         return None, []
-    return tracks.name, light.gather(context, tracks, range(lit_frames[0], lit_frames[1] + 1), operator.quality,
-                                     operator.seed)
+    return (tracks.name if tracks is not None else None,
+            light.gather(context, spray, tracks, range(lit_frames[0], lit_frames[1] + 1), operator.quality,
+                         operator.seed))
 
 
 class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
-    """Simulate every Snow Spray of the scene over a frame range and bake the light of its tracked snow frame by
-    frame: frames already on disk for the same scene and settings are kept (an interrupted bake resumes; render
+    """Simulate every Snow Spray of the scene over a frame range and bake the light of its lumps and tracked snow
+    frame by frame: frames already on disk for the same scene and settings are kept (an interrupted bake resumes; render
     farm nodes may each bake their own frames)"""
 
     bl_idname = "firn.bake_sequence"
@@ -282,7 +283,8 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
         FRAME_PROPERTIES,
         light=bpy.props.BoolProperty(
             name="Bake Light", default=True,
-            description="Bake the light of the tracked snow at every frame (Bake Scattering, frame by frame)"),
+            description="Bake the light of the thrown lumps and the tracked snow at every frame, lit together "
+                        "(Bake Scattering, frame by frame)"),
         quality=bpy.props.EnumProperty(name="Quality", items=BAKE_QUALITY_ITEMS, default="FINAL"),
         seed=bpy.props.IntProperty(name="Light Seed", description="Same scene and seed, same bake", default=0,
                                    min=0),
@@ -339,8 +341,8 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
             inputs["current"] = index
             todo = []
             for frame in job["frames"]:
-                frame["parts"]["snow"] = bake_state.file_digest(frame["path"])  # as the simulation left it
-                if not light.is_lit(os.path.dirname(frame["lit"]), frame["frame"], frame["parts"]):
+                light.read_files(frame)  # as the simulation left them
+                if not light.is_lit(frame):
                     todo.append(frame)
             job["baked"] = [frame["frame"] for frame in todo]
             if todo and inputs["world"] is not None:
@@ -356,38 +358,38 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
             spray.firn.spray.summary = summary(job, run)
             for obj in sequence_objects(job["directory"]):
                 obj.firn.spray.frame_start, obj.firn.spray.frame_end = job["first"], job["last"]
-                role = obj.firn.spray.role
-                kind = "spray" if role == "SPRAY" else "lit" if self._plays_light(obj, job) else "snow"
+                unlit, lit = ("spray", "lit_spray") if obj.firn.spray.role == "SPRAY" else ("snow", "lit")
+                kind = lit if self._plays_light(obj, job, lit) else unlit
                 play_sequence(obj, os.path.dirname(obj.data.filepath), kind, job["first"], job["last"])
-                if kind == "lit":
+                if kind == lit:
                     self._adopt_light(obj, job)
-                elif role == "TRACKS" and not self.light:  # Bake Light off: the tracked snow renders unlit
+                elif not self.light:  # Bake Light off: the lumps and the tracked snow render unlit
                     obj.firn.bake_fingerprint = obj.firn.bake_summary = ""
                     materials.ensure_snow_material(obj)
             self.report({"INFO"}, f"{spray.name}: {spray.firn.spray.summary}")
 
-    def _plays_light(self, tracks, job):
-        """The tracked snow plays its lit files when every frame has one, or when only some frames were asked
-        for (a render-farm node): then the others are said to be missing."""
-        if job["tracks"] != tracks.name:
+    def _plays_light(self, obj, job, kind):
+        """A spray or its tracked snow plays its lit files (`kind`) when every frame has one, or when only some
+        frames were asked for (a render-farm node): then the others are said to be missing."""
+        if not self.light or (kind == "lit" and job["tracks"] != obj.name):
             return False
         first, last = job["lit"]
-        if light.all_lit(job["directory"], job["first"], job["last"]):
+        if light.all_lit(job["directory"], job["first"], job["last"], kind):
             return True
-        if (first, last) != (job["first"], job["last"]) and light.all_lit(job["directory"], first, last):
-            self.report({"WARNING"}, f"'{tracks.name}': frames outside {first}-{last} have no baked light yet and "
-                                     "show no snow until they are baked")
+        if (first, last) != (job["first"], job["last"]) and light.all_lit(job["directory"], first, last, kind):
+            self.report({"WARNING"}, f"'{obj.name}': frames outside {first}-{last} have no baked light yet and "
+                                     "show nothing until they are baked")
             return True
         return False
 
-    def _adopt_light(self, tracks, job):
+    def _adopt_light(self, obj, job):
         frames = job["baked"]
-        optics = bake_operators.volume_optics_of(tracks)
-        tracks.firn.bake_extinction_per_density = optics.extinction_per_density
-        tracks.firn.bake_summary = (f"{self.quality.title()} light, frames {job['lit'][0]}-{job['lit'][1]} "
-                                    f"({len(frames)} baked now, the others already were)")
-        bake_state.store(tracks, {"sequence": light.sequence_digest(job["directory"], job["first"], job["last"])})
-        materials.ensure_snow_material(tracks)
+        optics = bake_operators.volume_optics_of(obj)
+        obj.firn.bake_extinction_per_density = optics.extinction_per_density
+        obj.firn.bake_summary = (f"{self.quality.title()} light, frames {job['lit'][0]}-{job['lit'][1]} "
+                                 f"({len(frames)} baked now, the others already were)")
+        bake_state.store(obj, {"sequence": light.sequence_digest(job["directory"], job["first"], job["last"])})
+        materials.ensure_snow_material(obj)
 
 
 class FIRN_OT_clear_snow_spray(bpy.types.Operator):
