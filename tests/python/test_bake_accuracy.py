@@ -119,9 +119,11 @@ def test_ramp_in_front_of_a_lit_rim_carries_the_returned_grazing_sun(folder):
     # sun's forward return, while the core's Monte Carlo finds the lit top's forward return travelling through
     # that ramp (its source there 0.3-0.4 W/m^2/sr against the bake's 0.15-0.2 on ball_issue). With the ramp's
     # sunlit voxels carrying the peaked lobes of the smooth surface voxels within two voxels whose peak travels
-    # towards them (bake.cpp, forwardPeakThrough), against these 1024 paths (noise 3.1 % and 2.5 %): ball_grey
-    # (omega 0.9, g 0.6) view -32.9 % -> -23.3 %, its worst block -61 % -> -48 %; ball_clean (omega 1 - 1e-7,
-    # g 0.85, 5 mm voxels) worst block -60 % -> -48 % (docs/bake.md, Accuracy).
+    # towards them (bake.cpp, forwardPeakThrough), against these 1024 paths (noise 5.0 %, 3.1 %, 2.5 %): ball_issue
+    # view -40.1 % -> -32.0 %; ball_grey (omega 0.9, g 0.6) view -32.9 % -> -24.1 %, its worst block -61 % -> -48 %;
+    # ball_clean (omega 1 - 1e-7, g 0.85, 5 mm voxels) worst block -60 % -> -48 % (docs/bake.md, Accuracy).
+    issue = baked_against_reference(folder, "ball_issue", 1024, [(180, 0)])
+    assert issue["view_bias"][0] > -0.36, issue["view_bias"]
     grey = baked_against_reference(folder, "ball_grey", 1024, [(180, 0)])
     assert grey["view_bias"][0] > -0.28, grey["view_bias"]
     assert grey["worst"] < 0.55, grey["worst_signed"]
