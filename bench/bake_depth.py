@@ -44,7 +44,8 @@ def main():
             o, d = origins[k], directions[k]
             step = 0.25 * case.voxel
             along = np.arange(0.0, 6.0 * 0.55 * max(case.density.shape) * case.voxel, step)
-            extinction = bake_suite.trilinear(case.density, (o + along[:, None] * d) / case.voxel) * case.sigma_t / case.rho
+            density = bake_suite.trilinear(case.density, (o + along[:, None] * d) / case.voxel)
+            extinction = density * case.sigma_t / case.rho
             depth = np.cumsum(extinction) * step
             entry = along[np.argmax(extinction > 0.0)]
             t = entry - case.voxel + 0.5 * case.voxel * np.arange(args.steps)
@@ -53,8 +54,10 @@ def main():
                                                              sky=case.skies(), occluders=case.occluders,
                                                              samples=args.samples, seed=5)
             baked = firncore.render_baked(path, case.optics, points, rays, occluders=case.occluders)
-            print(f"{case.name} view {case.views[args.view]} pixel row {row} column {column}: optical depth {tau[k]:.1f}")
-            print(f"{'from cm':>8} {'depth':>6} {'index x, y, z':>22} {'reference':>17} {'baked':>8} {'baked/ref-1':>11}")
+            print(f"{case.name} view {case.views[args.view]} pixel row {row} column {column}: "
+                  f"optical depth {tau[k]:.1f}")
+            print(f"{'from cm':>8} {'depth':>6} {'index x, y, z':>22} {'reference':>17} {'baked':>8} "
+                  f"{'baked/ref-1':>11}")
             for ti, p, r, e, b in zip(t, points, reference[:, 1], error[:, 1], baked[:, 1]):
                 x = ", ".join(f"{v:.2f}" for v in p / case.voxel)
                 relative = f"{b / r - 1.0:+.2f}" if r > 0.0 else "-"

@@ -1042,6 +1042,7 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
         openvdb::Coord lo, hi;  // the voxels around the midpoint of the way, from `from`
     };
     static const std::vector<Offset> offsets = [] {
+        const auto half = [](int v, bool up) { return int(up ? std::ceil(v / 2.0) : std::floor(v / 2.0)); };
         std::vector<Offset> out;
         for (int dx = -2; dx <= 2; ++dx)
             for (int dy = -2; dy <= 2; ++dy)
@@ -1049,8 +1050,8 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
                     if (dx || dy || dz)
                         out.push_back({openvdb::Coord(-dx, -dy, -dz), glm::normalize(glm::dvec3(dx, dy, dz)),
                                        std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) == 1,
-                                       openvdb::Coord(int(std::floor(dx / 2.0)), int(std::floor(dy / 2.0)), int(std::floor(dz / 2.0))),
-                                       openvdb::Coord(int(std::ceil(dx / 2.0)), int(std::ceil(dy / 2.0)), int(std::ceil(dz / 2.0)))});
+                                       openvdb::Coord(half(dx, false), half(dy, false), half(dz, false)),
+                                       openvdb::Coord(half(dx, true), half(dy, true), half(dz, true))});
         return out;
     }();
     const auto sharpAt = [&](const openvdb::Coord &v) {
@@ -1139,9 +1140,12 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
         for (const PeakedLobes::Peak &peak : source.peaked.peaks)
             peaked[peak.key] = glm::length(peak.peak1) > 0.0f;
         for (auto it = topo.index->cbeginValueOn(); it; ++it)
-            if (const std::int32_t j = *it; j >= 0 && peaked[j] && topo.patches[j].isSurface() && !topo.patches[j].sharp)
-                nearPeak.setValueOn(it.getCoord());
-        openvdb::tools::dilateActiveValues(nearPeak, 2, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+            if (const std::int32_t j = *it; j >= 0 && peaked[j]) {
+                const SurfacePatch &patch = topo.patches[j];
+                if (patch.isSurface() && !patch.sharp) nearPeak.setValueOn(it.getCoord());
+            }
+        openvdb::tools::dilateActiveValues(nearPeak, 2, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                           openvdb::tools::IGNORE_TILES);
     }
     // First: traced voxels, and the voxels next to surface voxels (unknowns hold their own source).
     Pairs perLeaf(leaves.leafCount());
@@ -1157,7 +1161,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 Source S;
                 if (t >= 0) S = traced.source[t];
                 else if (index.getValue(c) >= 0 || !facingAverage(topo, c, index, source, S)) continue;
-                else if (nearPeakAt.isValueOn(c)) forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaked, marcher, S);
+                else if (nearPeakAt.isValueOn(c))
+                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaked, marcher, S);
                 perLeaf[l].add(it.pos(), S);
             }
     });
