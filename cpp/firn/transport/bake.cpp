@@ -1018,6 +1018,74 @@ openvdb::Vec3f sourceComponent(const Source &S, int k) {
                                                  : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
 }
 
+// The returned grazing sun carried through the density ramp: voxel c (outside the unknowns, carrying its surface's
+// radiance) in front of smooth surface voxels within two voxels whose peaked lobe (the sun returned sharply
+// forwards, Method 5) travels towards it takes their peaked lobes where these are over twice its own (elsewhere
+// its surface holds as much: a march towards the suns saved), weighted by the cosine squared between a lobe's
+// axis and the way to c and by how much its surface faces c, in the share of the suns' light that reaches c
+// uncollided (sunlit). On a lit rim seen against the sun the camera ray crosses the ramp at the
+// top and becomes opaque in its camera side, whose own surface voxels take the sun at grazing incidence and
+// hold little peak (mu0 0-0.2), while the light there is the lit top's forward return travelling through
+// (ball_issue's top row: the reference's source 0.3-0.4 in the ramp's first optical depth, the bake's 0.15-0.2;
+// ball_grey's top row seen against the sun -55 -> -37 %). Not across sharp edges (a peak whose way to c passes
+// an edge voxel: their faces' light leaves face by face; slab_thick 4.4 -> 4.7 % with them, and left out
+// wherever an edge voxel lay beside c, ball_issue's side rims seen against the sun stayed at -59 %), nor from
+// traced voxels (their peak is their own beams' scattering). bench/bake_suite.py: docs/bake.md, Accuracy.
+void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c,
+                        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
+                        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &tracedIndex, const SourceValues &source,
+                        const std::vector<bool> &peaked, Medium::ColumnMarcher &marcher, Source &S) {
+    struct Offset {
+        openvdb::Coord from;  // c minus the way to c
+        glm::dvec3 towards;   // unit
+        bool beside;          // within one voxel
+        openvdb::Coord lo, hi;  // the voxels around the midpoint of the way, from `from`
+    };
+    static const std::vector<Offset> offsets = [] {
+        const auto half = [](int v, bool up) { return int(up ? std::ceil(v / 2.0) : std::floor(v / 2.0)); };
+        std::vector<Offset> out;
+        for (int dx = -2; dx <= 2; ++dx)
+            for (int dy = -2; dy <= 2; ++dy)
+                for (int dz = -2; dz <= 2; ++dz)
+                    if (dx || dy || dz)
+                        out.push_back({openvdb::Coord(-dx, -dy, -dz), glm::normalize(glm::dvec3(dx, dy, dz)),
+                                       std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) == 1,
+                                       openvdb::Coord(half(dx, false), half(dy, false), half(dz, false)),
+                                       openvdb::Coord(half(dx, true), half(dy, true), half(dz, true))});
+        return out;
+    }();
+    const auto sharpAt = [&](const openvdb::Coord &v) {
+        const std::int32_t k = index.getValue(v);
+        return k >= 0 && topo.patches[k].sharp;
+    };
+    glm::dvec3 p0(0.0), p1(0.0);
+    double total = 0.0;
+    for (const Offset &o : offsets) {
+        const openvdb::Coord from = c + o.from;
+        const std::int32_t j = index.getValue(from);
+        if (j < 0 || !peaked[j] || !topo.patches[j].isSurface()) continue;
+        if (!o.beside && (sharpAt(from + o.lo) || sharpAt(from + o.hi))) continue;  // its light passes an edge
+        const double facing = glm::dot(topo.patches[j].normal, o.towards);
+        if (facing <= 0.0 || tracedIndex.getValue(from) >= 0) continue;
+        const Source v = source[j];
+        const double along = glm::dot(glm::normalize(glm::dvec3(v.peak1)), o.towards);
+        if (along <= 0.0) continue;
+        const double w = along * along * facing;
+        p0 += w * glm::dvec3(v.peak0), p1 += w * glm::dvec3(v.peak1), total += w;
+    }
+    if (!(total > 0.0) || (p0.x + p0.y + p0.z) / total <= 2.0 * double(S.peak0.x + S.peak0.y + S.peak0.z)) return;
+    const Medium &medium = *scene.medium;
+    const glm::dvec3 centre = medium.voxelCentre(c);
+    double arriving = 0.0, outside = 0.0;
+    for (std::size_t b = 0; b < scene.suns.size(); ++b) {
+        arriving += beamAt(scene, b, centre, 1, 0, 0, marcher, nullptr, Crossing::Uncollided).irradiance.y;
+        outside += scene.suns[b].irradiance.y;
+    }
+    const double lit = outside > 0.0 ? arriving / outside : 0.0;
+    S.peak0 = glm::vec3(lit * p0 / total + (1.0 - lit) * glm::dvec3(S.peak0));
+    S.peak1 = glm::vec3(lit * p1 / total + (1.0 - lit) * glm::dvec3(S.peak1));
+}
+
 // What the source grids hold, worked out once so that the grids can be written one at a time (a grid at
 // the density's resolution takes 12 bytes for every voxel of its leaves: the four of one lobe took ~250 bytes per unknown on
 // the car sample, docs/bake.md Memory).
@@ -1035,7 +1103,9 @@ struct GridValues {
 };
 
 // gathering: the values the gathering reads alone (those beside snow, besideSnow: the grids carry the surface's
-// radiance two voxels out, the gathering needs one).
+// radiance two voxels out, the gathering needs one), without the returned grazing sun carried through the ramp
+// (forwardPeakThrough: what cameras see of a lit rim; the sky rays between snow surfaces hardly meet it, and it
+// cost the car 0.8 processor seconds there).
 GridValues gridValues(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
                       const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
                       bool gathering) {
@@ -1061,11 +1131,29 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
         if (count) S.l0 /= double(count), S.l1 /= double(count), S.peak0 /= double(count), S.peak1 /= double(count);
         return count > 0;
     };
+    // Where forwardPeakThrough may find a peak: within two voxels of a smooth surface voxel holding one (the car's
+    // grids took 4.6 processor seconds searching around every voxel next to a surface voxel, 4.3-4.4 so, 3.3 without).
+    openvdb::BoolTree nearPeak(false);
+    std::vector<bool> peaked;  // by unknown: whether it holds a peaked lobe
+    if (!gathering) {
+        peaked.assign(source.broad.size(), false);
+        for (const PeakedLobes::Peak &peak : source.peaked.peaks)
+            peaked[peak.key] = glm::length(peak.peak1) > 0.0f;
+        for (auto it = topo.index->cbeginValueOn(); it; ++it)
+            if (const std::int32_t j = *it; j >= 0 && peaked[j]) {
+                const SurfacePatch &patch = topo.patches[j];
+                if (patch.isSurface() && !patch.sharp) nearPeak.setValueOn(it.getCoord());
+            }
+        openvdb::tools::dilateActiveValues(nearPeak, 2, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                           openvdb::tools::IGNORE_TILES);
+    }
     // First: traced voxels, and the voxels next to surface voxels (unknowns hold their own source).
     Pairs perLeaf(leaves.leafCount());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak);
+        Medium::ColumnMarcher marcher(medium);
         for (std::size_t l = range.begin(); l != range.end(); ++l)
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
@@ -1073,6 +1161,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 Source S;
                 if (t >= 0) S = traced.source[t];
                 else if (index.getValue(c) >= 0 || !facingAverage(topo, c, index, source, S)) continue;
+                else if (nearPeakAt.isValueOn(c))
+                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaked, marcher, S);
                 perLeaf[l].add(it.pos(), S);
             }
     });
