@@ -264,7 +264,8 @@ def run_case(case, folder, cache, quality="FINAL"):
     origins, directions, tau = views(case)
     mean, error, reference_seconds = reference(case, path, origins, directions, cache)
     start = time.perf_counter()
-    firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders, quality=quality)
+    stats = firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
+                          quality=quality)
     bake_seconds = time.perf_counter() - start
     baked = firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)
     seen = tau >= 1.0
@@ -278,7 +279,8 @@ def run_case(case, folder, cache, quality="FINAL"):
         "mean": float(np.abs(relative).mean()), "worst": float(np.abs(relative).max()),
         "worst_signed": float(relative.flat[np.abs(relative).argmax()]),
         "bias": float(b.sum() / m.sum() - 1.0), "noise": float(np.median(e / np.maximum(m, 1e-30))),
-        "bake_s": bake_seconds, "reference_s": reference_seconds,
+        "bake_s": bake_seconds, "reference_s": reference_seconds, "traced": stats["traced_voxels"],
+        "trace_cpu_s": stats["cpu_seconds"]["trace"],
         "relative": relative, "view_bias": view_bias, "views": case.views,
     }
 
@@ -328,7 +330,7 @@ def main():
             rows.append(run_case(case, folder, cache, args.quality))
             r = rows[-1]
             print(f"  {r['case']}: {r['what']}: mean {100 * r['mean']:.1f} %, worst {100 * r['worst_signed']:+.0f} %, "
-                  f"bias {100 * r['bias']:+.1f} %; per view: " +
+                  f"bias {100 * r['bias']:+.1f} %; {r['traced']} traced voxels, trace {r['trace_cpu_s']:.2f} processor s; per view: " +
                   ", ".join(f"{v} {100 * b:+.0f} %" for v, b in zip(case.views, r["view_bias"])), flush=True)
             if args.maps:
                 _, _, tau = views(case)
