@@ -173,8 +173,8 @@ def test_traced_voxels_are_stratified_and_deterministic(tmp_vdb):
     # gathering directions come from a randomly shifted R5 Kronecker sequence (monte_carlo.cpp): two seeds' renders
     # differ by 1.4 % per block on average (|a - b| / (a + b) over the suite's blocks), against 1.9 % with
     # independent draws (main 37060a5), at the same paths per voxel. Same seed, same grids, on 1 or 2 threads.
-    # Its accuracy against the core's Monte Carlo: test_small_balls_match_monte_carlo (4.6 % mean over 4 seeds
-    # against 4.9 % before; docs/bake.md).
+    # Its accuracy against the core's Monte Carlo: test_small_balls_match_monte_carlo (4.6 % mean over 16 seeds
+    # against 4.8 % before; docs/bake.md, Method 3).
     c = case("ball_thin")
     bake_suite.write_density(tmp_vdb, c.density, c.voxel)
     origins, directions, tau = bake_suite.views(c)

@@ -47,8 +47,9 @@ struct ArrivingLight {
 
 // Points of [0, 1)^5 (a voxel's position and a direction) from the R5 Kronecker sequence, n alpha mod 1 with
 // alpha_i = phi^-i, phi the root of x^6 = x + 1 (Roberts 2018), shifted at random (Cranley-Patterson): every
-// projection stratified, seeded. Measured on bench/bake_suite.py, 4 seeds, per-block spread of the baked render
-// across seeds: ball_thin 3.3 -> 2.5 %, spray_dense 16.8 -> 15.5 %, mean errors 4.9 -> 4.6 %, 23.3 -> 21.8 %.
+// projection stratified, seeded. Against independent draws (bench/bake_suite.py --seeds, mean error per block and
+// the render's spread across seeds): ball_thin 4.8 -> 4.6 % (3.5 -> 2.8 %), spray_lumps 14.1 -> 13.0 % (16
+// seeds), spray_dense 25.0 -> 21.8 % (4 seeds), at the same cost; most of what is left is the paths' own noise.
 class KroneckerSequence {
   public:
     explicit KroneckerSequence(Rng &rng) {
