@@ -258,13 +258,14 @@ def reference(case, path, origins, directions, cache):
     return mean, error, seconds
 
 
-def run_case(case, folder, cache, quality="FINAL"):
+def run_case(case, folder, cache, quality="FINAL", seed=0):
     path = os.path.join(folder, case.name + ".vdb")
     write_density(path, case.density, case.voxel)
     origins, directions, tau = views(case)
     mean, error, reference_seconds = reference(case, path, origins, directions, cache)
     start = time.perf_counter()
-    firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders, quality=quality)
+    stats = firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
+                          quality=quality, seed=seed)
     bake_seconds = time.perf_counter() - start
     baked = firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)
     seen = tau >= 1.0
@@ -278,9 +279,25 @@ def run_case(case, folder, cache, quality="FINAL"):
         "mean": float(np.abs(relative).mean()), "worst": float(np.abs(relative).max()),
         "worst_signed": float(relative.flat[np.abs(relative).argmax()]),
         "bias": float(b.sum() / m.sum() - 1.0), "noise": float(np.median(e / np.maximum(m, 1e-30))),
-        "bake_s": bake_seconds, "reference_s": reference_seconds,
+        "bake_s": bake_seconds, "reference_s": reference_seconds, "traced": stats["traced_voxels"],
+        "trace_cpu_s": stats["cpu_seconds"]["trace"],
         "relative": relative, "view_bias": view_bias, "views": case.views,
     }
+
+
+def over_seeds(runs):
+    """One row from the runs of several bake seeds: mean error, bias, view biases and times averaged, the worst
+    block the worst of any; "spread": the per-block spread of the baked render across seeds (relative standard
+    deviation), the bake's own noise."""
+    r = dict(runs[0])
+    for key in ("mean", "bias", "bake_s", "trace_cpu_s"):
+        r[key] = float(np.mean([x[key] for x in runs]))
+    r["view_bias"] = list(np.mean([x["view_bias"] for x in runs], axis=0))
+    worst = max(runs, key=lambda x: x["worst"])
+    r["worst"], r["worst_signed"] = worst["worst"], worst["worst_signed"]
+    ratios = np.array([x["relative"] for x in runs]) + 1.0
+    r["spread"] = float(np.mean(ratios.std(0, ddof=1) / np.maximum(ratios.mean(0), 1e-30))) if len(runs) > 1 else 0.0
+    return r
 
 
 def worst_view(r):
@@ -290,12 +307,15 @@ def worst_view(r):
 
 
 def table(rows, markdown):
-    head = ("case", "blocks", "mean", "worst", "bias", "worst view bias", "ref noise", "bake s", "ref s")
+    seeds = any(r.get("spread") for r in rows)  # several bake seeds: their spread too
+    head = ("case", "blocks", "mean", "worst", "bias", "worst view bias", "ref noise") + \
+        (("bake spread",) if seeds else ()) + ("bake s", "ref s")
     if markdown:
         lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
         for r in rows:
+            spread = f"{100 * r['spread']:.1f} % | " if seeds else ""
             lines.append(f"| {r['case']} | {r['blocks']} | {100 * r['mean']:.1f} % | {100 * r['worst_signed']:+.0f} % | "
-                         f"{100 * r['bias']:+.1f} % | {worst_view(r)} | {100 * r['noise']:.1f} % | {r['bake_s']:.2f} | "
+                         f"{100 * r['bias']:+.1f} % | {worst_view(r)} | {100 * r['noise']:.1f} % | {spread}{r['bake_s']:.2f} | "
                          f"{r['reference_s']:.0f} |")
         return "\n".join(lines)
     lines = [f"{'case':<14} {'blocks':>6} {'mean':>7} {'worst':>7} {'bias':>7} {'worst view bias':>22} {'noise':>6} "
@@ -316,6 +336,9 @@ def main():
     parser.add_argument("--markdown", action="store_true")
     parser.add_argument("--quality", default="FINAL")
     parser.add_argument("--maps", action="store_true", help="print each view's per-block relative errors")
+    parser.add_argument("--seeds", type=int, default=1,
+                        help="bake each case with seeds 0..N-1 and report the means (traced voxels' noise: one seed's "
+                             "mean error moves by up to 2 points)")
     args = parser.parse_args()
     chosen = [c for c in cases() if not args.cases or c.name in args.cases.split(",")]
     cache = None if args.fresh else args.cache
@@ -325,10 +348,15 @@ def main():
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         for case in chosen:
-            rows.append(run_case(case, folder, cache, args.quality))
+            runs = [run_case(case, folder, cache, args.quality, seed) for seed in range(args.seeds)]
+            rows.append(over_seeds(runs))
             r = rows[-1]
+            seeds = ", ".join(f"{100 * x['mean']:.1f}" for x in runs)
             print(f"  {r['case']}: {r['what']}: mean {100 * r['mean']:.1f} %, worst {100 * r['worst_signed']:+.0f} %, "
-                  f"bias {100 * r['bias']:+.1f} %; per view: " +
+                  f"bias {100 * r['bias']:+.1f} %; " +
+                  (f"over {args.seeds} seeds (means {seeds} %, spread {100 * r['spread']:.1f} %); "
+                   if args.seeds > 1 else "") +
+                  f"{r['traced']} traced voxels, trace {r['trace_cpu_s']:.2f} processor s; per view: " +
                   ", ".join(f"{v} {100 * b:+.0f} %" for v, b in zip(case.views, r["view_bias"])), flush=True)
             if args.maps:
                 _, _, tau = views(case)

@@ -46,14 +46,15 @@ struct Preset {
     int referenceSamples;
     int snowBounces;  // passes gathering light between snow surfaces
     int tracedSamples;  // paths per optically thin voxel (thinVoxels)
+    int cheapTracedSamples;  // as many where all of them cost at most kCheapTracedSteps (tracedSamples)
 };
 
 constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
 
 Preset resolve(const BakeSettings &s) {
-    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64}
-               : s.quality == BakeQuality::Final ? Preset{16, 4, 1e-5, 0, 1, 256}
-                                                 : Preset{64, 8, 1e-7, 64, 2, 1024};
+    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64}
+               : s.quality == BakeQuality::Final ? Preset{16, 4, 1e-5, 0, 1, 256, 1024}
+                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
     // Conjugate gradients in double precision stall near 1e-15: asked for less, it iterated on a residual of
@@ -241,8 +242,14 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
 // its start (the gathering's fixed cost: 1.5 us per path on ball_half_tau, at 16 M steps per processor
 // second, as spray_dense's long paths). The budget: a ski spray's frame (774 traced voxels of lumps, 2585
 // steps per path; docs/spray.md) takes 99 paths per voxel, 13.0 % mean error per block (24.9 %, worst
-// +210 %, with 25 paths per voxel: hence 64 at least; 11.3 % with 256).
+// +210 %, with 25 paths per voxel: hence 64 at least; 11.3 % with 256). Where all the paths cost little, more
+// of them (up to the preset's cheapTracedSamples, while they cost at most kCheapTracedSteps): a small object's
+// few traced voxels show their estimates' noise, and 1024 paths each cost it well under a processor second
+// (bench/bake_suite.py --seeds 4 at FINAL, 256 -> 1024 paths: ball_thin 4.6 -> 4.0 %, ball_thin_forward 9.8 ->
+// 7.0 %, ball_rgb 8.8 -> 8.0 %, ball_forward 16.4 -> 15.1 %, spray_lumps 12.5 -> 10.2 %, the tracing 0.05 -> 0.2,
+// 0.2 -> 0.9 processor s; spray_dense and ball_half_tau, over the budget at 256 already, as they were).
 constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 processor seconds
+constexpr double kCheapTracedSteps = 2e7;                       // about 1.2 processor seconds
 int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
     if (voxels.empty()) return 0;
@@ -258,7 +265,11 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
     }
     const double perPath = steps / paths;
     const int affordable = int(std::min(kMaxTracedPaths, kMaxTracedSteps / perPath) / double(voxels.size()));
-    return affordable < kMinSamples ? 0 : std::min(affordable, preset.tracedSamples);
+    if (affordable < kMinSamples) return 0;
+    int samples = std::min(affordable, preset.tracedSamples);
+    while (2 * samples <= preset.cheapTracedSamples && perPath * 2.0 * samples * double(voxels.size()) <= kCheapTracedSteps)
+        samples *= 2;
+    return samples;
 }
 
 // Caps a broad lobe's first moments at |l1| <= l0 (k <= 1/3; tracedSource).

@@ -59,7 +59,8 @@ class MonteCarloReference {
     std::vector<RadianceEstimate> estimate(const std::vector<Ray> &rays, int samplesPerRay, std::uint64_t seed,
                                            Progress *progress = nullptr) const;
 
-    // The source function in one voxel, from `samples` points spread over it (weighted by extinction, as
+    // The source function in one voxel, from `samples` points spread over it (a randomly shifted Kronecker
+    // sequence over position and direction, stratified and seeded; weighted by extinction, as
     // the renderer's emission is), each gathering the light arriving from one uniformly drawn direction,
     // all orders, and every light's direct beam: omega / (4 pi) (phi + 3 g F . w), the Henyey-Greenstein
     // phase function to first order in w, with the exact fluence phi and flux F; the direct beams' share apart;
