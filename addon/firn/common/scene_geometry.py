@@ -61,8 +61,10 @@ def _loop_triangle_corners(mesh):
         probes = {0, len(triangles) // 2, len(triangles) - 1}
         if all(tuple(corner_loops[t]) == tuple(triangles[t].loops) for t in probes) and all(
                 loop_vertices[loop] == loops[int(loop)].vertex_index for t in probes for loop in corner_loops[t]):
-            if corner_loops.max() < len(loops):
+            try:  # numpy checks each index as it reads: a loop past the loops' array raises, nothing is read there
                 return loop_vertices[corner_loops].reshape(-1)  # a copy, before the mesh can go
+            except IndexError:
+                pass
     corners = np.empty(len(triangles) * 3, np.int32)
     triangles.foreach_get("vertices", corners)
     return corners

@@ -40,7 +40,9 @@ class ColumnTable {
         singleTop_ = solveDecreasing([&](double z) { return wyvillLayerField(z, radius_, area_); }, kSnowIsoValue, 0.0,
                                      radius_);
         step_ = maxDepth / (kEntries - 1);
-        for (int i = 0; i < kEntries; ++i) table_.push_back(solve(i * step_));
+        // Nested bisections for each entry (a serial 7 ms, on the way from the landing sites to the voxels).
+        table_.resize(kEntries);
+        tbb::parallel_for(0, kEntries, [&](int i) { table_[i] = solve(i * step_); });
     }
 
     Column lookup(double depth) const {

@@ -76,9 +76,10 @@ SnowBands generateSnowBands(const TriangleMesh &targets, const TriangleMesh &occ
                               std::to_string(targets.positions.size()) + " target vertices");
     if (progress) progress->report(0.0, "finding where snow lands");
     SnowBands out;
-    TriangleMesh oriented = targets;
-    out.openSurfaces = orientOpenSurfaces(oriented, -glm::normalize(settings.direction));
-    const RayCaster shelter(merge({&oriented, &occluders}));
+    const ShelteredTargets sheltered = shelterTargets(targets, occluders, -glm::normalize(settings.direction));
+    const TriangleMesh &oriented = sheltered.oriented;
+    const RayCaster &shelter = *sheltered.shelter;
+    out.openSurfaces = sheltered.openSurfaces;
     const double fine = settings.effectiveVoxelSize();
     const std::vector<LodBand> bands =
         lodBands(camera, fine, settings.spacing, farthestVertex(oriented, camera.position), kMaxBands);

@@ -7,8 +7,8 @@
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_group.h>
 
-#include "firn/geometry/ray_caster.h"
 #include "firn/snow/snow_volume_bound.h"
 #include "firn/util/error.h"
 
@@ -92,9 +92,10 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
     layer.voxelSize = settings.effectiveVoxelSize();
     if (progress) progress->report(0.0, "finding where snow lands");
 
-    TriangleMesh oriented = targets;
-    layer.openSurfaces = orientOpenSurfaces(oriented, -glm::normalize(settings.direction));
-    const RayCaster shelter(merge({&oriented, &occluders}));
+    const ShelteredTargets sheltered = shelterTargets(targets, occluders, -glm::normalize(settings.direction));
+    const TriangleMesh &oriented = sheltered.oriented;
+    const RayCaster &shelter = *sheltered.shelter;
+    layer.openSurfaces = sheltered.openSurfaces;
     // Sure refusals first: placing and sheltering sites grows with the area (minutes on a large plane).
     checkVoxelBudget(leastDepthWeight(depthWeights) * snowVoxelLowerBound(oriented, shelter, settings.snowfall(), settings.depth,
                                                        layer.voxelSize),
@@ -111,6 +112,25 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
     layer.grids = rasterizeSnow(layer.metaballs, raster, SubProgress(progress, 0.45, 1.0));
     if (progress) progress->report(1.0, "done");
     return layer;
+}
+
+ShelteredTargets shelterTargets(const TriangleMesh &targets, const TriangleMesh &occluders, const glm::vec3 &up) {
+    ShelteredTargets out;
+    tbb::task_group orienting;
+    orienting.run([&] {
+        out.oriented = targets;
+        out.openSurfaces = orientOpenSurfaces(out.oriented, up);
+    });
+    try {
+        out.shelter = std::make_unique<const RayCaster>(merge({&targets, &occluders}));
+    } catch (...) {
+        orienting.wait();  // the task writes `out`: it ends before `out` goes
+        throw;
+    }
+    orienting.wait();
+    if (out.openSurfaces.triangles > 0)
+        out.shelter = std::make_unique<const RayCaster>(merge({&out.oriented, &occluders}));
+    return out;
 }
 
 double leastDepthWeight(const std::vector<float> &depthWeights) {

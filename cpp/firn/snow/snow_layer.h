@@ -1,12 +1,14 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "firn/geometry/mesh.h"
 #include "firn/geometry/orientation.h"
+#include "firn/geometry/ray_caster.h"
 #include "firn/snow/metaball_layout.h"
 #include "firn/snow/snow_rasterizer.h"
 #include "firn/snow/snowfall.h"
@@ -57,6 +59,18 @@ struct SnowLayer {
 SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occluders,
                             const SnowLayerSettings &settings, Progress *progress,
                             const std::vector<float> &depthWeights = {});
+
+// The targets with their open surfaces turned to face `up` (orientOpenSurfaces), and the shelter: a RayCaster over
+// them and the occluders.
+struct ShelteredTargets {
+    TriangleMesh oriented;
+    Reorientation openSurfaces;
+    std::unique_ptr<const RayCaster> shelter;
+};
+
+// The shelter is built from the targets as given while they are oriented beside it (orientation's weld is serial:
+// it takes the other core); most scenes turn no triangle, and when one turned the shelter is built again.
+ShelteredTargets shelterTargets(const TriangleMesh &targets, const TriangleMesh &occluders, const glm::vec3 &up);
 
 // The smallest depth weight (1 for none, or for weights out of 0..1: findLandingSites refuses those): the
 // lower bound of snow_volume_bound.h times it stays a lower bound.

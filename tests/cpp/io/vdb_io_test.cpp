@@ -43,6 +43,35 @@ TEST(VdbIo, RoundTripKeepsValuesAndInMemoryTransform) {
     std::filesystem::remove_all(path.parent_path());
 }
 
+TEST(VdbIo, ManyLeavesComeBackEachWithItsOwnValuesAndMask) {
+    // writeGrids compresses the leaf buffers in chunks on several threads and writes them in the tree's order:
+    // a leaf's values read back into another leaf if that order slipped. 1,000 leaves (16 chunks), each with
+    // values of its own, some voxels off (with values other than the background, which the file keeps).
+    initializeOpenVdb();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    for (int l = 0; l < 1000; ++l) {
+        const openvdb::Coord origin(8 * (l % 10), 8 * (l / 10 % 10), 8 * (l / 100) - 40);
+        for (int v = 0; v < 512; v += 1 + l % 7) {
+            const openvdb::Coord ijk = origin.offsetBy(v & 7, (v >> 3) & 7, v >> 6);
+            grid->tree().setValue(ijk, float(l) + 0.001f * float(v));
+            if (v % 5 == 0) grid->tree().setValueOff(ijk);
+        }
+    }
+    const auto path = tempPath("leaves.vdb");
+    writeGrids(path.string(), {grid});
+    const auto back = openvdb::gridPtrCast<openvdb::FloatGrid>(readGrids(path.string()).at(0));
+    ASSERT_TRUE(back);
+    ASSERT_EQ(back->tree().leafCount(), 1000u);
+    for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf) {
+        const auto *read = back->tree().probeConstLeaf(leaf->origin());
+        ASSERT_NE(read, nullptr);
+        EXPECT_EQ(read->getValueMask(), leaf->getValueMask()) << leaf->origin();
+        for (openvdb::Index v = 0; v < leaf->SIZE; ++v)
+            ASSERT_EQ(read->getValue(v), leaf->getValue(v)) << leaf->origin() << " voxel " << v;
+    }
+}
+
 TEST(VdbIo, FileHasNoTilesAndIsShiftedHalfAVoxelForCycles) {
     const auto path = tempPath("cycles.vdb");
     writeGrids(path.string(), {cubeWithTile(0.1)});
