@@ -164,6 +164,9 @@ def cases():
              100.0, (0.99,) * 3, 0.7, sun=0.0, sky=1.0, views=[(0, 0), (0, 60), (0, -60)], samples=16384))
     add(Case("slab_thin", "slab 3 cm (3 voxels, tau 2 each), omega 0.99, g 0.6", slab(24, 3) * 100, 0.01, 200.0, 100.0,
              (0.99,) * 3, 0.6, views=[(0, 60), (90, 75), (0, -60), (180, -75)], samples=16384))
+    add(Case("slab_thin_forward", "slab 3 cm (3 voxels, tau 1 each), omega 0.9999, g 0.87", slab(24, 3) * 100, 0.01,
+             100.0, 100.0, (0.9999,) * 3, 0.87, views=[(0, 60), (90, 75), (0, -60), (180, -75), (180, -30)],
+             samples=16384))
     add(Case("slab_thick", "slab 20 cm (20 voxels, tau 30 each), omega 0.9999, g 0.87", slab(24, 20) * 300, 0.01,
              3000.0, 300.0, (0.9999,) * 3, 0.87, views=[(0, 60), (180, 60), (90, 80)], samples=16384))
     add(Case("box_sharp", "box 12 x 10 x 6 cm, sharp edges, tau 8, omega 0.995, g 0.7", box((0.12, 0.10, 0.06), 0.01) * 200,
