@@ -1,5 +1,6 @@
 #include "firn/geometry/orientation.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <utility>
@@ -66,7 +67,7 @@ struct TrianglesAround {
 
 }  // namespace
 
-Reorientation orientOpenSurfaces(TriangleMesh &mesh, const glm::vec3 &up) {
+OpenSurfaceTurns findOpenSurfaceTurns(const TriangleMesh &mesh, const glm::vec3 &up) {
     const std::size_t n = mesh.triangleCount();
     std::vector<char> down(n);
     tbb::parallel_for(std::size_t(0), n, [&](std::size_t t) { down[t] = glm::dot(mesh.crossNormal(t), up) < 0.0f; });
@@ -74,7 +75,8 @@ Reorientation orientOpenSurfaces(TriangleMesh &mesh, const glm::vec3 &up) {
     // triangles, so a terrain or floor that faces up everywhere is never walked.
     std::size_t firstDown = 0;
     while (firstDown < n && !down[firstDown]) ++firstDown;
-    if (firstDown == n) return {};
+    OpenSurfaceTurns turns;
+    if (firstDown == n) return turns;
     const std::vector<std::uint32_t> welded = weldedVertices(mesh);
     const TrianglesAround around(mesh, welded);
     const auto corner = [&](std::uint32_t t, int k) { return welded[mesh.triangles[t][k]]; };
@@ -82,7 +84,6 @@ Reorientation orientOpenSurfaces(TriangleMesh &mesh, const glm::vec3 &up) {
         return corner(t, 0) == v || corner(t, 1) == v || corner(t, 2) == v;
     };
 
-    Reorientation changed;
     std::vector<char> reached(n, 0);
     std::vector<std::uint32_t> component, frontier;
     for (std::size_t seed = firstDown; seed < n; ++seed) {
@@ -109,13 +110,23 @@ Reorientation orientOpenSurfaces(TriangleMesh &mesh, const glm::vec3 &up) {
             }
         }
         if (!open) continue;
-        std::size_t turned = 0;
         for (std::uint32_t t : component)
-            if (down[t]) std::swap(mesh.triangles[t][1], mesh.triangles[t][2]), ++turned;
-        changed.triangles += turned;
-        ++changed.surfaces;
+            if (down[t]) turns.triangles.push_back(t);
+        ++turns.changed.surfaces;
     }
-    return changed;
+    std::sort(turns.triangles.begin(), turns.triangles.end());
+    turns.changed.triangles = turns.triangles.size();
+    return turns;
+}
+
+void applyTurns(TriangleMesh &mesh, const OpenSurfaceTurns &turns) {
+    for (std::uint32_t t : turns.triangles) std::swap(mesh.triangles[t][1], mesh.triangles[t][2]);
+}
+
+Reorientation orientOpenSurfaces(TriangleMesh &mesh, const glm::vec3 &up) {
+    const OpenSurfaceTurns turns = findOpenSurfaceTurns(mesh, up);
+    applyTurns(mesh, turns);
+    return turns.changed;
 }
 
 }  // namespace firn

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
@@ -19,5 +21,16 @@ struct Reorientation {
 // connect); a component with a boundary edge (an edge of one triangle) is open, and its triangles facing away
 // from `up` are reversed to face it. Closed components keep their winding: their normals say where the inside is.
 Reorientation orientOpenSurfaces(TriangleMesh &mesh, const glm::vec3 &up);
+
+// The triangles orientOpenSurfaces would reverse (ascending), and what that changes; the mesh untouched, so the
+// search can run beside readers of it and a copy is made only when something turns.
+struct OpenSurfaceTurns {
+    Reorientation changed;
+    std::vector<std::uint32_t> triangles;
+};
+OpenSurfaceTurns findOpenSurfaceTurns(const TriangleMesh &mesh, const glm::vec3 &up);
+
+// Reverses the winding of the triangles `turns` names.
+void applyTurns(TriangleMesh &mesh, const OpenSurfaceTurns &turns);
 
 }  // namespace firn

@@ -14,7 +14,9 @@ namespace firn {
 
 struct RayCaster::Impl {
     EmbreeScene embree;
-    std::vector<glm::vec3> normals;  // unit, per triangle
+    // Unit, per triangle; left uninitialized until the parallel fill (a vector's resize would zero 12 MB per
+    // million triangles on one thread first).
+    std::unique_ptr<glm::vec3[]> normals;
     TriangleMesh mesh;               // for exact distances in point queries
 };
 
@@ -86,7 +88,7 @@ RayCaster::RayCaster(TriangleMesh mesh) : impl_(std::make_unique<Impl>()), empty
                               for (std::size_t i = r.begin(); i != r.end(); ++i)
                                   for (int k = 0; k < 3; ++k) vertices[3 * i + k] = kept.positions[i][k];
                           });
-        impl_->normals.resize(kept.triangles.size());
+        impl_->normals.reset(new glm::vec3[kept.triangles.size()]);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept.triangles.size()),
                           [&](const tbb::blocked_range<std::size_t> &r) {
                               for (std::size_t t = r.begin(); t != r.end(); ++t)

@@ -77,7 +77,7 @@ SnowBands generateSnowBands(const TriangleMesh &targets, const TriangleMesh &occ
     if (progress) progress->report(0.0, "finding where snow lands");
     SnowBands out;
     const ShelteredTargets sheltered = shelterTargets(targets, occluders, -glm::normalize(settings.direction));
-    const TriangleMesh &oriented = sheltered.oriented;
+    const TriangleMesh &oriented = sheltered.oriented();
     const RayCaster &shelter = *sheltered.shelter;
     out.openSurfaces = sheltered.openSurfaces;
     const double fine = settings.effectiveVoxelSize();

@@ -93,7 +93,7 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
     if (progress) progress->report(0.0, "finding where snow lands");
 
     const ShelteredTargets sheltered = shelterTargets(targets, occluders, -glm::normalize(settings.direction));
-    const TriangleMesh &oriented = sheltered.oriented;
+    const TriangleMesh &oriented = sheltered.oriented();
     const RayCaster &shelter = *sheltered.shelter;
     layer.openSurfaces = sheltered.openSurfaces;
     // Sure refusals first: placing and sheltering sites grows with the area (minutes on a large plane).
@@ -116,20 +116,23 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
 
 ShelteredTargets shelterTargets(const TriangleMesh &targets, const TriangleMesh &occluders, const glm::vec3 &up) {
     ShelteredTargets out;
+    out.targets = &targets;
+    OpenSurfaceTurns turns;
     tbb::task_group orienting;
-    orienting.run([&] {
-        out.oriented = targets;
-        out.openSurfaces = orientOpenSurfaces(out.oriented, up);
-    });
+    orienting.run([&] { turns = findOpenSurfaceTurns(targets, up); });
     try {
         out.shelter = std::make_unique<const RayCaster>(merge({&targets, &occluders}));
     } catch (...) {
-        orienting.wait();  // the task writes `out`: it ends before `out` goes
+        orienting.wait();  // the task writes `turns`: it ends before `turns` goes
         throw;
     }
     orienting.wait();
-    if (out.openSurfaces.triangles > 0)
-        out.shelter = std::make_unique<const RayCaster>(merge({&out.oriented, &occluders}));
+    out.openSurfaces = turns.changed;
+    if (out.openSurfaces.triangles > 0) {
+        out.turned = targets;
+        applyTurns(out.turned, turns);
+        out.shelter = std::make_unique<const RayCaster>(merge({&out.turned, &occluders}));
+    }
     return out;
 }
 

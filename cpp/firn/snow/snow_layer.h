@@ -63,13 +63,17 @@ SnowLayer generateSnowLayer(const TriangleMesh &targets, const TriangleMesh &occ
 // The targets with their open surfaces turned to face `up` (orientOpenSurfaces), and the shelter: a RayCaster over
 // them and the occluders.
 struct ShelteredTargets {
-    TriangleMesh oriented;
+    const TriangleMesh *targets = nullptr;  // as given: they outlive this
+    TriangleMesh turned;                      // a copy of them, oriented, only when some triangle turned
     Reorientation openSurfaces;
     std::unique_ptr<const RayCaster> shelter;
+
+    const TriangleMesh &oriented() const { return openSurfaces.triangles > 0 ? turned : *targets; }
 };
 
-// The shelter is built from the targets as given while they are oriented beside it (orientation's weld is serial:
-// it takes the other core); most scenes turn no triangle, and when one turned the shelter is built again.
+// The shelter is built from the targets as given while the triangles to turn are found beside it (orientation's
+// weld is serial: it takes the other core); most scenes turn no triangle and need no oriented copy of a million
+// triangles (18 MB of fresh memory); when one turned the targets are copied, turned and the shelter built again.
 ShelteredTargets shelterTargets(const TriangleMesh &targets, const TriangleMesh &occluders, const glm::vec3 &up);
 
 // The smallest depth weight (1 for none, or for weights out of 0..1: findLandingSites refuses those): the

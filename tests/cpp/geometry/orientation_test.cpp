@@ -100,4 +100,21 @@ TEST(OrientOpenSurfaces, TurnsOnlyTheOpenPartsOfAMixedSoup) {
     EXPECT_EQ(facingUp(mesh), 2u + 2u + 6u);  // each box's top (outward) or bottom (inverted), and three planes
 }
 
+// The search (on a const mesh) names the triangles the orientation turns, and applying them gives its mesh: the
+// shelter is built from the targets while it runs beside (shelterTargets).
+TEST(OrientOpenSurfaces, FindingTheTurnsLeavesTheMeshAndNamesWhatOrientingTurns) {
+    const TriangleMesh soup = merge({reversed(test::box({3, 0, 0}, {4, 1, 1})), reversed(test::plane(1.0f, {0, 5, 0})),
+                                     test::plane(1.0f, {0, 8, 0})});
+    const OpenSurfaceTurns turns = findOpenSurfaceTurns(soup, kUp);
+    EXPECT_EQ(turns.changed.surfaces, 1u);
+    EXPECT_EQ(turns.changed.triangles, turns.triangles.size());
+    TriangleMesh oriented = soup;
+    const Reorientation changed = orientOpenSurfaces(oriented, kUp);
+    EXPECT_EQ(changed.triangles, turns.changed.triangles);
+    TriangleMesh applied = soup;
+    applyTurns(applied, turns);
+    EXPECT_EQ(applied.triangles, oriented.triangles);
+    EXPECT_NE(soup.triangles, oriented.triangles);  // something turned: the comparison above says something
+}
+
 }  // namespace firn
