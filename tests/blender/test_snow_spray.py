@@ -8,6 +8,7 @@ import bpy
 import numpy as np
 import pytest
 
+from firn.common import cache
 from firn.common.core import firncore
 from scene_helpers import select_only
 
@@ -326,6 +327,22 @@ def test_the_lumps_baked_light_matches_the_monte_carlo_of_lumps_and_snow_togethe
                                                      samples=512, seed=1, **core_light(job["inputs"]))
     assert np.sqrt((error[:, 1] ** 2).sum()) < 0.04 * reference[:, 1].sum()
     assert baked[seen, 1].sum() == pytest.approx(reference[:, 1].sum(), rel=0.20)
+
+
+def test_frames_a_bake_adds_are_lit_from_their_tracked_snow(clean_scene):
+    """A Bake Sequence that runs past the spray's last frame simulates the new frames before it lights them: their
+    light is baked from their tracked snow (with the groove), not from the snow layer they were cut from."""
+    snow = snow_on_plane()
+    spray = add_spray(snow, ski(end_x=0.6), frame_end=FRAMES[1] - 1)
+    select_only(snow)
+    assert bpy.ops.firn.bake_sequence(frame_end=FRAMES[1], quality="DRAFT") == {"FINISHED"}
+    folder = folder_of(spray)
+    tracked = firncore.spray_frame_paths(folder, FRAMES[1])[1]
+    lit = os.path.join(folder, f"lit_{FRAMES[1]:04d}.vdb")
+    untracked = firncore.grid_statistics(cache.volume_path(snow.data), "density")["active_voxels"]
+    grooved = firncore.grid_statistics(tracked, "density")["active_voxels"]
+    assert grooved < untracked  # the ski cut a groove by then
+    assert firncore.grid_statistics(lit, "density")["active_voxels"] == grooved
 
 
 def test_a_spray_without_tracks_and_frames_without_lumps_bake(clean_scene):

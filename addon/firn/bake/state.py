@@ -120,7 +120,8 @@ def _frame_changes(obj, context):
     if then is None:
         return OUTDATED, [f"frame {frame} not lit"]
     source = obj.firn.spray.source
-    snow, spray = spray_files.medium_paths(directory, frame, cache.volume_path(source.data) if source else "")
+    tracked = os.path.exists(spray_files.frame_path(directory, frame, "snow"))  # simulated: the files are there
+    snow, spray = spray_files.medium_paths(directory, frame, cache.volume_path(source.data) if source else "", tracked)
     now = dict(bake_inputs.signature(context, obj), optics=optics_digest(obj), snow=file_digest(snow),
                spray=file_digest(spray))
     now["settings"] = then.get("settings")  # quality and seed are the bake's choice, not the scene's

@@ -26,11 +26,11 @@ def frame_path(directory, frame, kind):
     return spray if kind == "spray" else snow
 
 
-def medium_paths(directory, frame, snow_layer_path):
-    """(snow, lumps) files a frame's light is baked from: its tracked snow, or the snow layer's own file where
-    the spray has no tracks (Cut Tracks off), and its lumps."""
-    tracked = frame_path(directory, frame, "snow")
-    return (tracked if os.path.exists(tracked) else snow_layer_path), frame_path(directory, frame, "spray")
+def medium_paths(directory, frame, snow_layer_path, tracked):
+    """(snow, lumps) files a frame's light is baked from: its tracked snow where the spray has tracks (`tracked`;
+    the file may be simulated only later), else the snow layer's own file (Cut Tracks off), and its lumps."""
+    snow = frame_path(directory, frame, "snow") if tracked else snow_layer_path
+    return snow, frame_path(directory, frame, "spray")
 
 
 def marker_path(directory, frame):

@@ -113,7 +113,7 @@ def gather(context, spray, tracks, frames, quality, seed):
     try:
         for frame in frames:
             scene.frame_set(frame)
-            paths = files.medium_paths(directory, frame, snow_layer_file)
+            paths = files.medium_paths(directory, frame, snow_layer_file, tracked=tracks is not None)
             signature = bake_inputs.signature(context, snow)
             parts = frame_parts(signature, optics_digest, quality, seed, *paths)
             inputs = bake_inputs.gather(context, snow, occluders=lambda objects, depsgraph, space:
