@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 
 namespace firn {
 
@@ -11,6 +12,15 @@ inline std::uint64_t mix64(std::uint64_t x) {
     x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
     x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
     return x ^ (x >> 31);
+}
+
+// A stream number from a point's coordinates (their bits), chained onto `stream`: what is drawn for a point then
+// depends on where it is, not on its index, so inputs given in another order give the same draws.
+inline std::uint64_t pointStream(float x, float y, float z, std::uint64_t stream = 0) {
+    std::uint32_t bits[3];
+    const float coordinates[3] = {x, y, z};
+    std::memcpy(bits, coordinates, sizeof bits);
+    return mix64(stream ^ mix64((std::uint64_t(bits[0]) << 32 | bits[1]) ^ mix64(bits[2])));
 }
 
 class Rng {
