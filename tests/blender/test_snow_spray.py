@@ -345,17 +345,24 @@ def test_frames_a_bake_adds_are_lit_from_their_tracked_snow(clean_scene):
     assert firncore.grid_statistics(lit, "density")["active_voxels"] == grooved
 
 
-def test_a_spray_without_tracks_and_frames_without_lumps_bake(clean_scene):
+def test_a_spray_without_tracks_and_frames_without_lumps_bake(clean_scene, monkeypatch):
     """Cut Tracks off: the lumps are baked over the snow layer's own file; a ski buried in untracked snow throws
-    none (they would start inside the snow), so every frame has empty light grids, and Bake Sequence finishes."""
+    none (they would start inside the snow), so every frame has empty light grids, written without a bake (the
+    snow layer keeps its own: nothing else is lit), and Bake Sequence finishes."""
     snow = snow_on_plane()
     bpy.ops.object.light_add(type="SUN", location=(0.0, 0.0, 2.0))
     spray = add_spray(snow, ski(), cut_tracks=False)
     assert not any(obj.firn.spray.role == "TRACKS" for obj in bpy.data.objects)
+    bakes = []
+    for name in ("bake", "bake_joint"):
+        monkeypatch.setattr(firncore, name, lambda *args, _name=name, _bake=getattr(firncore, name), **kwargs: (
+            bakes.append(_name), _bake(*args, **kwargs))[1])
     assert bpy.ops.firn.bake_sequence(quality="DRAFT") == {"FINISHED"}
+    assert bakes == []
     assert os.path.basename(spray.data.filepath).startswith("lit_spray_")
     assert spray.active_material.get("firn_form", "").startswith("BAKED")
     folder = folder_of(spray)
     for path, frame in zip(_lit_spray_files(folder), range(FRAMES[0], FRAMES[1] + 1)):
         assert firncore.grid_statistics(firncore.spray_frame_paths(folder, frame)[0], "density")["active_voxels"] == 0
         assert set(firncore.BAKED_GRID_NAMES) <= set(firncore.grid_names(path))
+        assert firncore.grid_statistics(path, "density")["active_voxels"] == 0
