@@ -7,6 +7,7 @@ import os
 import bpy
 import numpy as np
 import pytest
+from mathutils import Matrix, Vector
 
 from firn.common import cache
 from firn.common.core import firncore
@@ -86,6 +87,87 @@ def test_the_tracked_snow_plays_in_the_snow_layers_place(clean_scene):
     before = firncore.sample_grid(firncore.spray_frame_paths(folder, FRAMES[0])[1], "density", centre)[0]
     after = firncore.sample_grid(firncore.spray_frame_paths(folder, FRAMES[1])[1], "density", centre)[0]
     assert before > 50.0 and after < 0.5 * before  # the ski cut a groove there
+
+
+MOVE = Matrix.Translation((0.3, -0.2, 0.1)) @ Matrix.Rotation(0.5, 4, "Z")  # a snow layer moved and turned
+VOXEL = 0.01  # m, snow_on_plane's
+
+
+def _carried(emitter, transform):
+    """Parents `emitter` to an Empty placed by `transform`: its world path becomes the old one moved by it."""
+    holder = bpy.data.objects.new("Holder", None)
+    bpy.context.scene.collection.objects.link(holder)
+    holder.matrix_world = transform
+    emitter.parent = holder  # identity parent inverse: world = transform @ its own animation
+    return holder
+
+
+def _world_lumps(spray):
+    """The last frame's lumps (their reference points), in world space (Unit Scale 1: Blender units are m)."""
+    bpy.context.view_layer.update()
+    positions = firncore.read_spray_state(firncore.spray_frame_paths(folder_of(spray), FRAMES[1])[2]).positions
+    matrix = np.array(spray.matrix_world)
+    return positions @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def _moved(points, transform):
+    matrix = np.array(transform)
+    return points @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def _grooved(tracks, world_point):
+    """(before, after): the tracked snow's density at the first and last frames at a world point."""
+    bpy.context.view_layer.update()
+    local = np.array([tracks.matrix_world.inverted() @ Vector(world_point)], np.float32)  # the file's metres
+    folder = folder_of(tracks)
+    return [firncore.sample_grid(firncore.spray_frame_paths(folder, frame)[1], "density", local)[0]
+            for frame in FRAMES]
+
+
+def test_a_moved_and_turned_snow_layer_keeps_its_tracks_under_the_ski_and_its_lumps_in_place(clean_scene):
+    """The spray's files are in the snow's file space and its objects are the snow layer's children: a layer
+    moved and turned (before or after Add Snow Spray) with its ski gives the unmoved layer's groove and lumps,
+    moved the same way (within a voxel), and the groove lies under the ski's world path."""
+    snow = snow_on_plane()
+    emitter = ski()
+    unmoved = _world_lumps(add_spray(snow, emitter))
+    assert len(unmoved) > 10
+    assert bpy.ops.firn.clear_snow_spray() == {"FINISHED"}
+    # Moved before Add Snow Spray.
+    snow.matrix_world = MOVE @ snow.matrix_world
+    holder = _carried(emitter, MOVE)
+    spray = add_spray(snow, emitter)
+    tracks = bpy.data.objects[f"{snow.name} Tracks"]
+    lumps = _world_lumps(spray)
+    expected = _moved(unmoved, MOVE)
+    np.testing.assert_allclose(lumps.min(0), expected.min(0), atol=VOXEL)
+    np.testing.assert_allclose(lumps.max(0), expected.max(0), atol=VOXEL)
+    before, after = _grooved(tracks, MOVE @ Vector((-0.1, 0.0, SNOW_DEPTH * 0.75)))  # on the ski's world path
+    assert before > 50.0 and after < 0.5 * before
+    beside = _grooved(tracks, MOVE @ Vector((-0.1, 0.2, SNOW_DEPTH * 0.75)))  # 20 cm to its side: untouched
+    assert beside[1] == pytest.approx(beside[0]) and beside[0] > 50.0
+    # Moved after: the spray and its tracks go with the snow layer; Bake Sequence simulates it where it is.
+    again = Matrix.Translation((-0.4, 0.5, 0.0)) @ Matrix.Rotation(-1.2, 4, "Z")
+    snow.matrix_world = again @ snow.matrix_world
+    holder.matrix_world = again @ holder.matrix_world
+    bpy.context.view_layer.update()
+    for obj in (spray, tracks):
+        assert np.allclose(np.array(obj.matrix_world), np.array(snow.matrix_world), atol=1e-6)
+    assert tracks.visible_get() and spray.visible_get() and not snow.visible_get()
+    assert bpy.ops.firn.bake_sequence(light=False) == {"FINISHED"}
+    lumps = _world_lumps(spray)
+    expected = _moved(unmoved, again @ MOVE)
+    np.testing.assert_allclose(lumps.min(0), expected.min(0), atol=VOXEL)
+    np.testing.assert_allclose(lumps.max(0), expected.max(0), atol=VOXEL)
+
+
+def test_a_scaled_snow_layer_is_reported(clean_scene):
+    snow = snow_on_plane()
+    emitter = ski()
+    snow.scale = (2.0, 2.0, 2.0)
+    select_only(snow, emitter)
+    with pytest.raises(RuntimeError, match="is scaled"):
+        bpy.ops.firn.add_snow_spray(frame_start=FRAMES[0], frame_end=FRAMES[1])
 
 
 def test_same_seed_same_files(clean_scene):
