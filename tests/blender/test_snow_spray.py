@@ -93,12 +93,13 @@ MOVE = Matrix.Translation((0.3, -0.2, 0.1)) @ Matrix.Rotation(0.5, 4, "Z")  # a 
 VOXEL = 0.01  # m, snow_on_plane's
 
 
-def _carried(emitter, transform):
-    """Parents `emitter` to an Empty placed by `transform`: its world path becomes the old one moved by it."""
+def _carried(transform, *objects):
+    """Parents `objects` to an Empty placed by `transform`: their world paths become the old ones moved by it."""
     holder = bpy.data.objects.new("Holder", None)
     bpy.context.scene.collection.objects.link(holder)
     holder.matrix_world = transform
-    emitter.parent = holder  # identity parent inverse: world = transform @ its own animation
+    for obj in objects:
+        obj.parent = holder  # identity parent inverse: world = transform @ its own animation
     return holder
 
 
@@ -135,7 +136,7 @@ def test_a_moved_and_turned_snow_layer_keeps_its_tracks_under_the_ski_and_its_lu
     assert bpy.ops.firn.clear_snow_spray() == {"FINISHED"}
     # Moved before Add Snow Spray.
     snow.matrix_world = MOVE @ snow.matrix_world
-    holder = _carried(emitter, MOVE)
+    holder = _carried(MOVE, emitter)
     spray = add_spray(snow, emitter)
     tracks = bpy.data.objects[f"{snow.name} Tracks"]
     lumps = _world_lumps(spray)
@@ -159,6 +160,18 @@ def test_a_moved_and_turned_snow_layer_keeps_its_tracks_under_the_ski_and_its_lu
     expected = _moved(unmoved, again @ MOVE)
     np.testing.assert_allclose(lumps.min(0), expected.min(0), atol=VOXEL)
     np.testing.assert_allclose(lumps.max(0), expected.max(0), atol=VOXEL)
+
+
+def test_regenerating_the_snow_layer_keeps_its_spray(clean_scene):
+    snow = snow_on_plane()
+    spray = add_spray(snow, ski())
+    snow.matrix_world = MOVE @ snow.matrix_world
+    select_only(snow)
+    assert bpy.ops.firn.regenerate_snow() == {"FINISHED"}
+    tracks = bpy.data.objects[f"{snow.name} Tracks"]
+    assert spray.parent == snow and tracks.parent == snow  # back where its targets are, with the layer
+    bpy.context.view_layer.update()
+    assert np.allclose(np.array(tracks.matrix_world), np.eye(4), atol=1e-6)
 
 
 def test_a_scaled_snow_layer_is_reported(clean_scene):
@@ -257,9 +270,10 @@ def test_a_missing_vertex_group_is_reported(clean_scene):
 
 # --- the light of the tracked snow and the lumps, frame by frame (spray/light.py) ------------------------------
 
-def _lit_snow_scene():
+def _lit_snow_scene(transform=None):
     """A snow layer lit by a high sun, a ski and a 'body' (a 20 cm box 30 cm above the snow) moving with it, so
-    its shadow on the snow moves from frame to frame; the Snow Spray and its Tracks, to be baked over FRAMES."""
+    its shadow on the snow moves from frame to frame; the Snow Spray and its Tracks, to be baked over FRAMES.
+    With `transform`, the snow layer and everything else moved by it."""
     snow = snow_on_plane()
     emitter = ski()
     bpy.ops.mesh.primitive_cube_add(size=0.2)
@@ -274,6 +288,9 @@ def _lit_snow_scene():
     bpy.ops.object.light_add(type="SUN", location=(0.0, 0.0, 2.0))
     bpy.context.object.data.energy = 3.0
     bpy.context.object.data.angle = 0.01
+    if transform is not None:
+        snow.matrix_world = transform @ snow.matrix_world
+        _carried(transform, emitter, body, bpy.context.object)
     spray = add_spray(snow, emitter)
     return snow, spray, bpy.data.objects[f"{snow.name} Tracks"]
 
@@ -340,6 +357,18 @@ def test_bake_sequence_bakes_the_tracked_snow_and_the_lumps_at_every_frame(clean
     assert spray.active_material.get("firn_form", "").startswith("BAKED")
     os.remove(os.path.join(folder, f"lit_{FRAMES[0] + 1:04d}.json"))
     assert bake_state.changes(tracks) == (bake_state.OUTDATED, [f"frame {FRAMES[0] + 1} not lit"])
+
+
+def test_a_moved_and_turned_snow_layer_is_lit_where_it_stands(clean_scene):
+    """The snow layer, its ski, the body and the sun moved and turned together: the body's shadow falls on the
+    baked snow where the body is, as on the unmoved layer (the files are in the snow's space: the same places)."""
+    _snow, spray, tracks = _lit_snow_scene(MOVE)
+    assert bpy.ops.firn.bake_sequence(quality="DRAFT") == {"FINISHED"}
+    folder = folder_of(spray)
+    lit = [os.path.join(folder, f"lit_{frame:04d}.vdb") for frame in FRAMES]
+    shaded_first, open_first = _drawn_above(lit[0], tracks, -0.6), _drawn_above(lit[0], tracks, 0.4)
+    shaded_last, open_last = _drawn_above(lit[-1], tracks, 0.4), _drawn_above(lit[-1], tracks, -0.6)
+    assert shaded_first < 0.5 * open_first and shaded_last < 0.5 * open_last
 
 
 def test_a_second_bake_keeps_lit_frames_and_one_frame_per_process_gives_the_same_light(clean_scene):
