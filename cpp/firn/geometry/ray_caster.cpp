@@ -14,10 +14,7 @@ namespace firn {
 
 struct RayCaster::Impl {
     EmbreeScene embree;
-    // Unit, per triangle; left uninitialized until the parallel fill (a vector's resize would zero 12 MB per
-    // million triangles on one thread first).
-    std::unique_ptr<glm::vec3[]> normals;
-    TriangleMesh mesh;               // for exact distances in point queries
+    TriangleMesh mesh;  // Embree's triangles; exact distances in point queries, the normals of hits
 };
 
 namespace {
@@ -82,17 +79,11 @@ RayCaster::RayCaster(TriangleMesh mesh) : impl_(std::make_unique<Impl>()), empty
         // The scene's quality alone leaves its one geometry's BVH at MEDIUM (SAH): 4x slower to build on 1M
         // triangles (0.33 s against 0.09 s, bench/snow_layer_bench.py's scene).
         rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_LOW);
-        // Filled in parallel: a million triangles' vertices and normals take as long as the BVH's build.
+        // Filled in parallel (some 500,000 vertices for a million triangles).
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept.positions.size()),
                           [&](const tbb::blocked_range<std::size_t> &r) {
                               for (std::size_t i = r.begin(); i != r.end(); ++i)
                                   for (int k = 0; k < 3; ++k) vertices[3 * i + k] = kept.positions[i][k];
-                          });
-        impl_->normals.reset(new glm::vec3[kept.triangles.size()]);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept.triangles.size()),
-                          [&](const tbb::blocked_range<std::size_t> &r) {
-                              for (std::size_t t = r.begin(); t != r.end(); ++t)
-                                  impl_->normals[t] = glm::normalize(kept.crossNormal(t));
                           });
         impl_->embree.attach(geometry);
     }
@@ -115,7 +106,10 @@ std::optional<RayCaster::Hit> RayCaster::intersect(const glm::vec3 &origin, cons
     if (empty_) return std::nullopt;
     const RTCRayHit query = intersectEmbree(impl_->embree.scene, origin, direction, tNear, tFar);
     if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-    return Hit{query.ray.tfar, query.hit.primID, impl_->normals[query.hit.primID]};
+    // The normal of the triangle hit, not a table of them all: a million triangles' normals (12 MB, touched
+    // once) cost more than the few thousand hits of a snow layer.
+    const unsigned t = query.hit.primID;
+    return Hit{query.ray.tfar, t, glm::normalize(impl_->mesh.crossNormal(t))};
 }
 
 std::optional<double> RayCaster::closestDistance(const glm::dvec3 &point, double maxDistance) const {
