@@ -14,7 +14,8 @@ namespace firn {
 
 struct RayCaster::Impl {
     EmbreeScene embree;
-    TriangleMesh mesh;  // Embree's triangles; exact distances in point queries, the normals of hits
+    TriangleMesh owned;
+    const TriangleMesh *mesh = nullptr;  // Embree's triangles (owned or borrowed): point queries, hits' normals
 };
 
 namespace {
@@ -60,13 +61,21 @@ bool visitTriangle(RTCPointQueryFunctionArguments *args) {
 
 }  // namespace
 
-RayCaster::RayCaster(TriangleMesh mesh) : impl_(std::make_unique<Impl>()), empty_(mesh.empty()) {
+RayCaster::RayCaster(TriangleMesh mesh) : RayCaster(nullptr, std::move(mesh)) {}
+
+std::unique_ptr<const RayCaster> RayCaster::over(const TriangleMesh &mesh) {
+    return std::unique_ptr<const RayCaster>(new RayCaster(&mesh, TriangleMesh()));
+}
+
+RayCaster::RayCaster(const TriangleMesh *borrowed, TriangleMesh owned)
+    : impl_(std::make_unique<Impl>()), empty_(borrowed ? borrowed->empty() : owned.empty()) {
     RTCDevice device = impl_->embree.device;
     // Few rays per triangle here: a fast build (Morton) beats a better tree.
     rtcSetSceneBuildQuality(impl_->embree.scene, RTC_BUILD_QUALITY_LOW);
     if (!empty_) {
-        impl_->mesh = std::move(mesh);  // kept: its triangles are Embree's index buffer
-        const TriangleMesh &kept = impl_->mesh;
+        impl_->owned = std::move(owned);  // kept: its triangles are Embree's index buffer
+        impl_->mesh = borrowed ? borrowed : &impl_->owned;
+        const TriangleMesh &kept = *impl_->mesh;
         static_assert(sizeof(glm::uvec3) == 3 * sizeof(unsigned), "Embree reads the triangles as packed UINT3");
         RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         // Vertices copied (Embree reads 16 bytes at the last one, past the mesh's array); the triangles shared
@@ -109,7 +118,7 @@ std::optional<RayCaster::Hit> RayCaster::intersect(const glm::vec3 &origin, cons
     // The normal of the triangle hit, not a table of them all: a million triangles' normals (12 MB, touched
     // once) cost more than the few thousand hits of a snow layer.
     const unsigned t = query.hit.primID;
-    return Hit{query.ray.tfar, t, glm::normalize(impl_->mesh.crossNormal(t))};
+    return Hit{query.ray.tfar, t, glm::normalize(impl_->mesh->crossNormal(t))};
 }
 
 std::optional<double> RayCaster::closestDistance(const glm::dvec3 &point, double maxDistance) const {
@@ -120,7 +129,7 @@ std::optional<double> RayCaster::closestDistance(const glm::dvec3 &point, double
     query.time = 0.0f;
     RTCPointQueryContext context;
     rtcInitPointQueryContext(&context);
-    ClosestQuery closest{&impl_->mesh, point, maxDistance};
+    ClosestQuery closest{impl_->mesh, point, maxDistance};
     rtcPointQuery(impl_->embree.scene, &query, &context, visitTriangle, &closest);
     if (closest.distance >= maxDistance) return std::nullopt;
     return closest.distance;
