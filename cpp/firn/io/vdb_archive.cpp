@@ -49,7 +49,8 @@ std::size_t headerBytes(std::int8_t written) {
                                    : (written == io::MASK_AND_TWO_INACTIVE_VALS ? 2 : 0);
     const bool selection = written == io::MASK_AND_NO_INACTIVE_VALS || written == io::MASK_AND_ONE_INACTIVE_VAL ||
                            written == io::MASK_AND_TWO_INACTIVE_VALS;
-    return Mask::memUsage() + 1 + inactiveValues * sizeof(typename Leaf::ValueType) + (selection ? Mask::memUsage() : 0);
+    return Mask::memUsage() + 1 + inactiveValues * sizeof(typename Leaf::ValueType) +
+           (selection ? Mask::memUsage() : 0);
 }
 
 // A grid sharing `grid`'s tree (its own transform and metadata) whose leaf buffers are written as OpenVDB writes

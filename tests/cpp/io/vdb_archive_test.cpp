@@ -14,7 +14,8 @@ namespace firn {
 namespace {
 
 std::filesystem::path tempPath(const std::string &name) {
-    const auto folder = std::filesystem::temp_directory_path() / ("firn_vdb_archive_test_" + std::to_string(::getpid()));
+    const auto folder =
+        std::filesystem::temp_directory_path() / ("firn_vdb_archive_test_" + std::to_string(::getpid()));
     std::filesystem::create_directories(folder);
     return folder / name;
 }
