@@ -14,10 +14,8 @@ namespace firn {
 
 struct RayCaster::Impl {
     EmbreeScene embree;
-    // Unit, per triangle; left uninitialized until the parallel fill (a vector's resize would zero 12 MB per
-    // million triangles on one thread first).
-    std::unique_ptr<glm::vec3[]> normals;
-    TriangleMesh mesh;               // for exact distances in point queries
+    TriangleMesh owned;
+    const TriangleMesh *mesh = nullptr;  // Embree's triangles (owned or borrowed): point queries, hits' normals
 };
 
 namespace {
@@ -63,13 +61,21 @@ bool visitTriangle(RTCPointQueryFunctionArguments *args) {
 
 }  // namespace
 
-RayCaster::RayCaster(TriangleMesh mesh) : impl_(std::make_unique<Impl>()), empty_(mesh.empty()) {
+RayCaster::RayCaster(TriangleMesh mesh) : RayCaster(nullptr, std::move(mesh)) {}
+
+std::unique_ptr<const RayCaster> RayCaster::over(const TriangleMesh &mesh) {
+    return std::unique_ptr<const RayCaster>(new RayCaster(&mesh, TriangleMesh()));
+}
+
+RayCaster::RayCaster(const TriangleMesh *borrowed, TriangleMesh owned)
+    : impl_(std::make_unique<Impl>()), empty_(borrowed ? borrowed->empty() : owned.empty()) {
     RTCDevice device = impl_->embree.device;
     // Few rays per triangle here: a fast build (Morton) beats a better tree.
     rtcSetSceneBuildQuality(impl_->embree.scene, RTC_BUILD_QUALITY_LOW);
     if (!empty_) {
-        impl_->mesh = std::move(mesh);  // kept: its triangles are Embree's index buffer
-        const TriangleMesh &kept = impl_->mesh;
+        impl_->owned = std::move(owned);  // kept: its triangles are Embree's index buffer
+        impl_->mesh = borrowed ? borrowed : &impl_->owned;
+        const TriangleMesh &kept = *impl_->mesh;
         static_assert(sizeof(glm::uvec3) == 3 * sizeof(unsigned), "Embree reads the triangles as packed UINT3");
         RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         // Vertices copied (Embree reads 16 bytes at the last one, past the mesh's array); the triangles shared
@@ -82,17 +88,11 @@ RayCaster::RayCaster(TriangleMesh mesh) : impl_(std::make_unique<Impl>()), empty
         // The scene's quality alone leaves its one geometry's BVH at MEDIUM (SAH): 4x slower to build on 1M
         // triangles (0.33 s against 0.09 s, bench/snow_layer_bench.py's scene).
         rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_LOW);
-        // Filled in parallel: a million triangles' vertices and normals take as long as the BVH's build.
+        // Filled in parallel (some 500,000 vertices for a million triangles).
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept.positions.size()),
                           [&](const tbb::blocked_range<std::size_t> &r) {
                               for (std::size_t i = r.begin(); i != r.end(); ++i)
                                   for (int k = 0; k < 3; ++k) vertices[3 * i + k] = kept.positions[i][k];
-                          });
-        impl_->normals.reset(new glm::vec3[kept.triangles.size()]);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept.triangles.size()),
-                          [&](const tbb::blocked_range<std::size_t> &r) {
-                              for (std::size_t t = r.begin(); t != r.end(); ++t)
-                                  impl_->normals[t] = glm::normalize(kept.crossNormal(t));
                           });
         impl_->embree.attach(geometry);
     }
@@ -115,7 +115,10 @@ std::optional<RayCaster::Hit> RayCaster::intersect(const glm::vec3 &origin, cons
     if (empty_) return std::nullopt;
     const RTCRayHit query = intersectEmbree(impl_->embree.scene, origin, direction, tNear, tFar);
     if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-    return Hit{query.ray.tfar, query.hit.primID, impl_->normals[query.hit.primID]};
+    // The normal of the triangle hit, not a table of them all: a million triangles' normals (12 MB, touched
+    // once) cost more than the few thousand hits of a snow layer.
+    const unsigned t = query.hit.primID;
+    return Hit{query.ray.tfar, t, glm::normalize(impl_->mesh->crossNormal(t))};
 }
 
 std::optional<double> RayCaster::closestDistance(const glm::dvec3 &point, double maxDistance) const {
@@ -126,7 +129,7 @@ std::optional<double> RayCaster::closestDistance(const glm::dvec3 &point, double
     query.time = 0.0f;
     RTCPointQueryContext context;
     rtcInitPointQueryContext(&context);
-    ClosestQuery closest{&impl_->mesh, point, maxDistance};
+    ClosestQuery closest{impl_->mesh, point, maxDistance};
     rtcPointQuery(impl_->embree.scene, &query, &context, visitTriangle, &closest);
     if (closest.distance >= maxDistance) return std::nullopt;
     return closest.distance;

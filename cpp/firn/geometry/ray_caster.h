@@ -21,6 +21,9 @@ class RayCaster {
     };
 
     explicit RayCaster(TriangleMesh mesh);  // kept (moved in: pass a temporary to spare a copy)
+    // Built on `mesh` in place, not copied (a million triangles: 18 MB): `mesh` must outlive the caster, unchanged
+    // and at its address.
+    static std::unique_ptr<const RayCaster> over(const TriangleMesh &mesh);
     ~RayCaster();
     RayCaster(const RayCaster &) = delete;
     RayCaster &operator=(const RayCaster &) = delete;
@@ -39,6 +42,8 @@ class RayCaster {
     bool empty() const { return empty_; }
 
   private:
+    RayCaster(const TriangleMesh *borrowed, TriangleMesh owned);  // on `borrowed`, or on `owned` when null
+
     struct Impl;
     std::unique_ptr<Impl> impl_;
     bool empty_;

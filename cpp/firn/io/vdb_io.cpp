@@ -1,15 +1,11 @@
 #include "firn/io/vdb_io.h"
 
 #include <algorithm>
-#include <memory>
-#include <sstream>
 #include <string>
-#include <type_traits>
 #include <vector>
 
-#include <tbb/parallel_for.h>
-
 #include "firn/io/atomic_file.h"
+#include "firn/io/vdb_archive.h"
 #include "firn/io/vdb_layout.h"
 #include "firn/util/error.h"
 #include "firn/util/openvdb_library.h"
@@ -26,45 +22,10 @@ void shiftHalfVoxel(const openvdb::GridPtrVec &grids, double sign) {
     for (const openvdb::GridBase::Ptr &grid : grids) grid->transform().postTranslate(sign * 0.5 * grid->voxelSize());
 }
 
-// A grid sharing `grid`'s tree whose leaf buffers are written as OpenVDB writes them, in the same order and bytes,
-// but compressed on every core first: OpenVDB compresses leaf after leaf on one (a serial 0.05 s per grid of
-// 1.8 M voxels with Blosc), which held the snow's write back while the other core waited.
-template <typename GridT>
-class ParallelBuffersGrid : public GridT {
-  public:
-    explicit ParallelBuffersGrid(GridT &grid) : GridT(grid, openvdb::ShallowCopy()) {}
-
-    void writeBuffers(std::ostream &os) const override {
-        if (GridT::hasMultiPassIO()) return GridT::writeBuffers(os);  // points: passes over the leaves
-        using Leaf = typename GridT::TreeType::LeafNodeType;
-        std::vector<const Leaf *> leaves;
-        this->tree().getNodes(leaves);  // the order Tree::writeBuffers visits them
-        constexpr std::size_t kLeavesPerChunk = 64;
-        std::vector<std::string> chunks((leaves.size() + kLeavesPerChunk - 1) / kLeavesPerChunk);
-        tbb::parallel_for(std::size_t(0), chunks.size(), [&](std::size_t c) {
-            std::ostringstream chunk;
-            chunk.copyfmt(os);  // OpenVDB's per-stream settings: compression, background, half floats
-            const std::size_t end = std::min(leaves.size(), (c + 1) * kLeavesPerChunk);
-            for (std::size_t l = c * kLeavesPerChunk; l < end; ++l)
-                leaves[l]->writeBuffers(chunk, this->saveFloatAsHalf());
-            chunks[c] = std::move(chunk).str();
-        });
-        for (const std::string &chunk : chunks) os.write(chunk.data(), std::streamsize(chunk.size()));
-    }
-};
-
-// openvdb::io::File::write ignores stream errors, so a full disk would give a truncated file that the rename
-// then puts in place of a good one. This writes the same format through writeFileAtomically's checked stream.
-class ArchiveWriter : public openvdb::io::Archive {
-  public:
-    void writeTo(std::ostream &stream, const openvdb::GridPtrVec &grids, const openvdb::MetaMap &meta) const {
-        openvdb::io::Archive::write(stream, openvdb::GridCPtrVec(grids.begin(), grids.end()), /*seekable=*/true,
-                                    meta);
-    }
-};
-
+// Through writeFileAtomically's checked stream: openvdb::io::File::write ignores stream errors, so a full disk
+// would give a truncated file that the rename then puts in place of a good one.
 void writeVdbAtomically(const std::string &path, const openvdb::GridPtrVec &grids, const openvdb::MetaMap &meta) {
-    writeFileAtomically(path, [&](std::ostream &stream) { ArchiveWriter().writeTo(stream, grids, meta); });
+    writeFileAtomically(path, [&](std::ostream &stream) { writeVdbArchive(stream, grids, meta); });
 }
 
 }  // namespace
@@ -78,13 +39,12 @@ void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids) {
     for (const openvdb::GridBase::Ptr &grid : grids) {
         openvdb::GridBase::Ptr copy;
         const bool known = grid->apply<openvdb::GridTypes>([&](auto &typed) {
-            using GridT = std::decay_t<decltype(typed)>;
             if (typed.tree().hasActiveTiles()) {
                 auto deep = typed.deepCopy();
                 deep->tree().voxelizeActiveTiles();
-                copy = std::make_shared<ParallelBuffersGrid<GridT>>(*deep);
+                copy = deep;
             } else {
-                copy = std::make_shared<ParallelBuffersGrid<GridT>>(typed);  // its own transform, the tree shared
+                copy = typed.copyGrid();  // its own transform, the tree shared
             }
         });
         if (!known) throw InvalidArgument("grid '" + grid->getName() + "' has a type Firn does not write");

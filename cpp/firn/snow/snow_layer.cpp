@@ -118,8 +118,12 @@ ShelteredTargets shelterTargets(const TriangleMesh &targets, const TriangleMesh 
     ShelteredTargets out;
     out.targets = &targets;
     OpenSurfaceTurns turns;
+    // Without occluders the shelter is built on the targets themselves (they outlive it): no joined copy.
     runBeside([&] { turns = findOpenSurfaceTurns(targets, up); },
-              [&] { out.shelter = std::make_unique<const RayCaster>(merge({&targets, &occluders})); });
+              [&] {
+                  out.shelter = occluders.empty() ? RayCaster::over(targets)
+                                                  : std::make_unique<const RayCaster>(merge({&targets, &occluders}));
+              });
     out.openSurfaces = turns.changed;
     if (out.openSurfaces.triangles > 0) {
         out.turned = targets;

@@ -74,6 +74,7 @@ struct ShelteredTargets {
 // The shelter is built from the targets as given while the triangles to turn are found beside it (orientation's
 // weld is serial: it takes the other core); most scenes turn no triangle and need no oriented copy of a million
 // triangles (18 MB of fresh memory); when one turned the targets are copied, turned and the shelter built again.
+// Without occluders the shelter is built on the targets in place (no joined copy): they outlive it.
 ShelteredTargets shelterTargets(const TriangleMesh &targets, const TriangleMesh &occluders, const glm::vec3 &up);
 
 // The smallest depth weight (1 for none, or for weights out of 0..1: findLandingSites refuses those): the
