@@ -1032,6 +1032,28 @@ openvdb::Vec3f sourceComponent(const Source &S, int k) {
                                                  : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
 }
 
+// The on-states of a voxel mask within `radius` (at most 4) of voxel c, read from the at most eight leaves that
+// hold them (found once) instead of looked up voxel by voxel.
+class BlockMask {
+  public:
+    BlockMask(openvdb::tree::ValueAccessor<const openvdb::BoolTree> &mask, const openvdb::Coord &c, int radius)
+        : split_(((c.x() - radius) & ~7) + 8, ((c.y() - radius) & ~7) + 8, ((c.z() - radius) & ~7) + 8) {
+        for (int a = 0; a < 2; ++a)
+            for (int b = 0; b < 2; ++b)
+                for (int d = 0; d < 2; ++d)
+                    leaves_[a][b][d] = mask.probeConstLeaf(split_.offsetBy(8 * a - 8, 8 * b - 8, 8 * d - 8));
+    }
+    bool isOn(const openvdb::Coord &v) const {  // v within the radius of c
+        const openvdb::BoolTree::LeafNodeType *leaf =
+            leaves_[v.x() >= split_.x()][v.y() >= split_.y()][v.z() >= split_.z()];
+        return leaf && leaf->isValueOn(v);
+    }
+
+  private:
+    openvdb::Coord split_;  // the upper leaves' origin
+    const openvdb::BoolTree::LeafNodeType *leaves_[2][2][2];
+};
+
 // The returned grazing sun carried through the density ramp: voxel c (outside the unknowns, carrying its surface's
 // radiance) in front of smooth surface voxels within two voxels whose peaked lobe (the sun returned sharply
 // forwards, Method 5) travels towards it takes their peaked lobes where these are over twice its own (elsewhere
@@ -1045,10 +1067,14 @@ openvdb::Vec3f sourceComponent(const Source &S, int k) {
 // an edge voxel: their faces' light leaves face by face; slab_thick 4.4 -> 4.7 % with them, and left out
 // wherever an edge voxel lay beside c, ball_issue's side rims seen against the sun stayed at -59 %), nor from
 // traced voxels (their peak is their own beams' scattering). bench/bake_suite.py: docs/bake.md, Accuracy.
+//
+// peaks: the surface voxels holding a peaked lobe, read from the at most eight leaves around c (BlockMask): an
+// index lookup for each of the 124 voxels around c took most of this walk's time.
 void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &tracedIndex, const SourceValues &source,
-                        const std::vector<bool> &peaked, Medium::ColumnMarcher &marcher, Source &S) {
+                        openvdb::tree::ValueAccessor<const openvdb::BoolTree> &peaks, Medium::ColumnMarcher &marcher,
+                        Source &S) {
     struct Offset {
         openvdb::Coord from;  // c minus the way to c
         glm::dvec3 towards;   // unit
@@ -1072,12 +1098,13 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
         const std::int32_t k = index.getValue(v);
         return k >= 0 && topo.patches[k].sharp;
     };
+    const BlockMask peakAt(peaks, c, 2);
     glm::dvec3 p0(0.0), p1(0.0);
     double total = 0.0;
     for (const Offset &o : offsets) {
         const openvdb::Coord from = c + o.from;
+        if (!peakAt.isOn(from)) continue;
         const std::int32_t j = index.getValue(from);
-        if (j < 0 || !peaked[j] || !topo.patches[j].isSurface()) continue;
         if (!o.beside && (sharpAt(from + o.lo) || sharpAt(from + o.hi))) continue;  // its light passes an edge
         const double facing = glm::dot(topo.patches[j].normal, o.towards);
         if (facing <= 0.0 || tracedIndex.getValue(from) >= 0) continue;
@@ -1147,16 +1174,15 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     };
     // Where forwardPeakThrough may find a peak: within two voxels of a smooth surface voxel holding one (the car's
     // grids took 4.6 processor seconds searching around every voxel next to a surface voxel, 4.3-4.4 so, 3.3 without).
-    openvdb::BoolTree nearPeak(false);
-    std::vector<bool> peaked;  // by unknown: whether it holds a peaked lobe
+    openvdb::BoolTree nearPeak(false), peaks(false);  // peaks: surface voxels holding a peaked lobe
     if (!gathering) {
-        peaked.assign(source.broad.size(), false);
+        std::vector<bool> peaked(source.broad.size(), false);  // by unknown
         for (const PeakedLobes::Peak &peak : source.peaked.peaks)
             peaked[peak.key] = glm::length(peak.peak1) > 0.0f;
         for (auto it = topo.index->cbeginValueOn(); it; ++it)
-            if (const std::int32_t j = *it; j >= 0 && peaked[j]) {
-                const SurfacePatch &patch = topo.patches[j];
-                if (patch.isSurface() && !patch.sharp) nearPeak.setValueOn(it.getCoord());
+            if (const std::int32_t j = *it; j >= 0 && peaked[j] && topo.patches[j].isSurface()) {
+                peaks.setValueOn(it.getCoord());
+                if (!topo.patches[j].sharp) nearPeak.setValueOn(it.getCoord());
             }
         openvdb::tools::dilateActiveValues(nearPeak, 2, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                            openvdb::tools::IGNORE_TILES);
@@ -1166,7 +1192,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
-        openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak);
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak), peaksAt(peaks);
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t l = range.begin(); l != range.end(); ++l)
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
@@ -1176,7 +1202,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 if (t >= 0) S = traced.source[t];
                 else if (index.getValue(c) >= 0 || !facingAverage(topo, c, index, source, S)) continue;
                 else if (nearPeakAt.isValueOn(c))
-                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaked, marcher, S);
+                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
                 perLeaf[l].add(it.pos(), S);
             }
     });
