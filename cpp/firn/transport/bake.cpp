@@ -976,23 +976,42 @@ struct VoxelValues {
     Source operator[](std::size_t k) const { return peaked.with(values[k].second, k); }
 };
 
-// Values by leaf of the grids' topology: leaf l's lie at [start[l], start[l + 1]).
+// Values by leaf of the grids' topology: leaf l's lie at [start[l], start[l + 1]) and, where a second block was
+// appended after the first, at [later[l], later[l + 1]).
 struct LeafValues : VoxelValues {
-    std::vector<std::size_t> start;
+    std::vector<std::size_t> start, later;
 
-    explicit LeafValues(std::size_t leaves) : start(leaves + 1, 0) {}
-    // Leaf by leaf, first's values and then `then`'s (consumed).
-    LeafValues(const LeafValues &first, std::vector<VoxelValues> &&then) : start{0} {
-        std::size_t total = first.values.size();
-        for (const auto &leaf : then) total += leaf.values.size();
+    // One block: perLeaf's values leaf by leaf (consumed).
+    explicit LeafValues(std::vector<VoxelValues> &&perLeaf) : start{0} {
+        std::size_t total = 0;
+        for (const auto &leaf : perLeaf) total += leaf.values.size();
         values.reserve(total);
-        for (std::size_t l = 0; l < then.size(); ++l) {
-            append(first, first.start[l], first.start[l + 1]);
-            append(then[l], 0, then[l].values.size());
-            then[l] = VoxelValues();  // (= {} would keep its capacity)
+        for (VoxelValues &leaf : perLeaf) {
+            append(leaf, 0, leaf.values.size());
+            leaf = VoxelValues();  // (= {} would keep its capacity)
             start.push_back(values.size());
         }
+        later.assign(start.size(), values.size());
     }
+    // first's block taken over as it is (a copy of it was the gathering's and the grids' memory peak), then
+    // `then`'s values leaf by leaf (consumed).
+    LeafValues(LeafValues &&first, std::vector<VoxelValues> &&then)
+        : VoxelValues(std::move(first)), start(std::move(first.start)), later{values.size()} {
+        std::size_t total = values.size();
+        for (const auto &leaf : then) total += leaf.values.size();
+        values.reserve(total);
+        for (VoxelValues &leaf : then) {
+            append(leaf, 0, leaf.values.size());
+            leaf = VoxelValues();
+            later.push_back(values.size());
+        }
+    }
+    template <typename Body>
+    void forEachIn(std::size_t l, const Body &body) const {  // body(k) for leaf l's values
+        for (std::size_t k = start[l]; k < start[l + 1]; ++k) body(k);
+        for (std::size_t k = later[l]; k < later[l + 1]; ++k) body(k);
+    }
+    bool emptyIn(std::size_t l) const { return start[l] == start[l + 1] && later[l] == later[l + 1]; }
 };
 
 // at: the voxels with values -> their place in `values` (by leaf of `leaves`), with leaves only where values are
@@ -1000,13 +1019,12 @@ struct LeafValues : VoxelValues {
 void placeValues(const LeafValues &values, const openvdb::tree::LeafManager<const openvdb::BoolTree> &leaves,
                  openvdb::Int32Tree &at) {
     for (std::size_t l = 0; l < leaves.leafCount(); ++l)
-        if (values.start[l] < values.start[l + 1]) at.touchLeaf(leaves.leaf(l).origin());
+        if (!values.emptyIn(l)) at.touchLeaf(leaves.leaf(l).origin());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
-            if (values.start[l] == values.start[l + 1]) continue;
+            if (values.emptyIn(l)) continue;
             openvdb::Int32Tree::LeafNodeType &leaf = *at.probeLeaf(leaves.leaf(l).origin());
-            for (std::size_t k = values.start[l]; k < values.start[l + 1]; ++k)
-                leaf.setValueOnly(values.values[k].first, std::int32_t(k));
+            values.forEachIn(l, [&](std::size_t k) { leaf.setValueOnly(values.values[k].first, std::int32_t(k)); });
         }
     });
 }
@@ -1206,7 +1224,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 perLeaf[l].add(it.pos(), S);
             }
     });
-    const LeafValues carried(LeafValues(leaves.leafCount()), std::move(perLeaf));
+    LeafValues carried(std::move(perLeaf));
     out.at = std::make_shared<openvdb::Int32Tree>(-1);
     placeValues(carried, leaves, *out.at);
     // Then: one voxel further out, and thin snow on its own.
@@ -1239,7 +1257,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 if (near || density.getValue(c) > 0.0f) perLeaf[l].add(it.pos(), S);
             }
     });
-    out.beyond.emplace(carried, std::move(perLeaf));
+    out.beyond.emplace(std::move(carried), std::move(perLeaf));
     placeValues(*out.beyond, leaves, *out.at);
     return out;
 }
@@ -1260,9 +1278,10 @@ openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology 
                     it.setValue(k < 4 ? broadComponent(source.broad[i], k) : sourceComponent(source[i], k));
             }
             const LeafValues &beyond = *values.beyond;
-            for (std::size_t m = beyond.start[l]; m < beyond.start[l + 1]; ++m)
+            beyond.forEachIn(l, [&](std::size_t m) {
                 leaf.setValueOnly(beyond.values[m].first, k < 4 ? broadComponent(beyond.values[m].second, k)
                                                                 : sourceComponent(beyond[m], k));
+            });
         }
     });
     return tree;
