@@ -1306,25 +1306,6 @@ openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scal
     return grid;
 }
 
-// The source grids at `scale` times the density's voxel size, one at a time: each grid at the density's
-// resolution is coarsened and freed before the next is written.
-BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
-                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
-    GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
-    values.at = nullptr;  // only BakedValuesSampler reads it
-    BakedGrids out;
-    openvdb::BoolTree::Ptr lit;  // fine voxels with a value (firn_source nonzero)
-    for (int k = 0; k < int(BakedGrids::kCount); ++k) {
-        openvdb::Vec3fTree::Ptr tree = sourceTree(values, topo, source, traced, k);
-        if (scale > 1) {
-            if (k == 0) lit = litVoxels(*tree);
-            tree = coarsenedSource(*tree, *lit, scene.medium->density().tree(), scale);
-        }
-        out.source[k] = sourceGrid(std::move(tree), k, scale, *scene.medium, settings);
-    }
-    return out;
-}
-
 // BakedGrids' values at a point of the density's index space before the grids are written: read from the
 // unknowns' source and the values beyond them, trilinear as BoxSampler reads a grid (the same values, bit for
 // bit). The last cell's corners are kept: the gathering's half-voxel steps read each cell about twice. One per
@@ -1341,7 +1322,7 @@ class BakedValuesSampler {
             for (int a = 0; a < 2; ++a)
                 for (int b = 0; b < 2; ++b)
                     for (int c = 0; c < 2; ++c) {
-                        const Source S = valueAt(lower.offsetBy(a, b, c));
+                        const Source S = at(lower.offsetBy(a, b, c));
                         for (int g = 0; g < int(BakedGrids::kCount); ++g) corners_[g][a][b][c] = sourceComponent(S, g);
                     }
             cell_ = lower, cached_ = true;
@@ -1353,13 +1334,14 @@ class BakedValuesSampler {
         return out;
     }
 
-  private:
-    Source valueAt(const openvdb::Coord &c) {
+    // The value at voxel c (what the grids hold there at the density's resolution).
+    Source at(const openvdb::Coord &c) {
         if (const std::int32_t i = index_.getValue(c); i >= 0 && traced_.getValue(c) < 0) return source_[i];
         const std::int32_t k = at_.getValue(c);
         return k >= 0 ? beyond_[k] : Source{};
     }
 
+  private:
     const SourceValues &source_;
     const LeafValues &beyond_;
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_, traced_, at_;
@@ -1367,6 +1349,32 @@ class BakedValuesSampler {
     openvdb::Coord cell_;  // the cell whose corners corners_ holds
     openvdb::Vec3f corners_[BakedGrids::kCount][2][2][2];
 };
+
+// The source grids at `scale` times the density's voxel size, one at a time. At the density's resolution each grid
+// is built and freed before the next is written; coarser, firn_source alone is built at the density's resolution
+// (which of its voxels hold a value: `lit`) and the others are coarsened from the values directly.
+BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
+                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
+    const GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
+    BakedGrids out;
+    openvdb::BoolTree::Ptr lit;  // fine voxels with a value (firn_source nonzero)
+    for (int k = 0; k < int(BakedGrids::kCount); ++k) {
+        openvdb::Vec3fTree::Ptr tree;
+        if (scale == 1 || k == 0) tree = sourceTree(values, topo, source, traced, k);
+        if (scale > 1 && k == 0) {
+            lit = litVoxels(*tree);
+            tree = coarsenedSource(*tree, *lit, scene.medium->density().tree(), scale);
+        } else if (scale > 1) {
+            const auto newReader = [&, k] {
+                return [k, baked = std::make_shared<BakedValuesSampler>(topo, source, traced, values)](
+                           const openvdb::Coord &c) { return sourceComponent(baked->at(c), k); };
+            };
+            tree = coarsenedSource(*values.topology, newReader, *lit, scene.medium->density().tree(), scale);
+        }
+        out.source[k] = sourceGrid(std::move(tree), k, scale, *scene.medium, settings);
+    }
+    return out;
+}
 
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
 // of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch), read
