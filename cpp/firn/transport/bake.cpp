@@ -1355,7 +1355,8 @@ class BakedValuesSampler {
 // (which of its voxels hold a value: `lit`) and the others are coarsened from the values directly.
 BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
-    const GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
+    GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
+    if (scale == 1) values.at = nullptr;  // only the coarsening's readers (BakedValuesSampler) read it
     BakedGrids out;
     openvdb::BoolTree::Ptr lit;  // fine voxels with a value (firn_source nonzero)
     for (int k = 0; k < int(BakedGrids::kCount); ++k) {
