@@ -1523,8 +1523,9 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     releaseFreedMemory();  // the topology's intermediate lists
     clock.lap(&BakeStats::Phases::topology);
     p.report(0.05, "Tracing sun and sky light");
-    IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
-                                               SubProgress(&p, 0.05, 0.4));
+    IncidentLight light =
+        computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
+                             SubProgress(&p, 0.05, 0.4));
     clock.lap(&BakeStats::Phases::light);
 
     local.unknowns = topo.size();
