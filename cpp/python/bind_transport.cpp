@@ -415,6 +415,23 @@ shared source, and the objects add up to the union). A file may hold an empty de
 Every file written atomically, none before the bake is done. Arguments, errors and statistics as `bake`'s.)doc");
 
     m.def(
+        "write_empty_light",
+        [](const std::string &path, const std::string &outputPath, const firn::VolumeOptics &optics,
+           const std::string &quality, std::uint64_t seed) {
+            const firn::BakeSettings settings = bakeSettings(quality, seed, 0, 0, 0, 0);
+            longCall([&] {
+                const openvdb::FloatGrid::Ptr density = jointDensity(path);
+                writeBaked(path, density, firn::emptyBakedGrids(*density, optics, settings), outputPath);
+            });
+        },
+        py::arg("vdb_path"), py::arg("output_path"), py::arg("optics"), py::arg("quality") = "FINAL",
+        py::arg("seed") = 0, R"doc(
+Writes the grids of `vdb_path`, whose 'density' is empty (a spray's frame without lumps), with the six source
+grids of BAKED_GRID_NAMES empty, to `output_path` (atomically), without a bake: `bake` refuses an empty density,
+and bake_joint would bake the snow beside it only for this. The grids carry a bake's metadata (quality, seed,
+optics). ValueError when the density is missing or has an active voxel.)doc");
+
+    m.def(
         "union_density",
         [](const std::vector<std::string> &paths, const std::string &outputPath) {
             longCall([&] {

@@ -7,6 +7,7 @@ import os
 import bpy
 import numpy as np
 import pytest
+from mathutils import Matrix, Vector
 
 from firn.common import cache
 from firn.common.core import firncore
@@ -86,6 +87,100 @@ def test_the_tracked_snow_plays_in_the_snow_layers_place(clean_scene):
     before = firncore.sample_grid(firncore.spray_frame_paths(folder, FRAMES[0])[1], "density", centre)[0]
     after = firncore.sample_grid(firncore.spray_frame_paths(folder, FRAMES[1])[1], "density", centre)[0]
     assert before > 50.0 and after < 0.5 * before  # the ski cut a groove there
+
+
+MOVE = Matrix.Translation((0.3, -0.2, 0.1)) @ Matrix.Rotation(0.5, 4, "Z")  # a snow layer moved and turned
+VOXEL = 0.01  # m, snow_on_plane's
+
+
+def _carried(transform, *objects):
+    """Parents `objects` to an Empty placed by `transform`: their world paths become the old ones moved by it."""
+    holder = bpy.data.objects.new("Holder", None)
+    bpy.context.scene.collection.objects.link(holder)
+    holder.matrix_world = transform
+    for obj in objects:
+        obj.parent = holder  # identity parent inverse: world = transform @ its own animation
+    return holder
+
+
+def _world_lumps(spray):
+    """The last frame's lumps (their reference points), in world space (Unit Scale 1: Blender units are m)."""
+    bpy.context.view_layer.update()
+    positions = firncore.read_spray_state(firncore.spray_frame_paths(folder_of(spray), FRAMES[1])[2]).positions
+    matrix = np.array(spray.matrix_world)
+    return positions @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def _moved(points, transform):
+    matrix = np.array(transform)
+    return points @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def _grooved(tracks, world_point):
+    """(before, after): the tracked snow's density at the first and last frames at a world point."""
+    bpy.context.view_layer.update()
+    local = np.array([tracks.matrix_world.inverted() @ Vector(world_point)], np.float32)  # the file's metres
+    folder = folder_of(tracks)
+    return [firncore.sample_grid(firncore.spray_frame_paths(folder, frame)[1], "density", local)[0]
+            for frame in FRAMES]
+
+
+def test_a_moved_and_turned_snow_layer_keeps_its_tracks_under_the_ski_and_its_lumps_in_place(clean_scene):
+    """The spray's files are in the snow's file space and its objects are the snow layer's children: a layer
+    moved and turned (before or after Add Snow Spray) with its ski gives the unmoved layer's groove and lumps,
+    moved the same way (within a voxel), and the groove lies under the ski's world path."""
+    snow = snow_on_plane()
+    emitter = ski()
+    unmoved = _world_lumps(add_spray(snow, emitter))
+    assert len(unmoved) > 10
+    assert bpy.ops.firn.clear_snow_spray() == {"FINISHED"}
+    # Moved before Add Snow Spray.
+    snow.matrix_world = MOVE @ snow.matrix_world
+    holder = _carried(MOVE, emitter)
+    spray = add_spray(snow, emitter)
+    tracks = bpy.data.objects[f"{snow.name} Tracks"]
+    lumps = _world_lumps(spray)
+    expected = _moved(unmoved, MOVE)
+    np.testing.assert_allclose(lumps.min(0), expected.min(0), atol=VOXEL)
+    np.testing.assert_allclose(lumps.max(0), expected.max(0), atol=VOXEL)
+    before, after = _grooved(tracks, MOVE @ Vector((-0.1, 0.0, SNOW_DEPTH * 0.75)))  # on the ski's world path
+    assert before > 50.0 and after < 0.5 * before
+    beside = _grooved(tracks, MOVE @ Vector((-0.1, 0.2, SNOW_DEPTH * 0.75)))  # 20 cm to its side: untouched
+    assert beside[1] == pytest.approx(beside[0]) and beside[0] > 50.0
+    # Moved after: the spray and its tracks go with the snow layer; Bake Sequence simulates it where it is.
+    again = Matrix.Translation((-0.4, 0.5, 0.0)) @ Matrix.Rotation(-1.2, 4, "Z")
+    snow.matrix_world = again @ snow.matrix_world
+    holder.matrix_world = again @ holder.matrix_world
+    bpy.context.view_layer.update()
+    for obj in (spray, tracks):
+        assert np.allclose(np.array(obj.matrix_world), np.array(snow.matrix_world), atol=1e-6)
+    assert tracks.visible_get() and spray.visible_get() and not snow.visible_get()
+    assert bpy.ops.firn.bake_sequence(light=False) == {"FINISHED"}
+    lumps = _world_lumps(spray)
+    expected = _moved(unmoved, again @ MOVE)
+    np.testing.assert_allclose(lumps.min(0), expected.min(0), atol=VOXEL)
+    np.testing.assert_allclose(lumps.max(0), expected.max(0), atol=VOXEL)
+
+
+def test_regenerating_the_snow_layer_keeps_its_spray(clean_scene):
+    snow = snow_on_plane()
+    spray = add_spray(snow, ski())
+    snow.matrix_world = MOVE @ snow.matrix_world
+    select_only(snow)
+    assert bpy.ops.firn.regenerate_snow() == {"FINISHED"}
+    tracks = bpy.data.objects[f"{snow.name} Tracks"]
+    assert spray.parent == snow and tracks.parent == snow  # back where its targets are, with the layer
+    bpy.context.view_layer.update()
+    assert np.allclose(np.array(tracks.matrix_world), np.eye(4), atol=1e-6)
+
+
+def test_a_scaled_snow_layer_is_reported(clean_scene):
+    snow = snow_on_plane()
+    emitter = ski()
+    snow.scale = (2.0, 2.0, 2.0)
+    select_only(snow, emitter)
+    with pytest.raises(RuntimeError, match="is scaled"):
+        bpy.ops.firn.add_snow_spray(frame_start=FRAMES[0], frame_end=FRAMES[1])
 
 
 def test_same_seed_same_files(clean_scene):
@@ -175,9 +270,10 @@ def test_a_missing_vertex_group_is_reported(clean_scene):
 
 # --- the light of the tracked snow and the lumps, frame by frame (spray/light.py) ------------------------------
 
-def _lit_snow_scene():
+def _lit_snow_scene(transform=None):
     """A snow layer lit by a high sun, a ski and a 'body' (a 20 cm box 30 cm above the snow) moving with it, so
-    its shadow on the snow moves from frame to frame; the Snow Spray and its Tracks, to be baked over FRAMES."""
+    its shadow on the snow moves from frame to frame; the Snow Spray and its Tracks, to be baked over FRAMES.
+    With `transform`, the snow layer and everything else moved by it."""
     snow = snow_on_plane()
     emitter = ski()
     bpy.ops.mesh.primitive_cube_add(size=0.2)
@@ -192,6 +288,9 @@ def _lit_snow_scene():
     bpy.ops.object.light_add(type="SUN", location=(0.0, 0.0, 2.0))
     bpy.context.object.data.energy = 3.0
     bpy.context.object.data.angle = 0.01
+    if transform is not None:
+        snow.matrix_world = transform @ snow.matrix_world
+        _carried(transform, emitter, body, bpy.context.object)
     spray = add_spray(snow, emitter)
     return snow, spray, bpy.data.objects[f"{snow.name} Tracks"]
 
@@ -258,6 +357,18 @@ def test_bake_sequence_bakes_the_tracked_snow_and_the_lumps_at_every_frame(clean
     assert spray.active_material.get("firn_form", "").startswith("BAKED")
     os.remove(os.path.join(folder, f"lit_{FRAMES[0] + 1:04d}.json"))
     assert bake_state.changes(tracks) == (bake_state.OUTDATED, [f"frame {FRAMES[0] + 1} not lit"])
+
+
+def test_a_moved_and_turned_snow_layer_is_lit_where_it_stands(clean_scene):
+    """The snow layer, its ski, the body and the sun moved and turned together: the body's shadow falls on the
+    baked snow where the body is, as on the unmoved layer (the files are in the snow's space: the same places)."""
+    _snow, spray, tracks = _lit_snow_scene(MOVE)
+    assert bpy.ops.firn.bake_sequence(quality="DRAFT") == {"FINISHED"}
+    folder = folder_of(spray)
+    lit = [os.path.join(folder, f"lit_{frame:04d}.vdb") for frame in FRAMES]
+    shaded_first, open_first = _drawn_above(lit[0], tracks, -0.6), _drawn_above(lit[0], tracks, 0.4)
+    shaded_last, open_last = _drawn_above(lit[-1], tracks, 0.4), _drawn_above(lit[-1], tracks, -0.6)
+    assert shaded_first < 0.5 * open_first and shaded_last < 0.5 * open_last
 
 
 def test_a_second_bake_keeps_lit_frames_and_one_frame_per_process_gives_the_same_light(clean_scene):
@@ -345,17 +456,24 @@ def test_frames_a_bake_adds_are_lit_from_their_tracked_snow(clean_scene):
     assert firncore.grid_statistics(lit, "density")["active_voxels"] == grooved
 
 
-def test_a_spray_without_tracks_and_frames_without_lumps_bake(clean_scene):
+def test_a_spray_without_tracks_and_frames_without_lumps_bake(clean_scene, monkeypatch):
     """Cut Tracks off: the lumps are baked over the snow layer's own file; a ski buried in untracked snow throws
-    none (they would start inside the snow), so every frame has empty light grids, and Bake Sequence finishes."""
+    none (they would start inside the snow), so every frame has empty light grids, written without a bake (the
+    snow layer keeps its own: nothing else is lit), and Bake Sequence finishes."""
     snow = snow_on_plane()
     bpy.ops.object.light_add(type="SUN", location=(0.0, 0.0, 2.0))
     spray = add_spray(snow, ski(), cut_tracks=False)
     assert not any(obj.firn.spray.role == "TRACKS" for obj in bpy.data.objects)
+    bakes = []
+    for name in ("bake", "bake_joint"):
+        monkeypatch.setattr(firncore, name, lambda *args, _name=name, _bake=getattr(firncore, name), **kwargs: (
+            bakes.append(_name), _bake(*args, **kwargs))[1])
     assert bpy.ops.firn.bake_sequence(quality="DRAFT") == {"FINISHED"}
+    assert bakes == []
     assert os.path.basename(spray.data.filepath).startswith("lit_spray_")
     assert spray.active_material.get("firn_form", "").startswith("BAKED")
     folder = folder_of(spray)
     for path, frame in zip(_lit_spray_files(folder), range(FRAMES[0], FRAMES[1] + 1)):
         assert firncore.grid_statistics(firncore.spray_frame_paths(folder, frame)[0], "density")["active_voxels"] == 0
         assert set(firncore.BAKED_GRID_NAMES) <= set(firncore.grid_names(path))
+        assert firncore.grid_statistics(path, "density")["active_voxels"] == 0

@@ -170,3 +170,18 @@ def test_bad_settings_and_files_raise_clear_errors(snow, tmp_path):
     damaged.write_bytes(b"FIRNSPRY" + bytes(20))
     with pytest.raises(firncore.ReadError):
         firncore.read_spray_state(str(damaged))
+
+
+def test_a_frame_without_lumps_gets_empty_light_grids_without_a_bake(snow, tmp_path):
+    # A ski gliding above the snow throws nothing: its frames' lumps files have an empty density, which `bake`
+    # refuses; write_empty_light gives the lumps' lit file (spray/light.py) without baking anything.
+    firncore.simulate_spray(snow, [ski(3, z=0.5)], str(tmp_path), FPS, 1, settings())
+    lumps = frame_files(tmp_path, 2)[0]
+    assert firncore.grid_statistics(lumps, "density")["active_voxels"] == 0
+    optics = firncore.VolumeOptics(2.0, [0.99, 0.99, 0.99], 0.87)
+    lit = str(tmp_path / "lit_spray_0002.vdb")
+    firncore.write_empty_light(lumps, lit, optics, "DRAFT", 3)
+    assert sorted(firncore.grid_names(lit)) == sorted(firncore.grid_names(lumps) + list(firncore.BAKED_GRID_NAMES))
+    assert firncore.grid_statistics(lit, "density")["active_voxels"] == 0
+    with pytest.raises(ValueError, match="not empty"):
+        firncore.write_empty_light(snow, str(tmp_path / "x.vdb"), optics)

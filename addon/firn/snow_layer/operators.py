@@ -16,7 +16,7 @@ from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
 from ..material import nodes as materials
-from ..properties import SNOW_LAYER_PROPERTIES, active_snow_layer
+from ..properties import SNOW_LAYER_PROPERTIES, active_snow_layer, is_spray
 from . import masks, proxy
 from .ui import draw_layer_settings
 
@@ -272,7 +272,10 @@ def _store_surface_mesh(snow, surface):
 
 
 def _remove_children(snow):
+    """The metaballs, surface mesh and proxy; a spray's objects (children too, spray/operators.py) stay."""
     for child in list(snow.children):
+        if is_spray(child):
+            continue
         data = child.data
         bpy.data.objects.remove(child)
         if data is not None and data.users == 0:

@@ -133,14 +133,14 @@ def _bake_frame(job, quality, seed, progress):
     reflects the snow's white-sky albedo (its light under them, its shadow on them): inside the joint medium the
     lumps' paths would enter the snow and scatter thousands of times, so the bake's budget leaves them to its
     diffusion (docs/spray.md "Light": 24 % per block against 16 % traced). A frame without lumps gets their lit
-    file with empty light grids."""
+    file with empty light grids, unbaked (without tracks there is nothing else to bake that frame)."""
     (snow, spray), (lit, lit_spray) = job["paths"], job["outputs"]
     settings = dict(quality=quality, seed=seed, progress=progress, **core_light(job["inputs"]))
-    if firncore.grid_statistics(spray, "density")["active_voxels"] == 0:
-        firncore.bake_joint([snow, spray], [lit, lit_spray], job["optics"], **settings)
-        return
     if lit is not None:
         firncore.bake_joint([snow, spray], [lit, None], job["optics"], **settings)
+    if firncore.grid_statistics(spray, "density")["active_voxels"] == 0:
+        firncore.write_empty_light(spray, lit_spray, job["optics"], quality, seed)
+        return
     voxel = firncore.grid_statistics(snow, "surface")["voxel_size"]
     vertices, triangles = firncore.snow_surface_mesh(snow, adaptivity=SURFACE_ADAPTIVITY, isovalue=-voxel)
     settings["occluders"].append((vertices, triangles, job["optics"].white_sky_albedo))

@@ -23,7 +23,7 @@ from ..material import nodes as materials
 from ..properties import BAKE_QUALITY_ITEMS, CORE_SPRAY_SETTINGS, OPTICS_SETTINGS, SPRAY_PROPERTIES, active_snow_layer, is_spray
 from ..snow_layer import proxy
 from ..snow_layer.operators import free_object_name, new_snow_object
-from . import emitters as emitter_rectangles, files, light
+from . import emitters as emitter_rectangles, files, light, snow_space
 from .ui import ADD_LABEL, BAKE_LABEL, draw_spray_settings
 
 FRAME_PROPERTIES = {
@@ -96,12 +96,15 @@ def gather_inputs(context, props, snow, emitters, frames, directory):
         scene.frame_set(first)
         objects = scene_geometry.world_triangles(obstacles, context.evaluated_depsgraph_get())
     finally:
-        scene.frame_set(current)
+        scene.frame_set(current)  # also brings the snow's matrix_world up to date
+    space = snow_space.snow_space(snow, scene)
+    settings = core_settings(props)
+    settings.down = snow_space.down_in(space)
     cache.check_writable(os.path.join(directory, "spray.vdb"))
     return {
-        "snow_path": snow_file(snow), "emitters": rectangles, "directory": directory, "objects": objects,
-        "fps": scene.render.fps / scene.render.fps_base, "first": first, "last": last,
-        "settings": core_settings(props), "unit_matrix": scene_geometry.unit_matrix(scene),
+        "snow_path": snow_file(snow), "emitters": snow_space.rectangles_in(space, rectangles),
+        "directory": directory, "objects": snow_space.triangles_in(space, objects),
+        "fps": scene.render.fps / scene.render.fps_base, "first": first, "last": last, "settings": settings,
     }
 
 
@@ -162,8 +165,12 @@ def sequence_objects(folder):
 
 def _new_sequence_object(context, name, role, snow, props, emitters, frames):
     """A Volume of Firn snow for a spray sequence, with the optics of the snow it came from and the settings it
-    was made with (Bake Sequence makes it again from them)."""
+    was made with (Bake Sequence makes it again from them). A child of the snow layer, in its space (identity
+    parent inverse): its files are in the snow's file space (snow_space.py), and it moves with the layer."""
     obj = new_snow_object(context, name)
+    obj.parent = snow
+    obj.matrix_parent_inverse = Matrix.Identity(4)
+    obj.matrix_basis = Matrix.Identity(4)
     for setting in OPTICS_SETTINGS + ("render_mode",):
         setattr(obj.firn, setting, getattr(snow.firn, setting))
     obj.firn.voxel_size = snow.firn.voxel_size
@@ -220,7 +227,6 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
         emitters = [bpy.data.objects[name] for name in inputs["emitter_names"]]
         frames = inputs["first"], inputs["last"]
         spray = _new_sequence_object(context, inputs["name"], "SPRAY", snow, self, emitters, frames)
-        spray.matrix_world = Matrix(inputs["unit_matrix"].tolist())
         spray.firn.mean_density = self.lump_density
         spray.firn.spray.summary = summary(inputs, run)
         play_sequence(spray, inputs["stored"], "spray", *frames)
@@ -228,7 +234,6 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
         if run["snow_frames"]:
             tracks = _new_sequence_object(context, free_object_name(f"{snow.name} Tracks"), "TRACKS", snow, self,
                                           emitters, frames)
-            tracks.matrix_world = snow.matrix_world
             tracks.firn.mean_density = snow.firn.mean_density
             play_sequence(tracks, inputs["stored"], "snow", *frames)
             materials.ensure_snow_material(tracks)

@@ -109,8 +109,13 @@ std::vector<Metaball> MetaballColumns::layout(const std::vector<LandingSite> &si
     const ColumnTable &table = *table_;
     const std::uint64_t streamKey = stream * 0x9E3779B97F4A7C15ull;  // 0 for stream 0: layoutMetaballs's draws
 
+    // A site's draws follow its position, not its index: the sites come in the targets' triangle order.
+    auto siteStream = [&](std::size_t i) {
+        const glm::vec3 &p = sites[i].position;
+        return pointStream(p.x, p.y, p.z);
+    };
     auto columnDepth = [&](std::size_t i) {
-        Rng rng(s.seed ^ 0x5EEDC0FFEEull ^ streamKey, i);
+        Rng rng(s.seed ^ 0x5EEDC0FFEEull ^ streamKey, siteStream(i));
         return s.depth * sites[i].cover * (1.0 + 0.5 * s.randomness * (2.0 * rng.uniform() - 1.0));
     };
     std::vector<std::size_t> offsets(sites.size() + 1, 0);
@@ -128,7 +133,7 @@ std::vector<Metaball> MetaballColumns::layout(const std::vector<LandingSite> &si
         if (count == 0) return;
         const double d = columnDepth(i);
         const ColumnTable::Column c = table.lookup(d);
-        Rng rng(s.seed ^ 0xBA11ull ^ streamKey, i);
+        Rng rng(s.seed ^ 0xBA11ull ^ streamKey, siteStream(i));
         for (std::size_t k = 0; k < count; ++k) {
             const double z = count == 1 ? c.zLow : c.zLow + (c.zHigh - c.zLow) * double(k) / double(count - 1);
             const double r = radius * (1.0 + 0.2 * s.randomness * (2.0 * rng.uniform() - 1.0));

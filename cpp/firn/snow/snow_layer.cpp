@@ -7,10 +7,10 @@
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/task_group.h>
 
 #include "firn/snow/snow_volume_bound.h"
 #include "firn/util/error.h"
+#include "firn/util/threads.h"
 
 namespace firn {
 
@@ -118,15 +118,8 @@ ShelteredTargets shelterTargets(const TriangleMesh &targets, const TriangleMesh 
     ShelteredTargets out;
     out.targets = &targets;
     OpenSurfaceTurns turns;
-    tbb::task_group orienting;
-    orienting.run([&] { turns = findOpenSurfaceTurns(targets, up); });
-    try {
-        out.shelter = std::make_unique<const RayCaster>(merge({&targets, &occluders}));
-    } catch (...) {
-        orienting.wait();  // the task writes `turns`: it ends before `turns` goes
-        throw;
-    }
-    orienting.wait();
+    runBeside([&] { turns = findOpenSurfaceTurns(targets, up); },
+              [&] { out.shelter = std::make_unique<const RayCaster>(merge({&targets, &occluders})); });
     out.openSurfaces = turns.changed;
     if (out.openSurfaces.triangles > 0) {
         out.turned = targets;

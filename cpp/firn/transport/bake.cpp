@@ -1287,16 +1287,17 @@ openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology 
     return tree;
 }
 
-// Grid k of BakedGrids from its tree, `scale` times the density's voxel size.
-openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scale, const Medium &medium,
-                                   const BakeSettings &settings) {
+// Grid k of BakedGrids from its tree, `scale` times the voxel size of `density`, for optics of extinction
+// `extinctionPerDensity` (m^2/kg).
+openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scale, const openvdb::FloatGrid &density,
+                                   double extinctionPerDensity, const BakeSettings &settings) {
     auto grid = openvdb::Vec3fGrid::create(std::move(tree));
-    grid->setTransform(medium.density().transform().copy());
+    grid->setTransform(density.transform().copy());
     if (scale > 1) grid->transform().preScale(double(scale));
     grid->setName(BakedGrids::kNames[k]);
     grid->setVectorType(openvdb::VEC_INVARIANT);
     grid->insertMeta("firn_units", openvdb::StringMetadata("W/m^2/sr (source function: emission / extinction)"));
-    grid->insertMeta("firn_extinction_per_density", openvdb::DoubleMetadata(medium.optics().extinctionPerDensity));
+    grid->insertMeta("firn_extinction_per_density", openvdb::DoubleMetadata(extinctionPerDensity));
     grid->insertMeta("firn_bake_quality",
                      openvdb::StringMetadata(settings.quality == BakeQuality::Draft   ? "DRAFT"
                                              : settings.quality == BakeQuality::Final ? "FINAL"
@@ -1372,7 +1373,8 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceV
             };
             tree = coarsenedSource(*values.topology, newReader, *lit, scene.medium->density().tree(), scale);
         }
-        out.source[k] = sourceGrid(std::move(tree), k, scale, *scene.medium, settings);
+        out.source[k] = sourceGrid(std::move(tree), k, scale, scene.medium->density(),
+                                   scene.medium->optics().extinctionPerDensity, settings);
     }
     return out;
 }
@@ -1506,6 +1508,16 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
 }
 
 }  // namespace
+
+BakedGrids emptyBakedGrids(const openvdb::FloatGrid &density, const VolumeOptics &optics,
+                           const BakeSettings &settings) {
+    if (density.activeVoxelCount() > 0) throw InvalidArgument("the density grid is not empty: bake it");
+    BakedGrids out;
+    for (int k = 0; k < int(BakedGrids::kCount); ++k)
+        out.source[k] = sourceGrid(std::make_shared<openvdb::Vec3fTree>(openvdb::Vec3f(0.0f)), k, 1, density,
+                                   optics.extinctionPerDensity, settings);
+    return out;
+}
 
 BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
     validate(scene);

@@ -64,4 +64,9 @@ struct BakeStats {
 BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress = nullptr,
                           BakeStats *stats = nullptr);
 
+// The source grids of a snow with nothing to light (an empty density: a spray's frame without lumps, which
+// bakeScattering refuses), without a bake: empty, with the density's transform and a bake's metadata. Throws
+// InvalidArgument when the density has an active voxel.
+BakedGrids emptyBakedGrids(const openvdb::FloatGrid &density, const VolumeOptics &optics, const BakeSettings &settings);
+
 }  // namespace firn

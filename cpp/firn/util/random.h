@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 
 namespace firn {
 
@@ -11,6 +12,18 @@ inline std::uint64_t mix64(std::uint64_t x) {
     x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
     x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
     return x ^ (x >> 31);
+}
+
+// A stream number from a point's coordinates (their bits), chained onto `stream`: what is drawn for a point (or a
+// triangle, chaining its corners) then depends on where it is, not on its index, so inputs given in another order
+// give the same draws. Each step (h ^ word) x odd constant is a bijection of h, so points that differ give
+// different numbers; Rng's constructor mixes them (a million triangles' streams: a few ms, not three mix64 each).
+inline std::uint64_t pointStream(float x, float y, float z, std::uint64_t stream = 0) {
+    std::uint32_t bits[3];
+    const float coordinates[3] = {x, y, z};
+    std::memcpy(bits, coordinates, sizeof bits);
+    stream = (stream ^ (std::uint64_t(bits[0]) << 32 | bits[1])) * 0x9E3779B97F4A7C15ull;
+    return (stream ^ bits[2]) * 0xD6E8FEB86659FD93ull;
 }
 
 class Rng {

@@ -1,9 +1,11 @@
 #pragma once
 
+#include <exception>
 #include <memory>
 #include <utility>
 
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 namespace firn {
 
@@ -27,6 +29,26 @@ template <class Work>
 auto runInCoreArena(Work &&work) -> decltype(work()) {
     const std::shared_ptr<tbb::task_arena> arena = coreArena();  // alive until the work is done
     return arena->execute(std::forward<Work>(work));
+}
+
+// Runs `side` as a task beside `work` (on the calling thread) and returns when both are done. When `work` throws,
+// its exception is the one that goes on, whatever `side` did: the task is waited for first (it may write what
+// `work`'s caller owns), and its own exception, a second one, is dropped.
+template <class Side, class Work>
+void runBeside(Side &&side, Work &&work) {
+    tbb::task_group beside;
+    beside.run(std::forward<Side>(side));
+    try {
+        work();
+    } catch (...) {
+        const std::exception_ptr first = std::current_exception();
+        try {
+            beside.wait();
+        } catch (...) {  // the side task's: a second error, after the one that goes on
+        }
+        std::rethrow_exception(first);
+    }
+    beside.wait();
 }
 
 }  // namespace firn

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <map>
 #include <mutex>
+#include <stdexcept>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -61,6 +62,32 @@ TEST(Threads, ThreadCountCapsTheCoresArenaOnly) {
     setThreadCount(0);
     EXPECT_EQ(runInCoreArena([] { return tbb::this_task_arena::max_concurrency(); }), hardwareThreadCount());
     EXPECT_THROW(setThreadCount(-1), InvalidArgument);
+}
+
+// shelterTargets builds the shelter while the open surfaces' turns are found beside it: when both throw (out of
+// memory, say), the shelter's error is the one reported, not the task's that tbb::task_group::wait rethrows.
+TEST(Threads, WhenBothThrowTheWorksExceptionGoesOnAndTheSideTaskHasEnded) {
+    std::atomic<bool> sideEnded{false};
+    try {
+        runBeside(
+            [&] {
+                sideEnded = true;
+                throw std::runtime_error("side");
+            },
+            [] { throw InvalidArgument("work"); });
+        FAIL() << "nothing thrown";
+    } catch (const InvalidArgument &error) {
+        EXPECT_STREQ(error.what(), "work");
+    } catch (const std::runtime_error &error) {
+        FAIL() << "the side task's exception replaced the work's: " << error.what();
+    }
+    EXPECT_TRUE(sideEnded);
+}
+
+TEST(Threads, TheSideTasksExceptionGoesOnWhenTheWorkSucceeds) {
+    bool worked = false;
+    EXPECT_THROW(runBeside([] { throw std::runtime_error("side"); }, [&] { worked = true; }), std::runtime_error);
+    EXPECT_TRUE(worked);
 }
 
 }  // namespace firn
