@@ -47,14 +47,17 @@ struct Preset {
     int snowBounces;  // passes gathering light between snow surfaces
     int tracedSamples;  // paths per optically thin voxel (thinVoxels)
     int cheapTracedSamples;  // as many where all of them cost at most kCheapTracedSteps (tracedSamples)
+    // The sky and the light gathered from other snow averaged over like-facing neighbours (averageOverNeighbours):
+    // 9 rays a voxel pooled over its neighbours where 16 were its own (docs/bake.md, Performance).
+    bool skyOverNeighbours;
 };
 
 constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
 
 Preset resolve(const BakeSettings &s) {
-    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64}
-               : s.quality == BakeQuality::Final ? Preset{16, 4, 1e-5, 0, 1, 256, 1024}
-                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024};
+    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true}
+               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true}
+                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
     // Conjugate gradients in double precision stall near 1e-15: asked for less, it iterated on a residual of
@@ -973,23 +976,42 @@ struct VoxelValues {
     Source operator[](std::size_t k) const { return peaked.with(values[k].second, k); }
 };
 
-// Values by leaf of the grids' topology: leaf l's lie at [start[l], start[l + 1]).
+// Values by leaf of the grids' topology: leaf l's lie at [start[l], start[l + 1]) and, where a second block was
+// appended after the first, at [later[l], later[l + 1]).
 struct LeafValues : VoxelValues {
-    std::vector<std::size_t> start;
+    std::vector<std::size_t> start, later;
 
-    explicit LeafValues(std::size_t leaves) : start(leaves + 1, 0) {}
-    // Leaf by leaf, first's values and then `then`'s (consumed).
-    LeafValues(const LeafValues &first, std::vector<VoxelValues> &&then) : start{0} {
-        std::size_t total = first.values.size();
-        for (const auto &leaf : then) total += leaf.values.size();
+    // One block: perLeaf's values leaf by leaf (consumed).
+    explicit LeafValues(std::vector<VoxelValues> &&perLeaf) : start{0} {
+        std::size_t total = 0;
+        for (const auto &leaf : perLeaf) total += leaf.values.size();
         values.reserve(total);
-        for (std::size_t l = 0; l < then.size(); ++l) {
-            append(first, first.start[l], first.start[l + 1]);
-            append(then[l], 0, then[l].values.size());
-            then[l] = VoxelValues();  // (= {} would keep its capacity)
+        for (VoxelValues &leaf : perLeaf) {
+            append(leaf, 0, leaf.values.size());
+            leaf = VoxelValues();  // (= {} would keep its capacity)
             start.push_back(values.size());
         }
+        later.assign(start.size(), values.size());
     }
+    // first's block taken over as it is (a copy of it was the gathering's and the grids' memory peak), then
+    // `then`'s values leaf by leaf (consumed).
+    LeafValues(LeafValues &&first, std::vector<VoxelValues> &&then)
+        : VoxelValues(std::move(first)), start(std::move(first.start)), later{values.size()} {
+        std::size_t total = values.size();
+        for (const auto &leaf : then) total += leaf.values.size();
+        values.reserve(total);
+        for (VoxelValues &leaf : then) {
+            append(leaf, 0, leaf.values.size());
+            leaf = VoxelValues();
+            later.push_back(values.size());
+        }
+    }
+    template <typename Body>
+    void forEachIn(std::size_t l, const Body &body) const {  // body(k) for leaf l's values
+        for (std::size_t k = start[l]; k < start[l + 1]; ++k) body(k);
+        for (std::size_t k = later[l]; k < later[l + 1]; ++k) body(k);
+    }
+    bool emptyIn(std::size_t l) const { return start[l] == start[l + 1] && later[l] == later[l + 1]; }
 };
 
 // at: the voxels with values -> their place in `values` (by leaf of `leaves`), with leaves only where values are
@@ -997,13 +1019,12 @@ struct LeafValues : VoxelValues {
 void placeValues(const LeafValues &values, const openvdb::tree::LeafManager<const openvdb::BoolTree> &leaves,
                  openvdb::Int32Tree &at) {
     for (std::size_t l = 0; l < leaves.leafCount(); ++l)
-        if (values.start[l] < values.start[l + 1]) at.touchLeaf(leaves.leaf(l).origin());
+        if (!values.emptyIn(l)) at.touchLeaf(leaves.leaf(l).origin());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
-            if (values.start[l] == values.start[l + 1]) continue;
+            if (values.emptyIn(l)) continue;
             openvdb::Int32Tree::LeafNodeType &leaf = *at.probeLeaf(leaves.leaf(l).origin());
-            for (std::size_t k = values.start[l]; k < values.start[l + 1]; ++k)
-                leaf.setValueOnly(values.values[k].first, std::int32_t(k));
+            values.forEachIn(l, [&](std::size_t k) { leaf.setValueOnly(values.values[k].first, std::int32_t(k)); });
         }
     });
 }
@@ -1029,6 +1050,28 @@ openvdb::Vec3f sourceComponent(const Source &S, int k) {
                                                  : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
 }
 
+// The on-states of a voxel mask within `radius` (at most 4) of voxel c, read from the at most eight leaves that
+// hold them (found once) instead of looked up voxel by voxel.
+class BlockMask {
+  public:
+    BlockMask(openvdb::tree::ValueAccessor<const openvdb::BoolTree> &mask, const openvdb::Coord &c, int radius)
+        : split_(((c.x() - radius) & ~7) + 8, ((c.y() - radius) & ~7) + 8, ((c.z() - radius) & ~7) + 8) {
+        for (int a = 0; a < 2; ++a)
+            for (int b = 0; b < 2; ++b)
+                for (int d = 0; d < 2; ++d)
+                    leaves_[a][b][d] = mask.probeConstLeaf(split_.offsetBy(8 * a - 8, 8 * b - 8, 8 * d - 8));
+    }
+    bool isOn(const openvdb::Coord &v) const {  // v within the radius of c
+        const openvdb::BoolTree::LeafNodeType *leaf =
+            leaves_[v.x() >= split_.x()][v.y() >= split_.y()][v.z() >= split_.z()];
+        return leaf && leaf->isValueOn(v);
+    }
+
+  private:
+    openvdb::Coord split_;  // the upper leaves' origin
+    const openvdb::BoolTree::LeafNodeType *leaves_[2][2][2];
+};
+
 // The returned grazing sun carried through the density ramp: voxel c (outside the unknowns, carrying its surface's
 // radiance) in front of smooth surface voxels within two voxels whose peaked lobe (the sun returned sharply
 // forwards, Method 5) travels towards it takes their peaked lobes where these are over twice its own (elsewhere
@@ -1042,10 +1085,14 @@ openvdb::Vec3f sourceComponent(const Source &S, int k) {
 // an edge voxel: their faces' light leaves face by face; slab_thick 4.4 -> 4.7 % with them, and left out
 // wherever an edge voxel lay beside c, ball_issue's side rims seen against the sun stayed at -59 %), nor from
 // traced voxels (their peak is their own beams' scattering). bench/bake_suite.py: docs/bake.md, Accuracy.
+//
+// peaks: the surface voxels holding a peaked lobe, read from the at most eight leaves around c (BlockMask): an
+// index lookup for each of the 124 voxels around c took most of this walk's time.
 void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &tracedIndex, const SourceValues &source,
-                        const std::vector<bool> &peaked, Medium::ColumnMarcher &marcher, Source &S) {
+                        openvdb::tree::ValueAccessor<const openvdb::BoolTree> &peaks, Medium::ColumnMarcher &marcher,
+                        Source &S) {
     struct Offset {
         openvdb::Coord from;  // c minus the way to c
         glm::dvec3 towards;   // unit
@@ -1069,12 +1116,13 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
         const std::int32_t k = index.getValue(v);
         return k >= 0 && topo.patches[k].sharp;
     };
+    const BlockMask peakAt(peaks, c, 2);
     glm::dvec3 p0(0.0), p1(0.0);
     double total = 0.0;
     for (const Offset &o : offsets) {
         const openvdb::Coord from = c + o.from;
+        if (!peakAt.isOn(from)) continue;
         const std::int32_t j = index.getValue(from);
-        if (j < 0 || !peaked[j] || !topo.patches[j].isSurface()) continue;
         if (!o.beside && (sharpAt(from + o.lo) || sharpAt(from + o.hi))) continue;  // its light passes an edge
         const double facing = glm::dot(topo.patches[j].normal, o.towards);
         if (facing <= 0.0 || tracedIndex.getValue(from) >= 0) continue;
@@ -1144,16 +1192,15 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     };
     // Where forwardPeakThrough may find a peak: within two voxels of a smooth surface voxel holding one (the car's
     // grids took 4.6 processor seconds searching around every voxel next to a surface voxel, 4.3-4.4 so, 3.3 without).
-    openvdb::BoolTree nearPeak(false);
-    std::vector<bool> peaked;  // by unknown: whether it holds a peaked lobe
+    openvdb::BoolTree nearPeak(false), peaks(false);  // peaks: surface voxels holding a peaked lobe
     if (!gathering) {
-        peaked.assign(source.broad.size(), false);
+        std::vector<bool> peaked(source.broad.size(), false);  // by unknown
         for (const PeakedLobes::Peak &peak : source.peaked.peaks)
             peaked[peak.key] = glm::length(peak.peak1) > 0.0f;
         for (auto it = topo.index->cbeginValueOn(); it; ++it)
-            if (const std::int32_t j = *it; j >= 0 && peaked[j]) {
-                const SurfacePatch &patch = topo.patches[j];
-                if (patch.isSurface() && !patch.sharp) nearPeak.setValueOn(it.getCoord());
+            if (const std::int32_t j = *it; j >= 0 && peaked[j] && topo.patches[j].isSurface()) {
+                peaks.setValueOn(it.getCoord());
+                if (!topo.patches[j].sharp) nearPeak.setValueOn(it.getCoord());
             }
         openvdb::tools::dilateActiveValues(nearPeak, 2, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                            openvdb::tools::IGNORE_TILES);
@@ -1163,7 +1210,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
-        openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak);
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak), peaksAt(peaks);
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t l = range.begin(); l != range.end(); ++l)
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
@@ -1173,11 +1220,11 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 if (t >= 0) S = traced.source[t];
                 else if (index.getValue(c) >= 0 || !facingAverage(topo, c, index, source, S)) continue;
                 else if (nearPeakAt.isValueOn(c))
-                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaked, marcher, S);
+                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
                 perLeaf[l].add(it.pos(), S);
             }
     });
-    const LeafValues carried(LeafValues(leaves.leafCount()), std::move(perLeaf));
+    LeafValues carried(std::move(perLeaf));
     out.at = std::make_shared<openvdb::Int32Tree>(-1);
     placeValues(carried, leaves, *out.at);
     // Then: one voxel further out, and thin snow on its own.
@@ -1210,7 +1257,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 if (near || density.getValue(c) > 0.0f) perLeaf[l].add(it.pos(), S);
             }
     });
-    out.beyond.emplace(carried, std::move(perLeaf));
+    out.beyond.emplace(std::move(carried), std::move(perLeaf));
     placeValues(*out.beyond, leaves, *out.at);
     return out;
 }
@@ -1231,9 +1278,10 @@ openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology 
                     it.setValue(k < 4 ? broadComponent(source.broad[i], k) : sourceComponent(source[i], k));
             }
             const LeafValues &beyond = *values.beyond;
-            for (std::size_t m = beyond.start[l]; m < beyond.start[l + 1]; ++m)
+            beyond.forEachIn(l, [&](std::size_t m) {
                 leaf.setValueOnly(beyond.values[m].first, k < 4 ? broadComponent(beyond.values[m].second, k)
                                                                 : sourceComponent(beyond[m], k));
+            });
         }
     });
     return tree;
@@ -1259,26 +1307,6 @@ openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scal
     return grid;
 }
 
-// The source grids at `scale` times the density's voxel size, one at a time: each grid at the density's
-// resolution is coarsened and freed before the next is written.
-BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
-                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
-    GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
-    values.at = nullptr;  // only BakedValuesSampler reads it
-    BakedGrids out;
-    openvdb::BoolTree::Ptr lit;  // fine voxels with a value (firn_source nonzero)
-    for (int k = 0; k < int(BakedGrids::kCount); ++k) {
-        openvdb::Vec3fTree::Ptr tree = sourceTree(values, topo, source, traced, k);
-        if (scale > 1) {
-            if (k == 0) lit = litVoxels(*tree);
-            tree = coarsenedSource(*tree, *lit, scene.medium->density().tree(), scale);
-        }
-        out.source[k] = sourceGrid(std::move(tree), k, scale, scene.medium->density(),
-                                   scene.medium->optics().extinctionPerDensity, settings);
-    }
-    return out;
-}
-
 // BakedGrids' values at a point of the density's index space before the grids are written: read from the
 // unknowns' source and the values beyond them, trilinear as BoxSampler reads a grid (the same values, bit for
 // bit). The last cell's corners are kept: the gathering's half-voxel steps read each cell about twice. One per
@@ -1295,7 +1323,7 @@ class BakedValuesSampler {
             for (int a = 0; a < 2; ++a)
                 for (int b = 0; b < 2; ++b)
                     for (int c = 0; c < 2; ++c) {
-                        const Source S = valueAt(lower.offsetBy(a, b, c));
+                        const Source S = at(lower.offsetBy(a, b, c));
                         for (int g = 0; g < int(BakedGrids::kCount); ++g) corners_[g][a][b][c] = sourceComponent(S, g);
                     }
             cell_ = lower, cached_ = true;
@@ -1307,13 +1335,14 @@ class BakedValuesSampler {
         return out;
     }
 
-  private:
-    Source valueAt(const openvdb::Coord &c) {
+    // The value at voxel c (what the grids hold there at the density's resolution).
+    Source at(const openvdb::Coord &c) {
         if (const std::int32_t i = index_.getValue(c); i >= 0 && traced_.getValue(c) < 0) return source_[i];
         const std::int32_t k = at_.getValue(c);
         return k >= 0 ? beyond_[k] : Source{};
     }
 
+  private:
     const SourceValues &source_;
     const LeafValues &beyond_;
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_, traced_, at_;
@@ -1321,6 +1350,34 @@ class BakedValuesSampler {
     openvdb::Coord cell_;  // the cell whose corners corners_ holds
     openvdb::Vec3f corners_[BakedGrids::kCount][2][2][2];
 };
+
+// The source grids at `scale` times the density's voxel size, one at a time. At the density's resolution each grid
+// is built and freed before the next is written; coarser, firn_source alone is built at the density's resolution
+// (which of its voxels hold a value: `lit`) and the others are coarsened from the values directly.
+BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
+                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
+    GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
+    if (scale == 1) values.at = nullptr;  // only the coarsening's readers (BakedValuesSampler) read it
+    BakedGrids out;
+    openvdb::BoolTree::Ptr lit;  // fine voxels with a value (firn_source nonzero)
+    for (int k = 0; k < int(BakedGrids::kCount); ++k) {
+        openvdb::Vec3fTree::Ptr tree;
+        if (scale == 1 || k == 0) tree = sourceTree(values, topo, source, traced, k);
+        if (scale > 1 && k == 0) {
+            lit = litVoxels(*tree);
+            tree = coarsenedSource(*tree, *lit, scene.medium->density().tree(), scale);
+        } else if (scale > 1) {
+            const auto newReader = [&, k] {
+                return [k, baked = std::make_shared<BakedValuesSampler>(topo, source, traced, values)](
+                           const openvdb::Coord &c) { return sourceComponent(baked->at(c), k); };
+            };
+            tree = coarsenedSource(*values.topology, newReader, *lit, scene.medium->density().tree(), scale);
+        }
+        out.source[k] = sourceGrid(std::move(tree), k, scale, scene.medium->density(),
+                                   scene.medium->optics().extinctionPerDensity, settings);
+    }
+    return out;
+}
 
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
 // of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch), read
@@ -1415,6 +1472,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                 const GridValues values = gridValues(scene, topo, source, traced, preset, settings, true);
                 fromSnow = snowIrradiance(scene, topo, light, source, traced, values, SkyRays(preset.skySamples),
                                           settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
+                if (preset.skyOverNeighbours) averageOverNeighbours(topo, fromSnow);
                 source = SourceValues();  // freed (= {} would keep its vectors' capacity)
             }
             releaseFreedMemory();  // the previous pass's values
@@ -1477,8 +1535,9 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     releaseFreedMemory();  // the topology's intermediate lists
     clock.lap(&BakeStats::Phases::topology);
     p.report(0.05, "Tracing sun and sky light");
-    IncidentLight light = computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed},
-                                               SubProgress(&p, 0.05, 0.4));
+    IncidentLight light =
+        computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
+                             SubProgress(&p, 0.05, 0.4));
     clock.lap(&BakeStats::Phases::light);
 
     local.unknowns = topo.size();

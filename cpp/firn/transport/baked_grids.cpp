@@ -37,8 +37,13 @@ openvdb::BoolTree::Ptr litVoxels(const openvdb::Vec3fTree &source) {
     return lit;
 }
 
-openvdb::Vec3fTree::Ptr coarsenedSource(const openvdb::Vec3fTree &fine, const openvdb::BoolTree &lit,
-                                        const openvdb::FloatTree &density, int factor) {
+namespace {
+
+// coarsenedSource over the active voxels of `fine` (any tree), reading their values through newReader() (one reader
+// per thread).
+template <typename FineTree, typename NewReader>
+openvdb::Vec3fTree::Ptr coarsened(const FineTree &fine, const NewReader &newReader, const openvdb::BoolTree &lit,
+                                  const openvdb::FloatTree &density, int factor) {
     if (factor < 2) throw InvalidArgument("source grids: coarsening factor must be at least 2");
     using Vec3Tree = openvdb::Vec3fTree;
     // The coarse voxels over the fine ones.
@@ -54,7 +59,7 @@ openvdb::Vec3fTree::Ptr coarsenedSource(const openvdb::Vec3fTree &fine, const op
     openvdb::tree::LeafManager<Vec3Tree> leaves(*tree);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(density);
-        openvdb::tree::ValueAccessor<const Vec3Tree> in(fine);
+        auto in = newReader();
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> isLit(lit);
         for (std::size_t l = range.begin(); l != range.end(); ++l)
             for (auto it = leaves.leaf(l).beginValueOn(); it; ++it) {
@@ -68,7 +73,7 @@ openvdb::Vec3fTree::Ptr coarsenedSource(const openvdb::Vec3fTree &fine, const op
                             const openvdb::Coord c(C.x() * factor + i, C.y() * factor + j, C.z() * factor + k);
                             const double w = rho.getValue(c);
                             if (w <= 0.0 && !isLit.getValue(c)) continue;  // no snow, no extended value: a ring voxel
-                            const openvdb::Vec3d v(in.getValue(c));
+                            const openvdb::Vec3d v(in(c));
                             weighted += w * v;
                             extended += v;
                             weight += std::max(w, 0.0);
@@ -80,6 +85,23 @@ openvdb::Vec3fTree::Ptr coarsenedSource(const openvdb::Vec3fTree &fine, const op
     });
     openvdb::tools::dilateActiveValues(*tree, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::EXPAND_TILES);
     return tree;
+}
+
+}  // namespace
+
+openvdb::Vec3fTree::Ptr coarsenedSource(const openvdb::Vec3fTree &fine, const openvdb::BoolTree &lit,
+                                        const openvdb::FloatTree &density, int factor) {
+    const auto newReader = [&] {
+        return [in = openvdb::tree::ValueAccessor<const openvdb::Vec3fTree>(fine)](const openvdb::Coord &c) mutable {
+            return in.getValue(c);
+        };
+    };
+    return coarsened(fine, newReader, lit, density, factor);
+}
+
+openvdb::Vec3fTree::Ptr coarsenedSource(const openvdb::BoolTree &fineTopology, const FineSourceReaders &newReader,
+                                        const openvdb::BoolTree &lit, const openvdb::FloatTree &density, int factor) {
+    return coarsened(fineTopology, newReader, lit, density, factor);
 }
 
 SourceGridsSampler::SourceGridsSampler(const Medium &medium, const BakedGrids &baked)

@@ -195,6 +195,26 @@ glm::dvec3 SkyRays::direction(const glm::dvec3 &normal, int k, std::uint64_t see
     return sampleCosineHemisphere(normal, (k / strata_ + rng.uniform()) / strata_, (k % strata_ + rng.uniform()) / strata_);
 }
 
+void averageOverNeighbours(const SnowTopology &topo, SurfaceValues<glm::vec3> &values) {
+    constexpr double kMinCosine = 0.9;
+    const std::vector<glm::vec3> own = values.values();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const SurfacePatch &patch = topo.patches[i];
+            if (!patch.isSurface() || patch.sharp) continue;
+            glm::dvec3 sum(0.0);
+            int count = 0;
+            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
+                const std::uint32_t j = topo.neighbourhood[k];
+                const SurfacePatch &other = topo.patches[j];
+                if (other.sharp || glm::dot(patch.normal, other.normal) < kMinCosine) continue;
+                sum += glm::dvec3(own[std::size_t((*topo.surfaceSlot)[j])]), ++count;
+            }
+            values.surface(i) = glm::vec3(sum / double(count));  // count >= 1: i itself
+        }
+    });
+}
+
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::size_t i) {
     const double h = medium.voxelSize();
     const double thin = kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h);
@@ -273,6 +293,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                 light.skyOnSurface.surface(i) = skyIrradianceAt(scene, outside(i), topo.patches[i].normal, rays, bounce,
                                                                 Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i));
     });
+    if (settings.skyOverNeighbours) averageOverNeighbours(topo, light.skyOnSurface);
     if (scene.sky.isBlack()) return light;
     parallelChunks(topo.faces.size(), progress, [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);

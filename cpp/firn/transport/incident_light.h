@@ -50,10 +50,16 @@ struct IncidentLightSettings {
     int skySamples = 16;  // rays per face, cosine-weighted, stratified
     int sunSamples = 4;   // points on each sun's disc or lamp per shadow test
     std::uint64_t seed = 0;
+    bool skyOverNeighbours = false;  // skyOnSurface averaged over like-facing neighbours (averageOverNeighbours)
 };
 
 IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topology,
                                    const IncidentLightSettings &settings, const SubProgress &progress);
+
+// Surface values (W/m^2 onto each patch) averaged over the smooth surface voxels of each smooth surface voxel's
+// 3^3 block whose normals lie within about 25 degrees of its own: neighbours see nearly the same sky, so a few
+// rays each (SkyRays, each voxel's own jitter) pool into a less noisy estimate. Sharp edges keep their own.
+void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3> &values);
 
 // Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe.
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i);
