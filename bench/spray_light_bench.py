@@ -34,7 +34,7 @@ SKY = firncore.Sky(radiance=(0.3, 0.35, 0.45))
 BLOCK = 4  # pixels
 
 
-def ski_spray(folder):
+def ski_spray(folder, settings):
     """(tracked snow, lumps) files of the spray's last frame."""
     snow = os.path.join(folder, "snow.vdb")
     if not os.path.exists(snow):
@@ -45,7 +45,7 @@ def ski_spray(folder):
     emitter = np.zeros((FRAMES, 3, 3))
     emitter[:, 0] = [[-0.6 + 5.0 * f / FPS, 0.0, 0.10] for f in range(FRAMES)]
     emitter[:, 1], emitter[:, 2] = [0.4, 0, 0], [0, 0.05, 0]
-    firncore.simulate_spray(snow, [emitter], folder, fps=FPS, first_frame=1, settings=firncore.SpraySettings(seed=5))
+    firncore.simulate_spray(snow, [emitter], folder, fps=FPS, first_frame=1, settings=settings)
     tracked = next(path for frame in range(FRAMES, 0, -1)  # the core writes the snow where tracks changed it
                    if os.path.exists(path := firncore.spray_frame_paths(folder, frame)[1]))
     return tracked, firncore.spray_frame_paths(folder, FRAMES)[0]
@@ -82,7 +82,8 @@ def timed(label, bake):
     stats = bake()
     cpu = sum(stats["cpu_seconds"].values())
     print(f"  {label:<28} {time.time() - start:6.1f} s wall, {cpu:6.1f} processor s, traced voxels "
-          f"{stats['traced_voxels']}, load {os.getloadavg()[0]:.1f}")
+          f"{stats['traced_voxels']} ({stats['light_traced_voxels']} light traced, {stats['photons']} photons), "
+          f"trace {stats['cpu_seconds']['trace']:.1f} processor s, load {os.getloadavg()[0]:.1f}")
 
 
 def monte_carlo(saved, medium, origins, directions, samples):
@@ -95,6 +96,38 @@ def monte_carlo(saved, medium, origins, directions, samples):
     return reference
 
 
+def dense(args, folder):
+    """The skier sample's lumps (blend_samples/skier.py: 1.2 cm lumps on 1 cm voxels, clouds of thousands of
+    voxels) over the snow's surface mesh: baked as before (thrown=False: clouds over 343 voxels take the diffusion's
+    light) and as thrown snow (light traced), against the core's Monte Carlo of the same scene (the lumps over that
+    mesh; the mesh standing for the snow was measured above)."""
+    tracked, spray = ski_spray(folder, firncore.SpraySettings(seed=5, lump_radius=0.012, voxel_size=0.01))
+    path = lambda name: os.path.join(folder, name)
+    voxels = firncore.grid_statistics(spray, "density")["active_voxels"]
+    print(f"frame {FRAMES}: lumps {spray}, {voxels} voxels")
+    voxel = firncore.grid_statistics(tracked, "surface")["voxel_size"]
+    surface = firncore.snow_surface_mesh(tracked, adaptivity=args.adaptivity, isovalue=-voxel)
+    occluders = [(*surface, OPTICS.white_sky_albedo)]
+    print("bakes (FINAL, seed 0), the lumps over the snow surface:")
+    for label, thrown in (("as before", False), ("thrown (light traced)", True)):
+        timed(label, lambda: firncore.bake(spray, OPTICS, suns=SUNS, sky=SKY, occluders=occluders, thrown=thrown,
+                                           output_path=path(f"lit_spray_{int(thrown)}.vdb")))
+    origins, directions, shape = view("side", args.pixels)
+    saved = path(f"reference_dense_side_{args.pixels}_{args.samples}.npy")
+    start = time.time()
+    if os.path.exists(saved):
+        reference = np.load(saved)
+    else:
+        reference, _error = firncore.monte_carlo_radiance(spray, OPTICS, origins, directions, suns=SUNS, sky=SKY,
+                                                          occluders=occluders, samples=args.samples, seed=1)
+        np.save(saved, reference)
+    print(f"side view, {shape[1]} x {shape[0]} pixels, reference {args.samples} paths per pixel "
+          f"({time.time() - start:.0f} s):")
+    for label, thrown in (("as before", False), ("thrown (light traced)", True)):
+        compare(label, firncore.render_baked(path(f"lit_spray_{int(thrown)}.vdb"), OPTICS, origins, directions),
+                reference, shape)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--samples", type=int, default=256, help="Monte Carlo paths per pixel")
@@ -102,10 +135,13 @@ def main():
     parser.add_argument("--adaptivity", type=float, default=0.5, help="of the snow surface the lumps see")
     parser.add_argument("--pixels", type=int, default=48, help="columns of a view (rows: half)")
     parser.add_argument("--folder", default=None, help="keep the files here (default: a temporary folder)")
+    parser.add_argument("--dense", action="store_true", help="the skier sample's lumps instead (see dense())")
     args = parser.parse_args()
     folder = args.folder or tempfile.mkdtemp(prefix="firn_spray_light_")
     os.makedirs(folder, exist_ok=True)
-    tracked, spray = ski_spray(folder)
+    if args.dense:
+        return dense(args, folder)
+    tracked, spray = ski_spray(folder, firncore.SpraySettings(seed=5))
     path = lambda name: os.path.join(folder, name)
     print(f"frame {FRAMES}: lumps {firncore.spray_frame_paths(folder, FRAMES)[0]}")
     print("bakes (FINAL, seed 0):")

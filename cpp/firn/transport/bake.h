@@ -27,6 +27,9 @@ struct BakeSettings {
     // of the voxels, which is what Cycles' memory follows (baked_grids.h: coarsenedSource). 0: the finest whose
     // dense box Cycles will allocate stays within kSourceBudgetBytes.
     int sourceScale = 0;
+    // The medium is thrown snow (a spray's lumps): every voxel is traced (bake.md Method 3), by light tracing
+    // where gathering per voxel costs too much, however large its clouds.
+    bool thrown = false;
 };
 
 // What Cycles (dense volume textures, no NanoVDB) may allocate for the six source grids: 16 bytes per voxel
@@ -36,6 +39,8 @@ constexpr double kSourceBudgetBytes = 512.0 * 1024 * 1024;
 struct BakeStats {
     std::size_t unknowns = 0, airFaces = 0, occluderFaces = 0, surfaceVoxels = 0;
     std::size_t tracedVoxels = 0;              // optically thin voxels lit by Monte Carlo instead of the solve
+    std::size_t lightTracedVoxels = 0;         // of which by light tracing (paths from the lights), with
+    long photons = 0;                          // these photons
     int passes = 0;                            // diffusion solves per channel (1 + snow-to-snow bounces)
     int sourceScale = 1;                       // the source grids' voxel size in density voxels
     std::array<int, 3> iterations{};          // per colour channel, all passes
