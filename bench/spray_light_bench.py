@@ -7,13 +7,13 @@ Carlo of lumps and snow as one medium (firncore.monte_carlo_radiance of firncore
 Henyey-Greenstein phase function, none of the bake's approximations).
 
 PYTHONPATH=build/python /usr/bin/python3 bench/spray_light_bench.py [--samples 256] [--above-samples 64]
-    [--pixels 48] [--adaptivity 0.5] [--folder DIR]
+    [--pixels 48] [--adaptivity 0.5] [--folder DIR] [--dense]
 Views (orthographic): "side", from -y over the spray above the snow (the lumps alone in view; 4 x 4-pixel blocks
 as /work/draft/spraybake/measure.py); "above", looking down on the snow beside and under the spray (the spray's
 shadow on the snow; the lumps and the snow in view). Rows besides Bake Sequence's: the lumps' part of the joint
 medium's bake (their paths enter the snow: the bake's budget leaves them untraced), the lumps baked alone (no
 snow under them: what the bake gave before) and the tracked snow baked alone (what Bake Sequence baked before).
-Bake times are processor seconds (stats["cpu_seconds"], all phases): compare those, as wall seconds vary with the
+--dense: the skier sample's lumps instead (1 cm voxels; dense()). Bake times are processor seconds (stats["cpu_seconds"], all phases): compare those, as wall seconds vary with the
 machine's load. The references are kept in the folder (same seeds: the same values) for the next run.
 """
 
@@ -97,10 +97,10 @@ def monte_carlo(saved, medium, origins, directions, samples):
 
 
 def dense(args, folder):
-    """The skier sample's lumps (blend_samples/skier.py: 1.2 cm lumps on 1 cm voxels, clouds of thousands of
-    voxels) over the snow's surface mesh: baked as before (thrown=False: clouds over 343 voxels take the diffusion's
-    light) and as thrown snow (light traced), against the core's Monte Carlo of the same scene (the lumps over that
-    mesh; the mesh standing for the snow was measured above)."""
+    """The skier sample's lumps (blend_samples/skier.py: 1.2 cm lumps on 1 cm voxels) over the snow's surface mesh,
+    baked as Bake Sequence bakes them, against the core's Monte Carlo of the same scene (the lumps over that mesh;
+    the mesh standing for the snow is measured by the default run), and a second reference of another seed: the
+    references' own noise per block."""
     tracked, spray = ski_spray(folder, firncore.SpraySettings(seed=5, lump_radius=0.012, voxel_size=0.01))
     path = lambda name: os.path.join(folder, name)
     voxels = firncore.grid_statistics(spray, "density")["active_voxels"]
@@ -108,24 +108,21 @@ def dense(args, folder):
     voxel = firncore.grid_statistics(tracked, "surface")["voxel_size"]
     surface = firncore.snow_surface_mesh(tracked, adaptivity=args.adaptivity, isovalue=-voxel)
     occluders = [(*surface, OPTICS.white_sky_albedo)]
-    print("bakes (FINAL, seed 0), the lumps over the snow surface:")
-    for label, thrown in (("as before", False), ("thrown (light traced)", True)):
-        timed(label, lambda: firncore.bake(spray, OPTICS, suns=SUNS, sky=SKY, occluders=occluders, thrown=thrown,
-                                           output_path=path(f"lit_spray_{int(thrown)}.vdb")))
+    print("bake (FINAL, seed 0):")
+    timed("lumps over the snow surface", lambda: firncore.bake(spray, OPTICS, suns=SUNS, sky=SKY, occluders=occluders,
+                                                                output_path=path("lit_spray.vdb")))
     origins, directions, shape = view("side", args.pixels)
-    saved = path(f"reference_dense_side_{args.pixels}_{args.samples}.npy")
-    start = time.time()
-    if os.path.exists(saved):
-        reference = np.load(saved)
-    else:
-        reference, _error = firncore.monte_carlo_radiance(spray, OPTICS, origins, directions, suns=SUNS, sky=SKY,
-                                                          occluders=occluders, samples=args.samples, seed=1)
-        np.save(saved, reference)
-    print(f"side view, {shape[1]} x {shape[0]} pixels, reference {args.samples} paths per pixel "
-          f"({time.time() - start:.0f} s):")
-    for label, thrown in (("as before", False), ("thrown (light traced)", True)):
-        compare(label, firncore.render_baked(path(f"lit_spray_{int(thrown)}.vdb"), OPTICS, origins, directions),
-                reference, shape)
+    references = []
+    for seed in (1, 2):
+        saved = path(f"reference_dense_side_{args.pixels}_{args.samples}" + ("" if seed == 1 else f"_{seed}") + ".npy")
+        if not os.path.exists(saved):
+            np.save(saved, firncore.monte_carlo_radiance(spray, OPTICS, origins, directions, suns=SUNS, sky=SKY,
+                                                         occluders=occluders, samples=args.samples, seed=seed)[0])
+        references.append(np.load(saved))
+    print(f"side view, {shape[1]} x {shape[0]} pixels, reference {args.samples} paths per pixel:")
+    compare("lumps over the snow surface", firncore.render_baked(path("lit_spray.vdb"), OPTICS, origins, directions),
+            references[0], shape)
+    compare("reference of seed 2", references[1], references[0], shape)
 
 
 def main():

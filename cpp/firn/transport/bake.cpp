@@ -208,8 +208,7 @@ bool smallPiece(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb:
     return small;
 }
 
-// With `all` (thrown snow: BakeSettings::thrown), every voxel of snow.
-std::vector<openvdb::Coord> thinVoxels(const Medium &medium, bool all) {
+std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
     const VolumeOptics &optics = medium.optics();
     const double h = medium.voxelSize(), k = optics.extinctionPerDensity;
     const double leastReduced = 1.0 - std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z}) * optics.g;
@@ -220,10 +219,6 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium, bool all) {
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> done(pieces);
     for (auto it = medium.density().cbeginValueOn(); it; ++it) {
         if (!(*it > 0.0f)) continue;
-        if (all) {
-            out.push_back(it.getCoord());
-            continue;
-        }
         const std::int32_t mark = done.getValue(it.getCoord());
         if (mark == 1 || (mark == 0 && smallPiece(density, done, it.getCoord(), kSmallPieceVoxels))) {
             out.push_back(it.getCoord());
@@ -260,7 +255,6 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
     if (voxels.empty()) return 0;
     const MonteCarloReference reference(scene);
-    const double kMaxTracedSteps = firn::kMaxTracedSteps * (getenv("LT_GATHER") ? atof(getenv("LT_GATHER")) : 1.0);
     const double budget = kMaxTracedSteps / (double(voxels.size()) * kMinSamples);  // per path, at the least
     double steps = 0.0;
     int paths = 0;
@@ -382,7 +376,7 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
                                    const SubProgress &progress, BakeStats &stats) {
     const MonteCarloReference reference(scene);
-    const LightTracingPlan plan = planLightTracing(reference, voxels, kMaxTracedSteps * (getenv("LT_SCALE") ? atof(getenv("LT_SCALE")) : 1.0), seed);
+    const LightTracingPlan plan = planLightTracing(reference, voxels, kMaxTracedSteps, seed);
     if (plan.photons == 0) return MonteCarloVoxels{};
     const std::vector<SourceEstimate> estimates = lightTracedSources(reference, voxels, plan, seed, progress);
     stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size();
@@ -1504,7 +1498,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     const int passes = local.passes = hidden ? 1 + preset.snowBounces : 1;
 
     p.report(0.4, "Tracing thin snow");
-    const std::vector<openvdb::Coord> thin = thinVoxels(*scene.medium, settings.thrown);
+    const std::vector<openvdb::Coord> thin = thinVoxels(*scene.medium);
     const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
     const MonteCarloVoxels traced =
         samples > 0 || thin.empty()

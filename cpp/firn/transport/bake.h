@@ -27,9 +27,6 @@ struct BakeSettings {
     // of the voxels, which is what Cycles' memory follows (baked_grids.h: coarsenedSource). 0: the finest whose
     // dense box Cycles will allocate stays within kSourceBudgetBytes.
     int sourceScale = 0;
-    // The medium is thrown snow (a spray's lumps): every voxel is traced (bake.md Method 3), by light tracing
-    // where gathering per voxel costs too much, however large its clouds.
-    bool thrown = false;
 };
 
 // What Cycles (dense volume textures, no NanoVDB) may allocate for the six source grids: 16 bytes per voxel

@@ -147,12 +147,8 @@ ChunkSums traceChunk(const MonteCarloReference &reference, const BoxEmitter &emi
     };
     for (long i = first; i < last; ++i) {
         Rng rng(seed, std::uint64_t(i));
-        long before = steps;
         const Photon photon = emitter.emit(rng, steps);
-        if (getenv("LT_DEBUG") && index.empty()) fprintf(stderr, "emit %ld ", steps - before);
-        before = steps;
         if (photon.power != Rgb(0.0)) steps += reference.follow(photon, rng, tally);
-        if (getenv("LT_DEBUG") && index.empty()) fprintf(stderr, "follow %ld %d\n", steps - before, int(photon.straightFromLight));
     }
     ChunkSums out(sums.begin(), sums.end());
     std::sort(out.begin(), out.end(), [](const auto &a, const auto &b) { return a.first < b.first; });
@@ -194,7 +190,6 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
     traceChunk(reference, BoxEmitter(reference), none, 0, kPilotPhotons, seed, steps);
     const double perPhoton = double(steps) / kPilotPhotons + kStepsPerPhoton;
     plan.photons = long(std::min(double(kMaxPhotons), std::max(photonSteps, 0.0) / perPhoton));
-    if (getenv("LT_DEBUG")) fprintf(stderr, "LT perBeamSample %g beamSamples %d perPhoton %g photons %ld\n", perBeamSample, plan.beamSamples, perPhoton, plan.photons);
     if (plan.photons < kMinPhotons) plan = LightTracingPlan{};
     return plan;
 }

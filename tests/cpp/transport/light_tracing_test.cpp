@@ -1,5 +1,5 @@
 // Light tracing (light_tracing.h) against the per-voxel brute force it stands in for (MonteCarloReference::sourceIn),
-// its determinism across thread counts, and the bake's use of it for thrown snow.
+// and its determinism across thread counts.
 #include <cmath>
 #include <cstdio>
 
@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "firn/transport/bake.h"
 #include "firn/transport/light_tracing.h"
 #include "firn/util/openvdb_library.h"
 #include "firn/util/random.h"
@@ -49,9 +48,9 @@ double grey(const Rgb &c) { return (c.x + c.y + c.z) / 3.0; }
 }  // namespace
 
 // Each voxel's scattered light (all but the beams' single scattering, which both take from sourceIn's beams) as
-// the per-voxel brute force gathers it. Oracle: sourceIn with 8192 points per voxel (relative standard error
-// about 2 % here); light tracing's noise per voxel at 400,000 photons about 4 % (measured over 8 seeds): the bound
-// is some 3 standard errors of the difference.
+// the per-voxel brute force gathers it. Oracle: sourceIn with 8192 points per voxel; the six voxels differed by
+// -7.5 to +8.3 % (RMS 5 %: both estimates' noise; summed over half the cloud's voxels, with 256 points each and
+// 10^6 photons, +0.2 % under the sky alone, +2.5 % under the sun alone): the bound is some 3 standard errors.
 TEST(LightTracing, MatchesPerVoxelGathering) {
     const Scene scene = cloudScene();
     const MonteCarloReference reference(scene);
@@ -67,7 +66,6 @@ TEST(LightTracing, MatchesPerVoxelGathering) {
         std::printf("voxel (%d %d %d): scattered l0 %.5f traced, %.5f gathered; beams %.5f, %.5f\n", voxels[v].x(),
                     voxels[v].y(), voxels[v].z(), got, expected, grey(traced[v].beamL0), grey(gathered.beamL0));
         EXPECT_NEAR(got, expected, 0.15 * expected) << "voxel " << v;
-        EXPECT_NEAR(grey(traced[v].beamL0), grey(gathered.beamL0), 0.1 * grey(gathered.beamL0)) << "voxel " << v;
     }
 }
 
@@ -88,24 +86,6 @@ TEST(LightTracing, SameOnOneAndTwoThreads) {
         EXPECT_EQ(one[v].l1, two[v].l1) << "voxel " << v;
         EXPECT_EQ(one[v].third[2], two[v].third[2]) << "voxel " << v;
     }
-}
-
-// Thrown snow: the bake traces every voxel of a cloud larger than a small piece, by light tracing when
-// gathering per voxel would cost more than its budget (lumps of 20 optical depths per voxel); without
-// `thrown`, such a cloud is the diffusion's.
-TEST(LightTracing, BakeLightTracesThrownClouds) {
-    Scene scene = cloudScene();
-    scene.medium = std::make_shared<Medium>(cloud(), VolumeOptics{200.0, Rgb(0.9999), 0.89});
-    BakeSettings settings;
-    BakeStats stats;
-    bakeScattering(scene, settings, nullptr, &stats);
-    EXPECT_EQ(stats.tracedVoxels, 0u);
-    settings.thrown = true;
-    bakeScattering(scene, settings, nullptr, &stats);
-    const std::size_t voxels = scene.medium->density().activeVoxelCount();
-    EXPECT_EQ(stats.tracedVoxels, voxels);
-    EXPECT_EQ(stats.lightTracedVoxels, voxels);
-    EXPECT_GT(stats.photons, 0);
 }
 
 }  // namespace firn
