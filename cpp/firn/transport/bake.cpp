@@ -372,7 +372,7 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 
 // The voxels whose gathering costs more than the budget (tracedSamples: 0), by light tracing within it
 // (light_tracing.h); none where even that costs too much (a cloud of lumps inside thick snow: photons
-// scatter thousands of times there), or with lamps (their emission is not sampled).
+// scatter thousands of times there), or with lamps (their emission is not sampled) or occluders (planLightTracing).
 MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
                                    const SubProgress &progress, BakeStats &stats) {
     const MonteCarloReference reference(scene);

@@ -189,8 +189,11 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinBeamSamples = 4, kMaxBeamSamples = 64;
     constexpr double kBeamShare = 0.25;      // of the budget, for the beams' points at most
     constexpr double kStepsPerPhoton = 20.0;  // its start and its sums, in tracking steps
+    // Not with occluders: lumps over a snow surface mesh came out bright (tests/blender/test_snow_spray.py's lumps
+    // +32 %, +21 % at 8 times the budget, where gathering or the diffusion are within 5 %; the --dense lumps +6.8 %
+    // against the diffusion's -2.2 %), the cause not found.
     LightTracingPlan plan;
-    if (voxels.empty() || !reference.scene().lamps.empty()) return plan;
+    if (voxels.empty() || !reference.scene().lamps.empty() || !reference.scene().occluders->empty()) return plan;
     double beamSteps = 0.0;
     for (int k = 0; k < kPilotVoxels; ++k) {
         const std::size_t v = voxels.size() * k / kPilotVoxels;

@@ -23,7 +23,7 @@ namespace firn {
 // collision: that single scattering is each voxel's sourceIn beams (noise-free peaked lobe). Photon i draws
 // from its own stream and the sums are reduced in fixed chunks in order: the same grids on any thread count.
 struct LightTracingPlan {
-    long photons = 0;     // 0: too costly (or lamps: their emission is not sampled); leave the voxels to others
+    long photons = 0;     // 0: too costly, or lamps or occluders in the scene (planLightTracing): leave the voxels to others
     int beamSamples = 0;  // points per voxel for the direct beams
 };
 
