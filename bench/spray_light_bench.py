@@ -7,13 +7,13 @@ Carlo of lumps and snow as one medium (firncore.monte_carlo_radiance of firncore
 Henyey-Greenstein phase function, none of the bake's approximations).
 
 PYTHONPATH=build/python /usr/bin/python3 bench/spray_light_bench.py [--samples 256] [--above-samples 64]
-    [--pixels 48] [--adaptivity 0.5] [--folder DIR]
+    [--pixels 48] [--adaptivity 0.5] [--folder DIR] [--dense]
 Views (orthographic): "side", from -y over the spray above the snow (the lumps alone in view; 4 x 4-pixel blocks
 as /work/draft/spraybake/measure.py); "above", looking down on the snow beside and under the spray (the spray's
 shadow on the snow; the lumps and the snow in view). Rows besides Bake Sequence's: the lumps' part of the joint
 medium's bake (their paths enter the snow: the bake's budget leaves them untraced), the lumps baked alone (no
 snow under them: what the bake gave before) and the tracked snow baked alone (what Bake Sequence baked before).
-Bake times are processor seconds (stats["cpu_seconds"], all phases): compare those, as wall seconds vary with the
+--dense: the skier sample's lumps instead (1 cm voxels; dense()). Bake times are processor seconds (stats["cpu_seconds"], all phases): compare those, as wall seconds vary with the
 machine's load. The references are kept in the folder (same seeds: the same values) for the next run.
 """
 
@@ -34,7 +34,7 @@ SKY = firncore.Sky(radiance=(0.3, 0.35, 0.45))
 BLOCK = 4  # pixels
 
 
-def ski_spray(folder):
+def ski_spray(folder, settings):
     """(tracked snow, lumps) files of the spray's last frame."""
     snow = os.path.join(folder, "snow.vdb")
     if not os.path.exists(snow):
@@ -45,7 +45,7 @@ def ski_spray(folder):
     emitter = np.zeros((FRAMES, 3, 3))
     emitter[:, 0] = [[-0.6 + 5.0 * f / FPS, 0.0, 0.10] for f in range(FRAMES)]
     emitter[:, 1], emitter[:, 2] = [0.4, 0, 0], [0, 0.05, 0]
-    firncore.simulate_spray(snow, [emitter], folder, fps=FPS, first_frame=1, settings=firncore.SpraySettings(seed=5))
+    firncore.simulate_spray(snow, [emitter], folder, fps=FPS, first_frame=1, settings=settings)
     tracked = next(path for frame in range(FRAMES, 0, -1)  # the core writes the snow where tracks changed it
                    if os.path.exists(path := firncore.spray_frame_paths(folder, frame)[1]))
     return tracked, firncore.spray_frame_paths(folder, FRAMES)[0]
@@ -82,7 +82,8 @@ def timed(label, bake):
     stats = bake()
     cpu = sum(stats["cpu_seconds"].values())
     print(f"  {label:<28} {time.time() - start:6.1f} s wall, {cpu:6.1f} processor s, traced voxels "
-          f"{stats['traced_voxels']}, load {os.getloadavg()[0]:.1f}")
+          f"{stats['traced_voxels']} ({stats['light_traced_voxels']} light traced, {stats['photons']} photons), "
+          f"trace {stats['cpu_seconds']['trace']:.1f} processor s, load {os.getloadavg()[0]:.1f}")
 
 
 def monte_carlo(saved, medium, origins, directions, samples):
@@ -95,6 +96,35 @@ def monte_carlo(saved, medium, origins, directions, samples):
     return reference
 
 
+def dense(args, folder):
+    """The skier sample's lumps (blend_samples/skier.py: 1.2 cm lumps on 1 cm voxels) over the snow's surface mesh,
+    baked as Bake Sequence bakes them, against the core's Monte Carlo of the same scene (the lumps over that mesh;
+    the mesh standing for the snow is measured by the default run), and a second reference of another seed: the
+    references' own noise per block."""
+    tracked, spray = ski_spray(folder, firncore.SpraySettings(seed=5, lump_radius=0.012, voxel_size=0.01))
+    path = lambda name: os.path.join(folder, name)
+    voxels = firncore.grid_statistics(spray, "density")["active_voxels"]
+    print(f"frame {FRAMES}: lumps {spray}, {voxels} voxels")
+    voxel = firncore.grid_statistics(tracked, "surface")["voxel_size"]
+    surface = firncore.snow_surface_mesh(tracked, adaptivity=args.adaptivity, isovalue=-voxel)
+    occluders = [(*surface, OPTICS.white_sky_albedo)]
+    print("bake (FINAL, seed 0):")
+    timed("lumps over the snow surface", lambda: firncore.bake(spray, OPTICS, suns=SUNS, sky=SKY, occluders=occluders,
+                                                                output_path=path("lit_spray.vdb")))
+    origins, directions, shape = view("side", args.pixels)
+    references = []
+    for seed in (1, 2):
+        saved = path(f"reference_dense_side_{args.pixels}_{args.samples}" + ("" if seed == 1 else f"_{seed}") + ".npy")
+        if not os.path.exists(saved):
+            np.save(saved, firncore.monte_carlo_radiance(spray, OPTICS, origins, directions, suns=SUNS, sky=SKY,
+                                                         occluders=occluders, samples=args.samples, seed=seed)[0])
+        references.append(np.load(saved))
+    print(f"side view, {shape[1]} x {shape[0]} pixels, reference {args.samples} paths per pixel:")
+    compare("lumps over the snow surface", firncore.render_baked(path("lit_spray.vdb"), OPTICS, origins, directions),
+            references[0], shape)
+    compare("reference of seed 2", references[1], references[0], shape)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--samples", type=int, default=256, help="Monte Carlo paths per pixel")
@@ -102,10 +132,13 @@ def main():
     parser.add_argument("--adaptivity", type=float, default=0.5, help="of the snow surface the lumps see")
     parser.add_argument("--pixels", type=int, default=48, help="columns of a view (rows: half)")
     parser.add_argument("--folder", default=None, help="keep the files here (default: a temporary folder)")
+    parser.add_argument("--dense", action="store_true", help="the skier sample's lumps instead (see dense())")
     args = parser.parse_args()
     folder = args.folder or tempfile.mkdtemp(prefix="firn_spray_light_")
     os.makedirs(folder, exist_ok=True)
-    tracked, spray = ski_spray(folder)
+    if args.dense:
+        return dense(args, folder)
+    tracked, spray = ski_spray(folder, firncore.SpraySettings(seed=5))
     path = lambda name: os.path.join(folder, name)
     print(f"frame {FRAMES}: lumps {firncore.spray_frame_paths(folder, FRAMES)[0]}")
     print("bakes (FINAL, seed 0):")

@@ -315,6 +315,8 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["unknowns"] = stats.unknowns;
     d["surface_voxels"] = stats.surfaceVoxels;
     d["traced_voxels"] = stats.tracedVoxels;
+    d["light_traced_voxels"] = stats.lightTracedVoxels;
+    d["photons"] = stats.photons;
     d["air_faces"] = stats.airFaces;
     d["occluder_faces"] = stats.occluderFaces;
     d["iterations"] = stats.iterations;

@@ -26,6 +26,7 @@
 #include "firn/transport/edge_lobe.h"
 #include "firn/transport/half_space.h"
 #include "firn/transport/incident_light.h"
+#include "firn/transport/light_tracing.h"
 #include "firn/transport/monte_carlo.h"
 #include "firn/transport/multigrid.h"
 #include "firn/transport/snow_topology.h"
@@ -346,23 +347,43 @@ Source tracedSource(const SourceEstimate &S, double g) {
     return out;
 }
 
-// The source function of the given voxels by brute force (MonteCarloReference::sourceIn), `samples` each.
-MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
-                              std::uint64_t seed, const SubProgress &progress) {
+// The traced voxels' sources from their estimates (`estimate(v)`: voxel v's, called in parallel).
+template <class Estimate>
+MonteCarloVoxels tracedVoxels(const Scene &scene, const std::vector<openvdb::Coord> &voxels, const Estimate &estimate,
+                              const SubProgress &progress) {
     MonteCarloVoxels out;
     out.source.resize(voxels.size());
-    const MonteCarloReference reference(scene);
     std::atomic<std::size_t> done{0};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4), [&](const auto &range) {
         progress.throwIfCancelled();
-        for (std::size_t v = range.begin(); v != range.end(); ++v) {
-            out.source[v] = tracedSource(reference.sourceIn(voxels[v], samples, seed, v), scene.medium->optics().g);
-        }
+        for (std::size_t v = range.begin(); v != range.end(); ++v)
+            out.source[v] = tracedSource(estimate(v), scene.medium->optics().g);
         progress.report(double(done += range.size()) / voxels.size());
     });
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> index(*out.index);
     for (std::size_t v = 0; v < voxels.size(); ++v) index.setValue(voxels[v], std::int32_t(v));
     return out;
+}
+
+// The source function of the given voxels by brute force (MonteCarloReference::sourceIn), `samples` each.
+MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
+                              std::uint64_t seed, const SubProgress &progress) {
+    const MonteCarloReference reference(scene);
+    return tracedVoxels(scene, voxels, [&](std::size_t v) { return reference.sourceIn(voxels[v], samples, seed, v); },
+                        progress);
+}
+
+// The voxels whose gathering costs more than the budget (tracedSamples: 0), by light tracing within it
+// (light_tracing.h); none where even that costs too much (a cloud of lumps inside thick snow: photons
+// scatter thousands of times there), or with lamps (their emission is not sampled) or occluders (planLightTracing).
+MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
+                                   const SubProgress &progress, BakeStats &stats) {
+    const MonteCarloReference reference(scene);
+    const LightTracingPlan plan = planLightTracing(reference, voxels, kMaxTracedSteps, seed);
+    if (plan.photons == 0) return MonteCarloVoxels{};
+    const std::vector<SourceEstimate> estimates = lightTracedSources(reference, voxels, plan, seed, progress);
+    stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size();
+    return tracedVoxels(scene, voxels, [&](std::size_t v) { return estimates[v]; }, progress);
 }
 
 // The diffusion system of one channel plus what the surface needs afterwards.
@@ -1551,8 +1572,9 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     const std::vector<openvdb::Coord> thin = thinVoxels(*scene.medium);
     const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
     const MonteCarloVoxels traced =
-        traceSources(scene, samples > 0 ? thin : std::vector<openvdb::Coord>{}, samples, settings.seed ^ 0x7EACEull,
-                     SubProgress(&p, 0.4, 0.4));
+        samples > 0 || thin.empty()
+            ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, SubProgress(&p, 0.4, 0.4))
+            : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, SubProgress(&p, 0.4, 0.4), local);
     local.tracedVoxels = traced.source.size();
     clock.lap(&BakeStats::Phases::trace);
     const SourceValues source = solveSources(scene, topo, light, traced, preset, settings, passes, p, clock, local);

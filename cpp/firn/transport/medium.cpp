@@ -138,6 +138,12 @@ int Medium::clearBlockEdge(const openvdb::Coord &cell) const {
     return 0;
 }
 
+int Medium::emptyBlockEdge(const openvdb::Coord &cell, SupportAccessor &support) const {
+    if (const int edge = clearBlockEdge(cell)) return edge;
+    const openvdb::BoolTree::LeafNodeType *leaf = support.probeConstLeaf(cell);
+    return leaf ? firn::emptyBlockEdge(leaf->getValueMask(), cell) : int(openvdb::BoolTree::LeafNodeType::DIM);
+}
+
 Medium::~Medium() = default;
 
 bool Medium::clipToBounds(const glm::dvec3 &origin, const glm::dvec3 &direction, double &t0, double &t1) const {
@@ -221,7 +227,7 @@ int Medium::ColumnMarcher::lastEmptySample(const openvdb::math::Ray<double> &ray
                                            int i, int steps) {
     const openvdb::Coord cell = floorCoord(p);
     const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell);
-    const int edge = leaf ? emptyBlockEdge(leaf->getValueMask(), cell) : int(openvdb::BoolTree::LeafNodeType::DIM);
+    const int edge = leaf ? firn::emptyBlockEdge(leaf->getValueMask(), cell) : int(openvdb::BoolTree::LeafNodeType::DIM);
     if (edge == 0) return i - 1;
     if (edge == 1) return i;
     // The samples before the ray leaves the block (a little early, never late: rounding).

@@ -62,6 +62,11 @@ class Medium {
     // Edge (cells) of the largest aligned block of 64^3, 32^3 or 16^3 cells that holds `cell` and no cell that may
     // hold snow; 0 if the 16^3 block holds one.
     int clearBlockEdge(const openvdb::Coord &cell) const;
+    // Edge (cells) of the largest aligned block (64^3 down to the cell itself) that holds `cell` and no cell that
+    // may hold snow; 0 if `cell` may hold snow.
+    using SupportAccessor = openvdb::tree::ValueAccessor<const openvdb::BoolTree>;
+    SupportAccessor supportAccessor() const { return SupportAccessor(*support_); }
+    int emptyBlockEdge(const openvdb::Coord &cell, SupportAccessor &support) const;
 
     // Integrates the density along rays (kg/m^2), skipping cells and blocks without snow. One per thread
     // (cheap copies).

@@ -24,27 +24,6 @@ constexpr long kMaxEvents = 10'000'000;   // a safety net only; paths end by esc
 
 double maxComponent(const Rgb &c) { return std::max({c.x, c.y, c.z}); }
 
-// Light arriving at the points of a voxel, summed: fluence (W/m^2) and flux (column c: channel c's vector, W/m^2
-// along the direction light travels), scattered light and the lights' direct beams apart, and the second and
-// third moments of the directions t light travels, weighted by what the snow scatters of it (albedo, grey).
-struct ArrivingLight {
-    Rgb phi{0.0}, phiBeam{0.0};
-    glm::dmat3 flux{0.0}, fluxBeam{0.0};
-    glm::dmat3 second{0.0};            // sum of mean(albedo phi) t t^T
-    std::array<glm::dmat3, 3> third{};  // sum of mean(albedo phi) t_i t t^T
-
-    // Light of `fluence` travelling along `travel`: a direct beam's, or scattered light's.
-    void add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const Rgb &albedo) {
-        (beam ? phiBeam : phi) += fluence;
-        glm::dmat3 &toFlux = beam ? fluxBeam : flux;
-        for (int c = 0; c < 3; ++c) toFlux[c] += fluence[c] * travel;
-        const double grey = glm::dot(albedo, fluence) / 3.0;
-        const glm::dmat3 tt = grey * glm::outerProduct(travel, travel);
-        second += tt;
-        for (int i = 0; i < 3; ++i) third[i] += travel[i] * tt;
-    }
-};
-
 // Points of [0, 1)^5 (a voxel's position and a direction) from the R5 Kronecker sequence, n alpha mod 1 with
 // alpha_i = phi^-i, phi the root of x^6 = x + 1 (Roberts 2018), shifted at random (Cranley-Patterson): every
 // projection stratified, seeded. Against independent draws (bench/bake_suite.py --seeds, mean error per block and
@@ -68,10 +47,13 @@ class KroneckerSequence {
 // One path tracer per thread: holds a density accessor.
 class PathTracer {
   public:
-    explicit PathTracer(const Scene &scene)
-        : scene_(scene),
+    // With `skipEmpty`, tracking jumps over blocks without snow (sampleCollision): the same estimates, other draws.
+    explicit PathTracer(const Scene &scene, bool skipEmpty = false)
+        : skipEmpty_(skipEmpty),
+          scene_(scene),
           medium_(*scene.medium),
           accessor_(medium_.accessor()),
+          support_(medium_.supportAccessor()),
           k_(medium_.optics().extinctionPerDensity),
           sigmaBar_(std::max(medium_.maxSigmaT(), 1e-12)) {}
 
@@ -124,14 +106,53 @@ class PathTracer {
     // All light arriving at p, one sample: radiance from one direction drawn uniformly over the sphere (all
     // orders, scattered light only) and each light's direct beam, added with weight w. (u1, u2) draw the
     // direction.
-    void sampleArriving(const glm::dvec3 &p, double w, double u1, double u2, Rng &rng, ArrivingLight &sum) {
-        const glm::dvec3 d = sampleUniformCone(glm::dvec3(0.0, 0.0, 1.0), -1.0, u1, u2);
-        const Rgb L = 4.0 * kPi * sample(Ray{p, d}, rng, true);
-        sum.add(w * L, -d, false, medium_.optics().albedo);
+    // Without `scattered`, the direct beams only.
+    void sampleArriving(const glm::dvec3 &p, double w, double u1, double u2, Rng &rng, ArrivingLight &sum, bool scattered) {
+        if (scattered) {
+            const glm::dvec3 d = sampleUniformCone(glm::dvec3(0.0, 0.0, 1.0), -1.0, u1, u2);
+            const Rgb L = 4.0 * kPi * sample(Ray{p, d}, rng, true);
+            sum.add(w * L, -d, false, medium_.optics().albedo);
+        }
         for (std::size_t b = 0; b < lightCount(); ++b) {
             glm::dvec3 towards;
             const Rgb E = lightIrradiance(b, p, 0.0, towards, rng);
             if (E != Rgb(0.0)) sum.add(w * E, -towards, true, medium_.optics().albedo);
+        }
+    }
+
+    // Light tracing: the photon forwards until it leaves the medium's bounds (what lies beyond reaches them again
+    // only as the light arriving there, which the caller's photons carry) or roulette ends it.
+    void follow(const Photon &photon, Rng &rng, const CollisionTally &tally) {
+        glm::dvec3 p = photon.ray.origin, d = photon.ray.direction;
+        Rgb throughput(1.0);
+        bool straight = photon.straightFromLight;
+        for (long event = 0; event < kMaxEvents; ++event) {
+            double t0, t1;
+            if (!medium_.clipToBounds(p, d, t0, t1)) return;
+            const double tCollision = sampleCollision(p, d, kInfinity, rng);
+            const float tNear = event == 0 ? 0.0f : float(kSurfaceEpsilon);
+            const std::optional<RayCaster::Hit> hit = scene_.occluders->caster().intersect(
+                glm::vec3(p), glm::vec3(d), tNear, float(std::min(tCollision, t1)));
+            if (hit) {
+                p += double(hit->distance) * d;
+                const glm::dvec3 n = glm::dot(glm::dvec3(hit->normal), d) < 0.0 ? glm::dvec3(hit->normal)
+                                                                                  : -glm::dvec3(hit->normal);
+                throughput *= scene_.occluders->albedo(hit->triangle);
+                d = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
+            } else if (tCollision < kInfinity) {
+                p += tCollision * d;
+                if (!straight) tally(p, d, photon.power * throughput);
+                throughput *= medium_.optics().albedo;
+                d = sampleHenyeyGreenstein(d, medium_.optics().g, rng.uniform(), rng.uniform());
+            } else {
+                return;
+            }
+            straight = false;
+            const double q = maxComponent(throughput);
+            if (q < 0.25) {
+                if (rng.uniform() >= q) return;
+                throughput /= q;
+            }
         }
     }
 
@@ -141,7 +162,9 @@ class PathTracer {
 
   private:
 
-    // Delta tracking: distance to the first real collision before tEnd, or infinity.
+    // Delta tracking: distance to the first real collision before tEnd, or infinity. With `skipEmpty`, a
+    // tentative collision in a block without snow jumps to where the ray leaves the block (none of the block's
+    // tentative collisions could be real, and free flights are memoryless: the same distribution).
     double sampleCollision(const glm::dvec3 &p, const glm::dvec3 &d, double tEnd, Rng &rng) {
         double t0, t1;
         if (!medium_.clipToBounds(p, d, t0, t1)) return kInfinity;
@@ -150,8 +173,30 @@ class PathTracer {
             ++steps;
             t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
             if (t >= t1) return kInfinity;
+            if (skipEmpty_) {
+                if (const double exit = emptyBlockExit(p, d, t); exit > t) {
+                    t = exit;
+                    continue;
+                }
+            }
             if (rng.uniform() * sigmaBar_ < sigmaT(p + t * d)) return t;
         }
+    }
+
+    // Where the ray p + t d leaves the empty aligned block (Medium::clearBlockEdge) that holds p + t d, or t if that
+    // point's block holds snow.
+    double emptyBlockExit(const glm::dvec3 &p, const glm::dvec3 &d, double t) {
+        const glm::dvec3 ijk = medium_.worldToIndex(p + t * d);
+        const openvdb::Coord cell(int(std::floor(ijk.x)), int(std::floor(ijk.y)), int(std::floor(ijk.z)));
+        const int edge = medium_.emptyBlockEdge(cell, support_);
+        if (edge == 0) return t;
+        double exit = kInfinity;
+        for (int a = 0; a < 3; ++a) {
+            const double low = double(cell[a] & ~(edge - 1));  // blocks are aligned to their edge
+            if (d[a] > 0.0) exit = std::min(exit, (low + edge - ijk[a]) / d[a]);
+            else if (d[a] < 0.0) exit = std::min(exit, (low - ijk[a]) / d[a]);
+        }
+        return t + exit * medium_.voxelSize() + 1e-9;
     }
 
     // Ratio tracking with Russian roulette: unbiased transmittance of the medium from p along d, up to tEnd.
@@ -164,6 +209,12 @@ class PathTracer {
             ++steps;
             t -= std::log(1.0 - rng.uniform()) / sigmaBar_;
             if (t >= t1) return T;
+            if (skipEmpty_) {
+                if (const double exit = emptyBlockExit(p, d, t); exit > t) {
+                    t = exit;
+                    continue;
+                }
+            }
             T *= 1.0 - sigmaT(p + t * d) / sigmaBar_;
             if (T < 0.1) {
                 if (rng.uniform() >= T * 10.0) return 0.0;
@@ -216,9 +267,11 @@ class PathTracer {
         return sum;
     }
 
+    bool skipEmpty_;
     const Scene &scene_;
     const Medium &medium_;
     Medium::Accessor accessor_;
+    Medium::SupportAccessor support_;
     double k_, sigmaBar_;
 };
 
@@ -244,9 +297,22 @@ RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std:
     return out;
 }
 
+long MonteCarloReference::follow(const Photon &photon, Rng &rng, const CollisionTally &tally) const {
+    PathTracer tracer(scene_, true);
+    tracer.follow(photon, rng, tally);
+    return tracer.steps;
+}
+
+Rgb MonteCarloReference::radianceArriving(const Ray &ray, Rng &rng, long &steps) const {
+    PathTracer tracer(scene_, true);
+    const Rgb L = tracer.sample(ray, rng, true);
+    steps += tracer.steps;
+    return L;
+}
+
 SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
-                                             std::uint64_t stream) const {
-    PathTracer tracer(scene_);
+                                             std::uint64_t stream, bool scattered) const {
+    PathTracer tracer(scene_, !scattered);  // the per-voxel gathering's draws as they were (bench/bake_suite.py)
     Rng rng(seed, stream);
     const Medium &medium = *scene_.medium;
     const glm::dvec3 centre = medium.voxelCentre(voxel);
@@ -260,13 +326,17 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
         const glm::dvec3 p = centre + medium.voxelSize() * (glm::dvec3(u[0], u[1], u[2]) - 0.5);
         const double w = tracer.sigmaT(p);
         if (w <= 0.0) continue;
-        tracer.sampleArriving(p, w, u[3], u[4], rng, sum);
+        tracer.sampleArriving(p, w, u[3], u[4], rng, sum, scattered);
         weights += w;
     }
-    SourceEstimate out;
+    SourceEstimate out = sourceOf(sum, weights, medium.optics());
     out.steps = tracer.steps;
+    return out;
+}
+
+SourceEstimate sourceOf(const ArrivingLight &sum, double weights, const VolumeOptics &optics) {
+    SourceEstimate out;
     if (weights <= 0.0) return out;
-    const VolumeOptics &optics = medium.optics();
     for (int c = 0; c < 3; ++c) {
         const double scale = optics.albedo[c] * kInvFourPi / weights;
         out.beamL0[c] = scale * sum.phiBeam[c];
@@ -278,6 +348,29 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     out.second = greyScale * sum.second;
     for (int i = 0; i < 3; ++i) out.third[i] = greyScale * sum.third[i];
     return out;
+}
+
+void ArrivingLight::add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const Rgb &albedo) {
+    (beam ? phiBeam : phi) += fluence;
+    glm::dmat3 &toFlux = beam ? fluxBeam : flux;
+    for (int c = 0; c < 3; ++c) toFlux[c] += fluence[c] * travel;
+    const double grey = glm::dot(albedo, fluence) / 3.0;
+    const glm::dmat3 tt = grey * glm::outerProduct(travel, travel);
+    second += tt;
+    for (int i = 0; i < 3; ++i) third[i] += travel[i] * tt;
+}
+
+ArrivingLight &ArrivingLight::operator+=(const ArrivingLight &o) {
+    phi += o.phi, phiBeam += o.phiBeam, flux += o.flux, fluxBeam += o.fluxBeam, second += o.second;
+    for (int i = 0; i < 3; ++i) third[i] += o.third[i];
+    return *this;
+}
+
+SourceEstimate &operator+=(SourceEstimate &a, const SourceEstimate &b) {
+    a.l0 += b.l0, a.l1 += b.l1, a.beamL0 += b.beamL0, a.beamL1 += b.beamL1, a.second += b.second;
+    for (int i = 0; i < 3; ++i) a.third[i] += b.third[i];
+    a.steps += b.steps;
+    return a;
 }
 
 std::vector<RadianceEstimate> MonteCarloReference::estimate(const std::vector<Ray> &rays, int samplesPerRay,

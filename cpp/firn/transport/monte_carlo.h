@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include <glm/mat3x3.hpp>
@@ -11,6 +12,7 @@
 #include "firn/transport/scene.h"
 #include "firn/util/color.h"
 #include "firn/util/progress.h"
+#include "firn/util/random.h"
 
 namespace firn {
 
@@ -34,6 +36,36 @@ struct SourceEstimate {
     std::array<glm::dmat3, 3> third{};
     long steps = 0;  // tracking steps (density lookups) of all its paths and shadow rays: what the estimate cost
 };
+
+SourceEstimate &operator+=(SourceEstimate &a, const SourceEstimate &b);
+
+// Light arriving at the points of a voxel, summed: fluence (W/m^2) and flux (column c: channel c's vector, W/m^2
+// along the direction light travels), scattered light and the lights' direct beams apart, and the second and
+// third moments of the directions t light travels, weighted by what the snow scatters of it (albedo, grey).
+struct ArrivingLight {
+    Rgb phi{0.0}, phiBeam{0.0};
+    glm::dmat3 flux{0.0}, fluxBeam{0.0};
+    glm::dmat3 second{0.0};            // sum of mean(albedo phi) t t^T
+    std::array<glm::dmat3, 3> third{};  // sum of mean(albedo phi) t_i t t^T
+
+    // Light of `fluence` travelling along `travel`: a direct beam's, or scattered light's.
+    void add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const Rgb &albedo);
+    ArrivingLight &operator+=(const ArrivingLight &other);
+};
+
+// The source a voxel's snow scatters of the light arriving in it, `sum` gathered with weights adding up to
+// `weights` (extinction: the extinction-weighted mean the renderer's emission needs).
+SourceEstimate sourceOf(const ArrivingLight &sum, double weights, const VolumeOptics &optics);
+
+// Light travelling forwards from the lights (light tracing): power (W, per channel) leaving a point along a ray.
+struct Photon {
+    Ray ray;
+    Rgb power{0.0};
+    bool straightFromLight = false;  // a sun's beam: its first collision is the single scattering sourceIn's beams hold
+};
+
+// A photon's real collision in the medium at p (m), with the power arriving there (W) and the direction it travels.
+using CollisionTally = std::function<void(const glm::dvec3 &p, const glm::dvec3 &travel, const Rgb &power)>;
 
 struct RadianceEstimate {
     Rgb mean{0.0};           // W/m^2/sr
@@ -65,7 +97,21 @@ class MonteCarloReference {
     // all orders, and every light's direct beam: omega / (4 pi) (phi + 3 g F . w), the Henyey-Greenstein
     // phase function to first order in w, with the exact fluence phi and flux F; the direct beams' share apart;
     // and the higher moments of the directions the light travels, which tell how peaked the source is.
-    SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream) const;
+    // Without `scattered`, the direct beams only (beamL0, beamL1 and their share of the moments): what light
+    // tracing leaves to each voxel (light_tracing.h).
+    SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream,
+                            bool scattered = true) const;
+
+    // Light tracing, the paths above run forwards: follows `photon` through the medium (delta tracking,
+    // Henyey-Greenstein at every real collision) and off the occluders (Lambertian) until it leaves the medium's
+    // bounds or roulette ends it, calling `tally` at every real collision (but a sun beam's first). Returns its
+    // tracking steps.
+    long follow(const Photon &photon, Rng &rng, const CollisionTally &tally) const;
+
+    // All the light arriving at `ray.origin` travelling along -ray.direction (sky, occluders' reflections, the
+    // medium's scattering; not the suns' and lamps' direct beams), one sample, W/m^2/sr; its tracking steps added
+    // to `steps`.
+    Rgb radianceArriving(const Ray &ray, Rng &rng, long &steps) const;
 
     const Scene &scene() const { return scene_; }
 
