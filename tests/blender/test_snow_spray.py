@@ -162,6 +162,38 @@ def test_a_moved_and_turned_snow_layer_keeps_its_tracks_under_the_ski_and_its_lu
     np.testing.assert_allclose(lumps.max(0), expected.max(0), atol=VOXEL)
 
 
+def test_a_spray_saved_before_it_followed_its_snow_layer_follows_it_at_the_next_bake(clean_scene):
+    """Sprays made before their objects were the snow layer's children stood unparented where the layer was: Bake
+    Sequence makes them its children, so a layer moved since carries its lumps (review finding: they stayed put)."""
+    snow = snow_on_plane()
+    emitter = ski()
+    spray = add_spray(snow, emitter)
+    tracks = bpy.data.objects[f"{snow.name} Tracks"]
+    unmoved = _world_lumps(spray)
+    for obj in (spray, tracks):  # as such a .blend holds them
+        obj.parent = None
+        obj.matrix_world = snow.matrix_world
+    snow.matrix_world = MOVE @ snow.matrix_world
+    _carried(MOVE, emitter)
+    assert bpy.ops.firn.bake_sequence(light=False) == {"FINISHED"}
+    assert spray.parent == snow and tracks.parent == snow
+    lumps = _world_lumps(spray)
+    expected = _moved(unmoved, MOVE)
+    np.testing.assert_allclose(lumps.min(0), expected.min(0), atol=VOXEL)
+    np.testing.assert_allclose(lumps.max(0), expected.max(0), atol=VOXEL)
+
+
+def test_a_scene_without_obstacles_throws_snow(clean_scene):
+    """No rendered mesh but the ski (the ground hidden from renders): the core gets no obstacles (review finding:
+    Add Snow Spray failed unpacking them)."""
+    snow = snow_on_plane()
+    for obj in bpy.context.scene.objects:
+        if obj.type == "MESH":
+            obj.hide_render = True
+    spray = add_spray(snow, ski())
+    assert len(firncore.read_spray_state(firncore.spray_frame_paths(folder_of(spray), FRAMES[1])[2])) > 0
+
+
 def test_regenerating_the_snow_layer_keeps_its_spray(clean_scene):
     snow = snow_on_plane()
     spray = add_spray(snow, ski())

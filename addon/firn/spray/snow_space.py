@@ -37,7 +37,9 @@ def rectangles_in(space, rectangles):
 
 
 def triangles_in(space, objects):
-    """(vertices (N, 3) float32 m, triangles) in the snow's space."""
+    """(vertices (N, 3) float32 m, triangles) in the snow's space; None (no obstacles) stays None."""
+    if objects is None:
+        return None
     vertices, triangles = objects
     return space.points(vertices), triangles
 

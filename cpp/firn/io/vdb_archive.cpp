@@ -74,12 +74,14 @@ class PrecompressedGrid : public GridT, public CompressedLeaves {
             if (!leaves.empty()) delayedLoad_->resizeMask(leaves.size());
             if (!leaves.empty() && sized) delayedLoad_->resizeCompressedSize(leaves.size());
         }
+        // Set once here, not in each task: it also writes the grid's StreamMetadata, which every chunk shares
+        // through copyfmt (the topology's write, which comes later, sets it again).
+        io::setGridBackgroundValuePtr(settings, &background);
         constexpr std::size_t kLeavesPerChunk = 64;
         chunks_.assign((leaves.size() + kLeavesPerChunk - 1) / kLeavesPerChunk, std::string());
         tbb::parallel_for(std::size_t(0), chunks_.size(), [&](std::size_t c) {
             std::ostringstream chunk;
-            chunk.copyfmt(settings);  // OpenVDB's per-stream settings: compression, half floats
-            io::setGridBackgroundValuePtr(chunk, &background);  // set by the topology's write, which comes later
+            chunk.copyfmt(settings);  // OpenVDB's per-stream settings: compression, half floats, background
             const std::size_t end = std::min(leaves.size(), (c + 1) * kLeavesPerChunk);
             for (std::size_t l = c * kLeavesPerChunk; l < end; ++l) {
                 const auto start = chunk.tellp();
