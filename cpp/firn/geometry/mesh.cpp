@@ -28,6 +28,7 @@ bool finite(const glm::vec3 &p) { return std::isfinite(p.x) && std::isfinite(p.y
 TriangleMesh makeTriangleMesh(const float *positions, std::size_t vertexCount, const unsigned *indices,
                               std::size_t triangleCount) {
     TriangleMesh mesh;
+    mesh.positions.reserve(vertexCount + 1);  // the spare vertex Embree reads into (mesh.h)
     mesh.positions.resize(vertexCount);
     const auto point = [&](std::size_t i) {
         return glm::vec3(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]);
@@ -92,7 +93,7 @@ TriangleMesh joined(const std::vector<const TriangleMesh *> &meshes) {
     TriangleMesh out;
     std::size_t vertices = 0, triangles = 0;
     for (const TriangleMesh *m : meshes) vertices += m->positions.size(), triangles += m->triangles.size();
-    out.positions.reserve(vertices);
+    out.positions.reserve(vertices + 1);  // the spare vertex Embree reads into (mesh.h)
     out.triangles.resize(triangles);
     std::size_t at = 0;
     for (const TriangleMesh *part : meshes) {

@@ -12,7 +12,9 @@ namespace firn {
 // World-space triangles (m). Built only through makeTriangleMesh, so every mesh in the core is valid:
 // finite vertices, indices in range, no degenerate triangles.
 struct TriangleMesh {
-    std::vector<glm::vec3> positions;   // m, world space
+    // m, world space. makeTriangleMesh and merge leave a spare vertex of capacity past the last one: Embree reads
+    // 16 bytes there and then shares the array (RayCaster), without a copy.
+    std::vector<glm::vec3> positions;
     std::vector<glm::uvec3> triangles;  // indices into positions
     std::size_t droppedDegenerate = 0;  // zero-area triangles removed while building
 

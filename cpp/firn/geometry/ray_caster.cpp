@@ -78,22 +78,28 @@ RayCaster::RayCaster(const TriangleMesh *borrowed, TriangleMesh owned)
         const TriangleMesh &kept = *impl_->mesh;
         static_assert(sizeof(glm::uvec3) == 3 * sizeof(unsigned), "Embree reads the triangles as packed UINT3");
         RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        // Vertices copied (Embree reads 16 bytes at the last one, past the mesh's array); the triangles shared
-        // (a million: 12 MB not copied).
-        auto *vertices = static_cast<float *>(rtcSetNewGeometryBuffer(
-            geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), kept.positions.size()));
+        // The triangles shared (a million: 12 MB not copied), and the vertices too when their array has the spare
+        // vertex past the last one that Embree reads 16 bytes into (mesh.h); else they are copied.
+        if (kept.positions.capacity() > kept.positions.size()) {
+            rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, kept.positions.data(),
+                                       0, sizeof(glm::vec3), kept.positions.size());
+        } else {
+            auto *vertices = static_cast<float *>(rtcSetNewGeometryBuffer(
+                geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), kept.positions.size()));
+            if (vertices)
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept.positions.size()),
+                                  [&](const tbb::blocked_range<std::size_t> &r) {
+                                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                                          for (int k = 0; k < 3; ++k) vertices[3 * i + k] = kept.positions[i][k];
+                                  });
+        }
+        static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "Embree reads the vertices as packed FLOAT3");
         rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, kept.triangles.data(), 0,
                                    sizeof(glm::uvec3), kept.triangles.size());
         throwOnEmbreeError(device, "allocate the scene (out of memory?)");
         // The scene's quality alone leaves its one geometry's BVH at MEDIUM (SAH): 4x slower to build on 1M
         // triangles (0.33 s against 0.09 s, bench/snow_layer_bench.py's scene).
         rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_LOW);
-        // Filled in parallel (some 500,000 vertices for a million triangles).
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept.positions.size()),
-                          [&](const tbb::blocked_range<std::size_t> &r) {
-                              for (std::size_t i = r.begin(); i != r.end(); ++i)
-                                  for (int k = 0; k < 3; ++k) vertices[3 * i + k] = kept.positions[i][k];
-                          });
         impl_->embree.attach(geometry);
     }
     impl_->embree.commit("build the scene");

@@ -1,6 +1,7 @@
 #include "firn/io/vdb_archive.h"
 
 #include <algorithm>
+#include <array>
 #include <map>
 #include <memory>
 #include <set>
@@ -82,23 +83,33 @@ class PrecompressedGrid : public GridT, public CompressedLeaves {
         tbb::parallel_for(std::size_t(0), chunks_.size(), [&](std::size_t c) {
             std::ostringstream chunk;
             chunk.copyfmt(settings);  // OpenVDB's per-stream settings: compression, half floats, background
-            const std::size_t end = std::min(leaves.size(), (c + 1) * kLeavesPerChunk);
-            for (std::size_t l = c * kLeavesPerChunk; l < end; ++l) {
-                const auto start = chunk.tellp();
+            const std::size_t first = c * kLeavesPerChunk, end = std::min(leaves.size(), first + kLeavesPerChunk);
+            std::array<std::size_t, kLeavesPerChunk + 1> starts{};  // each leaf's bytes in the chunk
+            for (std::size_t l = first; l < end; ++l) {
+                starts[l - first] = std::size_t(chunk.tellp());
                 leaves[l]->writeBuffers(chunk, this->saveFloatAsHalf());
-                if constexpr (kTable) {
-                    // As populateDelayedLoadMetadata: the mask compression found whether or not the file uses it,
-                    // and the size of the compressed block with its 8-byte length.
-                    const io::MaskCompress<typename Leaf::ValueType, typename Leaf::NodeMaskType> kind(
-                        leaves[l]->valueMask(), typename Leaf::NodeMaskType(), leaves[l]->buffer().data(), background);
-                    delayedLoad_->setMask(l, kind.metadata);
-                    const std::int8_t written = maskCompressed ? kind.metadata : std::int8_t(io::NO_MASK_AND_ALL_VALS);
+            }
+            starts[end - first] = std::size_t(chunk.tellp());
+            chunks_[c] = std::move(chunk).str();
+            if constexpr (kTable) {
+                using Mask = typename Leaf::NodeMaskType;
+                for (std::size_t l = first; l < end; ++l) {
+                    // As populateDelayedLoadMetadata: the mask compression found whether or not the file uses it
+                    // (when it does, the byte the leaf wrote after its value mask), and the size of the
+                    // compressed block with its 8-byte length.
+                    const std::size_t at = starts[l - first];
+                    const std::int8_t kind =
+                        maskCompressed
+                            ? std::int8_t(chunks_[c][at + Mask::memUsage()])
+                            : io::MaskCompress<typename Leaf::ValueType, Mask>(leaves[l]->valueMask(), Mask(),
+                                                                               leaves[l]->buffer().data(), background)
+                                  .metadata;
+                    delayedLoad_->setMask(l, kind);
+                    const std::int8_t written = maskCompressed ? kind : std::int8_t(io::NO_MASK_AND_ALL_VALS);
                     if (sized)
-                        delayedLoad_->setCompressedSize(
-                            l, std::size_t(chunk.tellp() - start) - headerBytes<Leaf>(written));
+                        delayedLoad_->setCompressedSize(l, starts[l - first + 1] - at - headerBytes<Leaf>(written));
                 }
             }
-            chunks_[c] = std::move(chunk).str();
         });
     }
 
