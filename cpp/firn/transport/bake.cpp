@@ -1087,6 +1087,13 @@ openvdb::Vec3f sourceComponent(const Source &S, int k) {
                                                  : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
 }
 
+// The grids' values (BakedGrids::Values) of a source function.
+BakedGrids::Values sourceComponents(const Source &S) {
+    BakedGrids::Values out;
+    for (int k = 0; k < int(BakedGrids::kCount); ++k) out[k] = sourceComponent(S, k);
+    return out;
+}
+
 // The on-states of a voxel mask within `radius` (at most 4) of voxel c, read from the at most eight leaves that
 // hold them (found once) instead of looked up voxel by voxel.
 class BlockMask {
@@ -1388,31 +1395,29 @@ class BakedValuesSampler {
     openvdb::Vec3f corners_[BakedGrids::kCount][2][2][2];
 };
 
-// The source grids at `scale` times the density's voxel size, one at a time. At the density's resolution each grid
-// is built and freed before the next is written; coarser, firn_source alone is built at the density's resolution
-// (which of its voxels hold a value: `lit`) and the others are coarsened from the values directly.
+// The source grids at `scale` times the density's voxel size. At the density's resolution each grid is built
+// before the next; coarser, all six are coarsened together from the values directly (coarsenedSources), none
+// built at the density's resolution.
 BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
     GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
-    if (scale == 1) values.at = nullptr;  // only the coarsening's readers (BakedValuesSampler) read it
     BakedGrids out;
-    openvdb::BoolTree::Ptr lit;  // fine voxels with a value (firn_source nonzero)
-    for (int k = 0; k < int(BakedGrids::kCount); ++k) {
-        openvdb::Vec3fTree::Ptr tree;
-        if (scale == 1 || k == 0) tree = sourceTree(values, topo, source, traced, k);
-        if (scale > 1 && k == 0) {
-            lit = litVoxels(*tree);
-            tree = coarsenedSource(*tree, *lit, scene.medium->density().tree(), scale);
-        } else if (scale > 1) {
-            const auto newReader = [&, k] {
-                return [k, baked = std::make_shared<BakedValuesSampler>(topo, source, traced, values)](
-                           const openvdb::Coord &c) { return sourceComponent(baked->at(c), k); };
-            };
-            tree = coarsenedSource(*values.topology, newReader, *lit, scene.medium->density().tree(), scale);
-        }
-        out.source[k] = sourceGrid(std::move(tree), k, scale, scene.medium->density(),
-                                   scene.medium->optics().extinctionPerDensity, settings);
+    if (scale == 1) {
+        values.at = nullptr;  // only the coarsening's readers (BakedValuesSampler) read it
+        for (int k = 0; k < int(BakedGrids::kCount); ++k)
+            out.source[k] = sourceGrid(sourceTree(values, topo, source, traced, k), k, scale, scene.medium->density(),
+                                       scene.medium->optics().extinctionPerDensity, settings);
+        return out;
     }
+    const auto newReader = [&] {
+        return [baked = std::make_shared<BakedValuesSampler>(topo, source, traced, values)](const openvdb::Coord &c) {
+            return sourceComponents(baked->at(c));
+        };
+    };
+    auto trees = coarsenedSources(*values.topology, newReader, scene.medium->density().tree(), scale);
+    for (int k = 0; k < int(BakedGrids::kCount); ++k)
+        out.source[k] = sourceGrid(std::move(trees[k]), k, scale, scene.medium->density(),
+                                   scene.medium->optics().extinctionPerDensity, settings);
     return out;
 }
 
