@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <queue>
 #include <unordered_map>
 
@@ -272,6 +273,9 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
         progress.throwIfCancelled();
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         Medium::Accessor density = medium.accessor();
+        // The occluder hit up each axis from each voxel of the leaf (by offset), taken over by the voxel above
+        // where both lie in the leaf: the car's topology cast a ray per face of every voxel near an occluder.
+        std::vector<std::optional<RayCaster::Hit>> upHits(3 * IndexLeaf::SIZE);
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             const IndexLeaf &leaf = leaves.leaf(l);
             const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
@@ -285,12 +289,19 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
                     if (near[l]) {
                         // Both voxels of a link test the same segment, from the lower centre (nudged along
                         // the axis so that a surface through voxel centres cuts the link below them).
+                        // Voxels come in offset order: the one below in the same leaf has tested its link up.
                         const bool up = f & 1;
                         const openvdb::Coord lower = up ? c : c + faceStep(f);
                         const glm::dvec3 axis = faceNormal(f | 1);
                         const double nudge = 1e-4 * h;
-                        const auto hit = occluders.caster().intersect(glm::vec3(medium.voxelCentre(lower) + nudge * axis),
-                                                                      glm::vec3(axis), 0.0f, float(h));
+                        const openvdb::Index lowerOffset = IndexLeaf::coordToOffset(lower);
+                        std::optional<RayCaster::Hit> hit;
+                        if (!up && (c[f / 2] & 7) != 0 && leaf.isValueOn(lowerOffset))
+                            hit = upHits[3 * lowerOffset + f / 2];
+                        else
+                            hit = occluders.caster().intersect(glm::vec3(medium.voxelCentre(lower) + nudge * axis),
+                                                               glm::vec3(axis), 0.0f, float(h));
+                        if (up) upHits[3 * lowerOffset + f / 2] = hit;
                         if (hit) {
                             face.occluder = true, face.triangle = hit->triangle;
                             face.distance = float(std::clamp(up ? hit->distance + nudge : h - hit->distance - nudge, 0.0, h));
