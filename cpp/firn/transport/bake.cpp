@@ -275,11 +275,13 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
     if (voxels.empty()) return 0;
     const MonteCarloReference reference(scene);
     const double budget = kMaxTracedSteps / (double(voxels.size()) * kMinSamples);  // per path, at the least
-    double steps = 0.0;
+    double steps = 0.0, last = 0.0;  // last: voxel v's pilot steps (fewer voxels than pilots repeat theirs)
     int paths = 0;
     for (int k = 0; k < kPilotVoxels; ++k) {
         const std::size_t v = voxels.size() * k / kPilotVoxels;
-        steps += double(reference.sourceIn(voxels[v], kPilotSamples, seed, v).steps) + kStepsPerPath * kPilotSamples;
+        if (k == 0 || v != voxels.size() * (k - 1) / kPilotVoxels)
+            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v).steps) + kStepsPerPath * kPilotSamples;
+        steps += last;
         paths += kPilotSamples;
         if (steps > budget * kPilotVoxels * kPilotSamples) return 0;  // too costly already
     }
