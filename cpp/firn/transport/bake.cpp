@@ -1451,10 +1451,11 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);
+        Medium::Accessor density = scene.medium->accessor();
         BakedValuesSampler baked(topo, source, traced, values);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!light.snowRays[i]) continue;
-            const glm::dvec3 p = patchOutside(*scene.medium, topo, i);
+            const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
             glm::dvec3 sum(0.0);
             for (int k = 0; k < rays.count(); ++k) {
                 if (!(light.snowRays[i] >> k & 1)) continue;
