@@ -29,42 +29,36 @@ namespace {
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 }  // namespace
 
-openvdb::BoolTree::Ptr litVoxels(const openvdb::Vec3fTree &source) {
-    auto lit = std::make_shared<openvdb::BoolTree>(false);
-    openvdb::tree::ValueAccessor<openvdb::BoolTree> set(*lit);
-    for (auto it = source.cbeginValueOn(); it; ++it)
-        if (*it != openvdb::Vec3f(0.0f)) set.setValue(it.getCoord(), true);
-    return lit;
-}
-
-namespace {
-
-// coarsenedSource over the active voxels of `fine` (any tree), reading their values through newReader() (one reader
-// per thread).
-template <typename FineTree, typename NewReader>
-openvdb::Vec3fTree::Ptr coarsened(const FineTree &fine, const NewReader &newReader, const openvdb::BoolTree &lit,
-                                  const openvdb::FloatTree &density, int factor) {
+std::array<openvdb::Vec3fTree::Ptr, BakedGrids::kCount> coarsenedSources(const openvdb::BoolTree &fineTopology,
+                                                                         const FineValuesReaders &newReader,
+                                                                         const openvdb::FloatTree &density, int factor) {
     if (factor < 2) throw InvalidArgument("source grids: coarsening factor must be at least 2");
     using Vec3Tree = openvdb::Vec3fTree;
+    constexpr std::size_t kCount = BakedGrids::kCount;
     // The coarse voxels over the fine ones.
-    auto tree = std::make_shared<Vec3Tree>(openvdb::Vec3f(0.0f));
+    openvdb::BoolTree coarse(false);
     {
-        openvdb::tree::ValueAccessor<Vec3Tree> coarse(*tree);
-        for (auto it = fine.cbeginValueOn(); it; ++it) {
+        openvdb::tree::ValueAccessor<openvdb::BoolTree> on(coarse);
+        for (auto it = fineTopology.cbeginValueOn(); it; ++it) {
             if (!it.isVoxelValue()) throw InvalidArgument("source grids: tiles are not supported");
             const openvdb::Coord c = it.getCoord();
-            coarse.setValueOn(openvdb::Coord(floorDiv(c.x(), factor), floorDiv(c.y(), factor), floorDiv(c.z(), factor)));
+            on.setValueOn(openvdb::Coord(floorDiv(c.x(), factor), floorDiv(c.y(), factor), floorDiv(c.z(), factor)));
         }
     }
-    openvdb::tree::LeafManager<Vec3Tree> leaves(*tree);
+    std::array<Vec3Tree::Ptr, kCount> trees;
+    for (auto &tree : trees) tree = std::make_shared<Vec3Tree>(coarse, openvdb::Vec3f(0.0f), openvdb::TopologyCopy());
+    openvdb::tree::LeafManager<Vec3Tree> leaves(*trees[0]);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(density);
         auto in = newReader();
-        openvdb::tree::ValueAccessor<const openvdb::BoolTree> isLit(lit);
-        for (std::size_t l = range.begin(); l != range.end(); ++l)
-            for (auto it = leaves.leaf(l).beginValueOn(); it; ++it) {
+        for (std::size_t l = range.begin(); l != range.end(); ++l) {
+            std::array<Vec3Tree::LeafNodeType *, kCount> leaf;
+            leaf[0] = &leaves.leaf(l);
+            for (std::size_t g = 1; g < kCount; ++g) leaf[g] = trees[g]->probeLeaf(leaf[0]->origin());
+            for (auto it = leaf[0]->beginValueOn(); it; ++it) {
                 const openvdb::Coord C = it.getCoord();
-                openvdb::Vec3d weighted(0.0), extended(0.0);
+                std::array<openvdb::Vec3d, kCount> weighted, extended;
+                weighted.fill(openvdb::Vec3d(0.0)), extended.fill(openvdb::Vec3d(0.0));
                 double weight = 0.0;
                 int outside = 0;
                 for (int i = 0; i < factor; ++i)
@@ -72,36 +66,28 @@ openvdb::Vec3fTree::Ptr coarsened(const FineTree &fine, const NewReader &newRead
                         for (int k = 0; k < factor; ++k) {
                             const openvdb::Coord c(C.x() * factor + i, C.y() * factor + j, C.z() * factor + k);
                             const double w = rho.getValue(c);
-                            if (w <= 0.0 && !isLit.getValue(c)) continue;  // no snow, no extended value: a ring voxel
-                            const openvdb::Vec3d v(in(c));
-                            weighted += w * v;
-                            extended += v;
+                            const BakedGrids::Values v = in(c);
+                            if (w <= 0.0 && v[0] == openvdb::Vec3f(0.0f)) continue;  // no snow, no extended value: a ring voxel
+                            for (std::size_t g = 0; g < kCount; ++g) {
+                                const openvdb::Vec3d value(v[g]);
+                                weighted[g] += w * value;
+                                extended[g] += value;
+                            }
                             weight += std::max(w, 0.0);
                             outside += w <= 0.0;
                         }
-                const openvdb::Vec3d v = weight > 0.0 ? weighted / weight : outside ? extended / outside : openvdb::Vec3d(0.0);
-                it.setValue(openvdb::Vec3f(v));
+                for (std::size_t g = 0; g < kCount; ++g) {
+                    const openvdb::Vec3d v = weight > 0.0 ? weighted[g] / weight
+                                             : outside    ? extended[g] / outside
+                                                          : openvdb::Vec3d(0.0);
+                    leaf[g]->setValueOnly(it.pos(), openvdb::Vec3f(v));
+                }
             }
+        }
     });
-    openvdb::tools::dilateActiveValues(*tree, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::EXPAND_TILES);
-    return tree;
-}
-
-}  // namespace
-
-openvdb::Vec3fTree::Ptr coarsenedSource(const openvdb::Vec3fTree &fine, const openvdb::BoolTree &lit,
-                                        const openvdb::FloatTree &density, int factor) {
-    const auto newReader = [&] {
-        return [in = openvdb::tree::ValueAccessor<const openvdb::Vec3fTree>(fine)](const openvdb::Coord &c) mutable {
-            return in.getValue(c);
-        };
-    };
-    return coarsened(fine, newReader, lit, density, factor);
-}
-
-openvdb::Vec3fTree::Ptr coarsenedSource(const openvdb::BoolTree &fineTopology, const FineSourceReaders &newReader,
-                                        const openvdb::BoolTree &lit, const openvdb::FloatTree &density, int factor) {
-    return coarsened(fineTopology, newReader, lit, density, factor);
+    for (auto &tree : trees)
+        openvdb::tools::dilateActiveValues(*tree, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::EXPAND_TILES);
+    return trees;
 }
 
 SourceGridsSampler::SourceGridsSampler(const Medium &medium, const BakedGrids &baked)

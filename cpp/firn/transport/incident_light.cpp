@@ -215,10 +215,9 @@ void averageOverNeighbours(const SnowTopology &topo, SurfaceValues<glm::vec3> &v
     });
 }
 
-glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::size_t i) {
+glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::size_t i, Medium::Accessor &density) {
     const double h = medium.voxelSize();
     const double thin = kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h);
-    Medium::Accessor density = medium.accessor();
     glm::dvec3 p = medium.voxelCentre(topo.coord[i]) + h * topo.patches[i].normal;
     for (int k = 0; k < 6 && medium.densityAt(p, density) >= thin; ++k) p += 0.5 * h * topo.patches[i].normal;
     return p;
@@ -227,7 +226,6 @@ glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::siz
 IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                                    const IncidentLightSettings &settings, const SubProgress &progress) {
     const Medium &medium = *scene.medium;
-    auto outside = [&](std::size_t i) { return patchOutside(medium, topo, i); };
     IncidentLight light;
     const double jobs = double(beamCount(scene) + 1);
 
@@ -264,13 +262,14 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             });
         parallelChunks(topo.size(), progress, [&](const auto &range) {
             Medium::ColumnMarcher marcher(medium);
+            Medium::Accessor density = medium.accessor();
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
                 if (topo.patches[i].isSurface() && topo.patches[i].facesTowards(towardsBeam(scene, b, centre))) {
                     // Snow in the way from outside the density ramp; occluders' shadow on the surface itself
                     // (half a voxel out), so shadow edges fall where they do on the snow.
                     const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
-                    beam.atSurface.surface(i) = beamAt(scene, b, outside(i), settings.sunSamples, seed, 2 * i + 1, marcher,
+                    beam.atSurface.surface(i) = beamAt(scene, b, patchOutside(medium, topo, i, density), settings.sunSamples, seed, 2 * i + 1, marcher,
                                                &surface, Crossing::Uncollided).irradiance;
                 }
             }
@@ -288,9 +287,10 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     const std::uint64_t seed = settings.seed ^ 0x5C1Eull;
     parallelChunks(topo.size(), progress, [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);
+        Medium::Accessor density = medium.accessor();
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
-                light.skyOnSurface.surface(i) = skyIrradianceAt(scene, outside(i), topo.patches[i].normal, rays, bounce,
+                light.skyOnSurface.surface(i) = skyIrradianceAt(scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
                                                                 Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i));
     });
     if (settings.skyOverNeighbours) averageOverNeighbours(topo, light.skyOnSurface);

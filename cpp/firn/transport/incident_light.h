@@ -61,8 +61,9 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topol
 // rays each (SkyRays, each voxel's own jitter) pool into a less noisy estimate. Sharp edges keep their own.
 void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3> &values);
 
-// Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe.
-glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i);
+// Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe. `density`:
+// the caller's (one per thread; an accessor made per call started each lookup from the tree's root).
+glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i, Medium::Accessor &density);
 
 // Reduced extinction per unit density, per channel: k (1 - omega g) (m^2/kg).
 glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
