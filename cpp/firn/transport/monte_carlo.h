@@ -103,10 +103,11 @@ class MonteCarloReference {
                             bool scattered = true) const;
 
     // Light tracing, the paths above run forwards: follows `photon` through the medium (delta tracking,
-    // Henyey-Greenstein at every real collision) and off the occluders (Lambertian) until it leaves the medium's
-    // bounds or roulette ends it, calling `tally` at every real collision (but a sun beam's first). Returns its
-    // tracking steps.
-    long follow(const Photon &photon, Rng &rng, const CollisionTally &tally) const;
+    // Henyey-Greenstein at every real collision) and off the occluders (Lambertian) until it leaves the box
+    // [boxMin, boxMax] (within the medium's bounds) or roulette ends it, calling `tally` at every real collision
+    // (but a sun beam's first). Returns its tracking steps.
+    long follow(const Photon &photon, const glm::dvec3 &boxMin, const glm::dvec3 &boxMax, Rng &rng,
+                const CollisionTally &tally) const;
 
     // All the light arriving at `ray.origin` travelling along -ray.direction (sky, occluders' reflections, the
     // medium's scattering; not the suns' and lamps' direct beams), one sample, W/m^2/sr; its tracking steps added
