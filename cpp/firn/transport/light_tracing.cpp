@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
 #include <unordered_map>
 #include <utility>
 
@@ -78,14 +79,14 @@ class BoxEmitter {
         for (double p : power) sunShare_.push_back(total > 0.0 ? (1.0 - diffuseShare_) * p / (total - kPi * totalArea_ * sky) : 0.0);
     }
 
-    // One photon (zero power where no light comes); the tracking steps of finding its radiance added to `steps`.
-    Photon emit(Rng &rng, long &steps) const {
+    // One photon (zero power where no light comes), `tracer` finding its radiance.
+    Photon emit(Rng &rng, PhotonTracer &tracer) const {
         double u = rng.uniform();
         for (std::size_t b = 0; b < sunShare_.size(); ++b) {
             if (u < sunShare_[b]) return sunPhoton(reference_.scene().suns[b], sunShare_[b], rng);
             u -= sunShare_[b];
         }
-        return diffusePhoton(rng, steps);
+        return diffusePhoton(rng, tracer);
     }
 
     // The box photons enter and leave.
@@ -125,7 +126,7 @@ class BoxEmitter {
 
     // All other light arriving through a face: a cosine-weighted direction into the box, its radiance from one
     // path of the reference traced out of the box.
-    Photon diffusePhoton(Rng &rng, long &steps) const {
+    Photon diffusePhoton(Rng &rng, PhotonTracer &tracer) const {
         double pick = rng.uniform() * totalArea_;
         const Face *face = &faces_.back();
         for (const Face &f : faces_) {
@@ -137,7 +138,7 @@ class BoxEmitter {
         }
         const glm::dvec3 p = pointOn(*face, rng);
         const glm::dvec3 d = sampleCosineHemisphere(face->inward, rng.uniform(), rng.uniform());
-        const Rgb L = reference_.radianceArriving(Ray{p, -d}, rng, steps);
+        const Rgb L = tracer.radianceArriving(Ray{p, -d}, rng);
         return Photon{Ray{p, d}, L * (kPi * totalArea_ / diffuseShare_)};
     }
 
@@ -157,16 +158,19 @@ ChunkSums traceChunk(const MonteCarloReference &reference, const BoxEmitter &emi
     const Rgb albedo = medium.optics().albedo;
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> voxelOf(index);
     std::unordered_map<std::int32_t, ArrivingLight> sums;
+    long tallies = 0;
     const CollisionTally tally = [&](const glm::dvec3 &p, const glm::dvec3 &travel, const Rgb &power) {
         const glm::dvec3 ijk = glm::round(medium.worldToIndex(p));
         const std::int32_t v = voxelOf.getValue(openvdb::Coord(int(ijk.x), int(ijk.y), int(ijk.z)));
-        if (v >= 0) sums[v].add(power, travel, false, albedo), steps += kStepsPerTally;
+        if (v >= 0) sums[v].add(power, travel, false, albedo), ++tallies;
     };
+    PhotonTracer tracer(reference);
     for (long i = first; i < last; ++i) {
         Rng rng(seed, std::uint64_t(i));
-        const Photon photon = emitter.emit(rng, steps);
-        if (photon.power != Rgb(0.0)) steps += reference.follow(photon, emitter.boxMin(), emitter.boxMax(), rng, tally);
+        const Photon photon = emitter.emit(rng, tracer);
+        if (photon.power != Rgb(0.0)) tracer.follow(photon, emitter.boxMin(), emitter.boxMax(), rng, tally);
     }
+    steps += tracer.steps() + kStepsPerTally * tallies;
     ChunkSums out(sums.begin(), sums.end());
     std::sort(out.begin(), out.end(), [](const auto &a, const auto &b) { return a.first < b.first; });
     return out;
@@ -218,10 +222,20 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
     const double perBeamSample = std::max(beamSteps / (kPilotVoxels * kPilotSamples), 1.0);
     plan.beamSamples = std::clamp(int(kBeamShare * maxSteps / (perBeamSample * double(voxels.size()))),
                                   kMinBeamSamples, kMaxBeamSamples);
-    const double photonSteps = maxSteps - perBeamSample * plan.beamSamples * double(voxels.size());
-    long steps = 0;
-    traceChunk(reference, BoxEmitter(reference), voxelIndex(voxels), 0, kPilotPhotons, seed, steps);
-    const double perPhoton = double(steps) / kPilotPhotons + kStepsPerPhoton;
+    // The pilot's photons in parallel pieces (its sums dropped); what the pilots cost comes out of the budget.
+    constexpr long kPilotPieces = 8;
+    const BoxEmitter emitter(reference);
+    const openvdb::Int32Tree index = voxelIndex(voxels);
+    std::vector<long> pieceSteps(kPilotPieces, 0);
+    tbb::parallel_for(tbb::blocked_range<long>(0, kPilotPieces, 1), [&](const auto &range) {
+        for (long k = range.begin(); k != range.end(); ++k)
+            traceChunk(reference, emitter, index, k * kPilotPhotons / kPilotPieces,
+                       (k + 1) * kPilotPhotons / kPilotPieces, seed, pieceSteps[k]);
+    });
+    const double pilotSteps = double(std::accumulate(pieceSteps.begin(), pieceSteps.end(), 0L));
+    const double perPhoton = pilotSteps / kPilotPhotons + kStepsPerPhoton;
+    const double photonSteps = maxSteps - beamSteps - pilotSteps - kStepsPerPhoton * kPilotPhotons -
+                               perBeamSample * plan.beamSamples * double(voxels.size());
     plan.photons = long(std::min(double(kMaxPhotons), std::max(photonSteps, 0.0) / perPhoton));
     if (plan.photons < std::max(double(kMinPhotons), kMinPhotonsPerVoxel * double(voxels.size()))) plan = LightTracingPlan{};
     return plan;

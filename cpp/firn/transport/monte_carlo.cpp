@@ -54,6 +54,8 @@ class KroneckerSequence {
     std::array<double, 5> alpha_{}, x_{};
 };
 
+}  // namespace
+
 // One path tracer per thread: holds a density accessor.
 class PathTracer {
   public:
@@ -285,8 +287,6 @@ class PathTracer {
     double k_, sigmaBar_;
 };
 
-}  // namespace
-
 MonteCarloReference::MonteCarloReference(Scene scene) : scene_(std::move(scene)) { validate(scene_); }
 
 RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std::uint64_t seed,
@@ -307,19 +307,19 @@ RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std:
     return out;
 }
 
-long MonteCarloReference::follow(const Photon &photon, const glm::dvec3 &boxMin, const glm::dvec3 &boxMax, Rng &rng,
-                                 const CollisionTally &tally) const {
-    PathTracer tracer(scene_, true);
-    tracer.follow(photon, boxMin, boxMax, rng, tally);
-    return tracer.steps;
+PhotonTracer::PhotonTracer(const MonteCarloReference &reference)
+    : tracer_(std::make_unique<PathTracer>(reference.scene(), true)) {}
+
+PhotonTracer::~PhotonTracer() = default;
+
+void PhotonTracer::follow(const Photon &photon, const glm::dvec3 &boxMin, const glm::dvec3 &boxMax, Rng &rng,
+                          const CollisionTally &tally) {
+    tracer_->follow(photon, boxMin, boxMax, rng, tally);
 }
 
-Rgb MonteCarloReference::radianceArriving(const Ray &ray, Rng &rng, long &steps) const {
-    PathTracer tracer(scene_, true);
-    const Rgb L = tracer.sample(ray, rng, true);
-    steps += tracer.steps;
-    return L;
-}
+Rgb PhotonTracer::radianceArriving(const Ray &ray, Rng &rng) { return tracer_->sample(ray, rng, true); }
+
+long PhotonTracer::steps() const { return tracer_->steps; }
 
 SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
                                              std::uint64_t stream, bool scattered) const {
