@@ -401,7 +401,8 @@ MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb
     if (plan.photons == 0) return MonteCarloVoxels{};
     const std::vector<SourceEstimate> estimates = lightTracedSources(reference, voxels, plan, seed, progress);
     stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size();
-    return tracedVoxels(scene, voxels, [&](std::size_t v) { return estimates[v]; }, progress);
+    // The fit alone left: the photons have run the progress to its end.
+    return tracedVoxels(scene, voxels, [&](std::size_t v) { return estimates[v]; }, SubProgress(nullptr, 0.0, 1.0));
 }
 
 // The diffusion system of one channel plus what the surface needs afterwards.

@@ -12,11 +12,11 @@
 namespace firn {
 
 // Light tracing (docs/bake.md Method 3): the source function of many voxels from paths that serve every voxel
-// they cross, for clouds of thrown snow too large to gather per voxel. Photons enter the medium's bounding box
-// through its faces: the suns' beams (their direction jittered over the disc) where no occluder hides the sun,
+// they cross, for clouds of thrown snow too large to gather per voxel. Photons enter a box just inside the medium's
+// bounds through its faces: the suns' beams (their direction jittered over the disc) where no occluder hides the sun,
 // and all other light arriving there (sky, occluders' reflections, light the medium sent out and the scene
 // returned), one path of the reference traced outwards per photon for its radiance. Inside, the reference's own
-// tracking (MonteCarloReference::follow): delta tracking, Henyey-Greenstein, Lambertian occluders, roulette,
+// tracking (PhotonTracer::follow): delta tracking, Henyey-Greenstein, Lambertian occluders, roulette,
 // until the photon leaves the box. Each real collision in a voxel adds the power arriving and its direction to
 // the voxel's sums (the collision estimator of the integral of sigma_t phi and of the moments; divided by the
 // voxel's integral of sigma_t: the extinction-weighted mean sourceIn gives), except a sun beam's first

@@ -24,6 +24,16 @@ constexpr long kMaxEvents = 10'000'000;   // a safety net only; paths end by esc
 
 double maxComponent(const Rgb &c) { return std::max({c.x, c.y, c.z}); }
 
+// Distance (m) along d from p, inside the box [lo, hi], to where the ray leaves it.
+double boxExit(const glm::dvec3 &lo, const glm::dvec3 &hi, const glm::dvec3 &p, const glm::dvec3 &d) {
+    double t = kInfinity;
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] > 0.0) t = std::min(t, (hi[a] - p[a]) / d[a]);
+        else if (d[a] < 0.0) t = std::min(t, (lo[a] - p[a]) / d[a]);
+    }
+    return t;
+}
+
 // Points of [0, 1)^5 (a voxel's position and a direction) from the R5 Kronecker sequence, n alpha mod 1 with
 // alpha_i = phi^-i, phi the root of x^6 = x + 1 (Roberts 2018), shifted at random (Cranley-Patterson): every
 // projection stratified, seeded. Against independent draws (bench/bake_suite.py --seeds, mean error per block and
@@ -43,6 +53,8 @@ class KroneckerSequence {
   private:
     std::array<double, 5> alpha_{}, x_{};
 };
+
+}  // namespace
 
 // One path tracer per thread: holds a density accessor.
 class PathTracer {
@@ -120,19 +132,19 @@ class PathTracer {
         }
     }
 
-    // Light tracing: the photon forwards until it leaves the medium's bounds (what lies beyond reaches them again
-    // only as the light arriving there, which the caller's photons carry) or roulette ends it.
-    void follow(const Photon &photon, Rng &rng, const CollisionTally &tally) {
+    // Light tracing: the photon forwards until it leaves the box [lo, hi] (what lies beyond reaches it again only
+    // as the light arriving there, which the caller's photons carry) or roulette ends it.
+    void follow(const Photon &photon, const glm::dvec3 &lo, const glm::dvec3 &hi, Rng &rng, const CollisionTally &tally) {
         glm::dvec3 p = photon.ray.origin, d = photon.ray.direction;
         Rgb throughput(1.0);
         bool straight = photon.straightFromLight;
         for (long event = 0; event < kMaxEvents; ++event) {
-            double t0, t1;
-            if (!medium_.clipToBounds(p, d, t0, t1)) return;
-            const double tCollision = sampleCollision(p, d, kInfinity, rng);
+            const double tExit = boxExit(lo, hi, p, d);
+            if (!(tExit > 0.0)) return;
+            const double tCollision = sampleCollision(p, d, tExit, rng);
             const float tNear = event == 0 ? 0.0f : float(kSurfaceEpsilon);
             const std::optional<RayCaster::Hit> hit = scene_.occluders->caster().intersect(
-                glm::vec3(p), glm::vec3(d), tNear, float(std::min(tCollision, t1)));
+                glm::vec3(p), glm::vec3(d), tNear, float(std::min(tCollision, tExit)));
             if (hit) {
                 p += double(hit->distance) * d;
                 const glm::dvec3 n = glm::dot(glm::dvec3(hit->normal), d) < 0.0 ? glm::dvec3(hit->normal)
@@ -275,8 +287,6 @@ class PathTracer {
     double k_, sigmaBar_;
 };
 
-}  // namespace
-
 MonteCarloReference::MonteCarloReference(Scene scene) : scene_(std::move(scene)) { validate(scene_); }
 
 RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std::uint64_t seed,
@@ -297,18 +307,19 @@ RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std:
     return out;
 }
 
-long MonteCarloReference::follow(const Photon &photon, Rng &rng, const CollisionTally &tally) const {
-    PathTracer tracer(scene_, true);
-    tracer.follow(photon, rng, tally);
-    return tracer.steps;
+PhotonTracer::PhotonTracer(const MonteCarloReference &reference)
+    : tracer_(std::make_unique<PathTracer>(reference.scene(), true)) {}
+
+PhotonTracer::~PhotonTracer() = default;
+
+void PhotonTracer::follow(const Photon &photon, const glm::dvec3 &boxMin, const glm::dvec3 &boxMax, Rng &rng,
+                          const CollisionTally &tally) {
+    tracer_->follow(photon, boxMin, boxMax, rng, tally);
 }
 
-Rgb MonteCarloReference::radianceArriving(const Ray &ray, Rng &rng, long &steps) const {
-    PathTracer tracer(scene_, true);
-    const Rgb L = tracer.sample(ray, rng, true);
-    steps += tracer.steps;
-    return L;
-}
+Rgb PhotonTracer::radianceArriving(const Ray &ray, Rng &rng) { return tracer_->sample(ray, rng, true); }
+
+long PhotonTracer::steps() const { return tracer_->steps; }
 
 SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
                                              std::uint64_t stream, bool scattered) const {

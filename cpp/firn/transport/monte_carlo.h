@@ -3,6 +3,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include <glm/mat3x3.hpp>
@@ -102,21 +103,35 @@ class MonteCarloReference {
     SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream,
                             bool scattered = true) const;
 
-    // Light tracing, the paths above run forwards: follows `photon` through the medium (delta tracking,
-    // Henyey-Greenstein at every real collision) and off the occluders (Lambertian) until it leaves the medium's
-    // bounds or roulette ends it, calling `tally` at every real collision (but a sun beam's first). Returns its
-    // tracking steps.
-    long follow(const Photon &photon, Rng &rng, const CollisionTally &tally) const;
-
-    // All the light arriving at `ray.origin` travelling along -ray.direction (sky, occluders' reflections, the
-    // medium's scattering; not the suns' and lamps' direct beams), one sample, W/m^2/sr; its tracking steps added
-    // to `steps`.
-    Rgb radianceArriving(const Ray &ray, Rng &rng, long &steps) const;
-
     const Scene &scene() const { return scene_; }
 
   private:
     Scene scene_;
+};
+
+class PathTracer;
+
+// Light tracing (light_tracing.h) with the reference's tracking, on one thread: its density accessors are built
+// once for many photons. Its tracking (density lookups) jumps over blocks without snow.
+class PhotonTracer {
+  public:
+    explicit PhotonTracer(const MonteCarloReference &reference);
+    ~PhotonTracer();
+
+    // The paths above run forwards: follows `photon` through the medium (delta tracking, Henyey-Greenstein at
+    // every real collision) and off the occluders (Lambertian) until it leaves the box [boxMin, boxMax] (within
+    // the medium's bounds) or roulette ends it, calling `tally` at every real collision (but a sun beam's first).
+    void follow(const Photon &photon, const glm::dvec3 &boxMin, const glm::dvec3 &boxMax, Rng &rng,
+                const CollisionTally &tally);
+
+    // All the light arriving at `ray.origin` travelling along -ray.direction (sky, occluders' reflections, the
+    // medium's scattering; not the suns' and lamps' direct beams), one sample, W/m^2/sr.
+    Rgb radianceArriving(const Ray &ray, Rng &rng);
+
+    long steps() const;  // tracking steps so far
+
+  private:
+    std::unique_ptr<PathTracer> tracer_;
 };
 
 }  // namespace firn
