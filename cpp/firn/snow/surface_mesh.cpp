@@ -62,6 +62,8 @@ SurfaceMesh mesh(const openvdb::FloatGrid &grid, double isovalue, double adaptiv
 
 // A leaf's voxels as 8 words of 64 bits, word x, bit (y << 3) | z: NodeMask<3>'s layout.
 using LeafWords = std::array<std::uint64_t, 8>;
+static_assert(openvdb::FloatTree::LeafNodeType::LOG2DIM == 3 && openvdb::FloatTree::LeafNodeType::NodeMaskType::WORD_COUNT == 8,
+              "the word layout below is that of an 8^3 leaf's NodeMask<3>");
 constexpr std::uint64_t kAllBits = ~std::uint64_t(0);
 constexpr std::uint64_t kBelowTopZ = 0x7F7F7F7F7F7F7F7FULL;  // z < 7
 constexpr std::uint64_t kTopZ = ~kBelowTopZ;                  // z = 7

@@ -23,6 +23,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/bounce_tail.h"
 #include "firn/transport/edge_lobe.h"
 #include "firn/transport/half_space.h"
 #include "firn/transport/incident_light.h"
@@ -132,25 +133,25 @@ struct Source : BroadLobe {
 // the beams' single scattering lies beneath the shell that takes the surface's radiance (composeSource) and
 // above where the snow blocks the beams (639,023 of 2.7 M unknowns on the car sample; held for all, they
 // took 24 bytes per unknown while the source is gathered and written).
-struct PeakedLobes {
+class PeakedLobes {
+  public:
     struct Peak {
         std::uint32_t key;
         glm::vec3 peak0, peak1;
     };
-    std::vector<Peak> peaks;  // in key order, added by add() and push() alone
-
+    const std::vector<Peak> &peaks() const { return peaks_; }  // in key order
     static bool holds(const Source &S) { return S.peak0 != glm::vec3(0.0f) || S.peak1 != glm::vec3(0.0f); }
     void add(std::size_t key, const Source &S) {  // keys in increasing order
         if (holds(S)) push({std::uint32_t(key), S.peak0, S.peak1});
     }
     void push(const Peak &peak) {  // keys in increasing order
         const std::size_t word = peak.key / 64;
-        if (word >= held_.size()) before_.resize(word + 1, std::uint32_t(peaks.size())), held_.resize(word + 1, 0);
+        if (word >= held_.size()) before_.resize(word + 1, std::uint32_t(peaks_.size())), held_.resize(word + 1, 0);
         held_[word] |= std::uint64_t(1) << (peak.key % 64);
-        peaks.push_back(peak);
+        peaks_.push_back(peak);
     }
     std::vector<Peak>::const_iterator from(std::size_t key) const {  // the first peak of key >= key
-        return std::lower_bound(peaks.begin(), peaks.end(), key, [](const Peak &p, std::size_t k) { return p.key < k; });
+        return std::lower_bound(peaks_.begin(), peaks_.end(), key, [](const Peak &p, std::size_t k) { return p.key < k; });
     }
     // The source function of that broad lobe and key: its peak found by counting the keys held before it (a
     // binary search over the car's 640,000 peaks took 0.7 processor seconds of its gathering and grids).
@@ -159,13 +160,14 @@ struct PeakedLobes {
         static_cast<BroadLobe &>(S) = broad;
         const std::size_t word = key / 64, bit = key % 64;
         if (word < held_.size() && (held_[word] >> bit & 1)) {
-            const Peak &peak = peaks[before_[word] + __builtin_popcountll(held_[word] & ((std::uint64_t(1) << bit) - 1))];
+            const Peak &peak = peaks_[before_[word] + __builtin_popcountll(held_[word] & ((std::uint64_t(1) << bit) - 1))];
             S.peak0 = peak.peak0, S.peak1 = peak.peak1;
         }
         return S;
     }
 
   private:
+    std::vector<Peak> peaks_;            // in key order, added by push() alone (the bitmap follows it)
     std::vector<std::uint64_t> held_;    // bit key % 64 of word key / 64: whether key holds a peak
     std::vector<std::uint32_t> before_;  // per word: the peaks of smaller keys
 };
@@ -1009,7 +1011,7 @@ struct VoxelValues {
         values.emplace_back(offset, S);
     }
     void append(const VoxelValues &other, std::size_t begin, std::size_t end) {  // other's values [begin, end)
-        for (auto peak = other.peaked.from(begin); peak != other.peaked.peaks.end() && peak->key < end; ++peak)
+        for (auto peak = other.peaked.from(begin); peak != other.peaked.peaks().end() && peak->key < end; ++peak)
             peaked.push({std::uint32_t(values.size() + peak->key - begin), peak->peak0, peak->peak1});
         values.insert(values.end(), other.values.begin() + begin, other.values.begin() + end);
     }
@@ -1242,7 +1244,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     openvdb::BoolTree nearPeak(false), peaks(false);  // peaks: surface voxels holding a peaked lobe
     if (!gathering) {
         std::vector<bool> peaked(source.broad.size(), false);  // by unknown
-        for (const PeakedLobes::Peak &peak : source.peaked.peaks)
+        for (const PeakedLobes::Peak &peak : source.peaked.peaks())
             peaked[peak.key] = glm::length(peak.peak1) > 0.0f;
         for (auto it = topo.index->cbeginValueOn(); it; ++it)
             if (const std::int32_t j = *it; j >= 0 && peaked[j] && topo.patches[j].isSurface()) {
@@ -1513,32 +1515,6 @@ void keepIndexAndPatches(SnowTopology &topo) {
 // Progress when the diffusion solves are done (REFERENCE: before path tracing the surface).
 constexpr double kSolvedProgress = 0.9, kSolvedProgressReference = 0.5;
 
-// Light between snow surfaces beyond the bounces gathered, added to the last gather `last` (W/m^2 per surface
-// patch, all bounces so far; `before`, `older`: the two gathers before it, none: zero): each bounce returns
-// about the same share r of the one before, measured per channel from the last two bounces over all patches
-// (area-weighted), so the rest of the geometric series is the last bounce times r / (1 - r) (r at most
-// kMaxBounceShare). For a cloud of small pieces left to the diffusion (the skier sample's 9,334 lumps, 176,775
-// voxels): they light each other over many bounces (those lumps alone, sun only, against the core's Monte
-// Carlo: -39 % without the gathering, -17 % with one bounce, +5 % with four, +10 % with two and this tail; r
-// about 0.5; the whole frame, sun and sky over the snow, -33 % -> -14 %; bench/skier_light_bench.py).
-constexpr double kMaxBounceShare = 0.8;
-void addBounceTail(const SnowTopology &topo, const SurfaceValues<glm::vec3> *older, const SurfaceValues<glm::vec3> &before,
-                   SurfaceValues<glm::vec3> &last) {
-    const auto olderAt = [&](std::size_t i) { return older ? glm::dvec3((*older)[i]) : glm::dvec3(0.0); };
-    glm::dvec3 previousBounce(0.0), lastBounce(0.0);
-    for (std::size_t i = 0; i < topo.size(); ++i) {
-        const double area = topo.patches[i].area;
-        if (!(area > 0.0)) continue;
-        previousBounce += area * (glm::dvec3(before[i]) - olderAt(i)), lastBounce += area * glm::dvec3(last[i] - before[i]);
-    }
-    for (int c = 0; c < 3; ++c) {
-        const double r = previousBounce[c] > 0.0 ? std::clamp(lastBounce[c] / previousBounce[c], 0.0, kMaxBounceShare) : 0.0;
-        if (!(r > 0.0)) continue;
-        for (std::size_t i = 0; i < topo.size(); ++i)
-            if (topo.patches[i].area > 0.0) last.surface(i)[c] += float((last[i][c] - before[i][c]) * r / (1.0 - r));
-    }
-}
-
 // The source function of every unknown: per pass (the later ones gather the light between snow surfaces
 // first), a diffusion solve per channel. One channel at a time, its system assembled and its solver built
 // again each pass: keeping the three tripled the bake's memory, and rebuilding them costs a few per cent of a
@@ -1551,25 +1527,31 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
     std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
     for (auto &channel : phi) channel.assign(topo.size(), 0.0);
     SurfaceValues<glm::vec3> fromSnow;  // W/m^2 gathered from other snow onto surface patches (after the first pass)
-    SurfaceValues<glm::vec3> before, older;  // the two gathers before it (bounceTail)
+    SurfaceValues<glm::vec3> before, older;  // the two gathers before it (bounceTail only)
     SourceValues source;
     for (int pass = 0; pass < passes; ++pass) {
-        const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
+        double begin = 0.4 + (solved - 0.4) * pass / passes;
+        const double end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
         if (pass > 0) {
-            // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
+            // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass). The
+            // gathering takes the first half of the pass's progress, the three solves the rest.
+            const double gathered = (begin + end) / 2.0;
             p.report(begin, "Gathering light between snow surfaces");
             {
                 const GridValues values = gridValues(scene, topo, source, traced, preset, settings, true);
-                older = std::move(before), before = std::move(fromSnow);
+                if (bounceTail) older = std::move(before), before = std::move(fromSnow);
                 fromSnow = snowIrradiance(scene, topo, light, source, traced, values, SkyRays(preset.skySamples),
-                                          settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, begin));
+                                          settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, gathered));
                 if (preset.skyOverNeighbours) averageOverNeighbours(topo, fromSnow);
-                if (bounceTail && pass + 1 == passes && pass > 1)
+                if (bounceTail && pass + 1 == passes && pass > 1) {
                     addBounceTail(topo, pass > 2 ? &older : nullptr, before, fromSnow);
+                    older = before = SurfaceValues<glm::vec3>();
+                }
                 source = SourceValues();  // freed (= {} would keep its vectors' capacity)
             }
             releaseFreedMemory();  // the previous pass's values
             clock.lap(&BakeStats::Phases::gather);
+            begin = gathered;
         }
         SurfaceValues<SurfaceLight> leaving(topo.surfaceSlot, topo.surfaceVoxels());
         for (int c = 0; c < 3; ++c) {
@@ -1630,7 +1612,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     p.report(0.05, "Tracing sun and sky light");
     IncidentLight light =
         computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
-                             SubProgress(&p, 0.05, 0.4));
+                             SubProgress(&p, 0.05, 0.3));
     clock.lap(&BakeStats::Phases::light);
 
     local.unknowns = topo.size();
@@ -1638,13 +1620,13 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     local.surfaceVoxels = topo.surfaceVoxels();
     const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
     const bool hidden = std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
-    p.report(0.4, "Tracing thin snow");
+    p.report(0.3, "Tracing thin snow");
     const std::vector<openvdb::Coord> thin = thinVoxels(*scene.medium);
     const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
     const MonteCarloVoxels traced =
         samples > 0 || thin.empty()
-            ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, SubProgress(&p, 0.4, 0.4))
-            : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, SubProgress(&p, 0.4, 0.4), local);
+            ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, SubProgress(&p, 0.3, 0.4))
+            : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, SubProgress(&p, 0.3, 0.4), local);
     local.tracedVoxels = traced.source.size();
     clock.lap(&BakeStats::Phases::trace);
     // Small pieces and thin snow left to the diffusion (too many to trace: a skier's thousands of lumps) light
