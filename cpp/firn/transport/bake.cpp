@@ -490,6 +490,9 @@ void acrossPieces(const Scene &scene, const SnowTopology &topo, const std::vecto
         });
         // Per entry voxel: the cross-section (m^2) the rays entering there carry across.
         beam.acrossShare = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
+        beam.inPiece.assign(topo.size(), 0);
+        for (const openvdb::Coord &c : pieces)
+            if (const std::int32_t i = unknowns.getValue(c); i >= 0) beam.inPiece[std::size_t(i)] = 1;
         for (const auto &list : found)
             for (auto a : list) {
                 a.share *= float(spacing * spacing);
@@ -661,6 +664,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     if (patch.share[f] <= 0.0f) continue;
                     const double mu = glm::dot(patch.sharp ? faceNormal(f) : patch.normal, w);
                     const double flow = mu * patch.area * patch.share[f] * (mu > 0.0 ? Bs : Bv);
+                    if (flow < 0.0 && !beam.inPiece.empty() && beam.inPiece[i]) continue;  // the rays carry it out
                     (flow > 0.0 ? in : out) += std::abs(flow);
                     if (flow > 0.0) entering[f] = flow, muIn[f] = mu;
                 }
@@ -860,6 +864,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             double crossing = 0.0;
             glm::dvec3 axis(0.0);
             for (std::size_t s = 0; s < light.beams.size(); ++s) {
+                if (!light.beams[s].inPiece.empty() && light.beams[s].inPiece[i]) continue;  // acrossOut instead
                 const double beam = light.beams[s].atVoxel[i][c];
                 const glm::dvec3 d = -towardsBeam(scene, s, centre);
                 for (int f = 0; f < 6 && beam > 0.0; ++f) {

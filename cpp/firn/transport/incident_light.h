@@ -30,6 +30,7 @@ struct IncidentLight {
             glm::vec3 share;            // of the beam entering `entry`'s patch
         };
         SurfaceValues<glm::vec3> acrossShare;
+        std::vector<std::uint8_t> inPiece;  // per unknown: 1 in the pieces the rays cross (they carry the beam out)
         std::vector<Across> across;
     };
     std::vector<Beam> beams;
