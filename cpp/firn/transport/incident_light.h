@@ -22,16 +22,6 @@ struct IncidentLight {
     struct Beam {
         std::vector<glm::vec3> atVoxel;      // at each unknown's centre
         SurfaceValues<glm::vec3> atSurface;  // just outside each surface voxel's patch (0 inside the snow)
-        // Small pieces left to the diffusion (bake.cpp, acrossPieces): per lit surface voxel, the share of the
-        // beam entering its patch that crosses the piece (transmittance with sigma_tr, per channel; 0 elsewhere),
-        // and the rays that measured it: where each left the piece and its part of that share.
-        struct Across {
-            std::uint32_t entry, exit;  // surface voxels
-            glm::vec3 share;            // of the beam entering `entry`'s patch
-        };
-        SurfaceValues<glm::vec3> acrossShare;
-        std::vector<std::uint8_t> inPiece;  // per unknown: 1 in the pieces the rays cross (they carry the beam out)
-        std::vector<Across> across;
     };
     std::vector<Beam> beams;
     // W/m^2 onto each surface voxel's patch from the sky, past occluders and snow, plus sun and sky light
