@@ -25,7 +25,8 @@ import time
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-BLOCK = 4  # pixels
+sys.path.insert(0, HERE)
+from block_compare import compare  # noqa: E402  (bench/ on the path when Blender runs this file)
 
 
 def build(folder, frames):
@@ -71,21 +72,6 @@ def build(folder, frames):
         json.dump(meta, f, indent=1)
     os.replace(os.path.join(folder, "inputs.json.tmp"), os.path.join(folder, "inputs.json"))
     print(f"frame {frames} built and dumped to {folder} ({time.time() - start:.0f} s)")
-
-
-def blocks(values, shape):
-    rows, columns = shape
-    return values.reshape(rows // BLOCK, BLOCK, columns // BLOCK, BLOCK).sum((1, 3))
-
-
-def compare(label, baked, reference, shape):
-    """Per 4 x 4-pixel block: mean |relative error|, worst, and the bias of the sum, over blocks with light."""
-    b, m = blocks(baked.mean(1), shape), blocks(reference.mean(1), shape)
-    lit = m > 0.05 * m.max()
-    error = (b[lit] - m[lit]) / m[lit]
-    bias = b[lit].sum() / m[lit].sum() - 1
-    print(f"  {label:<36} {lit.sum():4d} blocks  mean |err| {100 * np.abs(error).mean():5.1f} %  "
-          f"worst {100 * error[np.argmax(np.abs(error))]:+6.1f} %  bias {100 * bias:+5.1f} %", flush=True)
 
 
 def measure(args):
@@ -151,9 +137,9 @@ def measure(args):
                 print(f"  reference seed {seed}: {time.time() - start:.0f} s wall, load {os.getloadavg()[0]:.1f}")
             references.append(np.load(saved))
         for seed, reference in zip((1, 2), references):
-            compare(f"baked vs reference seed {seed}", render, reference, X.shape)
+            compare(f"baked vs reference seed {seed}", render, reference, X.shape, width=36)
         if len(references) > 1:
-            compare("reference seed 2 vs seed 1", references[1], references[0], X.shape)
+            compare("reference seed 2 vs seed 1", references[1], references[0], X.shape, width=36)
 
 
 def main():

@@ -25,13 +25,13 @@ import time
 import numpy as np
 
 import firncore
+from block_compare import compare
 
 FPS = 24.0
 FRAMES = 12
 OPTICS = firncore.VolumeOptics(8.18, (0.99998,) * 3, 0.89)
 SUNS = [firncore.SunLight((0.5, -0.3, 0.81), (3.0, 3.0, 3.0), 0.0093)]
 SKY = firncore.Sky(radiance=(0.3, 0.35, 0.45))
-BLOCK = 4  # pixels
 
 
 def ski_spray(folder, settings):
@@ -60,21 +60,6 @@ def view(name, n):
     X, Y = np.meshgrid(np.linspace(0.2, 1.8, n), np.linspace(-0.45, 0.45, n // 2))
     origins = np.stack([X.ravel(), Y.ravel(), np.full(X.size, 1.0)], 1)
     return origins, np.tile([0.0, 0.0, -1.0], (X.size, 1)), X.shape
-
-
-def blocks(values, shape):
-    rows, columns = shape
-    return values.reshape(rows // BLOCK, BLOCK, columns // BLOCK, BLOCK).sum((1, 3))
-
-
-def compare(label, baked, reference, shape):
-    """Per 4 x 4-pixel block: mean |relative error|, worst, and the bias of the sum, over blocks with light."""
-    b, m = blocks(baked.mean(1), shape), blocks(reference.mean(1), shape)
-    lit = m > 0.05 * m.max()
-    error = (b[lit] - m[lit]) / m[lit]
-    bias = b[lit].sum() / m[lit].sum() - 1
-    print(f"  {label:<28} {lit.sum():4d} blocks  mean |err| {100 * np.abs(error).mean():5.1f} %  "
-          f"worst {100 * error[np.argmax(np.abs(error))]:+6.1f} %  bias {100 * bias:+5.1f} %")
 
 
 def timed(label, bake):
