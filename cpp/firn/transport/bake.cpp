@@ -516,7 +516,6 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 }
                 const std::size_t fi = SnowTopology::faceIndex(link);
                 const BoundaryFace &face = topo.faces[fi];
-                const double beyond = ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f)));
                 double area = h2;  // m^2 of boundary the face stands for
                 if (!face.occluder) {
                     // Air: the density ramps down to zero through any fringe; diffuse sky light (its share
@@ -533,6 +532,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 } else {
                     // Occluder: a Lambertian surface at `distance` from the node.
                     albedo[f] = std::min(scene.occluders->albedo(face.triangle)[c], 0.99);
+                    const double beyond = ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f)));
                     const double d = face.distance;
                     boundary[f].emplace(beta, 2.0 * (1.0 + albedo[f]) / (1.0 - albedo[f]),
                                         3.0 * (d * sigmaTr + 0.5 * d * d / h * (beyond - sigmaTr)));

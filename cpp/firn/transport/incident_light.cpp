@@ -65,6 +65,7 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
     for (int k = 0; k < rays.count(); ++k) {
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
         const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+        if (hit && !bounce && !snowRays) continue;  // brings nothing, and no one asks whether snow lies along it
         const double column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
         if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
         if (column >= limit) continue;
