@@ -489,8 +489,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     const double beta = std::max(ch.beta(), 1e-9);
     const std::size_t n = topo.size();
     ChannelSystem sys(topo, light.beams.size());
-    sys.A.coord = topo.coord;
-    // The topology's links, not a copy: the topology outlives the solver (an aliasing pointer owning nothing).
+    // The topology's voxels and links, not copies: the topology outlives the solver (aliasing pointers owning
+    // nothing).
+    sys.A.coord = std::shared_ptr<const std::vector<openvdb::Coord>>(std::shared_ptr<void>(), &topo.coord);
     sys.A.neighbour = std::shared_ptr<const Stencil<float>::Neighbours>(std::shared_ptr<void>(), &topo.link);
     sys.A.conductance.resize(n), sys.A.diag.resize(n), sys.remainder.resize(n);
 

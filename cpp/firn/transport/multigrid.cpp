@@ -124,7 +124,7 @@ void prepare(Level &level) {
     const std::size_t n = level.A.size();
     level.rowsByColour[0].clear(), level.rowsByColour[1].clear();
     for (std::size_t i = 0; i < n; ++i) {
-        const openvdb::Coord &c = level.A.coord[i];
+        const openvdb::Coord &c = (*level.A.coord)[i];
         level.rowsByColour[(c.x() + c.y() + c.z()) & 1].push_back(std::uint32_t(i));
     }
     level.b.assign(n, 0.0), level.x.assign(n, 0.0);
@@ -139,18 +139,20 @@ bool coarsen(Level &fine, Level &coarse) {
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> access(index);
     std::vector<std::uint32_t> aggregate(n);  // row -> row of the next level
     Stencil<float> &C = coarse.A;
+    auto coord = std::make_shared<std::vector<openvdb::Coord>>();
     for (std::size_t i = 0; i < n; ++i) {
-        const openvdb::Coord &c = A.coord[i];
+        const openvdb::Coord &c = (*A.coord)[i];
         const openvdb::Coord cc(floorHalf(c.x()), floorHalf(c.y()), floorHalf(c.z()));
         int id = access.getValue(cc);
         if (id < 0) {
-            id = int(C.coord.size());
+            id = int(coord->size());
             access.setValue(cc, id);
-            C.coord.push_back(cc);
+            coord->push_back(cc);
         }
         aggregate[i] = std::uint32_t(id);
     }
-    const std::size_t nc = C.coord.size();
+    const std::size_t nc = coord->size();
+    C.coord = std::move(coord);
     if (nc > n * 3 / 4) return false;
     using StencilOperator = Stencil<float>;
 
@@ -165,14 +167,15 @@ bool coarsen(Level &fine, Level &coarse) {
     auto neighbour = std::make_shared<Stencil<float>::Neighbours>(nc);
     C.conductance.assign(nc, {});
     C.diag.assign(nc, 0.0);
-    static const openvdb::Coord kStep[6] = {openvdb::Coord(-1, 0, 0), openvdb::Coord(1, 0, 0),
-                                            openvdb::Coord(0, -1, 0), openvdb::Coord(0, 1, 0),
-                                            openvdb::Coord(0, 0, -1), openvdb::Coord(0, 0, 1)};
+    // A block's neighbour along an axis is the block its members' links on that side cross into (a voxel's
+    // neighbour one step away lies in its own block or in the next one that way). A neighbouring block that no
+    // link reaches gets none: its conductance would be 0, which adds nothing to a sum.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nc, 1024), [&](const auto &range) {
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> look(index);
         for (std::size_t I = range.begin(); I != range.end(); ++I) {
             double remainder = 0.0;  // sums in double, stored in float
             std::array<double, 6> crossing{};
+            std::array<std::int32_t, 6> across;
+            across.fill(StencilOperator::kNone);
             for (std::uint32_t m = fine.membersStart[I]; m < fine.membersStart[I + 1]; ++m) {
                 const std::uint32_t i = fine.members[m];
                 remainder += A.diag[i];
@@ -180,14 +183,13 @@ bool coarsen(Level &fine, Level &coarse) {
                     const std::int32_t j = N[i][k];
                     if (j < 0) continue;
                     remainder -= A.conductance[i][k];
-                    if (aggregate[j] != I) crossing[k] += A.conductance[i][k];
+                    if (aggregate[j] != I) crossing[k] += A.conductance[i][k], across[k] = std::int32_t(aggregate[j]);
                 }
             }
             double diag = remainder;
             for (int k = 0; k < 6; ++k) {
-                const int id = look.getValue(C.coord[I] + kStep[k]);
-                (*neighbour)[I][k] = id < 0 ? StencilOperator::kNone : id;
-                C.conductance[I][k] = float(id < 0 ? 0.0 : 0.5 * crossing[k]);
+                (*neighbour)[I][k] = across[k];
+                C.conductance[I][k] = float(across[k] < 0 ? 0.0 : 0.5 * crossing[k]);
                 diag += C.conductance[I][k];
             }
             C.diag[I] = float(diag);
@@ -327,7 +329,7 @@ MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remaind
     }
     for (Level &level : h.levels) prepare(level);
     if (h.levels.back().A.size() <= kDenseLimit) h.cholesky = denseCholesky(h.levels.back().A);
-    for (Level &level : h.levels) level.A.coord = std::vector<openvdb::Coord>();  // they only placed the rows in colours and blocks
+    for (Level &level : h.levels) level.A.coord.reset();  // they only placed the rows in colours and blocks
 }
 
 MultigridSolver::~MultigridSolver() = default;
