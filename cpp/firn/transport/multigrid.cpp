@@ -1,6 +1,7 @@
 #include "firn/transport/multigrid.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -247,25 +248,28 @@ struct FineOperator {
 // Conjugate gradients' reductions as OpenVDB's pcg::Vector computes them, so that the iterates are those of its
 // pcg::solve bit for bit: <a, b> summed in 100 fixed segments added in order (serially below 1024 entries), the
 // same whatever the threads; the largest |a_i|.
-double dot(const std::vector<double> &a, const std::vector<double> &b) {
-    const std::size_t n = a.size();
-    double sum = 0.0;
-    if (n < 1024) {
-        for (std::size_t i = 0; i < n; ++i) sum += a[i] * b[i];
-        return sum;
-    }
+// `segment(begin, end)` returns its entries' part of the sum; called once per segment, in parallel.
+template <typename Segment>
+double segmentedSum(std::size_t n, const Segment &segment) {
+    if (n < 1024) return segment(std::size_t(0), n);
     constexpr std::size_t kSegments = 100;
     std::array<double, kSegments> partial;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kSegments), [&](const auto &range) {
         for (std::size_t s = range.begin(); s != range.end(); ++s) {
             const std::size_t begin = s * (n / kSegments), end = s + 1 == kSegments ? n : begin + n / kSegments;
-            double part = 0.0;
-            for (std::size_t i = begin; i < end; ++i) part += a[i] * b[i];
-            partial[s] = part;
+            partial[s] = segment(begin, end);
         }
     });
+    double sum = 0.0;
     for (double part : partial) sum += part;
     return sum;
+}
+double dot(const std::vector<double> &a, const std::vector<double> &b) {
+    return segmentedSum(a.size(), [&](std::size_t begin, std::size_t end) {
+        double part = 0.0;
+        for (std::size_t i = begin; i < end; ++i) part += a[i] * b[i];
+        return part;
+    });
 }
 double infNorm(const std::vector<double> &a) {
     return tbb::parallel_reduce(
@@ -276,10 +280,12 @@ double infNorm(const std::vector<double> &a) {
         },
         [](double a, double b) { return std::max(a, b); });
 }
-// z = one V-cycle applied to r, scaled into float's range (the bake's sources span many decades between scenes).
-void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector<double> &r, std::vector<double> &z) {
+// z = one V-cycle applied to r, scaled into float's range (the bake's sources span many decades between scenes) by
+// r's largest |r_i|.
+void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector<double> &r, double largest,
+                  std::vector<double> &z) {
     const auto &top = hierarchy.levels.front();
-    const double scale = std::max(infNorm(r), 1e-300);
+    const double scale = std::max(largest, 1e-300);
     parallelRows(top.b.size(), [&](std::size_t i) { top.b[i] = float(r[i] / scale); });
     hierarchy.vcycle(0);
     parallelRows(top.x.size(), [&](std::size_t i) { z[i] = double(top.x[i]) * scale; });
@@ -288,6 +294,27 @@ void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector
 // y = a x + y.
 void axpy(double a, const std::vector<double> &x, std::vector<double> &y) {
     parallelRows(y.size(), [&](std::size_t i) { y[i] = a * x[i] + y[i]; });
+}
+
+// The iteration's step in one pass over the vectors: x += alpha p, r -= alpha q; returns <r, r> (as dot) and sets
+// `largest` to the largest |r_i| of the new r.
+double step(double alpha, const std::vector<double> &p, const std::vector<double> &q, std::vector<double> &x,
+            std::vector<double> &r, double &largest) {
+    std::array<double, 100> most{};  // per segment (segmentedSum's), or the first alone below 1024 entries
+    std::atomic<std::size_t> segments{0};
+    const double sum = segmentedSum(r.size(), [&](std::size_t begin, std::size_t end) {
+        double part = 0.0, top = 0.0;
+        for (std::size_t i = begin; i < end; ++i) {
+            x[i] = alpha * p[i] + x[i];
+            r[i] = -alpha * q[i] + r[i];
+            part += r[i] * r[i];
+            top = std::max(top, std::abs(r[i]));
+        }
+        most[segments++] = top;
+        return part;
+    });
+    largest = *std::max_element(most.begin(), most.end());
+    return sum;
 }
 
 }  // namespace
@@ -352,13 +379,14 @@ MultigridSolver::Result MultigridSolver::solve(std::vector<double> b, std::vecto
     std::vector<double> &r = b, p(n), z(n);  // z: M^-1 r, then A p
     A.multiply(x.data(), z.data());
     axpy(-1.0, z, r);  // r = b - A x
-    result.relativeResidual = infNorm(r) / normB;
+    double largest = infNorm(r);
+    result.relativeResidual = largest / normB;
     if (result.relativeResidual <= tolerance) return result;
     double rDotZPrevious = 1.0, leastL2 = std::numeric_limits<double>::max();
     for (int iteration = 0; iteration < maxIterations; ++iteration) {
         progress.throwIfCancelled();
         result.iterations = iteration + 1;
-        precondition(*hierarchy_, r, z);
+        precondition(*hierarchy_, r, largest, z);
         const double rDotZ = dot(r, z);
         if (iteration == 0) p = z;
         else {
@@ -369,11 +397,8 @@ MultigridSolver::Result MultigridSolver::solve(std::vector<double> b, std::vecto
         A.multiply(p.data(), q.data());
         const double alpha = rDotZ / dot(p, q);
         rDotZPrevious = rDotZ;
-        axpy(alpha, p, x);
-        axpy(-alpha, q, r);
-        const double l2 = std::sqrt(dot(r, r));
+        const double l2 = std::sqrt(step(alpha, p, q, x, r, largest));
         leastL2 = std::min(l2, leastL2);
-        const double largest = infNorm(r);
         result.relativeResidual = largest / normB;
         // Diverging, not finite, or converged.
         if (l2 > 2.0 * leastL2 || !std::isfinite(largest) || result.relativeResidual <= tolerance) break;
