@@ -57,7 +57,9 @@ struct MultigridSolver::Hierarchy {
     std::vector<double> cholesky;  // lower factor of the bottom level, dense row-major
     std::vector<float> remainder;  // finest level: diag minus the conductances
 
-    void sweep(const Level &level, int colour) const {
+    // fromZero: the first sweep of a cycle, whose neighbours all hold x = 0 (they are not read; the level's x need
+    // not be cleared first: the other colour's sweep writes the rest before anything reads it).
+    void sweep(const Level &level, int colour, bool fromZero = false) const {
         const Stencil<float> &A = level.A;
         const Stencil<float>::Neighbours &N = *A.neighbour;
         const auto &rows = level.rowsByColour[colour];
@@ -65,7 +67,7 @@ struct MultigridSolver::Hierarchy {
             for (std::size_t n = range.begin(); n != range.end(); ++n) {
                 const std::uint32_t i = rows[n];
                 float sum = level.b[i];
-                for (int k = 0; k < 6; ++k)
+                for (int k = 0; k < 6 && !fromZero; ++k)
                     if (N[i][k] >= 0) sum += A.conductance[i][k] * level.x[N[i][k]];
                 level.x[i] = sum / A.diag[i];
             }
@@ -91,14 +93,13 @@ struct MultigridSolver::Hierarchy {
     // One V-cycle on level l for level.b, from x = 0; symmetric (post-smoothing is the adjoint).
     void vcycle(std::size_t l) const {
         const Level &level = levels[l];
-        std::fill(level.x.begin(), level.x.end(), 0.0);
         if (l + 1 == levels.size()) {
             if (!cholesky.empty()) return solveDense(level);
-            for (int s = 0; s < 50; ++s) sweep(level, 0), sweep(level, 1);
+            for (int s = 0; s < 50; ++s) sweep(level, 0, s == 0), sweep(level, 1);
             for (int s = 0; s < 50; ++s) sweep(level, 1), sweep(level, 0);
             return;
         }
-        for (int s = 0; s < kSweeps; ++s) sweep(level, 0), sweep(level, 1);
+        for (int s = 0; s < kSweeps; ++s) sweep(level, 0, s == 0), sweep(level, 1);
         const Level &coarse = levels[l + 1];
         // The residual b - A x restricted to the blocks and the correction brought back, block by block (the
         // residual is not stored: 4 bytes per row).
