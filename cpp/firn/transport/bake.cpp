@@ -183,7 +183,21 @@ struct SourceValues {
 // Voxels whose source function comes from Monte Carlo (snow too thin for the diffusion), not from the solve.
 struct MonteCarloVoxels {
     openvdb::Int32Tree::Ptr index = std::make_shared<openvdb::Int32Tree>(-1);  // voxel -> source, -1 elsewhere
+    openvdb::CoordBBox box;  // around the voxels (empty: none)
     std::vector<Source> source;
+};
+
+// Voxel -> MonteCarloVoxels' source, -1 elsewhere; one per thread. Outside the traced voxels' box without a tree
+// lookup: a lookup where the tree holds no node searches its root every time (the car's 3 traced voxels, looked
+// up for each of millions of voxels several times a bake).
+class TracedIndex {
+  public:
+    explicit TracedIndex(const MonteCarloVoxels &traced) : box_(traced.box), index_(*traced.index) {}
+    std::int32_t getValue(const openvdb::Coord &c) { return box_.isInside(c) ? index_.getValue(c) : -1; }
+
+  private:
+    openvdb::CoordBBox box_;
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_;
 };
 
 // Voxels optically thinner than kTracedOpticalDepth (partly filled voxels of thrown snow, thin flakes, a
@@ -381,7 +395,7 @@ MonteCarloVoxels tracedVoxels(const Scene &scene, const std::vector<openvdb::Coo
         progress.report(double(done += range.size()) / voxels.size());
     });
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> index(*out.index);
-    for (std::size_t v = 0; v < voxels.size(); ++v) index.setValue(voxels[v], std::int32_t(v));
+    for (std::size_t v = 0; v < voxels.size(); ++v) index.setValue(voxels[v], std::int32_t(v)), out.box.expand(voxels[v]);
     return out;
 }
 
@@ -491,8 +505,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     const double beta = std::max(ch.beta(), 1e-9);
     const std::size_t n = topo.size();
     ChannelSystem sys(topo, light.beams.size());
-    sys.A.coord = topo.coord;
-    // The topology's links, not a copy: the topology outlives the solver (an aliasing pointer owning nothing).
+    // The topology's voxels and links, not copies: the topology outlives the solver (aliasing pointers owning
+    // nothing).
+    sys.A.coord = std::shared_ptr<const std::vector<openvdb::Coord>>(std::shared_ptr<void>(), &topo.coord);
     sys.A.neighbour = std::shared_ptr<const Stencil<float>::Neighbours>(std::shared_ptr<void>(), &topo.link);
     sys.A.conductance.resize(n), sys.A.diag.resize(n), sys.remainder.resize(n);
 
@@ -518,7 +533,6 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 }
                 const std::size_t fi = SnowTopology::faceIndex(link);
                 const BoundaryFace &face = topo.faces[fi];
-                const double beyond = ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f)));
                 double area = h2;  // m^2 of boundary the face stands for
                 if (!face.occluder) {
                     // Air: the density ramps down to zero through any fringe; diffuse sky light (its share
@@ -535,6 +549,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 } else {
                     // Occluder: a Lambertian surface at `distance` from the node.
                     albedo[f] = std::min(scene.occluders->albedo(face.triangle)[c], 0.99);
+                    const double beyond = ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f)));
                     const double d = face.distance;
                     boundary[f].emplace(beta, 2.0 * (1.0 + albedo[f]) / (1.0 - albedo[f]),
                                         3.0 * (d * sigmaTr + 0.5 * d * d / h * (beyond - sigmaTr)));
@@ -873,7 +888,7 @@ SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const 
     out.broad.resize(topo.size());
     std::vector<std::vector<PeakedLobes::Peak>> peaked((topo.size() + kBlock - 1) / kBlock);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, peaked.size(), 1), [&](const auto &blocks) {
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
+        TracedIndex tracedIndex(traced);
         std::vector<Source> values;
         for (std::size_t b = blocks.begin(); b != blocks.end(); ++b) {
             const tbb::blocked_range<std::size_t> range(b * kBlock, std::min(topo.size(), (b + 1) * kBlock));
@@ -1139,7 +1154,7 @@ class BlockMask {
 // index lookup for each of the 124 voxels around c took most of this walk's time.
 void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
-                        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &tracedIndex, const SourceValues &source,
+                        TracedIndex &tracedIndex, const SourceValues &source,
                         openvdb::tree::ValueAccessor<const openvdb::BoolTree> &peaks, Medium::ColumnMarcher &marcher,
                         Source &S) {
     struct Offset {
@@ -1271,7 +1286,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     Pairs perLeaf(leaves.leafCount());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
+        TracedIndex tracedIndex(traced);
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak), peaksAt(peaks), nearSurfaceAt(nearSurface);
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t l = range.begin(); l != range.end(); ++l)
@@ -1295,7 +1310,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> carriedSlot(*out.at);
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
+        TracedIndex tracedIndex(traced);
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearCarriedAt(nearCarried);
         Medium::Accessor density = medium.accessor();
         Medium::ColumnMarcher marcher(medium);
@@ -1335,7 +1350,7 @@ openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology 
     openvdb::tree::LeafManager<openvdb::Vec3fTree> leaves(*tree);  // in the topology's leaf order
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> tracedIndex(*traced.index);
+        TracedIndex tracedIndex(traced);
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             auto &leaf = leaves.leaf(l);
             for (auto it = leaf.beginValueOn(); it; ++it) {
@@ -1381,7 +1396,7 @@ class BakedValuesSampler {
   public:
     BakedValuesSampler(const SnowTopology &topo, const SourceValues &source, const MonteCarloVoxels &traced,
                        const GridValues &values)
-        : source_(source), beyond_(*values.beyond), index_(*topo.index), traced_(*traced.index), at_(*values.at) {}
+        : source_(source), beyond_(*values.beyond), index_(*topo.index), traced_(traced), at_(*values.at) {}
 
     BakedGrids::Values operator()(const openvdb::Vec3d &ijk) {
         const openvdb::Coord lower = floorCoord(ijk);
@@ -1411,7 +1426,9 @@ class BakedValuesSampler {
   private:
     const SourceValues &source_;
     const LeafValues &beyond_;
-    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_, traced_, at_;
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_;
+    TracedIndex traced_;
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> at_;
     bool cached_ = false;
     openvdb::Coord cell_;  // the cell whose corners corners_ holds
     openvdb::Vec3f corners_[BakedGrids::kCount][2][2][2];

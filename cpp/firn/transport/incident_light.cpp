@@ -1,6 +1,7 @@
 #include "firn/transport/incident_light.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -65,6 +66,7 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
     for (int k = 0; k < rays.count(); ++k) {
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
         const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+        if (hit && !bounce && !snowRays) continue;  // brings nothing, and no one asks whether snow lies along it
         const double column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
         if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
         if (column >= limit) continue;
@@ -108,11 +110,18 @@ std::vector<std::vector<std::uint32_t>> bucketsAlongBeam(const Scene &scene, std
 }
 
 // Offsets to a voxel's neighbours one step towards a light in direction w: along w's main axis, and
-// diagonally along the others where w leans that way.
-std::vector<openvdb::Coord> stepsTowards(const glm::dvec3 &w) {
+// diagonally along the others where w leans that way. At most four, held in place (the sweep asks for them at
+// every voxel: a vector took up to three allocations each time).
+struct Steps {
+    std::array<openvdb::Coord, 4> offset;
+    int count = 0;
+    const openvdb::Coord *begin() const { return offset.data(); }
+    const openvdb::Coord *end() const { return offset.data() + count; }
+};
+Steps stepsTowards(const glm::dvec3 &w) {
     const int axis = int(std::max_element(&w.x, &w.x + 3, [](double a, double b) { return std::abs(a) < std::abs(b); }) - &w.x);
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    std::vector<openvdb::Coord> steps;
+    Steps steps;
     for (int bu = 0; bu < 2; ++bu)
         for (int bv = 0; bv < 2; ++bv) {
             if ((bu && std::abs(w[u]) < 1e-3) || (bv && std::abs(w[v]) < 1e-3)) continue;
@@ -120,7 +129,7 @@ std::vector<openvdb::Coord> stepsTowards(const glm::dvec3 &w) {
             o[axis] = w[axis] > 0.0 ? 1 : -1;
             if (bu) o[u] = w[u] > 0.0 ? 1 : -1;
             if (bv) o[v] = w[v] > 0.0 ? 1 : -1;
-            steps.push_back(o);
+            steps.offset[steps.count++] = o;
         }
     return steps;
 }

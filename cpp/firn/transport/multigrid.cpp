@@ -1,6 +1,7 @@
 #include "firn/transport/multigrid.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -56,7 +57,9 @@ struct MultigridSolver::Hierarchy {
     std::vector<double> cholesky;  // lower factor of the bottom level, dense row-major
     std::vector<float> remainder;  // finest level: diag minus the conductances
 
-    void sweep(const Level &level, int colour) const {
+    // fromZero: the first sweep of a cycle, whose neighbours all hold x = 0 (they are not read; the level's x need
+    // not be cleared first: the other colour's sweep writes the rest before anything reads it).
+    void sweep(const Level &level, int colour, bool fromZero = false) const {
         const Stencil<float> &A = level.A;
         const Stencil<float>::Neighbours &N = *A.neighbour;
         const auto &rows = level.rowsByColour[colour];
@@ -64,7 +67,7 @@ struct MultigridSolver::Hierarchy {
             for (std::size_t n = range.begin(); n != range.end(); ++n) {
                 const std::uint32_t i = rows[n];
                 float sum = level.b[i];
-                for (int k = 0; k < 6; ++k)
+                for (int k = 0; k < 6 && !fromZero; ++k)
                     if (N[i][k] >= 0) sum += A.conductance[i][k] * level.x[N[i][k]];
                 level.x[i] = sum / A.diag[i];
             }
@@ -90,14 +93,13 @@ struct MultigridSolver::Hierarchy {
     // One V-cycle on level l for level.b, from x = 0; symmetric (post-smoothing is the adjoint).
     void vcycle(std::size_t l) const {
         const Level &level = levels[l];
-        std::fill(level.x.begin(), level.x.end(), 0.0);
         if (l + 1 == levels.size()) {
             if (!cholesky.empty()) return solveDense(level);
-            for (int s = 0; s < 50; ++s) sweep(level, 0), sweep(level, 1);
+            for (int s = 0; s < 50; ++s) sweep(level, 0, s == 0), sweep(level, 1);
             for (int s = 0; s < 50; ++s) sweep(level, 1), sweep(level, 0);
             return;
         }
-        for (int s = 0; s < kSweeps; ++s) sweep(level, 0), sweep(level, 1);
+        for (int s = 0; s < kSweeps; ++s) sweep(level, 0, s == 0), sweep(level, 1);
         const Level &coarse = levels[l + 1];
         // The residual b - A x restricted to the blocks and the correction brought back, block by block (the
         // residual is not stored: 4 bytes per row).
@@ -124,7 +126,7 @@ void prepare(Level &level) {
     const std::size_t n = level.A.size();
     level.rowsByColour[0].clear(), level.rowsByColour[1].clear();
     for (std::size_t i = 0; i < n; ++i) {
-        const openvdb::Coord &c = level.A.coord[i];
+        const openvdb::Coord &c = (*level.A.coord)[i];
         level.rowsByColour[(c.x() + c.y() + c.z()) & 1].push_back(std::uint32_t(i));
     }
     level.b.assign(n, 0.0), level.x.assign(n, 0.0);
@@ -139,18 +141,20 @@ bool coarsen(Level &fine, Level &coarse) {
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> access(index);
     std::vector<std::uint32_t> aggregate(n);  // row -> row of the next level
     Stencil<float> &C = coarse.A;
+    auto coord = std::make_shared<std::vector<openvdb::Coord>>();
     for (std::size_t i = 0; i < n; ++i) {
-        const openvdb::Coord &c = A.coord[i];
+        const openvdb::Coord &c = (*A.coord)[i];
         const openvdb::Coord cc(floorHalf(c.x()), floorHalf(c.y()), floorHalf(c.z()));
         int id = access.getValue(cc);
         if (id < 0) {
-            id = int(C.coord.size());
+            id = int(coord->size());
             access.setValue(cc, id);
-            C.coord.push_back(cc);
+            coord->push_back(cc);
         }
         aggregate[i] = std::uint32_t(id);
     }
-    const std::size_t nc = C.coord.size();
+    const std::size_t nc = coord->size();
+    C.coord = std::move(coord);
     if (nc > n * 3 / 4) return false;
     using StencilOperator = Stencil<float>;
 
@@ -165,14 +169,15 @@ bool coarsen(Level &fine, Level &coarse) {
     auto neighbour = std::make_shared<Stencil<float>::Neighbours>(nc);
     C.conductance.assign(nc, {});
     C.diag.assign(nc, 0.0);
-    static const openvdb::Coord kStep[6] = {openvdb::Coord(-1, 0, 0), openvdb::Coord(1, 0, 0),
-                                            openvdb::Coord(0, -1, 0), openvdb::Coord(0, 1, 0),
-                                            openvdb::Coord(0, 0, -1), openvdb::Coord(0, 0, 1)};
+    // A block's neighbour along an axis is the block its members' links on that side cross into (a voxel's
+    // neighbour one step away lies in its own block or in the next one that way). A neighbouring block that no
+    // link reaches gets none: its conductance would be 0, which adds nothing to a sum.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nc, 1024), [&](const auto &range) {
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> look(index);
         for (std::size_t I = range.begin(); I != range.end(); ++I) {
             double remainder = 0.0;  // sums in double, stored in float
             std::array<double, 6> crossing{};
+            std::array<std::int32_t, 6> across;
+            across.fill(StencilOperator::kNone);
             for (std::uint32_t m = fine.membersStart[I]; m < fine.membersStart[I + 1]; ++m) {
                 const std::uint32_t i = fine.members[m];
                 remainder += A.diag[i];
@@ -180,14 +185,13 @@ bool coarsen(Level &fine, Level &coarse) {
                     const std::int32_t j = N[i][k];
                     if (j < 0) continue;
                     remainder -= A.conductance[i][k];
-                    if (aggregate[j] != I) crossing[k] += A.conductance[i][k];
+                    if (aggregate[j] != I) crossing[k] += A.conductance[i][k], across[k] = std::int32_t(aggregate[j]);
                 }
             }
             double diag = remainder;
             for (int k = 0; k < 6; ++k) {
-                const int id = look.getValue(C.coord[I] + kStep[k]);
-                (*neighbour)[I][k] = id < 0 ? StencilOperator::kNone : id;
-                C.conductance[I][k] = float(id < 0 ? 0.0 : 0.5 * crossing[k]);
+                (*neighbour)[I][k] = across[k];
+                C.conductance[I][k] = float(across[k] < 0 ? 0.0 : 0.5 * crossing[k]);
                 diag += C.conductance[I][k];
             }
             C.diag[I] = float(diag);
@@ -245,25 +249,28 @@ struct FineOperator {
 // Conjugate gradients' reductions as OpenVDB's pcg::Vector computes them, so that the iterates are those of its
 // pcg::solve bit for bit: <a, b> summed in 100 fixed segments added in order (serially below 1024 entries), the
 // same whatever the threads; the largest |a_i|.
-double dot(const std::vector<double> &a, const std::vector<double> &b) {
-    const std::size_t n = a.size();
-    double sum = 0.0;
-    if (n < 1024) {
-        for (std::size_t i = 0; i < n; ++i) sum += a[i] * b[i];
-        return sum;
-    }
+// `segment(begin, end)` returns its entries' part of the sum; called once per segment, in parallel.
+template <typename Segment>
+double segmentedSum(std::size_t n, const Segment &segment) {
+    if (n < 1024) return segment(std::size_t(0), n);
     constexpr std::size_t kSegments = 100;
     std::array<double, kSegments> partial;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kSegments), [&](const auto &range) {
         for (std::size_t s = range.begin(); s != range.end(); ++s) {
             const std::size_t begin = s * (n / kSegments), end = s + 1 == kSegments ? n : begin + n / kSegments;
-            double part = 0.0;
-            for (std::size_t i = begin; i < end; ++i) part += a[i] * b[i];
-            partial[s] = part;
+            partial[s] = segment(begin, end);
         }
     });
+    double sum = 0.0;
     for (double part : partial) sum += part;
     return sum;
+}
+double dot(const std::vector<double> &a, const std::vector<double> &b) {
+    return segmentedSum(a.size(), [&](std::size_t begin, std::size_t end) {
+        double part = 0.0;
+        for (std::size_t i = begin; i < end; ++i) part += a[i] * b[i];
+        return part;
+    });
 }
 double infNorm(const std::vector<double> &a) {
     return tbb::parallel_reduce(
@@ -274,10 +281,12 @@ double infNorm(const std::vector<double> &a) {
         },
         [](double a, double b) { return std::max(a, b); });
 }
-// z = one V-cycle applied to r, scaled into float's range (the bake's sources span many decades between scenes).
-void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector<double> &r, std::vector<double> &z) {
+// z = one V-cycle applied to r, scaled into float's range (the bake's sources span many decades between scenes) by
+// r's largest |r_i|.
+void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector<double> &r, double largest,
+                  std::vector<double> &z) {
     const auto &top = hierarchy.levels.front();
-    const double scale = std::max(infNorm(r), 1e-300);
+    const double scale = std::max(largest, 1e-300);
     parallelRows(top.b.size(), [&](std::size_t i) { top.b[i] = float(r[i] / scale); });
     hierarchy.vcycle(0);
     parallelRows(top.x.size(), [&](std::size_t i) { z[i] = double(top.x[i]) * scale; });
@@ -286,6 +295,27 @@ void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector
 // y = a x + y.
 void axpy(double a, const std::vector<double> &x, std::vector<double> &y) {
     parallelRows(y.size(), [&](std::size_t i) { y[i] = a * x[i] + y[i]; });
+}
+
+// The iteration's step in one pass over the vectors: x += alpha p, r -= alpha q; returns <r, r> (as dot) and sets
+// `largest` to the largest |r_i| of the new r.
+double step(double alpha, const std::vector<double> &p, const std::vector<double> &q, std::vector<double> &x,
+            std::vector<double> &r, double &largest) {
+    std::array<double, 100> most{};  // per segment (segmentedSum's), or the first alone below 1024 entries
+    std::atomic<std::size_t> segments{0};
+    const double sum = segmentedSum(r.size(), [&](std::size_t begin, std::size_t end) {
+        double part = 0.0, top = 0.0;
+        for (std::size_t i = begin; i < end; ++i) {
+            x[i] = alpha * p[i] + x[i];
+            r[i] = -alpha * q[i] + r[i];
+            part += r[i] * r[i];
+            top = std::max(top, std::abs(r[i]));
+        }
+        most[segments++] = top;
+        return part;
+    });
+    largest = *std::max_element(most.begin(), most.end());
+    return sum;
 }
 
 }  // namespace
@@ -327,7 +357,7 @@ MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remaind
     }
     for (Level &level : h.levels) prepare(level);
     if (h.levels.back().A.size() <= kDenseLimit) h.cholesky = denseCholesky(h.levels.back().A);
-    for (Level &level : h.levels) level.A.coord = std::vector<openvdb::Coord>();  // they only placed the rows in colours and blocks
+    for (Level &level : h.levels) level.A.coord.reset();  // they only placed the rows in colours and blocks
 }
 
 MultigridSolver::~MultigridSolver() = default;
@@ -350,13 +380,14 @@ MultigridSolver::Result MultigridSolver::solve(std::vector<double> b, std::vecto
     std::vector<double> &r = b, p(n), z(n);  // z: M^-1 r, then A p
     A.multiply(x.data(), z.data());
     axpy(-1.0, z, r);  // r = b - A x
-    result.relativeResidual = infNorm(r) / normB;
+    double largest = infNorm(r);
+    result.relativeResidual = largest / normB;
     if (result.relativeResidual <= tolerance) return result;
     double rDotZPrevious = 1.0, leastL2 = std::numeric_limits<double>::max();
     for (int iteration = 0; iteration < maxIterations; ++iteration) {
         progress.throwIfCancelled();
         result.iterations = iteration + 1;
-        precondition(*hierarchy_, r, z);
+        precondition(*hierarchy_, r, largest, z);
         const double rDotZ = dot(r, z);
         if (iteration == 0) p = z;
         else {
@@ -367,11 +398,8 @@ MultigridSolver::Result MultigridSolver::solve(std::vector<double> b, std::vecto
         A.multiply(p.data(), q.data());
         const double alpha = rDotZ / dot(p, q);
         rDotZPrevious = rDotZ;
-        axpy(alpha, p, x);
-        axpy(-alpha, q, r);
-        const double l2 = std::sqrt(dot(r, r));
+        const double l2 = std::sqrt(step(alpha, p, q, x, r, largest));
         leastL2 = std::min(l2, leastL2);
-        const double largest = infNorm(r);
         result.relativeResidual = largest / normB;
         // Diverging, not finite, or converged.
         if (l2 > 2.0 * leastL2 || !std::isfinite(largest) || result.relativeResidual <= tolerance) break;
