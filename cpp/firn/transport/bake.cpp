@@ -452,6 +452,8 @@ struct ChannelSystem {
             b[i] += E * skyToNode[i], escaped.surface(i) += E * skyReturned[i], skyIn.surface(i) += E * area[i];
         }
     }
+    // Frees what only the assembly and addDiffuse read (12 bytes per surface voxel), before the solver is built.
+    void releaseDiffuseTerms() { skyToNode = skyReturned = area = SurfaceValues<float>(); }
 };
 
 // Finite volumes with exponential fitting: every link between two unknowns, and between an unknown and
@@ -1579,6 +1581,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
             ChannelSystem system = assemble(scene, topo, light, c, sub);
             if (pass > 0) system.addDiffuse(fromSnow, c);
+            system.releaseDiffuseTerms();
             if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
             if (topo.size() > 0) {
                 const MultigridSolver solver(std::move(system.A), std::move(system.remainder));
