@@ -452,6 +452,8 @@ struct ChannelSystem {
             b[i] += E * skyToNode[i], escaped.surface(i) += E * skyReturned[i], skyIn.surface(i) += E * area[i];
         }
     }
+    // Frees what only the assembly and addDiffuse read (12 bytes per surface voxel), before the solver is built.
+    void releaseDiffuseTerms() { skyToNode = skyReturned = area = SurfaceValues<float>(); }
 };
 
 // Finite volumes with exponential fitting: every link between two unknowns, and between an unknown and
@@ -1038,11 +1040,13 @@ struct VoxelValues {
 struct LeafValues : VoxelValues {
     std::vector<std::size_t> start, later;
 
-    // One block: perLeaf's values leaf by leaf (consumed).
-    explicit LeafValues(std::vector<VoxelValues> &&perLeaf) : start{0} {
+    // One block: perLeaf's values leaf by leaf (consumed), with room for `more` values after them, so that a
+    // second block appended within it does not move the first (the old array and the new together were the car's
+    // gathering peak). Room never written holds no memory (the pages of a large array are the system's until used).
+    LeafValues(std::vector<VoxelValues> &&perLeaf, std::size_t more) : start{0} {
         std::size_t total = 0;
         for (const auto &leaf : perLeaf) total += leaf.values.size();
-        values.reserve(total);
+        values.reserve(total + more);
         for (VoxelValues &leaf : perLeaf) {
             append(leaf, 0, leaf.values.size());
             leaf = VoxelValues();  // (= {} would keep its capacity)
@@ -1302,7 +1306,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 perLeaf[l].add(it.pos(), S);
             }
     });
-    LeafValues carried(std::move(perLeaf));
+    // The second block adds at most a value per voxel near the carried ones or holding snow.
+    LeafValues carried(std::move(perLeaf), nearCarried.activeVoxelCount() + medium.density().activeVoxelCount());
     out.at = std::make_shared<openvdb::Int32Tree>(-1);
     placeValues(carried, leaves, *out.at);
     // Then: one voxel further out, and thin snow on its own.
@@ -1576,6 +1581,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
             ChannelSystem system = assemble(scene, topo, light, c, sub);
             if (pass > 0) system.addDiffuse(fromSnow, c);
+            system.releaseDiffuseTerms();
             if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
             if (topo.size() > 0) {
                 const MultigridSolver solver(std::move(system.A), std::move(system.remainder));

@@ -49,7 +49,9 @@ template struct Stencil<float>;
 struct MultigridSolver::Hierarchy {
     struct Level {
         Stencil<float> A;
-        std::vector<std::uint32_t> rowsByColour[2];  // voxel parity (i + j + k) & 1
+        // Per row, its voxel's parity (i + j + k) & 1: a sweep's colour (a byte a row where lists of each colour's
+        // rows took four; a colour's rows read only the other's, so the order they are visited in does not matter).
+        std::vector<std::uint8_t> colour;
         std::vector<std::uint32_t> membersStart, members;  // next level's rows -> rows here (CSR)
         mutable std::vector<float> b, x;
     };
@@ -62,10 +64,9 @@ struct MultigridSolver::Hierarchy {
     void sweep(const Level &level, int colour, bool fromZero = false) const {
         const Stencil<float> &A = level.A;
         const Stencil<float>::Neighbours &N = *A.neighbour;
-        const auto &rows = level.rowsByColour[colour];
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size(), 4096), [&](const auto &range) {
-            for (std::size_t n = range.begin(); n != range.end(); ++n) {
-                const std::uint32_t i = rows[n];
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, A.size(), 8192), [&](const auto &range) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                if (level.colour[i] != colour) continue;
                 float sum = level.b[i];
                 for (int k = 0; k < 6 && !fromZero; ++k)
                     if (N[i][k] >= 0) sum += A.conductance[i][k] * level.x[N[i][k]];
@@ -124,10 +125,10 @@ using Level = MultigridSolver::Hierarchy::Level;
 
 void prepare(Level &level) {
     const std::size_t n = level.A.size();
-    level.rowsByColour[0].clear(), level.rowsByColour[1].clear();
+    level.colour.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
         const openvdb::Coord &c = (*level.A.coord)[i];
-        level.rowsByColour[(c.x() + c.y() + c.z()) & 1].push_back(std::uint32_t(i));
+        level.colour[i] = std::uint8_t((c.x() + c.y() + c.z()) & 1);
     }
     level.b.assign(n, 0.0), level.x.assign(n, 0.0);
 }
