@@ -1552,12 +1552,11 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
     SurfaceValues<glm::vec3> before, older;  // the two gathers before it (bounceTail only)
     SourceValues source;
     for (int pass = 0; pass < passes; ++pass) {
-        double begin = 0.4 + (solved - 0.4) * pass / passes;
-        const double end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
+        const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
+        // A pass after the first gathers first: the first half of its progress, the three solves the rest.
+        const double gathered = pass > 0 ? (begin + end) / 2.0 : begin;
         if (pass > 0) {
-            // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass). The
-            // gathering takes the first half of the pass's progress, the three solves the rest.
-            const double gathered = (begin + end) / 2.0;
+            // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
             p.report(begin, "Gathering light between snow surfaces");
             {
                 const GridValues values = gridValues(scene, topo, source, traced, preset, settings, true);
@@ -1573,12 +1572,11 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             }
             releaseFreedMemory();  // the previous pass's values
             clock.lap(&BakeStats::Phases::gather);
-            begin = gathered;
         }
         SurfaceValues<SurfaceLight> leaving(topo.surfaceSlot, topo.surfaceVoxels());
         for (int c = 0; c < 3; ++c) {
-            const SubProgress sub(&p, begin + (end - begin) * c / 3.0, begin + (end - begin) * (c + 1) / 3.0);
-            p.report(begin + (end - begin) * c / 3.0, "Solving multiple scattering");
+            const SubProgress sub(&p, gathered + (end - gathered) * c / 3.0, gathered + (end - gathered) * (c + 1) / 3.0);
+            p.report(gathered + (end - gathered) * c / 3.0, "Solving multiple scattering");
             ChannelSystem system = assemble(scene, topo, light, c, sub);
             if (pass > 0) system.addDiffuse(fromSnow, c);
             system.releaseDiffuseTerms();

@@ -1,7 +1,6 @@
 #include "firn/transport/multigrid.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -250,16 +249,16 @@ struct FineOperator {
 // Conjugate gradients' reductions as OpenVDB's pcg::Vector computes them, so that the iterates are those of its
 // pcg::solve bit for bit: <a, b> summed in 100 fixed segments added in order (serially below 1024 entries), the
 // same whatever the threads; the largest |a_i|.
-// `segment(begin, end)` returns its entries' part of the sum; called once per segment, in parallel.
+// `segment(s, begin, end)` returns segment s's part of the sum; called once per segment, in parallel.
+constexpr std::size_t kSegments = 100;
 template <typename Segment>
 double segmentedSum(std::size_t n, const Segment &segment) {
-    if (n < 1024) return segment(std::size_t(0), n);
-    constexpr std::size_t kSegments = 100;
+    if (n < 1024) return segment(std::size_t(0), std::size_t(0), n);
     std::array<double, kSegments> partial;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kSegments), [&](const auto &range) {
         for (std::size_t s = range.begin(); s != range.end(); ++s) {
             const std::size_t begin = s * (n / kSegments), end = s + 1 == kSegments ? n : begin + n / kSegments;
-            partial[s] = segment(begin, end);
+            partial[s] = segment(s, begin, end);
         }
     });
     double sum = 0.0;
@@ -267,7 +266,7 @@ double segmentedSum(std::size_t n, const Segment &segment) {
     return sum;
 }
 double dot(const std::vector<double> &a, const std::vector<double> &b) {
-    return segmentedSum(a.size(), [&](std::size_t begin, std::size_t end) {
+    return segmentedSum(a.size(), [&](std::size_t, std::size_t begin, std::size_t end) {
         double part = 0.0;
         for (std::size_t i = begin; i < end; ++i) part += a[i] * b[i];
         return part;
@@ -302,9 +301,8 @@ void axpy(double a, const std::vector<double> &x, std::vector<double> &y) {
 // `largest` to the largest |r_i| of the new r.
 double step(double alpha, const std::vector<double> &p, const std::vector<double> &q, std::vector<double> &x,
             std::vector<double> &r, double &largest) {
-    std::array<double, 100> most{};  // per segment (segmentedSum's), or the first alone below 1024 entries
-    std::atomic<std::size_t> segments{0};
-    const double sum = segmentedSum(r.size(), [&](std::size_t begin, std::size_t end) {
+    std::array<double, kSegments> most{};  // per segment of segmentedSum
+    const double sum = segmentedSum(r.size(), [&](std::size_t s, std::size_t begin, std::size_t end) {
         double part = 0.0, top = 0.0;
         for (std::size_t i = begin; i < end; ++i) {
             x[i] = alpha * p[i] + x[i];
@@ -312,7 +310,7 @@ double step(double alpha, const std::vector<double> &p, const std::vector<double
             part += r[i] * r[i];
             top = std::max(top, std::abs(r[i]));
         }
-        most[segments++] = top;
+        most[s] = top;
         return part;
     });
     largest = *std::max_element(most.begin(), most.end());
