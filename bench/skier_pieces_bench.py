@@ -146,11 +146,11 @@ def main():
     write(files["one in ten"], [(alone, lo), (rest, lo - np.array([0, 0, 300]))], voxel)
     reference_of = {"all": files["all"], "one in ten": os.path.join(args.folder, "pieces_ten_alone.vdb")}
     write(reference_of["one in ten"], [(alone, lo)], voxel)
-    del rest, alone
+    del rest
 
     sun = np.asarray(meta["suns"][0][0], float)
-    met = first_met(dense, lo, voxel, linear, label, origins, extinction, sun / np.linalg.norm(sun))
-    for name, path in files.items():
+    for (name, path), density in zip(files.items(), (dense, alone)):
+        met = first_met(density, lo, voxel, linear, label, origins, extinction, sun / np.linalg.norm(sun))
         baked_path = path[:-4] + "_baked.vdb"
         start = time.process_time()
         firncore.bake(path, optics, suns=suns, sky=dark, quality="DRAFT", seed=0, output_path=baked_path)
@@ -164,15 +164,15 @@ def main():
         reference = np.load(saved).mean(1)
         baked = firncore.render_baked(baked_path, optics, origins, directions)
         compare(name, baked, reference[:, None], X.shape, width=12)
+        hit = met[:, 0] >= 0
+        share, seen = reference[hit].sum() / reference.sum(), baked.mean(1)[hit].sum() / reference[hit].sum()
+        print(f"  rays meeting a piece: {hit.sum()} of {len(hit)}, {100 * share:.1f} % of the reference's light; "
+              f"baked / reference - 1 {100 * (seen - 1):+.1f} %")
         if name == "all":
-            hit = met[:, 0] >= 0
-            share, seen = reference[hit].sum() / reference.sum(), baked.mean(1)[hit].sum() / reference[hit].sum()
-            print(f"  rays meeting a piece: {hit.sum()} of {len(hit)}, {100 * share:.1f} % of the reference's light; "
-                  f"baked / reference - 1 {100 * (seen - 1):+.1f} %")
             table("by the sun's optical depth through other pieces to where the ray meets its piece:",
                   baked.mean(1)[hit], reference[hit], met[hit, 2], [0, 0.01, 1, 5, 20, 100, np.inf])
-            table("by the ray's optical depth through that piece:",
-                  baked.mean(1)[hit], reference[hit], met[hit, 1], [0, 5, 10, 20, 40, np.inf])
+        table("by the ray's optical depth through its piece:",
+              baked.mean(1)[hit], reference[hit], met[hit, 1], [0, 5, 10, 20, 40, np.inf])
 
 
 if __name__ == "__main__":
