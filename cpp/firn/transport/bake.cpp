@@ -285,7 +285,7 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
 // (bench/bake_suite.py --seeds 4 at FINAL, 256 -> 1024 paths: ball_thin 4.6 -> 4.0 %, ball_thin_forward 9.8 ->
 // 7.0 %, ball_rgb 8.8 -> 8.0 %, ball_forward 16.4 -> 15.1 %, spray_lumps 12.5 -> 10.2 %, the tracing 0.05 -> 0.2,
 // 0.2 -> 0.9 processor s; spray_dense and ball_half_tau, over the budget at 256 already, as they were). Raised
-// 2e7 -> 8e7 for the fit by direction (tracedSource): a light dusting's 1728 voxels at 1024 paths (the slab's
+// 2e7 -> 8e7 for the fit by direction (tracedSourceByDirection): a light dusting's 1728 voxels at 1024 paths (the slab's
 // estimates at 256 read 14.7 %; the trace 0.6 -> 2.6 processor s; ball_half_tau 1.9 -> 1.4 %, 1.1 -> 2.2 s).
 constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 processor seconds
 constexpr double kCheapTracedSteps = 8e7;                       // about 5 processor seconds
@@ -313,7 +313,7 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
     return samples;
 }
 
-// Caps a broad lobe's first moments at |l1| <= l0 (k <= 1/3; tracedSource).
+// Caps a broad lobe's first moments at |l1| <= l0 (k <= 1/3; tracedSourceByMoments).
 void capBroad(BroadLobe &S) {
     for (int c = 0; c < 3; ++c) {
         const float length = glm::length(S.l1[c]), most = std::max(S.l0[c], 0.0f);
