@@ -66,7 +66,7 @@ def test_conservative_thin_ball_under_uniform_sky_glows_with_the_sky(tmp_vdb):
     # single scattering in the second, peaked lobe to 4.8 % (the goal) and 15.4 %, bias -2.1 % and -7.1 %
     # against the suite's 16384-path references. ball_thin_forward stays short of the goal, guarded: 15.4 %, bias
     # -7.1 % with the peaked lobe holding the beams' single scattering only, 9.1 %, +0.2 % with the two lobes
-    # fitted to the source's first four Legendre moments (bake.cpp, tracedSource); 7.0 %, +0.5 % (ball_thin 4.0 %)
+    # fitted to the source's first four Legendre moments (bake.cpp, tracedSourceByMoments); 7.0 %, +0.5 % (ball_thin 4.0 %)
     # over 4 seeds with 1024 paths per voxel where that is cheap (tracedSamples).
     ("ball_thin", 0.06, 0.05),
     ("ball_thin_forward", 0.12, 0.05),

@@ -286,7 +286,7 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
 // 7.0 %, ball_rgb 8.8 -> 8.0 %, ball_forward 16.4 -> 15.1 %, spray_lumps 12.5 -> 10.2 %, the tracing 0.05 -> 0.2,
 // 0.2 -> 0.9 processor s; spray_dense and ball_half_tau, over the budget at 256 already, as they were). Raised
 // 2e7 -> 8e7 for the fit by direction (tracedSourceByDirection): a light dusting's 1728 voxels at 1024 paths (the slab's
-// estimates at 256 read 14.7 %; the trace 0.6 -> 2.6 processor s; ball_half_tau 1.9 -> 1.4 %, 1.1 -> 2.2 s).
+// estimates at 256 paths are too noisy; the trace 0.56 -> 2.47 processor s; ball_half_tau 1.9 -> 1.4 %, 1.04 -> 2.23 s).
 constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 processor seconds
 constexpr double kCheapTracedSteps = 8e7;                       // about 5 processor seconds
 int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
@@ -492,7 +492,7 @@ constexpr double kMinDirectionFitG = 0.8, kMaxDirectionFitTau = 2.0;
 
 // The source of a thin voxel of forward scattering snow (kMinDirectionFitG) as the grids' two lobes fitted to
 // the source gathered in `directions` (bench/bake_suite.py, over 2 seeds: slab_thin_forward 18.6 -> 10.2 %, per
-// view +8, +20, +9, +23, -13 % -> -3, +5, +0, +16, -5 %), or to its moments where no beam reaches it.
+// view +8, +20, +9, +23, -13 % -> -3, +5, +1, +16, -6 %), or to its moments where no beam reaches it.
 Source tracedSourceByDirection(const SourceEstimate &S, const SourceDirections &directions,
                                const DirectionWeights &visibility, double g) {
     const Source moments = tracedSourceByMoments(S, g);
