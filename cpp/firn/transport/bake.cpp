@@ -1,6 +1,7 @@
 #include "firn/transport/bake.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -283,9 +284,11 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
 // few traced voxels show their estimates' noise, and 1024 paths each cost it well under a processor second
 // (bench/bake_suite.py --seeds 4 at FINAL, 256 -> 1024 paths: ball_thin 4.6 -> 4.0 %, ball_thin_forward 9.8 ->
 // 7.0 %, ball_rgb 8.8 -> 8.0 %, ball_forward 16.4 -> 15.1 %, spray_lumps 12.5 -> 10.2 %, the tracing 0.05 -> 0.2,
-// 0.2 -> 0.9 processor s; spray_dense and ball_half_tau, over the budget at 256 already, as they were).
+// 0.2 -> 0.9 processor s; spray_dense and ball_half_tau, over the budget at 256 already, as they were). Raised
+// 2e7 -> 8e7 for the fit by direction (tracedSourceByDirection): a light dusting's 1728 voxels at 1024 paths (the slab's
+// estimates at 256 paths are too noisy; the trace 0.56 -> 2.47 processor s; ball_half_tau 1.9 -> 1.4 %, 1.04 -> 2.23 s).
 constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 processor seconds
-constexpr double kCheapTracedSteps = 2e7;                       // about 1.2 processor seconds
+constexpr double kCheapTracedSteps = 8e7;                       // about 5 processor seconds
 int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
     if (voxels.empty()) return 0;
@@ -310,7 +313,7 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
     return samples;
 }
 
-// Caps a broad lobe's first moments at |l1| <= l0 (k <= 1/3; tracedSource).
+// Caps a broad lobe's first moments at |l1| <= l0 (k <= 1/3; tracedSourceByMoments).
 void capBroad(BroadLobe &S) {
     for (int c = 0; c < 3; ++c) {
         const float length = glm::length(S.l1[c]), most = std::max(S.l0[c], 0.0f);
@@ -337,6 +340,106 @@ std::optional<LobePair> lobePair(double a0, double a1, double a2, double a3) {
     return LobePair{x1, x2};
 }
 
+// The two lobes fitted by direction (fitByDirection), grey: the peaked lobe's mean and anisotropy k
+// about the beams' axis, and the broad lobe's linear form l0 + l1 . w.
+struct DirectionFit {
+    double peak = 0.0, k = 0.0, l0 = 0.0;
+    glm::dvec3 l1{0.0};
+    double error = std::numeric_limits<double>::infinity();  // weighted squared misfit
+};
+
+// Solves the symmetric positive definite system A x = b in place (Cholesky, lower triangle); false where A is
+// singular.
+template <int n>
+bool solveSymmetric(std::array<std::array<double, n>, n> &A, std::array<double, n> &b) {
+    for (int j = 0; j < n; ++j) {
+        for (int k = 0; k < j; ++k) A[j][j] -= A[j][k] * A[j][k];
+        if (!(A[j][j] > 1e-12 * (1.0 + std::abs(A[0][0])))) return false;
+        A[j][j] = std::sqrt(A[j][j]);
+        for (int i = j + 1; i < n; ++i) {
+            for (int k = 0; k < j; ++k) A[i][j] -= A[i][k] * A[j][k];
+            A[i][j] /= A[j][j];
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        for (int k = 0; k < i; ++k) b[i] -= A[i][k] * b[k];
+        b[i] /= A[i][i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+        for (int k = i + 1; k < n; ++k) b[i] -= A[k][i] * b[k];
+        b[i] /= A[i][i];
+    }
+    return true;
+}
+
+using DirectionWeights = std::array<double, kSourceDirections>;
+
+// The lobes with the peaked one's anisotropy k (none: k < 0) fitted to the gathered source S.toward by weighted
+// least squares: linear in the peak's mean and the broad lobe's l0 and l1.
+DirectionFit fitAtK(const SourceEstimate &S, const SourceDirections &directions, const glm::dvec3 &m, double k,
+                    const DirectionWeights &weights) {
+    constexpr int n = 5;
+    std::array<std::array<double, n>, n> A{};
+    std::array<double, n> b{};
+    std::array<std::array<double, n>, kSourceDirections> basis;
+    for (int j = 0; j < kSourceDirections; ++j) {
+        const glm::dvec3 &w = directions[j];
+        basis[j] = {k >= 0.0 ? 4.0 * kPi * henyeyGreenstein(glm::dot(w, m), k) : 0.0, 1.0, w.x, w.y, w.z};
+        for (int r = 0; r < n; ++r) {
+            b[r] += weights[j] * basis[j][r] * S.toward[j];
+            for (int c = 0; c <= r; ++c) A[r][c] += weights[j] * basis[j][r] * basis[j][c];
+        }
+    }
+    if (k < 0.0) A[0][0] = 1.0;  // no peak: its mean held at 0
+    DirectionFit out;
+    if (!solveSymmetric<n>(A, b) || b[0] < 0.0 || b[1] <= 0.0) return out;
+    out.peak = b[0], out.k = std::max(k, 0.0), out.l0 = b[1], out.l1 = glm::dvec3(b[2], b[3], b[4]);
+    out.error = 0.0;
+    for (int j = 0; j < kSourceDirections; ++j) {
+        double model = 0.0;
+        for (int r = 0; r < n; ++r) model += basis[j][r] * b[r];
+        out.error += weights[j] * (model - S.toward[j]) * (model - S.toward[j]);
+    }
+    return out;
+}
+
+// The grey radiance a source's two lobes show towards w (source_lobe.h).
+double greyRadiance(const Source &S, const glm::dvec3 &w) {
+    const double peakMean = (S.peak0.x + S.peak0.y + S.peak0.z) / 3.0;
+    double sum = 0.0;
+    for (int c = 0; c < 3; ++c)
+        sum += lobeRadiance(S.l0[c], glm::dvec3(S.l1[c]), w) + peakRadiance(S.peak0[c], peakMean, glm::dvec3(S.peak1), w);
+    return sum / 3.0;
+}
+
+// The traced source's two lobes fitted to the exact source gathered in `directions` (grey): the peaked lobe
+// about the beams' axis m, k from 0.5 to min(g, kMaxLobeAnisotropy) by steps of 0.01 (or none), the best; the
+// broad lobe's linear form. In relative error against `moments` (the lobes fitted to the moments: weights that do
+// not depend on the estimates, as the estimates' own values would, which favour those drawn low), each direction
+// weighted by the visibility of the voxel from it, exp(-tau) to the snow's bounds: a thin layer's source is
+// brightest along the layer (its limb), which no such pair holds and no camera sees but through the layer; the
+// fit keeps what cameras see, not the mean (docs/bake.md, Method 3). The channels in the ratio of their means.
+std::optional<Source> fitByDirection(const SourceEstimate &S, const SourceDirections &directions,
+                                    const DirectionWeights &visibility, const glm::dvec3 &m, double g,
+                                    const Source &moments) {
+    const double a0 = (S.l0.x + S.l0.y + S.l0.z) / 3.0;
+    if (!(a0 > 0.0)) return std::nullopt;
+    DirectionWeights weights;
+    for (int j = 0; j < kSourceDirections; ++j)
+        weights[j] = visibility[j] / std::pow(std::max(greyRadiance(moments, directions[j]), 0.1 * a0), 2.0);
+    DirectionFit fit = fitAtK(S, directions, m, -1.0, weights);
+    for (int i = 0; 0.5 + 0.01 * i <= std::min(g, kMaxLobeAnisotropy) + 1e-9; ++i)
+        if (const DirectionFit atK = fitAtK(S, directions, m, 0.5 + 0.01 * i, weights); atK.error < fit.error) fit = atK;
+    if (!std::isfinite(fit.error)) return std::nullopt;
+    Source out;
+    const glm::dvec3 share = S.l0 / a0;  // each channel's of the grey mean
+    out.l0 = glm::vec3(fit.l0 * share);
+    for (int c = 0; c < 3; ++c) out.l1[c] = glm::vec3(fit.l1 * share[c]);
+    if (fit.peak > 0.0) out.addPeak(fit.peak * share, fit.k, m);
+    capBroad(out);
+    return out;
+}
+
 // The source of a traced voxel as the two lobes the grids hold, fitted to its first four Legendre moments about
 // the direct beams' axis m (lobePair): at g 0.85 light scattered a few times is peaked too, and the peaked
 // lobe takes it with the beams' single scattering (bench/bake_suite.py: ball_thin_forward 15.4 -> 9.1 %, per
@@ -346,7 +449,7 @@ std::optional<LobePair> lobePair(double a0, double a1, double a2, double a3) {
 // across m. Where the moments are no pair's (or no beam reaches the voxel), the beams' single scattering alone
 // is the peaked lobe (k = g) and the rest the broad one. The broad lobe's |l1| <= l0 (k <= 1/3: measured
 // against the exact moments, k <= g, when one lobe held all: the thin g = 0.85 ball 16 % against 26 %).
-Source tracedSource(const SourceEstimate &S, double g) {
+Source tracedSourceByMoments(const SourceEstimate &S, double g) {
     Source out;
     const double a0 = (S.l0.x + S.l0.y + S.l0.z) / 3.0;
     const glm::dvec3 first = (S.l1[0] + S.l1[1] + S.l1[2]) / 9.0, beamFirst = S.beamL1[0] + S.beamL1[1] + S.beamL1[2];
@@ -381,17 +484,62 @@ Source tracedSource(const SourceEstimate &S, double g) {
     return out;
 }
 
+// Where the fit by direction replaces the moments' lobes: snow scattering sharply forwards (g >= 0.8; at g 0.7
+// the moments' pair holds the source: ball_rgb's views as main's, its blocks noisier), voxels of at most
+// kMaxDirectionFitTau (in thicker ones a camera sees the first optical depth, not the voxel's mean: spray_dense's
+// bias -2.8 -> -11.0 % fitted by direction), and a beam to give the peak its axis.
+constexpr double kMinDirectionFitG = 0.8, kMaxDirectionFitTau = 2.0;
+
+// The source of a thin voxel of forward scattering snow (kMinDirectionFitG) as the grids' two lobes fitted to
+// the source gathered in `directions` (bench/bake_suite.py, over 2 seeds: slab_thin_forward 18.6 -> 10.2 %, per
+// view +8, +20, +9, +23, -13 % -> -3, +5, +1, +16, -6 %), or to its moments where no beam reaches it.
+Source tracedSourceByDirection(const SourceEstimate &S, const SourceDirections &directions,
+                               const DirectionWeights &visibility, double g) {
+    const Source moments = tracedSourceByMoments(S, g);
+    const glm::dvec3 beamFirst = S.beamL1[0] + S.beamL1[1] + S.beamL1[2];
+    if (!(glm::length(beamFirst) > 0.0)) return moments;
+    return fitByDirection(S, directions, visibility, glm::normalize(beamFirst), g, moments).value_or(moments);
+}
+
+// exp(-tau) from the voxel's centre to the snow's bounds along each direction (fitByDirection), in
+// steps of a quarter voxel from half a voxel out, up to tau 10.
+DirectionWeights visibilityFrom(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &voxel,
+                                const SourceDirections &directions) {
+    constexpr double kStep = 0.25, kMaxTau = 10.0;
+    const glm::dvec3 start(voxel.x(), voxel.y(), voxel.z());
+    const double tauPerDensity = kStep * medium.voxelSize() * medium.optics().extinctionPerDensity;
+    DirectionWeights out;
+    for (int j = 0; j < kSourceDirections; ++j) {
+        double tau = 0.0;
+        for (double t = 0.5; tau < kMaxTau; t += kStep) {
+            const glm::dvec3 ijk = start + t * directions[j], p = medium.indexToWorld(ijk);
+            if (glm::any(glm::lessThan(p, medium.boundsMin())) || glm::any(glm::greaterThan(p, medium.boundsMax()))) break;
+            tau += tauPerDensity * density.getValue(openvdb::Coord(int(std::lround(ijk.x)), int(std::lround(ijk.y)), int(std::lround(ijk.z))));
+        }
+        out[j] = std::exp(-tau);
+    }
+    return out;
+}
+
 // The traced voxels' sources from their estimates (`estimate(v)`: voxel v's, called in parallel).
 template <class Estimate>
 MonteCarloVoxels tracedVoxels(const Scene &scene, const std::vector<openvdb::Coord> &voxels, const Estimate &estimate,
                               const SubProgress &progress) {
     MonteCarloVoxels out;
     out.source.resize(voxels.size());
+    const Medium &medium = *scene.medium;
+    const SourceDirections directions = sourceDirections(brightestBeam(scene));
     std::atomic<std::size_t> done{0};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4), [&](const auto &range) {
         progress.throwIfCancelled();
-        for (std::size_t v = range.begin(); v != range.end(); ++v)
-            out.source[v] = tracedSource(estimate(v), scene.medium->optics().g);
+        Medium::Accessor density = medium.accessor();
+        for (std::size_t v = range.begin(); v != range.end(); ++v) {
+            const double g = medium.optics().g;
+            const double voxelTau = medium.voxelSize() * medium.optics().extinctionPerDensity * density.getValue(voxels[v]);
+            out.source[v] = g >= kMinDirectionFitG && voxelTau <= kMaxDirectionFitTau
+                                ? tracedSourceByDirection(estimate(v), directions, visibilityFrom(medium, density, voxels[v], directions), g)
+                                : tracedSourceByMoments(estimate(v), g);
+        }
         progress.report(double(done += range.size()) / voxels.size());
     });
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> index(*out.index);

@@ -155,14 +155,15 @@ using ChunkSums = std::vector<std::pair<std::int32_t, ArrivingLight>>;
 ChunkSums traceChunk(const MonteCarloReference &reference, const BoxEmitter &emitter,
                      const openvdb::Int32Tree &index, long first, long last, std::uint64_t seed, long &steps) {
     const Medium &medium = *reference.scene().medium;
-    const Rgb albedo = medium.optics().albedo;
+    const VolumeOptics &optics = medium.optics();
+    const SourceDirections directions = sourceDirections(brightestBeam(reference.scene()));
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> voxelOf(index);
     std::unordered_map<std::int32_t, ArrivingLight> sums;
     long tallies = 0;
     const CollisionTally tally = [&](const glm::dvec3 &p, const glm::dvec3 &travel, const Rgb &power) {
         const glm::dvec3 ijk = glm::round(medium.worldToIndex(p));
         const std::int32_t v = voxelOf.getValue(openvdb::Coord(int(ijk.x), int(ijk.y), int(ijk.z)));
-        if (v >= 0) sums[v].add(power, travel, false, albedo), ++tallies;
+        if (v >= 0) sums[v].add(power, travel, false, optics, directions), ++tallies;
     };
     PhotonTracer tracer(reference);
     for (long i = first; i < last; ++i) {

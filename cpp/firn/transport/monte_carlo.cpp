@@ -67,7 +67,8 @@ class PathTracer {
           accessor_(medium_.accessor()),
           support_(medium_.supportAccessor()),
           k_(medium_.optics().extinctionPerDensity),
-          sigmaBar_(std::max(medium_.maxSigmaT(), 1e-12)) {}
+          sigmaBar_(std::max(medium_.maxSigmaT(), 1e-12)),
+          directions_(sourceDirections(brightestBeam(scene))) {}
 
     // Radiance scattered by the medium towards the camera along one camera ray, one sample. With
     // `unscattered`, also the sky and surfaces seen straight along the ray: all the light arriving at its origin.
@@ -120,15 +121,16 @@ class PathTracer {
     // direction.
     // Without `scattered`, the direct beams only.
     void sampleArriving(const glm::dvec3 &p, double w, double u1, double u2, Rng &rng, ArrivingLight &sum, bool scattered) {
+        const VolumeOptics &optics = medium_.optics();
         if (scattered) {
             const glm::dvec3 d = sampleUniformCone(glm::dvec3(0.0, 0.0, 1.0), -1.0, u1, u2);
             const Rgb L = 4.0 * kPi * sample(Ray{p, d}, rng, true);
-            sum.add(w * L, -d, false, medium_.optics().albedo);
+            sum.add(w * L, -d, false, optics, directions_);
         }
         for (std::size_t b = 0; b < lightCount(); ++b) {
             glm::dvec3 towards;
             const Rgb E = lightIrradiance(b, p, 0.0, towards, rng);
-            if (E != Rgb(0.0)) sum.add(w * E, -towards, true, medium_.optics().albedo);
+            if (E != Rgb(0.0)) sum.add(w * E, -towards, true, optics, directions_);
         }
     }
 
@@ -285,6 +287,7 @@ class PathTracer {
     Medium::Accessor accessor_;
     Medium::SupportAccessor support_;
     double k_, sigmaBar_;
+    SourceDirections directions_;  // where the source is gathered besides its moments (sourceIn)
 };
 
 MonteCarloReference::MonteCarloReference(Scene scene) : scene_(std::move(scene)) { validate(scene_); }
@@ -358,10 +361,35 @@ SourceEstimate sourceOf(const ArrivingLight &sum, double weights, const VolumeOp
     const double greyScale = kInvFourPi / weights;
     out.second = greyScale * sum.second;
     for (int i = 0; i < 3; ++i) out.third[i] = greyScale * sum.third[i];
+    for (int j = 0; j < kSourceDirections; ++j) out.toward[j] = sum.toward[j] / weights;
     return out;
 }
 
-void ArrivingLight::add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const Rgb &albedo) {
+glm::dvec3 brightestBeam(const Scene &scene) {
+    glm::dvec3 travel(0.0);
+    double brightest = 0.0;
+    for (const SunLight &sun : scene.suns)
+        if (const double E = glm::dot(sun.irradiance, Rgb(1.0)); E > brightest) brightest = E, travel = -sun.direction;
+    return travel;
+}
+
+SourceDirections sourceDirections(const glm::dvec3 &beamTravel) {
+    SourceDirections out;
+    int n = 0;
+    for (int x = -1; x <= 1; ++x)
+        for (int y = -1; y <= 1; ++y)
+            for (int z = -1; z <= 1; ++z)
+                if (x || y || z) out[n++] = glm::normalize(glm::dvec3(x, y, z));
+    const glm::dvec3 axis = beamTravel == glm::dvec3(0.0) ? glm::dvec3(0.0, 0.0, 1.0) : beamTravel;
+    out[n++] = axis;
+    for (const double degrees : {10.0, 25.0})
+        for (int i = 0; i < 6; ++i) out[n++] = directionAround(axis, std::cos(degrees * kPi / 180.0), kPi * i / 3.0);
+    return out;
+}
+
+void ArrivingLight::add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const VolumeOptics &optics,
+                        const SourceDirections &directions) {
+    const Rgb &albedo = optics.albedo;
     (beam ? phiBeam : phi) += fluence;
     glm::dmat3 &toFlux = beam ? fluxBeam : flux;
     for (int c = 0; c < 3; ++c) toFlux[c] += fluence[c] * travel;
@@ -369,17 +397,20 @@ void ArrivingLight::add(const Rgb &fluence, const glm::dvec3 &travel, bool beam,
     const glm::dmat3 tt = grey * glm::outerProduct(travel, travel);
     second += tt;
     for (int i = 0; i < 3; ++i) third[i] += travel[i] * tt;
+    for (int j = 0; j < kSourceDirections; ++j) toward[j] += grey * henyeyGreenstein(glm::dot(travel, directions[j]), optics.g);
 }
 
 ArrivingLight &ArrivingLight::operator+=(const ArrivingLight &o) {
     phi += o.phi, phiBeam += o.phiBeam, flux += o.flux, fluxBeam += o.fluxBeam, second += o.second;
     for (int i = 0; i < 3; ++i) third[i] += o.third[i];
+    for (int j = 0; j < kSourceDirections; ++j) toward[j] += o.toward[j];
     return *this;
 }
 
 SourceEstimate &operator+=(SourceEstimate &a, const SourceEstimate &b) {
     a.l0 += b.l0, a.l1 += b.l1, a.beamL0 += b.beamL0, a.beamL1 += b.beamL1, a.second += b.second;
     for (int i = 0; i < 3; ++i) a.third[i] += b.third[i];
+    for (int j = 0; j < kSourceDirections; ++j) a.toward[j] += b.toward[j];
     a.steps += b.steps;
     return a;
 }

@@ -22,6 +22,16 @@ struct Ray {
     glm::dvec3 direction;  // unit
 };
 
+// The direction the brightest sun's beam travels (0 without suns).
+glm::dvec3 brightestBeam(const Scene &scene);
+
+// The directions the traced source is also gathered in (bake.cpp fits its lobes to them), unit: the cube's 6
+// faces, 12 edges and 8 corners, and about the beam's travel (brightestBeam; +z without one) the axis and rings
+// of 6 at 10 and 25 degrees, where the peaked lobe falls by 3 and 20 times at g 0.87.
+constexpr int kSourceDirections = 39;
+using SourceDirections = std::array<glm::dvec3, kSourceDirections>;
+SourceDirections sourceDirections(const glm::dvec3 &beamTravel);
+
 // The moments of the source function a voxel's snow scatters, per channel: mean l0 and first moment 4 pi l1 / 3
 // (w: the direction the light leaves; l1 column c is channel c's vector), W/m^2/sr: the baked grids' form.
 struct SourceEstimate {
@@ -35,6 +45,9 @@ struct SourceEstimate {
     // keeps g^n of the arriving light's n-th Legendre moment about any axis: how peaked the source is.
     glm::dmat3 second{0.0};
     std::array<glm::dmat3, 3> third{};
+    // The source itself seen from each of sourceDirections(brightestBeam) (grey: the channels' mean), W/m^2/sr: the
+    // arriving light through the exact Henyey-Greenstein phase function, not its moments.
+    std::array<double, kSourceDirections> toward{};
     long steps = 0;  // tracking steps (density lookups) of all its paths and shadow rays: what the estimate cost
 };
 
@@ -48,9 +61,11 @@ struct ArrivingLight {
     glm::dmat3 flux{0.0}, fluxBeam{0.0};
     glm::dmat3 second{0.0};            // sum of mean(albedo phi) t t^T
     std::array<glm::dmat3, 3> third{};  // sum of mean(albedo phi) t_i t t^T
+    std::array<double, kSourceDirections> toward{};  // sum of mean(albedo phi) HG(t . w_j) (SourceDirections)
 
     // Light of `fluence` travelling along `travel`: a direct beam's, or scattered light's.
-    void add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const Rgb &albedo);
+    void add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const VolumeOptics &optics,
+             const SourceDirections &directions);
     ArrivingLight &operator+=(const ArrivingLight &other);
 };
 
@@ -95,9 +110,10 @@ class MonteCarloReference {
     // The source function in one voxel, from `samples` points spread over it (a randomly shifted Kronecker
     // sequence over position and direction, stratified and seeded; weighted by extinction, as
     // the renderer's emission is), each gathering the light arriving from one uniformly drawn direction,
-    // all orders, and every light's direct beam: omega / (4 pi) (phi + 3 g F . w), the Henyey-Greenstein
-    // phase function to first order in w, with the exact fluence phi and flux F; the direct beams' share apart;
-    // and the higher moments of the directions the light travels, which tell how peaked the source is.
+    // all orders, and every light's direct beam: omega / (4 pi) (phi + 3 g F . w),
+    // the Henyey-Greenstein phase function to first order in w, with the exact fluence phi and flux F; the
+    // direct beams' share apart; the higher moments of the directions the light travels, which tell how peaked
+    // the source is; and the exact source in sourceDirections(brightestBeam(scene)).
     // Without `scattered`, the direct beams only (beamL0, beamL1 and their share of the moments): what light
     // tracing leaves to each voxel (light_tracing.h).
     SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream,
