@@ -421,111 +421,6 @@ MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb
     return tracedVoxels(scene, voxels, [&](std::size_t v) { return estimates[v]; }, SubProgress(nullptr, 0.0, 1.0));
 }
 
-// Small pieces left to the diffusion (too many to trace: a skier's lumps) are fuzzy: a lump of 1-2 cm on 1 cm
-// voxels is mostly partly filled voxels, and much of the sun falling on it crosses a rim of a few transport mean
-// free paths and leaves forwards (a 19-voxel lump at g 0.845: 24 % of the sun it intercepts crosses it as the
-// similarity-reduced beam; the core's Monte Carlo sends 32 % of its light within 40 degrees of the sun's travel,
-// 10 % for the same lump at g 0 and the same sigma_tr). Beams sampled at voxel centres miss that rim: the lit
-// patches took it all in and returned it towards the sun (that lump under the sun: +86 % seen from the sun's side,
-// -61 % against it; bench/skier_light_bench.py's pieces +27 %). So parallel rays kAcrossSpacing voxels apart over
-// the pieces march each sun's beam through them (sigma_tr, trilinear density, as the beams): each piece a ray
-// crosses gives the lit surface voxel nearest where the ray met the piece (entry), the last surface voxel it passed
-// (exit), and its parts: scattered at all (1 - exp(-tau), the uncollided transmittance's complement) and scattered
-// forwards out of the far side (exp(-tau_tr) - exp(-tau), the similarity-reduced beam less the uncollided light
-// that never met the piece). That forward part of what the entry voxel's patch takes in leaves at the exit voxel
-// as the crossing beams do (surfaceLight). A share, not the rays' power: the frame's fuzzy pieces intercept 2.6
-// times what their patches take in (the skier's frame: 25.1 W against 9.5 W; a 19-voxel ball 1.2 times), and the
-// rays' power taken from the patches starved them (docs/benchmarks.md, skier-frame).
-constexpr double kAcrossSpacing = 0.5;  // voxels between rays
-void acrossPieces(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &pieces,
-                  IncidentLight &light) {
-    const Medium &medium = *scene.medium;
-    const double h = medium.voxelSize(), spacing = kAcrossSpacing * h;
-    const glm::dvec3 reduced = reducedExtinctionPerDensity(medium.optics());
-    const glm::dvec3 full(medium.optics().extinctionPerDensity);
-    const double limit = std::log(1e5) / std::min({reduced.x, reduced.y, reduced.z});
-    const double dense = kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h);
-    for (std::size_t b = 0; b < scene.suns.size(); ++b) {  // lamps' beams diverge: not across pieces
-        IncidentLight::Beam &beam = light.beams[b];
-        const glm::dvec3 w = scene.suns[b].direction;
-        const glm::dvec3 u = glm::normalize(glm::cross(w, std::abs(w.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
-        const glm::dvec3 v = glm::cross(w, u);
-        // The rays: lattice points (spacing apart, across the beam) within a voxel of a piece's voxel centres.
-        std::vector<std::pair<std::int64_t, std::int64_t>> cells;
-        double near = std::numeric_limits<double>::infinity(), far = -near;
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> unknowns(*topo.index);
-        for (const openvdb::Coord &c : pieces) {  // a piece's surface voxels cover what it shows the sun
-            const std::int32_t unknown = unknowns.getValue(c);
-            if (unknown < 0 || !topo.patches[std::size_t(unknown)].isSurface()) continue;
-            const glm::dvec3 x = medium.voxelCentre(c);
-            const double cu = glm::dot(x, u) / spacing, cv = glm::dot(x, v) / spacing, reach = 1.0 / kAcrossSpacing;
-            near = std::min(near, glm::dot(x, w)), far = std::max(far, glm::dot(x, w));
-            for (std::int64_t i = std::int64_t(std::floor(cu - reach)); i <= std::int64_t(std::ceil(cu + reach)); ++i)
-                for (std::int64_t j = std::int64_t(std::floor(cv - reach)); j <= std::int64_t(std::ceil(cv + reach)); ++j)
-                    cells.emplace_back(i, j);
-        }
-        std::sort(cells.begin(), cells.end());
-        cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-        // Each ray from the light's side: every piece it enters, the lit surface voxel it enters at (the first
-        // it meets facing the light), the surface voxel it leaves at and the transmittance in between.
-        std::vector<std::vector<IncidentLight::Beam::Across>> found(cells.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size(), 256), [&](const auto &range) {
-            Medium::ColumnMarcher marcher(medium);
-            openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
-            for (std::size_t r = range.begin(); r != range.end(); ++r) {
-                const glm::dvec3 start = double(cells[r].first) * spacing * u + double(cells[r].second) * spacing * v +
-                                         (far + 2.0 * h) * w;
-                std::int32_t entry = -1, exit = -1;
-                double column = 0.0, lastDense = -1e300;
-                auto close = [&] {
-                    if (entry >= 0 && exit >= 0)
-                        found[r].push_back({std::uint32_t(entry), std::uint32_t(exit),
-                                            glm::vec3(glm::exp(-reduced * column) - glm::exp(-full * column)),
-                                            glm::vec3(1.0 - glm::exp(-full * column))});
-                    entry = exit = -1, column = 0.0;
-                };
-                marcher.march(start, -w, far - near + 4.0 * h, 0.25, [&](const openvdb::Vec3d &p, double dt) {
-                    const double t = glm::dot(start - medium.indexToWorld(glm::dvec3(p.x(), p.y(), p.z())), w);
-                    if (t > lastDense + 2.0 * h) close();  // out of the piece
-                    const double rho = marcher.densityAt(p);
-                    if (rho < dense) return true;
-                    lastDense = t;
-                    if (column < limit) column += rho * dt;
-                    const openvdb::Coord at = openvdb::Coord::round(p);
-                    if (entry < 0) {  // the lit surface voxel nearest the ray's first snow
-                        double nearest = 1e300;
-                        for (int k = 0; k < 27; ++k) {
-                            const openvdb::Coord c = at.offsetBy(k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1);
-                            const std::int32_t j = index.getValue(c);
-                            if (j < 0 || !topo.patches[std::size_t(j)].facesTowards(w) || beam.atSurface[std::size_t(j)] == glm::vec3(0.0f))
-                                continue;
-                            const double d2 = (c.asVec3d() - p).lengthSqr();
-                            if (d2 < nearest) nearest = d2, entry = j;
-                        }
-                    }
-                    const std::int32_t j = index.getValue(at);
-                    if (j >= 0 && topo.patches[std::size_t(j)].isSurface()) exit = j;
-                    if (entry >= 0 && exit < 0) exit = entry;
-                    return true;
-                });
-                close();
-            }
-        });
-        // Per entry voxel: the cross-sections (m^2) of the rays entering there.
-        beam.crossedArea = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
-        beam.interceptedArea = beam.crossedArea;
-        beam.inPiece.assign(topo.size(), 0);
-        for (const openvdb::Coord &c : pieces)
-            if (const std::int32_t i = unknowns.getValue(c); i >= 0) beam.inPiece[std::size_t(i)] = 1;
-        for (const auto &list : found)
-            for (auto a : list) {
-                a.crossed *= float(spacing * spacing), a.intercepted *= float(spacing * spacing);
-                beam.crossedArea.surface(a.entry) += a.crossed, beam.interceptedArea.surface(a.entry) += a.intercepted;
-                if (a.crossed != glm::vec3(0.0f)) beam.across.push_back(a);
-            }
-    }
-}
-
 // The diffusion system of one channel plus what the surface needs afterwards.
 struct ChannelSystem {
     Stencil<float> A;              // what the solver keeps of the operator (MultigridSolver)
@@ -535,7 +430,6 @@ struct ChannelSystem {
     SurfaceValues<float> escaped;             // W: light leaving through air faces without reaching the node
     SurfaceValues<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
     std::vector<SurfaceValues<float>> sunIn;  // per beam (sun or lamp), W entering through air faces
-    std::vector<SurfaceValues<float>> across;  // per beam, W of it crossing a small piece (acrossPieces)
     SurfaceValues<float> skyIn;               // W entering through air faces
     // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
     // returned at once (m^2), so that light from other snow adds to the sources as sky light does.
@@ -544,7 +438,7 @@ struct ChannelSystem {
 
     ChannelSystem(const SnowTopology &topo, std::size_t beams)
         : b(topo.size(), 0.0), escaped(surfaceZeros(topo)), outConductance(surfaceZeros(topo)),
-          sunIn(beams, surfaceZeros(topo)), across(beams, surfaceZeros(topo)), skyIn(surfaceZeros(topo)), skyToNode(surfaceZeros(topo)),
+          sunIn(beams, surfaceZeros(topo)), skyIn(surfaceZeros(topo)), skyToNode(surfaceZeros(topo)),
           skyReturned(surfaceZeros(topo)), area(surfaceZeros(topo)) {}
     static SurfaceValues<float> surfaceZeros(const SnowTopology &topo) {
         return SurfaceValues<float>(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);
@@ -691,7 +585,6 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     if (patch.share[f] <= 0.0f) continue;
                     const double mu = glm::dot(patch.sharp ? faceNormal(f) : patch.normal, w);
                     const double flow = mu * patch.area * patch.share[f] * (mu > 0.0 ? Bs : Bv);
-                    if (flow < 0.0 && !beam.inPiece.empty() && beam.inPiece[i]) continue;  // the rays carry it out
                     (flow > 0.0 ? in : out) += std::abs(flow);
                     if (flow > 0.0) entering[f] = flow, muIn[f] = mu;
                 }
@@ -711,18 +604,14 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     (flow[f] > 0.0 ? in : out) += std::abs(flow[f]);
                 }
                 if (in <= 0.0) continue;
-                // W of the patch's intake crossing the piece: the forward part of what its rays intercept.
-                const double across = beam.crossedArea.values().empty() || beam.interceptedArea[i][c] <= 0.0f ? 0.0
-                                      : patchIn * beam.crossedArea[i][c] / beam.interceptedArea[i][c];
-                const double scattered = aPrime * std::max(0.0, in - out - across) / in;
+                const double scattered = aPrime * std::max(0.0, in - out) / in;
                 for (int f = 0; f < 6; ++f)
                     if (flow[f] > 0.0) source += scattered * flow[f];
                 if (patchIn <= 0.0) continue;
                 // Into a surface voxel through its air faces: the beam scatters at mean resistance 3 mu
                 // (reduced depth mu below the surface), cut at the node; what scatters above the node
                 // partly escapes at once.
-                sys.sunIn[s].surface(i) += std::max(0.0, patchIn - across);
-                sys.across[s].surface(i) += across;
+                sys.sunIn[s].surface(i) += patchIn;
                 for (int f = 0; f < 6; ++f) {
                     if (entering[f] <= 0.0) continue;
                     const double P = scattered * entering[f], L = boundary[f]->L;
@@ -866,17 +755,6 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         }
         return std::pair{r0, r1};
     };
-    // The beams crossing small pieces (acrossPieces), gathered at the surface voxels where they leave: l0 (W per
-    // channel) and its axis, as the crossing beams below.
-    SurfaceValues<glm::dvec4> acrossOut(topo.surfaceSlot, topo.surfaceVoxels(), glm::dvec4(0.0));
-    const double kAcross = crossingAnisotropy(ch.g);
-    for (std::size_t s = 0; s < light.beams.size(); ++s)
-        for (const IncidentLight::Beam::Across &a : light.beams[s].across) {
-            const double C = sys.across[s][a.entry] * a.crossed[c] / light.beams[s].crossedArea[a.entry][c];  // W
-            const glm::dvec3 d = -towardsBeam(scene, s, glm::dvec3(0.0)), &n = topo.patches[a.exit].normal;
-            const double l0 = C / (kPi * (1.0 + 3.0 * kAcross * std::max(0.0, glm::dot(d, n))));
-            acrossOut.surface(a.exit) += glm::dvec4(l0 * d, l0);
-        }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
@@ -893,7 +771,6 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             double crossing = 0.0;
             glm::dvec3 axis(0.0);
             for (std::size_t s = 0; s < light.beams.size(); ++s) {
-                if (!light.beams[s].inPiece.empty() && light.beams[s].inPiece[i]) continue;  // acrossOut instead
                 const double beam = light.beams[s].atVoxel[i][c];
                 const glm::dvec3 d = -towardsBeam(scene, s, centre);
                 for (int f = 0; f < 6 && beam > 0.0; ++f) {
@@ -903,7 +780,6 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     crossing += l0, axis += l0 * d;
                 }
             }
-            crossing += acrossOut[i].w, axis += glm::dvec3(acrossOut[i]);
             surface.crossing[c] = float(crossing);
             if (crossing > 0.0) surface.crossingAxis = glm::vec3(axis / crossing);
             surface.returned.l0[c] = float(r0);
@@ -1777,10 +1653,6 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     // Small pieces and thin snow left to the diffusion (too many to trace: a skier's thousands of lumps) light
     // each other over many bounces: one more gather, and the rest of the bounces from the last two (addBounceTail).
     const bool untracedPieces = !thin.empty() && traced.source.empty();
-    if (untracedPieces) {
-        acrossPieces(scene, topo, thin, light);
-        clock.lap(&BakeStats::Phases::light);
-    }
     const int passes = local.passes = hidden ? 1 + preset.snowBounces + (untracedPieces ? 1 : 0) : 1;
     const SourceValues source =
         solveSources(scene, topo, light, traced, preset, settings, passes, untracedPieces, p, clock, local);

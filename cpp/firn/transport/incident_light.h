@@ -22,17 +22,6 @@ struct IncidentLight {
     struct Beam {
         std::vector<glm::vec3> atVoxel;      // at each unknown's centre
         SurfaceValues<glm::vec3> atSurface;  // just outside each surface voxel's patch (0 inside the snow)
-        // Small pieces left to the diffusion (bake.cpp, acrossPieces): per lit surface voxel, the cross-sections
-        // (m^2, per channel; 0 elsewhere) of the rays entering there that the piece scatters (intercepted) and of
-        // those it scatters forwards out of its far side (crossed), and the rays themselves: where each left the
-        // piece and its parts of both.
-        struct Across {
-            std::uint32_t entry, exit;   // surface voxels
-            glm::vec3 crossed, intercepted;  // m^2
-        };
-        SurfaceValues<glm::vec3> crossedArea, interceptedArea;
-        std::vector<std::uint8_t> inPiece;  // per unknown: 1 in the pieces the rays cross (they carry the beam out)
-        std::vector<Across> across;
     };
     std::vector<Beam> beams;
     // W/m^2 onto each surface voxel's patch from the sky, past occluders and snow, plus sun and sky light
