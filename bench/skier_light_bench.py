@@ -113,13 +113,13 @@ def measure(args):
         lights.update({"sun only": dict(suns=suns, sky=dark), "sky only": dict(suns=[], sky=sky)})
     for name, light in lights.items():
         tag = name.replace(" ", "_")
-        baked = os.path.join(folder, f"bench_{tag}_{args.quality}.vdb")
+        baked = os.path.join(folder, f"bench_{tag}_{args.quality}{args.source_scale or ''}.vdb")
         stats = firncore.bake(spray, optics, occluders=occluders, quality=args.quality, seed=0, output_path=baked,
-                              **light)
+                              source_scale=args.source_scale, **light)
         cpu = stats["cpu_seconds"]
         print(f"{name}: bake {args.quality} {sum(cpu.values()):.1f} processor s ("
               + ", ".join(f"{k} {v:.1f}" for k, v in cpu.items()) + f"), traced voxels {stats['traced_voxels']} "
-              f"({stats['light_traced_voxels']} light traced), load {os.getloadavg()[0]:.1f}", flush=True)
+              f"({stats['light_traced_voxels']} light traced), source scale {stats['source_scale']}, load {os.getloadavg()[0]:.1f}", flush=True)
         render = firncore.render_baked(baked, optics, origins, directions, occluders=occluders)
         if name == "sun and sky" and args.quality == "DRAFT":
             file = firncore.render_baked(meta["outputs"][1], optics, origins, directions, occluders=occluders)
@@ -150,6 +150,7 @@ def main():
     parser.add_argument("--samples", type=int, default=64, help="Monte Carlo paths per pixel")
     parser.add_argument("--pixels", type=int, default=48, help="columns of the side view (rows: half)")
     parser.add_argument("--quality", default="DRAFT")
+    parser.add_argument("--source-scale", type=int, default=0, help="the bake's source_scale (0: its budget's)")
     parser.add_argument("--no-split", dest="split", action="store_false", help="no sun-only and sky-only rows")
     parser.add_argument("--build", default=None, help=argparse.SUPPRESS)  # in Blender: build into this folder
     args = parser.parse_args(argv)

@@ -8,6 +8,7 @@ bench does, against firncore.monte_carlo_radiance (references kept in the folder
 Pieces: voxels connected through faces, edges or corners, as bake.cpp's smallPiece.
 
 PYTHONPATH=build/python /usr/bin/python3 bench/skier_pieces_bench.py [--folder /tmp/firn_skier_light] [--samples 64]
+    [--source-scale N]  (the bake's source grids N density voxels each; 0: as the budget gives, 3-4 here)
 """
 
 import argparse
@@ -112,6 +113,7 @@ def main():
     parser.add_argument("--folder", default="/tmp/firn_skier_light", help="skier_light_bench.py's folder")
     parser.add_argument("--samples", type=int, default=64)
     parser.add_argument("--pixels", type=int, default=48)
+    parser.add_argument("--source-scale", type=int, default=0, help="the bake's source_scale (0: its budget's)")
     args = parser.parse_args()
     import firncore
 
@@ -151,10 +153,12 @@ def main():
     sun = np.asarray(meta["suns"][0][0], float)
     for (name, path), density in zip(files.items(), (dense, alone)):
         met = first_met(density, lo, voxel, linear, label, origins, extinction, sun / np.linalg.norm(sun))
-        baked_path = path[:-4] + "_baked.vdb"
+        baked_path = path[:-4] + f"_baked{args.source_scale or ''}.vdb"
         start = time.process_time()
-        firncore.bake(path, optics, suns=suns, sky=dark, quality="DRAFT", seed=0, output_path=baked_path)
-        print(f"{name}: bake {time.process_time() - start:.1f} processor s", flush=True)
+        stats = firncore.bake(path, optics, suns=suns, sky=dark, quality="DRAFT", seed=0, output_path=baked_path,
+                              source_scale=args.source_scale)
+        print(f"{name}: bake {time.process_time() - start:.1f} processor s, source scale {stats['source_scale']}",
+              flush=True)
         saved = path[:-4] + f"_reference_{n}_{args.samples}.npy"
         if not os.path.exists(saved):
             start = time.time()
