@@ -49,7 +49,7 @@ struct Preset {
     int referenceSamples;
     int snowBounces;  // passes gathering light between snow surfaces
     int tracedSamples;  // paths per optically thin voxel (thinVoxels)
-    int cheapTracedSamples;  // as many where all of them cost at most kCheapTracedSteps (tracedSamples)
+    int cheapTracedSamples;  // as many where all of them cost little (kCheapTracedSteps, kShortTracedSteps: tracedSamples)
     // The sky and the light gathered from other snow averaged over like-facing neighbours (averageOverNeighbours):
     // 9 rays a voxel pooled over its neighbours where 16 were its own (docs/bake.md, Performance).
     bool skyOverNeighbours;
@@ -284,11 +284,15 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
 // few traced voxels show their estimates' noise, and 1024 paths each cost it well under a processor second
 // (bench/bake_suite.py --seeds 4 at FINAL, 256 -> 1024 paths: ball_thin 4.6 -> 4.0 %, ball_thin_forward 9.8 ->
 // 7.0 %, ball_rgb 8.8 -> 8.0 %, ball_forward 16.4 -> 15.1 %, spray_lumps 12.5 -> 10.2 %, the tracing 0.05 -> 0.2,
-// 0.2 -> 0.9 processor s; spray_dense and ball_half_tau, over the budget at 256 already, as they were). Raised
-// 2e7 -> 8e7 for the fit by direction (tracedSourceByDirection): a light dusting's 1728 voxels at 1024 paths (the slab's
-// estimates at 256 paths are too noisy; the trace 0.56 -> 2.47 processor s; ball_half_tau 1.9 -> 1.4 %, 1.04 -> 2.23 s).
+// 0.2 -> 0.9 processor s; spray_dense and ball_half_tau, over the budget at 256 already, as they were). Short
+// paths (at most kShortPathSteps: thin snow in a small object, 34-42 steps on ball_half_tau and a light dusting)
+// may cost up to kShortTracedSteps, for the fit by direction (tracedSourceByDirection): a light dusting's 1728
+// voxels at 1024 paths (its estimates at 256 paths are too noisy; the trace 0.56 -> 2.47 processor s; ball_half_tau
+// 1.9 -> 1.4 %, 1.04 -> 2.23 s). Long ones keep kCheapTracedSteps: the car's 3 traced voxels in 2.7 M voxels of
+// thick snow (thousands of steps per path) took 0.84 -> 2.94 processor s at kShortTracedSteps, for three voxels.
 constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 processor seconds
-constexpr double kCheapTracedSteps = 8e7;                       // about 5 processor seconds
+constexpr double kCheapTracedSteps = 2e7;                       // about 1.2 processor seconds
+constexpr double kShortPathSteps = 1000.0, kShortTracedSteps = 8e7;  // about 5 processor seconds
 int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
     if (voxels.empty()) return 0;
@@ -308,7 +312,8 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
     const int affordable = int(std::min(kMaxTracedPaths, kMaxTracedSteps / perPath) / double(voxels.size()));
     if (affordable < kMinSamples) return 0;
     int samples = std::min(affordable, preset.tracedSamples);
-    while (2 * samples <= preset.cheapTracedSamples && perPath * 2.0 * samples * double(voxels.size()) <= kCheapTracedSteps)
+    const double cheap = perPath <= kShortPathSteps ? kShortTracedSteps : kCheapTracedSteps;
+    while (2 * samples <= preset.cheapTracedSamples && perPath * 2.0 * samples * double(voxels.size()) <= cheap)
         samples *= 2;
     return samples;
 }
