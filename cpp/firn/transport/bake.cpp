@@ -1661,13 +1661,20 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     clock.lap(&BakeStats::Phases::topology);
     // Thin snow is traced beside the sun and sky light, which it neither reads nor changes (the same values
     // either way): the car's 3 traced voxels are one task of 0.8 processor seconds, which before held one core
-    // while the other idled.
+    // while the other idled. The tracing stays on the calling thread and the light is the task beside it: the
+    // core's workers run at a lower priority (threads.h), and under load a serial trace on a worker ran slower
+    // while the light had the calling thread alone; the light's loop takes both threads once the trace is done.
     p.report(0.05, "Tracing sun and sky light");
     IncidentLight light;
     std::vector<openvdb::Coord> thin;
     MonteCarloVoxels traced;
     ThreadSeconds tracing;
     runBeside(
+        [&] {
+            light = computeIncidentLight(
+                scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
+                SubProgress(&p, 0.05, 0.4));
+        },
         [&] {
             tracing = isolatedOnThisThread([&] {
                 const SubProgress quiet = SubProgress::cancelOnly(&p);
@@ -1677,11 +1684,6 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                              ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, quiet)
                              : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, quiet, local);
             });
-        },
-        [&] {
-            light = computeIncidentLight(
-                scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
-                SubProgress(&p, 0.05, 0.4));
         });
     clock.lap(&BakeStats::Phases::light);
     clock.beside(&BakeStats::Phases::trace, &BakeStats::Phases::light, tracing);
