@@ -23,6 +23,7 @@
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "firn/transport/bounce_tail.h"
 #include "firn/transport/edge_lobe.h"
@@ -37,6 +38,7 @@
 #include "firn/util/error.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
+#include "firn/util/threads.h"
 #include "firn/util/version.h"
 
 namespace firn {
@@ -79,6 +81,25 @@ Preset resolve(const BakeSettings &s) {
     return p;
 }
 
+// Wall-clock and processor seconds of work run on the calling thread, the processor's of this thread alone:
+// isolated (tbb::this_task_arena::isolate), it takes no other work while it waits for its own loops, whose
+// chunks another thread runs count where that thread's time goes.
+struct ThreadSeconds {
+    double wall = 0.0, cpu = 0.0;
+};
+template <class Work>
+ThreadSeconds isolatedOnThisThread(Work &&work) {
+    const auto threadCpu = [] {
+        timespec t{};
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+        return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+    };
+    const auto start = std::chrono::steady_clock::now();
+    const double cpuStart = threadCpu();
+    tbb::this_task_arena::isolate(std::forward<Work>(work));
+    return {std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), threadCpu() - cpuStart};
+}
+
 // Wall-clock and processor time (all threads: std::clock) between laps, added to a phase's seconds.
 class Stopwatch {
   public:
@@ -89,6 +110,14 @@ class Stopwatch {
         stats_.seconds.*phase += std::chrono::duration<double>(now - last_).count();
         stats_.cpuSeconds.*phase += double(cpuNow - cpuLast_) / CLOCKS_PER_SEC;
         last_ = now, cpuLast_ = cpuNow;
+    }
+
+    // `seconds` of a phase that ran beside the laps' `within`: its wall seconds its own (they overlap
+    // within's), its processor seconds moved out of within's (the last lap counted them there).
+    void beside(double BakeStats::Phases::*phase, double BakeStats::Phases::*within, const ThreadSeconds &seconds) {
+        stats_.seconds.*phase += seconds.wall;
+        stats_.cpuSeconds.*within -= seconds.cpu;
+        stats_.cpuSeconds.*phase += seconds.cpu;
     }
 
   private:
@@ -1783,26 +1812,41 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(&p, 0.0, 0.05), sourceScale);
     releaseFreedMemory();  // the topology's intermediate lists
     clock.lap(&BakeStats::Phases::topology);
+    // Thin snow is traced beside the sun and sky light, which it neither reads nor changes (the same values
+    // either way): the car's 3 traced voxels are one task of 0.8 processor seconds, which before held one core
+    // while the other idled. The tracing stays on the calling thread and the light is the task beside it: the
+    // core's workers run at a lower priority (threads.h), and under load a serial trace on a worker ran slower
+    // while the light had the calling thread alone; the light's loop takes both threads once the trace is done.
     p.report(0.05, "Tracing sun and sky light");
-    IncidentLight light =
-        computeIncidentLight(scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
-                             SubProgress(&p, 0.05, 0.3));
+    IncidentLight light;
+    std::vector<openvdb::Coord> thin;
+    MonteCarloVoxels traced;
+    ThreadSeconds tracing;
+    runBeside(
+        [&] {
+            light = computeIncidentLight(
+                scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
+                SubProgress(&p, 0.05, 0.4));
+        },
+        [&] {
+            tracing = isolatedOnThisThread([&] {
+                const SubProgress quiet = SubProgress::cancelOnly(&p);
+                thin = thinVoxels(*scene.medium);
+                const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
+                traced = samples > 0 || thin.empty()
+                             ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, quiet)
+                             : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, quiet, local);
+            });
+        });
     clock.lap(&BakeStats::Phases::light);
+    clock.beside(&BakeStats::Phases::trace, &BakeStats::Phases::light, tracing);
+    local.tracedVoxels = traced.source.size();
 
     local.unknowns = topo.size();
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
     local.surfaceVoxels = topo.surfaceVoxels();
     const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
     const bool hidden = std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
-    p.report(0.3, "Tracing thin snow");
-    const std::vector<openvdb::Coord> thin = thinVoxels(*scene.medium);
-    const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
-    const MonteCarloVoxels traced =
-        samples > 0 || thin.empty()
-            ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, SubProgress(&p, 0.3, 0.4))
-            : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, SubProgress(&p, 0.3, 0.4), local);
-    local.tracedVoxels = traced.source.size();
-    clock.lap(&BakeStats::Phases::trace);
     // Small pieces and thin snow left to the diffusion (too many to trace: a skier's thousands of lumps) light
     // each other over many bounces: one more gather, and the rest of the bounces from the last two (addBounceTail).
     const bool untracedPieces = !thin.empty() && traced.source.empty();

@@ -44,8 +44,15 @@ class Progress {
 class SubProgress {
   public:
     SubProgress(Progress *parent, double begin, double end) : parent_(parent), begin_(begin), end_(end) {}
+    // A step run beside another that reports: it reports nothing (the parent's fraction would go back and forth)
+    // but still stops when the parent is cancelled.
+    static SubProgress cancelOnly(Progress *parent) {
+        SubProgress out(parent, 0.0, 0.0);
+        out.reports_ = false;
+        return out;
+    }
     void report(double fraction) const {
-        if (parent_) parent_->report(begin_ + (end_ - begin_) * fraction);
+        if (parent_ && reports_) parent_->report(begin_ + (end_ - begin_) * fraction);
     }
     void throwIfCancelled() const {
         if (parent_) parent_->throwIfCancelled();
@@ -54,6 +61,7 @@ class SubProgress {
   private:
     Progress *parent_;
     double begin_, end_;
+    bool reports_ = true;
 };
 
 }  // namespace firn

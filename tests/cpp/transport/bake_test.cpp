@@ -14,6 +14,7 @@
 #include "firn/transport/snow_topology.h"
 #include "firn/util/error.h"
 #include "firn/util/sampling.h"
+#include "firn/util/threads.h"
 
 namespace firn {
 
@@ -155,6 +156,41 @@ TEST(Bake, ReportsProgressAndStopsWhenCancelled) {
     Progress cancelled;
     cancelled.cancel();
     EXPECT_THROW(bakeScattering(scene, BakeSettings{}, &cancelled), Cancelled);
+}
+
+// Thin snow is traced beside the sun and sky light (bakeScattering): a small lump above the slab, traced whole. Its
+// grids do not depend on how the two share the threads (one thread runs them one after the other, two side by
+// side), the progress still only goes forwards, and a cancelled bake stops in either.
+TEST(Bake, SnowTracedBesideTheLightIsTheSameOnOneThreadAndStopsWhenCancelled) {
+    Scene scene = slabScene(2000.0, 0.999, 0.85, 12, 6);
+    openvdb::FloatGrid::Ptr density = makeSlabDensity(kVoxel, 12, 6, kDensity);
+    for (int x = 0; x < 2; ++x)
+        for (int y = 0; y < 2; ++y) density->tree().setValue(openvdb::Coord(x, y, 4), 0.1f * kDensity);  // 4 voxels above
+    scene.medium = std::make_shared<Medium>(density, scene.medium->optics());
+    scene.sky.radiance = Rgb(0.5);
+    scene.suns = {sunAt(0.7)};
+    const BakeSettings settings{BakeQuality::Draft, 3};
+    BakeStats stats;
+    double last = -1.0;
+    bool monotone = true;
+    Progress progress([&](double fraction, const std::string &) {
+        monotone = monotone && fraction >= last;
+        last = fraction;
+    });
+    const BakedGrids both = bakeScattering(scene, settings, &progress, &stats);
+    EXPECT_EQ(stats.tracedVoxels, 4u);
+    EXPECT_TRUE(monotone);
+    setThreadCount(1);
+    const BakedGrids one = runInCoreArena([&] { return bakeScattering(scene, settings); });
+    setThreadCount(0);
+    for (std::size_t k = 0; k < BakedGrids::kCount; ++k) {
+        ASSERT_EQ(both.source[k]->activeVoxelCount(), one.source[k]->activeVoxelCount());
+        openvdb::tree::ValueAccessor<const openvdb::Vec3fTree> other(one.source[k]->tree());
+        for (auto it = both.source[k]->cbeginValueOn(); it; ++it) ASSERT_EQ(*it, other.getValue(it.getCoord()));
+    }
+    Progress cancelled;
+    cancelled.cancel();
+    EXPECT_THROW(bakeScattering(scene, settings, &cancelled), Cancelled);
 }
 
 TEST(Bake, RejectsBadInput) {

@@ -48,4 +48,16 @@ TEST(SubProgress, MapsOntoParentRange) {
     EXPECT_DOUBLE_EQ(progress.fraction(), 0.625);
 }
 
+// A step run beside another (bake: thin snow traced beside the light) reports nothing, but stops when cancelled.
+TEST(SubProgress, CancelOnlyReportsNothingButStopsWhenCancelled) {
+    Progress progress;
+    progress.report(0.3);
+    const SubProgress quiet = SubProgress::cancelOnly(&progress);
+    quiet.report(0.9);
+    EXPECT_DOUBLE_EQ(progress.fraction(), 0.3);
+    EXPECT_NO_THROW(quiet.throwIfCancelled());
+    progress.cancel();
+    EXPECT_THROW(quiet.throwIfCancelled(), Cancelled);
+}
+
 }  // namespace firn
