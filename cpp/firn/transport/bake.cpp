@@ -35,6 +35,7 @@
 #include "firn/transport/snow_topology.h"
 #include "firn/transport/source_lobe.h"
 #include "firn/transport/sun_lobe.h"
+#include "firn/transport/traced_source.h"
 #include "firn/util/error.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
@@ -134,29 +135,6 @@ struct Channel {
     double sigmaTr(double rho) const { return (1.0 - omega * g) * k * rho; }   // sigma_a + sigma_s (1 - g)
     double reducedAlbedo() const { return omega * (1.0 - g) / (1.0 - omega * g); }
     double beta() const { return std::sqrt((1.0 - omega) / (3.0 * (1.0 - omega * g))); }  // kappa D
-};
-
-// The anisotropy of the peaked lobe a beam's light keeps where it scatters once or crosses the snow to a far
-// surface: the snow's g, within what a stored lobe holds.
-double crossingAnisotropy(double g) { return std::min(g, kMaxLobeAnisotropy); }
-
-// The broad lobe per channel (W/m^2/sr): mean l0 and first moment 4 pi l1 / 3 (source_lobe.h). A surface's
-// radiance has no other (the peaked lobe is the beams' light inside the snow).
-struct BroadLobe {
-    glm::vec3 l0{0.0f};
-    glm::mat3 l1{0.0f};  // column c: the vector for channel c
-};
-
-// The source function in one voxel, per channel (W/m^2/sr), as the grids store it: the broad lobe and the
-// peaked lobe of mean peak0 and grey first moment peak1 (source_lobe.h).
-struct Source : BroadLobe {
-    glm::vec3 peak0{0.0f}, peak1{0.0f};
-
-    // Adds a peaked lobe of mean l0 per channel and anisotropy k about the unit axis m (where its light goes).
-    void addPeak(const glm::dvec3 &mean, double k, const glm::dvec3 &m) {
-        peak0 += glm::vec3(mean);
-        peak1 += glm::vec3(k * (mean.x + mean.y + mean.z) * m);  // 3 k m (the channels' mean)
-    }
 };
 
 // Source functions' peaked lobes where they are not zero, by key (an unknown, a place among the grids' values):
@@ -315,9 +293,9 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
 // 7.0 %, ball_rgb 8.8 -> 8.0 %, ball_forward 16.4 -> 15.1 %, spray_lumps 12.5 -> 10.2 %, the tracing 0.05 -> 0.2,
 // 0.2 -> 0.9 processor s; spray_dense and ball_half_tau, over the budget at 256 already, as they were). Short
 // paths (at most kShortPathSteps: thin snow in a small object, 34-42 steps on ball_half_tau and a light dusting)
-// may cost up to kShortTracedSteps, for the fit by direction (tracedSourceByDirection): a light dusting's 1728
-// voxels at 1024 paths (its estimates at 256 paths are too noisy; the trace 0.56 -> 2.47 processor s; ball_half_tau
-// 1.9 -> 1.4 %, 1.04 -> 2.23 s). Long ones keep kCheapTracedSteps: the car's 3 traced voxels in 2.7 M voxels of
+// may cost up to kShortTracedSteps: a light dusting's 1728 voxels at 1024 paths for the fit by direction
+// (tracedSourceByDirection; its estimates at 256 paths are too noisy; the trace 0.56 -> 2.47 processor s), and
+// ball_half_tau's 2512 at g 0.3 gain too (1.9 -> 1.5 %, the trace 1.04 -> 2.23 s). Long ones keep kCheapTracedSteps: the car's 3 traced voxels in 2.7 M voxels of
 // thick snow (thousands of steps per path) took 0.84 -> 2.94 processor s at kShortTracedSteps, for three voxels.
 constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 processor seconds
 constexpr double kCheapTracedSteps = 2e7;                       // about 1.2 processor seconds
@@ -347,214 +325,6 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
     return samples;
 }
 
-// Caps a broad lobe's first moments at |l1| <= l0 (k <= 1/3; tracedSourceByMoments).
-void capBroad(BroadLobe &S) {
-    for (int c = 0; c < 3; ++c) {
-        const float length = glm::length(S.l1[c]), most = std::max(S.l0[c], 0.0f);
-        if (length > most) S.l1[c] *= most / length;
-    }
-}
-
-// Two Henyey-Greenstein lobes with the Legendre moments a0..a3 of an axially symmetric source (a_n = sum of
-// w k^n over the lobes): the nodes k are the roots of x^2 + c1 x + c0 with a_(n+2) + c1 a_(n+1) + c0 a_n = 0
-// (Prony's method; exact for two lobes). None where the moments are no such pair's.
-struct LobePair {
-    double kPeak, kBroad;  // kPeak > kBroad
-};
-std::optional<LobePair> lobePair(double a0, double a1, double a2, double a3) {
-    const double det = a1 * a1 - a0 * a2;
-    if (!(std::abs(det) > 1e-9 * a0 * a0)) return std::nullopt;
-    const double c1 = (a0 * a3 - a1 * a2) / det, c0 = (a2 * a2 - a1 * a3) / det;
-    const double disc = c1 * c1 - 4.0 * c0;
-    if (!(disc >= 0.0)) return std::nullopt;
-    const double x1 = 0.5 * (-c1 + std::sqrt(disc)), x2 = 0.5 * (-c1 - std::sqrt(disc));
-    if (!(x1 > x2 && x1 <= 1.0 && x2 >= -kMaxLobeAnisotropy)) return std::nullopt;
-    const double w1 = (a1 - x2 * a0) / (x1 - x2);
-    if (!(w1 >= 0.0 && w1 <= a0)) return std::nullopt;
-    return LobePair{x1, x2};
-}
-
-// The two lobes fitted by direction (fitByDirection), grey: the peaked lobe's mean and anisotropy k
-// about the beams' axis, and the broad lobe's linear form l0 + l1 . w.
-struct DirectionFit {
-    double peak = 0.0, k = 0.0, l0 = 0.0;
-    glm::dvec3 l1{0.0};
-    double error = std::numeric_limits<double>::infinity();  // weighted squared misfit
-};
-
-// Solves the symmetric positive definite system A x = b in place (Cholesky, lower triangle); false where A is
-// singular.
-template <int n>
-bool solveSymmetric(std::array<std::array<double, n>, n> &A, std::array<double, n> &b) {
-    for (int j = 0; j < n; ++j) {
-        for (int k = 0; k < j; ++k) A[j][j] -= A[j][k] * A[j][k];
-        if (!(A[j][j] > 1e-12 * (1.0 + std::abs(A[0][0])))) return false;
-        A[j][j] = std::sqrt(A[j][j]);
-        for (int i = j + 1; i < n; ++i) {
-            for (int k = 0; k < j; ++k) A[i][j] -= A[i][k] * A[j][k];
-            A[i][j] /= A[j][j];
-        }
-    }
-    for (int i = 0; i < n; ++i) {
-        for (int k = 0; k < i; ++k) b[i] -= A[i][k] * b[k];
-        b[i] /= A[i][i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        for (int k = i + 1; k < n; ++k) b[i] -= A[k][i] * b[k];
-        b[i] /= A[i][i];
-    }
-    return true;
-}
-
-using DirectionWeights = std::array<double, kSourceDirections>;
-
-// The lobes with the peaked one's anisotropy k (none: k < 0) fitted to the gathered source S.toward by weighted
-// least squares: linear in the peak's mean and the broad lobe's l0 and l1.
-DirectionFit fitAtK(const SourceEstimate &S, const SourceDirections &directions, const glm::dvec3 &m, double k,
-                    const DirectionWeights &weights) {
-    constexpr int n = 5;
-    std::array<std::array<double, n>, n> A{};
-    std::array<double, n> b{};
-    std::array<std::array<double, n>, kSourceDirections> basis;
-    for (int j = 0; j < kSourceDirections; ++j) {
-        const glm::dvec3 &w = directions[j];
-        basis[j] = {k >= 0.0 ? 4.0 * kPi * henyeyGreenstein(glm::dot(w, m), k) : 0.0, 1.0, w.x, w.y, w.z};
-        for (int r = 0; r < n; ++r) {
-            b[r] += weights[j] * basis[j][r] * S.toward[j];
-            for (int c = 0; c <= r; ++c) A[r][c] += weights[j] * basis[j][r] * basis[j][c];
-        }
-    }
-    if (k < 0.0) A[0][0] = 1.0;  // no peak: its mean held at 0
-    DirectionFit out;
-    if (!solveSymmetric<n>(A, b) || b[0] < 0.0 || b[1] <= 0.0) return out;
-    out.peak = b[0], out.k = std::max(k, 0.0), out.l0 = b[1], out.l1 = glm::dvec3(b[2], b[3], b[4]);
-    out.error = 0.0;
-    for (int j = 0; j < kSourceDirections; ++j) {
-        double model = 0.0;
-        for (int r = 0; r < n; ++r) model += basis[j][r] * b[r];
-        out.error += weights[j] * (model - S.toward[j]) * (model - S.toward[j]);
-    }
-    return out;
-}
-
-// The grey radiance a source's two lobes show towards w (source_lobe.h).
-double greyRadiance(const Source &S, const glm::dvec3 &w) {
-    const double peakMean = (S.peak0.x + S.peak0.y + S.peak0.z) / 3.0;
-    double sum = 0.0;
-    for (int c = 0; c < 3; ++c)
-        sum += lobeRadiance(S.l0[c], glm::dvec3(S.l1[c]), w) + peakRadiance(S.peak0[c], peakMean, glm::dvec3(S.peak1), w);
-    return sum / 3.0;
-}
-
-// The traced source's two lobes fitted to the exact source gathered in `directions` (grey): the peaked lobe
-// about the beams' axis m, k from 0.5 to min(g, kMaxLobeAnisotropy) by steps of 0.01 (or none), the best; the
-// broad lobe's linear form. In relative error against `moments` (the lobes fitted to the moments: weights that do
-// not depend on the estimates, as the estimates' own values would, which favour those drawn low), each direction
-// weighted by the visibility of the voxel from it, exp(-tau) to the snow's bounds: a thin layer's source is
-// brightest along the layer (its limb), which no such pair holds and no camera sees but through the layer; the
-// fit keeps what cameras see, not the mean (docs/bake.md, Method 3). The channels in the ratio of their means.
-std::optional<Source> fitByDirection(const SourceEstimate &S, const SourceDirections &directions,
-                                    const DirectionWeights &visibility, const glm::dvec3 &m, double g,
-                                    const Source &moments) {
-    const double a0 = (S.l0.x + S.l0.y + S.l0.z) / 3.0;
-    if (!(a0 > 0.0)) return std::nullopt;
-    DirectionWeights weights;
-    for (int j = 0; j < kSourceDirections; ++j)
-        weights[j] = visibility[j] / std::pow(std::max(greyRadiance(moments, directions[j]), 0.1 * a0), 2.0);
-    DirectionFit fit = fitAtK(S, directions, m, -1.0, weights);
-    for (int i = 0; 0.5 + 0.01 * i <= std::min(g, kMaxLobeAnisotropy) + 1e-9; ++i)
-        if (const DirectionFit atK = fitAtK(S, directions, m, 0.5 + 0.01 * i, weights); atK.error < fit.error) fit = atK;
-    if (!std::isfinite(fit.error)) return std::nullopt;
-    Source out;
-    const glm::dvec3 share = S.l0 / a0;  // each channel's of the grey mean
-    out.l0 = glm::vec3(fit.l0 * share);
-    for (int c = 0; c < 3; ++c) out.l1[c] = glm::vec3(fit.l1 * share[c]);
-    if (fit.peak > 0.0) out.addPeak(fit.peak * share, fit.k, m);
-    capBroad(out);
-    return out;
-}
-
-// The source of a traced voxel as the two lobes the grids hold, fitted to its first four Legendre moments about
-// the direct beams' axis m (lobePair): at g 0.85 light scattered a few times is peaked too, and the peaked
-// lobe takes it with the beams' single scattering (bench/bake_suite.py: ball_thin_forward 15.4 -> 9.1 %, per
-// view -17, +17, -10, -16 % -> -3, +6, -0, -2 %). About the grey first moment's axis instead (tilted from the
-// beams by the light leaving the object, and a beam's peak is sharp): +20 % seen against the sun. Per channel
-// the two lobes keep that channel's mean and first moment along m; the broad lobe also takes the first moment
-// across m. Where the moments are no pair's (or no beam reaches the voxel), the beams' single scattering alone
-// is the peaked lobe (k = g) and the rest the broad one. The broad lobe's |l1| <= l0 (k <= 1/3: measured
-// against the exact moments, k <= g, when one lobe held all: the thin g = 0.85 ball 16 % against 26 %).
-Source tracedSourceByMoments(const SourceEstimate &S, double g) {
-    Source out;
-    const double a0 = (S.l0.x + S.l0.y + S.l0.z) / 3.0;
-    const glm::dvec3 first = (S.l1[0] + S.l1[1] + S.l1[2]) / 9.0, beamFirst = S.beamL1[0] + S.beamL1[1] + S.beamL1[2];
-    const glm::dvec3 m = glm::length(beamFirst) > 0.0 ? glm::normalize(beamFirst) : glm::dvec3(0.0);
-    const double a1 = glm::dot(first, m);  // a0 k along m
-    if (g > 0.0 && a0 > 0.0 && a1 > 0.0) {
-        // The arriving light's mean(l0) E[(t.m)^n], then the source's Legendre moments (g^n of the light's).
-        const double t1 = a1 / g, t2 = glm::dot(m, S.second * m);
-        const double t3 = m.x * glm::dot(m, S.third[0] * m) + m.y * glm::dot(m, S.third[1] * m) + m.z * glm::dot(m, S.third[2] * m);
-        const double a2 = g * g * 0.5 * (3.0 * t2 - a0), a3 = g * g * g * 0.5 * (5.0 * t3 - 3.0 * t1);
-        if (const std::optional<LobePair> pair = lobePair(a0, a1, a2, a3)) {
-            const double kp = std::min(pair->kPeak, kMaxLobeAnisotropy), kb = pair->kBroad;
-            glm::dvec3 peak;
-            for (int c = 0; c < 3; ++c)
-                peak[c] = std::clamp((glm::dot(S.l1[c], m) / 3.0 - kb * S.l0[c]) / (pair->kPeak - kb), 0.0, std::max(S.l0[c], 0.0));
-            out.l0 = glm::vec3(S.l0 - peak);
-            for (int c = 0; c < 3; ++c) out.l1[c] = glm::vec3(S.l1[c] - 3.0 * kp * peak[c] * m);
-            out.addPeak(peak, kp, m);
-            capBroad(out);
-            return out;
-        }
-    }
-    out.l0 = glm::vec3(S.l0 - S.beamL0);
-    out.l1 = glm::mat3(S.l1 - S.beamL1);
-    const glm::dvec3 peak = S.beamL0;
-    const double peakMean = (peak.x + peak.y + peak.z) / 3.0;
-    if (peakMean > 0.0 && g > 0.0)
-        out.addPeak(peak, glm::length(beamFirst) / (9.0 * g * peakMean) * crossingAnisotropy(g), m);
-    else
-        out.peak0 = glm::vec3(peak);
-    capBroad(out);
-    return out;
-}
-
-// Where the fit by direction replaces the moments' lobes: snow scattering sharply forwards (g >= 0.8; at g 0.7
-// the moments' pair holds the source: ball_rgb's views as main's, its blocks noisier), voxels of at most
-// kMaxDirectionFitTau (in thicker ones a camera sees the first optical depth, not the voxel's mean: spray_dense's
-// bias -2.8 -> -11.0 % fitted by direction), and a beam to give the peak its axis.
-constexpr double kMinDirectionFitG = 0.8, kMaxDirectionFitTau = 2.0;
-
-// The source of a thin voxel of forward scattering snow (kMinDirectionFitG) as the grids' two lobes fitted to
-// the source gathered in `directions` (bench/bake_suite.py, over 2 seeds: slab_thin_forward 18.6 -> 10.2 %, per
-// view +8, +20, +9, +23, -13 % -> -3, +5, +1, +16, -6 %), or to its moments where no beam reaches it.
-Source tracedSourceByDirection(const SourceEstimate &S, const SourceDirections &directions,
-                               const DirectionWeights &visibility, double g) {
-    const Source moments = tracedSourceByMoments(S, g);
-    const glm::dvec3 beamFirst = S.beamL1[0] + S.beamL1[1] + S.beamL1[2];
-    if (!(glm::length(beamFirst) > 0.0)) return moments;
-    return fitByDirection(S, directions, visibility, glm::normalize(beamFirst), g, moments).value_or(moments);
-}
-
-// exp(-tau) from the voxel's centre to the snow's bounds along each direction (fitByDirection), in
-// steps of a quarter voxel from half a voxel out, up to tau 10.
-DirectionWeights visibilityFrom(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &voxel,
-                                const SourceDirections &directions) {
-    constexpr double kStep = 0.25, kMaxTau = 10.0;
-    const glm::dvec3 start(voxel.x(), voxel.y(), voxel.z());
-    const double tauPerDensity = kStep * medium.voxelSize() * medium.optics().extinctionPerDensity;
-    DirectionWeights out;
-    for (int j = 0; j < kSourceDirections; ++j) {
-        double tau = 0.0;
-        for (double t = 0.5; tau < kMaxTau; t += kStep) {
-            const glm::dvec3 ijk = start + t * directions[j], p = medium.indexToWorld(ijk);
-            if (glm::any(glm::lessThan(p, medium.boundsMin())) || glm::any(glm::greaterThan(p, medium.boundsMax()))) break;
-            tau += tauPerDensity * density.getValue(openvdb::Coord(int(std::lround(ijk.x)), int(std::lround(ijk.y)), int(std::lround(ijk.z))));
-        }
-        out[j] = std::exp(-tau);
-    }
-    return out;
-}
-
 // The traced voxels' sources from their estimates (`estimate(v)`: voxel v's, called in parallel).
 template <class Estimate>
 MonteCarloVoxels tracedVoxels(const Scene &scene, const std::vector<openvdb::Coord> &voxels, const Estimate &estimate,
@@ -567,11 +337,12 @@ MonteCarloVoxels tracedVoxels(const Scene &scene, const std::vector<openvdb::Coo
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::Accessor density = medium.accessor();
+        Medium::ColumnMarcher marcher(medium);
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
             const double g = medium.optics().g;
             const double voxelTau = medium.voxelSize() * medium.optics().extinctionPerDensity * density.getValue(voxels[v]);
             out.source[v] = g >= kMinDirectionFitG && voxelTau <= kMaxDirectionFitTau
-                                ? tracedSourceByDirection(estimate(v), directions, visibilityFrom(medium, density, voxels[v], directions), g)
+                                ? tracedSourceByDirection(estimate(v), directions, visibilityFrom(medium, marcher, voxels[v], directions), g)
                                 : tracedSourceByMoments(estimate(v), g);
         }
         progress.report(double(done += range.size()) / voxels.size());
@@ -1817,7 +1588,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     // while the other idled. The tracing stays on the calling thread and the light is the task beside it: the
     // core's workers run at a lower priority (threads.h), and under load a serial trace on a worker ran slower
     // while the light had the calling thread alone; the light's loop takes both threads once the trace is done.
-    p.report(0.05, "Tracing sun and sky light");
+    p.report(0.05, "Tracing sun and sky light, and thin snow");
     IncidentLight light;
     std::vector<openvdb::Coord> thin;
     MonteCarloVoxels traced;
@@ -1830,12 +1601,12 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         },
         [&] {
             tracing = isolatedOnThisThread([&] {
-                const SubProgress quiet = SubProgress::cancelOnly(&p);
+                const SubProgress silent = SubProgress::cancelOnly(&p);
                 thin = thinVoxels(*scene.medium);
                 const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
                 traced = samples > 0 || thin.empty()
-                             ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, quiet)
-                             : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, quiet, local);
+                             ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, silent)
+                             : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, silent, local);
             });
         });
     clock.lap(&BakeStats::Phases::light);

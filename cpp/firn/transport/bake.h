@@ -47,6 +47,8 @@ struct BakeStats {
     struct Phases {
         double topology = 0, light = 0, trace = 0, solve = 0, gather = 0, grids = 0;
     };
+    // The trace runs beside the light (bake.cpp): its wall seconds overlap the light's; its processor seconds
+    // are its own thread's (its loops' chunks that other threads took count in the light's).
     Phases seconds;     // wall clock
     Phases cpuSeconds;  // processor time of all threads: what the bake cost, whatever else the machine runs
 };

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <algorithm>
+
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 namespace firn {
@@ -39,5 +42,28 @@ struct SourceLobe {
 // fitted (within 9 % for mu >= 0.2, +32 % at grazing views). From a table over |e1| / (e0 + |e1|) and the
 // angle between e1 and the normal, built on first use.
 SourceLobe exitLobe(double e0, const glm::dvec3 &e1, const glm::dvec3 &normal);
+
+// The anisotropy of the peaked lobe a beam's light keeps where it scatters once or crosses the snow to a far
+// surface: the snow's g, within what a stored lobe holds.
+inline double crossingAnisotropy(double g) { return std::min(g, kMaxLobeAnisotropy); }
+
+// The broad lobe per channel (W/m^2/sr): mean l0 and first moment 4 pi l1 / 3 (lobeRadiance). A surface's
+// radiance has no other (the peaked lobe is the beams' light inside the snow).
+struct BroadLobe {
+    glm::vec3 l0{0.0f};
+    glm::mat3 l1{0.0f};  // column c: the vector for channel c
+};
+
+// The source function in one voxel, per channel (W/m^2/sr), as the grids store it: the broad lobe and the
+// peaked lobe of mean peak0 and grey first moment peak1 (peakRadiance).
+struct Source : BroadLobe {
+    glm::vec3 peak0{0.0f}, peak1{0.0f};
+
+    // Adds a peaked lobe of mean l0 per channel and anisotropy k about the unit axis m (where its light goes).
+    void addPeak(const glm::dvec3 &mean, double k, const glm::dvec3 &m) {
+        peak0 += glm::vec3(mean);
+        peak1 += glm::vec3(k * (mean.x + mean.y + mean.z) * m);  // 3 k m (the channels' mean)
+    }
+};
 
 }  // namespace firn

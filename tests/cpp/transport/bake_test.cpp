@@ -165,21 +165,14 @@ TEST(Bake, SnowTracedBesideTheLightIsTheSameOnOneThreadAndStopsWhenCancelled) {
     Scene scene = slabScene(2000.0, 0.999, 0.85, 12, 6);
     openvdb::FloatGrid::Ptr density = makeSlabDensity(kVoxel, 12, 6, kDensity);
     for (int x = 0; x < 2; ++x)
-        for (int y = 0; y < 2; ++y) density->tree().setValue(openvdb::Coord(x, y, 4), 0.1f * kDensity);  // 4 voxels above
+        for (int y = 0; y < 2; ++y) density->tree().setValue(openvdb::Coord(x, y, 4), 0.05f * kDensity);  // 4 voxels above, tau 1
     scene.medium = std::make_shared<Medium>(density, scene.medium->optics());
     scene.sky.radiance = Rgb(0.5);
     scene.suns = {sunAt(0.7)};
     const BakeSettings settings{BakeQuality::Draft, 3};
     BakeStats stats;
-    double last = -1.0;
-    bool monotone = true;
-    Progress progress([&](double fraction, const std::string &) {
-        monotone = monotone && fraction >= last;
-        last = fraction;
-    });
-    const BakedGrids both = bakeScattering(scene, settings, &progress, &stats);
+    const BakedGrids both = bakeScattering(scene, settings, nullptr, &stats);
     EXPECT_EQ(stats.tracedVoxels, 4u);
-    EXPECT_TRUE(monotone);
     setThreadCount(1);
     const BakedGrids one = runInCoreArena([&] { return bakeScattering(scene, settings); });
     setThreadCount(0);
@@ -188,6 +181,8 @@ TEST(Bake, SnowTracedBesideTheLightIsTheSameOnOneThreadAndStopsWhenCancelled) {
         openvdb::tree::ValueAccessor<const openvdb::Vec3fTree> other(one.source[k]->tree());
         for (auto it = both.source[k]->cbeginValueOn(); it; ++it) ASSERT_EQ(*it, other.getValue(it.getCoord()));
     }
+    // Cancelled before it starts (a cancel timed to land within the light and the trace would depend on the
+    // machine's speed: Progress calls back at most every 0.1 s).
     Progress cancelled;
     cancelled.cancel();
     EXPECT_THROW(bakeScattering(scene, settings, &cancelled), Cancelled);
