@@ -29,6 +29,15 @@ sys.path.insert(0, HERE)
 from block_compare import compare  # noqa: E402  (bench/ on the path when Blender runs this file)
 
 
+def side_view(positions, n):
+    """The orthographic view from -y over the lumps (2nd to 98th percentile of their positions in x and z, m):
+    the pixel grid X (n x n // 2), the rays' origins and directions, and the extent (x0, x1, z0, z1)."""
+    (x0, x1), (z0, z1) = np.percentile(positions[:, 0], [2, 98]), np.percentile(positions[:, 2], [2, 98])
+    X, Z = np.meshgrid(np.linspace(x0, x1, n), np.linspace(z0, z1, n // 2))
+    origins = np.stack([X.ravel(), np.full(X.size, -3.0), Z.ravel()], 1)
+    return X, origins, np.tile([0.0, 1.0, 0.0], (X.size, 1)), (x0, x1, z0, z1)
+
+
 def build(folder, frames):
     """In Blender: the sample's scene, frames 1..frames simulated and the last baked; its bake inputs dumped."""
     import bpy
@@ -101,11 +110,8 @@ def measure(args):
           f"{len(surface[1])} triangles; {firncore.hardware_threads()} threads, load {os.getloadavg()[0]:.1f}")
 
     positions = np.asarray(firncore.read_spray_state(spray[:-len(".vdb")] + ".state").positions)
-    (x0, x1), (z0, z1) = np.percentile(positions[:, 0], [2, 98]), np.percentile(positions[:, 2], [2, 98])
     n = args.pixels
-    X, Z = np.meshgrid(np.linspace(x0, x1, n), np.linspace(z0, z1, n // 2))
-    origins = np.stack([X.ravel(), np.full(X.size, -3.0), Z.ravel()], 1)
-    directions = np.tile([0.0, 1.0, 0.0], (X.size, 1))
+    X, origins, directions, (x0, x1, z0, z1) = side_view(positions, n)
     print(f"side view: x {x0:.2f}..{x1:.2f}, z {z0:.2f}..{z1:.2f} m, {n} x {n // 2} pixels, "
           f"reference {args.samples} paths per pixel")
     lights = {"sun and sky": dict(suns=suns, sky=sky)}

@@ -22,6 +22,7 @@ import pyopenvdb
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from block_compare import compare  # noqa: E402
+from skier_light_bench import side_view  # noqa: E402
 
 NEIGHBOURS = [(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1) if (i, j, k) > (0, 0, 0)]
 
@@ -124,11 +125,8 @@ def main():
     suns = [firncore.SunLight(tuple(d), tuple(i), diameter) for d, i, diameter in meta["suns"]]
     dark = firncore.Sky(radiance=(0.0, 0.0, 0.0))
     positions = np.asarray(firncore.read_spray_state(spray[:-len(".vdb")] + ".state").positions)
-    (x0, x1), (z0, z1) = np.percentile(positions[:, 0], [2, 98]), np.percentile(positions[:, 2], [2, 98])
     n = args.pixels
-    X, Z = np.meshgrid(np.linspace(x0, x1, n), np.linspace(z0, z1, n // 2))
-    origins = np.stack([X.ravel(), np.full(X.size, -3.0), Z.ravel()], 1)
-    directions = np.tile([0.0, 1.0, 0.0], (X.size, 1))
+    X, origins, directions, _ = side_view(positions, n)
 
     dense, lo, voxel = read_density(spray)
     at, linear, label = pieces(dense)
