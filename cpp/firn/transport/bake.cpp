@@ -325,23 +325,23 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
     return samples;
 }
 
-// The traced voxels' sources from their estimates (`estimate(v)`: voxel v's, called in parallel).
+// The traced voxels' sources from their estimates (`estimate(v)`: voxel v's, called in parallel, gathered by
+// `reference`).
 template <class Estimate>
-MonteCarloVoxels tracedVoxels(const Scene &scene, const std::vector<openvdb::Coord> &voxels, const Estimate &estimate,
-                              const SubProgress &progress) {
+MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::vector<openvdb::Coord> &voxels,
+                              const Estimate &estimate, const SubProgress &progress) {
     MonteCarloVoxels out;
     out.source.resize(voxels.size());
-    const Medium &medium = *scene.medium;
-    const SourceDirections directions = sourceDirections(brightestBeam(scene));
+    const Medium &medium = *reference.scene().medium;
+    const double g = medium.optics().g, tauPerDensity = medium.voxelSize() * medium.optics().extinctionPerDensity;
+    const SourceDirections &directions = reference.directions();
     std::atomic<std::size_t> done{0};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::Accessor density = medium.accessor();
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
-            const double g = medium.optics().g;
-            const double voxelTau = medium.voxelSize() * medium.optics().extinctionPerDensity * density.getValue(voxels[v]);
-            out.source[v] = g >= kMinDirectionFitG && voxelTau <= kMaxDirectionFitTau
+            out.source[v] = fittedByDirection(g, tauPerDensity * density.getValue(voxels[v]))
                                 ? tracedSourceByDirection(estimate(v), directions, visibilityFrom(medium, marcher, voxels[v], directions), g)
                                 : tracedSourceByMoments(estimate(v), g);
         }
@@ -356,7 +356,7 @@ MonteCarloVoxels tracedVoxels(const Scene &scene, const std::vector<openvdb::Coo
 MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
                               std::uint64_t seed, const SubProgress &progress) {
     const MonteCarloReference reference(scene);
-    return tracedVoxels(scene, voxels, [&](std::size_t v) { return reference.sourceIn(voxels[v], samples, seed, v); },
+    return tracedVoxels(reference, voxels, [&](std::size_t v) { return reference.sourceIn(voxels[v], samples, seed, v); },
                         progress);
 }
 
@@ -371,7 +371,7 @@ MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb
     const std::vector<SourceEstimate> estimates = lightTracedSources(reference, voxels, plan, seed, progress);
     stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size();
     // The fit alone left: the photons have run the progress to its end.
-    return tracedVoxels(scene, voxels, [&](std::size_t v) { return estimates[v]; }, SubProgress(nullptr, 0.0, 1.0));
+    return tracedVoxels(reference, voxels, [&](std::size_t v) { return estimates[v]; }, SubProgress(nullptr, 0.0, 1.0));
 }
 
 // The diffusion system of one channel plus what the surface needs afterwards.

@@ -156,7 +156,7 @@ ChunkSums traceChunk(const MonteCarloReference &reference, const BoxEmitter &emi
                      const openvdb::Int32Tree &index, long first, long last, std::uint64_t seed, long &steps) {
     const Medium &medium = *reference.scene().medium;
     const VolumeOptics &optics = medium.optics();
-    const SourceDirections directions = sourceDirections(brightestBeam(reference.scene()));
+    const SourceDirections &directions = reference.directions();
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> voxelOf(index);
     std::unordered_map<std::int32_t, ArrivingLight> sums;
     long tallies = 0;

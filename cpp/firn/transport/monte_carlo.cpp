@@ -60,15 +60,15 @@ class KroneckerSequence {
 class PathTracer {
   public:
     // With `skipEmpty`, tracking jumps over blocks without snow (sampleCollision): the same estimates, other draws.
-    explicit PathTracer(const Scene &scene, bool skipEmpty = false)
+    explicit PathTracer(const MonteCarloReference &reference, bool skipEmpty = false)
         : skipEmpty_(skipEmpty),
-          scene_(scene),
-          medium_(*scene.medium),
+          scene_(reference.scene()),
+          medium_(*scene_.medium),
           accessor_(medium_.accessor()),
           support_(medium_.supportAccessor()),
           k_(medium_.optics().extinctionPerDensity),
           sigmaBar_(std::max(medium_.maxSigmaT(), 1e-12)),
-          directions_(sourceDirections(brightestBeam(scene))) {}
+          directions_(reference.directions()) {}
 
     // Radiance scattered by the medium towards the camera along one camera ray, one sample. With
     // `unscattered`, also the sky and surfaces seen straight along the ray: all the light arriving at its origin.
@@ -287,14 +287,17 @@ class PathTracer {
     Medium::Accessor accessor_;
     Medium::SupportAccessor support_;
     double k_, sigmaBar_;
-    SourceDirections directions_;  // where the source is gathered besides its moments (sourceIn)
+    const SourceDirections &directions_;  // where the source is gathered besides its moments (sourceIn)
 };
 
-MonteCarloReference::MonteCarloReference(Scene scene) : scene_(std::move(scene)) { validate(scene_); }
+MonteCarloReference::MonteCarloReference(Scene scene)
+    : scene_(std::move(scene)), directions_(sourceDirections(brightestBeam(scene_))) {
+    validate(scene_);
+}
 
 RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std::uint64_t seed,
                                                std::uint64_t stream) const {
-    PathTracer tracer(scene_);
+    PathTracer tracer(*this);
     Rng rng(seed, stream);
     Rgb sum(0.0), sumSquares(0.0);
     for (int s = 0; s < samples; ++s) {
@@ -311,7 +314,7 @@ RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std:
 }
 
 PhotonTracer::PhotonTracer(const MonteCarloReference &reference)
-    : tracer_(std::make_unique<PathTracer>(reference.scene(), true)) {}
+    : tracer_(std::make_unique<PathTracer>(reference, true)) {}
 
 PhotonTracer::~PhotonTracer() = default;
 
@@ -326,7 +329,7 @@ long PhotonTracer::steps() const { return tracer_->steps; }
 
 SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
                                              std::uint64_t stream, bool scattered) const {
-    PathTracer tracer(scene_, !scattered);  // the per-voxel gathering's draws as they were (bench/bake_suite.py)
+    PathTracer tracer(*this, !scattered);  // the per-voxel gathering's draws as they were (bench/bake_suite.py)
     Rng rng(seed, stream);
     const Medium &medium = *scene_.medium;
     const glm::dvec3 centre = medium.voxelCentre(voxel);

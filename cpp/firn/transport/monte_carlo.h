@@ -113,16 +113,20 @@ class MonteCarloReference {
     // all orders, and every light's direct beam: omega / (4 pi) (phi + 3 g F . w),
     // the Henyey-Greenstein phase function to first order in w, with the exact fluence phi and flux F; the
     // direct beams' share apart; the higher moments of the directions the light travels, which tell how peaked
-    // the source is; and the exact source in sourceDirections(brightestBeam(scene)).
+    // the source is; and the exact source in directions().
     // Without `scattered`, the direct beams only (beamL0, beamL1 and their share of the moments): what light
     // tracing leaves to each voxel (light_tracing.h).
     SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream,
                             bool scattered = true) const;
 
     const Scene &scene() const { return scene_; }
+    // Where every estimate of this reference gathers the exact source (sourceIn, light tracing's tallies), and
+    // so where a fit reads it: sourceDirections(brightestBeam(scene())).
+    const SourceDirections &directions() const { return directions_; }
 
   private:
     Scene scene_;
+    SourceDirections directions_;
 };
 
 class PathTracer;

@@ -23,6 +23,9 @@ Source tracedSourceByMoments(const SourceEstimate &S, double g);
 // kMaxDirectionFitTau (in thicker ones a camera sees the first optical depth, not the voxel's mean: spray_dense's
 // bias -2.8 -> -11.0 % fitted by direction), and a beam to give the peak its axis.
 constexpr double kMinDirectionFitG = 0.8, kMaxDirectionFitTau = 2.0;
+inline bool fittedByDirection(double g, double voxelTau) {
+    return g >= kMinDirectionFitG && voxelTau <= kMaxDirectionFitTau;
+}
 
 // Per direction of sourceDirections: the weight a fit gives it (visibilityFrom).
 using DirectionWeights = std::array<double, kSourceDirections>;
