@@ -57,16 +57,14 @@ struct Preset {
     // The sky and the light gathered from other snow averaged over like-facing neighbours (averageOverNeighbours):
     // 9 rays a voxel pooled over its neighbours where 16 were its own (docs/bake.md, Performance).
     bool skyOverNeighbours;
-    // A surface voxel's other sky rays untraced where its probe rays all meet open sky (IncidentLightSettings).
-    bool skyProbed;
 };
 
 constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
 
 Preset resolve(const BakeSettings &s) {
-    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true, true}
-               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true, true}
-                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false, false};
+    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true}
+               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true}
+                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
     // Conjugate gradients in double precision stall near 1e-15: asked for less, it iterated on a residual of
@@ -1621,7 +1619,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     runBeside(
         [&] {
             light = computeIncidentLight(
-                scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours, preset.skyProbed},
+                scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
                 SubProgress(&p, 0.05, 0.4));
         },
         [&] {

@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <optional>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
@@ -54,66 +53,37 @@ glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const gl
 }
 
 // Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
-// occluders in the way send what they reflect once (when `bounce`). With `probed`, the rays of SkyRays' diagonal
-// strata (one per band of elevation and of azimuth) are traced first: where all of them meet open sky (no
-// occluder, no snow), the others are taken to as well and only read the sky's radiance (a flat top under open
-// sky sees the same in every ray); the sum is then the one tracing all would give wherever that holds. Rays
-// are summed in their order either way, and the occluders' reflections drawn in that order, so a voxel whose
-// probes meet anything gets every ray traced and the same value as without probing.
+// occluders in the way send what they reflect once (when `bounce`).
 glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays, bool bounce,
                           Crossing crossing, std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher,
-                          std::uint64_t *snowRays = nullptr, bool probed = false) {
+                          std::uint64_t *snowRays = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
-    struct Traced {
-        glm::dvec3 w;
-        std::optional<RayCaster::Hit> hit;
-        double column = 0.0;  // kg/m^2 of snow before the occluder or the sky
-    };
-    std::array<Traced, 64> ray;
-    const int count = rays.count();
-    const auto trace = [&](int k) {
-        Traced &t = ray[std::size_t(k)];
-        t.w = rays.direction(n, k, seed, stream);
-        t.hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(t.w), 1e-5f);
-        if (t.hit && !bounce && !snowRays) return;  // brings nothing, and no one asks whether snow lies along it
-        t.column = marcher.column(p, t.w, t.hit ? double(t.hit->distance) : std::numeric_limits<double>::infinity(), limit);
-    };
-    bool open = probed;
-    for (int k = 0; k < count && probed; ++k) {
-        if (!rays.isProbe(k)) continue;
-        trace(k);
-        open &= !ray[std::size_t(k)].hit && ray[std::size_t(k)].column == 0.0;
-    }
-    for (int k = 0; k < count; ++k) {
-        if (probed && rays.isProbe(k)) continue;
-        if (!open) trace(k);
-        else ray[std::size_t(k)] = {rays.direction(n, k, seed, stream), std::nullopt, 0.0};
-    }
     Rng rng(seed ^ 0xB0B0ull, stream);  // for the occluders' reflections
     glm::dvec3 sum(0.0);
     std::uint64_t hidden = 0;
-    for (int k = 0; k < count; ++k) {
-        const Traced &t = ray[std::size_t(k)];
-        if (t.hit && !bounce && !snowRays) continue;
-        if (thinnest * t.column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
-        if (t.column >= limit) continue;
+    for (int k = 0; k < rays.count(); ++k) {
+        const glm::dvec3 w = rays.direction(n, k, seed, stream);
+        const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+        if (hit && !bounce && !snowRays) continue;  // brings nothing, and no one asks whether snow lies along it
+        const double column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
+        if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
+        if (column >= limit) continue;
         glm::dvec3 radiance;
-        if (!t.hit) {
-            radiance = scene.sky.radianceFrom(t.w);
+        if (!hit) {
+            radiance = scene.sky.radianceFrom(w);
         } else if (bounce) {
-            const glm::dvec3 normal(t.hit->normal);
-            radiance = reflectedByOccluder(scene, p + double(t.hit->distance) * t.w,
-                                           glm::dot(normal, t.w) < 0.0 ? normal : -normal,
-                                           scene.occluders->albedo(t.hit->triangle), rng, marcher);
+            const glm::dvec3 normal(hit->normal);
+            radiance = reflectedByOccluder(scene, p + double(hit->distance) * w, glm::dot(normal, w) < 0.0 ? normal : -normal,
+                                           scene.occluders->albedo(hit->triangle), rng, marcher);
         } else {
             continue;
         }
-        sum += kPi * radiance * transmittance(reduced, t.column);
+        sum += kPi * radiance * transmittance(reduced, column);
     }
     if (snowRays) *snowRays = hidden;
-    return glm::vec3(sum / double(count));
+    return glm::vec3(sum / double(rays.count()));
 }
 
 // Unknowns in the order beam b's light reaches them, in buckets half a voxel deep (nearest the light
@@ -229,8 +199,6 @@ BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, in
 
 SkyRays::SkyRays(int samples) : strata_(std::clamp(int(std::lround(std::sqrt(double(samples)))), 1, 8)) {}
 
-bool SkyRays::isProbe(int k) const { return k / strata_ == k % strata_ || k / strata_ == strata_ - 1; }
-
 glm::dvec3 SkyRays::direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const {
     Rng rng(seed, stream * 64 + std::uint64_t(k));
     return sampleCosineHemisphere(normal, (k / strata_ + rng.uniform()) / strata_, (k % strata_ + rng.uniform()) / strata_);
@@ -332,8 +300,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
                 light.skyOnSurface.surface(i) = skyIrradianceAt(scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
-                                                                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i),
-                                                                settings.skyProbed);
+                                                                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i));
     });
     if (settings.skyOverNeighbours) averageOverNeighbours(topo, light.skyOnSurface);
     if (scene.sky.isBlack()) return light;

@@ -40,10 +40,6 @@ class SkyRays {
   public:
     explicit SkyRays(int samples);
     int count() const { return strata_ * strata_; }
-    int strata() const { return strata_; }  // per side: rays k = row * strata + column, row the elevation's band
-    // Whether ray k lies on the strata's diagonal (k = j * (strata + 1)): one ray per band of elevation and of
-    // azimuth, the rays traced first where the sky is probed (IncidentLightSettings::skyProbed).
-    bool isProbe(int k) const;
     glm::dvec3 direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const;
 
   private:
@@ -55,9 +51,6 @@ struct IncidentLightSettings {
     int sunSamples = 4;   // points on each sun's disc or lamp per shadow test
     std::uint64_t seed = 0;
     bool skyOverNeighbours = false;  // skyOnSurface averaged over like-facing neighbours (averageOverNeighbours)
-    // A surface voxel whose probe rays (SkyRays::isProbe) all meet open sky takes its other rays to meet it too:
-    // they read the sky's radiance untraced (docs/bake.md, Performance: car-speed8).
-    bool skyProbed = false;
 };
 
 IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topology,
