@@ -3,7 +3,7 @@ the phases (`stats["seconds"]`, `stats["cpu_seconds"]`) and the bake's peak memo
 on all the cores firncore sees, each bake in a fresh process (bench/bake_measure.py).
 
     bench/run.sh bench/car_scene.py -- FOLDER          # once: writes the car's bake inputs (Blender)
-    PYTHONPATH=build/python /usr/bin/python3 bench/car_bake.py FOLDER [repeats]
+    PYTHONPATH=build/python /usr/bin/python3 bench/car_bake.py FOLDER [repeats [seed]]
 """
 
 import os
@@ -12,7 +12,7 @@ import sys
 import bake_measure
 
 
-def bake_car(folder):
+def bake_car(folder, seed=0):
     """One FINAL bake of the car's inputs (bench/car_scene.py); firncore's stats plus the active voxels. The core
     rewrites the density's file with the baked grids, as Bake Scattering does."""
     import numpy as np
@@ -27,7 +27,7 @@ def bake_car(folder):
     occluders = [(inputs[f"occluder_{k}_vertices"], inputs[f"occluder_{k}_triangles"],
                   tuple(inputs[f"occluder_{k}_albedo"])) for k in range(int(inputs["occluders"]))]
     path = os.path.join(folder, "car_density.vdb")
-    stats = firncore.bake(path, optics, suns=suns, sky=sky, occluders=occluders, quality="FINAL")
+    stats = firncore.bake(path, optics, suns=suns, sky=sky, occluders=occluders, quality="FINAL", seed=seed)
     stats["voxels"] = firncore.grid_statistics(path, "density")["active_voxels"]
     return stats
 
@@ -36,11 +36,12 @@ def main():
     import firncore
 
     folder, repeats = sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 1
+    seed = int(sys.argv[3]) if len(sys.argv) > 3 else 0
     print(f"firncore {firncore.__version__}, car sample, {firncore.hardware_threads()} threads, FINAL quality")
     print("wall: seconds on the clock; cpu: processor seconds of all threads (on a busy machine wall > cpu / threads)")
     for _ in range(repeats):
         load = os.getloadavg()[0]
-        r = bake_measure.measure_fresh(bake_car, folder)
+        r = bake_measure.measure_fresh(bake_car, folder, seed)
         voxels = r["voxels"]
         print(f"{voxels} active voxels, {r['unknowns']} unknowns, {r['surface_voxels']} surface, "
               f"{r['traced_voxels']} traced, iterations {r['iterations']}; peak {r['peak_bytes'] / voxels:.0f} bytes "

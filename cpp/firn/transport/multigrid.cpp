@@ -363,20 +363,39 @@ MultigridSolver::~MultigridSolver() = default;
 
 int MultigridSolver::levelCount() const { return int(hierarchy_->levels.size()); }
 
+std::pair<Stencil<float>, std::vector<float>> MultigridSolver::release() && {
+    std::pair<Stencil<float>, std::vector<float>> out{std::move(hierarchy_->levels.front().A),
+                                                       std::move(hierarchy_->remainder)};
+    hierarchy_.reset();
+    return out;
+}
+
 MultigridSolver::Result MultigridSolver::solve(std::vector<double> b, std::vector<double> &x,
                                                double relativeTolerance, int maxIterations,
-                                               const SubProgress &progress) const {
+                                               const SubProgress &progress, Workspace *workspace) const {
+    Workspace local;
+    Workspace &w = workspace ? *workspace : local;
+    const Result result = iterate(b, x, relativeTolerance, maxIterations, progress, w);
+    w.spare = std::move(b);
+    return result;
+}
+
+MultigridSolver::Result MultigridSolver::iterate(std::vector<double> &b, std::vector<double> &x,
+                                                 double relativeTolerance, int maxIterations,
+                                                 const SubProgress &progress, Workspace &w) const {
     const std::size_t n = b.size();
     if (x.size() != n || hierarchy_->levels.front().A.size() != n)
         throw InvalidArgument("multigrid solve: the operator, b and x differ in size");
     Result result;
     if (n == 0) return result;
     // Preconditioned conjugate gradients, the steps of OpenVDB's pcg::solve in its order (the same iterates), in
-    // b and x rather than in copies: r takes b's place, A p takes z's (32 bytes per unknown, against 48).
+    // b and x rather than in copies: r takes b's place, A p takes z's (32 bytes per unknown, against 48). p and z
+    // are written before they are read, so a workspace's earlier values do not matter.
     const FineOperator A{hierarchy_->levels.front().A, hierarchy_->remainder};
     const double tolerance = std::max(relativeTolerance, kFinestTolerance);
     const double largestB = infNorm(b), normB = largestB == 0.0 ? 1.0 : largestB;
-    std::vector<double> &r = b, p(n), z(n);  // z: M^-1 r, then A p
+    w.p.resize(n), w.z.resize(n);
+    std::vector<double> &r = b, &p = w.p, &z = w.z;  // z: M^-1 r, then A p
     A.multiply(x.data(), z.data());
     axpy(-1.0, z, r);  // r = b - A x
     double largest = infNorm(r);

@@ -3,6 +3,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <openvdb/openvdb.h>
@@ -65,17 +66,31 @@ class MultigridSolver {
     // rounding noise ends in 0/0 (NaN everywhere). Smaller tolerances are raised to it.
     static constexpr double kFinestTolerance = 1e-12;
 
+    // The vectors conjugate gradients work in, for a caller that solves systems of one size in turn: kept
+    // between solves, their pages are reused rather than mapped and cleared afresh (the bake's three channels).
+    struct Workspace {
+        std::vector<double> p, z;
+        std::vector<double> spare;  // b's storage after a solve (holding its last residual)
+    };
+
     // x holds the initial guess on entry and is iterated in place; b is taken (pass it with std::move where it
     // is not needed after) and holds the residual meanwhile. Throws Cancelled when progress is cancelled (x then
     // holds the last iterate).
     Result solve(std::vector<double> b, std::vector<double> &x, double relativeTolerance, int maxIterations,
-                 const SubProgress &progress) const;
+                 const SubProgress &progress, Workspace *workspace = nullptr) const;
+
+    // The finest level's operator and remainder handed back, the solver spent: their storage can hold the next
+    // system of the same size.
+    std::pair<Stencil<float>, std::vector<float>> release() &&;
 
     int levelCount() const;
 
     struct Hierarchy;  // levels, defined in multigrid.cpp
 
   private:
+    Result iterate(std::vector<double> &b, std::vector<double> &x, double relativeTolerance, int maxIterations,
+                   const SubProgress &progress, Workspace &workspace) const;
+
     std::unique_ptr<Hierarchy> hierarchy_;
 };
 

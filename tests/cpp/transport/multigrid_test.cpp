@@ -1,5 +1,6 @@
 #include "firn/transport/multigrid.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -102,6 +103,40 @@ TEST(Multigrid, BlocksThatTouchWithoutLinksStayApart) {
         }
         EXPECT_NEAR(Ax[i], b[i], 1e-6);
     }
+}
+
+// The bake solves a pass's three channels in the same vectors (release(), Workspace): a solve in the vectors an
+// earlier solve of another system left behind takes the same iterates, bit for bit, as one in fresh vectors.
+TEST(Multigrid, SolvesInAnEarlierSolvesVectorsAsInFreshOnes) {
+    const StencilOperator first = ballProblem(12, 1e-2), second = ballProblem(12, 1e-4);
+    const std::size_t n = second.size();
+    std::vector<double> b(n);
+    for (std::size_t i = 0; i < n; ++i) b[i] = (*second.coord)[i].z() > 4 ? 1.0 : 0.0;
+    std::vector<double> fresh(n, 0.0);
+    const auto freshResult = MultigridSolver(second).solve(b, fresh, 1e-9, 100, SubProgress(nullptr, 0, 1));
+
+    MultigridSolver::Workspace workspace;
+    std::vector<double> x(n, 0.0);
+    MultigridSolver solver(first);
+    solver.solve(b, x, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
+    auto [A, remainder] = std::move(solver).release();
+    ASSERT_EQ(A.size(), n);
+    ASSERT_EQ(remainder.size(), n);
+    ASSERT_EQ(workspace.spare.size(), n);
+    // The second system written over the first's storage, as the bake's assembly does.
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 6; ++k) A.conductance[i][k] = float(second.conductance[i][k]);
+        A.diag[i] = float(second.diag[i]);
+        remainder[i] = float(rowRemainder(second.diag[i], second.conductance[i], (*second.neighbour)[i]));
+    }
+    A.coord = second.coord, A.neighbour = second.neighbour;
+    std::vector<double> reusedB = std::move(workspace.spare);
+    std::copy(b.begin(), b.end(), reusedB.begin());
+    std::vector<double> reused(n, 0.0);
+    const auto reusedResult = MultigridSolver(std::move(A), std::move(remainder))
+                                  .solve(std::move(reusedB), reused, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
+    EXPECT_EQ(reusedResult.iterations, freshResult.iterations);
+    EXPECT_EQ(reused, fresh);
 }
 
 TEST(Multigrid, HonoursCancellation) {
