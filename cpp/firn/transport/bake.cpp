@@ -136,6 +136,9 @@ struct Channel {
     double sigmaTr(double rho) const { return (1.0 - omega * g) * k * rho; }   // sigma_a + sigma_s (1 - g)
     double reducedAlbedo() const { return omega * (1.0 - g) / (1.0 - omega * g); }
     double beta() const { return std::sqrt((1.0 - omega) / (3.0 * (1.0 - omega * g))); }  // kappa D
+    // What a half-space returns of diffuse light by this diffusion (Marshak's condition, extrapolation 2D):
+    // (1 - 2 kappa D) / (1 + 2 kappa D).
+    double diffuseAlbedo() const { return (1.0 - 2.0 * beta()) / (1.0 + 2.0 * beta()); }
 };
 
 // Source functions' peaked lobes where they are not zero, by key (an unknown, a place among the grids' values):
@@ -681,21 +684,27 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
     const double y = absorptionParameter(ch.omega, ch.g);
+    // The diffusion returns less diffuse light than a half-space of this snow does where the snow absorbs (the
+    // spherical albedo, by the sun lobe's Monte Carlo table: 0.447 against Marshak's 0.429 at omega 0.98, g 0.85;
+    // 0.330 against 0.300 at omega 0.9, g 0.6): the difference, times the diffuse light arriving, leaves too
+    // (an absorbing ball's shadowed side, lit by the sky alone, was 5-9 % too dark: docs/bake.md, Accuracy).
+    const double diffuseMissed = sphericalAlbedo(ch.g, y) - ch.diffuseAlbedo();
     // Sun light that entered returns as a half-space of this snow returns it, with the sun lobe's albedo and
     // shape; sky light isotropically (a non-absorbing half-space returns uniform sky light so; absorption takes
     // the escape function's shape from it, by reciprocity with ART's plane albedo). What the diffusion says
     // beyond that (absorbed sky light, light gone elsewhere, light from deep inside, from the ground or from
-    // neighbouring snow) takes the escape function's u(mu) = 3/7 + 6/7 mu. So: leaving = sum returned
-    // (shape - u) + out u. The returned part (W, moments of a linear form) through a surface of normal n
-    // taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's; with `peak` (a smooth patch),
-    // the suns' light returned sharply forwards leaves as the peaked lobe instead (SunPeak: at grazing sun the
-    // lit rim seen against the sun, bench/bake_halfspace.py), added to `peak` (radiance), the rest linear:
+    // neighbouring snow) and the diffuse light it misses take the escape function's u(mu) = 3/7 + 6/7 mu. So:
+    // leaving = sum returned (shape - u) + (out + missed) u. The returned part (W, moments of a linear form)
+    // through a surface of normal n taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's; with
+    // `peak` (a smooth patch), the suns' light returned sharply forwards leaves as the peaked lobe instead
+    // (SunPeak: at grazing sun the lit rim seen against the sun, bench/bake_halfspace.py), added to `peak`
+    // (radiance), the rest linear:
     auto returnedThrough = [&](std::size_t i, const glm::dvec3 &n, double skyShare, const auto &beamShare,
                                SurfaceLight *peak) {
         const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
         const double sky = skyShare * sys.skyIn[i];
-        double r0 = sky * (1.0 - 3.0 / 7.0);
-        glm::dvec3 r1 = -sky * escape1;
+        double r0 = sky * (1.0 - (1.0 - diffuseMissed) * 3.0 / 7.0);
+        glm::dvec3 r1 = -sky * (1.0 - diffuseMissed) * escape1;
         for (std::size_t s = 0; s < light.beams.size(); ++s) {
             const double P = sys.sunIn[s][i] * beamShare(s);
             if (P <= 0.0) continue;

@@ -249,6 +249,16 @@ SunLobe sunLobe(double g, double mu0, double y) {
     return lobe;
 }
 
+double sphericalAlbedo(double g, double y) {
+    constexpr int kNodes = 40;  // midpoint rule in mu (below the table's first node, 0.05, A is held there)
+    double albedo = 0.0;
+    for (int m = 0; m < kNodes; ++m) {
+        const double mu = (m + 0.5) / kNodes;
+        albedo += 2.0 * sunLobe(g, mu, y).albedo * mu / kNodes;
+    }
+    return albedo;
+}
+
 SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe) {
     const std::array<double, 6> v = interpolate<6>(kSunPeakTable, g, mu0, y);
     SunPeak peak;

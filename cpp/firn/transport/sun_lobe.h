@@ -47,6 +47,10 @@ double absorptionParameter(double omega, double g);
 // y to [0, 4] (omega down to 0.75 at g = 0.85).
 SunLobe sunLobe(double g, double mu0, double y = 0.0);
 
+// The spherical albedo of a half-space of this snow, 2 int A(mu) mu dmu over the table's plane albedo A: the
+// share of uniform sky light it returns (by reciprocity, towards mu it returns L_sky A(mu)).
+double sphericalAlbedo(double g, double y);
+
 // Interpolated in (y, g, mu0) like sunLobe, from sun_peak_table.inc; `lobe` = sunLobe(g, mu0, y), which the
 // split fades into (the caller has it already).
 SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe);
