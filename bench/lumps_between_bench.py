@@ -97,6 +97,7 @@ def main():
     start = time.time()
     print(f"samples {args.samples} per pixel; baked / Monte Carlo - 1 (noise), and what the surroundings add to B")
     for name, gap, ground_z, albedos in (("cluster", 1, -0.03, (0.0, 0.9)), ("pile", 0, 0.06, (0.97,))):
+        among = []  # B among the others, per ground
         for albedo in albedos:
             sums = {}
             for neighbours in (False, True):
@@ -108,6 +109,11 @@ def main():
             print(f"  {name} over ground {albedo:.2f}: B alone {100 * (b0 / m0 - 1):+.1f} %, among the others "
                   f"{100 * (b1 / m1 - 1):+.1f} % ({100 * e1 / m1:.1f}); they add baked {100 * (b1 / b0 - 1):+.1f} %, "
                   f"Monte Carlo {100 * (m1 / m0 - 1):+.1f} %", flush=True)
+            among.append((b1, m1))
+        if len(among) == 2:
+            (b_black, m_black), (b_white, m_white) = among
+            print(f"  the white ground's light on B among the others: baked / Monte Carlo "
+                  f"{(b_white - b_black) / (m_white - m_black):.2f}", flush=True)
     piece, n, step = lump(), 6, 5
     side = (n - 1) * step + piece.shape[0]
     cube = np.zeros((side, side, side))
