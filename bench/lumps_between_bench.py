@@ -93,7 +93,8 @@ def main():
     folder = args.folder or tempfile.mkdtemp()
     path = os.path.join(folder, "lumps.vdb")
     e = math.radians(30.0)
-    sun = dict(suns=[firncore.SunLight((math.cos(e), 0.0, math.sin(e)), (1.0,) * 3, 0.0093)], sky=firncore.Sky((0.0,) * 3))
+    dark = firncore.Sky((0.0,) * 3)
+    sun = dict(suns=[firncore.SunLight((math.cos(e), 0.0, math.sin(e)), (1.0,) * 3, 0.0093)], sky=dark)
     start = time.time()
     print(f"samples {args.samples} per pixel; baked / Monte Carlo - 1 (noise), and what the surroundings add to B")
     for name, gap, ground_z, albedos in (("cluster", 1, -0.03, (0.0, 0.9)), ("pile", 0, 0.06, (0.97,))):
@@ -122,8 +123,9 @@ def main():
         cube[box] = np.maximum(cube[box], piece)
     u = (np.arange(16) + 0.5) / 16 * side * H
     U, V = np.meshgrid(u, u)
-    origins, directions = np.stack([U.ravel(), np.full(U.size, -0.5), V.ravel()], 1), np.tile([0.0, 1.0, 0.0], (U.size, 1))
-    sun_across = dict(suns=[firncore.SunLight((math.cos(e), 0.3, math.sin(e)), (1.0,) * 3, 0.0093)], sky=sun["sky"])
+    origins = np.stack([U.ravel(), np.full(U.size, -0.5), V.ravel()], 1)
+    directions = np.tile([0.0, 1.0, 0.0], (U.size, 1))
+    sun_across = dict(suns=[firncore.SunLight((math.cos(e), 0.3, math.sin(e)), (1.0,) * 3, 0.0093)], sky=dark)
     for label, light, albedo in (("uniform sky, grey ground", dict(sky=firncore.Sky((1.0,) * 3)), 0.3),
                                  ("sun, white ground", sun_across, 0.97), ("sun, black ground", sun_across, 0.0)):
         b, m, err = measure(firncore, path, cube, origins, directions, light, [plane(-0.01, albedo)], 64)
