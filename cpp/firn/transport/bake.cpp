@@ -1431,7 +1431,6 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
         Medium::ColumnMarcher marcher(*scene.medium);
         Medium::Accessor density = scene.medium->accessor();
         BakedValuesSampler baked(topo, source, traced, values);
-        const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!light.snowRays[i]) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
@@ -1441,7 +1440,7 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
-                sum += bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5, reduced);
+                sum += bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
             }
             out.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
         }

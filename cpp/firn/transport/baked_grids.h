@@ -52,17 +52,17 @@ std::array<openvdb::Vec3fTree::Ptr, BakedGrids::kCount> coarsenedSources(const o
 // Integrates the baked emission along a ray as the renderer does: the radiance the baked snow sends back along
 // it (towards its origin) from t = 0 to tMax (m), in steps of at most `step` voxels with the exact exponential of
 // each step. sourceAt(ijk) gives the grids' values (BakedGrids::Values) at a point of the density's index
-// space: SourceGridsSampler, or the bake's own values before it writes its grids. `extinctionPerDensity`
-// (m^2/kg per channel): the renderer's k, or the similarity-reduced k (1 - omega g) where the light crossing
-// the snow travels on as a beam (the gathering between surfaces, bake.cpp: snowIrradiance).
+// space: SourceGridsSampler, or the bake's own values before it writes its grids.
 template <typename SourceAt>
 Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, SourceAt &sourceAt, const Ray &ray,
-                       double tMax, double step, const glm::dvec3 &extinctionPerDensity) {
+                       double tMax, double step) {
+    const double k = scene.medium->optics().extinctionPerDensity;
     const glm::dvec3 w = -ray.direction;  // towards the viewer
-    Rgb radiance(0.0), transmittance(1.0);
+    Rgb radiance(0.0);
+    double transmittance = 1.0;
     marcher.march(ray.origin, ray.direction, tMax, step, [&](const openvdb::Vec3d &ijk, double dt) {
-        const double rho = marcher.densityAt(ijk);
-        if (rho <= 0.0) return true;
+        const double sigmaT = k * marcher.densityAt(ijk);
+        if (sigmaT <= 0.0) return true;
         const BakedGrids::Values source = sourceAt(ijk);  // l0, l1 per axis, p0 (RGB), then p1
         const glm::dvec3 p1(source[5][0], source[5][1], source[5][2]);
         const double p0Mean = (double(source[4][0]) + source[4][1] + source[4][2]) / 3.0;
@@ -70,18 +70,12 @@ Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Sourc
         for (int c = 0; c < 3; ++c)
             S[c] = lobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]), w) +
                    peakRadiance(source[4][c], p0Mean, p1, w);
-        const Rgb opacity = 1.0 - glm::exp(-extinctionPerDensity * rho * dt);
+        const double opacity = 1.0 - std::exp(-sigmaT * dt);
         radiance += transmittance * opacity * S;
         transmittance *= 1.0 - opacity;
-        return std::max({transmittance.x, transmittance.y, transmittance.z}) > 1e-6;
+        return transmittance > 1e-6;
     });
     return radiance;
-}
-
-template <typename SourceAt>
-Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, SourceAt &sourceAt, const Ray &ray,
-                       double tMax, double step) {
-    return bakedRadianceAlong(scene, marcher, sourceAt, ray, tMax, step, glm::dvec3(scene.medium->optics().extinctionPerDensity));
 }
 
 // The source grids' values at a point, trilinear as the renderer reads them; one per thread.

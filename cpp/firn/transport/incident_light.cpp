@@ -300,7 +300,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
                 light.skyOnSurface.surface(i) = skyIrradianceAt(scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
-                                                                Crossing::Beam, seed, i, marcher, &light.snowRays.surface(i));
+                                                                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i));
     });
     if (settings.skyOverNeighbours) averageOverNeighbours(topo, light.skyOnSurface);
     if (scene.sky.isBlack()) return light;
