@@ -333,7 +333,7 @@ MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::v
     MonteCarloVoxels out;
     out.source.resize(voxels.size());
     const Medium &medium = *reference.scene().medium;
-    const double g = medium.optics().g, tauPerDensity = medium.voxelSize() * medium.optics().extinctionPerDensity;
+    const double g = medium.optics().g;
     const SourceDirections &directions = reference.directions();
     std::atomic<std::size_t> done{0};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4), [&](const auto &range) {
@@ -341,7 +341,7 @@ MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::v
         Medium::Accessor density = medium.accessor();
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
-            out.source[v] = fittedByDirection(g, tauPerDensity * density.getValue(voxels[v]))
+            out.source[v] = fittedByDirection(medium, density, voxels[v])
                                 ? tracedSourceByDirection(estimate(v), directions, visibilityFrom(medium, marcher, voxels[v], directions), g)
                                 : tracedSourceByMoments(estimate(v), g);
         }
@@ -369,7 +369,7 @@ MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb
     const LightTracingPlan plan = planLightTracing(reference, voxels, kMaxTracedSteps, seed);
     if (plan.photons == 0) return MonteCarloVoxels{};
     const std::vector<SourceEstimate> estimates = lightTracedSources(reference, voxels, plan, seed, progress);
-    stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size();
+    stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size(), stats.lightTracingBytes = plan.sumsBytes;
     // The fit alone left: the photons have run the progress to its end.
     return tracedVoxels(reference, voxels, [&](std::size_t v) { return estimates[v]; }, SubProgress(nullptr, 0.0, 1.0));
 }

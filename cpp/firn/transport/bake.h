@@ -38,6 +38,7 @@ struct BakeStats {
     std::size_t tracedVoxels = 0;              // optically thin voxels lit by Monte Carlo instead of the solve
     std::size_t lightTracedVoxels = 0;         // of which by light tracing (paths from the lights), with
     long photons = 0;                          // these photons
+    std::size_t lightTracingBytes = 0;         // the sums they add to (LightTracingPlan::sumsBytes)
     int passes = 0;                            // diffusion solves per channel (1 + snow-to-snow bounces)
     int sourceScale = 1;                       // the source grids' voxel size in density voxels
     std::array<int, 3> iterations{};          // per colour channel, all passes
