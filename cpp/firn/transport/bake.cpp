@@ -1588,7 +1588,9 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     // while the other idled. The tracing stays on the calling thread and the light is the task beside it: the
     // core's workers run at a lower priority (threads.h), and under load a serial trace on a worker ran slower
     // while the light had the calling thread alone; the light's loop takes both threads once the trace is done.
-    p.report(0.05, "Tracing sun and sky light, and thin snow");
+    // The bar moves by half of what each has done (their reports may land out of order: it never goes back).
+    p.report(0.05, kLightAndTraceStage);
+    const SideBySideProgress beside(&p, 0.05, 0.4, {0.5, 0.5});
     IncidentLight light;
     std::vector<openvdb::Coord> thin;
     MonteCarloVoxels traced;
@@ -1597,16 +1599,17 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         [&] {
             light = computeIncidentLight(
                 scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
-                SubProgress(&p, 0.05, 0.4));
+                beside.step(0));
         },
         [&] {
             tracing = isolatedOnThisThread([&] {
-                const SubProgress silent = SubProgress::cancelOnly(&p);
+                const SubProgress progress = beside.step(1);
                 thin = thinVoxels(*scene.medium);
                 const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
                 traced = samples > 0 || thin.empty()
-                             ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, silent)
-                             : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, silent, local);
+                             ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, progress)
+                             : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
+                progress.report(1.0);  // none traced, or light traced (its fit does not report)
             });
         });
     clock.lap(&BakeStats::Phases::light);

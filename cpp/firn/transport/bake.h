@@ -68,6 +68,9 @@ struct BakeStats {
 // of a surface's sky, its light is gathered from the first solution and the solve repeated.
 BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress = nullptr,
                           BakeStats *stats = nullptr);
+// The progress's stage while the sun and sky light and the thin snow are traced side by side (fractions 0.05 to
+// 0.4, half each).
+inline constexpr char kLightAndTraceStage[] = "Tracing sun and sky light, and thin snow";
 
 // The source grids of a snow with nothing to light (an empty density: a spray's frame without lumps, which
 // bakeScattering refuses), without a bake: empty, with the density's transform and a bake's metadata. Throws
