@@ -317,6 +317,7 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["traced_voxels"] = stats.tracedVoxels;
     d["light_traced_voxels"] = stats.lightTracedVoxels;
     d["photons"] = stats.photons;
+    d["light_tracing_bytes"] = stats.lightTracingBytes;
     d["air_faces"] = stats.airFaces;
     d["occluder_faces"] = stats.occluderFaces;
     d["iterations"] = stats.iterations;

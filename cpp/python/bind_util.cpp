@@ -36,7 +36,7 @@ void bindProgress(py::module_ &m) {
 Progress of a long core call, shared with the caller. Poll `fraction` and `stage` from any thread
 (a Blender modal timer does), call `cancel()` to stop the work: the call then raises firncore.Cancelled.
 An optional callback(fraction, stage) is called from the working thread with the GIL held, at most ten
-times a second.)doc")
+times a second but on every new stage.)doc")
         .def(py::init([](std::optional<py::function> callback) {
                  if (!callback) return std::make_shared<firn::Progress>();
                  // The worker runs without the GIL; take it for the Python callback only.

@@ -123,6 +123,24 @@ def test_cancel_raises_and_leaves_the_file(slab):
     assert (os.path.getmtime(slab), grid_names(slab)) == before
 
 
+def test_cancel_while_light_and_thin_snow_are_traced_leaves_the_file(slab):
+    """Cancelled from the callback as the sun and sky light and the thin snow start to be traced side by side (a
+    new stage always reaches the callback): the bake raises firncore.Cancelled from within them and writes nothing."""
+    before = os.path.getmtime(slab), grid_names(slab)
+    stages = []
+
+    def cancel_there(fraction, stage):
+        stages.append(stage)
+        if stage == "Tracing sun and sky light, and thin snow":
+            progress.cancel()
+
+    progress = firncore.Progress(cancel_there)
+    with pytest.raises(firncore.Cancelled):
+        firncore.bake(slab, SNOW, sky=firncore.Sky(), quality="DRAFT", progress=progress)
+    assert stages[-1] == "Tracing sun and sky light, and thin snow"
+    assert (os.path.getmtime(slab), grid_names(slab)) == before
+
+
 def test_bake_releases_the_gil(tmp_vdb):
     firncore.write_slab_vdb(tmp_vdb, voxel_size=0.01, width=96, layers=32, density=300.0)
     before = os.path.getmtime(tmp_vdb), grid_names(tmp_vdb)

@@ -337,7 +337,7 @@ MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::v
     MonteCarloVoxels out;
     out.source.resize(voxels.size());
     const Medium &medium = *reference.scene().medium;
-    const double g = medium.optics().g, tauPerDensity = medium.voxelSize() * medium.optics().extinctionPerDensity;
+    const double g = medium.optics().g;
     const SourceDirections &directions = reference.directions();
     std::atomic<std::size_t> done{0};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4), [&](const auto &range) {
@@ -345,7 +345,7 @@ MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::v
         Medium::Accessor density = medium.accessor();
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
-            out.source[v] = fittedByDirection(g, tauPerDensity * density.getValue(voxels[v]))
+            out.source[v] = fittedByDirection(medium, density, voxels[v])
                                 ? tracedSourceByDirection(estimate(v), directions, visibilityFrom(medium, marcher, voxels[v], directions), g)
                                 : tracedSourceByMoments(estimate(v), g);
         }
@@ -373,7 +373,7 @@ MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb
     const LightTracingPlan plan = planLightTracing(reference, voxels, kMaxTracedSteps, seed);
     if (plan.photons == 0) return MonteCarloVoxels{};
     const std::vector<SourceEstimate> estimates = lightTracedSources(reference, voxels, plan, seed, progress);
-    stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size();
+    stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size(), stats.lightTracingBytes = plan.sumsBytes;
     // The fit alone left: the photons have run the progress to its end.
     return tracedVoxels(reference, voxels, [&](std::size_t v) { return estimates[v]; }, SubProgress(nullptr, 0.0, 1.0));
 }
@@ -1620,7 +1620,9 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     // while the other idled. The tracing stays on the calling thread and the light is the task beside it: the
     // core's workers run at a lower priority (threads.h), and under load a serial trace on a worker ran slower
     // while the light had the calling thread alone; the light's loop takes both threads once the trace is done.
-    p.report(0.05, "Tracing sun and sky light, and thin snow");
+    // The bar moves by half of what each has done (their reports may land out of order: it never goes back).
+    p.report(0.05, kLightAndTraceStage);
+    const SideBySideProgress beside(&p, 0.05, 0.4, {0.5, 0.5});
     IncidentLight light;
     std::vector<openvdb::Coord> thin;
     MonteCarloVoxels traced;
@@ -1629,16 +1631,17 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         [&] {
             light = computeIncidentLight(
                 scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
-                SubProgress(&p, 0.05, 0.4));
+                beside.step(0));
         },
         [&] {
             tracing = isolatedOnThisThread([&] {
-                const SubProgress silent = SubProgress::cancelOnly(&p);
+                const SubProgress progress = beside.step(1);
                 thin = thinVoxels(*scene.medium);
                 const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
                 traced = samples > 0 || thin.empty()
-                             ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, silent)
-                             : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, silent, local);
+                             ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, progress)
+                             : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
+                progress.report(1.0);  // none traced, or light traced (its fit does not report)
             });
         });
     clock.lap(&BakeStats::Phases::light);

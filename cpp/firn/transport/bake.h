@@ -38,6 +38,7 @@ struct BakeStats {
     std::size_t tracedVoxels = 0;              // optically thin voxels lit by Monte Carlo instead of the solve
     std::size_t lightTracedVoxels = 0;         // of which by light tracing (paths from the lights), with
     long photons = 0;                          // these photons
+    std::size_t lightTracingBytes = 0;         // the sums they add to (LightTracingPlan::sumsBytes)
     int passes = 0;                            // diffusion solves per channel (1 + snow-to-snow bounces)
     int sourceScale = 1;                       // the source grids' voxel size in density voxels
     std::array<int, 3> iterations{};          // per colour channel, all passes
@@ -67,6 +68,9 @@ struct BakeStats {
 // of a surface's sky, its light is gathered from the first solution and the solve repeated.
 BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress = nullptr,
                           BakeStats *stats = nullptr);
+// The progress's stage while the sun and sky light and the thin snow are traced side by side (fractions 0.05 to
+// 0.4, half each).
+inline constexpr char kLightAndTraceStage[] = "Tracing sun and sky light, and thin snow";
 
 // The source grids of a snow with nothing to light (an empty density: a spray's frame without lumps, which
 // bakeScattering refuses), without a bake: empty, with the density's transform and a bake's metadata. Throws

@@ -11,6 +11,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/traced_source.h"
 #include "firn/util/sampling.h"
 
 namespace firn {
@@ -149,21 +150,61 @@ class BoxEmitter {
     std::vector<double> sunShare_;
 };
 
-using ChunkSums = std::vector<std::pair<std::int32_t, ArrivingLight>>;
+// Per voxel: its index among the voxels a fit by direction follows (fittedByDirection: only theirs gather
+// ArrivingToward), -1 for the others.
+std::vector<std::int32_t> towardSlots(const Medium &medium, const std::vector<openvdb::Coord> &voxels) {
+    std::vector<std::int32_t> out(voxels.size(), -1);
+    Medium::Accessor density = medium.accessor();
+    std::int32_t fitted = 0;
+    for (std::size_t v = 0; v < voxels.size(); ++v)
+        if (fittedByDirection(medium, density, voxels[v])) out[v] = fitted++;
+    return out;
+}
 
-// The light photons [first, last) bring to the voxels (index >= 0), per voxel in index order.
-ChunkSums traceChunk(const MonteCarloReference &reference, const BoxEmitter &emitter,
-                     const openvdb::Int32Tree &index, long first, long last, std::uint64_t seed, long &steps) {
+std::size_t fittedCount(const std::vector<std::int32_t> &towardSlot) {
+    return std::size_t(std::count_if(towardSlot.begin(), towardSlot.end(), [](std::int32_t s) { return s >= 0; }));
+}
+
+// The voxels' sums: each voxel's ArrivingLight, and the ArrivingToward of those fitted by direction.
+struct VoxelSums {
+    VoxelSums(const Medium &medium, const std::vector<openvdb::Coord> &voxels)
+        : light(voxels.size()), towardSlot(towardSlots(medium, voxels)),
+          toward(fittedCount(towardSlot)) {}
+    std::vector<ArrivingLight> light;      // per voxel
+    std::vector<std::int32_t> towardSlot;  // towardSlots
+    std::vector<ArrivingToward> toward;    // per voxel fitted by direction, in voxel order
+};
+
+// What one chunk of photons adds to the voxels' sums, each in index order.
+struct ChunkSums {
+    std::vector<std::pair<std::int32_t, ArrivingLight>> light;    // by voxel
+    std::vector<std::pair<std::int32_t, ArrivingToward>> toward;  // by slot (VoxelSums::towardSlot)
+};
+
+template <class Sum>
+std::vector<std::pair<std::int32_t, Sum>> inOrder(const std::unordered_map<std::int32_t, Sum> &sums) {
+    std::vector<std::pair<std::int32_t, Sum>> out(sums.begin(), sums.end());
+    std::sort(out.begin(), out.end(), [](const auto &a, const auto &b) { return a.first < b.first; });
+    return out;
+}
+
+// The light photons [first, last) bring to the voxels (index >= 0; `towardSlot`: VoxelSums').
+ChunkSums traceChunk(const MonteCarloReference &reference, const BoxEmitter &emitter, const openvdb::Int32Tree &index,
+                     const std::vector<std::int32_t> &towardSlot, long first, long last, std::uint64_t seed,
+                     long &steps) {
     const Medium &medium = *reference.scene().medium;
     const VolumeOptics &optics = medium.optics();
     const SourceDirections &directions = reference.directions();
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> voxelOf(index);
-    std::unordered_map<std::int32_t, ArrivingLight> sums;
+    std::unordered_map<std::int32_t, ArrivingLight> light;
+    std::unordered_map<std::int32_t, ArrivingToward> toward;
     long tallies = 0;
     const CollisionTally tally = [&](const glm::dvec3 &p, const glm::dvec3 &travel, const Rgb &power) {
         const glm::dvec3 ijk = glm::round(medium.worldToIndex(p));
         const std::int32_t v = voxelOf.getValue(openvdb::Coord(int(ijk.x), int(ijk.y), int(ijk.z)));
-        if (v >= 0) sums[v].add(power, travel, false, optics, directions), ++tallies;
+        if (v < 0) return;
+        light[v].add(power, travel, false, optics), ++tallies;
+        if (const std::int32_t slot = towardSlot[std::size_t(v)]; slot >= 0) toward[slot].add(power, travel, optics, directions);
     };
     PhotonTracer tracer(reference);
     for (long i = first; i < last; ++i) {
@@ -172,9 +213,7 @@ ChunkSums traceChunk(const MonteCarloReference &reference, const BoxEmitter &emi
         if (photon.power != Rgb(0.0)) tracer.follow(photon, emitter.boxMin(), emitter.boxMax(), rng, tally);
     }
     steps += tracer.steps() + kStepsPerTally * tallies;
-    ChunkSums out(sums.begin(), sums.end());
-    std::sort(out.begin(), out.end(), [](const auto &a, const auto &b) { return a.first < b.first; });
-    return out;
+    return ChunkSums{inOrder(light), inOrder(toward)};
 }
 
 // The voxel's integral of sigma_t (m^2): the trilinear density integrates over a voxel to weights 1/8, 3/4,
@@ -227,10 +266,11 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
     constexpr long kPilotPieces = 8;
     const BoxEmitter emitter(reference);
     const openvdb::Int32Tree index = voxelIndex(voxels);
+    const std::vector<std::int32_t> towardSlot = towardSlots(*reference.scene().medium, voxels);
     std::vector<long> pieceSteps(kPilotPieces, 0);
     tbb::parallel_for(tbb::blocked_range<long>(0, kPilotPieces, 1), [&](const auto &range) {
         for (long k = range.begin(); k != range.end(); ++k)
-            traceChunk(reference, emitter, index, k * kPilotPhotons / kPilotPieces,
+            traceChunk(reference, emitter, index, towardSlot, k * kPilotPhotons / kPilotPieces,
                        (k + 1) * kPilotPhotons / kPilotPieces, seed, pieceSteps[k]);
     });
     const double pilotSteps = double(std::accumulate(pieceSteps.begin(), pieceSteps.end(), 0L));
@@ -238,6 +278,7 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
     const double photonSteps = maxSteps - beamSteps - pilotSteps - kStepsPerPhoton * kPilotPhotons -
                                perBeamSample * plan.beamSamples * double(voxels.size());
     plan.photons = long(std::min(double(kMaxPhotons), std::max(photonSteps, 0.0) / perPhoton));
+    plan.sumsBytes = voxels.size() * (sizeof(ArrivingLight) + sizeof(std::int32_t)) + fittedCount(towardSlot) * sizeof(ArrivingToward);
     if (plan.photons < std::max(double(kMinPhotons), kMinPhotonsPerVoxel * double(voxels.size()))) plan = LightTracingPlan{};
     return plan;
 }
@@ -250,7 +291,7 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
     const Medium &medium = *reference.scene().medium;
     const openvdb::Int32Tree index = voxelIndex(voxels);
     const BoxEmitter emitter(reference);
-    std::vector<ArrivingLight> sums(voxels.size());
+    VoxelSums sums(medium, voxels);
     long steps = 0;
     const long chunks = (plan.photons + kPhotonsPerChunk - 1) / kPhotonsPerChunk;
     for (long first = 0; first < chunks; first += kChunksPerBatch) {
@@ -260,12 +301,13 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
         std::vector<long> batchSteps(batch.size(), 0);
         tbb::parallel_for(tbb::blocked_range<long>(first, last, 1), [&](const auto &range) {
             for (long c = range.begin(); c != range.end(); ++c)
-                batch[c - first] = traceChunk(reference, emitter, index, c * kPhotonsPerChunk,
+                batch[c - first] = traceChunk(reference, emitter, index, sums.towardSlot, c * kPhotonsPerChunk,
                                               std::min(plan.photons, (c + 1) * kPhotonsPerChunk), seed,
                                               batchSteps[c - first]);
         });
         for (std::size_t c = 0; c < batch.size(); ++c) {
-            for (const auto &[v, light] : batch[c]) sums[v] += light;
+            for (const auto &[v, light] : batch[c].light) sums.light[v] += light;
+            for (const auto &[slot, toward] : batch[c].toward) sums.toward[slot] += toward;
             steps += batchSteps[c];
         }
         progress.report(0.8 * double(last) / double(chunks));
@@ -277,8 +319,9 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
         Medium::Accessor density = medium.accessor();
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
             out[v] = reference.sourceIn(voxels[v], plan.beamSamples, seed ^ kBeamSeed, v, false);
-            out[v] += sourceOf(sums[v], double(plan.photons) * extinctionIntegral(medium, density, voxels[v]),
-                               medium.optics());
+            const std::int32_t slot = sums.towardSlot[v];
+            out[v] += sourceOf(sums.light[v], slot >= 0 ? &sums.toward[std::size_t(slot)] : nullptr,
+                               double(plan.photons) * extinctionIntegral(medium, density, voxels[v]), medium.optics());
         }
     });
     out.front().steps += steps;  // the photons' steps, counted once

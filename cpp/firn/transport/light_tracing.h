@@ -25,6 +25,7 @@ namespace firn {
 struct LightTracingPlan {
     long photons = 0;     // 0: too costly, or lamps or occluders in the scene (planLightTracing): leave the voxels to others
     int beamSamples = 0;  // points per voxel for the direct beams
+    std::size_t sumsBytes = 0;  // the voxels' sums photons add to (ArrivingLight; ArrivingToward where fitted by direction)
 };
 
 // The photons and beam points that `maxSteps` tracking steps buy, measured on a pilot of both.

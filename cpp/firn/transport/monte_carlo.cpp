@@ -120,17 +120,18 @@ class PathTracer {
     // orders, scattered light only) and each light's direct beam, added with weight w. (u1, u2) draw the
     // direction.
     // Without `scattered`, the direct beams only.
-    void sampleArriving(const glm::dvec3 &p, double w, double u1, double u2, Rng &rng, ArrivingLight &sum, bool scattered) {
+    void sampleArriving(const glm::dvec3 &p, double w, double u1, double u2, Rng &rng, ArrivingLight &sum,
+                        ArrivingToward &toward, bool scattered) {
         const VolumeOptics &optics = medium_.optics();
         if (scattered) {
             const glm::dvec3 d = sampleUniformCone(glm::dvec3(0.0, 0.0, 1.0), -1.0, u1, u2);
             const Rgb L = 4.0 * kPi * sample(Ray{p, d}, rng, true);
-            sum.add(w * L, -d, false, optics, directions_);
+            sum.add(w * L, -d, false, optics), toward.add(w * L, -d, optics, directions_);
         }
         for (std::size_t b = 0; b < lightCount(); ++b) {
             glm::dvec3 towards;
             const Rgb E = lightIrradiance(b, p, 0.0, towards, rng);
-            if (E != Rgb(0.0)) sum.add(w * E, -towards, true, optics, directions_);
+            if (E != Rgb(0.0)) sum.add(w * E, -towards, true, optics), toward.add(w * E, -towards, optics, directions_);
         }
     }
 
@@ -336,6 +337,7 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     // Points spread over the voxel, each weighted by its extinction: the renderer draws sigma_t S, so the
     // voxel's S is the extinction-weighted mean of the light's (the fluence falls steeply in thick voxels).
     ArrivingLight sum;
+    ArrivingToward toward;
     double weights = 0.0;
     KroneckerSequence points(rng);
     for (int s = 0; s < samples; ++s) {
@@ -343,15 +345,16 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
         const glm::dvec3 p = centre + medium.voxelSize() * (glm::dvec3(u[0], u[1], u[2]) - 0.5);
         const double w = tracer.sigmaT(p);
         if (w <= 0.0) continue;
-        tracer.sampleArriving(p, w, u[3], u[4], rng, sum, scattered);
+        tracer.sampleArriving(p, w, u[3], u[4], rng, sum, toward, scattered);
         weights += w;
     }
-    SourceEstimate out = sourceOf(sum, weights, medium.optics());
+    SourceEstimate out = sourceOf(sum, &toward, weights, medium.optics());
     out.steps = tracer.steps;
     return out;
 }
 
-SourceEstimate sourceOf(const ArrivingLight &sum, double weights, const VolumeOptics &optics) {
+SourceEstimate sourceOf(const ArrivingLight &sum, const ArrivingToward *toward, double weights,
+                        const VolumeOptics &optics) {
     SourceEstimate out;
     if (weights <= 0.0) return out;
     for (int c = 0; c < 3; ++c) {
@@ -364,7 +367,8 @@ SourceEstimate sourceOf(const ArrivingLight &sum, double weights, const VolumeOp
     const double greyScale = kInvFourPi / weights;
     out.second = greyScale * sum.second;
     for (int i = 0; i < 3; ++i) out.third[i] = greyScale * sum.third[i];
-    for (int j = 0; j < kSourceDirections; ++j) out.toward[j] = sum.toward[j] / weights;
+    if (toward)
+        for (int j = 0; j < kSourceDirections; ++j) out.toward[j] = toward->toward[j] / weights;
     return out;
 }
 
@@ -390,22 +394,33 @@ SourceDirections sourceDirections(const glm::dvec3 &beamTravel) {
     return out;
 }
 
-void ArrivingLight::add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const VolumeOptics &optics,
-                        const SourceDirections &directions) {
-    const Rgb &albedo = optics.albedo;
+namespace {
+// What the snow scatters of `fluence`, the channels' mean.
+double greyScattered(const Rgb &fluence, const VolumeOptics &optics) { return glm::dot(optics.albedo, fluence) / 3.0; }
+}  // namespace
+
+void ArrivingLight::add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const VolumeOptics &optics) {
     (beam ? phiBeam : phi) += fluence;
     glm::dmat3 &toFlux = beam ? fluxBeam : flux;
     for (int c = 0; c < 3; ++c) toFlux[c] += fluence[c] * travel;
-    const double grey = glm::dot(albedo, fluence) / 3.0;
-    const glm::dmat3 tt = grey * glm::outerProduct(travel, travel);
+    const glm::dmat3 tt = greyScattered(fluence, optics) * glm::outerProduct(travel, travel);
     second += tt;
     for (int i = 0; i < 3; ++i) third[i] += travel[i] * tt;
-    for (int j = 0; j < kSourceDirections; ++j) toward[j] += grey * henyeyGreenstein(glm::dot(travel, directions[j]), optics.g);
 }
 
 ArrivingLight &ArrivingLight::operator+=(const ArrivingLight &o) {
     phi += o.phi, phiBeam += o.phiBeam, flux += o.flux, fluxBeam += o.fluxBeam, second += o.second;
     for (int i = 0; i < 3; ++i) third[i] += o.third[i];
+    return *this;
+}
+
+void ArrivingToward::add(const Rgb &fluence, const glm::dvec3 &travel, const VolumeOptics &optics,
+                         const SourceDirections &directions) {
+    const double grey = greyScattered(fluence, optics);
+    for (int j = 0; j < kSourceDirections; ++j) toward[j] += grey * henyeyGreenstein(glm::dot(travel, directions[j]), optics.g);
+}
+
+ArrivingToward &ArrivingToward::operator+=(const ArrivingToward &o) {
     for (int j = 0; j < kSourceDirections; ++j) toward[j] += o.toward[j];
     return *this;
 }

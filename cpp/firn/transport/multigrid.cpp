@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include "firn/util/cholesky.h"
 #include "firn/util/error.h"
 
 namespace firn {
@@ -75,18 +76,8 @@ struct MultigridSolver::Hierarchy {
     }
 
     void solveDense(const Level &level) const {
-        const std::size_t n = level.A.size();
-        std::vector<double> x(n);
-        for (std::size_t i = 0; i < n; ++i) {  // L y = b
-            double s = level.b[i];
-            for (std::size_t k = 0; k < i; ++k) s -= cholesky[i * n + k] * x[k];
-            x[i] = s / cholesky[i * n + i];
-        }
-        for (std::size_t i = n; i-- > 0;) {  // L^T x = y
-            double s = x[i];
-            for (std::size_t k = i + 1; k < n; ++k) s -= cholesky[k * n + i] * x[k];
-            x[i] = s / cholesky[i * n + i];
-        }
+        std::vector<double> x(level.b.begin(), level.b.end());
+        choleskySolve(cholesky.data(), x.size(), x.data());
         std::copy(x.begin(), x.end(), level.x.begin());
     }
 
@@ -209,21 +200,9 @@ std::vector<double> denseCholesky(const Stencil<float> &A) {
         for (int k = 0; k < 6; ++k)
             if ((*A.neighbour)[i][k] >= 0) L[i * n + (*A.neighbour)[i][k]] -= A.conductance[i][k];
     }
-    for (std::size_t j = 0; j < n; ++j) {
-        double d = L[j * n + j];
-        for (std::size_t k = 0; k < j; ++k) d -= L[j * n + k] * L[j * n + k];
-        if (!(d > 0.0))  // seen with voxels thousands of mean free paths thick: exp(-tau) underflows
-            throw InvalidArgument("the diffusion solve broke down (coarse operator not positive definite): the snow "
-                                  "is too optically thick per voxel; use a smaller voxel size");
-        L[j * n + j] = std::sqrt(d);
-        for (std::size_t i = j + 1; i < n; ++i) {
-            double s = L[i * n + j];
-            for (std::size_t k = 0; k < j; ++k) s -= L[i * n + k] * L[j * n + k];
-            L[i * n + j] = s / L[j * n + j];
-        }
-    }
-    for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t j = i + 1; j < n; ++j) L[i * n + j] = 0.0;
+    if (!choleskyFactor(L.data(), n))  // seen with voxels thousands of mean free paths thick: exp(-tau) underflows
+        throw InvalidArgument("the diffusion solve broke down (coarse operator not positive definite): the snow "
+                              "is too optically thick per voxel; use a smaller voxel size");
     return L;
 }
 

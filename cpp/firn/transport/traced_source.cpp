@@ -6,6 +6,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "firn/util/cholesky.h"
 #include "firn/util/sampling.h"
 
 namespace firn {
@@ -39,36 +40,12 @@ struct DirectionFit {
     double error = std::numeric_limits<double>::infinity();  // weighted squared misfit
 };
 
-// Solves the symmetric positive definite system A x = b in place (Cholesky, lower triangle); false where A is
-// singular.
-template <int n>
-bool solveSymmetric(std::array<std::array<double, n>, n> &A, std::array<double, n> &b) {
-    for (int j = 0; j < n; ++j) {
-        for (int k = 0; k < j; ++k) A[j][j] -= A[j][k] * A[j][k];
-        if (!(A[j][j] > 1e-12 * (1.0 + std::abs(A[0][0])))) return false;
-        A[j][j] = std::sqrt(A[j][j]);
-        for (int i = j + 1; i < n; ++i) {
-            for (int k = 0; k < j; ++k) A[i][j] -= A[i][k] * A[j][k];
-            A[i][j] /= A[j][j];
-        }
-    }
-    for (int i = 0; i < n; ++i) {
-        for (int k = 0; k < i; ++k) b[i] -= A[i][k] * b[k];
-        b[i] /= A[i][i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        for (int k = i + 1; k < n; ++k) b[i] -= A[k][i] * b[k];
-        b[i] /= A[i][i];
-    }
-    return true;
-}
-
 // The lobes with the peaked one's anisotropy k (none: k < 0) fitted to the gathered source S.toward by weighted
 // least squares: linear in the peak's mean and the broad lobe's l0 and l1.
 DirectionFit fitAtK(const SourceEstimate &S, const SourceDirections &directions, const glm::dvec3 &m, double k,
                     const DirectionWeights &weights) {
     constexpr int n = 5;
-    std::array<std::array<double, n>, n> A{};
+    std::array<double, n * n> A{};  // row-major, the lower triangle
     std::array<double, n> b{};
     std::array<std::array<double, n>, kSourceDirections> basis;
     for (int j = 0; j < kSourceDirections; ++j) {
@@ -76,12 +53,12 @@ DirectionFit fitAtK(const SourceEstimate &S, const SourceDirections &directions,
         basis[j] = {k >= 0.0 ? 4.0 * kPi * henyeyGreenstein(glm::dot(w, m), k) : 0.0, 1.0, w.x, w.y, w.z};
         for (int r = 0; r < n; ++r) {
             b[r] += weights[j] * basis[j][r] * S.toward[j];
-            for (int c = 0; c <= r; ++c) A[r][c] += weights[j] * basis[j][r] * basis[j][c];
+            for (int c = 0; c <= r; ++c) A[r * n + c] += weights[j] * basis[j][r] * basis[j][c];
         }
     }
-    if (k < 0.0) A[0][0] = 1.0;  // no peak: its mean held at 0
+    if (k < 0.0) A[0] = 1.0;  // no peak: its mean held at 0
     DirectionFit out;
-    if (!solveSymmetric<n>(A, b) || b[0] < 0.0 || b[1] <= 0.0) return out;
+    if (!solveSymmetric(A.data(), n, b.data(), 1e-12 * (1.0 + std::abs(A[0]))) || b[0] < 0.0 || b[1] <= 0.0) return out;
     out.peak = b[0], out.k = std::max(k, 0.0), out.l0 = b[1], out.l1 = glm::dvec3(b[2], b[3], b[4]);
     out.error = 0.0;
     for (int j = 0; j < kSourceDirections; ++j) {

@@ -26,6 +26,11 @@ constexpr double kMinDirectionFitG = 0.8, kMaxDirectionFitTau = 2.0;
 inline bool fittedByDirection(double g, double voxelTau) {
     return g >= kMinDirectionFitG && voxelTau <= kMaxDirectionFitTau;
 }
+// The same for `voxel` of `medium`, its optical depth from the density at its centre.
+inline bool fittedByDirection(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &voxel) {
+    const double tauPerDensity = medium.voxelSize() * medium.optics().extinctionPerDensity;
+    return fittedByDirection(medium.optics().g, tauPerDensity * density.getValue(voxel));
+}
 
 // Per direction of sourceDirections: the weight a fit gives it (visibilityFrom).
 using DirectionWeights = std::array<double, kSourceDirections>;

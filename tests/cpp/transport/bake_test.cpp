@@ -2,8 +2,12 @@
 // /work/shared/notes/snow-optics.md), energy conservation, and the independent Monte Carlo reference.
 #include "firn/transport/bake.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -160,7 +164,8 @@ TEST(Bake, ReportsProgressAndStopsWhenCancelled) {
 
 // Thin snow is traced beside the sun and sky light (bakeScattering): a small lump above the slab, traced whole. Its
 // grids do not depend on how the two share the threads (one thread runs them one after the other, two side by
-// side), the progress still only goes forwards, and a cancelled bake stops in either.
+// side), the progress moves while they run and only goes forwards, and a bake cancelled as they start stops in
+// them.
 TEST(Bake, SnowTracedBesideTheLightIsTheSameOnOneThreadAndStopsWhenCancelled) {
     Scene scene = slabScene(2000.0, 0.999, 0.85, 12, 6);
     openvdb::FloatGrid::Ptr density = makeSlabDensity(kVoxel, 12, 6, kDensity);
@@ -181,11 +186,24 @@ TEST(Bake, SnowTracedBesideTheLightIsTheSameOnOneThreadAndStopsWhenCancelled) {
         openvdb::tree::ValueAccessor<const openvdb::Vec3fTree> other(one.source[k]->tree());
         for (auto it = both.source[k]->cbeginValueOn(); it; ++it) ASSERT_EQ(*it, other.getValue(it.getCoord()));
     }
-    // Cancelled before it starts (a cancel timed to land within the light and the trace would depend on the
-    // machine's speed: Progress calls back at most every 0.1 s).
-    Progress cancelled;
-    cancelled.cancel();
+    // Every report called back (interval 0): fractions within the two's stage, between its start and end.
+    std::vector<std::pair<double, std::string>> seen;
+    Progress progress([&](double f, const std::string &stage) { seen.emplace_back(f, stage); }, 0.0);
+    bakeScattering(scene, settings, &progress);
+    for (std::size_t i = 1; i < seen.size(); ++i) ASSERT_GE(seen[i].first, seen[i - 1].first) << seen[i].second;
+    EXPECT_TRUE(std::any_of(seen.begin(), seen.end(), [](const auto &s) {
+        return s.second == kLightAndTraceStage && s.first > 0.05 && s.first < 0.4;
+    }));
+    // Cancelled when the callback first sees their stage (a new stage is always called back): the bake stops
+    // within the two, before any later stage.
+    std::vector<std::string> stages;
+    Progress cancelled([&](double, const std::string &stage) {
+        stages.push_back(stage);
+        if (stage == kLightAndTraceStage) cancelled.cancel();
+    });
     EXPECT_THROW(bakeScattering(scene, settings, &cancelled), Cancelled);
+    ASSERT_FALSE(stages.empty());
+    EXPECT_EQ(stages.back(), kLightAndTraceStage);
 }
 
 TEST(Bake, RejectsBadInput) {

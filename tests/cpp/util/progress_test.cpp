@@ -48,16 +48,52 @@ TEST(SubProgress, MapsOntoParentRange) {
     EXPECT_DOUBLE_EQ(progress.fraction(), 0.625);
 }
 
-// A step run beside another (bake: thin snow traced beside the light) reports nothing, but stops when cancelled.
-TEST(SubProgress, CancelOnlyReportsNothingButStopsWhenCancelled) {
+// A new stage always reaches the callback, however soon after the last (a watcher that acts on a stage, as a
+// test that cancels there, sees it).
+TEST(Progress, CallbackSeesEveryNewStage) {
+    std::vector<std::string> stages;
+    Progress progress([&](double, const std::string &stage) { stages.push_back(stage); });
+    progress.report(0.1, "first");
+    progress.report(0.2);  // throttled: within 0.1 s of the last
+    progress.report(0.3, "second");
+    EXPECT_EQ(stages, (std::vector<std::string>{"first", "second"}));
+}
+
+// Steps side by side (bake: thin snow traced beside the light) move the parent by their shares of its range; a
+// step's fraction going back (its loop's reports out of order) moves nothing back; both stop when cancelled.
+TEST(SideBySideProgress, SharesAddAndNeverGoBack) {
     Progress progress;
-    progress.report(0.3);
-    const SubProgress quiet = SubProgress::cancelOnly(&progress);
-    quiet.report(0.9);
-    EXPECT_DOUBLE_EQ(progress.fraction(), 0.3);
-    EXPECT_NO_THROW(quiet.throwIfCancelled());
+    const SideBySideProgress beside(&progress, 0.2, 0.6, {0.5, 0.5});
+    const SubProgress light = beside.step(0), trace = beside.step(1);
+    trace.report(0.5);
+    EXPECT_DOUBLE_EQ(progress.fraction(), 0.3);  // 0.2 + 0.4 * (0.5 * 0.5)
+    light.report(1.0);
+    EXPECT_DOUBLE_EQ(progress.fraction(), 0.5);
+    trace.report(0.25);  // reported late
+    EXPECT_DOUBLE_EQ(progress.fraction(), 0.5);
+    trace.report(1.0);
+    EXPECT_DOUBLE_EQ(progress.fraction(), 0.6);
+    EXPECT_NO_THROW(light.throwIfCancelled());
     progress.cancel();
-    EXPECT_THROW(quiet.throwIfCancelled(), Cancelled);
+    EXPECT_THROW(light.throwIfCancelled(), Cancelled);
+    EXPECT_THROW(trace.throwIfCancelled(), Cancelled);
+}
+
+// Two threads reporting at once, each its steps in order: the fraction the callbacks see never goes back, and the
+// end is reached.
+TEST(SideBySideProgress, CallbacksNeverGoBackUnderTwoReporters) {
+    std::vector<double> seen;
+    Progress progress([&](double f, const std::string &) { seen.push_back(f); }, 0.0);  // called back from either
+    const SideBySideProgress beside(&progress, 0.0, 1.0, {0.25, 0.75});
+    auto run = [&](std::size_t step) {
+        for (int i = 0; i <= 20000; ++i) beside.step(step).report(i / 20000.0);
+    };
+    std::thread other(run, 0);
+    run(1);
+    other.join();
+    ASSERT_FALSE(seen.empty());
+    for (std::size_t i = 1; i < seen.size(); ++i) ASSERT_GE(seen[i], seen[i - 1]) << i;
+    EXPECT_DOUBLE_EQ(progress.fraction(), 1.0);
 }
 
 }  // namespace firn

@@ -1,0 +1,81 @@
+"""What light tracing costs (docs/bake.md, Method 3) in a bake that light traces: a cube of thin snow too large to
+gather per voxel (`--side` voxels of 1 cm a side, optical depth `--tau` per voxel, albedo 0.999, `--g`; a sun 30
+degrees up and a sky), baked by two builds alternating in one run (the machine's load shared alike). Per bake: the
+trace's processor seconds (stats["cpu_seconds"]["trace"]), the photons and the bytes of the per-voxel sums the
+photons add to (stats["light_tracing_bytes"]; a build without that statistic held 792 bytes per light-traced
+voxel: ArrivingLight with the 39 directions' sums in every voxel); then whether both builds' grids are identical.
+At g 0.8 and above the thin voxels are fitted by direction and gather the 39 directions (traced_source.h), below
+not.
+
+    /usr/bin/python3 bench/light_tracing_cost.py BUILD_A/python BUILD_B/python [--side 40] [--tau 0.5] [--g 0.7]
+        [--rounds 2]
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+VOXEL = 0.01  # m
+BAKE = r"""
+import json, math, sys
+sys.path.insert(0, sys.argv[1])
+import firncore
+path, tau, g = sys.argv[2], float(sys.argv[3]), float(sys.argv[5])
+optics = firncore.VolumeOptics(tau / (0.01 * 300.0), (0.999,) * 3, g)  # m^2/kg: tau per voxel at 300 kg/m^3
+sun = firncore.SunLight((math.cos(math.radians(30.0)), 0.0, math.sin(math.radians(30.0))), (1.0,) * 3, 0.0093)
+stats = firncore.bake(path, optics, suns=[sun], sky=firncore.Sky((0.05,) * 3), output_path=sys.argv[4])
+print(json.dumps({"trace_cpu_s": stats["cpu_seconds"]["trace"], "photons": stats["photons"],
+                  "voxels": stats["light_traced_voxels"],
+                  "bytes": stats.get("light_tracing_bytes", 792 * stats["light_traced_voxels"])}))
+"""
+
+
+def cloud(path, side, density=300.0):
+    import numpy as np
+    import pyopenvdb
+
+    grid = pyopenvdb.FloatGrid()
+    grid.name = "density"
+    grid.transform = pyopenvdb.createLinearTransform(voxelSize=VOXEL)
+    grid.copyFromArray(np.full((side,) * 3, density, np.float32), tolerance=0.0)
+    pyopenvdb.write(path, grids=[grid])
+
+
+def bake(build, path, tau, g, output):
+    env = dict(os.environ, PYTHONPATH=os.path.abspath(build))
+    out = subprocess.run([sys.executable, "-c", BAKE, os.path.abspath(build), path, str(tau), output, str(g)],
+                         env=env, check=True, capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("builds", nargs=2, help="two folders holding firncore (build/python)")
+    parser.add_argument("--side", type=int, default=40)
+    parser.add_argument("--tau", type=float, default=0.5)
+    parser.add_argument("--g", type=float, default=0.7)
+    parser.add_argument("--rounds", type=int, default=2)
+    args = parser.parse_args()
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from grids_identical import compare
+
+    with tempfile.TemporaryDirectory() as folder:
+        density = os.path.join(folder, "cloud.vdb")
+        cloud(density, args.side)
+        runs = {b: [] for b in args.builds}
+        for _ in range(args.rounds):
+            for k, b in enumerate(args.builds):
+                runs[b].append(bake(b, density, args.tau, args.g, os.path.join(folder, f"baked{k}.vdb")))
+        for b in args.builds:
+            r = runs[b]
+            seconds = ", ".join(f"{x['trace_cpu_s']:.2f}" for x in r)
+            print(f"{b}: {r[0]['voxels']} light-traced voxels, {r[0]['photons']} photons, sums "
+                  f"{r[0]['bytes'] / 2**20:.2f} MiB; trace processor s {seconds} (min {min(x['trace_cpu_s'] for x in r):.2f})")
+        compare(os.path.join(folder, "baked0.vdb"), os.path.join(folder, "baked1.vdb"))
+
+
+if __name__ == "__main__":
+    main()
