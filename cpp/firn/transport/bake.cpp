@@ -135,9 +135,13 @@ struct Channel {
     double sigmaTr(double rho) const { return (1.0 - omega * g) * k * rho; }   // sigma_a + sigma_s (1 - g)
     double reducedAlbedo() const { return omega * (1.0 - g) / (1.0 - omega * g); }
     double beta() const { return std::sqrt((1.0 - omega) / (3.0 * (1.0 - omega * g))); }  // kappa D
-    // What a half-space returns of diffuse light by this diffusion (Marshak's condition, extrapolation 2D):
-    // (1 - 2 kappa D) / (1 + 2 kappa D).
+    // What a half-space returns by this diffusion (Marshak's condition, extrapolation 2D) of diffuse light,
+    // (1 - 2 kappa D) / (1 + 2 kappa D), and of a beam arriving at cosine mu0 whose reduced scattering is the
+    // source, a' / ((1 + 3 kappa D mu0) (1 + 2 kappa D)) (the 1D solution; a' = 1: all of it).
     double diffuseAlbedo() const { return (1.0 - 2.0 * beta()) / (1.0 + 2.0 * beta()); }
+    double beamAlbedo(double mu0) const {
+        return reducedAlbedo() / ((1.0 + 3.0 * beta() * mu0) * (1.0 + 2.0 * beta()));
+    }
 };
 
 // Source functions' peaked lobes where they are not zero, by key (an unknown, a place among the grids' values):
@@ -672,16 +676,18 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
     const double y = absorptionParameter(ch.omega, ch.g);
-    // The diffusion returns less diffuse light than a half-space of this snow does where the snow absorbs (the
-    // spherical albedo, by the sun lobe's Monte Carlo table: 0.447 against Marshak's 0.429 at omega 0.98, g 0.85;
-    // 0.330 against 0.300 at omega 0.9, g 0.6): the difference, times the diffuse light arriving, leaves too
-    // (an absorbing ball's shadowed side, lit by the sky alone, was 5-9 % too dark: docs/bake.md, Accuracy).
+    // Where the snow absorbs, the diffusion returns other amounts than a half-space of this snow does (the sun
+    // lobe's Monte Carlo table): of diffuse light less (the spherical albedo 0.447 against Marshak's 0.429 at
+    // omega 0.98, g 0.85; 0.330 against 0.300 at omega 0.9, g 0.6), of a beam more at steep incidence and less at
+    // grazing (0.393 against 0.353 at mu0 1, 0.533 against 0.571 at mu0 0.3, omega 0.98, g 0.85). What it misses
+    // (negative where it returns too much) leaves too: an absorbing ball's shadowed side, lit by the sky alone,
+    // was 5-9 % too dark, its sunward face 5-8 % too bright (docs/bake.md, Accuracy).
     const double diffuseMissed = sphericalAlbedo(ch.g, y) - ch.diffuseAlbedo();
     // Sun light that entered returns as a half-space of this snow returns it, with the sun lobe's albedo and
     // shape; sky light isotropically (a non-absorbing half-space returns uniform sky light so; absorption takes
     // the escape function's shape from it, by reciprocity with ART's plane albedo). What the diffusion says
     // beyond that (absorbed sky light, light gone elsewhere, light from deep inside, from the ground or from
-    // neighbouring snow) and the diffuse light it misses take the escape function's u(mu) = 3/7 + 6/7 mu. So:
+    // neighbouring snow) and what it misses take the escape function's u(mu) = 3/7 + 6/7 mu. So:
     // leaving = sum returned (shape - u) + (out + missed) u. The returned part (W, moments of a linear form)
     // through a surface of normal n taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's; with
     // `peak` (a smooth patch), the suns' light returned sharply forwards leaves as the peaked lobe instead
@@ -691,8 +697,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                                SurfaceLight *peak) {
         const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
         const double sky = skyShare * sys.skyIn[i];
-        double r0 = sky * (1.0 - (1.0 - diffuseMissed) * 3.0 / 7.0);
-        glm::dvec3 r1 = -sky * (1.0 - diffuseMissed) * escape1;
+        double r0 = sky * (1.0 - 3.0 / 7.0), missed = sky * diffuseMissed;  // W
+        glm::dvec3 r1 = -sky * escape1;
         for (std::size_t s = 0; s < light.beams.size(); ++s) {
             const double P = sys.sunIn[s][i] * beamShare(s);
             if (P <= 0.0) continue;
@@ -702,6 +708,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             glm::dvec3 t = d - glm::dot(d, n) * n;
             t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
             const double returned = P * lobe.albedo;
+            missed += P * (lobe.albedo - ch.beamAlbedo(mu0));
             if (!peak) {
                 r0 += returned * (lobe.a - 3.0 / 7.0);
                 r1 += returned * (lobe.b * n + lobe.c * t - escape1);
@@ -715,7 +722,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             peak->peak0[c] += float(p0);
             peak->peak1 += glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part
         }
-        return std::pair{r0, r1};
+        return std::pair{r0 + missed * 3.0 / 7.0, r1 + missed * escape1};
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
