@@ -150,15 +150,55 @@ def test_absorbing_balls_under_a_uniform_sky_return_what_a_half_space_returns(fo
 
 def test_sunward_faces_of_absorbing_balls_return_what_a_half_space_returns(folder):
     # The issue's ball (omega 0.98, g 0.85) and the grey one (omega 0.9, g 0.6) seen from the sun's side and from
-    # above, against the core's Monte Carlo (1024 paths; noise 8.2 % and 3.4 % per block). The diffusion returns
-    # of a beam at steep incidence more than a half-space of the snow does: a' / ((1 + 3 kappa D mu0)
-    # (1 + 2 kappa D)) = 0.393 against 0.353 (the sun lobe table's plane albedo) at mu0 1 for the issue's snow.
-    # Measured: bias +6.1 % and +6.5 %, the grey ball's mean 14.2 %; with the difference leaving in the escape
-    # function's shape (bake.cpp, surfaceLight) +3.7 % and +5.0 %, 10.7 % (docs/bake.md, Accuracy).
+    # above, against the core's Monte Carlo (1024 paths; noise 8.2 % and 3.4 % per block). The voxel scheme returns
+    # of a beam at steep incidence more than a half-space of the snow does, at grazing less (0.387 against 0.353,
+    # the sun lobe table's plane albedo, at mu0 1 for the issue's snow: bake.cpp, schemeBeamAlbedo). Without the
+    # difference (main with the diffuse step): bias +7.1 % and +8.7 %, the grey ball's mean 14.5 %; with it leaving
+    # in the escape function's shape (surfaceLight) +6.2 % and +7.4 %, 12.0 %. Subtracting the 1D diffusion's
+    # a' / ((1 + 3 kappa D mu0) (1 + 2 kappa D)) instead gave +3.7 %, +5.0 %, 10.7 %, but flat slabs 9 % too dark
+    # (test_flat_absorbing_slab_returns_a_half_space_albedo_of_the_sun; docs/bake.md, Accuracy).
     issue = baked_against_reference(folder, "ball_issue", 1024, [(0, 0), (0, 60)])
-    assert abs(issue["bias"]) < 0.05, issue["view_bias"]
+    assert abs(issue["bias"]) < 0.07, issue["view_bias"]
     grey = baked_against_reference(folder, "ball_grey", 1024, [(0, 0), (0, 60)])
-    assert abs(grey["bias"]) < 0.06 and grey["mean"] < 0.125, (grey["bias"], grey["mean"])
+    assert abs(grey["bias"]) < 0.08 and grey["mean"] < 0.125, (grey["bias"], grey["mean"])
+
+
+def flat_slab_albedo(folder, omega, g, tau_per_voxel, elevation):
+    """A wide flat slab (64 x 64 voxels of 1 cm, 6 deep) baked under a sun alone at `elevation` (degrees): the
+    fraction of the sun's flux it returns, its baked radiance integrated over the hemisphere (Gauss-Legendre in the
+    cosine, 6 nodes, 12 azimuths) about the top's centre."""
+    density = bake_suite.slab(64, 6) * 100.0
+    optics = firncore.VolumeOptics(tau_per_voxel / 0.01 / 100.0, (omega,) * 3, g)
+    e = math.radians(elevation)
+    sun = firncore.SunLight((math.cos(e), 0.0, math.sin(e)), (1.0,) * 3, 0.0093)
+    path = os.path.join(folder, "flat_slab.vdb")
+    bake_suite.write_density(path, density, 0.01)
+    firncore.bake(path, optics, suns=[sun], seed=0)
+    top = np.array([(density.shape[0] - 1) / 2, (density.shape[1] - 1) / 2, 2 + 6 - 0.5]) * 0.01
+    nodes, weights = np.polynomial.legendre.leggauss(6)
+    origins, directions, projected = [], [], []
+    for mu, w in zip(0.5 * (nodes + 1.0), 0.5 * weights):
+        for k in range(12):
+            phi, s = 2.0 * math.pi * (k + 0.5) / 12, math.sqrt(1.0 - mu * mu)
+            back = np.array([s * math.cos(phi), s * math.sin(phi), mu])
+            origins.append(top + 2.0 * back), directions.append(-back), projected.append(w * mu * 2.0 * math.pi / 12)
+    radiance = firncore.render_baked(path, optics, np.array(origins), np.array(directions))[:, 1]
+    return float(np.dot(projected, radiance)) / math.sin(e)
+
+
+@pytest.mark.parametrize("omega, g, tau_per_voxel", [(0.9, 0.6, 5.0), (0.98, 0.85, 10.0)])
+def test_flat_absorbing_slab_returns_a_half_space_albedo_of_the_sun(folder, omega, g, tau_per_voxel):
+    # The sun's half-space correction (bake.cpp, surfaceLight) subtracts what the voxel scheme itself returns of a
+    # beam (schemeBeamAlbedo: 0.266 overhead for omega 0.9, g 0.6 at tau 5 per voxel) from the sun lobe table's
+    # albedo. Oracle: the core's 1D Monte Carlo of the half-space (slab_monte_carlo, tau inf). Subtracting the 1D
+    # diffusion's a' / ((1 + 3 kappa D mu0) (1 + 2 kappa D)) instead (0.281 overhead), the slabs returned -3.5 %
+    # and -8.9 % (omega 0.9; sun at 90 and 30 deg) and -1.3 %, -5.2 % (omega 0.98); so +2.8 %, +0.6 % and +0.6 %,
+    # +0.9 %: the table's own, its albedo 0.245 at mu0 1 where this Monte Carlo finds 0.2376 (trilinear in y).
+    for elevation in (90.0, 30.0):
+        mu0 = math.sin(math.radians(elevation))
+        exact = firncore.slab_monte_carlo(omega=omega, g=g, tau=float("inf"), mu0=mu0, photons=100000, seed=3)
+        baked = flat_slab_albedo(folder, omega, g, tau_per_voxel, elevation)
+        assert baked == pytest.approx(exact["reflectance"], rel=0.04), (elevation, baked, exact["reflectance"])
 
 
 def test_forward_light_crossing_a_ball_leaves_its_far_side(folder):

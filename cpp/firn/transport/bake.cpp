@@ -705,6 +705,16 @@ double densityBeneath(const SnowTopology &topo, std::size_t i, const glm::dvec3 
     return SnowTopology::isFace(link) ? topo.density[i] : topo.density[std::size_t(link)];
 }
 
+// The beam towards w entering surface voxel i through its faces shared with snow, per W/m^2 at its node and m^2 of
+// its patch (schemeBeamAlbedo's `across`: on a flat grid face the cosines to the other axes; a staircase's steps
+// let less in so, the voxel's other air faces none).
+double acrossSnowFaces(const SnowTopology &topo, std::size_t i, const glm::dvec3 &w, double h) {
+    double across = 0.0;
+    for (int f = 0; f < 6; ++f)
+        if (!SnowTopology::isFace(topo.link[i][f])) across += std::max(0.0, glm::dot(faceNormal(f), w));
+    return across * h * h / topo.patches[i].area;
+}
+
 // Channel c's light leaving each surface voxel, from its solve.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
                   const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
@@ -716,7 +726,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // lobe's Monte Carlo table): of diffuse light less (the spherical albedo 0.447 against Marshak's 0.429 at
     // omega 0.98, g 0.85; 0.330 against 0.300 at omega 0.9, g 0.6), of a beam more at steep incidence and less at
     // grazing (the voxel scheme's 0.387 against 0.353 at mu0 1, 0.505 against 0.571 at mu0 0.3, omega 0.98,
-    // g 0.85: schemeBeamAlbedo, for the voxel's density and ramp). What it misses (negative where it returns too
+    // g 0.85: schemeBeamAlbedo, on the snow beneath the patch). What it misses (negative where it returns too
     // much) leaves too: an absorbing ball's shadowed side, lit by the sky alone, was 5-9 % too dark, its sunward
     // face 5-8 % too bright (docs/bake.md, Accuracy).
     const double diffuseMissed = sphericalAlbedo(ch.g, y) - ch.diffuseAlbedo();
@@ -739,8 +749,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         glm::dvec3 r1 = -sky * escape1;
         // The half-space of the snow beneath the patch: a voxel's resistance and the node's below the surface
         // (schemeBeamAlbedo's d, L). A smooth surface's fringe voxel holds less snow where the surface crosses it
-        // (antialiasing), its ramp: the snow's own density for d, not the fringe's (ball_grey 12.6 % with the
-        // fringe's for the top voxel, 11.5 % so).
+        // (antialiasing), its ramp: the snow's own density for d, not the fringe's (with the fringe's ball_grey
+        // was 12.6 % where it is 11.5 %, docs/bake.md).
         const double voxelR = 3.0 * h * ch.sigmaTr(densityBeneath(topo, i, n)), nodeR = 3.0 * ch.sigmaTr(patchRampMass(topo, i));
         for (std::size_t s = 0; s < light.beams.size(); ++s) {
             const double P = sys.sunIn[s][i] * beamShare(s);
@@ -748,11 +758,10 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
             const double mu0 = std::clamp(-glm::dot(d, n), 0.05, 1.0);
             const SunLobe lobe = sunLobe(ch.g, mu0, y);
-            const glm::dvec3 along = d - glm::dot(d, n) * n;
-            const glm::dvec3 t = glm::length(along) > 1e-9 ? glm::normalize(along) : glm::dvec3(0.0);
+            glm::dvec3 t = d - glm::dot(d, n) * n;
+            t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
             const double returned = P * lobe.albedo;
-            const double across = std::abs(along.x) + std::abs(along.y) + std::abs(along.z);  // as through side faces
-            missed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, across));
+            missed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, acrossSnowFaces(topo, i, -d, h)));
             if (!peak) {
                 r0 += returned * (lobe.a - 3.0 / 7.0);
                 r1 += returned * (lobe.b * n + lobe.c * t - escape1);
