@@ -137,7 +137,7 @@ struct Channel {
     double reducedAlbedo() const { return omega * (1.0 - g) / (1.0 - omega * g); }
     double beta() const { return std::sqrt((1.0 - omega) / (3.0 * (1.0 - omega * g))); }  // kappa D
     // What a half-space returns of diffuse light by this diffusion (Marshak's condition, extrapolation 2D):
-    // (1 - 2 kappa D) / (1 + 2 kappa D).
+    // (1 - 2 kappa D) / (1 + 2 kappa D). The voxel scheme returns it so to four digits (its links are exact).
     double diffuseAlbedo() const { return (1.0 - 2.0 * beta()) / (1.0 + 2.0 * beta()); }
 };
 
@@ -466,6 +466,30 @@ struct BoundaryLink {
     double diffuseReturned() const { return (sh - 2.0 * beta * ch) / delta; }
 };
 
+// Where a beam entering at cosine mu scatters within a stretch L (resistance) above the node: at mean resistance
+// 3 mu (reduced depth mu below the surface), cut at the node.
+double beamScatteringDepth(double mu, double L) { return 3.0 * mu * (1.0 - std::exp(-L / (3.0 * mu))); }
+
+// What the voxel scheme (assemble) returns of a beam entering a half-space of uniform snow through a flat grid face,
+// per W entering: its closed form, exact as its links are (a source at a node R below the boundary, in resistance,
+// escapes exp(-beta R) / (1 + 2 beta)). The beam arrives at cosine mu0 and `across` (its cosines to the face's
+// other axes) through the top voxel's side faces; voxels are d thick, the top node L below the boundary (both
+// resistance). The top voxel scatters what its bottom face does not pass, the share entering through the surface
+// at its mean depth (toNode, toBoundary), that through the sides at its node; voxel j below it, at L + j d,
+// scatters B0 q^(j - 1/2) (1 - q) of it, a geometric series. On flat slabs of omega 0.98, g 0.85 and omega 0.9,
+// g 0.6 overhead it gives 0.387 and 0.266 where the solve returned 0.387 and 0.267 (1D diffusion 0.393, 0.281).
+double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, double across) {
+    const double beta = std::max(ch.beta(), 1e-9);
+    const BoundaryLink top(beta, 2.0, L);
+    const auto escaping = [&](double R) { return std::exp(-beta * R) / (1.0 + 2.0 * beta); };
+    const double B0 = std::exp(-L / (3.0 * mu0)), halfPass = std::exp(-d / (6.0 * mu0));  // beam at the top node; sqrt(q)
+    const double R = beamScatteringDepth(mu0, L), side = across * B0;
+    const double topReturn = (mu0 * (top.toBoundary(R) + top.toNode(R) * escaping(L)) + side * escaping(L)) / (mu0 + side);
+    // (1 - q) / (1 - q exp(-beta d)), q = exp(-d / (3 mu0)), exact where the snow is thin
+    const double series = std::expm1(-d / (3.0 * mu0)) / std::expm1(-d / (3.0 * mu0) - beta * d);
+    return ch.reducedAlbedo() * ((1.0 - B0 * halfPass) * topReturn + B0 * halfPass * series * escaping(L + d));
+}
+
 ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, int c,
                        const SubProgress &progress, ChannelStorage storage) {
     const Medium &medium = *scene.medium;
@@ -576,14 +600,13 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 for (int f = 0; f < 6; ++f)
                     if (flow[f] > 0.0) source += scattered * flow[f];
                 if (patchIn <= 0.0) continue;
-                // Into a surface voxel through its air faces: the beam scatters at mean resistance 3 mu
-                // (reduced depth mu below the surface), cut at the node; what scatters above the node
-                // partly escapes at once.
+                // Into a surface voxel through its air faces: the beam scatters at its mean depth
+                // (beamScatteringDepth); what scatters above the node partly escapes at once.
                 sys.sunIn[s].surface(i) += patchIn;
                 for (int f = 0; f < 6; ++f) {
                     if (entering[f] <= 0.0) continue;
                     const double P = scattered * entering[f], L = boundary[f]->L;
-                    const double R = 3.0 * muIn[f] * (1.0 - std::exp(-L / (3.0 * muIn[f])));
+                    const double R = beamScatteringDepth(muIn[f], L);
                     source += boundary[f]->toNode(R) * P;
                     sys.escaped.surface(i) += boundary[f]->toBoundary(R) * P;
                 }
@@ -677,6 +700,33 @@ std::pair<T, double> neighbourhoodOutflow(const SnowTopology &topo, std::size_t 
     return {leaving, area};
 }
 
+// kg/m^2 of snow from surface voxel i's centre out through its patch: its air faces' ramps by their shares.
+double patchRampMass(const SnowTopology &topo, std::size_t i) {
+    double mass = 0.0;
+    for (int f = 0; f < 6; ++f)
+        if (topo.patches[i].share[f] > 0.0f)
+            mass += topo.patches[i].share[f] * topo.faces[SnowTopology::faceIndex(topo.link[i][f])].rampMass;
+    return mass;
+}
+
+// The density of the snow beneath surface voxel i's patch: its neighbour against the normal's largest component
+// (its own where that is no snow).
+double densityBeneath(const SnowTopology &topo, std::size_t i, const glm::dvec3 &n) {
+    const int axis = std::abs(n.x) >= std::max(std::abs(n.y), std::abs(n.z)) ? 0 : std::abs(n.y) >= std::abs(n.z) ? 1 : 2;
+    const std::int32_t link = topo.link[i][2 * axis + (n[axis] > 0.0 ? 0 : 1)];
+    return SnowTopology::isFace(link) ? topo.density[i] : topo.density[std::size_t(link)];
+}
+
+// The beam towards w entering surface voxel i through its faces shared with snow, per W/m^2 at its node and m^2 of
+// its patch (schemeBeamAlbedo's `across`: on a flat grid face the cosines to the other axes; a staircase's steps
+// let less in so, the voxel's other air faces none).
+double acrossSnowFaces(const SnowTopology &topo, std::size_t i, const glm::dvec3 &w, double h) {
+    double across = 0.0;
+    for (int f = 0; f < 6; ++f)
+        if (!SnowTopology::isFace(topo.link[i][f])) across += std::max(0.0, glm::dot(faceNormal(f), w));
+    return across * h * h / topo.patches[i].area;
+}
+
 // Channel c's light leaving each surface voxel, from its solve.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
                   const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
@@ -684,16 +734,20 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
     const double y = absorptionParameter(ch.omega, ch.g);
-    // The diffusion returns less diffuse light than a half-space of this snow does where the snow absorbs (the
-    // spherical albedo, by the sun lobe's Monte Carlo table: 0.447 against Marshak's 0.429 at omega 0.98, g 0.85;
-    // 0.330 against 0.300 at omega 0.9, g 0.6): the difference, times the diffuse light arriving, leaves too
-    // (an absorbing ball's shadowed side, lit by the sky alone, was 5-9 % too dark: docs/bake.md, Accuracy).
+    // Where the snow absorbs, the diffusion returns other amounts than a half-space of this snow does (the sun
+    // lobe's Monte Carlo table): of diffuse light less (the spherical albedo 0.447 against Marshak's 0.429 at
+    // omega 0.98, g 0.85; 0.330 against 0.300 at omega 0.9, g 0.6), of a beam more at steep incidence and less at
+    // grazing (the voxel scheme's 0.387 against 0.353 at mu0 1, 0.505 against 0.571 at mu0 0.3, omega 0.98,
+    // g 0.85: schemeBeamAlbedo, on the snow beneath the patch). What it misses (negative where it returns too
+    // much) leaves too: an absorbing ball's shadowed side, lit by the sky alone, was 5-9 % too dark, its sunward
+    // face 5-8 % too bright (docs/bake.md, Accuracy).
     const double diffuseMissed = sphericalAlbedo(ch.g, y) - ch.diffuseAlbedo();
+    const double h = medium.voxelSize();
     // Sun light that entered returns as a half-space of this snow returns it, with the sun lobe's albedo and
     // shape; sky light isotropically (a non-absorbing half-space returns uniform sky light so; absorption takes
     // the escape function's shape from it, by reciprocity with ART's plane albedo). What the diffusion says
     // beyond that (absorbed sky light, light gone elsewhere, light from deep inside, from the ground or from
-    // neighbouring snow) and the diffuse light it misses take the escape function's u(mu) = 3/7 + 6/7 mu. So:
+    // neighbouring snow) and what it misses take the escape function's u(mu) = 3/7 + 6/7 mu. So:
     // leaving = sum returned (shape - u) + (out + missed) u. The returned part (W, moments of a linear form)
     // through a surface of normal n taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's; with
     // `peak` (a smooth patch), the suns' light returned sharply forwards leaves as the peaked lobe instead
@@ -703,8 +757,13 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                                SurfaceLight *peak) {
         const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
         const double sky = skyShare * sys.skyIn[i];
-        double r0 = sky * (1.0 - (1.0 - diffuseMissed) * 3.0 / 7.0);
-        glm::dvec3 r1 = -sky * (1.0 - diffuseMissed) * escape1;
+        double r0 = sky * (1.0 - 3.0 / 7.0), missed = sky * diffuseMissed;  // W
+        glm::dvec3 r1 = -sky * escape1;
+        // The half-space of the snow beneath the patch: a voxel's resistance and the node's below the surface
+        // (schemeBeamAlbedo's d, L). A smooth surface's fringe voxel holds less snow where the surface crosses it
+        // (antialiasing), its ramp: the snow's own density for d, not the fringe's (with the fringe's ball_grey
+        // was 12.6 % where it is 11.5 %, docs/bake.md).
+        const double voxelR = 3.0 * h * ch.sigmaTr(densityBeneath(topo, i, n)), nodeR = 3.0 * ch.sigmaTr(patchRampMass(topo, i));
         for (std::size_t s = 0; s < light.beams.size(); ++s) {
             const double P = sys.sunIn[s][i] * beamShare(s);
             if (P <= 0.0) continue;
@@ -714,6 +773,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             glm::dvec3 t = d - glm::dot(d, n) * n;
             t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
             const double returned = P * lobe.albedo;
+            missed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, acrossSnowFaces(topo, i, -d, h)));
             if (!peak) {
                 r0 += returned * (lobe.a - 3.0 / 7.0);
                 r1 += returned * (lobe.b * n + lobe.c * t - escape1);
@@ -727,7 +787,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             peak->peak0[c] += float(p0);
             peak->peak1 += glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part
         }
-        return std::pair{r0, r1};
+        return std::pair{r0 + missed * 3.0 / 7.0, r1 + missed * escape1};
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -764,7 +824,6 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // Sharp edges: each air face's own exit radiance (the light returned through it, the exitance of the
     // surface voxels facing its way, other edge voxels left out as in surfaceRadiance), and the one lobe
     // fitted to what cameras see of them (edgeLobe).
-    const double h = medium.voxelSize();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         std::vector<FaceExit> faces;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
