@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/transport/traced_source.h"
+#include "firn/util/color.h"
 #include "firn/util/sampling.h"
 
 namespace firn {
@@ -51,8 +52,6 @@ std::array<Face, 6> boxFaces(const glm::dvec3 &lo, const glm::dvec3 &hi) {
     return out;
 }
 
-double mean(const Rgb &c) { return (c.x + c.y + c.z) / 3.0; }
-
 // Photons entering the medium's bounding box through its faces: each sun's beam, and all other light arriving
 // there. Their power is per photon of one: the sums are divided by the photons' number at the end.
 class BoxEmitter {
@@ -67,12 +66,12 @@ class BoxEmitter {
         // Shares by the power each brings in: a sun's irradiance over the box's cross-section, the sky's mean
         // radiance over pi times its area (the occluders' reflections not known yet: kDiffuseShare at least).
         std::vector<double> power;
-        for (const SunLight &sun : scene.suns) power.push_back(mean(sun.irradiance) * crossSection(-sun.direction));
+        for (const SunLight &sun : scene.suns) power.push_back(channelMean(sun.irradiance) * crossSection(-sun.direction));
         double sky = 0.0;
         constexpr int kSkyDirections = 256;
         for (int i = 0; i < kSkyDirections; ++i) {  // a Fibonacci sphere
             const double z = 1.0 - (2.0 * i + 1.0) / kSkyDirections, r = std::sqrt(1.0 - z * z), phi = 2.399963229728653 * i;
-            sky += mean(scene.sky.radianceFrom(glm::dvec3(r * std::cos(phi), r * std::sin(phi), z))) / kSkyDirections;
+            sky += channelMean(scene.sky.radianceFrom(glm::dvec3(r * std::cos(phi), r * std::sin(phi), z))) / kSkyDirections;
         }
         double total = kPi * totalArea_ * sky;
         for (double p : power) total += p;

@@ -7,6 +7,7 @@
 #include <glm/geometric.hpp>
 
 #include "firn/util/cholesky.h"
+#include "firn/util/color.h"
 #include "firn/util/sampling.h"
 
 namespace firn {
@@ -71,7 +72,7 @@ DirectionFit fitAtK(const SourceEstimate &S, const SourceDirections &directions,
 
 // The grey radiance a source's two lobes show towards w (source_lobe.h).
 double greyRadiance(const Source &S, const glm::dvec3 &w) {
-    const double peakMean = (S.peak0.x + S.peak0.y + S.peak0.z) / 3.0;
+    const double peakMean = channelMean(S.peak0);
     double sum = 0.0;
     for (int c = 0; c < 3; ++c)
         sum += lobeRadiance(S.l0[c], glm::dvec3(S.l1[c]), w) + peakRadiance(S.peak0[c], peakMean, glm::dvec3(S.peak1), w);
@@ -96,7 +97,7 @@ void capBroad(BroadLobe &S) {
 // broad one.
 Source tracedSourceByMoments(const SourceEstimate &S, double g) {
     Source out;
-    const double a0 = (S.l0.x + S.l0.y + S.l0.z) / 3.0;
+    const double a0 = channelMean(S.l0);
     const glm::dvec3 first = (S.l1[0] + S.l1[1] + S.l1[2]) / 9.0, beamFirst = S.beamL1[0] + S.beamL1[1] + S.beamL1[2];
     const glm::dvec3 m = glm::length(beamFirst) > 0.0 ? glm::normalize(beamFirst) : glm::dvec3(0.0);
     const double a1 = glm::dot(first, m);  // a0 k along m
@@ -120,7 +121,7 @@ Source tracedSourceByMoments(const SourceEstimate &S, double g) {
     out.l0 = glm::vec3(S.l0 - S.beamL0);
     out.l1 = glm::mat3(S.l1 - S.beamL1);
     const glm::dvec3 peak = S.beamL0;
-    const double peakMean = (peak.x + peak.y + peak.z) / 3.0;
+    const double peakMean = channelMean(peak);
     if (peakMean > 0.0 && g > 0.0)
         out.addPeak(peak, glm::length(beamFirst) / (9.0 * g * peakMean) * crossingAnisotropy(g), m);
     else
@@ -132,7 +133,7 @@ Source tracedSourceByMoments(const SourceEstimate &S, double g) {
 std::optional<Source> fitByDirection(const SourceEstimate &S, const SourceDirections &directions,
                                     const DirectionWeights &visibility, const glm::dvec3 &m, double g,
                                     const Source &moments) {
-    const double a0 = (S.l0.x + S.l0.y + S.l0.z) / 3.0;
+    const double a0 = channelMean(S.l0);
     if (!(a0 > 0.0)) return std::nullopt;
     DirectionWeights weights;  // in units of a0 (the system's size independent of the light's)
     for (int j = 0; j < kSourceDirections; ++j) {
