@@ -1538,19 +1538,24 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
             if (!light.snowRays[i] && !(occluders && topo.patches[i].isSurface())) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
             glm::dvec3 sum(0.0);
-            Rng rng(seed ^ 0x0CC1ull, i);  // for the occluders' reflections
+            // Of the rays meeting an occluder across the air, one drawn at random stands for all of them (its
+            // reflection times their count): the car's patches meet the body and the ground by the million.
+            Rng rng(seed ^ 0x0CC1ull, i);
+            std::optional<std::pair<glm::dvec3, RayCaster::Hit>> drawn;
+            int meeting = 0;
             for (int k = 0; k < rays.count(); ++k) {
                 const bool snow = light.snowRays[i] >> k & 1;
                 if (!snow && !occluders) continue;
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 if (!snow) {
-                    if (hit) sum += occluderLitFromBelow(scene, marcher, baked, p, w, *hit, rng);
+                    if (hit && rng.uniform() * ++meeting < 1.0) drawn.emplace(w, *hit);  // reservoir of one
                     continue;
                 }
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
                 sum += bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
             }
+            if (drawn) sum += double(meeting) * occluderLitFromBelow(scene, marcher, baked, p, drawn->first, drawn->second, rng);
             out.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
         }
     });
