@@ -79,8 +79,9 @@ def main():
             firncore.bake(path, case.optics, quality=args.quality, **light)
             baked = firncore.render_baked(path, case.optics, origins, directions)
             result[name] = (reference[:, 1], error[:, 1], baked[:, 1])
-    print(f"{case.name} ({case.voxel * 100:g} cm voxels, {args.quality}): radiance leaving the surface at psi degrees from the sunward pole (90: terminator), channel G;"
-          f" reference +- its standard error, baked, baked / reference - 1")
+    print(f"{case.name} ({case.voxel * 100:g} cm voxels, {args.quality}): radiance leaving the surface at psi degrees "
+          f"from the sunward pole (90: terminator), channel G; reference +- its standard error, baked, "
+          f"baked / reference - 1")
     print(f"{'psi':>5} {'exit':>23} {'mu':>5} | {'sun ref':>15} {'baked':>8} {'err':>6} | {'sky ref':>15} {'baked':>8} "
           f"{'err':>6} | {'both err':>8}")
     for i, (psi, exit_name, mu) in enumerate(labels):

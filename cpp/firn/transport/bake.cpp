@@ -651,7 +651,7 @@ struct SurfaceLight {
 // 3^3 block (weighted by the cosine between their normals and its own), in its tangent plane.
 glm::dvec3 surfaceGradient(const SnowTopology &topo, const std::vector<double> &phi, std::size_t i, double h) {
     const glm::dvec3 n = topo.patches[i].normal;
-    const glm::dvec3 u = glm::normalize(std::abs(n.x) < 0.9 ? glm::cross(n, glm::dvec3(1, 0, 0)) : glm::cross(n, glm::dvec3(0, 1, 0)));
+    const glm::dvec3 u = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
     const glm::dvec3 v = glm::cross(n, u);
     double a = 0.0, b = 0.0, c = 0.0, ru = 0.0, rv = 0.0;
     for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
@@ -844,7 +844,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             glm::dvec3 drift(0.0);
             if (!patch.sharp && phi[i] > 0.0) {
                 const glm::dvec3 g = surfaceGradient(topo, phi, i, h);
-                drift = -(g - glm::dot(g, patch.normal) * patch.normal) / (ch.sigmaTr(densityBeneath(topo, i, patch.normal)) * phi[i]);
+                const double sigmaTr = ch.sigmaTr(densityBeneath(topo, i, patch.normal));
+                drift = -(g - glm::dot(g, patch.normal) * patch.normal) / (sigmaTr * phi[i]);
                 const double length = glm::length(drift);
                 if (length > 3.0 / 7.0) drift *= 3.0 / 7.0 / length;
             }
