@@ -234,8 +234,9 @@ class TracedIndex {
 // inside across the sun with the diffusion. Traced whole they are light traced (light_tracing.h: paths shared by
 // the voxels): gathered per voxel, the backward tail of g 0.9 snow's source is too noisy to fit (1024 paths per
 // voxel 13.1 %, bias -9.5 %; 8192 paths 8.6 %, -4.6 %, at 29 processor s), light traced 7.2 %, bias -2.3 % at
-// 5.4 processor s (docs/bake.md, Accuracy). Where light tracing is not used (occluders, lamps, over its budget)
-// they are diffused as before.
+// 5.4 processor s (docs/bake.md, Accuracy), within a quarter of the budget (kWholePieceTracedSteps) 7.8 %, -2.7 %
+// at 1.4 (a tenth: 8.7 %, -4.2 %). Where light tracing is not used (occluders, lamps, over that budget) they are
+// diffused as before.
 constexpr double kTracedOpticalDepth = 1.5, kThickReducedDepth = 2.0;
 constexpr int kSmallPieceVoxels = 343;  // 7^3
 constexpr double kMaxTracedPieceReducedVolume = 64.0;
@@ -331,6 +332,7 @@ TracedSnow thinVoxels(const Medium &medium) {
 // thick snow (thousands of steps per path) took 0.84 -> 2.94 processor s at kShortTracedSteps, for three voxels.
 constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 processor seconds
 constexpr double kCheapTracedSteps = 2e7;                       // about 1.2 processor seconds
+constexpr double kWholePieceTracedSteps = kMaxTracedSteps / 4.0;  // transport-thin pieces, light traced whole (thinVoxels)
 constexpr double kShortPathSteps = 1000.0, kShortTracedSteps = 8e7;  // about 5 processor seconds
 int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
@@ -396,9 +398,9 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 // (light_tracing.h); none where even that costs too much (a cloud of lumps inside thick snow: photons
 // scatter thousands of times there), or with lamps (their emission is not sampled) or occluders (planLightTracing).
 MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
-                                   const SubProgress &progress, BakeStats &stats) {
+                                   const SubProgress &progress, BakeStats &stats, double budget = kMaxTracedSteps) {
     const MonteCarloReference reference(scene);
-    const LightTracingPlan plan = planLightTracing(reference, voxels, kMaxTracedSteps, seed);
+    const LightTracingPlan plan = planLightTracing(reference, voxels, budget, seed);
     if (plan.photons == 0) return MonteCarloVoxels{};
     const std::vector<SourceEstimate> estimates = lightTracedSources(reference, voxels, plan, seed, progress);
     stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size(), stats.lightTracingBytes = plan.sumsBytes;
@@ -1728,7 +1730,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 if (!snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole, else as before
                     std::vector<openvdb::Coord> whole = thin;
                     whole.insert(whole.end(), snow.wholePieces.begin(), snow.wholePieces.end());
-                    traced = lightTraceSources(scene, whole, settings.seed ^ 0x7EACEull, progress, local);
+                    traced = lightTraceSources(scene, whole, settings.seed ^ 0x7EACEull, progress, local, kWholePieceTracedSteps);
                     if (!traced.source.empty()) thin = std::move(whole);
                 }
                 if (traced.source.empty()) {
