@@ -19,8 +19,10 @@ namespace firn {
 namespace {
 
 constexpr double kMinTransmittance = 1e-5;  // beams fainter than this are dropped
-// The occluders' reflection cache's cell edge, in voxels: 2 (4 cm on the car) holds ~20 sky rays' hits per cell.
-constexpr double kOccluderCellVoxels = 2.0;
+// The occluders' reflection cache's cell edge, in voxels. On the car (docs/bake.md, Performance) 1.1 M sky rays meet
+// an occluder: 2 voxels gave 165,927 cells, 4 (8 cm) 75,598, 8 38,924; the suite's bumpy_plate read main's figures
+// with 2 and 4, its bias 0.3 points further with 8.
+constexpr double kOccluderCellVoxels = 4.0;
 
 glm::dvec3 extinction(const VolumeOptics &optics, Crossing crossing) {
     return crossing == Crossing::Beam ? reducedExtinctionPerDensity(optics) : glm::dvec3(optics.extinctionPerDensity);
