@@ -4,13 +4,11 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <optional>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "firn/transport/occluder_radiance.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
 
@@ -19,39 +17,66 @@ namespace firn {
 namespace {
 
 constexpr double kMinTransmittance = 1e-5;  // beams fainter than this are dropped
-// The occluders' reflection cache's cell edge, in voxels. On the car (docs/bake.md, Performance) 1.1 M sky rays meet
-// an occluder: 2 voxels gave 165,927 cells, 4 (8 cm) 75,598, 8 38,924; the suite's bumpy_plate read main's figures
-// with 2 and 4, its bias 0.3 points further with 8.
-constexpr double kOccluderCellVoxels = 4.0;
+
+// Mass column (kg/m^2) beyond which every channel's reduced transmittance is below kMinTransmittance.
+double columnLimit(const glm::dvec3 &reduced) {
+    return std::log(1.0 / kMinTransmittance) / std::max(1e-12, std::min({reduced.x, reduced.y, reduced.z}));
+}
+
+// exp(-extinction column) per channel; exactly 1 without the exponentials where no snow is crossed (most sky rays).
+glm::dvec3 transmittance(const glm::dvec3 &extinction, double column) {
+    return column > 0.0 ? glm::exp(-extinction * column) : glm::dvec3(1.0);
+}
 
 glm::dvec3 extinction(const VolumeOptics &optics, Crossing crossing) {
     return crossing == Crossing::Beam ? reducedExtinctionPerDensity(optics) : glm::dvec3(optics.extinctionPerDensity);
 }
 
+// Radiance (W/m^2/sr) an occluder sends from point q (unit normal n facing the viewer) after one
+// reflection of sun and sky light, each estimated with one ray.
+glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
+                               Rng &rng, Medium::ColumnMarcher &marcher) {
+    const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
+    const double limit = columnLimit(reduced);
+    const glm::dvec3 p = q + 1e-5 * n;
+    glm::dvec3 irradiance(0.0);
+    for (std::size_t b = 0; b < beamCount(scene); ++b) {
+        const double cosine = glm::dot(n, towardsBeam(scene, b, p));
+        if (cosine > 0.0) irradiance += cosine * glm::dvec3(beamAt(scene, b, p, 1, 0, 0, marcher).irradiance);
+    }
+    const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
+    if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
+        const double column = marcher.column(p, w, std::numeric_limits<double>::infinity(), limit);
+        if (column < limit) irradiance += kPi * scene.sky.radianceFrom(w) * transmittance(reduced, column);
+    }
+    return albedo * irradiance / kPi;
+}
+
 // Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
-// occluders in the way send what they reflect once (`reflected`; none when null).
-glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
-                          const OccluderRadiance *reflected, Crossing crossing, std::uint64_t seed, std::uint64_t stream,
-                          Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr) {
+// occluders in the way send what they reflect once (when `bounce`).
+glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays, bool bounce,
+                          Crossing crossing, std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher,
+                          std::uint64_t *snowRays = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
+    Rng rng(seed ^ 0xB0B0ull, stream);  // for the occluders' reflections
     glm::dvec3 sum(0.0);
     std::uint64_t hidden = 0;
     for (int k = 0; k < rays.count(); ++k) {
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
         const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
-        if (hit && !reflected && !snowRays) continue;  // brings nothing, and no one asks whether snow lies along it
+        if (hit && !bounce && !snowRays) continue;  // brings nothing, and no one asks whether snow lies along it
         const double column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
         if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
         if (column >= limit) continue;
         glm::dvec3 radiance;
         if (!hit) {
             radiance = scene.sky.radianceFrom(w);
-        } else if (reflected) {
+        } else if (bounce) {
             const glm::dvec3 normal(hit->normal);
-            radiance = reflected->at(p + double(hit->distance) * w, hit->triangle, glm::dot(normal, w) < 0.0 ? normal : -normal,
-                                     marcher);
+            radiance = reflectedByOccluder(scene, p + double(hit->distance) * w, glm::dot(normal, w) < 0.0 ? normal : -normal,
+                                           scene.occluders->albedo(hit->triangle), rng, marcher);
         } else {
             continue;
         }
@@ -118,14 +143,6 @@ void parallelChunks(std::size_t n, const SubProgress &progress, const Body &body
 }
 
 }  // namespace
-
-double columnLimit(const glm::dvec3 &reduced) {
-    return std::log(1.0 / kMinTransmittance) / std::max(1e-12, std::min({reduced.x, reduced.y, reduced.z}));
-}
-
-glm::dvec3 transmittance(const glm::dvec3 &extinction, double column) {
-    return column > 0.0 ? glm::exp(-extinction * column) : glm::dvec3(1.0);
-}
 
 glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics) {
     return optics.extinctionPerDensity * (glm::dvec3(1.0) - optics.albedo * optics.g);
@@ -274,10 +291,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     light.snowRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
     const SkyRays rays(settings.skySamples);
     light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
-    // The occluders' reflections cached per cell of kOccluderCellVoxels voxels, with as many sky rays as a patch.
-    std::optional<OccluderRadiance> reflected;
-    if (!scene.occluders->empty())
-        reflected.emplace(scene, kOccluderCellVoxels * medium.voxelSize(), settings.skySamples, settings.seed ^ 0xB0B0ull);
+    const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
     const std::uint64_t seed = settings.seed ^ 0x5C1Eull;
     parallelChunks(topo.size(), progress, [&](const auto &range) {
@@ -285,7 +299,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         Medium::Accessor density = medium.accessor();
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
-                light.skyOnSurface.surface(i) = skyIrradianceAt(scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, reflected ? &*reflected : nullptr,
+                light.skyOnSurface.surface(i) = skyIrradianceAt(scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
                                                                 Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i));
     });
     if (settings.skyOverNeighbours) averageOverNeighbours(topo, light.skyOnSurface);
@@ -301,7 +315,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             const glm::dvec3 up = glm::dot(normal, n) > 0.0 ? -normal : normal;  // towards the snow
             const glm::dvec3 ground = medium.voxelCentre(topo.coord[face.voxel]) + double(face.distance) * n;
             if (marcher.column(ground, up, std::numeric_limits<double>::infinity(), limit) >= limit) continue;
-            light.skyUnderSnow[f] = skyIrradianceAt(scene, ground, up, rays, nullptr, Crossing::Beam, seed,
+            light.skyUnderSnow[f] = skyIrradianceAt(scene, ground, up, rays, false, Crossing::Beam, seed,
                                                     topo.size() + f, marcher);
         }
     });

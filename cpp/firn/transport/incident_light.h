@@ -65,12 +65,6 @@ void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3
 // the caller's (one per thread; an accessor made per call started each lookup from the tree's root).
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i, Medium::Accessor &density);
 
-// Mass column (kg/m^2) beyond which every channel's transmittance with extinction `reduced` (m^2/kg) is below 1e-5:
-// beams are dropped there.
-double columnLimit(const glm::dvec3 &reduced);
-// exp(-extinction column) per channel; exactly 1 without the exponentials where no snow is crossed (most sky rays).
-glm::dvec3 transmittance(const glm::dvec3 &extinction, double column);
-
 // Reduced extinction per unit density, per channel: k (1 - omega g) (m^2/kg).
 glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
 
