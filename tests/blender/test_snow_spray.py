@@ -183,6 +183,29 @@ def test_a_spray_saved_before_it_followed_its_snow_layer_follows_it_at_the_next_
     np.testing.assert_allclose(lumps.max(0), expected.max(0), atol=VOXEL)
 
 
+def test_a_spray_stays_where_it_is_drawn_when_its_snow_layer_is_deleted(clean_scene):
+    """The spray and its tracks are drawn in the snow layer's space: the viewport's Delete (X) of a moved layer
+    (Blender keeps the children and drops the parent's transform) left them at the origin (review finding); they
+    stay where they were drawn, and Bake Sequence says the layer is gone. The layer is hidden while its spray plays,
+    so the user deletes it from the Outliner (or a script does): the object removed, its children kept."""
+    snow = snow_on_plane()
+    emitter = ski()
+    spray = add_spray(snow, emitter)
+    tracks = bpy.data.objects[f"{snow.name} Tracks"]
+    snow.matrix_world = MOVE @ snow.matrix_world
+    _carried(MOVE, emitter)
+    assert bpy.ops.firn.bake_sequence(light=False) == {"FINISHED"}
+    bpy.context.view_layer.update()
+    drawn = [obj.matrix_world.copy() for obj in (spray, tracks)]
+    bpy.data.objects.remove(snow)
+    bpy.context.view_layer.update()
+    for obj, before in zip((spray, tracks), drawn):
+        assert obj.parent is None
+        assert np.allclose(np.array(obj.matrix_world), np.array(before), atol=1e-5)
+    with pytest.raises(RuntimeError, match="its snow layer or one of its emitters was deleted"):
+        bpy.ops.firn.bake_sequence(light=False)
+
+
 def test_a_scene_without_obstacles_throws_snow(clean_scene):
     """No rendered mesh but the ski (the ground hidden from renders): the core gets no obstacles (review finding:
     Add Snow Spray failed unpacking them)."""

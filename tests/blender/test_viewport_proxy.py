@@ -72,6 +72,30 @@ def test_proxy_lies_where_the_density_ends(clean_scene, metres):
     assert points[:, 2].max() == pytest.approx(top, abs=0.02)  # the top of 10 cm of snow, in metres
 
 
+def _delete_as_a_user_does(obj):
+    """The viewport's Delete (X): Blender keeps the children and drops the parent's transform from them."""
+    select_only(obj)
+    assert bpy.ops.object.delete() == {"FINISHED"}
+    bpy.context.view_layer.update()
+
+
+def test_the_proxy_and_surface_mesh_stay_where_they_are_drawn_when_the_snow_is_deleted(clean_scene):
+    """Children in the snow's space kept an identity transform: with the snow deleted, a scene in centimetres drew
+    them 100 times too small at the origin (review finding)."""
+    metres = 0.01  # Unit Scale: the snow's transform is a scale of 100
+    clean_scene.unit_settings.scale_length = metres
+    select_only(add_plane(size=2.0 / metres))
+    assert bpy.ops.firn.add_snow_layer(depth=0.1 / metres, spacing=0.05 / metres, surface_mesh=True) == {"FINISHED"}
+    snow = bpy.context.object
+    bpy.context.view_layer.update()
+    children = [snow_proxy.proxy_of(snow), bpy.data.objects[f"{snow.name} Surface"]]
+    drawn = [world_metres(child, metres) for child in children]
+    _delete_as_a_user_does(snow)
+    for child, before in zip(children, drawn):
+        assert child.parent is None
+        np.testing.assert_allclose(world_metres(child, metres), before, atol=1e-5)
+
+
 def test_proxy_follows_regenerate_and_rebuild(clean_scene):
     _ground, snow = snow_on_plane()
     first = snow_proxy.proxy_of(snow)

@@ -10,7 +10,7 @@ import bpy
 import numpy as np
 from mathutils import Matrix, Vector
 
-from ..common import cache, preferences, scene_geometry
+from ..common import cache, placement, preferences, scene_geometry
 from ..common.modes import object_mode_poll
 from ..common.core import firncore
 from ..common.errors import UserError
@@ -265,7 +265,7 @@ def read_metaballs(holder, metres):
 def _store_surface_mesh(snow, surface):
     mesh = proxy.new_mesh(f"{snow.name} Surface", *surface)
     surface_object = bpy.data.objects.new(mesh.name, mesh)
-    surface_object.parent = snow
+    placement.follow(surface_object, snow)  # metres in the snow's space; it stays put if the snow is deleted
     surface_object.hide_render = True  # the volume renders the snow; the mesh is for the viewport and modelling
     for collection in snow.users_collection:
         collection.objects.link(surface_object)

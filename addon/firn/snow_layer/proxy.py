@@ -10,7 +10,7 @@ bounds: Blender then never uploads the dense 3-D texture for the viewport, and C
 import bpy
 import numpy as np
 
-from ..common import scene_geometry
+from ..common import placement, scene_geometry
 from ..common.core import firncore
 from ..material import nodes as materials, preview
 
@@ -81,7 +81,7 @@ def store_proxy(snow, arrays, metres):
     mesh = new_mesh(f"{snow.name} Proxy", vertices, triangles, smooth=True)
     proxy = bpy.data.objects.new(mesh.name, mesh)
     proxy.firn.is_proxy = True
-    proxy.parent = snow  # metres in the snow's space (identity parent inverse): where the volume is drawn
+    placement.follow(proxy, snow)  # metres in the snow's space: where the volume is drawn
     proxy.hide_select = True  # click the snow's bounds to select the snow
     for collection in snow.users_collection:
         collection.objects.link(proxy)

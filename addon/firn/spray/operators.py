@@ -10,11 +10,10 @@ with the optics of the snow they came from, so the Snow Material panel and its r
 import os
 
 import bpy
-from mathutils import Matrix
 
 from ..bake import operators as bake_operators, state as bake_state
 from ..bake.inputs import occluder_objects, world_request
-from ..common import cache, scene_geometry
+from ..common import cache, placement, scene_geometry
 from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
@@ -163,20 +162,12 @@ def sequence_objects(folder):
             and os.path.dirname(os.path.normpath(cache.volume_path(obj.data))) == os.path.normpath(folder)]
 
 
-def _follow(obj, snow):
-    """Makes `obj` a child of the snow layer in its space (identity parent inverse and local transform): its files
-    are in the snow's file space (snow_space.py), and it moves with the layer."""
-    obj.parent = snow
-    obj.matrix_parent_inverse = Matrix.Identity(4)
-    obj.matrix_basis = Matrix.Identity(4)
-
-
 def _new_sequence_object(context, name, role, snow, props, emitters, frames):
     """A Volume of Firn snow for a spray sequence, with the optics of the snow it came from and the settings it
-    was made with (Bake Sequence makes it again from them). A child of the snow layer, in its space (identity
-    parent inverse): its files are in the snow's file space (snow_space.py), and it moves with the layer."""
+    was made with (Bake Sequence makes it again from them). A child of the snow layer, drawn in its space: its files
+    are in the snow's file space (snow_space.py), it moves with the layer and stays put if the layer is deleted."""
     obj = new_snow_object(context, name)
-    _follow(obj, snow)
+    placement.follow(obj, snow)
     for setting in OPTICS_SETTINGS + ("render_mode",):
         setattr(obj.firn, setting, getattr(snow.firn, setting))
     obj.firn.voxel_size = snow.firn.voxel_size
@@ -318,9 +309,9 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
             if snow is None or None in emitters:
                 raise UserError(f"'{spray.name}': its snow layer or one of its emitters was deleted: Clear it and "
                                 "Add Snow Spray again")
-            for obj in (spray, _tracks_of(spray)):  # a spray saved before they followed their snow layer
-                if obj is not None and obj.parent is not snow:
-                    _follow(obj, snow)
+            for obj in (spray, _tracks_of(spray)):  # also a spray saved before they followed their snow layer
+                if obj is not None:
+                    placement.follow(obj, snow)  # where the layer stands now: they stay there if it is deleted
             simulated, lit = baked_frames(self, record)
             directory = os.path.dirname(cache.volume_path(spray.data))
             inputs = gather_inputs(context, record, snow, emitters, simulated, directory)

@@ -227,57 +227,86 @@ class TracedIndex {
 // stay with the diffusion: ball_forward traced whole was 19.7 % against 17.1 %). Connected through faces only,
 // 167 voxels of bits beside the car sample's snow counted as pieces and took 12 s to trace, and the lumps
 // of spray_lumps, touching at edges, made pieces of over 125 voxels.
+// Larger pieces that are thin in transport mean free paths (more than kSmallPieceVoxels voxels, but at most
+// kMaxTracedPieceReducedVolume summed over them in (sigma_tr h)^3: a ball of transport radius 2.5) have no
+// diffusion inside either: ball_forward (5 cm, voxels of optical depth 4, g 0.9, sigma_tr h 0.4: 33 of it, 672
+// voxels; the suite's next piece, ball_rgb, 660) read 22.7 % on the rays through its fringe alone and +/-20 %
+// inside across the sun with the diffusion. Traced whole they are light traced (light_tracing.h: paths shared by
+// the voxels): gathered per voxel, the backward tail of g 0.9 snow's source is too noisy to fit (1024 paths per
+// voxel 13.1 %, bias -9.5 %; 8192 paths 8.6 %, -4.6 %, at 29 processor s), light traced 7.2 %, bias -2.3 % at
+// 5.4 processor s (docs/bake.md, Accuracy), within a quarter of the budget (kWholePieceTracedSteps) 7.8 %, -2.7 %
+// at 1.4 (a tenth: 8.7 %, -4.2 %). Where light tracing is not used (occluders, lamps, over that budget) they are
+// diffused as before.
 constexpr double kTracedOpticalDepth = 1.5, kThickReducedDepth = 2.0;
 constexpr int kSmallPieceVoxels = 343;  // 7^3
+constexpr double kMaxTracedPieceReducedVolume = 64.0;
 // At most this many paths in all: beyond it, fewer per voxel (a bake must not grow into a hang).
 constexpr double kMaxTracedPaths = 2e7;
 
-// Whether the connected snow (26-neighbours of non-zero density) around `seed` holds at most `most` voxels; marks
-// what it visits in `done` (1: small, 2: large). A fill that meets a large piece's voxel stops: each voxel is
-// visited a bounded number of times, however large the snow.
-bool smallPiece(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb::Int32Tree> &done, const openvdb::Coord &seed, int most) {
+// What a piece of connected snow is (26-neighbours of non-zero density), as marked in thinVoxels' `done`.
+enum PieceKind : std::int32_t { kUnvisited = 0, kSmallPiece = 1, kLargePiece = 2, kTransportThinPiece = 3 };
+
+// The kind of the piece around `seed` (sigma_tr h = reducedPerDensity * density); marks what it visits in `done`.
+// A fill that meets a large piece's voxel stops, and so does one past both sizes: each voxel is visited a bounded
+// number of times, however large the snow.
+PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb::Int32Tree> &done,
+                      const openvdb::Coord &seed, double reducedPerDensity) {
+    const auto reducedVolume = [&](const openvdb::Coord &c) { return std::pow(reducedPerDensity * density.getValue(c), 3.0); };
     std::vector<openvdb::Coord> piece{seed}, stack{seed};
-    done.setValue(seed, 1);
-    bool small = true;
-    while (!stack.empty() && small) {
+    done.setValue(seed, kSmallPiece);  // visited by this fill
+    double reduced = reducedVolume(seed);
+    bool large = false;
+    while (!stack.empty() && !large) {
         const openvdb::Coord c = stack.back();
         stack.pop_back();
-        for (int i = 0; i < 27 && small; ++i) {
+        for (int i = 0; i < 27 && !large; ++i) {
             const openvdb::Coord n = c.offsetBy(i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1);
             if (i == 13 || !(density.getValue(n) > 0.0f)) continue;
             const std::int32_t mark = done.getValue(n);
-            if (mark == 2 || (mark == 0 && int(piece.size()) >= most)) small = false;
-            else if (mark == 0) done.setValue(n, 1), piece.push_back(n), stack.push_back(n);
+            if (mark == kLargePiece) large = true;
+            else if (mark == kUnvisited) {
+                done.setValue(n, kSmallPiece), piece.push_back(n), stack.push_back(n);
+                reduced += reducedVolume(n);
+                large = int(piece.size()) > kSmallPieceVoxels && reduced > kMaxTracedPieceReducedVolume;
+            }
         }
     }
-    if (!small)
-        for (const openvdb::Coord &c : piece) done.setValue(c, 2);
-    return small;
+    const PieceKind kind = large ? kLargePiece : int(piece.size()) <= kSmallPieceVoxels ? kSmallPiece : kTransportThinPiece;
+    if (kind != kSmallPiece)
+        for (const openvdb::Coord &c : piece) done.setValue(c, kind);
+    return kind;
 }
 
-std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
+// The voxels traced rather than diffused: `thin`, and the other voxels of transport-thin pieces (`wholePieces`:
+// traced too where light tracing takes them, bakeScattering).
+struct TracedSnow {
+    std::vector<openvdb::Coord> thin, wholePieces;
+};
+
+TracedSnow thinVoxels(const Medium &medium) {
     const VolumeOptics &optics = medium.optics();
     const double h = medium.voxelSize(), k = optics.extinctionPerDensity;
     const double leastReduced = 1.0 - std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z}) * optics.g;
     const float thinBelow = float(kTracedOpticalDepth / (k * h)), thickFrom = float(kThickReducedDepth / (leastReduced * k * h));
-    std::vector<openvdb::Coord> out;
+    TracedSnow out;
     Medium::Accessor density = medium.accessor();
-    openvdb::Int32Tree pieces(0);
+    openvdb::Int32Tree pieces(kUnvisited);
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> done(pieces);
     for (auto it = medium.density().cbeginValueOn(); it; ++it) {
         if (!(*it > 0.0f)) continue;
-        const std::int32_t mark = done.getValue(it.getCoord());
-        if (mark == 1 || (mark == 0 && smallPiece(density, done, it.getCoord(), kSmallPieceVoxels))) {
-            out.push_back(it.getCoord());
+        std::int32_t mark = done.getValue(it.getCoord());
+        if (mark == kUnvisited) mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h);
+        if (mark == kSmallPiece) {
+            out.thin.push_back(it.getCoord());
             continue;
         }
-        if (!(*it < thinBelow)) continue;
-        bool nearThick = false;
+        bool nearThick = !(*it < thinBelow);
         for (int dx = -1; dx <= 1 && !nearThick; ++dx)
             for (int dy = -1; dy <= 1 && !nearThick; ++dy)
                 for (int dz = -1; dz <= 1 && !nearThick; ++dz)
                     nearThick = density.getValue(it.getCoord().offsetBy(dx, dy, dz)) >= thickFrom;
-        if (!nearThick) out.push_back(it.getCoord());
+        if (!nearThick) out.thin.push_back(it.getCoord());
+        else if (mark == kTransportThinPiece) out.wholePieces.push_back(it.getCoord());
     }
     return out;
 }
@@ -303,6 +332,7 @@ std::vector<openvdb::Coord> thinVoxels(const Medium &medium) {
 // thick snow (thousands of steps per path) took 0.84 -> 2.94 processor s at kShortTracedSteps, for three voxels.
 constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 processor seconds
 constexpr double kCheapTracedSteps = 2e7;                       // about 1.2 processor seconds
+constexpr double kWholePieceTracedSteps = kMaxTracedSteps / 4.0;  // transport-thin pieces, light traced whole (thinVoxels)
 constexpr double kShortPathSteps = 1000.0, kShortTracedSteps = 8e7;  // about 5 processor seconds
 int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
@@ -368,9 +398,9 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 // (light_tracing.h); none where even that costs too much (a cloud of lumps inside thick snow: photons
 // scatter thousands of times there), or with lamps (their emission is not sampled) or occluders (planLightTracing).
 MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
-                                   const SubProgress &progress, BakeStats &stats) {
+                                   const SubProgress &progress, BakeStats &stats, double budget = kMaxTracedSteps) {
     const MonteCarloReference reference(scene);
-    const LightTracingPlan plan = planLightTracing(reference, voxels, kMaxTracedSteps, seed);
+    const LightTracingPlan plan = planLightTracing(reference, voxels, budget, seed);
     if (plan.photons == 0) return MonteCarloVoxels{};
     const std::vector<SourceEstimate> estimates = lightTracedSources(reference, voxels, plan, seed, progress);
     stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size(), stats.lightTracingBytes = plan.sumsBytes;
@@ -647,6 +677,27 @@ struct SurfaceLight {
     glm::vec3 leaving{0.0f};
 };
 
+// The fluence's gradient along surface voxel i's patch (per m): least squares over the surface voxels of its
+// 3^3 block (weighted by the cosine between their normals and its own), in its tangent plane.
+glm::dvec3 surfaceGradient(const SnowTopology &topo, const std::vector<double> &phi, std::size_t i, double h) {
+    const glm::dvec3 n = topo.patches[i].normal;
+    const glm::dvec3 u = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+    const glm::dvec3 v = glm::cross(n, u);
+    double a = 0.0, b = 0.0, c = 0.0, ru = 0.0, rv = 0.0;
+    for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
+        const std::uint32_t j = topo.neighbourhood[k];
+        const double w = std::max(0.0, glm::dot(n, topo.patches[j].normal));
+        if (j == i || w <= 0.0) continue;
+        const openvdb::Coord d = topo.coord[j] - topo.coord[i];
+        const glm::dvec3 step = h * glm::dvec3(d.x(), d.y(), d.z());
+        const double x = glm::dot(step, u), y = glm::dot(step, v), f = phi[j] - phi[i];
+        a += w * x * x, b += w * x * y, c += w * y * y, ru += w * x * f, rv += w * y * f;
+    }
+    const double det = a * c - b * b;
+    if (det <= 1e-12 * h * h * h * h) return glm::dvec3(0.0);
+    return ((c * ru - b * rv) * u + (a * rv - b * ru) * v) / det;
+}
+
 // The source function inside unknowns `range` (out[i - range.begin()], zero on entry) from the three channels'
 // fluence: S = omega / (4 pi) (phi + 3 g F . w), F = -D grad phi, plus the beams scattered once (the peaked
 // lobe). After the solves (during them it would take 48 bytes per unknown).
@@ -814,10 +865,24 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     crossing += l0, axis += l0 * d;
                 }
             }
+            // Light flowing along the surface leaves leaning the way it flows: the diffusion's radiance
+            // (phi + 3 F . w) / 4 pi holds the tangential flux F_t = -D grad_t phi, which the escape function (the
+            // flux across the surface) does not; added to the exit form relative to phi, 3 F_t / phi, it moves no
+            // exitance (t . w integrates to zero over the hemisphere). Past a ball's terminator the fluence falls
+            // away from the lit side, and on its sunward face away from the point under the sun (docs/bake.md,
+            // Accuracy: the terminator). At most 3/7, so the form stays positive at grazing exit.
+            glm::dvec3 drift(0.0);
+            if (!patch.sharp && phi[i] > 0.0) {
+                const glm::dvec3 g = surfaceGradient(topo, phi, i, h);
+                const double sigmaTr = ch.sigmaTr(densityBeneath(topo, i, patch.normal));
+                drift = -(g - glm::dot(g, patch.normal) * patch.normal) / (sigmaTr * phi[i]);
+                const double length = glm::length(drift);
+                if (length > 3.0 / 7.0) drift *= 3.0 / 7.0 / length;
+            }
             surface.crossing[c] = float(crossing);
             if (crossing > 0.0) surface.crossingAxis = glm::vec3(axis / crossing);
             surface.returned.l0[c] = float(r0);
-            surface.returned.l1[c] = glm::vec3(r1);
+            surface.returned.l1[c] = glm::vec3(r1 + leaving * drift);
             surface.leaving[c] = float(leaving);
         }
     });
@@ -1729,11 +1794,20 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         [&] {
             tracing = isolatedOnThisThread([&] {
                 const SubProgress progress = beside.step(1);
-                thin = thinVoxels(*scene.medium);
-                const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
-                traced = samples > 0 || thin.empty()
-                             ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, progress)
-                             : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
+                TracedSnow snow = thinVoxels(*scene.medium);
+                thin = std::move(snow.thin);
+                if (!snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole, else as before
+                    std::vector<openvdb::Coord> whole = thin;
+                    whole.insert(whole.end(), snow.wholePieces.begin(), snow.wholePieces.end());
+                    traced = lightTraceSources(scene, whole, settings.seed ^ 0x7EACEull, progress, local, kWholePieceTracedSteps);
+                    if (!traced.source.empty()) thin = std::move(whole);
+                }
+                if (traced.source.empty()) {
+                    const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
+                    traced = samples > 0 || thin.empty()
+                                 ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, progress)
+                                 : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
+                }
                 progress.report(1.0);  // none traced, or light traced (its fit does not report)
             });
         });
