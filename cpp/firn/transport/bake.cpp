@@ -1584,6 +1584,24 @@ glm::dvec3 occluderLitFromBelow(const Scene &scene, Medium::ColumnMarcher &march
     return glm::dvec3(scene.occluders->albedo(hit.triangle)) * arriving;
 }
 
+// The occluders' share of the snow's light sent back along patch i's sky rays that snow does not hide (W/m^2/sr
+// summed over those rays): one of them drawn at random stands for all (its light times their count), intersected
+// alone, for the car's patches meet the body and the ground by the million.
+glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher, BakedValuesSampler &baked,
+                                   const SnowTopology &topo, const SkyRays &rays, std::uint64_t hidden,
+                                   const glm::dvec3 &p, std::uint64_t seed, std::size_t i) {
+    const int open = rays.count() - __builtin_popcountll(hidden);
+    if (open == 0) return glm::dvec3(0.0);
+    Rng rng(seed ^ 0x0CC1ull, i);
+    int skip = std::min(int(rng.uniform() * open), open - 1);  // the drawn ray's rank among the open ones
+    int k = 0;
+    while (hidden >> k & 1 || skip-- > 0) ++k;
+    const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
+    const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+    if (!hit) return glm::dvec3(0.0);
+    return double(open) * occluderLitFromBelow(scene, marcher, baked, p, w, *hit, rng);
+}
+
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
 // of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch), read
 // from the bake's values as its grids would hold them; and along the sky rays that meet an occluder, the snow's
@@ -1603,24 +1621,15 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
             if (!light.snowRays[i] && !(occluders && topo.patches[i].isSurface())) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
             glm::dvec3 sum(0.0);
-            // Of the rays meeting an occluder across the air, one drawn at random stands for all of them (its
-            // reflection times their count): the car's patches meet the body and the ground by the million.
-            Rng rng(seed ^ 0x0CC1ull, i);
-            std::optional<std::pair<glm::dvec3, RayCaster::Hit>> drawn;
-            int meeting = 0;
+            const std::uint64_t hidden = light.snowRays[i];
             for (int k = 0; k < rays.count(); ++k) {
-                const bool snow = light.snowRays[i] >> k & 1;
-                if (!snow && !occluders) continue;
+                if (!(hidden >> k & 1)) continue;
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
-                if (!snow) {
-                    if (hit && rng.uniform() * ++meeting < 1.0) drawn.emplace(w, *hit);  // reservoir of one
-                    continue;
-                }
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
                 sum += bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
             }
-            if (drawn) sum += double(meeting) * occluderLitFromBelow(scene, marcher, baked, p, drawn->first, drawn->second, rng);
+            if (occluders) sum += occludersSendBack(scene, marcher, baked, topo, rays, hidden, p, seed, i);
             out.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
         }
     });
