@@ -1588,8 +1588,8 @@ glm::dvec3 occluderLitFromBelow(const Scene &scene, Medium::ColumnMarcher &march
 // summed over those rays): one of them drawn at random stands for all (its light times their count), intersected
 // alone, for the car's patches meet the body and the ground by the million.
 glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher, BakedValuesSampler &baked,
-                             const SnowTopology &topo, const SkyRays &rays, std::uint64_t hidden, const glm::dvec3 &p,
-                             std::uint64_t seed, std::size_t i) {
+                                   const SnowTopology &topo, const SkyRays &rays, std::uint64_t hidden,
+                                   const glm::dvec3 &p, std::uint64_t seed, std::size_t i) {
     const int open = rays.count() - __builtin_popcountll(hidden);
     if (open == 0) return glm::dvec3(0.0);
     Rng rng(seed ^ 0x0CC1ull, i);
@@ -1828,7 +1828,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
     local.surfaceVoxels = topo.surfaceVoxels();
     const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
-    // Snow hides some patch's sky, or occluders may send the snow's light back (occludersSendBack): gather.
+    // Snow hides some patch's sky, or occluders may send the snow's light back (occluderLitFromBelow): gather.
     const bool hidden = !scene.occluders->empty() ||
                         std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
     // Small pieces and thin snow left to the diffusion (too many to trace: a skier's thousands of lumps) light
