@@ -245,35 +245,6 @@ def test_sharp_box_edges_take_and_give_light_face_by_face(folder):
     assert result["worst"] < 0.35
 
 
-def test_board_over_the_snow_sends_the_snows_light_back(folder):
-    # bumpy_plate's optics and ground, the layer flat (6 cm), its board 16 cm above it white (0.8) against black:
-    # the snow under the board gains the light the board's underside reflects of the snow and of the sunlit ground
-    # around it. Core's Monte Carlo, 8192 paths per ray (9 rays seen from (180°, 50°) past the board's edge, noise
-    # of the gain about 0.5 point): +9.6, +7.6, +6.9 % (R, G, B). The bake's first gathering lit a sky ray meeting
-    # the board with what the board reflects of sun and sky alone, nothing from below: +0.1 % (main before
-    # layer-edges); with the board's reflection of the snow's baked light and of other occluders' sun and sky
-    # (occluderLitFromBelow) +10.0, +7.9, +7.2 %.
-    c = case("bumpy_plate")
-    path = os.path.join(folder, "flat_under_board.vdb")
-    bake_suite.write_density(path, bake_suite.bumpy(30, 6, 0) * 300.0, 0.01)
-    board, ground = c.occluders
-    back = np.array([-math.cos(math.radians(50.0)), 0.0, math.sin(math.radians(50.0))])
-    targets = np.array([[x, y, 0.065] for x in (0.13, 0.15, 0.17) for y in (0.11, 0.15, 0.19)])  # under the board
-    origins, directions = targets + 0.5 * back, np.tile(-back, (len(targets), 1))
-    reference, baked = {}, {}
-    for albedo in (0.0, 0.8):
-        occluders = [(board[0], board[1], (albedo,) * 3), ground]
-        reference[albedo] = firncore.monte_carlo_radiance(path, c.optics, origins, directions, suns=c.suns(),
-                                                          sky=c.skies(), occluders=occluders, samples=8192,
-                                                          seed=5)[0].sum(0)
-        firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=occluders, seed=0)
-        baked[albedo] = firncore.render_baked(path, c.optics, origins, directions, occluders=occluders).sum(0)
-    reference_gain = reference[0.8] / reference[0.0] - 1.0
-    baked_gain = baked[0.8] / baked[0.0] - 1.0
-    assert np.all(reference_gain > 0.05), reference_gain
-    assert np.all(np.abs(baked_gain / reference_gain - 1.0) < 0.3), (baked_gain, reference_gain)
-
-
 def test_thin_forward_ball_holds_light_scattered_a_few_times_in_its_peaked_lobe(folder):
     # A ball under one transport mean free path across (voxels of optical depth 1, all traced; omega 0.999,
     # g 0.85) from the sun's side, across, against the sun and from above. At g 0.85 light scattered a few times

@@ -1563,73 +1563,30 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceV
     return out;
 }
 
-// Radiance (W/m^2/sr) an occluder hit at `hit` along w from p sends back after reflecting the snow's light and
-// what other occluders reflect of sun and sky, by one cosine-weighted ray from the hit (the underside of a board
-// over the snow, lit by the snow and the ground beneath it): what the first gathering (reflectedByOccluder) leaves
-// out, for its ray down meets the ground, not the sky.
-glm::dvec3 occluderLitFromBelow(const Scene &scene, Medium::ColumnMarcher &marcher, BakedValuesSampler &baked,
-                                const glm::dvec3 &p, const glm::dvec3 &w, const RayCaster::Hit &hit, Rng &rng) {
-    const glm::dvec3 facing(hit.normal);
-    const glm::dvec3 n = glm::normalize(glm::dot(facing, w) < 0.0 ? facing : -facing);
-    const glm::dvec3 q = p + double(hit.distance) * w + 1e-5 * n;
-    const glm::dvec3 v = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
-    const auto next = scene.occluders->caster().intersect(glm::vec3(q), glm::vec3(v), 1e-5f);
-    glm::dvec3 arriving(bakedRadianceAlong(scene, marcher, baked, Ray{q, v},
-                                           next ? double(next->distance) : std::numeric_limits<double>::infinity(), 0.5));
-    if (next) {
-        const glm::dvec3 other(next->normal);
-        arriving += reflectedByOccluder(scene, q + double(next->distance) * v, glm::normalize(glm::dot(other, v) < 0.0 ? other : -other),
-                                        scene.occluders->albedo(next->triangle), rng, marcher);
-    }
-    return glm::dvec3(scene.occluders->albedo(hit.triangle)) * arriving;
-}
-
-// The occluders' share of the snow's light sent back along patch i's sky rays that snow does not hide (W/m^2/sr
-// summed over those rays): one of them drawn at random stands for all (its light times their count), intersected
-// alone, for the car's patches meet the body and the ground by the million.
-glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher, BakedValuesSampler &baked,
-                                   const SnowTopology &topo, const SkyRays &rays, std::uint64_t hidden,
-                                   const glm::dvec3 &p, std::uint64_t seed, std::size_t i) {
-    const int open = rays.count() - __builtin_popcountll(hidden);
-    if (open == 0) return glm::dvec3(0.0);
-    Rng rng(seed ^ 0x0CC1ull, i);
-    int skip = std::min(int(rng.uniform() * open), open - 1);  // the drawn ray's rank among the open ones
-    int k = 0;
-    while (hidden >> k & 1 || skip-- > 0) ++k;
-    const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
-    const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
-    if (!hit) return glm::dvec3(0.0);
-    return double(open) * occluderLitFromBelow(scene, marcher, baked, p, w, *hit, rng);
-}
-
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
 // of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch), read
-// from the bake's values as its grids would hold them; and along the sky rays that meet an occluder, the snow's
-// light it reflects back (occluderLitFromBelow).
+// from the bake's values as its grids would hold them.
 SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
                                       const SourceValues &source, const MonteCarloVoxels &traced,
                                       const GridValues &values, const SkyRays &rays, std::uint64_t seed,
                                       const SubProgress &progress) {
     SurfaceValues<glm::vec3> out(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
-    const bool occluders = !scene.occluders->empty();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);
         Medium::Accessor density = scene.medium->accessor();
         BakedValuesSampler baked(topo, source, traced, values);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!light.snowRays[i] && !(occluders && topo.patches[i].isSurface())) continue;
+            if (!light.snowRays[i]) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
             glm::dvec3 sum(0.0);
-            const std::uint64_t hidden = light.snowRays[i];
             for (int k = 0; k < rays.count(); ++k) {
-                if (!(hidden >> k & 1)) continue;
+                if (!(light.snowRays[i] >> k & 1)) continue;
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
                 sum += bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
             }
-            if (occluders) sum += occludersSendBack(scene, marcher, baked, topo, rays, hidden, p, seed, i);
             out.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
         }
     });
@@ -1828,9 +1785,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
     local.surfaceVoxels = topo.surfaceVoxels();
     const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
-    // Snow hides some patch's sky, or occluders may send the snow's light back (occluderLitFromBelow): gather.
-    const bool hidden = !scene.occluders->empty() ||
-                        std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
+    const bool hidden = std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
     // Small pieces and thin snow left to the diffusion (too many to trace: a skier's thousands of lumps) light
     // each other over many bounces: one more gather, and the rest of the bounces from the last two (addBounceTail).
     const bool untracedPieces = !thin.empty() && traced.source.empty();
