@@ -261,14 +261,14 @@ def reference(case, path, origins, directions, cache):
     return mean, error, seconds
 
 
-def run_case(case, folder, cache, quality="FINAL", seed=0):
+def run_case(case, folder, cache, quality="FINAL", seed=0, sky_samples=0):
     path = os.path.join(folder, case.name + ".vdb")
     write_density(path, case.density, case.voxel)
     origins, directions, tau = views(case)
     mean, error, reference_seconds = reference(case, path, origins, directions, cache)
     start = time.perf_counter()
     stats = firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
-                          quality=quality, seed=seed)
+                          quality=quality, seed=seed, sky_samples=sky_samples)
     bake_seconds = time.perf_counter() - start
     baked = firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)
     seen = tau >= 1.0
@@ -339,6 +339,8 @@ def main():
     parser.add_argument("--markdown", action="store_true")
     parser.add_argument("--quality", default="FINAL")
     parser.add_argument("--maps", action="store_true", help="print each view's per-block relative errors")
+    parser.add_argument("--sky-samples", type=int, default=0,
+                        help="sky rays per surface voxel (0: the quality's; at most 64): whether the sky's share is converged")
     parser.add_argument("--seeds", type=int, default=1,
                         help="bake each case with seeds 0..N-1 and report the means (traced voxels' noise: one seed's "
                              "mean error moves by up to 2 points)")
@@ -347,11 +349,12 @@ def main():
     cache = None if args.fresh else args.cache
     if cache:
         os.makedirs(cache, exist_ok=True)
-    print(f"firncore {firncore.__version__}, {firncore.hardware_threads()} threads, {args.quality} quality", flush=True)
+    print(f"firncore {firncore.__version__}, {firncore.hardware_threads()} threads, {args.quality} quality" +
+          (f", {args.sky_samples} sky rays" if args.sky_samples else ""), flush=True)
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         for case in chosen:
-            runs = [run_case(case, folder, cache, args.quality, seed) for seed in range(args.seeds)]
+            runs = [run_case(case, folder, cache, args.quality, seed, args.sky_samples) for seed in range(args.seeds)]
             rows.append(over_seeds(runs))
             r = rows[-1]
             seeds = ", ".join(f"{100 * x['mean']:.1f}" for x in runs)
