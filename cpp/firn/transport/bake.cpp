@@ -33,7 +33,6 @@
 #include "firn/transport/light_tracing.h"
 #include "firn/transport/monte_carlo.h"
 #include "firn/transport/multigrid.h"
-#include "firn/transport/rim_forward.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/transport/source_lobe.h"
 #include "firn/transport/sun_lobe.h"
@@ -1577,12 +1576,8 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
         Medium::ColumnMarcher marcher(*scene.medium);
         Medium::Accessor density = scene.medium->accessor();
         BakedValuesSampler baked(topo, source, traced, values);
-        const glm::dvec3 extinction(scene.medium->optics().extinctionPerDensity);
-        const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
-        const double limit = columnLimit(reduced);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!light.snowRays[i]) continue;
-            Rng rng(seed ^ 0xF0F0ull, i);  // for the occluders' reflections behind the rims
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
             glm::dvec3 sum(0.0);
             for (int k = 0; k < rays.count(); ++k) {
@@ -1590,13 +1585,7 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
-                const Rgb rims = bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
-                sum += rims;
-                // What the rims let through forwards: the similarity beam's part beyond the uncollided, while it
-                // is worth the background's ray (kMinTransmittance).
-                const double column = marcher.column(p, w, tMax, limit);
-                if (column < limit)
-                    sum += forwardThroughRims(extinction, reduced, column, radianceBeyond(scene, p, w, hit, rng, marcher), rims);
+                sum += bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
             }
             out.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
         }

@@ -16,6 +16,12 @@ namespace firn {
 
 namespace {
 
+constexpr double kMinTransmittance = 1e-5;  // beams fainter than this are dropped
+
+// Mass column (kg/m^2) beyond which every channel's reduced transmittance is below kMinTransmittance.
+double columnLimit(const glm::dvec3 &reduced) {
+    return std::log(1.0 / kMinTransmittance) / std::max(1e-12, std::min({reduced.x, reduced.y, reduced.z}));
+}
 
 // exp(-extinction column) per channel; exactly 1 without the exponentials where no snow is crossed (most sky rays).
 glm::dvec3 transmittance(const glm::dvec3 &extinction, double column) {
@@ -64,8 +70,17 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
         const double column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
         if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
         if (column >= limit) continue;
-        if (hit && !bounce) continue;
-        sum += kPi * radianceBeyond(scene, p, w, hit, rng, marcher) * transmittance(reduced, column);
+        glm::dvec3 radiance;
+        if (!hit) {
+            radiance = scene.sky.radianceFrom(w);
+        } else if (bounce) {
+            const glm::dvec3 normal(hit->normal);
+            radiance = reflectedByOccluder(scene, p + double(hit->distance) * w, glm::dot(normal, w) < 0.0 ? normal : -normal,
+                                           scene.occluders->albedo(hit->triangle), rng, marcher);
+        } else {
+            continue;
+        }
+        sum += kPi * radiance * transmittance(reduced, column);
     }
     if (snowRays) *snowRays = hidden;
     return glm::vec3(sum / double(rays.count()));
@@ -128,19 +143,6 @@ void parallelChunks(std::size_t n, const SubProgress &progress, const Body &body
 }
 
 }  // namespace
-
-double columnLimit(const glm::dvec3 &extinctionPerDensity) {
-    return std::log(1.0 / kMinTransmittance) /
-           std::max(1e-12, std::min({extinctionPerDensity.x, extinctionPerDensity.y, extinctionPerDensity.z}));
-}
-
-glm::dvec3 radianceBeyond(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &w,
-                          const std::optional<RayCaster::Hit> &hit, Rng &rng, Medium::ColumnMarcher &marcher) {
-    if (!hit) return scene.sky.radianceFrom(w);
-    const glm::dvec3 normal(hit->normal);
-    return reflectedByOccluder(scene, p + double(hit->distance) * w, glm::dot(normal, w) < 0.0 ? normal : -normal,
-                               scene.occluders->albedo(hit->triangle), rng, marcher);
-}
 
 glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics) {
     return optics.extinctionPerDensity * (glm::dvec3(1.0) - optics.albedo * optics.g);

@@ -1,7 +1,6 @@
 #pragma once
 
 #include <cstdint>
-#include <optional>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -9,7 +8,6 @@
 #include "firn/transport/scene.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/util/progress.h"
-#include "firn/util/random.h"
 
 namespace firn {
 
@@ -66,16 +64,6 @@ void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3
 // Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe. `density`:
 // the caller's (one per thread; an accessor made per call started each lookup from the tree's root).
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i, Medium::Accessor &density);
-
-// Radiance (W/m^2/sr) arriving at p along a sky ray w from beyond the snow it crosses: the sky's, or, where the
-// ray meets an occluder (`hit`), what that occluder reflects once of sun and sky (one sky ray drawn from rng).
-glm::dvec3 radianceBeyond(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &w,
-                          const std::optional<RayCaster::Hit> &hit, Rng &rng, Medium::ColumnMarcher &marcher);
-
-constexpr double kMinTransmittance = 1e-5;  // beams fainter than this are dropped
-// Mass column (kg/m^2) beyond which every channel's transmittance under this extinction (m^2/kg) is below
-// kMinTransmittance.
-double columnLimit(const glm::dvec3 &extinctionPerDensity);
 
 // Reduced extinction per unit density, per channel: k (1 - omega g) (m^2/kg).
 glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
