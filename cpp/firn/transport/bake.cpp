@@ -278,13 +278,17 @@ double axisDepth(Medium::Accessor &density, const openvdb::Coord &c, double redu
 PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb::Int32Tree> &done,
                       const openvdb::Coord &seed, double reducedPerDensity) {
     const auto reducedVolume = [&](const openvdb::Coord &c) { return std::pow(reducedPerDensity * density.getValue(c), 3.0); };
-    const auto deep = [&](const openvdb::Coord &c) {
-        return axisDepth(density, c, reducedPerDensity, kMaxTracedPieceDepth) >= kMaxTracedPieceDepth;
-    };
     std::vector<openvdb::Coord> piece{seed}, stack{seed};
+    std::size_t shallow = 0;  // piece[0, shallow) lie less than kMaxTracedPieceDepth deep (checked past both sizes)
+    const auto hasInside = [&] {
+        const double D = kMaxTracedPieceDepth;
+        while (shallow < piece.size())
+            if (axisDepth(density, piece[shallow++], reducedPerDensity, D) >= D) return true;
+        return false;
+    };
     done.setValue(seed, kSmallPiece);  // visited by this fill
     double reduced = reducedVolume(seed);
-    bool hasInside = deep(seed), large = false;
+    bool large = false;
     while (!stack.empty() && !large) {
         const openvdb::Coord c = stack.back();
         stack.pop_back();
@@ -296,8 +300,7 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
             else if (mark == kUnvisited) {
                 done.setValue(n, kSmallPiece), piece.push_back(n), stack.push_back(n);
                 reduced += reducedVolume(n);
-                hasInside = hasInside || deep(n);
-                large = int(piece.size()) > kSmallPieceVoxels && reduced > kMaxTracedPieceReducedVolume && hasInside;
+                large = int(piece.size()) > kSmallPieceVoxels && reduced > kMaxTracedPieceReducedVolume && hasInside();
             }
         }
     }
