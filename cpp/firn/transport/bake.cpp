@@ -238,13 +238,19 @@ class TracedIndex {
 // at 1.4 (a tenth: 8.7 %, -4.2 %). Where light tracing is not used (occluders, lamps, over that budget) they are
 // diffused as before. Layers have no inside either: a piece none of whose voxels lies kMaxTracedPieceDepth
 // transport mean free paths deep (axisDepth: to the air along an axis; a slab up to 5 thick) is traced whole too,
-// however wide (slab_thin, 3 voxels of sigma_t h 2 and sigma_tr h 0.81 at g 0.6: 8.0 -> 6.2 %, worst -34 -> +17 %,
-// bias -2.7 -> +0.9 %; slabs of its snow 4, 5, 6 and 8 voxels thick, diffused 6.0, 5.2, 6.0, 4.0 %, traced whole
-// 5.4, 4.6, 5.1, 4.3 %: half-thicknesses 1.6, 2.0, 2.4, 3.2; docs/benchmarks.md, thin-slab). Along the axes, a
-// tilted layer reads up to sqrt(3) deeper, and stays with the diffusion sooner.
+// however wide, where all its voxels are optically thinner than kTracedLayerOpticalDepth and absorb less than
+// kTracedLayerAbsorptionDepth each (sigma_a h in the most absorbing channel). Measured on 24 x 24 slabs of 3 voxels
+// (bench/bake_suite.py's slab_thin and its views, 4096-path references; docs/benchmarks.md, thin-slab), diffused ->
+// traced whole: slab_thin (sigma_t h 2, omega 0.99, g 0.6) 8.0 -> 6.2 %, worst -34 -> +17 %, bias -2.7 -> +0.9 %;
+// 4, 5, 6, 8 voxels of it 6.0, 5.2, 6.0, 4.0 -> 5.4, 4.6, 5.1, 4.3 % (half-thicknesses 1.6, 2.0, 2.4, 3.2); omega
+// 0.9999 8.9 -> 6.3 %, 0.98 7.7 -> 6.2 %, but 0.95 6.9 -> 6.8 % and 0.9 6.8 -> 8.2 % (bias -8 %: in absorbing snow a
+// voxel's mean source is not what a camera sees of its first optical depth); sigma_t h 2.5 mixed (g 0.6: 6.8 -> 8.1
+// %, g 0.7: 8.5 -> 7.2 %), 3 and more worse (g 0.6: 6.3 -> 10.4 %; real snow, 10 at g 0.85: 9.0 -> 16.4 %). Along
+// the axes, a tilted layer reads up to sqrt(3) deeper and stays with the diffusion sooner.
 constexpr double kTracedOpticalDepth = 1.5, kThickReducedDepth = 2.0;
 constexpr int kSmallPieceVoxels = 343;  // 7^3
-constexpr double kMaxTracedPieceReducedVolume = 64.0, kMaxTracedPieceDepth = 2.5;
+constexpr double kMaxTracedPieceReducedVolume = 64.0, kMaxTracedPieceDepth = 2.5, kTracedLayerOpticalDepth = 2.25,
+                 kTracedLayerAbsorptionDepth = 0.1;
 // At most this many paths in all: beyond it, fewer per voxel (a bake must not grow into a hang).
 constexpr double kMaxTracedPaths = 2e7;
 
@@ -273,10 +279,11 @@ double axisDepth(Medium::Accessor &density, const openvdb::Coord &c, double redu
 }
 
 // The kind of the piece around `seed` (sigma_tr h = reducedPerDensity * density); marks what it visits in `done`.
-// A fill that meets a large piece's voxel stops, and so does one past both sizes with a deep voxel: each voxel is
-// visited a bounded number of times, however large the snow.
+// Voxels of density `layerBelow` or more make no traced layer. A fill that meets a large piece's voxel stops, and so
+// does one past both sizes that is no traced layer: each voxel is visited a bounded number of times, however large
+// the snow.
 PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb::Int32Tree> &done,
-                      const openvdb::Coord &seed, double reducedPerDensity) {
+                      const openvdb::Coord &seed, double reducedPerDensity, float layerBelow) {
     const auto reducedVolume = [&](const openvdb::Coord &c) { return std::pow(reducedPerDensity * density.getValue(c), 3.0); };
     std::vector<openvdb::Coord> piece{seed}, stack{seed};
     std::size_t shallow = 0;  // piece[0, shallow) lie less than kMaxTracedPieceDepth deep (checked past both sizes)
@@ -288,7 +295,7 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
     };
     done.setValue(seed, kSmallPiece);  // visited by this fill
     double reduced = reducedVolume(seed);
-    bool large = false;
+    bool notLayer = !(density.getValue(seed) < layerBelow), large = false;  // a voxel too thick for a traced layer
     while (!stack.empty() && !large) {
         const openvdb::Coord c = stack.back();
         stack.pop_back();
@@ -300,7 +307,9 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
             else if (mark == kUnvisited) {
                 done.setValue(n, kSmallPiece), piece.push_back(n), stack.push_back(n);
                 reduced += reducedVolume(n);
-                large = int(piece.size()) > kSmallPieceVoxels && reduced > kMaxTracedPieceReducedVolume && hasInside();
+                notLayer = notLayer || !(density.getValue(n) < layerBelow);
+                large = int(piece.size()) > kSmallPieceVoxels && reduced > kMaxTracedPieceReducedVolume &&
+                        (notLayer || hasInside());
             }
         }
     }
@@ -321,6 +330,8 @@ TracedSnow thinVoxels(const Medium &medium) {
     const double h = medium.voxelSize(), k = optics.extinctionPerDensity;
     const double leastReduced = 1.0 - std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z}) * optics.g;
     const float thinBelow = float(kTracedOpticalDepth / (k * h)), thickFrom = float(kThickReducedDepth / (leastReduced * k * h));
+    const double mostAbsorbed = 1.0 - std::min({optics.albedo.x, optics.albedo.y, optics.albedo.z});
+    const float layerBelow = float(std::min(kTracedLayerOpticalDepth, kTracedLayerAbsorptionDepth / mostAbsorbed) / (k * h));
     TracedSnow out;
     Medium::Accessor density = medium.accessor();
     openvdb::Int32Tree pieces(kUnvisited);
@@ -328,7 +339,7 @@ TracedSnow thinVoxels(const Medium &medium) {
     for (auto it = medium.density().cbeginValueOn(); it; ++it) {
         if (!(*it > 0.0f)) continue;
         std::int32_t mark = done.getValue(it.getCoord());
-        if (mark == kUnvisited) mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h);
+        if (mark == kUnvisited) mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h, layerBelow);
         if (mark == kSmallPiece) {
             out.thin.push_back(it.getCoord());
             continue;
