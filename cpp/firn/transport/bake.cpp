@@ -236,26 +236,66 @@ class TracedIndex {
 // voxel 13.1 %, bias -9.5 %; 8192 paths 8.6 %, -4.6 %, at 29 processor s), light traced 7.2 %, bias -2.3 % at
 // 5.4 processor s (docs/bake.md, Accuracy), within a quarter of the budget (kWholePieceTracedSteps) 7.8 %, -2.7 %
 // at 1.4 (a tenth: 8.7 %, -4.2 %). Where light tracing is not used (occluders, lamps, over that budget) they are
-// diffused as before.
+// diffused as before. Layers have no inside either: a piece none of whose voxels lies kMaxTracedPieceDepth
+// transport mean free paths deep (axisDepth: to the air along an axis; a slab up to 5 thick) is traced whole too,
+// however wide, where all its voxels are optically thinner than kTracedLayerOpticalDepth and absorb less than
+// kTracedLayerAbsorptionDepth each (sigma_a h in the most absorbing channel). Measured on 24 x 24 slabs of 3 voxels
+// (bench/bake_suite.py's slab_thin and its views, 4096-path references; docs/benchmarks.md, thin-slab), diffused ->
+// traced whole: slab_thin (sigma_t h 2, omega 0.99, g 0.6) 8.0 -> 6.2 %, worst -34 -> +17 %, bias -2.7 -> +0.9 %;
+// 4, 5, 6, 8 voxels of it 6.0, 5.2, 6.0, 4.0 -> 5.4, 4.6, 5.1, 4.3 % (half-thicknesses 1.6, 2.0, 2.4, 3.2); omega
+// 0.9999 8.9 -> 6.3 %, 0.98 7.7 -> 6.2 %, but 0.95 6.9 -> 6.8 % and 0.9 6.8 -> 8.2 % (bias -8 %: in absorbing snow a
+// voxel's mean source is not what a camera sees of its first optical depth); sigma_t h 2.5 mixed (g 0.6: 6.8 -> 8.1
+// %, g 0.7: 8.5 -> 7.2 %), 3 and more worse (g 0.6: 6.3 -> 10.4 %; real snow, 10 at g 0.85: 9.0 -> 16.4 %). Along
+// the axes, a tilted layer reads up to sqrt(3) deeper and stays with the diffusion sooner.
 constexpr double kTracedOpticalDepth = 1.5, kThickReducedDepth = 2.0;
 constexpr int kSmallPieceVoxels = 343;  // 7^3
-constexpr double kMaxTracedPieceReducedVolume = 64.0;
+constexpr double kMaxTracedPieceReducedVolume = 64.0, kMaxTracedPieceDepth = 2.5, kTracedLayerOpticalDepth = 2.25,
+                 kTracedLayerAbsorptionDepth = 0.1;
 // At most this many paths in all: beyond it, fewer per voxel (a bake must not grow into a hang).
 constexpr double kMaxTracedPaths = 2e7;
 
 // What a piece of connected snow is (26-neighbours of non-zero density), as marked in thinVoxels' `done`.
 enum PieceKind : std::int32_t { kUnvisited = 0, kSmallPiece = 1, kLargePiece = 2, kTransportThinPiece = 3 };
 
+// How deep `c` lies in its snow: the least reduced optical depth (sigma_tr h = reducedPerDensity * density per
+// voxel) from its centre to the air along the six axis directions, `enough` at most. The six walks go in step
+// and stop at the least so far: a voxel of a wide thin layer costs its way to the layer's face, not across it.
+double axisDepth(Medium::Accessor &density, const openvdb::Coord &c, double reducedPerDensity, double enough) {
+    std::array<double, 6> depth;
+    depth.fill(0.5 * reducedPerDensity * density.getValue(c));
+    double least = enough;
+    for (int s = 1;; ++s) {
+        bool walking = false;
+        for (int a = 0; a < 6; ++a) {
+            if (!(depth[a] < least)) continue;
+            openvdb::Coord n = c;
+            n[a / 2] += a % 2 ? s : -s;
+            const float d = density.getValue(n);
+            if (d > 0.0f) depth[a] += reducedPerDensity * d, walking = true;
+            else least = depth[a];  // the air
+        }
+        if (!walking) return least;
+    }
+}
+
 // The kind of the piece around `seed` (sigma_tr h = reducedPerDensity * density); marks what it visits in `done`.
-// A fill that meets a large piece's voxel stops, and so does one past both sizes: each voxel is visited a bounded
-// number of times, however large the snow.
+// Voxels of density `layerBelow` or more make no traced layer. A fill that meets a large piece's voxel stops, and so
+// does one past both sizes that is no traced layer: each voxel is visited a bounded number of times, however large
+// the snow.
 PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb::Int32Tree> &done,
-                      const openvdb::Coord &seed, double reducedPerDensity) {
+                      const openvdb::Coord &seed, double reducedPerDensity, float layerBelow) {
     const auto reducedVolume = [&](const openvdb::Coord &c) { return std::pow(reducedPerDensity * density.getValue(c), 3.0); };
     std::vector<openvdb::Coord> piece{seed}, stack{seed};
+    std::size_t shallow = 0;  // piece[0, shallow) lie less than kMaxTracedPieceDepth deep (checked past both sizes)
+    const auto hasInside = [&] {
+        const double D = kMaxTracedPieceDepth;
+        while (shallow < piece.size())
+            if (axisDepth(density, piece[shallow++], reducedPerDensity, D) >= D) return true;
+        return false;
+    };
     done.setValue(seed, kSmallPiece);  // visited by this fill
     double reduced = reducedVolume(seed);
-    bool large = false;
+    bool notLayer = !(density.getValue(seed) < layerBelow), large = false;  // a voxel too thick for a traced layer
     while (!stack.empty() && !large) {
         const openvdb::Coord c = stack.back();
         stack.pop_back();
@@ -267,7 +307,9 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
             else if (mark == kUnvisited) {
                 done.setValue(n, kSmallPiece), piece.push_back(n), stack.push_back(n);
                 reduced += reducedVolume(n);
-                large = int(piece.size()) > kSmallPieceVoxels && reduced > kMaxTracedPieceReducedVolume;
+                notLayer = notLayer || !(density.getValue(n) < layerBelow);
+                large = int(piece.size()) > kSmallPieceVoxels && reduced > kMaxTracedPieceReducedVolume &&
+                        (notLayer || hasInside());
             }
         }
     }
@@ -288,6 +330,8 @@ TracedSnow thinVoxels(const Medium &medium) {
     const double h = medium.voxelSize(), k = optics.extinctionPerDensity;
     const double leastReduced = 1.0 - std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z}) * optics.g;
     const float thinBelow = float(kTracedOpticalDepth / (k * h)), thickFrom = float(kThickReducedDepth / (leastReduced * k * h));
+    const double mostAbsorbed = 1.0 - std::min({optics.albedo.x, optics.albedo.y, optics.albedo.z});
+    const float layerBelow = float(std::min(kTracedLayerOpticalDepth, kTracedLayerAbsorptionDepth / mostAbsorbed) / (k * h));
     TracedSnow out;
     Medium::Accessor density = medium.accessor();
     openvdb::Int32Tree pieces(kUnvisited);
@@ -295,7 +339,7 @@ TracedSnow thinVoxels(const Medium &medium) {
     for (auto it = medium.density().cbeginValueOn(); it; ++it) {
         if (!(*it > 0.0f)) continue;
         std::int32_t mark = done.getValue(it.getCoord());
-        if (mark == kUnvisited) mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h);
+        if (mark == kUnvisited) mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h, layerBelow);
         if (mark == kSmallPiece) {
             out.thin.push_back(it.getCoord());
             continue;
