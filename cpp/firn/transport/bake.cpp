@@ -478,6 +478,39 @@ Link interiorLink(double beta, double R) {
     return {1.0 / (R * sinhOverX(x)), 0.5 * beta * x * tanhOverX(0.5 * x)};
 }
 
+// The interior links of a run of unknowns [begin, end), each computed once: a link between two unknowns of the run
+// is the same from either end (its resistance sums their sigma_tr in either order), so the run's links along +x,
+// +y and +z are computed first and its links along -x, -y and -z read them where the neighbour lies in the run
+// (the assembly's divisions were most of its time). The values are interiorLink's, bit for bit.
+class SharedLinks {
+  public:
+    SharedLinks(const SnowTopology &topo, const Channel &ch, double beta, double h, std::size_t begin, std::size_t end)
+        : topo_(topo), ch_(ch), beta_(beta), h_(h), begin_(begin), end_(end), upper_(3 * (end - begin)) {
+        for (std::size_t i = begin; i != end; ++i)
+            for (int axis = 0; axis < 3; ++axis) {
+                const std::int32_t j = topo.link[i][2 * axis + 1];
+                if (!SnowTopology::isFace(j)) upper_[3 * (i - begin) + axis] = computed(i, std::size_t(j));
+            }
+    }
+    // The link through face f (0..5 as faceStep) of unknown i of the run, whose neighbour there is an unknown.
+    Link at(std::size_t i, int f) const {
+        const std::size_t j = std::size_t(topo_.link[i][f]);
+        if (f & 1) return upper_[3 * (i - begin_) + f / 2];
+        if (j >= begin_ && j < end_) return upper_[3 * (j - begin_) + f / 2];  // i is j's upper neighbour
+        return computed(i, j);
+    }
+
+  private:
+    Link computed(std::size_t i, std::size_t j) const {
+        return interiorLink(beta_, 1.5 * h_ * (ch_.sigmaTr(topo_.density[i]) + ch_.sigmaTr(topo_.density[j])));
+    }
+    const SnowTopology &topo_;
+    const Channel &ch_;
+    double beta_, h_;
+    std::size_t begin_, end_;
+    std::vector<Link> upper_;  // per unknown of the run, its +x, +y, +z links (where a neighbour is)
+};
+
 // The stretch from a boundary to the unknown's node, L in resistance, with the boundary condition
 // phi = Rb dphi/dR + Phi (Marshak: Rb = 2 for air, 2 (1 + a) / (1 - a) for a Lambertian surface of
 // albedo a, Phi = 4 x the diffuse light it sends in / (1 - a)). Exact solution of the stretch.
@@ -538,6 +571,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::Accessor density = medium.accessor();
+        const SharedLinks links(topo, ch, beta, h, range.begin(), range.end());
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const double sigmaTr = ch.sigmaTr(topo.density[i]);
             const SurfacePatch &patch = topo.patches[i];
@@ -549,7 +583,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             for (int f = 0; f < 6; ++f) {
                 const std::int32_t link = topo.link[i][f];
                 if (!SnowTopology::isFace(link)) {
-                    const Link L = interiorLink(beta, 1.5 * h * (sigmaTr + ch.sigmaTr(topo.density[link])));
+                    const Link L = links.at(i, f);
                     conductance[f] = h2 * L.conductance;
                     diag += h2 * L.conductance;
                     mass[f] = h2 * L.halfMass;
@@ -655,7 +689,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             sys.area.surface(i) = patch.area;
             sys.skyIn.surface(i) = sky * sys.area[i];
         }
-    });
+    }, tbb::simple_partitioner());  // runs of at most 1024 unknowns: SharedLinks' buffer stays small
     return sys;
 }
 
