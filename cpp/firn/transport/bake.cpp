@@ -27,6 +27,7 @@
 #include <tbb/task_arena.h>
 
 #include "firn/transport/bounce_tail.h"
+#include "firn/transport/diffusion_links.h"
 #include "firn/transport/edge_lobe.h"
 #include "firn/transport/half_space.h"
 #include "firn/transport/incident_light.h"
@@ -133,7 +134,8 @@ class Stopwatch {
 struct Channel {
     double k, omega, g;
     double sigmaT(double rho) const { return k * rho; }
-    double sigmaTr(double rho) const { return (1.0 - omega * g) * k * rho; }   // sigma_a + sigma_s (1 - g)
+    double sigmaTrPerDensity() const { return (1.0 - omega * g) * k; }
+    double sigmaTr(double rho) const { return sigmaTrPerDensity() * rho; }  // sigma_a + sigma_s (1 - g)
     double reducedAlbedo() const { return omega * (1.0 - g) / (1.0 - omega * g); }
     double beta() const { return std::sqrt((1.0 - omega) / (3.0 * (1.0 - omega * g))); }  // kappa D
     // What a half-space returns of diffuse light by this diffusion (Marshak's condition, extrapolation 2D):
@@ -454,62 +456,8 @@ struct ChannelSystem {
     void releaseDiffuseTerms() { skyToNode = skyReturned = area = SurfaceValues<float>(); }
 };
 
-// Finite volumes with exponential fitting: every link between two unknowns, and between an unknown and
-// a boundary, is treated as the exact one-dimensional diffusion problem -phi'' + beta^2 phi = 0 in the
-// resistance coordinate R (dR = 3 sigma_tr dz), so voxels many diffusion lengths thick stay exact.
-
-// A link between two unknowns R apart: conductance, and the absorption it lends each end.
-struct Link {
-    double conductance, halfMass;  // per unit face area
-};
-// sinh(x) / x and tanh(x) / x, by series where x is small (snow: x ~ 0.1 per voxel), where they are
-// exact to double precision and cost no exponentials.
-double sinhOverX(double x) {
-    const double x2 = x * x;
-    return x < 0.3 ? 1.0 + x2 / 6.0 * (1.0 + x2 / 20.0 * (1.0 + x2 / 42.0 * (1.0 + x2 / 72.0))) : std::sinh(x) / x;
-}
-double tanhOverX(double x) {
-    const double x2 = x * x;
-    return x < 0.1 ? 1.0 - x2 / 3.0 * (1.0 - 0.4 * x2 * (1.0 - 17.0 / 42.0 * x2)) : std::tanh(x) / x;
-}
-
-Link interiorLink(double beta, double R) {
-    const double x = beta * R;
-    return {1.0 / (R * sinhOverX(x)), 0.5 * beta * x * tanhOverX(0.5 * x)};
-}
-
-// The interior links of a run of unknowns [begin, end), each computed once: a link between two unknowns of the run
-// is the same from either end (its resistance sums their sigma_tr in either order), so the run's links along +x,
-// +y and +z are computed first and its links along -x, -y and -z read them where the neighbour lies in the run
-// (the assembly's divisions were most of its time). The values are interiorLink's, bit for bit.
-class SharedLinks {
-  public:
-    SharedLinks(const SnowTopology &topo, const Channel &ch, double beta, double h, std::size_t begin, std::size_t end)
-        : topo_(topo), ch_(ch), beta_(beta), h_(h), begin_(begin), end_(end), upper_(3 * (end - begin)) {
-        for (std::size_t i = begin; i != end; ++i)
-            for (int axis = 0; axis < 3; ++axis) {
-                const std::int32_t j = topo.link[i][2 * axis + 1];
-                if (!SnowTopology::isFace(j)) upper_[3 * (i - begin) + axis] = computed(i, std::size_t(j));
-            }
-    }
-    // The link through face f (0..5 as faceStep) of unknown i of the run, whose neighbour there is an unknown.
-    Link at(std::size_t i, int f) const {
-        const std::size_t j = std::size_t(topo_.link[i][f]);
-        if (f & 1) return upper_[3 * (i - begin_) + f / 2];
-        if (j >= begin_ && j < end_) return upper_[3 * (j - begin_) + f / 2];  // i is j's upper neighbour
-        return computed(i, j);
-    }
-
-  private:
-    Link computed(std::size_t i, std::size_t j) const {
-        return interiorLink(beta_, 1.5 * h_ * (ch_.sigmaTr(topo_.density[i]) + ch_.sigmaTr(topo_.density[j])));
-    }
-    const SnowTopology &topo_;
-    const Channel &ch_;
-    double beta_, h_;
-    std::size_t begin_, end_;
-    std::vector<Link> upper_;  // per unknown of the run, its +x, +y, +z links (where a neighbour is)
-};
+// Finite volumes with exponential fitting (diffusion_links.h): the links between unknowns, and below those to
+// a boundary.
 
 // The stretch from a boundary to the unknown's node, L in resistance, with the boundary condition
 // phi = Rb dphi/dR + Phi (Marshak: Rb = 2 for air, 2 (1 + a) / (1 - a) for a Lambertian surface of
@@ -571,7 +519,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::Accessor density = medium.accessor();
-        const SharedLinks links(topo, ch, beta, h, range.begin(), range.end());
+        const SharedLinks links(topo.link, topo.density, ch.sigmaTrPerDensity(), beta, h, range.begin(), range.end());
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const double sigmaTr = ch.sigmaTr(topo.density[i]);
             const SurfacePatch &patch = topo.patches[i];
