@@ -127,35 +127,6 @@ std::optional<RayCaster::Hit> RayCaster::intersect(const glm::vec3 &origin, cons
     return Hit{query.ray.tfar, t, glm::normalize(impl_->mesh->crossNormal(t))};
 }
 
-void RayCaster::intersect(const glm::vec3 &origin, const glm::vec3 *directions, int count, float tNear,
-                          std::optional<Hit> *hits) const {
-    std::fill(hits, hits + count, std::nullopt);
-    if (empty_) return;
-    constexpr int kPacket = 16;
-    for (int first = 0; first < count; first += kPacket) {
-        const int n = std::min(kPacket, count - first);
-        alignas(64) int valid[kPacket];
-        alignas(64) RTCRayHit16 packet;
-        for (int k = 0; k < kPacket; ++k) {
-            valid[k] = k < n ? -1 : 0;
-            const glm::vec3 d = k < n ? directions[first + k] : glm::vec3(0.0f, 0.0f, 1.0f);
-            packet.ray.org_x[k] = origin.x, packet.ray.org_y[k] = origin.y, packet.ray.org_z[k] = origin.z;
-            packet.ray.dir_x[k] = d.x, packet.ray.dir_y[k] = d.y, packet.ray.dir_z[k] = d.z;
-            packet.ray.tnear[k] = tNear, packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
-            packet.ray.time[k] = 0.0f, packet.ray.mask[k] = 0xFFFFFFFF, packet.ray.id[k] = 0, packet.ray.flags[k] = 0;
-            packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-        }
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        rtcIntersect16(valid, impl_->embree.scene, &context, &packet);
-        for (int k = 0; k < n; ++k) {
-            if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
-            const unsigned t = packet.hit.primID[k];
-            hits[first + k] = Hit{packet.ray.tfar[k], t, glm::normalize(impl_->mesh->crossNormal(t))};
-        }
-    }
-}
-
 std::optional<double> RayCaster::closestDistance(const glm::dvec3 &point, double maxDistance) const {
     if (empty_) return std::nullopt;
     RTCPointQuery query{};

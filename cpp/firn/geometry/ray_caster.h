@@ -34,10 +34,6 @@ class RayCaster {
 
     std::optional<Hit> intersect(const glm::vec3 &origin, const glm::vec3 &direction, float tNear = 0.0f,
                                  float tFar = std::numeric_limits<float>::infinity()) const;
-    // intersect() for `count` rays from one origin (directions normalized), traced as packets of up to 16 (Embree's
-    // rtcIntersect16): rays that share their start share the tree's top. hits[k] for directions[k].
-    void intersect(const glm::vec3 &origin, const glm::vec3 *directions, int count, float tNear,
-                   std::optional<Hit> *hits) const;
 
     // Distance (m) from `point` to the nearest triangle, if one lies within `maxDistance` (m); an Embree
     // point query (BVH-culled), the closest point on each candidate triangle computed in double precision.

@@ -63,14 +63,9 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
     Rng rng(seed ^ 0xB0B0ull, stream);  // for the occluders' reflections
     glm::dvec3 sum(0.0);
     std::uint64_t hidden = 0;
-    std::array<glm::dvec3, 64> directions;
-    std::array<glm::vec3, 64> towards;
-    std::array<std::optional<RayCaster::Hit>, 64> hits;
-    for (int k = 0; k < rays.count(); ++k) directions[k] = rays.direction(n, k, seed, stream), towards[k] = glm::vec3(directions[k]);
-    scene.occluders->caster().intersect(glm::vec3(p), towards.data(), rays.count(), 1e-5f, hits.data());
     for (int k = 0; k < rays.count(); ++k) {
-        const glm::dvec3 &w = directions[k];
-        const std::optional<RayCaster::Hit> &hit = hits[k];
+        const glm::dvec3 w = rays.direction(n, k, seed, stream);
+        const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
         if (hit && !bounce && !snowRays) continue;  // brings nothing, and no one asks whether snow lies along it
         const double column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
         if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
