@@ -27,6 +27,7 @@
 #include <tbb/task_arena.h>
 
 #include "firn/transport/bounce_tail.h"
+#include "firn/transport/diffusion_links.h"
 #include "firn/transport/edge_lobe.h"
 #include "firn/transport/half_space.h"
 #include "firn/transport/incident_light.h"
@@ -133,7 +134,8 @@ class Stopwatch {
 struct Channel {
     double k, omega, g;
     double sigmaT(double rho) const { return k * rho; }
-    double sigmaTr(double rho) const { return (1.0 - omega * g) * k * rho; }   // sigma_a + sigma_s (1 - g)
+    double sigmaTrPerDensity() const { return (1.0 - omega * g) * k; }
+    double sigmaTr(double rho) const { return sigmaTrPerDensity() * rho; }  // sigma_a + sigma_s (1 - g)
     double reducedAlbedo() const { return omega * (1.0 - g) / (1.0 - omega * g); }
     double beta() const { return std::sqrt((1.0 - omega) / (3.0 * (1.0 - omega * g))); }  // kappa D
     // What a half-space returns of diffuse light by this diffusion (Marshak's condition, extrapolation 2D):
@@ -498,29 +500,8 @@ struct ChannelSystem {
     void releaseDiffuseTerms() { skyToNode = skyReturned = area = SurfaceValues<float>(); }
 };
 
-// Finite volumes with exponential fitting: every link between two unknowns, and between an unknown and
-// a boundary, is treated as the exact one-dimensional diffusion problem -phi'' + beta^2 phi = 0 in the
-// resistance coordinate R (dR = 3 sigma_tr dz), so voxels many diffusion lengths thick stay exact.
-
-// A link between two unknowns R apart: conductance, and the absorption it lends each end.
-struct Link {
-    double conductance, halfMass;  // per unit face area
-};
-// sinh(x) / x and tanh(x) / x, by series where x is small (snow: x ~ 0.1 per voxel), where they are
-// exact to double precision and cost no exponentials.
-double sinhOverX(double x) {
-    const double x2 = x * x;
-    return x < 0.3 ? 1.0 + x2 / 6.0 * (1.0 + x2 / 20.0 * (1.0 + x2 / 42.0 * (1.0 + x2 / 72.0))) : std::sinh(x) / x;
-}
-double tanhOverX(double x) {
-    const double x2 = x * x;
-    return x < 0.1 ? 1.0 - x2 / 3.0 * (1.0 - 0.4 * x2 * (1.0 - 17.0 / 42.0 * x2)) : std::tanh(x) / x;
-}
-
-Link interiorLink(double beta, double R) {
-    const double x = beta * R;
-    return {1.0 / (R * sinhOverX(x)), 0.5 * beta * x * tanhOverX(0.5 * x)};
-}
+// Finite volumes with exponential fitting (diffusion_links.h): the links between unknowns, and below those to
+// a boundary.
 
 // The stretch from a boundary to the unknown's node, L in resistance, with the boundary condition
 // phi = Rb dphi/dR + Phi (Marshak: Rb = 2 for air, 2 (1 + a) / (1 - a) for a Lambertian surface of
@@ -582,6 +563,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::Accessor density = medium.accessor();
+        const SharedLinks links(topo.link, topo.density, ch.sigmaTrPerDensity(), beta, h, range.begin(), range.end());
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const double sigmaTr = ch.sigmaTr(topo.density[i]);
             const SurfacePatch &patch = topo.patches[i];
@@ -593,7 +575,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             for (int f = 0; f < 6; ++f) {
                 const std::int32_t link = topo.link[i][f];
                 if (!SnowTopology::isFace(link)) {
-                    const Link L = interiorLink(beta, 1.5 * h * (sigmaTr + ch.sigmaTr(topo.density[link])));
+                    const Link L = links.at(i, f);
                     conductance[f] = h2 * L.conductance;
                     diag += h2 * L.conductance;
                     mass[f] = h2 * L.halfMass;
@@ -699,7 +681,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             sys.area.surface(i) = patch.area;
             sys.skyIn.surface(i) = sky * sys.area[i];
         }
-    });
+    }, tbb::simple_partitioner());  // runs of at most 1024 unknowns: SharedLinks' buffer stays small
     return sys;
 }
 
