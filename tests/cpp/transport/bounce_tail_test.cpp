@@ -43,6 +43,19 @@ TEST(BounceTail, CompletesAGeometricSeriesPerChannel) {
     EXPECT_EQ(last[2], glm::vec3(0.0f));  // inside the snow: no patch
 }
 
+// Two regions whose bounces return different shares (a dense cluster 0.75, a lone piece 0.25) each complete
+// their own geometric series: one share over both (area-weighted, 0.6 here) gave the cluster b / 0.4 for b / 0.25.
+TEST(BounceTail, CompletesEachRegionsOwnSeries) {
+    TwoPatches s;
+    s.topo.coord[1] = openvdb::Coord(4 << kBounceRegionLog2, 0, 0);  // four regions away
+    const float cluster = 0.75f, lone = 0.25f;
+    const auto before = s.gather(glm::vec3(4.0f), glm::vec3(2.0f));
+    auto last = s.gather(glm::vec3(4.0f + 4.0f * cluster), glm::vec3(2.0f + 2.0f * lone));
+    addBounceTail(s.topo, nullptr, before, last);
+    EXPECT_NEAR(last[0].x, 4.0f / (1.0f - cluster), 1e-4f);
+    EXPECT_NEAR(last[1].x, 2.0f / (1.0f - lone), 1e-5f);
+}
+
 // The bounce before the last is the difference of the two gathers before it.
 TEST(BounceTail, MeasuresTheShareFromTheLastTwoBounces) {
     const TwoPatches s;
