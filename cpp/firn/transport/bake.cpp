@@ -436,8 +436,11 @@ MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::v
 MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
                               std::uint64_t seed, const SubProgress &progress) {
     const MonteCarloReference reference(scene);
-    return tracedVoxels(reference, voxels, [&](std::size_t v) { return reference.sourceIn(voxels[v], samples, seed, v); },
-                        progress);
+    const Medium &medium = *scene.medium;
+    return tracedVoxels(reference, voxels, [&](std::size_t v) {
+            Medium::Accessor density = medium.accessor();
+            return reference.sourceIn(voxels[v], samples, seed, v, true, gatheredWhereSeen(medium, density, voxels[v]));
+        }, progress);
 }
 
 // The voxels whose gathering costs more than the budget (tracedSamples: 0), by light tracing within it
