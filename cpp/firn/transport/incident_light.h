@@ -65,6 +65,13 @@ void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3
 // the caller's (one per thread; an accessor made per call started each lookup from the tree's root).
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i, Medium::Accessor &density);
 
+// Where a ray from surface voxel i's patch along w (unit, leaving the patch) leaves the density ramp the patch lies
+// in: at most twice patchOutside's distance (and a voxel) along it. A light's shadow taken from there falls where
+// the snow in front of it casts it; from patchOutside, up to 3.5 voxels out along the normal, a small piece's
+// patches looked past the shadow of a piece its own size.
+glm::dvec3 pastOwnRamp(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
+                       Medium::Accessor &density);
+
 // Reduced extinction per unit density, per channel: k (1 - omega g) (m^2/kg).
 glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
 
