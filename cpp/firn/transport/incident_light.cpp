@@ -298,15 +298,12 @@ glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::siz
     return p;
 }
 
-glm::dvec3 pastOwnRamp(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
+glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
                        Medium::Accessor &density) {
-    const double h = medium.voxelSize();
-    const double thin = kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h);
-    const glm::dvec3 surface = medium.voxelCentre(topo.coord[i]) + 0.5 * h * topo.patches[i].normal;
-    const double most = 2.0 * glm::length(patchOutside(medium, topo, i, density) - surface) + h;
-    double t = 0.0;
-    while (t < most && medium.densityAt(surface + t * w, density) >= thin) t += 0.5 * h;
-    return surface + std::min(t, most) * w;
+    const glm::dvec3 n = topo.patches[i].normal;
+    const glm::dvec3 surface = medium.voxelCentre(topo.coord[i]) + 0.5 * medium.voxelSize() * n;
+    const double height = glm::length(patchOutside(medium, topo, i, density) - surface);
+    return surface + height / std::max(glm::dot(n, w), 1.0 / 3.0) * w;
 }
 
 IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
@@ -352,12 +349,13 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
                 if (topo.patches[i].isSurface() && topo.patches[i].facesTowards(towardsBeam(scene, b, centre))) {
-                    // Snow in the way from where the ray towards the light leaves the density ramp; occluders'
-                    // shadow on the surface itself (half a voxel out), so shadow edges fall where they do on the snow.
+                    // Snow in the way from a point of the line through the patch along the light past the density
+                    // ramp (patchOutsideAlong); occluders' shadow on the surface itself (half a voxel out), so shadow edges
+                    // fall where they do on the snow.
                     const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
-                    const glm::dvec3 from = pastOwnRamp(medium, topo, i, towardsBeam(scene, b, centre), density);
-                    beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher,
-                                               &surface, Crossing::Spreading).irradiance;
+                    const glm::dvec3 from = patchOutsideAlong(medium, topo, i, towardsBeam(scene, b, centre), density);
+                    beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher, &surface,
+                                                       Crossing::Spreading).irradiance;
                 }
             }
         });

@@ -65,11 +65,11 @@ void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3
 // the caller's (one per thread; an accessor made per call started each lookup from the tree's root).
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i, Medium::Accessor &density);
 
-// Where a ray from surface voxel i's patch along w (unit, leaving the patch) leaves the density ramp the patch lies
-// in: at most twice patchOutside's distance (and a voxel) along it. A light's shadow taken from there falls where
-// the snow in front of it casts it; from patchOutside, up to 3.5 voxels out along the normal, a small piece's
-// patches looked past the shadow of a piece its own size.
-glm::dvec3 pastOwnRamp(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
+// Where a ray from surface voxel i's patch along w (unit, leaving the patch) lies as high above the patch as
+// patchOutside (past the density ramp and any fringe; the ray at most 3 times that height long): a light's shadow
+// taken from there falls where the snow in front casts it. From patchOutside itself, up to 3.5 voxels out along
+// the normal, a small piece's patches looked past the shadow of a piece its own size.
+glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
                        Medium::Accessor &density);
 
 // Reduced extinction per unit density, per channel: k (1 - omega g) (m^2/kg).
