@@ -844,7 +844,7 @@ Displacement halfSpaceDisplacement(double mu0) {
 }
 
 // Surface voxel i's downstream kernel (SurfaceLight::downstream, spread; m): the beams' displacements weighted
-// by the power each lets in, on the snow beneath the patch.
+// by the power each lets in, on the snow beneath the patch (channel ch's sigma_tr: one kernel for the three).
 void downstreamKernel(const Scene &scene, const IncidentLight &light, const ChannelSystem &sys, const Channel &ch,
                       const SnowTopology &topo, std::size_t i, SurfaceLight &surface) {
     const glm::dvec3 n = topo.patches[i].normal, centre = scene.medium->voxelCentre(topo.coord[i]);
