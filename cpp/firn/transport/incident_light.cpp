@@ -73,7 +73,8 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const glm::dvec3 &point,
         double around = 0.0;  // kg/m^2 of the other pieces within reachAcross of this one along the ray
         for (const Piece &other : pieces)
             if (&other != &piece && std::abs(0.5 * (other.near + other.far) - centre) <= reachAcross) around += other.column;
-        const double share = std::min(1.0, forwardShare(0.5 * (piece.far - piece.near), piece.near, tau, optics.g) + around / piece.column);
+        const double alone = forwardShare(0.5 * (piece.far - piece.near), piece.near, tau, optics.g);
+        const double share = std::min(1.0, alone + around / piece.column);
         through *= uncollided + (glm::exp(-reduced * piece.column) - uncollided) * share;
     }
     return largest(through) >= kMinTransmittance ? through : glm::dvec3(0.0);
@@ -299,7 +300,7 @@ glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::siz
 }
 
 glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
-                       Medium::Accessor &density) {
+                             Medium::Accessor &density) {
     const glm::dvec3 n = topo.patches[i].normal;
     const glm::dvec3 surface = medium.voxelCentre(topo.coord[i]) + 0.5 * medium.voxelSize() * n;
     const double height = glm::length(patchOutside(medium, topo, i, density) - surface);
@@ -349,9 +350,9 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
                 if (topo.patches[i].isSurface() && topo.patches[i].facesTowards(towardsBeam(scene, b, centre))) {
-                    // Snow in the way from a point of the line through the patch along the light past the density
-                    // ramp (patchOutsideAlong); occluders' shadow on the surface itself (half a voxel out), so shadow edges
-                    // fall where they do on the snow.
+                    // Snow in the way from the line through the patch along the light, past the density ramp
+                    // (patchOutsideAlong); occluders' shadow on the surface itself (half a voxel out), so shadow
+                    // edges fall where they do on the snow.
                     const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
                     const glm::dvec3 from = patchOutsideAlong(medium, topo, i, towardsBeam(scene, b, centre), density);
                     beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher, &surface,

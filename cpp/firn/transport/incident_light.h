@@ -70,7 +70,7 @@ glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std:
 // taken from there falls where the snow in front casts it. From patchOutside itself, up to 3.5 voxels out along
 // the normal, a small piece's patches looked past the shadow of a piece its own size.
 glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
-                       Medium::Accessor &density);
+                             Medium::Accessor &density);
 
 // Reduced extinction per unit density, per channel: k (1 - omega g) (m^2/kg).
 glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
