@@ -472,6 +472,7 @@ struct ChannelSystem {
     std::vector<double> b;  // W: diffuse sources at the voxel nodes
     // Surface voxels only (what crosses air faces):
     SurfaceValues<float> escaped;             // W: light leaving through air faces without reaching the node
+    SurfaceValues<float> sunEscaped;          // W: of it, the beams' light (scattered above the node)
     SurfaceValues<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
     std::vector<SurfaceValues<float>> sunIn;  // per beam (sun or lamp), W entering through air faces
     SurfaceValues<float> skyIn;               // W entering through air faces
@@ -482,7 +483,7 @@ struct ChannelSystem {
 
     ChannelSystem(const SnowTopology &topo, std::size_t beams, ChannelStorage storage)
         : A(std::move(storage.A)), remainder(std::move(storage.remainder)), b(std::move(storage.b)),
-          escaped(surfaceZeros(topo)), outConductance(surfaceZeros(topo)),
+          escaped(surfaceZeros(topo)), sunEscaped(surfaceZeros(topo)), outConductance(surfaceZeros(topo)),
           sunIn(beams, surfaceZeros(topo)), skyIn(surfaceZeros(topo)), skyToNode(surfaceZeros(topo)),
           skyReturned(surfaceZeros(topo)), area(surfaceZeros(topo)) {
         b.assign(topo.size(), 0.0);
@@ -668,6 +669,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     const double R = beamScatteringDepth(muIn[f], L);
                     source += boundary[f]->toNode(R) * P;
                     sys.escaped.surface(i) += boundary[f]->toBoundary(R) * P;
+                    sys.sunEscaped.surface(i) += boundary[f]->toBoundary(R) * P;
                 }
             }
             // Light reflected by occluders under the snow enters diffusely through their faces.
@@ -701,6 +703,14 @@ struct SurfaceLight {
     // ... the suns' light returned sharply forwards (smooth patches; SunPeak), the peaked lobe's p0 per channel
     // and grey first moment p1 (radiance, source_lobe.h) ...
     glm::vec3 peak0{0.0f}, peak1{0.0f};
+    // ... the suns' light the half-space model returns at the patch it entered (smooth patches), which leaves
+    // downstream (sunLeavingDownstream: by the half-space's displacement `downstream` +- `spread`, m): what the
+    // diffusion misses of it and its share of the sun lobe's shape (W and moments), and of `leaving` what escaped
+    // at once (W per channel) ...
+    BroadLobe sunReturned;
+    glm::vec3 sunAtOnce{0.0f};
+    glm::vec3 downstream{0.0f};
+    float spread = 0.0f;
     // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
     // but spread unevenly over a voxel staircase).
     glm::vec3 leaving{0.0f};
@@ -807,6 +817,57 @@ double acrossSnowFaces(const SnowTopology &topo, std::size_t i, const glm::dvec3
     return across * h * h / topo.patches[i].area;
 }
 
+// Light returned through a patch (W and the first moments of its linear radiance), over and above the escape
+// function's share: of the sky (and light from other snow) and of the beams.
+struct ReturnedLight {
+    double sky0;
+    glm::dvec3 sky1;
+    double sun0;
+    glm::dvec3 sun1;
+    double sunShape0;  // of sun0, sun1: the sun lobe's shape beyond the escape function's
+    glm::dvec3 sunShape1;
+    double sunMissed, sunReturned;  // W: what the diffusion misses of it; all the half-space returns
+};
+
+// Where a half-space returns a beam entering at cos mu0, relative to where it entered, in transport mean free
+// paths 1/sigma_tr: the mean displacement along the beam's tangential travel and the spread about it (standard
+// deviation along it). Monte Carlo, bench/halfspace_displacement.py (100,000 photons), the means of omega 0.98,
+// g 0.85 and omega 0.9, g 0.6 (within 0.1 of omega 0.9999, g 0.85 for the mean), at mu0 0.05, 0.15, 0.3, 0.5, 0.7, 1.
+struct Displacement {
+    double mean, spread;
+};
+Displacement halfSpaceDisplacement(double mu0) {
+    static constexpr std::array<double, 6> kMu{0.05, 0.15, 0.3, 0.5, 0.7, 1.0};
+    static constexpr std::array<double, 6> kMean{0.58, 0.67, 0.73, 0.71, 0.60, 0.0};
+    static constexpr std::array<double, 6> kSpread{0.81, 0.93, 1.05, 1.17, 1.26, 1.37};
+    std::size_t k = 1;
+    while (k + 1 < kMu.size() && mu0 > kMu[k]) ++k;
+    const double f = std::clamp((mu0 - kMu[k - 1]) / (kMu[k] - kMu[k - 1]), 0.0, 1.0);
+    return {kMean[k - 1] + f * (kMean[k] - kMean[k - 1]), kSpread[k - 1] + f * (kSpread[k] - kSpread[k - 1])};
+}
+
+// Surface voxel i's downstream kernel (SurfaceLight::downstream, spread; m): the beams' displacements weighted
+// by the power each lets in, on the snow beneath the patch (channel ch's sigma_tr: one kernel for the three).
+void downstreamKernel(const Scene &scene, const IncidentLight &light, const ChannelSystem &sys, const Channel &ch,
+                      const SnowTopology &topo, std::size_t i, SurfaceLight &surface) {
+    const glm::dvec3 n = topo.patches[i].normal, centre = scene.medium->voxelCentre(topo.coord[i]);
+    const double transportPath = 1.0 / ch.sigmaTr(densityBeneath(topo, i, n));  // m
+    double power = 0.0, spread = 0.0;
+    glm::dvec3 downstream(0.0);
+    for (std::size_t s = 0; s < light.beams.size(); ++s) {
+        const double P = sys.sunIn[s][i];
+        if (P <= 0.0) continue;
+        const glm::dvec3 d = -towardsBeam(scene, s, centre);
+        const glm::dvec3 t = d - glm::dot(d, n) * n;
+        const Displacement k = halfSpaceDisplacement(std::clamp(-glm::dot(d, n), 0.05, 1.0));
+        if (glm::length(t) > 1e-9) downstream += P * k.mean * glm::normalize(t);
+        spread += P * k.spread, power += P;
+    }
+    if (power <= 0.0) return;
+    surface.downstream = glm::vec3(transportPath / power * downstream);
+    surface.spread = float(transportPath * spread / power);
+}
+
 // Channel c's light leaving each surface voxel, from its solve.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
                   const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
@@ -839,6 +900,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         const double sky = skyShare * sys.skyIn[i];
         double r0 = sky * (1.0 - 3.0 / 7.0), missed = sky * diffuseMissed;  // W
         glm::dvec3 r1 = -sky * escape1;
+        double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0;  // the beams' part
+        glm::dvec3 sun1(0.0);
         // The half-space of the snow beneath the patch: a voxel's resistance and the node's below the surface
         // (schemeBeamAlbedo's d, L). A smooth surface's fringe voxel holds less snow where the surface crosses it
         // (antialiasing), its ramp: the snow's own density for d, not the fringe's (with the fringe's ball_grey
@@ -853,21 +916,23 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             glm::dvec3 t = d - glm::dot(d, n) * n;
             t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
             const double returned = P * lobe.albedo;
-            missed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, acrossSnowFaces(topo, i, -d, h)));
+            sunReturned += returned;
+            sunMissed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, acrossSnowFaces(topo, i, -d, h)));
             if (!peak) {
-                r0 += returned * (lobe.a - 3.0 / 7.0);
-                r1 += returned * (lobe.b * n + lobe.c * t - escape1);
+                sun0 += returned * (lobe.a - 3.0 / 7.0);
+                sun1 += returned * (lobe.b * n + lobe.c * t - escape1);
                 continue;
             }
             const SunPeak split = sunPeak(ch.g, mu0, y, lobe);
-            r0 += returned * ((1.0 - split.share) * split.a() - 3.0 / 7.0);
-            r1 += returned * ((1.0 - split.share) * (split.b * n + split.c * t) - escape1);
+            sun0 += returned * ((1.0 - split.share) * split.a() - 3.0 / 7.0);
+            sun1 += returned * ((1.0 - split.share) * (split.b * n + split.c * t) - escape1);
             const double p0 = split.mean * returned / (kPi * topo.patches[i].area);
             const glm::dvec3 m = std::cos(split.elevation) * t + std::sin(split.elevation) * n;
             peak->peak0[c] += float(p0);
             peak->peak1 += glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part
         }
-        return std::pair{r0 + missed * 3.0 / 7.0, r1 + missed * escape1};
+        return ReturnedLight{r0 + missed * 3.0 / 7.0, r1 + missed * escape1, sun0 + sunMissed * 3.0 / 7.0,
+                             sun1 + sunMissed * escape1, sun0, sun1, sunMissed, sunReturned};
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -876,8 +941,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const SurfacePatch &patch = topo.patches[i];
             const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
             SurfaceLight &surface = out.surface(i);
-            const auto [r0, r1] = returnedThrough(i, patch.normal, 1.0, [](std::size_t) { return 1.0; },
-                                                  patch.sharp ? nullptr : &surface);
+            const ReturnedLight r = returnedThrough(i, patch.normal, 1.0, [](std::size_t) { return 1.0; },
+                                                    patch.sharp ? nullptr : &surface);
             // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
             // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
             // through the smooth surface or, at a sharp edge, through each air face.
@@ -910,9 +975,25 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             }
             surface.crossing[c] = float(crossing);
             if (crossing > 0.0) surface.crossingAxis = glm::vec3(axis / crossing);
-            surface.returned.l0[c] = float(r0);
-            surface.returned.l1[c] = glm::vec3(r1 + leaving * drift);
+            if (patch.sharp) {
+                surface.returned.l0[c] = float(r.sky0 + r.sun0);
+                surface.returned.l1[c] = glm::vec3(r.sky1 + r.sun1 + leaving * drift);
+                surface.leaving[c] = float(leaving);
+                continue;
+            }
+            // The suns' light the half-space returns at the patch it entered leaves downstream (sunLeavingDownstream):
+            // what escaped at once and what the diffusion misses, with their share of the sun lobe's shape (the
+            // rest of the shape goes with the light the diffusion carries from the node). The peaked lobe stays:
+            // single scattering at grazing sun leaves within a mean free path, a small part of 1/sigma_tr.
+            const double atOnce = sys.sunEscaped[i];
+            const double moved = r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
+            surface.returned.l0[c] = float(r.sky0 + (1.0 - moved) * r.sunShape0);
+            surface.returned.l1[c] = glm::vec3(r.sky1 + (1.0 - moved) * r.sunShape1 + leaving * drift);
+            surface.sunReturned.l0[c] = float(moved * r.sunShape0 + r.sunMissed * 3.0 / 7.0);
+            surface.sunReturned.l1[c] = glm::vec3(moved * r.sunShape1 + r.sunMissed * 6.0 / 7.0 * patch.normal);
             surface.leaving[c] = float(leaving);
+            surface.sunAtOnce[c] = float(atOnce);
+            if (c == 1) downstreamKernel(scene, light, sys, ch, topo, i, surface);
         }
     });
     // Sharp edges: each air face's own exit radiance (the light returned through it, the exitance of the
@@ -928,7 +1009,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             for (int f = 0; f < 6; ++f) {
                 if (patch.share[f] <= 0.0f) continue;
                 const glm::dvec3 n = faceNormal(f);
-                const auto [r0, r1] = returnedThrough(i, n, patch.share[f], [&](std::size_t s) {
+                const ReturnedLight r = returnedThrough(i, n, patch.share[f], [&](std::size_t s) {
                     const glm::dvec3 w = towardsBeam(scene, s, centre);  // the beam entered each face by its cosine
                     double total = 0.0;
                     for (int g = 0; g < 6; ++g)
@@ -938,13 +1019,80 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 const auto [leaving, area] =
                     neighbourhoodOutflow<double>(topo, i, n, [&](std::size_t j) { return double(out[j].leaving[c]); });
                 const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
-                faces.push_back({n, r0 / own + exitance * (3.0 / 7.0 / kPi), r1 / own + exitance * 6.0 / 7.0 / kPi * n});
+                faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
+                                 (r.sky1 + r.sun1) / own + exitance * 6.0 / 7.0 / kPi * n});
             }
             const SourceLobe lobe = edgeLobe(faces);
             out.surface(i).returned.l0[c] = float(lobe.l0);
             out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);
         }
     });
+}
+
+// The rotation taking unit vector `from` to unit vector `to` (the shorter way; from . to > -1), applied to v.
+glm::dvec3 rotatedWith(const glm::dvec3 &v, const glm::dvec3 &from, const glm::dvec3 &to) {
+    const glm::dvec3 axis = glm::cross(from, to);  // sin times the unit axis
+    const double cos = glm::dot(from, to);
+    return cos * v + glm::cross(axis, v) + axis * (glm::dot(axis, v) / (1.0 + cos));
+}
+
+// The weight surface voxel i's downstream kernel gives surface voxel j of its 3^3 block (before normalizing): a
+// Gaussian of the half-space's displacement (SurfaceLight::downstream, spread) in i's tangent plane, times j's patch
+// area and the cosine between the normals; smooth patches only.
+double downstreamWeight(const SnowTopology &topo, const SurfaceLight &from, std::size_t i, std::size_t j, double h) {
+    const SurfacePatch &a = topo.patches[i], &b = topo.patches[j];
+    const double facing = glm::dot(a.normal, b.normal);
+    if (b.sharp || facing <= 0.0) return 0.0;
+    if (from.spread <= 0.0f) return i == j ? 1.0 : 0.0;
+    const openvdb::Coord d = topo.coord[j] - topo.coord[i];
+    glm::dvec3 step = h * glm::dvec3(d.x(), d.y(), d.z());
+    step -= glm::dot(step, a.normal) * a.normal;
+    const glm::dvec3 off = step - glm::dvec3(from.downstream);
+    return facing * b.area * std::exp(-glm::dot(off, off) / (2.0 * double(from.spread) * double(from.spread)));
+}
+
+// The suns' light each smooth patch returns at once (SurfaceLight::sunReturned; sunAtOnce averaged over its
+// neighbourhood as the outflow is, for a staircase lets it out unevenly), where it leaves: over the surface voxels of
+// its 3^3 block by downstreamWeight, the weights of each sender summing to one (the power is kept), the forms turned
+// with the normal. A flat, evenly lit surface receives what it sends (the flat slabs unchanged); past a terminator
+// the patches downstream take what entered before it (docs/bake.md, Method 5). W and moments per surface voxel.
+SurfaceValues<BroadLobe> sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved, double h) {
+    SurfaceValues<float> total(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);  // each sender's weights' sum
+    SurfaceValues<glm::vec3> atOnce(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));  // W sent, averaged
+    auto smooth = [&](std::size_t i) { return topo.patches[i].isSurface() && !topo.patches[i].sharp; };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!smooth(i)) continue;
+            const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(
+                topo, i, topo.patches[i].normal, [&](std::size_t j) { return glm::dvec3(solved[j].sunAtOnce); });
+            atOnce.surface(i) = glm::vec3(leaving / area * double(topo.patches[i].area));
+            double sum = 0.0;
+            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k)
+                sum += downstreamWeight(topo, solved[i], i, topo.neighbourhood[k], h);
+            total.surface(i) = float(sum);
+        }
+    });
+    SurfaceValues<BroadLobe> out(topo.surfaceSlot, topo.surfaceVoxels());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t j = range.begin(); j != range.end(); ++j) {
+            if (!smooth(j)) continue;
+            const glm::dvec3 to = topo.patches[j].normal;
+            BroadLobe &received = out.surface(j);
+            for (std::size_t k = topo.neighbourhoodStart[j]; k < topo.neighbourhoodStart[j + 1]; ++k) {
+                const std::uint32_t i = topo.neighbourhood[k];
+                if (!smooth(i) || !(total[i] > 0.0f)) continue;
+                const double w = downstreamWeight(topo, solved[i], i, j, h) / total[i];
+                if (w <= 0.0) continue;
+                const BroadLobe &sent = solved[i].sunReturned;
+                for (int c = 0; c < 3; ++c) {  // what escaped at once in the escape function's shape
+                    received.l0[c] += float(w * (sent.l0[c] + 3.0 / 7.0 * atOnce[i][c]));
+                    received.l1[c] += glm::vec3(w * (rotatedWith(glm::dvec3(sent.l1[c]), topo.patches[i].normal, to) +
+                                                     6.0 / 7.0 * atOnce[i][c] * to));
+                }
+            }
+        }
+    });
+    return out;
 }
 
 // Radiance leaving each surface voxel. The returned part is the voxel's own (over its patch's area); the
@@ -956,22 +1104,25 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
 // lit top's light spread down a shadowed side a voxel or two, bench/bake_suite.py box_sharp: 8.7 % mean
 // error with them, 5.4 % without).
 SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
-                                      const SurfaceValues<SurfaceLight> &solved) {
+                                      const SurfaceValues<SurfaceLight> &solved, double h) {
+    const SurfaceValues<BroadLobe> downstream = sunLeavingDownstream(topo, solved, h);
     SurfaceValues<Source> out(topo.surfaceSlot, topo.surfaceVoxels());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
             const glm::dvec3 &n = topo.patches[i].normal;
-            const auto [leaving, area] =
-                neighbourhoodOutflow<glm::dvec3>(topo, i, n, [&](std::size_t j) { return glm::dvec3(solved[j].leaving); });
+            const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(
+                topo, i, n, [&](std::size_t j) { return glm::dvec3(solved[j].leaving - solved[j].sunAtOnce); });
             const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
             const double own = kPi * topo.patches[i].area;
             const BroadLobe &returned = solved[i].returned;
+            const BroadLobe &sun = downstream[i];
             for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
                 const SourceLobe lobe =
-                    topo.patches[i].sharp ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
-                                          : exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
-                                                     glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
+                    topo.patches[i].sharp
+                        ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
+                        : exitLobe((returned.l0[c] + sun.l0[c]) / own + exitance[c] * (3.0 / 7.0 / kPi),
+                                   glm::dvec3(returned.l1[c] + sun.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
                 // The crossing beams, added by their moments: light scattered forwards many times is broader
                 // than one scattering's peak (in the peaked lobe, k = g: ball_forward 17.6 % against 17.1 %, seen
                 // against the sun -29 % against -21 %; spray_lumps 20.1 % against 19.7 %; docs/bake.md).
@@ -1730,7 +1881,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                 surfaceLight(scene, topo, light, system, phi[c], c, leaving);
             }
         }
-        SurfaceValues<Source> surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
+        SurfaceValues<Source> surface = surfaceRadiance(scene.medium->optics(), topo, leaving, scene.medium->voxelSize());
         if (reference && pass + 1 == passes) {
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));

@@ -32,6 +32,54 @@ glm::dvec3 extinction(const VolumeOptics &optics, Crossing crossing) {
     return crossing == Crossing::Beam ? reducedExtinctionPerDensity(optics) : glm::dvec3(optics.extinctionPerDensity);
 }
 
+double largest(const glm::dvec3 &v) { return std::max({v.x, v.y, v.z}); }
+
+// Snow transmittance from `point` along w (unit) up to `reach` (m) for Crossing::Spreading. Each stretch of snow
+// the ray crosses (a piece: contiguous half-voxel samples with snow) lets through its uncollided light and, of
+// what it scatters forwards (the similarity beam's e^-tau_tr less e^-tau), the share that reaches the point: a
+// lone piece's forwardShare, plus what the snow around it sends the same way, the other pieces' mass within the
+// forward cone's reach (d theta) of it along the ray standing for the snow beside it (in a wide cloud all of it
+// arrives: what the point's own ray loses forwards, its neighbours' rays bring). 0 once every channel is below
+// kMinTransmittance.
+glm::dvec3 spreadingTransmittance(const Medium &medium, const glm::dvec3 &point, const glm::dvec3 &w, double reach,
+                                  Medium::ColumnMarcher &marcher) {
+    struct Piece {
+        double near = 0.0, far = -1.0;  // m along the ray
+        double column = 0.0;            // kg/m^2
+    };
+    const VolumeOptics &optics = medium.optics();
+    const glm::dvec3 reduced = reducedExtinctionPerDensity(optics);
+    const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
+    const double h = medium.voxelSize();
+    const glm::dvec3 start = medium.worldToIndex(point);
+    std::vector<Piece> pieces(1);
+    double total = 0.0;
+    marcher.march(point, w, reach, 0.5, [&](const openvdb::Vec3d &p, double dt) {
+        const double rho = marcher.densityAt(p);
+        if (rho <= 0.0) return true;
+        const double t = h * glm::length(glm::dvec3(p.x(), p.y(), p.z()) - start);
+        if (pieces.back().column > 0.0 && t - 0.5 * dt > pieces.back().far + 1e-3 * h) pieces.emplace_back();
+        Piece &piece = pieces.back();
+        if (piece.column == 0.0) piece.near = t - 0.5 * dt;
+        piece.column += rho * dt, piece.far = t + 0.5 * dt, total += rho * dt;
+        return std::exp(-thinnest * total) >= kMinTransmittance;
+    });
+    glm::dvec3 through(1.0);
+    for (const Piece &piece : pieces) {
+        if (piece.column <= 0.0) continue;
+        const double tau = optics.extinctionPerDensity * piece.column;
+        const double uncollided = std::exp(-tau);
+        const double centre = 0.5 * (piece.near + piece.far), reachAcross = piece.near * forwardConeWidth(tau, optics.g);
+        double around = 0.0;  // kg/m^2 of the other pieces within reachAcross of this one along the ray
+        for (const Piece &other : pieces)
+            if (&other != &piece && std::abs(0.5 * (other.near + other.far) - centre) <= reachAcross) around += other.column;
+        const double alone = forwardShare(0.5 * (piece.far - piece.near), piece.near, tau, optics.g);
+        const double share = std::min(1.0, alone + around / piece.column);
+        through *= uncollided + (glm::exp(-reduced * piece.column) - uncollided) * share;
+    }
+    return largest(through) >= kMinTransmittance ? through : glm::dvec3(0.0);
+}
+
 // Radiance (W/m^2/sr) an occluder sends from point q (unit normal n facing the viewer) after one
 // reflection of sun and sky light, each estimated with one ray.
 glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
@@ -144,6 +192,18 @@ void parallelChunks(std::size_t n, const SubProgress &progress, const Body &body
 
 }  // namespace
 
+double forwardConeWidth(double opticalDepth, double g) {
+    const double scatterings = opticalDepth > 1e-6 ? opticalDepth / -std::expm1(-opticalDepth) : 1.0;
+    return scatterings * (1.0 - g) / std::sqrt(std::max(g, 1e-6));
+}
+
+double forwardShare(double radius, double distance, double opticalDepth, double g) {
+    const double spread = distance * forwardConeWidth(opticalDepth, g);
+    if (!(spread > 0.0)) return 1.0;
+    const double x = radius / spread;
+    return 1.0 - 1.0 / std::sqrt(1.0 + x * x);
+}
+
 glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics) {
     return optics.extinctionPerDensity * (glm::dvec3(1.0) - optics.albedo * optics.g);
 }
@@ -166,8 +226,15 @@ BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, in
     const double reach = sun ? std::numeric_limits<double>::infinity()
                              : glm::length(scene.lamps[b - scene.suns.size()].position - point);
     BeamSample out;
-    const double column = marcher.column(point, w, reach, limit);
-    out.snowBlocks = column >= limit;
+    glm::dvec3 snow;
+    if (crossing == Crossing::Spreading) {
+        snow = spreadingTransmittance(*scene.medium, point, w, reach, marcher);
+        out.snowBlocks = snow == glm::dvec3(0.0);
+    } else {
+        const double column = marcher.column(point, w, reach, limit);
+        out.snowBlocks = column >= limit;
+        snow = transmittance(reduced, column);
+    }
     if (out.snowBlocks) return out;
     const glm::vec3 from(shadowPoint ? *shadowPoint : point);
     const RayCaster &caster = scene.occluders->caster();
@@ -193,7 +260,7 @@ BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, in
             if (!caster.occluded(from, glm::vec3(l.direction), 1e-5f, float(l.distance * (1.0 - 1e-6)))) sum += l.irradiance;
         }
     }
-    out.irradiance = glm::vec3(transmittance(reduced, column) * sum / double(samples));
+    out.irradiance = glm::vec3(snow * sum / double(samples));
     return out;
 }
 
@@ -230,6 +297,14 @@ glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::siz
     glm::dvec3 p = medium.voxelCentre(topo.coord[i]) + h * topo.patches[i].normal;
     for (int k = 0; k < 6 && medium.densityAt(p, density) >= thin; ++k) p += 0.5 * h * topo.patches[i].normal;
     return p;
+}
+
+glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
+                             Medium::Accessor &density) {
+    const glm::dvec3 n = topo.patches[i].normal;
+    const glm::dvec3 surface = medium.voxelCentre(topo.coord[i]) + 0.5 * medium.voxelSize() * n;
+    const double height = glm::length(patchOutside(medium, topo, i, density) - surface);
+    return surface + height / std::max(glm::dot(n, w), 1.0 / 3.0) * w;
 }
 
 IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
@@ -275,11 +350,13 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
                 if (topo.patches[i].isSurface() && topo.patches[i].facesTowards(towardsBeam(scene, b, centre))) {
-                    // Snow in the way from outside the density ramp; occluders' shadow on the surface itself
-                    // (half a voxel out), so shadow edges fall where they do on the snow.
+                    // Snow in the way from the line through the patch along the light, past the density ramp
+                    // (patchOutsideAlong); occluders' shadow on the surface itself (half a voxel out), so shadow
+                    // edges fall where they do on the snow.
                     const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
-                    beam.atSurface.surface(i) = beamAt(scene, b, patchOutside(medium, topo, i, density), settings.sunSamples, seed, 2 * i + 1, marcher,
-                                               &surface, Crossing::Uncollided).irradiance;
+                    const glm::dvec3 from = patchOutsideAlong(medium, topo, i, towardsBeam(scene, b, centre), density);
+                    beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher, &surface,
+                                                       Crossing::Spreading).irradiance;
                 }
             }
         });

@@ -65,13 +65,30 @@ void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3
 // the caller's (one per thread; an accessor made per call started each lookup from the tree's root).
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i, Medium::Accessor &density);
 
+// Where a ray from surface voxel i's patch along w (unit, leaving the patch) lies as high above the patch as
+// patchOutside (past the density ramp and any fringe; the ray at most 3 times that height long): a light's shadow
+// taken from there falls where the snow in front casts it. From patchOutside itself, up to 3.5 voxels out along
+// the normal, a small piece's patches looked past the shadow of a piece its own size.
+glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
+                             Medium::Accessor &density);
+
 // Reduced extinction per unit density, per channel: k (1 - omega g) (m^2/kg).
 glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
 
 // How light crossing snow is attenuated: inside the snow, as the similarity beam (forward-scattered light
 // travels on, sigma_tr); on its way to a surface from outside, uncollided (sigma_t: what other snow
-// scatters towards the surface arrives as that snow's own radiance, gathered separately).
-enum class Crossing { Beam, Uncollided };
+// scatters towards the surface arrives as that snow's own radiance, gathered separately); a beam on its way
+// to a surface patch, uncollided plus the share of each crossed piece's forward-scattered light that still
+// reaches the patch (forwardShare: all of it right behind the piece, a fraction further off).
+enum class Crossing { Beam, Uncollided, Spreading };
+
+// Of the light a piece of snow of radius r (m, across the beam) and optical depth tau (along it) scatters
+// forwards, the share reaching a point d (m) behind it on its axis: 1 - 1 / sqrt(1 + (r / (d theta))^2). Near
+// the axis Henyey-Greenstein's phase function is the 2-D Cauchy (Poisson) kernel of width theta_1 = (1 - g) /
+// sqrt(g), whose widths add over n scatterings (theta = n theta_1, n = tau / (1 - e^-tau) the mean count of
+// those that scattered); the share is that kernel's mass within the disc's half-angle r / d.
+double forwardShare(double radius, double distance, double opticalDepth, double g);
+double forwardConeWidth(double opticalDepth, double g);  // theta (rad) above
 
 // The lights that reach into the snow as beams, each from one direction at a point: the scene's suns
 // (beam b < suns.size()), then its lamps (towards their centre).
