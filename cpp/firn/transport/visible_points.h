@@ -22,14 +22,14 @@ namespace firn {
 // voxel's source are drawn so (spray_dense 21.7 -> 19.1 % over 4 seeds; converged, 4096 paths per voxel, 18.9 ->
 // 14.5 %).
 //
-// Candidates are drawn for the directions by turns, as many for each as its visibility (visibilityFrom) times
+// Candidates are drawn for each of the directions, as many as its visibility (visibilityFrom) times
 // the hat's box's projected area along it: entering the box through the faces that face w, by projected area
 // and the hat's tent across each face, and flying along -w to a collision drawn given one within the box (the
 // trilinear density's optical depth, midpoint rule on half-voxel steps, inverted), each weighted by the weight
 // above over the candidates' density (their mixture's: the balance heuristic). kVisibleCandidates per point,
-// then resampled in proportion to their weights (stratified): the points' weights are equal (the weights spread
-// over the candidates; drawn at once, a quarter of the points' weight carried all: the estimates' noise
-// swamped the gain, spray_dense 23.8 %).
+// then resampled in proportion to their weights (stratified), so that the points gather with equal weight (drawn
+// directly, with a quarter of them spread evenly over the voxel, the weights' effective sample size was 0.26-0.39
+// and the estimates' noise swamped the gain: spray_dense 23.8-25.1 %).
 constexpr int kVisibleCandidates = 2;  // 4: 19.8 %, the trace 3.3 -> 5.8 processor s (2 at quarter-voxel steps: 18.8 %, 4.7 s)
 
 class VisiblePoints {
