@@ -1949,7 +1949,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                     if (!traced.source.empty()) thin = std::move(whole);
                 }
                 if (traced.source.empty()) {
-                    const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
+                    const int samples = local.tracedPaths = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
                     traced = samples > 0 || thin.empty()
                                  ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, progress)
                                  : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
