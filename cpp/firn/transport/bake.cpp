@@ -384,13 +384,18 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
     if (voxels.empty()) return 0;
     const MonteCarloReference reference(scene);
+    Medium::Accessor density = scene.medium->accessor();
     const double budget = kMaxTracedSteps / (double(voxels.size()) * kMinSamples);  // per path, at the least
     double steps = 0.0, last = 0.0;  // last: voxel v's pilot steps (fewer voxels than pilots repeat theirs)
     int paths = 0;
     for (int k = 0; k < kPilotVoxels; ++k) {
         const std::size_t v = voxels.size() * k / kPilotVoxels;
-        if (k == 0 || v != voxels.size() * (k - 1) / kPilotVoxels)
-            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v).steps) + kStepsPerPath * kPilotSamples;
+        if (k == 0 || v != voxels.size() * (k - 1) / kPilotVoxels) {
+            // As traceSources gathers it: where cameras see it, those points' draws counted too.
+            const bool visible = gatheredWhereSeen(*scene.medium, density, voxels[v]);
+            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v, true, visible).steps) +
+                   kStepsPerPath * kPilotSamples;
+        }
         steps += last;
         paths += kPilotSamples;
         if (steps > budget * kPilotVoxels * kPilotSamples) return 0;  // too costly already

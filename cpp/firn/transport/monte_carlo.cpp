@@ -343,12 +343,13 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     KroneckerSequence points(rng);
     // Where cameras see a thick voxel: points drawn so, of equal weight (VisiblePoints).
     std::vector<glm::dvec3> seen;
+    long seenSteps = 0;  // their draws' work (the bake's budget counts it: tracedSamples)
     if (visible) {
         KroneckerSequence candidates(rng);
         seen = visiblePoints(medium, voxel, directions_, samples, [&] {
             const std::array<double, 5> u = candidates.next();
             return std::array<double, 3>{u[0], u[1], u[2]};
-        }, rng);
+        }, rng, seenSteps);
     }
     for (int s = 0; s < samples; ++s) {
         const std::array<double, 5> u = points.next();
@@ -359,7 +360,7 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
         weights += w;
     }
     SourceEstimate out = sourceOf(sum, &toward, weights, medium.optics());
-    out.steps = tracer.steps;
+    out.steps = tracer.steps + seenSteps;
     return out;
 }
 

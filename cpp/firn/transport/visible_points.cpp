@@ -57,6 +57,7 @@ VisiblePoints::VisiblePoints(const Medium &medium, const openvdb::Coord &voxel, 
 }
 
 double VisiblePoints::sigmaT(const glm::dvec3 &y) {
+    ++lookups_;
     const glm::dvec3 ijk = centre_ + y;
     return medium_.optics().extinctionPerDensity * marcher_.densityAt(openvdb::Vec3d(ijk.x, ijk.y, ijk.z));
 }
@@ -133,7 +134,7 @@ VisiblePoints::Candidate VisiblePoints::draw(int i, const std::array<double, 3> 
 
 std::vector<glm::dvec3> visiblePoints(const Medium &medium, const openvdb::Coord &voxel,
                                       const SourceDirections &directions, int samples,
-                                      const std::function<std::array<double, 3>()> &next, Rng &rng) {
+                                      const std::function<std::array<double, 3>()> &next, Rng &rng, long &steps) {
     const int n = samples * kVisibleCandidates;
     VisiblePoints draw(medium, voxel, directions, n);
     std::vector<VisiblePoints::Candidate> candidates(n);
@@ -143,6 +144,7 @@ std::vector<glm::dvec3> visiblePoints(const Medium &medium, const openvdb::Coord
         candidates[i] = draw.draw(i, next());
         cumulative[i] = total += candidates[i].weight;
     }
+    steps += draw.steps();
     std::vector<glm::dvec3> out;
     if (!(total > 0.0)) return out;
     for (int s = 0, i = 0; s < samples; ++s) {

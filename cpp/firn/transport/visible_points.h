@@ -44,6 +44,10 @@ class VisiblePoints {
     // Candidate i from u in [0, 1)^3.
     Candidate draw(int i, const std::array<double, 3> &u);
 
+    // The density lookups and column steps taken so far (the visibility included): the draws' work in tracking
+    // steps, which the bake's budget counts (SourceEstimate::steps, tracedSamples).
+    long steps() const { return lookups_ + marcher_.columnSteps(); }
+
   private:
     // Optical depth from y (index space about the voxel's centre) along d (unit) to where it leaves the hat's box.
     double depthOut(const glm::dvec3 &y, const glm::dvec3 &d);
@@ -56,12 +60,14 @@ class VisiblePoints {
     std::array<double, kSourceDirections> projectedArea_{};  // voxels^2, of the hat's box along each direction
     std::array<int, kSourceDirections> count_{};             // candidates drawn for each direction
     std::vector<int> drawnFor_;                              // per candidate, its direction
+    long lookups_ = 0;                                       // sigmaT's
 };
 
 // `samples` points of `voxel` drawn where cameras see it (VisiblePoints), m, world space, the candidates from
-// `next` (points of [0, 1)^3) and resampled with `rng`; none where no candidate is seen.
+// `next` (points of [0, 1)^3) and resampled with `rng`; none where no candidate is seen. Adds their work to
+// `steps` (VisiblePoints::steps).
 std::vector<glm::dvec3> visiblePoints(const Medium &medium, const openvdb::Coord &voxel,
                                       const SourceDirections &directions, int samples,
-                                      const std::function<std::array<double, 3>()> &next, Rng &rng);
+                                      const std::function<std::array<double, 3>()> &next, Rng &rng, long &steps);
 
 }  // namespace firn
