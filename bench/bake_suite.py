@@ -282,7 +282,7 @@ def run_case(case, folder, cache, quality="FINAL", seed=0, sky_samples=0):
         "mean": float(np.abs(relative).mean()), "worst": float(np.abs(relative).max()),
         "worst_signed": float(relative.flat[np.abs(relative).argmax()]),
         "bias": float(b.sum() / m.sum() - 1.0), "noise": float(np.median(e / np.maximum(m, 1e-30))),
-        "bake_s": bake_seconds, "reference_s": reference_seconds, "traced": stats["traced_voxels"],
+        "bake_s": bake_seconds, "reference_s": reference_seconds, "traced": stats["traced_voxels"], "traced_paths": stats["traced_paths"],
         "trace_cpu_s": stats["cpu_seconds"]["trace"],
         "relative": relative, "view_bias": view_bias, "views": case.views,
     }
@@ -362,7 +362,7 @@ def main():
                   f"bias {100 * r['bias']:+.1f} %; " +
                   (f"over {args.seeds} seeds (means {seeds} %, spread {100 * r['spread']:.1f} %); "
                    if args.seeds > 1 else "") +
-                  f"{r['traced']} traced voxels, trace {r['trace_cpu_s']:.2f} processor s; per view: " +
+                  f"{r['traced']} traced voxels ({r['traced_paths']} paths each), trace {r['trace_cpu_s']:.2f} processor s; per view: " +
                   ", ".join(f"{v} {100 * b:+.0f} %" for v, b in zip(case.views, r["view_bias"])), flush=True)
             if args.maps:
                 _, _, tau = views(case)

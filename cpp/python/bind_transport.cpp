@@ -315,6 +315,7 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["unknowns"] = stats.unknowns;
     d["surface_voxels"] = stats.surfaceVoxels;
     d["traced_voxels"] = stats.tracedVoxels;
+    d["traced_paths"] = stats.tracedPaths;
     d["light_traced_voxels"] = stats.lightTracedVoxels;
     d["photons"] = stats.photons;
     d["light_tracing_bytes"] = stats.lightTracingBytes;

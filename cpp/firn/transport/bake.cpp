@@ -384,13 +384,18 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
     if (voxels.empty()) return 0;
     const MonteCarloReference reference(scene);
+    Medium::Accessor density = scene.medium->accessor();
     const double budget = kMaxTracedSteps / (double(voxels.size()) * kMinSamples);  // per path, at the least
     double steps = 0.0, last = 0.0;  // last: voxel v's pilot steps (fewer voxels than pilots repeat theirs)
     int paths = 0;
     for (int k = 0; k < kPilotVoxels; ++k) {
         const std::size_t v = voxels.size() * k / kPilotVoxels;
-        if (k == 0 || v != voxels.size() * (k - 1) / kPilotVoxels)
-            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v).steps) + kStepsPerPath * kPilotSamples;
+        if (k == 0 || v != voxels.size() * (k - 1) / kPilotVoxels) {
+            // As traceSources gathers it: where cameras see it, those points' draws counted too.
+            const bool visible = gatheredWhereSeen(*scene.medium, density, voxels[v]);
+            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v, true, visible).steps) +
+                   kStepsPerPath * kPilotSamples;
+        }
         steps += last;
         paths += kPilotSamples;
         if (steps > budget * kPilotVoxels * kPilotSamples) return 0;  // too costly already
@@ -436,8 +441,11 @@ MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::v
 MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
                               std::uint64_t seed, const SubProgress &progress) {
     const MonteCarloReference reference(scene);
-    return tracedVoxels(reference, voxels, [&](std::size_t v) { return reference.sourceIn(voxels[v], samples, seed, v); },
-                        progress);
+    const Medium &medium = *scene.medium;
+    return tracedVoxels(reference, voxels, [&](std::size_t v) {
+            Medium::Accessor density = medium.accessor();
+            return reference.sourceIn(voxels[v], samples, seed, v, true, gatheredWhereSeen(medium, density, voxels[v]));
+        }, progress);
 }
 
 // The voxels whose gathering costs more than the budget (tracedSamples: 0), by light tracing within it
@@ -1946,7 +1954,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                     if (!traced.source.empty()) thin = std::move(whole);
                 }
                 if (traced.source.empty()) {
-                    const int samples = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
+                    const int samples = local.tracedPaths = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
                     traced = samples > 0 || thin.empty()
                                  ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, progress)
                                  : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);

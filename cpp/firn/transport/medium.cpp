@@ -190,6 +190,7 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
     for (; i < kPlainSteps; ++i) {
         const double t = (i + 0.5) * kStep;
         if (t >= tEnd) return sum * h;
+        ++columnSteps_;
         const double rho = densityAt(eye + t * dir);
         if (rho <= 0.0) break;
         sum += rho * kStep;
@@ -204,6 +205,7 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
     if (!medium_.clipToBounds(origin, direction, tBoundsIn, tBoundsOut)) return sum * h;
     const double tLast = std::min(tMax, tBoundsOut) / h;  // no snow beyond (index space)
     for (double t = i * kStep; t < tLast;) {
+        ++columnSteps_;
         const double dt = std::min(kLongStep, tLast - t);
         const Vec3d p = ray(t + 0.5 * dt);
         const openvdb::Coord cell = floorCoord(p);

@@ -81,6 +81,9 @@ class Medium {
         // half-voxel steps while the ray starts in snow, whole-voxel steps beyond; stops once the column exceeds
         // `limit` (kg/m^2) and returns what it has.
         double column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double limit);
+        // The steps column() has taken so far (each a density read, or a jump over cells without snow): its work
+        // in tracking-step equivalents, for a budget (bake.cpp, tracedSamples).
+        long columnSteps() const { return columnSteps_; }
 
         // Walks the ray from t = 0 to tMax (m) in steps of at most `step` voxels, calling visit(midpoint in index
         // space, step length in m) where the density may be non-zero (the midpoints in cells without snow are
@@ -130,6 +133,7 @@ class Medium {
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> support_;
         openvdb::Coord cell_;  // the cell whose eight density values corners_ holds
         float corners_[2][2][2];
+        long columnSteps_ = 0;
     };
 
   private:

@@ -11,6 +11,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/visible_points.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
 
@@ -329,7 +330,7 @@ Rgb PhotonTracer::radianceArriving(const Ray &ray, Rng &rng) { return tracer_->s
 long PhotonTracer::steps() const { return tracer_->steps; }
 
 SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
-                                             std::uint64_t stream, bool scattered) const {
+                                             std::uint64_t stream, bool scattered, bool visible) const {
     PathTracer tracer(*this, !scattered);  // the per-voxel gathering's draws as they were (bench/bake_suite.py)
     Rng rng(seed, stream);
     const Medium &medium = *scene_.medium;
@@ -340,16 +341,26 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     ArrivingToward toward;
     double weights = 0.0;
     KroneckerSequence points(rng);
+    // Where cameras see a thick voxel: points drawn so, of equal weight (VisiblePoints).
+    std::vector<glm::dvec3> seen;
+    long seenSteps = 0;  // their draws' work (the bake's budget counts it: tracedSamples)
+    if (visible) {
+        KroneckerSequence candidates(rng);
+        seen = visiblePoints(medium, voxel, directions_, samples, [&] {
+            const std::array<double, 5> u = candidates.next();
+            return std::array<double, 3>{u[0], u[1], u[2]};
+        }, rng, seenSteps);
+    }
     for (int s = 0; s < samples; ++s) {
         const std::array<double, 5> u = points.next();
-        const glm::dvec3 p = centre + medium.voxelSize() * (glm::dvec3(u[0], u[1], u[2]) - 0.5);
-        const double w = tracer.sigmaT(p);
+        const glm::dvec3 p = seen.empty() ? centre + medium.voxelSize() * (glm::dvec3(u[0], u[1], u[2]) - 0.5) : seen[s];
+        const double w = seen.empty() ? tracer.sigmaT(p) : 1.0;
         if (w <= 0.0) continue;
         tracer.sampleArriving(p, w, u[3], u[4], rng, sum, toward, scattered);
         weights += w;
     }
     SourceEstimate out = sourceOf(sum, &toward, weights, medium.optics());
-    out.steps = tracer.steps;
+    out.steps = tracer.steps + seenSteps;
     return out;
 }
 

@@ -125,9 +125,11 @@ class MonteCarloReference {
     // direct beams' share apart; the higher moments of the directions the light travels, which tell how peaked
     // the source is; and the exact source in directions().
     // Without `scattered`, the direct beams only (beamL0, beamL1 and their share of the moments): what light
-    // tracing leaves to each voxel (light_tracing.h).
+    // tracing leaves to each voxel (light_tracing.h). With `visible`, the points drawn where cameras see the
+    // voxel's stored source instead, of equal weight (VisiblePoints: in a voxel of many optical depths, its first
+    // optical depth from each side, and the trilinear hat's reach).
     SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream,
-                            bool scattered = true) const;
+                            bool scattered = true, bool visible = false) const;
 
     const Scene &scene() const { return scene_; }
     // Where every estimate of this reference gathers the exact source (sourceIn, light tracing's tallies), and

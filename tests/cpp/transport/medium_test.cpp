@@ -85,4 +85,22 @@ TEST(Medium, ColumnCountsSnowAcrossEmptyBlocks) {
     }
 }
 
+// A column's work in steps (columnSteps, what the bake's budget counts): inside snow, one per half-voxel step
+// taken, up to tMax or the step that passes the limit. Oracle: the midpoint rule's step count, ceil(2 t / h).
+TEST(Medium, ColumnCountsItsSteps) {
+    constexpr double kVoxel = 0.02;  // m
+    constexpr float kRho = 300.0f;   // kg/m^3
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    density->fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(19)), kRho);
+    const Medium medium(density, VolumeOptics{10.0, Rgb(0.99), 0.8});
+    Medium::ColumnMarcher marcher(medium);
+    const glm::dvec3 from = medium.indexToWorld(glm::dvec3(5.0, 9.5, 9.5)), x(1.0, 0.0, 0.0);
+    EXPECT_EQ(marcher.columnSteps(), 0);
+    marcher.column(from, x, 3.0 * kVoxel, 1e30);  // steps at 0.25, 0.75, ... 2.75 voxels
+    EXPECT_EQ(marcher.columnSteps(), 6);
+    marcher.column(from, x, 1e30, 2.2 * kRho * kVoxel);  // passes the limit on the fifth step (2.5 voxels of snow)
+    EXPECT_EQ(marcher.columnSteps(), 6 + 5);
+}
+
 }  // namespace firn
