@@ -708,17 +708,23 @@ struct SurfaceLight {
     // ... the suns' light returned sharply forwards (smooth patches; SunPeak), the peaked lobe's p0 per channel
     // and grey first moment p1 (radiance, source_lobe.h) ...
     glm::vec3 peak0{0.0f}, peak1{0.0f};
-    // ... the suns' light the half-space model returns at the patch it entered (smooth patches), which leaves
-    // downstream (sunLeavingDownstream: by the half-space's displacement `downstream` +- `spread`, m): what the
-    // diffusion misses of it and its share of the sun lobe's shape (W and moments), and of `leaving` what escaped
-    // at once (W per channel) ...
-    BroadLobe sunReturned;
-    glm::vec3 sunAtOnce{0.0f};
+    // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
+    // but spread unevenly over a voxel staircase; the suns' light that escaped at once left out: it leaves
+    // downstream, SunReturned).
+    glm::vec3 leaving{0.0f};
+};
+
+// The suns' light the half-space model returns at the smooth patch it entered, which leaves downstream
+// (sunLeavingDownstream, by the half-space's displacement `downstream` +- `spread`, m), one channel's: what the
+// diffusion misses of it and its share of the sun lobe's shape (W and moments), and what escaped at once (W).
+// Held per channel between its solve and the next (not in SurfaceLight: 76 bytes per surface voxel through the
+// solves, the car's peak 288 -> 313 bytes per active voxel).
+struct SunReturned {
+    float l0 = 0.0f;
+    glm::vec3 l1{0.0f};
+    float atOnce = 0.0f;
     glm::vec3 downstream{0.0f};
     float spread = 0.0f;
-    // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
-    // but spread unevenly over a voxel staircase).
-    glm::vec3 leaving{0.0f};
 };
 
 // The fluence's gradient along surface voxel i's patch (per m): least squares over the surface voxels of its
@@ -851,10 +857,10 @@ Displacement halfSpaceDisplacement(double mu0) {
     return {kMean[k - 1] + f * (kMean[k] - kMean[k - 1]), kSpread[k - 1] + f * (kSpread[k] - kSpread[k - 1])};
 }
 
-// Surface voxel i's downstream kernel (SurfaceLight::downstream, spread; m): the beams' displacements weighted
+// Surface voxel i's downstream kernel (SunReturned::downstream, spread; m): the beams' displacements weighted
 // by the power each lets in, on the snow beneath the patch (channel ch's sigma_tr: one kernel for the three).
 void downstreamKernel(const Scene &scene, const IncidentLight &light, const ChannelSystem &sys, const Channel &ch,
-                      const SnowTopology &topo, std::size_t i, SurfaceLight &surface) {
+                      const SnowTopology &topo, std::size_t i, SunReturned &surface) {
     const glm::dvec3 n = topo.patches[i].normal, centre = scene.medium->voxelCentre(topo.coord[i]);
     const double transportPath = 1.0 / ch.sigmaTr(densityBeneath(topo, i, n));  // m
     double power = 0.0, spread = 0.0;
@@ -873,12 +879,83 @@ void downstreamKernel(const Scene &scene, const IncidentLight &light, const Chan
     surface.spread = float(transportPath * spread / power);
 }
 
+// The rotation taking unit vector `from` to unit vector `to` (the shorter way; from . to > -1), applied to v.
+glm::dvec3 rotatedWith(const glm::dvec3 &v, const glm::dvec3 &from, const glm::dvec3 &to) {
+    const glm::dvec3 axis = glm::cross(from, to);  // sin times the unit axis
+    const double cos = glm::dot(from, to);
+    return cos * v + glm::cross(axis, v) + axis * (glm::dot(axis, v) / (1.0 + cos));
+}
+
+// The weight surface voxel i's downstream kernel gives surface voxel j of its 3^3 block (before normalizing): a
+// Gaussian of the half-space's displacement (SunReturned::downstream, spread) in i's tangent plane, times j's patch
+// area and the cosine between the normals; smooth patches only.
+double downstreamWeight(const SnowTopology &topo, const SunReturned &from, std::size_t i, std::size_t j, double h) {
+    const SurfacePatch &a = topo.patches[i], &b = topo.patches[j];
+    const double facing = glm::dot(a.normal, b.normal);
+    if (b.sharp || facing <= 0.0) return 0.0;
+    if (from.spread <= 0.0f) return i == j ? 1.0 : 0.0;
+    const openvdb::Coord d = topo.coord[j] - topo.coord[i];
+    glm::dvec3 step = h * glm::dvec3(d.x(), d.y(), d.z());
+    step -= glm::dot(step, a.normal) * a.normal;
+    const glm::dvec3 off = step - glm::dvec3(from.downstream);
+    return facing * b.area * std::exp(-glm::dot(off, off) / (2.0 * double(from.spread) * double(from.spread)));
+}
+
+// Channel c's sun light each smooth patch returns at once (`sun`; its atOnce averaged over the neighbourhood as the
+// outflow is, for a staircase lets it out unevenly), where it leaves: over the surface voxels of its 3^3 block by
+// downstreamWeight, the weights of each sender summing to one (the power is kept), the forms turned with the normal,
+// added to the receivers' returned light; what escaped at once is taken out of their `leaving`. A flat, evenly lit
+// surface receives what it sends (the flat slabs unchanged); past a terminator the patches downstream take what
+// entered before it (docs/bake.md, Method 5).
+void sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SunReturned> &sun, int c, double h,
+                          SurfaceValues<SurfaceLight> &out) {
+    SurfaceValues<float> total(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);   // each sender's weights' sum
+    SurfaceValues<float> atOnce(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);  // W sent, averaged
+    auto smooth = [&](std::size_t i) { return topo.patches[i].isSurface() && !topo.patches[i].sharp; };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!smooth(i)) continue;
+            const auto [leaving, area] = neighbourhoodOutflow<double>(
+                topo, i, topo.patches[i].normal, [&](std::size_t j) { return double(sun[j].atOnce); });
+            atOnce.surface(i) = float(leaving / area * double(topo.patches[i].area));
+            double sum = 0.0;
+            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k)
+                sum += downstreamWeight(topo, sun[i], i, topo.neighbourhood[k], h);
+            total.surface(i) = float(sum);
+        }
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t j = range.begin(); j != range.end(); ++j) {
+            if (!smooth(j)) continue;
+            const glm::dvec3 to = topo.patches[j].normal;
+            float l0 = 0.0f;
+            glm::vec3 l1(0.0f);
+            for (std::size_t k = topo.neighbourhoodStart[j]; k < topo.neighbourhoodStart[j + 1]; ++k) {
+                const std::uint32_t i = topo.neighbourhood[k];
+                if (!smooth(i) || !(total[i] > 0.0f)) continue;
+                const double w = downstreamWeight(topo, sun[i], i, j, h) / total[i];
+                if (w <= 0.0) continue;
+                // what escaped at once in the escape function's shape
+                l0 += float(w * (sun[i].l0 + 3.0 / 7.0 * atOnce[i]));
+                l1 += glm::vec3(w * (rotatedWith(glm::dvec3(sun[i].l1), topo.patches[i].normal, to) +
+                                     6.0 / 7.0 * atOnce[i] * to));
+            }
+            SurfaceLight &received = out.surface(j);
+            received.returned.l0[c] += l0;
+            received.returned.l1[c] += l1;
+            received.leaving[c] -= sun[j].atOnce;
+        }
+    });
+}
+
 // Channel c's light leaving each surface voxel, from its solve.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
                   const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
+    const Channel kernelChannel{optics.extinctionPerDensity, optics.albedo[1], optics.g};  // one kernel for the three
+    SurfaceValues<SunReturned> sun(topo.surfaceSlot, topo.surfaceVoxels());
     const double y = absorptionParameter(ch.omega, ch.g);
     // Where the snow absorbs, the diffusion returns other amounts than a half-space of this snow does (the sun
     // lobe's Monte Carlo table): of diffuse light less (the spherical albedo 0.447 against Marshak's 0.429 at
@@ -994,11 +1071,12 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const double moved = r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
             surface.returned.l0[c] = float(r.sky0 + (1.0 - moved) * r.sunShape0);
             surface.returned.l1[c] = glm::vec3(r.sky1 + (1.0 - moved) * r.sunShape1 + leaving * drift);
-            surface.sunReturned.l0[c] = float(moved * r.sunShape0 + r.sunMissed * 3.0 / 7.0);
-            surface.sunReturned.l1[c] = glm::vec3(moved * r.sunShape1 + r.sunMissed * 6.0 / 7.0 * patch.normal);
             surface.leaving[c] = float(leaving);
-            surface.sunAtOnce[c] = float(atOnce);
-            if (c == 1) downstreamKernel(scene, light, sys, ch, topo, i, surface);
+            SunReturned &sunHere = sun.surface(i);
+            sunHere.l0 = float(moved * r.sunShape0 + r.sunMissed * 3.0 / 7.0);
+            sunHere.l1 = glm::vec3(moved * r.sunShape1 + r.sunMissed * 6.0 / 7.0 * patch.normal);
+            sunHere.atOnce = float(atOnce);
+            downstreamKernel(scene, light, sys, kernelChannel, topo, i, sunHere);
         }
     });
     // Sharp edges: each air face's own exit radiance (the light returned through it, the exitance of the
@@ -1032,72 +1110,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);
         }
     });
-}
-
-// The rotation taking unit vector `from` to unit vector `to` (the shorter way; from . to > -1), applied to v.
-glm::dvec3 rotatedWith(const glm::dvec3 &v, const glm::dvec3 &from, const glm::dvec3 &to) {
-    const glm::dvec3 axis = glm::cross(from, to);  // sin times the unit axis
-    const double cos = glm::dot(from, to);
-    return cos * v + glm::cross(axis, v) + axis * (glm::dot(axis, v) / (1.0 + cos));
-}
-
-// The weight surface voxel i's downstream kernel gives surface voxel j of its 3^3 block (before normalizing): a
-// Gaussian of the half-space's displacement (SurfaceLight::downstream, spread) in i's tangent plane, times j's patch
-// area and the cosine between the normals; smooth patches only.
-double downstreamWeight(const SnowTopology &topo, const SurfaceLight &from, std::size_t i, std::size_t j, double h) {
-    const SurfacePatch &a = topo.patches[i], &b = topo.patches[j];
-    const double facing = glm::dot(a.normal, b.normal);
-    if (b.sharp || facing <= 0.0) return 0.0;
-    if (from.spread <= 0.0f) return i == j ? 1.0 : 0.0;
-    const openvdb::Coord d = topo.coord[j] - topo.coord[i];
-    glm::dvec3 step = h * glm::dvec3(d.x(), d.y(), d.z());
-    step -= glm::dot(step, a.normal) * a.normal;
-    const glm::dvec3 off = step - glm::dvec3(from.downstream);
-    return facing * b.area * std::exp(-glm::dot(off, off) / (2.0 * double(from.spread) * double(from.spread)));
-}
-
-// The suns' light each smooth patch returns at once (SurfaceLight::sunReturned; sunAtOnce averaged over its
-// neighbourhood as the outflow is, for a staircase lets it out unevenly), where it leaves: over the surface voxels of
-// its 3^3 block by downstreamWeight, the weights of each sender summing to one (the power is kept), the forms turned
-// with the normal. A flat, evenly lit surface receives what it sends (the flat slabs unchanged); past a terminator
-// the patches downstream take what entered before it (docs/bake.md, Method 5). W and moments per surface voxel.
-SurfaceValues<BroadLobe> sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved, double h) {
-    SurfaceValues<float> total(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);  // each sender's weights' sum
-    SurfaceValues<glm::vec3> atOnce(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));  // W sent, averaged
-    auto smooth = [&](std::size_t i) { return topo.patches[i].isSurface() && !topo.patches[i].sharp; };
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!smooth(i)) continue;
-            const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(
-                topo, i, topo.patches[i].normal, [&](std::size_t j) { return glm::dvec3(solved[j].sunAtOnce); });
-            atOnce.surface(i) = glm::vec3(leaving / area * double(topo.patches[i].area));
-            double sum = 0.0;
-            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k)
-                sum += downstreamWeight(topo, solved[i], i, topo.neighbourhood[k], h);
-            total.surface(i) = float(sum);
-        }
-    });
-    SurfaceValues<BroadLobe> out(topo.surfaceSlot, topo.surfaceVoxels());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        for (std::size_t j = range.begin(); j != range.end(); ++j) {
-            if (!smooth(j)) continue;
-            const glm::dvec3 to = topo.patches[j].normal;
-            BroadLobe &received = out.surface(j);
-            for (std::size_t k = topo.neighbourhoodStart[j]; k < topo.neighbourhoodStart[j + 1]; ++k) {
-                const std::uint32_t i = topo.neighbourhood[k];
-                if (!smooth(i) || !(total[i] > 0.0f)) continue;
-                const double w = downstreamWeight(topo, solved[i], i, j, h) / total[i];
-                if (w <= 0.0) continue;
-                const BroadLobe &sent = solved[i].sunReturned;
-                for (int c = 0; c < 3; ++c) {  // what escaped at once in the escape function's shape
-                    received.l0[c] += float(w * (sent.l0[c] + 3.0 / 7.0 * atOnce[i][c]));
-                    received.l1[c] += glm::vec3(w * (rotatedWith(glm::dvec3(sent.l1[c]), topo.patches[i].normal, to) +
-                                                     6.0 / 7.0 * atOnce[i][c] * to));
-                }
-            }
-        }
-    });
-    return out;
+    sunLeavingDownstream(topo, sun, c, h, out);
 }
 
 // Radiance leaving each surface voxel. The returned part is the voxel's own (over its patch's area); the
@@ -1109,25 +1122,23 @@ SurfaceValues<BroadLobe> sunLeavingDownstream(const SnowTopology &topo, const Su
 // lit top's light spread down a shadowed side a voxel or two, bench/bake_suite.py box_sharp: 8.7 % mean
 // error with them, 5.4 % without).
 SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
-                                      const SurfaceValues<SurfaceLight> &solved, double h) {
-    const SurfaceValues<BroadLobe> downstream = sunLeavingDownstream(topo, solved, h);
+                                      const SurfaceValues<SurfaceLight> &solved) {
     SurfaceValues<Source> out(topo.surfaceSlot, topo.surfaceVoxels());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
             const glm::dvec3 &n = topo.patches[i].normal;
             const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(
-                topo, i, n, [&](std::size_t j) { return glm::dvec3(solved[j].leaving - solved[j].sunAtOnce); });
+                topo, i, n, [&](std::size_t j) { return glm::dvec3(solved[j].leaving); });
             const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
             const double own = kPi * topo.patches[i].area;
             const BroadLobe &returned = solved[i].returned;
-            const BroadLobe &sun = downstream[i];
             for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
                 const SourceLobe lobe =
                     topo.patches[i].sharp
                         ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
-                        : exitLobe((returned.l0[c] + sun.l0[c]) / own + exitance[c] * (3.0 / 7.0 / kPi),
-                                   glm::dvec3(returned.l1[c] + sun.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
+                        : exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
+                                   glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
                 // The crossing beams, added by their moments: light scattered forwards many times is broader
                 // than one scattering's peak (in the peaked lobe, k = g: ball_forward 17.6 % against 17.1 %, seen
                 // against the sun -29 % against -21 %; spray_lumps 20.1 % against 19.7 %; docs/bake.md).
@@ -1886,7 +1897,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                 surfaceLight(scene, topo, light, system, phi[c], c, leaving);
             }
         }
-        SurfaceValues<Source> surface = surfaceRadiance(scene.medium->optics(), topo, leaving, scene.medium->voxelSize());
+        SurfaceValues<Source> surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
         if (reference && pass + 1 == passes) {
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
