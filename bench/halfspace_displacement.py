@@ -97,7 +97,10 @@ def main():
     parser.add_argument("--ball", type=float, default=0.0, help="ball radius in transport mean free paths")
     parser.add_argument("--omega", type=float, default=0.98)
     parser.add_argument("--g", type=float, default=0.85)
+    parser.add_argument("--excess", action="store_true", help="the ball's return beyond the half-space's, by R and mu0")
     args = parser.parse_args()
+    if args.excess:
+        return excess(args)
     if args.ball > 0.0:
         return ball(args)
     print("omega    g     mu0  albedo  mean_x  median_x  sd_x   sd_y   P(x>1)  P(x>2)  (x, y in 1/sigma_tr; "
@@ -133,6 +136,25 @@ def ball(args):
         for name, angles, weights, a in (("ball", exit_psi, w, albedo), ("half-space", wrapped, wh, albedo_h)):
             share = np.histogram(np.degrees(angles), edges, weights=weights)[0] / args.photons
             print(f"{psi:>9.0f} {a:7.3f} {name:>8} | " + " ".join(f"{v:5.3f}" for v in share))
+
+
+def excess(args):
+    """The light a ball returns beyond a half-space, by radius (transport mean free paths) and entry angle, and the
+    share of that excess leaving past the terminator (psi > 90 degrees)."""
+    ltr = 1.0 / (1.0 - args.omega * args.g)
+    print(f"omega {args.omega}, g {args.g}: albedo of a beam entering a ball at psi (mu0 = cos psi) against the "
+          f"half-space's; excess = ball - half-space (of the beam's power); past90 = the ball's return leaving past the "
+          f"terminator minus the half-space's wrapped there (psi + x / R)")
+    print("     R   psi    mu0  ball   half   excess  excess*R  past90")
+    for radius in (3.0, 8.0, 20.0, 60.0):
+        for psi in (0.0, 30.0, 60.0, 75.0, 85.0, 88.0):
+            mu0 = max(np.cos(np.radians(psi)), 1e-9)
+            exit_psi, w, a_ball = ball_exit(args.omega, args.g, radius * ltr, np.radians(psi), args.photons, args.seed)
+            x, _, wh, a_half = displacement(args.omega, args.g, mu0, args.photons, args.seed)
+            past_ball = w[np.abs(exit_psi) > np.pi / 2].sum() / args.photons
+            past_half = wh[np.radians(psi) + x / (radius * ltr) > np.pi / 2].sum() / args.photons
+            print(f"{radius:6.0f} {psi:5.0f} {mu0:6.3f} {a_ball:6.3f} {a_half:6.3f} {a_ball - a_half:7.3f} "
+                  f"{(a_ball - a_half) * radius:8.2f} {past_ball - past_half:7.3f}")
 
 
 if __name__ == "__main__":
