@@ -38,11 +38,11 @@ def scatter(d, g, u0, u1):
 
 def walk(omega, g, pos, d, outside, photons, seed):
     """Photons from pos along d until outside(start, step) gives the fraction of each step taken before leaving
-    (nan where it stays inside). Returns the exit points, their weights."""
+    (nan where it stays inside). Returns the exit points, their weights, the photons' indices."""
     rng = np.random.default_rng(seed)
     n = photons
     w = np.ones(n)
-    xs, ys, ws = [], [], []
+    xs, ks, ws = [], [], []
     alive = np.arange(n)
     while alive.size:
         s = -np.log(1.0 - rng.random(alive.size))
@@ -51,13 +51,13 @@ def walk(omega, g, pos, d, outside, photons, seed):
         out = ~np.isnan(t)
         if out.any():
             k = alive[out]
-            xs.append(pos[k] + t[out, None] * d[k]), ws.append(w[k])
+            xs.append(pos[k] + t[out, None] * d[k]), ws.append(w[k]), ks.append(k)
         pos[alive] = step
         alive = alive[~out]
         w[alive] *= omega
         alive = alive[w[alive] > 1e-4]
         d[alive] = scatter(d[alive], g, rng.random(alive.size), rng.random(alive.size))
-    return np.concatenate(xs), np.concatenate(ws)
+    return np.concatenate(xs), np.concatenate(ws), np.concatenate(ks)
 
 
 def displacement(omega, g, mu0, photons, seed):
@@ -69,7 +69,7 @@ def displacement(omega, g, mu0, photons, seed):
         t = p[:, 2] / -np.where(d[:, 2] < 0.0, d[:, 2], -1.0)
         return np.where((d[:, 2] < 0.0) & (t < s), t, np.nan)
 
-    points, w = walk(omega, g, pos, d, above, photons, seed)
+    points, w, _ = walk(omega, g, pos, d, above, photons, seed)
     return points[:, 0], points[:, 1], w, w.sum() / photons
 
 
@@ -86,7 +86,7 @@ def ball_exit(omega, g, radius, psi, photons, seed):
         t = -b + np.sqrt(np.maximum(0.0, b * b - c))
         return np.where(t < s, t, np.nan)
 
-    points, w = walk(omega, g, pos, d, leaving, photons, seed)
+    points, w, _ = walk(omega, g, pos, d, leaving, photons, seed)
     return np.arctan2(points[:, 2], points[:, 0]), w, w.sum() / photons
 
 
@@ -155,6 +155,50 @@ def excess(args):
             past_half = wh[np.radians(psi) + x / (radius * ltr) > np.pi / 2].sum() / args.photons
             print(f"{radius:6.0f} {psi:5.0f} {mu0:6.3f} {a_ball:6.3f} {a_half:6.3f} {a_ball - a_half:7.3f} "
                   f"{(a_ball - a_half) * radius:8.2f} {past_ball - past_half:7.3f}")
+    print("the whole lit disc (entry points uniform over the ball's cross-section): the share of the sun's power "
+          "returned, and returned past the terminator, by the ball and by the half-space wrapped onto it")
+    print("     R  ball   half   past90_ball  past90_half")
+    for radius in (3.0, 8.0, 20.0, 60.0):
+        print(f"{radius:6.0f} " + " ".join(f"{v:6.3f}" for v in lit_disc(args.omega, args.g, radius * ltr, args.photons,
+                                                                           args.seed)))
+
+
+def lit_disc(omega, g, radius, photons, seed):
+    """A sun along -x onto a ball (radius in optical depths): entry points uniform over its cross-section. The shares
+    of the sun's power the ball returns, the half-space at each entry point returns, and each returns past the
+    terminator (exit x < 0; the half-space's exit points wrapped along great circles, psi + |x, y| / R)."""
+    rng = np.random.default_rng(seed + 1)
+    r, a = np.sqrt(rng.random(photons)), 2.0 * np.pi * rng.random(photons)
+    n = np.stack([np.sqrt(1.0 - r * r), r * np.cos(a), r * np.sin(a)], axis=1)
+    d = np.tile([-1.0, 0.0, 0.0], (photons, 1))
+
+    def leaving(p, d, s):
+        b = np.sum(p * d, axis=1)
+        c = np.sum(p * p, axis=1) - radius * radius
+        t = -b + np.sqrt(np.maximum(0.0, b * b - c))
+        return np.where(t < s, t, np.nan)
+
+    points, w, _ = walk(omega, g, radius * n * (1.0 - 1e-9), d.copy(), leaving, photons, seed)
+    past_ball = w[points[:, 0] < 0.0].sum() / photons
+    # the half-space's: the beam in each entry point's frame (z into the snow, x along the tangential travel)
+    mu0 = n[:, 0]
+    t = d - mu0[:, None] * -n  # d . n = -mu0
+    t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-12)
+    b = np.cross(n, t)
+    local = np.stack([np.sqrt(1.0 - mu0 * mu0), np.zeros(photons), mu0], axis=1)
+
+    def above(p, d, s):
+        tt = p[:, 2] / -np.where(d[:, 2] < 0.0, d[:, 2], -1.0)
+        return np.where((d[:, 2] < 0.0) & (tt < s), tt, np.nan)
+
+    hp, hw, k = walk(omega, g, np.zeros((photons, 3)), local, above, photons, seed)
+    x, y = hp[:, 0], hp[:, 1]
+    v = x[:, None] * t[k] + y[:, None] * b[k]
+    length = np.linalg.norm(v, axis=1)
+    angle = length / radius
+    exit_x = np.cos(angle) * n[k, 0] + np.sin(angle) * v[:, 0] / np.maximum(length, 1e-12)
+    past_half = hw[exit_x < 0.0].sum() / photons
+    return w.sum() / photons, hw.sum() / photons, past_ball, past_half
 
 
 if __name__ == "__main__":
