@@ -7,9 +7,11 @@ tangential direction (x, downstream positive) and across it (y), in transport me
 
 With --ball R (radius in transport mean free paths) the same beams enter a ball at angle psi from its sunward pole
 (on the great circle through the sun and the zenith: 90 degrees is the terminator) and the returned light's exit
-angle is recorded, against the half-space's displacement wrapped onto the sphere (psi + x / R).
+angle is recorded, against the half-space's displacement wrapped onto the sphere (psi + x / R). With --excess: the
+ball's albedo against the half-space's by radius (3, 8, 20, 60 transport mean free paths) and entry angle, and over the
+whole lit disc the share of the sun returned past the terminator (docs/benchmarks.md, ball-return).
 
-    /usr/bin/python3 bench/halfspace_displacement.py [--photons 200000] [--ball 8.3]
+    /usr/bin/python3 bench/halfspace_displacement.py [--photons 200000] [--ball 8.3 | --excess] [--omega 0.9 --g 0.6]
 """
 
 import argparse
