@@ -62,14 +62,26 @@ def walk(omega, g, pos, d, outside, photons, seed):
     return np.concatenate(xs), np.concatenate(ws), np.concatenate(ks)
 
 
+def above(p, d, s):
+    """The distance to z = 0 where a step of length s from p along d crosses it (nan where it does not)."""
+    t = p[:, 2] / -np.where(d[:, 2] < 0.0, d[:, 2], -1.0)
+    return np.where((d[:, 2] < 0.0) & (t < s), t, np.nan)
+
+
+def leaving_ball(radius):
+    """The root of |p + t d| = radius in (0, s] (nan where the step stays inside the ball centred at 0)."""
+    def leaving(p, d, s):
+        b = np.sum(p * d, axis=1)
+        c = np.sum(p * p, axis=1) - radius * radius
+        t = -b + np.sqrt(np.maximum(0.0, b * b - c))
+        return np.where(t < s, t, np.nan)
+    return leaving
+
+
 def displacement(omega, g, mu0, photons, seed):
     """Returned photons' exit points (x, y in optical depths) and weights; the plane albedo."""
     pos = np.zeros((photons, 3))
     d = np.tile([np.sqrt(1.0 - mu0 * mu0), 0.0, mu0], (photons, 1))  # z grows downwards
-
-    def above(p, d, s):  # the distance to z = 0 where the step crosses it
-        t = p[:, 2] / -np.where(d[:, 2] < 0.0, d[:, 2], -1.0)
-        return np.where((d[:, 2] < 0.0) & (t < s), t, np.nan)
 
     points, w, _ = walk(omega, g, pos, d, above, photons, seed)
     return points[:, 0], points[:, 1], w, w.sum() / photons
@@ -82,13 +94,7 @@ def ball_exit(omega, g, radius, psi, photons, seed):
     pos = np.tile(radius * normal * (1.0 - 1e-9), (photons, 1))
     d = np.tile([-1.0, 0.0, 0.0], (photons, 1))
 
-    def leaving(p, d, s):  # the root of |p + t d| = radius in (0, s]
-        b = np.sum(p * d, axis=1)
-        c = np.sum(p * p, axis=1) - radius * radius
-        t = -b + np.sqrt(np.maximum(0.0, b * b - c))
-        return np.where(t < s, t, np.nan)
-
-    points, w, _ = walk(omega, g, pos, d, leaving, photons, seed)
+    points, w, _ = walk(omega, g, pos, d, leaving_ball(radius), photons, seed)
     return np.arctan2(points[:, 2], points[:, 0]), w, w.sum() / photons
 
 
@@ -173,14 +179,7 @@ def lit_disc(omega, g, radius, photons, seed):
     r, a = np.sqrt(rng.random(photons)), 2.0 * np.pi * rng.random(photons)
     n = np.stack([np.sqrt(1.0 - r * r), r * np.cos(a), r * np.sin(a)], axis=1)
     d = np.tile([-1.0, 0.0, 0.0], (photons, 1))
-
-    def leaving(p, d, s):
-        b = np.sum(p * d, axis=1)
-        c = np.sum(p * p, axis=1) - radius * radius
-        t = -b + np.sqrt(np.maximum(0.0, b * b - c))
-        return np.where(t < s, t, np.nan)
-
-    points, w, _ = walk(omega, g, radius * n * (1.0 - 1e-9), d.copy(), leaving, photons, seed)
+    points, w, _ = walk(omega, g, radius * n * (1.0 - 1e-9), d.copy(), leaving_ball(radius), photons, seed)
     past_ball = w[points[:, 0] < 0.0].sum() / photons
     # the half-space's: the beam in each entry point's frame (z into the snow, x along the tangential travel)
     mu0 = n[:, 0]
@@ -188,11 +187,6 @@ def lit_disc(omega, g, radius, photons, seed):
     t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-12)
     b = np.cross(n, t)
     local = np.stack([np.sqrt(1.0 - mu0 * mu0), np.zeros(photons), mu0], axis=1)
-
-    def above(p, d, s):
-        tt = p[:, 2] / -np.where(d[:, 2] < 0.0, d[:, 2], -1.0)
-        return np.where((d[:, 2] < 0.0) & (tt < s), tt, np.nan)
-
     hp, hw, k = walk(omega, g, np.zeros((photons, 3)), local, above, photons, seed)
     x, y = hp[:, 0], hp[:, 1]
     v = x[:, None] * t[k] + y[:, None] * b[k]
