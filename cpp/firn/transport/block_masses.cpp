@@ -7,10 +7,11 @@
 
 #include "firn/util/sampling.h"  // kPi
 
+
 namespace firn {
 
 namespace {
-constexpr int kFinestEdge = 8;        // voxels: OpenVDB's leaf
+constexpr int kFinestEdge = 4;        // voxels (8: the frame -7.7 -> -7.3 % only; 2: the cluster +3.4 -> +7.3 %)
 constexpr double kWindowReach = 3.0;  // kernel widths out to which blocks count
 }  // namespace
 
@@ -45,7 +46,7 @@ BlockMasses::BlockMasses(const openvdb::FloatGrid &density, double h, const glm:
 }
 
 double BlockMasses::windowedColumn(const glm::dvec3 &point, const glm::dvec3 &w, double near, double far, double s) const {
-    if (levels_.empty() || !(s > 0.0)) return 0.0;
+    if (levels_.empty() || !(s >= levels_[0].edge * h_)) return 0.0;  // blocks too coarse to tell
     std::size_t l = 0;
     while (l + 1 < levels_.size() && levels_[l + 1].edge * h_ <= s) ++l;
     const Level &level = levels_[l];
