@@ -11,7 +11,7 @@
 namespace firn {
 
 namespace {
-constexpr int kFinestEdge = 4;        // voxels (8: the frame -7.7 -> -7.3 % only; 2: the cluster +3.4 -> +7.3 %)
+constexpr int kFinestEdge = 4;        // voxels; windows narrower are not counted (from 2: the cluster +3.4 -> +7.3 %)
 constexpr double kWindowReach = 3.0;  // kernel widths out to which blocks count
 }  // namespace
 
