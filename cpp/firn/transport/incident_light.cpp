@@ -52,6 +52,7 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const glm::dvec3 &point,
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
     const double h = medium.voxelSize();
     const glm::dvec3 start = medium.worldToIndex(point);
+    const BlockMasses &blocks = medium.blockMasses();
     std::vector<Piece> pieces(1);
     double total = 0.0;
     marcher.march(point, w, reach, 0.5, [&](const openvdb::Vec3d &p, double dt) {
@@ -69,12 +70,9 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const glm::dvec3 &point,
         if (piece.column <= 0.0) continue;
         const double tau = optics.extinctionPerDensity * piece.column;
         const double uncollided = std::exp(-tau);
-        const double centre = 0.5 * (piece.near + piece.far), reachAcross = piece.near * forwardConeWidth(tau, optics.g);
-        double around = 0.0;  // kg/m^2 of the other pieces within reachAcross of this one along the ray
-        for (const Piece &other : pieces)
-            if (&other != &piece && std::abs(0.5 * (other.near + other.far) - centre) <= reachAcross) around += other.column;
         const double alone = forwardShare(0.5 * (piece.far - piece.near), piece.near, tau, optics.g);
-        const double share = std::min(1.0, alone + around / piece.column);
+        const double beside = blocks.windowedColumn(point, w, piece.near, piece.far, piece.near * forwardConeWidth(tau, optics.g));
+        const double share = std::min(1.0, std::max(alone, beside / piece.column));
         through *= uncollided + (glm::exp(-reduced * piece.column) - uncollided) * share;
     }
     return largest(through) >= kMinTransmittance ? through : glm::dvec3(0.0);
