@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -25,16 +26,20 @@ class BlockMasses {
     // ray; beside a lone small piece its mass times K_s(0).
     double windowedColumn(const glm::dvec3 &point, const glm::dvec3 &w, double near, double far, double s) const;
 
+    // The block masses held over all levels (4 bytes each): at most 8/7 of max(2^22, active voxels / 4), the finest
+    // blocks coarser than 4^3 voxels where the active box would need more.
+    std::size_t storedBlocks() const;
+
   private:
     struct Level {
-        int edge = 0;              // voxels per block edge
+        std::int64_t edge = 0;     // voxels per block edge
         openvdb::Coord count;      // blocks per axis
         std::vector<float> mass;   // kg, x fastest
         float at(int i, int j, int k) const { return mass[(std::size_t(k) * count.y() + j) * count.x() + i]; }
     };
     double h_ = 0.0;
     glm::dvec3 origin_{0.0};
-    openvdb::Coord first_;  // the first block's lowest voxel
+    glm::dvec3 firstCorner_{0.0};  // the first block's lowest voxel (index space)
     std::vector<Level> levels_;
 };
 

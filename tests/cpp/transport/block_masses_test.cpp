@@ -50,5 +50,19 @@ TEST(BlockMasses, BesideALoneSmallPieceItTakesWhatTheConeSpreadsOverThePoint) {
     EXPECT_EQ(blocks.windowedColumn(glm::dvec3(2.0, 0.0, 0.0), glm::dvec3(0, 0, 1), near, far, s), 0.0);
 }
 
+TEST(BlockMasses, SnowFarApartKeepsTheBlocksWithinBudget) {
+    // Two voxels 200,000 apart (a fuzzed grid): 4^3 blocks over their box would be 2.5e9 floats (bad_alloc in a
+    // bake); the finest blocks grow instead, and a window narrower than them counts nothing.
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    grid->tree().setValue(openvdb::Coord(-100000, -100000, 0), 300.0f);
+    grid->tree().setValue(openvdb::Coord(100000, 100000, 0), 300.0f);
+    const BlockMasses blocks(*grid, kVoxel, glm::dvec3(0.0));
+    EXPECT_LE(blocks.storedBlocks(), std::size_t((1 << 22) * 8 / 7 + 64));
+    EXPECT_EQ(blocks.windowedColumn(glm::dvec3(-1000.0, -1000.0, 0.0), glm::dvec3(0, 0, 1), 0.0, 0.01, 0.05), 0.0);
+    const double wide = blocks.windowedColumn(glm::dvec3(-1000.0, -1000.0, -1.0), glm::dvec3(0, 0, 1), 0.0, 2.0, 2000.0);
+    EXPECT_TRUE(std::isfinite(wide) && wide > 0.0);
+}
+
 }  // namespace
 }  // namespace firn
