@@ -37,10 +37,10 @@ double largest(const glm::dvec3 &v) { return std::max({v.x, v.y, v.z}); }
 // Snow transmittance from `point` along w (unit) up to `reach` (m) for Crossing::Spreading. Each stretch of snow
 // the ray crosses (a piece: contiguous half-voxel samples with snow) lets through its uncollided light and, of
 // what it scatters forwards (the similarity beam's e^-tau_tr less e^-tau), the share that reaches the point: a
-// lone piece's forwardShare, plus what the snow around it sends the same way, the other pieces' mass within the
-// forward cone's reach (d theta) of it along the ray standing for the snow beside it (in a wide cloud all of it
-// arrives: what the point's own ray loses forwards, its neighbours' rays bring). 0 once every channel is below
-// kMinTransmittance.
+// lone piece's forwardShare or, where larger, the snow beside the ray over the piece's own column (the mass seen
+// through the forward cone's window across the ray at the piece's depth, BlockMasses::windowedColumn: in a wide
+// cloud all of it arrives, what the point's own ray loses forwards its neighbours' rays bring), at most 1. 0 once
+// every channel is below kMinTransmittance.
 glm::dvec3 spreadingTransmittance(const Medium &medium, const glm::dvec3 &point, const glm::dvec3 &w, double reach,
                                   Medium::ColumnMarcher &marcher) {
     struct Piece {
