@@ -1,7 +1,6 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -18,17 +17,14 @@ class BlockMasses {
     // density: kg/m^3 at voxel centres; h: voxel edge (m); origin: world position of voxel (0, 0, 0).
     BlockMasses(const openvdb::FloatGrid &density, double h, const glm::dvec3 &origin);
 
-    // The mean of response(c) over the snow's columns c (kg/m^2) beside the ray from `point` along w (unit) between
-    // `near` and `far` (m) along it, weighted by the Cauchy kernel K_s(rho) = (1 + rho^2/s^2)^-3/2 across the ray:
-    // the blocks' masses (x their depth inside [near, far] over their extent along w) gathered bilinearly onto a
-    // grid of square cells across the ray (the block's edge, or a sixth of the window's reach where wider), each
-    // cell's mass over its area its column, the kernel smoothed by the block (s'^2 = s^2 + edge^2 / (2 pi): 1 /
-    // edge^2 on the axis as s -> 0) and cut at rho = 3 s', at the coarsest level whose edge is at most s. response
-    // must be 0 at 0 (empty cells count with their weight only). 0 where s is below the finest edge (the blocks
-    // cannot tell a piece's neighbours from the snow beyond its cone). With the identity response: in a uniform
-    // cloud the column along the ray; beside a lone small piece its mass times K_s(0) (normalised).
-    glm::dvec3 windowedMean(const glm::dvec3 &point, const glm::dvec3 &w, double near, double far, double s,
-                            const std::function<glm::dvec3(double)> &response) const;
+    // The mass column (kg/m^2) seen through a window of the Cauchy kernel K_s(rho) = 1/(2 pi s^2)
+    // (1 + rho^2/s^2)^-3/2 across the ray from `point` along w (unit), of the snow between `near` and `far` (m)
+    // along it: sum over blocks of mass x (the block's depth inside [near, far]) / edge x K_s'(rho), s'^2 = s^2 +
+    // edge^2 / (2 pi) (the kernel smoothed by the block: 1 / edge^2 on the axis as s -> 0), at the coarsest level whose
+    // edge is at most s, out to rho = 3 s', the kernel renormalised there; 0 where s is below the finest edge (the
+    // blocks cannot tell a piece's neighbours from the snow beyond its cone). In a uniform cloud it is the column along the
+    // ray; beside a lone small piece its mass times K_s(0).
+    double windowedColumn(const glm::dvec3 &point, const glm::dvec3 &w, double near, double far, double s) const;
 
     // The block masses held over all levels (4 bytes each): at most 8/7 of max(2^22, active voxels / 4), the finest
     // blocks coarser than 4^3 voxels where the active box would need more.

@@ -35,14 +35,12 @@ glm::dvec3 extinction(const VolumeOptics &optics, Crossing crossing) {
 double largest(const glm::dvec3 &v) { return std::max({v.x, v.y, v.z}); }
 
 // Snow transmittance from `point` along w (unit) up to `reach` (m) for Crossing::Spreading. Each stretch of snow
-// the ray crosses (a piece: contiguous half-voxel samples with snow) lets through its uncollided light e^-tau and,
-// of what it scatters forwards (its forward light: the similarity beam's e^-tau_tr less e^-tau), the share that
-// reaches the point: a lone piece's forwardShare of its own or, where larger, the forward light of the snow beside
-// the ray over the piece's depth (the kernel-weighted mean over the columns seen through the forward cone's window
-// across the ray, BlockMasses::windowedMean: in a wide cloud the piece's own, what the point's ray loses forwards
-// its neighbours' rays bring; a thick neighbour passes on at most what it lets through, a thin edge beside a thick
-// piece more than the piece), at most the piece's own (what its neighbours send slantwise crosses it). 0 once every
-// channel is below kMinTransmittance.
+// the ray crosses (a piece: contiguous half-voxel samples with snow) lets through its uncollided light and, of
+// what it scatters forwards (the similarity beam's e^-tau_tr less e^-tau), the share that reaches the point: a
+// lone piece's forwardShare or, where larger, the snow beside the ray over the piece's own column (the mass seen
+// through the forward cone's window across the ray at the piece's depth, BlockMasses::windowedColumn: in a wide
+// cloud all of it arrives, what the point's own ray loses forwards its neighbours' rays bring), at most 1. 0 once
+// every channel is below kMinTransmittance.
 glm::dvec3 spreadingTransmittance(const Medium &medium, const glm::dvec3 &point, const glm::dvec3 &w, double reach,
                                   Medium::ColumnMarcher &marcher) {
     struct Piece {
@@ -67,20 +65,15 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const glm::dvec3 &point,
         piece.column += rho * dt, piece.far = t + 0.5 * dt, total += rho * dt;
         return std::exp(-thinnest * total) >= kMinTransmittance;
     });
-    // What a column (kg/m^2) scatters forwards and lets through: the similarity beam less the uncollided light.
-    const auto forwardLight = [&](double column) {
-        return glm::exp(-reduced * column) - glm::dvec3(std::exp(-optics.extinctionPerDensity * column));
-    };
     glm::dvec3 through(1.0);
     for (const Piece &piece : pieces) {
         if (piece.column <= 0.0) continue;
         const double tau = optics.extinctionPerDensity * piece.column;
         const double uncollided = std::exp(-tau);
         const double alone = forwardShare(0.5 * (piece.far - piece.near), piece.near, tau, optics.g);
-        const glm::dvec3 own = forwardLight(piece.column);
-        const double window = piece.near * forwardConeWidth(tau, optics.g);  // m
-        const glm::dvec3 beside = blocks.windowedMean(point, w, piece.near, piece.far, window, forwardLight);
-        through *= uncollided + glm::max(alone * own, glm::min(own, beside));
+        const double beside = blocks.windowedColumn(point, w, piece.near, piece.far, piece.near * forwardConeWidth(tau, optics.g));
+        const double share = std::min(1.0, std::max(alone, beside / piece.column));
+        through *= uncollided + (glm::exp(-reduced * piece.column) - uncollided) * share;
     }
     return largest(through) >= kMinTransmittance ? through : glm::dvec3(0.0);
 }

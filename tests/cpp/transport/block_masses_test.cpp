@@ -12,9 +12,6 @@ namespace {
 
 constexpr double kVoxel = 0.01;  // m
 
-// The columns' own mean (kg/m^2): windowedMean of the identity.
-glm::dvec3 identity(double column) { return glm::dvec3(column); }
-
 openvdb::FloatGrid::Ptr boxOfSnow(const openvdb::CoordBBox &box, float density) {
     auto grid = openvdb::FloatGrid::create(0.0f);
     grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
@@ -32,7 +29,7 @@ TEST(BlockMasses, InAUniformCloudTheWindowedColumnIsTheRaysOwn) {
     for (const glm::dvec3 &w : {glm::dvec3(0, 0, 1), glm::normalize(glm::dvec3(1, 2, 3))})
         for (double s : {0.05, 0.1, 0.2}) {
             const double near = 0.1, far = 0.2;
-            EXPECT_NEAR(blocks.windowedMean(glm::dvec3(0.0), w, near, far, s, identity).x / (rho * (far - near)), 1.0, 0.1)
+            EXPECT_NEAR(blocks.windowedColumn(glm::dvec3(0.0), w, near, far, s) / (rho * (far - near)), 1.0, 0.1)
                 << "s " << s;
         }
 }
@@ -46,11 +43,11 @@ TEST(BlockMasses, BesideALoneSmallPieceItTakesWhatTheConeSpreadsOverThePoint) {
     const BlockMasses blocks(*grid, kVoxel, glm::dvec3(0.0));
     const double column = rho * 4 * kVoxel, r = 2 * kVoxel * std::sqrt(4.0 / 3.14159265358979);  // the same area
     const double centre = 0.495, near = 0.43, far = 0.56, s = centre * forwardConeWidth(1e-9, 0.845);
-    const double share = blocks.windowedMean(glm::dvec3(-0.005, -0.005, 0.0), glm::dvec3(0, 0, 1), near, far, s, identity).x / column;
+    const double share = blocks.windowedColumn(glm::dvec3(-0.005, -0.005, 0.0), glm::dvec3(0, 0, 1), near, far, s) / column;
     const double renormalised = 1.0 / (1.0 - 1.0 / std::sqrt(10.0));
     EXPECT_NEAR(share / (forwardShare(r, centre, 1e-9, 0.845) * renormalised), 1.0, 0.25);
     EXPECT_GT(share, 0.0);
-    EXPECT_EQ(blocks.windowedMean(glm::dvec3(2.0, 0.0, 0.0), glm::dvec3(0, 0, 1), near, far, s, identity).x, 0.0);
+    EXPECT_EQ(blocks.windowedColumn(glm::dvec3(2.0, 0.0, 0.0), glm::dvec3(0, 0, 1), near, far, s), 0.0);
 }
 
 TEST(BlockMasses, SnowFarApartKeepsTheBlocksWithinBudget) {
@@ -62,8 +59,8 @@ TEST(BlockMasses, SnowFarApartKeepsTheBlocksWithinBudget) {
     grid->tree().setValue(openvdb::Coord(100000, 100000, 0), 300.0f);
     const BlockMasses blocks(*grid, kVoxel, glm::dvec3(0.0));
     EXPECT_LE(blocks.storedBlocks(), std::size_t((1 << 22) * 8 / 7 + 64));
-    EXPECT_EQ(blocks.windowedMean(glm::dvec3(-1000.0, -1000.0, 0.0), glm::dvec3(0, 0, 1), 0.0, 0.01, 0.05, identity).x, 0.0);
-    const double wide = blocks.windowedMean(glm::dvec3(-1000.0, -1000.0, -1.0), glm::dvec3(0, 0, 1), 0.0, 2.0, 2000.0, identity).x;
+    EXPECT_EQ(blocks.windowedColumn(glm::dvec3(-1000.0, -1000.0, 0.0), glm::dvec3(0, 0, 1), 0.0, 0.01, 0.05), 0.0);
+    const double wide = blocks.windowedColumn(glm::dvec3(-1000.0, -1000.0, -1.0), glm::dvec3(0, 0, 1), 0.0, 2.0, 2000.0);
     EXPECT_TRUE(std::isfinite(wide) && wide > 0.0);
 }
 
