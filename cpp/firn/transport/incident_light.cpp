@@ -350,21 +350,11 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                 if (topo.patches[i].isSurface() && topo.patches[i].facesTowards(towardsBeam(scene, b, centre))) {
                     // Snow in the way from the line through the patch along the light, past the density ramp
                     // (patchOutsideAlong); occluders' shadow on the surface itself (half a voxel out), so shadow
-                    // edges fall where they do on the snow. Four lines across the patch's face (half a voxel off its
-                    // centre along two tangents): a shadow edge (a lump's soft rim) crossing the patch darkens part.
-                    const glm::dvec3 n = topo.patches[i].normal;
-                    const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * n;
+                    // edges fall where they do on the snow.
+                    const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
                     const glm::dvec3 from = patchOutsideAlong(medium, topo, i, towardsBeam(scene, b, centre), density);
-                    const glm::dvec3 t1 = glm::normalize(glm::cross(n, std::abs(n.x) < 0.6 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
-                    const glm::dvec3 t2 = glm::cross(n, t1);
-                    glm::vec3 sum(0.0f);
-                    for (int corner = 0; corner < 4; ++corner) {
-                        const glm::dvec3 off = 0.5 * medium.voxelSize() * ((corner & 1 ? 1.0 : -1.0) * t1 + (corner & 2 ? 1.0 : -1.0) * t2);
-                        const glm::dvec3 onSurface = surface + off;
-                        sum += beamAt(scene, b, from + off, settings.sunSamples, seed, 2 * i + 1, marcher, &onSurface,
-                                      Crossing::Spreading).irradiance;
-                    }
-                    beam.atSurface.surface(i) = 0.25f * sum;
+                    beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher, &surface,
+                                                       Crossing::Spreading).irradiance;
                 }
             }
         });
