@@ -78,73 +78,6 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
     return largest(through) >= kMinTransmittance ? through : glm::dvec3(0.0);
 }
 
-// The snow between a point and beam b's light (beamAt): its transmittance per channel, and whether it leaves less than
-// kMinTransmittance of the light (then the transmittance is not computed: 0).
-struct LightPastOccluders;
-struct SnowInTheWay {
-    glm::dvec3 snow{0.0};
-    bool blocks = false;
-    glm::vec3 through(const LightPastOccluders &light) const;  // W/m^2: the light on a plane facing it
-};
-SnowInTheWay snowInTheWay(const Scene &scene, std::size_t b, const glm::dvec3 &point, Medium::ColumnMarcher &marcher,
-                          Crossing crossing, const BlockMasses *blocks) {
-    const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
-    const double limit = columnLimit(reduced);
-    const glm::dvec3 w = towardsBeam(scene, b, point);
-    const double reach = b < scene.suns.size() ? std::numeric_limits<double>::infinity()
-                                               : glm::length(scene.lamps[b - scene.suns.size()].position - point);
-    SnowInTheWay out;
-    if (crossing == Crossing::Spreading) {
-        if (!blocks) throw std::logic_error("Crossing::Spreading needs the snow's block masses");
-        out.snow = spreadingTransmittance(*scene.medium, *blocks, point, w, reach, marcher);
-        out.blocks = out.snow == glm::dvec3(0.0);
-    } else {
-        const double column = marcher.column(point, w, reach, limit);
-        out.blocks = column >= limit;
-        if (!out.blocks) out.snow = transmittance(reduced, column);
-    }
-    return out;
-}
-
-// Beam b's irradiance (W/m^2) seen past occluders from `from`, summed over `samples` points of a sun's disc or a
-// lamp (a point lamp: one), before the snow.
-struct LightPastOccluders {
-    glm::dvec3 sum{0.0};
-    int samples = 1;
-};
-LightPastOccluders pastOccluders(const Scene &scene, std::size_t b, const glm::vec3 &from, int samples,
-                                 std::uint64_t seed, std::uint64_t stream) {
-    const RayCaster &caster = scene.occluders->caster();
-    Rng rng(seed, stream);
-    LightPastOccluders out;
-    if (b < scene.suns.size()) {
-        const SunLight &light = scene.suns[b];
-        int visible = samples;
-        if (!scene.occluders->empty()) {
-            visible = 0;
-            for (int s = 0; s < samples; ++s) {
-                const glm::dvec3 d = samples == 1 ? light.direction : sampleSunDirection(light, rng.uniform(), rng.uniform());
-                visible += !caster.occluded(from, glm::vec3(d), 1e-5f);
-            }
-        }
-        out.sum = light.irradiance * double(visible);
-    } else {
-        const Lamp &lamp = scene.lamps[b - scene.suns.size()];
-        if (lamp.shape != Lamp::Shape::Rectangle && lamp.shape != Lamp::Shape::Ellipse && lamp.radius == 0.0) samples = 1;
-        for (int s = 0; s < samples; ++s) {
-            const LampSample l = sampleLamp(lamp, glm::dvec3(from), rng.uniform(), rng.uniform());
-            if (l.irradiance == Rgb(0.0)) continue;
-            if (!caster.occluded(from, glm::vec3(l.direction), 1e-5f, float(l.distance * (1.0 - 1e-6)))) out.sum += l.irradiance;
-        }
-    }
-    out.samples = samples;
-    return out;
-}
-
-glm::vec3 SnowInTheWay::through(const LightPastOccluders &light) const {
-    return glm::vec3(snow * light.sum / double(light.samples));
-}
-
 // Radiance (W/m^2/sr) an occluder sends from point q (unit normal n facing the viewer) after one
 // reflection of sun and sky light, each estimated with one ray.
 glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
@@ -155,13 +88,7 @@ glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const gl
     glm::dvec3 irradiance(0.0);
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
         const double cosine = glm::dot(n, towardsBeam(scene, b, p));
-        if (!(cosine > 0.0)) continue;
-        // beamAt's value, the occluders asked first: a point on an occluder mostly lies in its own shadow (the
-        // car: 270,000 of 477,000), and then the snow's column is not needed (the light is 0 either way).
-        const LightPastOccluders light = pastOccluders(scene, b, glm::vec3(p), 1, 0, 0);
-        if (light.sum == glm::dvec3(0.0)) continue;
-        const SnowInTheWay snow = snowInTheWay(scene, b, p, marcher, Crossing::Beam, nullptr);
-        if (!snow.blocks) irradiance += cosine * glm::dvec3(snow.through(light));
+        if (cosine > 0.0) irradiance += cosine * glm::dvec3(beamAt(scene, b, p, 1, 0, 0, marcher).irradiance);
     }
     const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
     if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
@@ -291,11 +218,49 @@ glm::dvec3 towardsBeam(const Scene &scene, std::size_t b, const glm::dvec3 &poin
 BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
                   std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint, Crossing crossing,
                   const BlockMasses *blocks) {
+    const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
+    const double limit = columnLimit(reduced);
+    const bool sun = b < scene.suns.size();
+    const glm::dvec3 w = towardsBeam(scene, b, point);
+    const double reach = sun ? std::numeric_limits<double>::infinity()
+                             : glm::length(scene.lamps[b - scene.suns.size()].position - point);
     BeamSample out;
-    const SnowInTheWay snow = snowInTheWay(scene, b, point, marcher, crossing, blocks);
-    out.snowBlocks = snow.blocks;
+    glm::dvec3 snow;
+    if (crossing == Crossing::Spreading) {
+        if (!blocks) throw std::logic_error("Crossing::Spreading needs the snow's block masses");
+        snow = spreadingTransmittance(*scene.medium, *blocks, point, w, reach, marcher);
+        out.snowBlocks = snow == glm::dvec3(0.0);
+    } else {
+        const double column = marcher.column(point, w, reach, limit);
+        out.snowBlocks = column >= limit;
+        snow = transmittance(reduced, column);
+    }
     if (out.snowBlocks) return out;
-    out.irradiance = snow.through(pastOccluders(scene, b, glm::vec3(shadowPoint ? *shadowPoint : point), samples, seed, stream));
+    const glm::vec3 from(shadowPoint ? *shadowPoint : point);
+    const RayCaster &caster = scene.occluders->caster();
+    Rng rng(seed, stream);
+    glm::dvec3 sum(0.0);
+    if (sun) {
+        const SunLight &light = scene.suns[b];
+        int visible = samples;
+        if (!scene.occluders->empty()) {
+            visible = 0;
+            for (int s = 0; s < samples; ++s) {
+                const glm::dvec3 d = samples == 1 ? light.direction : sampleSunDirection(light, rng.uniform(), rng.uniform());
+                visible += !caster.occluded(from, glm::vec3(d), 1e-5f);
+            }
+        }
+        sum = light.irradiance * double(visible);
+    } else {
+        const Lamp &lamp = scene.lamps[b - scene.suns.size()];
+        if (lamp.shape != Lamp::Shape::Rectangle && lamp.shape != Lamp::Shape::Ellipse && lamp.radius == 0.0) samples = 1;
+        for (int s = 0; s < samples; ++s) {
+            const LampSample l = sampleLamp(lamp, glm::dvec3(from), rng.uniform(), rng.uniform());
+            if (l.irradiance == Rgb(0.0)) continue;
+            if (!caster.occluded(from, glm::vec3(l.direction), 1e-5f, float(l.distance * (1.0 - 1e-6)))) sum += l.irradiance;
+        }
+    }
+    out.irradiance = glm::vec3(snow * sum / double(samples));
     return out;
 }
 
