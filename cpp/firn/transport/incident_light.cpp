@@ -312,8 +312,10 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     const Medium &medium = *scene.medium;
     IncidentLight light;
     const double jobs = double(beamCount(scene) + 1);
-    // Only the patches' beams read it (Crossing::Spreading): built here, freed before the solves.
-    const BlockMasses blocks(medium.density(), medium.voxelSize(), medium.indexToWorld(glm::dvec3(0.0)));
+    // Only the patches' beams read it (Crossing::Spreading): built here when there are beams, freed before the solves.
+    const BlockMasses blocks = beamCount(scene) > 0
+                                   ? BlockMasses(medium.density(), medium.voxelSize(), medium.indexToWorld(glm::dvec3(0.0)))
+                                   : BlockMasses();
 
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
         IncidentLight::Beam beam;
