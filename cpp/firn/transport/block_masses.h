@@ -9,8 +9,8 @@
 namespace firn {
 
 // The snow's mass (kg) per aligned block of 4^3, 8^3, ... voxels (a mip of block masses over the grid's active
-// bounding box), built once per medium: what lies beside a ray at a coarse scale, for the forward light a cloud
-// sends along it (incident_light.cpp, Crossing::Spreading).
+// bounding box), built once per bake, for its incident light only (computeIncidentLight): what lies beside a ray at
+// a coarse scale, for the forward light a cloud sends along it (incident_light.cpp, Crossing::Spreading).
 class BlockMasses {
   public:
     BlockMasses() = default;

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
@@ -40,9 +41,10 @@ double largest(const glm::dvec3 &v) { return std::max({v.x, v.y, v.z}); }
 // lone piece's forwardShare or, where larger, the snow beside the ray over the piece's own column (the mass seen
 // through the forward cone's window across the ray at the piece's depth, BlockMasses::windowedColumn: in a wide
 // cloud all of it arrives, what the point's own ray loses forwards its neighbours' rays bring), at most 1. 0 once
-// every channel is below kMinTransmittance.
-glm::dvec3 spreadingTransmittance(const Medium &medium, const glm::dvec3 &point, const glm::dvec3 &w, double reach,
-                                  Medium::ColumnMarcher &marcher) {
+// every channel is below kMinTransmittance. Each piece is taken in as the march leaves it (nothing held per ray:
+// a list of pieces was an allocation per patch and sun).
+glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &blocks, const glm::dvec3 &point,
+                                  const glm::dvec3 &w, double reach, Medium::ColumnMarcher &marcher) {
     struct Piece {
         double near = 0.0, far = -1.0;  // m along the ray
         double column = 0.0;            // kg/m^2
@@ -52,29 +54,27 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const glm::dvec3 &point,
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
     const double h = medium.voxelSize();
     const glm::dvec3 start = medium.worldToIndex(point);
-    const BlockMasses &blocks = medium.blockMasses();
-    std::vector<Piece> pieces(1);
-    double total = 0.0;
-    marcher.march(point, w, reach, 0.5, [&](const openvdb::Vec3d &p, double dt) {
-        const double rho = marcher.densityAt(p);
-        if (rho <= 0.0) return true;
-        const double t = h * glm::length(glm::dvec3(p.x(), p.y(), p.z()) - start);
-        if (pieces.back().column > 0.0 && t - 0.5 * dt > pieces.back().far + 1e-3 * h) pieces.emplace_back();
-        Piece &piece = pieces.back();
-        if (piece.column == 0.0) piece.near = t - 0.5 * dt;
-        piece.column += rho * dt, piece.far = t + 0.5 * dt, total += rho * dt;
-        return std::exp(-thinnest * total) >= kMinTransmittance;
-    });
     glm::dvec3 through(1.0);
-    for (const Piece &piece : pieces) {
-        if (piece.column <= 0.0) continue;
+    auto crossed = [&](const Piece &piece) {
         const double tau = optics.extinctionPerDensity * piece.column;
         const double uncollided = std::exp(-tau);
         const double alone = forwardShare(0.5 * (piece.far - piece.near), piece.near, tau, optics.g);
         const double beside = blocks.windowedColumn(point, w, piece.near, piece.far, piece.near * forwardConeWidth(tau, optics.g));
         const double share = std::min(1.0, std::max(alone, beside / piece.column));
         through *= uncollided + (glm::exp(-reduced * piece.column) - uncollided) * share;
-    }
+    };
+    Piece piece;  // the one the march is in (column 0 until it meets snow)
+    double total = 0.0;
+    marcher.march(point, w, reach, 0.5, [&](const openvdb::Vec3d &p, double dt) {
+        const double rho = marcher.densityAt(p);
+        if (rho <= 0.0) return true;
+        const double t = h * glm::length(glm::dvec3(p.x(), p.y(), p.z()) - start);
+        if (piece.column > 0.0 && t - 0.5 * dt > piece.far + 1e-3 * h) crossed(piece), piece = Piece();
+        if (piece.column == 0.0) piece.near = t - 0.5 * dt;
+        piece.column += rho * dt, piece.far = t + 0.5 * dt, total += rho * dt;
+        return std::exp(-thinnest * total) >= kMinTransmittance;
+    });
+    if (piece.column > 0.0) crossed(piece);
     return largest(through) >= kMinTransmittance ? through : glm::dvec3(0.0);
 }
 
@@ -216,7 +216,8 @@ glm::dvec3 towardsBeam(const Scene &scene, std::size_t b, const glm::dvec3 &poin
 }
 
 BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
-                  std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint, Crossing crossing) {
+                  std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint, Crossing crossing,
+                  const BlockMasses *blocks) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const bool sun = b < scene.suns.size();
@@ -226,7 +227,8 @@ BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, in
     BeamSample out;
     glm::dvec3 snow;
     if (crossing == Crossing::Spreading) {
-        snow = spreadingTransmittance(*scene.medium, point, w, reach, marcher);
+        if (!blocks) throw std::logic_error("Crossing::Spreading needs the snow's block masses");
+        snow = spreadingTransmittance(*scene.medium, *blocks, point, w, reach, marcher);
         out.snowBlocks = snow == glm::dvec3(0.0);
     } else {
         const double column = marcher.column(point, w, reach, limit);
@@ -310,6 +312,10 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     const Medium &medium = *scene.medium;
     IncidentLight light;
     const double jobs = double(beamCount(scene) + 1);
+    // Only the patches' beams read it (Crossing::Spreading): built here when there are beams, freed before the solves.
+    const BlockMasses blocks = beamCount(scene) > 0
+                                   ? BlockMasses(medium.density(), medium.voxelSize(), medium.indexToWorld(glm::dvec3(0.0)))
+                                   : BlockMasses();
 
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
         IncidentLight::Beam beam;
@@ -354,7 +360,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                     const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
                     const glm::dvec3 from = patchOutsideAlong(medium, topo, i, towardsBeam(scene, b, centre), density);
                     beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher, &surface,
-                                                       Crossing::Spreading).irradiance;
+                                                       Crossing::Spreading, &blocks).irradiance;
                 }
             }
         });

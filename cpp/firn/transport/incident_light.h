@@ -5,6 +5,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "firn/transport/block_masses.h"
 #include "firn/transport/scene.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/util/progress.h"
@@ -102,9 +103,9 @@ struct BeamSample {
 
 // Beam b at a point: snow transmittance from `point` towards the light times the light's irradiance
 // seen past occluders from `shadowPoint` (default: the same point), over `samples` points of a sun's disc
-// or a lamp.
+// or a lamp. Crossing::Spreading reads the snow's `blocks` (its mass per coarse block).
 BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
                   std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint = nullptr,
-                  Crossing crossing = Crossing::Beam);
+                  Crossing crossing = Crossing::Beam, const BlockMasses *blocks = nullptr);
 
 }  // namespace firn

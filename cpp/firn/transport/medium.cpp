@@ -109,7 +109,6 @@ Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
     support_ = std::make_shared<openvdb::BoolTree>(density_->tree(), false, openvdb::TopologyCopy());
     openvdb::tools::dilateActiveValues(*support_, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
     markOccupiedBlocks();
-    blockMasses_ = BlockMasses(*density_, h_, origin_);
 }
 
 void Medium::markOccupiedBlocks() {

@@ -14,7 +14,6 @@
 
 #include "firn/optics/transport_scales.h"  // validate(VolumeOptics)
 #include "firn/optics/volume_optics.h"
-#include "firn/transport/block_masses.h"
 
 namespace firn {
 
@@ -46,7 +45,6 @@ class Medium {
     double voxelSize() const { return h_; }  // m
     double maxDensity() const { return maxDensity_; }  // kg/m^3
     double maxSigmaT() const { return optics_.extinctionPerDensity * maxDensity_; }  // 1/m
-    const BlockMasses &blockMasses() const { return blockMasses_; }  // the snow's mass per coarse block
 
     glm::dvec3 indexToWorld(const glm::dvec3 &ijk) const { return origin_ + h_ * ijk; }
     glm::dvec3 worldToIndex(const glm::dvec3 &p) const { return (p - origin_) / h_; }
@@ -156,7 +154,6 @@ class Medium {
     openvdb::Coord blocksOrigin_;
     std::array<openvdb::Coord, 3> blockCounts_;
     std::array<std::vector<std::uint8_t>, 3> blockOccupied_;
-    BlockMasses blockMasses_;
 };
 
 }  // namespace firn

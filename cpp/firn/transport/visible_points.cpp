@@ -48,6 +48,11 @@ VisiblePoints::VisiblePoints(const Medium &medium, const openvdb::Coord &voxel, 
         projectedArea_[k] = 4.0 * (std::abs(directions[k].x) + std::abs(directions[k].y) + std::abs(directions[k].z));
         cumulative[k] = total += visibility[k] * projectedArea_[k];
     }
+    for (int j = 0; j < kSourceDirections; ++j) {
+        opposite_[j] = -1;
+        for (int o = 0; o < j && opposite_[j] < 0; ++o)
+            if (directions[o] == -directions[j]) opposite_[j] = o;
+    }
     drawnFor_.resize(candidates);
     for (int i = 0, k = 0; i < candidates; ++i) {
         const double at = (i + 0.5) / candidates * total;  // systematic: each direction its share
@@ -114,10 +119,19 @@ VisiblePoints::Candidate VisiblePoints::draw(int i, const std::array<double, 3> 
     // the projected area, times the tent at the entry and over the chance that the chord stops a ray.
     const double k = medium_.optics().extinctionPerDensity;
     double density = 0.0, seen = 0.0;
+    std::array<double, kSourceDirections> aheadOf, behindOf;  // optical depth out along w_j and along -w_j
     for (int j = 0; j < kSourceDirections; ++j) {
         const glm::dvec3 &wj = directions_[j];
-        const double ahead = depthOut(y, wj), toExit = exitDistance(y, wj);
-        const double chord = ahead + depthOut(y, -wj);
+        if (const int o = opposite_[j]; o >= 0) {
+            // The same walks as w_o's, bit for bit; counted again, as the budget has always counted them
+            // (tracedSamples: the samples it allows, and so the bake's values, unchanged).
+            aheadOf[j] = behindOf[o], behindOf[j] = aheadOf[o];
+            lookups_ += stepsAlong(exitDistance(y, wj)) + stepsAlong(exitDistance(y, -wj));
+        } else {
+            aheadOf[j] = depthOut(y, wj), behindOf[j] = depthOut(y, -wj);
+        }
+        const double ahead = aheadOf[j], toExit = exitDistance(y, wj);
+        const double chord = ahead + behindOf[j];
         if (count_[j] > 0 && chord > 0.0)
             density += count_[j] * sigmaY * h * std::exp(-ahead) * 4.0 * tentDensity(y + toExit * wj) /
                        (projectedArea_[j] * -std::expm1(-chord));

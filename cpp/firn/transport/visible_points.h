@@ -60,6 +60,9 @@ class VisiblePoints {
     std::array<double, kSourceDirections> projectedArea_{};  // voxels^2, of the hat's box along each direction
     std::array<int, kSourceDirections> count_{};             // candidates drawn for each direction
     std::vector<int> drawnFor_;                              // per candidate, its direction
+    // Per direction, the earlier one exactly opposite it (-1: none): the depth out along one is the depth back
+    // along the other (the 26 neighbour directions pair up), walked once per candidate.
+    std::array<int, kSourceDirections> opposite_{};
     long lookups_ = 0;                                       // sigmaT's
 };
 
