@@ -385,11 +385,10 @@ constexpr double kShortPathSteps = 1000.0, kShortTracedSteps = 8e7;  // about 5 
 // seconds at the same count) where that affords light tracing's least photons (planLightTracing), else gathered:
 // a gathered path's next-event estimates weigh the sun by Henyey-Greenstein, which at g 0.85 spans 2000x as the
 // path turns, while photons scatter by sampling it and add at every collision, shared by the voxels they cross.
-// Voxels gathered where cameras see them stay so (lightTracedBesideSeen). bench/bake_suite.py --seeds 4, mean
-// error per block and the bake's processor seconds (docs/benchmarks.md, trace-noise): ball_thin_forward 6.6 ->
-// 5.5 % (0.23 -> 0.14 s), spray_lumps 10.0 -> 8.8 % (2.45 -> 2.09 s), spray_dense 19.1 -> 18.2 % (5.1 -> 4.5 s),
-// slab_thin_forward 10.0 -> 10.0 % (2.8 -> 2.8 s, worst block +73 -> +41 %); at g 0.5 ball_thin read 4.0 -> 4.2 %
-// (hence the gate).
+// Not where voxels are gathered where cameras see them (lightTracedAtGatheringCost). bench/bake_suite.py --seeds
+// 4, mean error per block and the whole bake's processor seconds (docs/benchmarks.md, trace-noise):
+// ball_thin_forward 6.6 -> 5.5 % (0.24 -> 0.14 s), slab_thin_forward 10.0 -> 10.0 % (2.8 -> 2.8 s, the render's
+// spread across seeds 8.7 -> 4.2 %, worst block +73 -> +41 %); at g 0.5 ball_thin read 4.0 -> 4.2 % (the gate).
 constexpr double kMinLightTracedG = 0.8, kLightTracedShare = 0.75;
 struct GatheringPlan {
     int paths = 0;       // per voxel; 0: none (over the budget)
@@ -477,29 +476,18 @@ MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb
     return tracedVoxels(reference, voxels, [&](std::size_t v) { return estimates[v]; }, SubProgress(nullptr, 0.0, 1.0));
 }
 
-// Forward scattering snow at what gathering it costs (kMinLightTracedG): the voxels gathered where cameras see
-// them (gatheredWhereSeen) gathered with `paths` each, the others light traced within kLightTracedShare of what
-// `paths` each would cost them (light tracing tallies the voxels' mean, not what cameras see of a thick one:
-// spray_dense light traced whole read 18.5 % against 19.1 %, but -17 % against -6 % seen against the light). None
-// (empty) where light tracing is not affordable so.
-MonteCarloVoxels lightTracedBesideSeen(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
-                                       int paths, std::uint64_t seed, const SubProgress &progress, BakeStats &stats) {
-    std::vector<openvdb::Coord> seen, rest;
+// Forward scattering snow at what gathering it costs (kMinLightTracedG): light traced within kLightTracedShare of
+// the gathering's steps, unless some voxel is gathered where cameras see it (gatheredWhereSeen: light tracing
+// tallies a voxel's mean, not what cameras see of a thick one; spray_dense light traced whole read -17 % against
+// -6 % seen against the light, and with only its thin voxels light traced the view across the light +4.9 -> +7.2 %
+// over 4 seeds against 512 paths, seed 0 +11.7 %). None (empty) there or where light tracing is not affordable so.
+MonteCarloVoxels lightTracedAtGatheringCost(const Scene &scene, const std::vector<openvdb::Coord> &voxels,
+                                            const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
+                                            BakeStats &stats) {
     Medium::Accessor density = scene.medium->accessor();
-    for (const openvdb::Coord &c : voxels) (gatheredWhereSeen(*scene.medium, density, c) ? seen : rest).push_back(c);
-    const GatheringPlan alone = planGathering(scene, preset, rest, seed);  // the rest's cost per path
-    if (alone.paths == 0) return {};
-    MonteCarloVoxels out = lightTraceSources(scene, rest, seed, progress, stats, kLightTracedShare * alone.steps * paths / alone.paths);
-    if (out.source.empty() || seen.empty()) return out;
-    stats.tracedPaths = paths;
-    const MonteCarloVoxels gathered = traceSources(scene, seen, paths, seed, progress);
-    openvdb::tree::ValueAccessor<openvdb::Int32Tree> index(*out.index);
-    for (std::size_t v = 0; v < seen.size(); ++v) {
-        index.setValue(seen[v], std::int32_t(out.source.size()));
-        out.box.expand(seen[v]);
-        out.source.push_back(gathered.source[v]);
-    }
-    return out;
+    for (const openvdb::Coord &c : voxels)
+        if (gatheredWhereSeen(*scene.medium, density, c)) return {};
+    return lightTraceSources(scene, voxels, seed, progress, stats, kLightTracedShare * plan.steps);
 }
 
 // A solved channel's operator and right-hand side, handed to the next channel's system: of the same sizes, their
@@ -2007,7 +1995,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 if (traced.source.empty()) {
                     const GatheringPlan plan = planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull);
                     if (plan.paths > 0 && scene.medium->optics().g >= kMinLightTracedG)
-                        traced = lightTracedBesideSeen(scene, preset, thin, plan.paths, settings.seed ^ 0x7EACEull, progress, local);
+                        traced = lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);
                     if (traced.source.empty()) {
                         local.tracedPaths = plan.paths;
                         traced = plan.paths > 0 || thin.empty()
