@@ -385,11 +385,15 @@ constexpr double kShortPathSteps = 1000.0, kShortTracedSteps = 8e7;  // about 5 
 // seconds at the same count) where that affords light tracing's least photons (planLightTracing), else gathered:
 // a gathered path's next-event estimates weigh the sun by Henyey-Greenstein, which at g 0.85 spans 2000x as the
 // path turns, while photons scatter by sampling it and add at every collision, shared by the voxels they cross.
-// Not where voxels are gathered where cameras see them (lightTracedAtGatheringCost). bench/bake_suite.py --seeds
-// 4, mean error per block and the whole bake's processor seconds (docs/benchmarks.md, trace-noise):
-// ball_thin_forward 6.6 -> 5.5 % (0.24 -> 0.14 s), slab_thin_forward 10.0 -> 10.0 % (2.8 -> 2.8 s, the render's
+// bench/bake_suite.py --seeds 4, mean error per block and the whole bake's processor seconds (docs/benchmarks.md,
+// trace-noise): ball_thin_forward 6.6 -> 5.5 % (0.24 -> 0.14 s), spray_lumps 10.0 -> 7.6 % (2.45 -> 2.31 s),
+// ball_issue 10.5 -> 10.4 % (0.63 -> 0.49 s), slab_thin_forward 10.0 -> 10.0 % (2.8 -> 2.8-3.2 s, the render's
 // spread across seeds 8.7 -> 4.2 %, worst block +73 -> +41 %); at g 0.5 ball_thin read 4.0 -> 4.2 % (the gate).
-constexpr double kMinLightTracedG = 0.8, kLightTracedShare = 0.75;
+// Not where a voxel is thicker than kMaxLightTracedTau: spray_dense (voxels up to optical depth 20, gathered where
+// cameras see them) light traced read -17 % against -6 % seen against the light, and with only its voxels of
+// optical depth 2 or less light traced +7.2 % against +4.9 % across it; spray_lumps' (up to 6) gained nothing from
+// being gathered where seen (visible-source: 10.1 -> 10.0 %).
+constexpr double kMinLightTracedG = 0.8, kLightTracedShare = 0.75, kMaxLightTracedTau = 10.0;
 struct GatheringPlan {
     int paths = 0;       // per voxel; 0: none (over the budget)
     double steps = 0.0;  // what they all cost, in tracking steps (the pilot's)
@@ -477,16 +481,14 @@ MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb
 }
 
 // Forward scattering snow at what gathering it costs (kMinLightTracedG): light traced within kLightTracedShare of
-// the gathering's steps, unless some voxel is gathered where cameras see it (gatheredWhereSeen: light tracing
-// tallies a voxel's mean, not what cameras see of a thick one; spray_dense light traced whole read -17 % against
-// -6 % seen against the light, and with only its thin voxels light traced the view across the light +4.9 -> +7.2 %
-// over 4 seeds against 512 paths, seed 0 +11.7 %). None (empty) there or where light tracing is not affordable so.
+// the gathering's steps, unless some voxel is thicker than kMaxLightTracedTau (light tracing tallies a voxel's
+// mean, not what cameras see of a thick one). None (empty) there or where light tracing is not affordable so.
 MonteCarloVoxels lightTracedAtGatheringCost(const Scene &scene, const std::vector<openvdb::Coord> &voxels,
                                             const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
                                             BakeStats &stats) {
     Medium::Accessor density = scene.medium->accessor();
     for (const openvdb::Coord &c : voxels)
-        if (gatheredWhereSeen(*scene.medium, density, c)) return {};
+        if (voxelOpticalDepth(*scene.medium, density, c) > kMaxLightTracedTau) return {};
     return lightTraceSources(scene, voxels, seed, progress, stats, kLightTracedShare * plan.steps);
 }
 
