@@ -54,7 +54,7 @@ struct Preset {
     int referenceSamples;
     int snowBounces;  // passes gathering light between snow surfaces
     int tracedSamples;  // paths per optically thin voxel (thinVoxels)
-    int cheapTracedSamples;  // as many where all of them cost little (kCheapTracedSteps, kShortTracedSteps: tracedSamples)
+    int cheapTracedSamples;  // as many where all of them cost little (kCheapTracedSteps, kShortTracedSteps: planGathering)
     // The sky and the light gathered from other snow averaged over like-facing neighbours (averageOverNeighbours):
     // 9 rays a voxel pooled over its neighbours where 16 were its own (docs/bake.md, Performance).
     bool skyOverNeighbours;
@@ -380,9 +380,27 @@ constexpr double kMaxTracedSteps = 2e8, kStepsPerPath = 20.0;  // about 12 proce
 constexpr double kCheapTracedSteps = 2e7;                       // about 1.2 processor seconds
 constexpr double kWholePieceTracedSteps = kMaxTracedSteps / 4.0;  // transport-thin pieces, light traced whole (thinVoxels)
 constexpr double kShortPathSteps = 1000.0, kShortTracedSteps = 8e7;  // about 5 processor seconds
-int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
+// Forward scattering snow (g >= kMinLightTracedG) is light traced at what gathering its voxels would cost
+// (kLightTracedShare of the pilot's steps: light tracing's sums cost more per counted step, 1.3-1.6x in processor
+// seconds at the same count) where that affords light tracing's least photons (planLightTracing), else gathered:
+// a gathered path's next-event estimates weigh the sun by Henyey-Greenstein, which at g 0.85 spans 2000x as the
+// path turns, while photons scatter by sampling it and add at every collision, shared by the voxels they cross.
+// bench/bake_suite.py --seeds 4, mean error per block and the whole bake's processor seconds (docs/benchmarks.md,
+// trace-noise): ball_thin_forward 6.6 -> 5.5 % (0.24 -> 0.14 s), spray_lumps 10.0 -> 7.6 % (2.45 -> 2.31 s),
+// ball_issue 10.5 -> 10.4 % (0.63 -> 0.49 s), slab_thin_forward 10.0 -> 10.0 % (2.8 -> 2.8-3.2 s, the render's
+// spread across seeds 8.7 -> 4.2 %, worst block +73 -> +41 %); at g 0.5 ball_thin read 4.0 -> 4.2 % (the gate).
+// Not where a voxel is thicker than kMaxLightTracedTau: spray_dense (voxels up to optical depth 20, gathered where
+// cameras see them) light traced read -17 % against -6 % seen against the light, and with only its voxels of
+// optical depth 2 or less light traced +7.2 % against +4.9 % across it; spray_lumps' (up to 6) gained nothing from
+// being gathered where seen (visible-source: 10.1 -> 10.0 %).
+constexpr double kMinLightTracedG = 0.8, kLightTracedShare = 0.75, kMaxLightTracedTau = 10.0;
+struct GatheringPlan {
+    int paths = 0;       // per voxel; 0: none (over the budget)
+    double steps = 0.0;  // what they all cost, in tracking steps (the pilot's)
+};
+GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
-    if (voxels.empty()) return 0;
+    if (voxels.empty()) return {};
     const MonteCarloReference reference(scene);
     Medium::Accessor density = scene.medium->accessor();
     const double budget = kMaxTracedSteps / (double(voxels.size()) * kMinSamples);  // per path, at the least
@@ -398,16 +416,16 @@ int tracedSamples(const Scene &scene, const Preset &preset, const std::vector<op
         }
         steps += last;
         paths += kPilotSamples;
-        if (steps > budget * kPilotVoxels * kPilotSamples) return 0;  // too costly already
+        if (steps > budget * kPilotVoxels * kPilotSamples) return {};  // too costly already
     }
     const double perPath = steps / paths;
     const int affordable = int(std::min(kMaxTracedPaths, kMaxTracedSteps / perPath) / double(voxels.size()));
-    if (affordable < kMinSamples) return 0;
+    if (affordable < kMinSamples) return {};
     int samples = std::min(affordable, preset.tracedSamples);
     const double cheap = perPath <= kShortPathSteps ? kShortTracedSteps : kCheapTracedSteps;
     while (2 * samples <= preset.cheapTracedSamples && perPath * 2.0 * samples * double(voxels.size()) <= cheap)
         samples *= 2;
-    return samples;
+    return {samples, perPath * samples * double(voxels.size())};
 }
 
 // The traced voxels' sources from their estimates (`estimate(v)`: voxel v's, called in parallel, gathered by
@@ -448,7 +466,7 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
         }, progress);
 }
 
-// The voxels whose gathering costs more than the budget (tracedSamples: 0), by light tracing within it
+// The voxels whose gathering costs more than the budget (planGathering: no paths), by light tracing within it
 // (light_tracing.h); none where even that costs too much (a cloud of lumps inside thick snow: photons
 // scatter thousands of times there), or with lamps (their emission is not sampled) or occluders (planLightTracing).
 MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
@@ -460,6 +478,18 @@ MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb
     stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size(), stats.lightTracingBytes = plan.sumsBytes;
     // The fit alone left: the photons have run the progress to its end.
     return tracedVoxels(reference, voxels, [&](std::size_t v) { return estimates[v]; }, SubProgress(nullptr, 0.0, 1.0));
+}
+
+// Forward scattering snow at what gathering it costs (kMinLightTracedG): light traced within kLightTracedShare of
+// the gathering's steps, unless some voxel is thicker than kMaxLightTracedTau (light tracing tallies a voxel's
+// mean, not what cameras see of a thick one). None (empty) there or where light tracing is not affordable so.
+MonteCarloVoxels lightTracedAtGatheringCost(const Scene &scene, const std::vector<openvdb::Coord> &voxels,
+                                            const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
+                                            BakeStats &stats) {
+    Medium::Accessor density = scene.medium->accessor();
+    for (const openvdb::Coord &c : voxels)
+        if (voxelOpticalDepth(*scene.medium, density, c) > kMaxLightTracedTau) return {};
+    return lightTraceSources(scene, voxels, seed, progress, stats, kLightTracedShare * plan.steps);
 }
 
 // A solved channel's operator and right-hand side, handed to the next channel's system: of the same sizes, their
@@ -1965,10 +1995,15 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                     if (!traced.source.empty()) thin = std::move(whole);
                 }
                 if (traced.source.empty()) {
-                    const int samples = local.tracedPaths = tracedSamples(scene, preset, thin, settings.seed ^ 0x7EACEull);
-                    traced = samples > 0 || thin.empty()
-                                 ? traceSources(scene, thin, samples, settings.seed ^ 0x7EACEull, progress)
-                                 : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
+                    const GatheringPlan plan = planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull);
+                    if (plan.paths > 0 && scene.medium->optics().g >= kMinLightTracedG)
+                        traced = lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);
+                    if (traced.source.empty()) {
+                        local.tracedPaths = plan.paths;
+                        traced = plan.paths > 0 || thin.empty()
+                                     ? traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress)
+                                     : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
+                    }
                 }
                 progress.report(1.0);  // none traced, or light traced (its fit does not report)
             });

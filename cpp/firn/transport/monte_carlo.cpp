@@ -343,7 +343,7 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     KroneckerSequence points(rng);
     // Where cameras see a thick voxel: points drawn so, of equal weight (VisiblePoints).
     std::vector<glm::dvec3> seen;
-    long seenSteps = 0;  // their draws' work (the bake's budget counts it: tracedSamples)
+    long seenSteps = 0;  // their draws' work (the bake's budget counts it: planGathering)
     if (visible) {
         KroneckerSequence candidates(rng);
         seen = visiblePoints(medium, voxel, directions_, samples, [&] {

@@ -45,7 +45,7 @@ class VisiblePoints {
     Candidate draw(int i, const std::array<double, 3> &u);
 
     // The density lookups and column steps taken so far (the visibility included): the draws' work in tracking
-    // steps, which the bake's budget counts (SourceEstimate::steps, tracedSamples).
+    // steps, which the bake's budget counts (SourceEstimate::steps, planGathering).
     long steps() const { return lookups_ + marcher_.columnSteps(); }
 
   private:
