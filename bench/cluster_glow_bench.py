@@ -16,6 +16,15 @@ import tempfile
 from lumps_between_bench import cluster_density, measure, plane, views_of
 
 
+# Towards the sun: azimuth 22.5, elevation 17.6 degrees, no neighbour's centre within 2.7 cm of B's sun line.
+SUN_TOWARDS = (math.cos(math.radians(17.6)) * math.cos(math.radians(22.5)),
+               math.cos(math.radians(17.6)) * math.sin(math.radians(22.5)), math.sin(math.radians(17.6)))
+
+
+def sun_off_the_neighbours(firncore):
+    return dict(suns=[firncore.SunLight(SUN_TOWARDS, (1.0,) * 3, 0.0093)], sky=firncore.Sky((0.0,) * 3))
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--samples", type=int, default=128, help="Monte Carlo paths per pixel")
@@ -23,9 +32,7 @@ def main():
     args = parser.parse_args()
     import firncore
 
-    azimuth, elevation = math.radians(22.5), math.radians(17.6)
-    towards = (math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth), math.sin(elevation))
-    sun = dict(suns=[firncore.SunLight(towards, (1.0,) * 3, 0.0093)], sky=firncore.Sky((0.0,) * 3))
+    sun = sun_off_the_neighbours(firncore)
     path = os.path.join(tempfile.mkdtemp(), "lumps.vdb")
     sums = {}
     for neighbours in (False, True):
