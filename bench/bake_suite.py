@@ -283,6 +283,7 @@ def run_case(case, folder, cache, quality="FINAL", seed=0, sky_samples=0):
         "worst_signed": float(relative.flat[np.abs(relative).argmax()]),
         "bias": float(b.sum() / m.sum() - 1.0), "noise": float(np.median(e / np.maximum(m, 1e-30))),
         "bake_s": bake_seconds, "reference_s": reference_seconds, "traced": stats["traced_voxels"], "traced_paths": stats["traced_paths"],
+        "light_traced": stats["light_traced_voxels"], "photons": stats["photons"],
         "trace_cpu_s": stats["cpu_seconds"]["trace"],
         "relative": relative, "view_bias": view_bias, "views": case.views,
     }
@@ -330,6 +331,13 @@ def table(rows, markdown):
     return "\n".join(lines)
 
 
+def traced_how(row):
+    """How the traced voxels were traced: paths gathered per voxel, or photons from the lights (light tracing)."""
+    if row["light_traced"]:
+        return f"{row['light_traced']} light traced, {row['photons']:,} photons"
+    return f"{row['traced_paths']} paths each"
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--cases", default="", help="comma-separated case names (default: all)")
@@ -362,7 +370,7 @@ def main():
                   f"bias {100 * r['bias']:+.1f} %; " +
                   (f"over {args.seeds} seeds (means {seeds} %, spread {100 * r['spread']:.1f} %); "
                    if args.seeds > 1 else "") +
-                  f"{r['traced']} traced voxels ({r['traced_paths']} paths each), trace {r['trace_cpu_s']:.2f} processor s; per view: " +
+                  f"{r['traced']} traced voxels ({traced_how(r)}), trace {r['trace_cpu_s']:.2f} processor s; per view: " +
                   ", ".join(f"{v} {100 * b:+.0f} %" for v, b in zip(case.views, r["view_bias"])), flush=True)
             if args.maps:
                 _, _, tau = views(case)
