@@ -124,7 +124,7 @@ VisiblePoints::Candidate VisiblePoints::draw(int i, const std::array<double, 3> 
         const glm::dvec3 &wj = directions_[j];
         if (const int o = opposite_[j]; o >= 0) {
             // The same walks as w_o's, bit for bit; counted again, as the budget has always counted them
-            // (tracedSamples: the samples it allows, and so the bake's values, unchanged).
+            // (planGathering: the samples it allows, and so the bake's values, unchanged).
             aheadOf[j] = behindOf[o], behindOf[j] = aheadOf[o];
             lookups_ += stepsAlong(exitDistance(y, wj)) + stepsAlong(exitDistance(y, -wj));
         } else {
