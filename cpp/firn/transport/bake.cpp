@@ -482,10 +482,12 @@ MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb
 
 // Forward scattering snow at what gathering it costs (kMinLightTracedG): light traced within kLightTracedShare of
 // the gathering's steps, unless some voxel is thicker than kMaxLightTracedTau (light tracing tallies a voxel's
-// mean, not what cameras see of a thick one). None (empty) there or where light tracing is not affordable so.
+// mean, not what cameras see of a thick one). None (empty) there, for broader scattering, without a gathering plan,
+// or where light tracing is not affordable so.
 MonteCarloVoxels lightTracedAtGatheringCost(const Scene &scene, const std::vector<openvdb::Coord> &voxels,
                                             const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
                                             BakeStats &stats) {
+    if (plan.paths <= 0 || scene.medium->optics().g < kMinLightTracedG) return {};
     Medium::Accessor density = scene.medium->accessor();
     for (const openvdb::Coord &c : voxels)
         if (voxelOpticalDepth(*scene.medium, density, c) > kMaxLightTracedTau) return {};
@@ -1106,6 +1108,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             sunHere.l0 = float(moved * r.sunShape0 + r.sunMissed * 3.0 / 7.0);
             sunHere.l1 = glm::vec3(moved * r.sunShape1 + r.sunMissed * 6.0 / 7.0 * patch.normal);
             sunHere.atOnce = float(atOnce);
+            // The same kernel for each channel, found again per channel (a loop over the beams): held through the
+            // three solves it would add 16 bytes per surface voxel at the solves' peak (docs/bake.md, Memory).
             downstreamKernel(scene, light, sys, kernelChannel, topo, i, sunHere);
         }
     });
@@ -1996,8 +2000,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 }
                 if (traced.source.empty()) {
                     const GatheringPlan plan = planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull);
-                    if (plan.paths > 0 && scene.medium->optics().g >= kMinLightTracedG)
-                        traced = lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);
+                    traced = lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);
                     if (traced.source.empty()) {
                         local.tracedPaths = plan.paths;
                         traced = plan.paths > 0 || thin.empty()
