@@ -1118,7 +1118,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // fitted to what cameras see of them (edgeLobe). A face the sun enters at grazing incidence returns it
     // sharply forwards as a smooth surface does: its SunPeak joins the voxel's peaked lobe (a small lump's edges
     // are its rim against the sun, docs/bake.md Method 5: lump_angles_bench's view 27 degrees off the sun's travel
-    // -39.5 -> -16.6 %).
+    // -39.5 -> -16.0 %).
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         std::vector<FaceExit> faces;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
