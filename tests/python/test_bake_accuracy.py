@@ -436,3 +436,27 @@ def test_a_lump_in_the_shadow_of_another_keeps_little_of_the_sun(tmp_path):
     (baked_alone, mc_alone, _), (baked_behind, mc_behind, mc_error) = light_on_b[0], light_on_b[5]
     assert mc_behind / mc_alone < 0.2, "the Monte Carlo's shadow"  # the oracle itself: A hides B
     assert baked_behind / baked_alone < 2.0 * (mc_behind + 3.0 * mc_error) / mc_alone
+
+
+def test_a_lone_lumps_sharp_edges_return_the_grazing_sun_forwards(tmp_path):
+    # The skier sample's lump (1.2 cm, 19 voxels: 12 of them sharp edges, two air faces at right angles) left to the
+    # diffusion by 400 far lumps, under a sun 17.6 degrees high, seen nearly level 27 degrees off the sun's travel
+    # (bench/lump_angles_bench.py's B alone, view -0.89). Oracle: the core's Monte Carlo (256 paths per pixel, noise
+    # 1.6 %). Its rim against the sun is the sun entering the edges' faces at grazing incidence and scattered on
+    # forwards, which a half-space returns sharply forwards (SunPeak). Measured: -42.7 % when the edge faces returned
+    # it in the sun lobe's linear shape, -20.5 % with each face's peak in the voxel's peaked lobe (docs/benchmarks.md
+    # "lump-lobe").
+    import cluster_glow_bench
+    import lumps_between_bench
+    optics = firncore.VolumeOptics(*lumps_between_bench.OPTICS_ARGS)
+    light = cluster_glow_bench.sun_off_the_neighbours(firncore)
+    density, centre, radius = lumps_between_bench.cluster_density(1, False)
+    origins, directions = lumps_between_bench.views_of(centre, radius, 14, 16)
+    per = len(origins) // 14
+    view = slice(6 * per, 7 * per)  # the Fibonacci sphere's view 6: cosine -0.89 with the sun's direction
+    assert -directions[view][0] @ np.array(cluster_glow_bench.SUN_TOWARDS) == pytest.approx(-0.89, abs=0.01)
+    baked, mc, mc_error = lumps_between_bench.measure(firncore, str(tmp_path / "lump.vdb"), density, origins[view],
+                                                      directions[view], light, [lumps_between_bench.plane(-0.03, 0.0)],
+                                                      256)
+    assert mc_error / mc < 0.05
+    assert baked / mc == pytest.approx(1.0, abs=0.25)

@@ -1005,9 +1005,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // neighbouring snow) and what it misses take the escape function's u(mu) = 3/7 + 6/7 mu. So:
     // leaving = sum returned (shape - u) + (out + missed) u. The returned part (W, moments of a linear form)
     // through a surface of normal n taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's; with
-    // `peak` (a smooth patch), the suns' light returned sharply forwards leaves as the peaked lobe instead
-    // (SunPeak: at grazing sun the lit rim seen against the sun, bench/bake_halfspace.py), added to `peak`
-    // (radiance), the rest linear:
+    // `peak` (a smooth patch, or each air face of a sharp edge), the suns' light returned sharply forwards leaves as
+    // the peaked lobe instead (SunPeak: at grazing sun the lit rim seen against the sun, bench/bake_halfspace.py),
+    // added to `peak` (radiance), the rest linear:
     auto returnedThrough = [&](std::size_t i, const glm::dvec3 &n, double skyShare, const auto &beamShare,
                                SurfaceLight *peak) {
         const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
@@ -1115,7 +1115,10 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     });
     // Sharp edges: each air face's own exit radiance (the light returned through it, the exitance of the
     // surface voxels facing its way, other edge voxels left out as in surfaceRadiance), and the one lobe
-    // fitted to what cameras see of them (edgeLobe).
+    // fitted to what cameras see of them (edgeLobe). A face the sun enters at grazing incidence returns it
+    // sharply forwards as a smooth surface does: its SunPeak joins the voxel's peaked lobe (a small lump's edges
+    // are its rim against the sun, docs/bake.md Method 5: lump_angles_bench's view 27 degrees off the sun's travel
+    // -39.5 -> -16.0 %).
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         std::vector<FaceExit> faces;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -1132,7 +1135,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     for (int g = 0; g < 6; ++g)
                         if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
                     return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
-                }, nullptr);
+                }, &out.surface(i));
                 const auto [leaving, area] =
                     neighbourhoodOutflow<double>(topo, i, n, [&](std::size_t j) { return double(out[j].leaving[c]); });
                 const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
@@ -1588,16 +1591,17 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     };
     // Where forwardPeakThrough may find a peak: within two voxels of a smooth surface voxel holding one (the car's
     // grids took 4.6 processor seconds searching around every voxel next to a surface voxel, 4.3-4.4 so, 3.3 without).
-    openvdb::BoolTree nearPeak(false), peaks(false);  // peaks: surface voxels holding a peaked lobe
+    // peaks: smooth surface voxels holding a peaked lobe. A sharp edge's peak (its faces' grazing sun) stays its
+    // own: carried through the ramp too, ball_issue's view against the sun read -29 % (-27 % without).
+    openvdb::BoolTree nearPeak(false), peaks(false);
     if (!gathering) {
         std::vector<bool> peaked(source.broad.size(), false);  // by unknown
         for (const PeakedLobes::Peak &peak : source.peaked.peaks())
             peaked[peak.key] = glm::length(peak.peak1) > 0.0f;
         for (auto it = topo.index->cbeginValueOn(); it; ++it)
-            if (const std::int32_t j = *it; j >= 0 && peaked[j] && topo.patches[j].isSurface()) {
+            if (const std::int32_t j = *it; j >= 0 && peaked[j] && topo.patches[j].isSurface() && !topo.patches[j].sharp)
                 peaks.setValueOn(it.getCoord());
-                if (!topo.patches[j].sharp) nearPeak.setValueOn(it.getCoord());
-            }
+        nearPeak.topologyUnion(peaks);
         openvdb::tools::dilateActiveValues(nearPeak, 2, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                            openvdb::tools::IGNORE_TILES);
     }
