@@ -245,6 +245,17 @@ def views(case):
     return origins, directions, tau
 
 
+def depth_one_points(case, origins, directions, seen):
+    """Where each seen ray reaches optical depth 1 of snow (NaN for the others)."""
+    steps = np.linspace(0.0, 2.0, 4000)
+    hit = np.full((len(origins), 3), np.nan)
+    for i in np.nonzero(seen)[0]:
+        p = origins[i] + steps[:, None] * directions[i]
+        tau = np.cumsum(trilinear(case.density, p / case.voxel)) * (steps[1] - steps[0]) * case.sigma_t / case.rho
+        hit[i] = p[np.searchsorted(tau, 1.0)]
+    return hit
+
+
 def reference(case, path, origins, directions, cache):
     file = os.path.join(cache, f"{case.name}_{case.key()}.npz") if cache else None
     if file and os.path.exists(file):

@@ -41,12 +41,7 @@ def regions(case, origins, directions, seen):
     """Masks of the blocks by where each ray meets optical depth 1."""
     column = np.tile(np.arange(case.pixels), len(case.views) * case.pixels)
     side = (column == 0) | (column == case.pixels - 1)
-    steps = np.linspace(0.0, 2.0, 4000)
-    hit = np.full((len(origins), 3), np.nan)
-    for i in np.nonzero(seen)[0]:
-        p = origins[i] + steps[:, None] * directions[i]
-        tau = np.cumsum(bs.trilinear(case.density, p / case.voxel)) * (steps[1] - steps[0]) * case.sigma_t / case.rho
-        hit[i] = p[np.searchsorted(tau, 1.0)]
+    hit = bs.depth_one_points(case, origins, directions, seen)
     under = ~side & (hit[:, 0] > 0.08) & (hit[:, 0] < 0.22) & (hit[:, 1] > 0.03) & (hit[:, 1] < 0.27)
     return {"under plate": under & seen, "cut sides": side & seen, "rest of top": ~side & ~under & seen}
 

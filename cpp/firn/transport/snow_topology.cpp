@@ -107,13 +107,20 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             for (int f = 0; f < 6; ++f)
                 if (topo.isAirFace(i, f)) faces += faceNormal(f), ++airFaces;
             if (airFaces == 0) continue;
+            // Across an occluder face the stencil reads the voxel's own layer: the snow goes on to the occluder
+            // and the emptiness beyond it is no air (it tilted a wall's lowest voxel 45° towards the ground).
+            std::array<bool, 6> occluderFace{};
+            for (int f = 0; f < 6; ++f)
+                occluderFace[f] = SnowTopology::isFace(topo.link[i][f]) && !topo.isAirFace(i, f);
+            const auto step = [&](int d, int axis) { return d != 0 && occluderFace[2 * axis + (d > 0)] ? 0 : d; };
             glm::dvec3 gradient(0.0);
             const openvdb::Coord &c = topo.coord[i];
             for (int dx = -1; dx <= 1; ++dx)
                 for (int dy = -1; dy <= 1; ++dy)
                     for (int dz = -1; dz <= 1; ++dz) {
                         const double w = (2 - std::abs(dx)) * (2 - std::abs(dy)) * (2 - std::abs(dz));
-                        gradient += w * double(density.getValue(c.offsetBy(dx, dy, dz))) * glm::dvec3(dx, dy, dz);
+                        const double rho = density.getValue(c.offsetBy(step(dx, 0), step(dy, 1), step(dz, 2)));
+                        gradient += w * rho * glm::dvec3(dx, dy, dz);
                     }
             glm::dvec3 n = -gradient;
             if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
