@@ -429,9 +429,7 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
 }
 
 // The traced voxels' sources from their estimates (`estimate(v)`: voxel v's, called in parallel, gathered by
-// `reference`). A voxel at a time: a few voxels are as many tasks for idle threads to take (the car's 3 traced
-// voxels, beside thick snow, take 7.6, 3.0 and 3.0 M tracking steps at 256 paths: 30,000 and 12,000 steps a
-// path). Each voxel's estimate is seeded by its index: the same values on any thread count.
+// `reference`).
 template <class Estimate>
 MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::vector<openvdb::Coord> &voxels,
                               const Estimate &estimate, const SubProgress &progress) {
@@ -441,7 +439,7 @@ MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::v
     const double g = medium.optics().g;
     const SourceDirections &directions = reference.directions();
     std::atomic<std::size_t> done{0};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 1), [&](const auto &range) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::Accessor density = medium.accessor();
         Medium::ColumnMarcher marcher(medium);
