@@ -1855,6 +1855,22 @@ void releaseFreedMemory() {
 #endif
 }
 
+// Whether every active value of `tree` is finite: its leaves in parallel (the car's six grids hold 6.9 M values:
+// 0.05-0.06 s on one thread), then its tiles, if any.
+bool allFinite(const openvdb::Vec3fTree &tree) {
+    const auto finite = [](const openvdb::Vec3f &v) { return std::isfinite(v.x() + v.y() + v.z()); };
+    std::atomic<bool> ok{true};
+    openvdb::tree::LeafManager<const openvdb::Vec3fTree>(tree).foreach([&](const auto &leaf, std::size_t) {
+        for (auto it = leaf.cbeginValueOn(); it; ++it)
+            if (!finite(*it)) ok = false;
+    });
+    auto tile = tree.cbeginValueOn();
+    tile.setMaxDepth(tile.getLeafDepth() - 1);
+    for (; tile; ++tile)
+        if (!finite(*tile)) ok = false;
+    return ok;
+}
+
 // The grids read the topology's index and surface patches alone (gridValues, sourceTree): the rest (links,
 // coordinates, densities, faces, neighbourhoods and shell) is freed before they are written. size() is 0 after.
 void keepIndexAndPatches(SnowTopology &topo) {
@@ -2038,9 +2054,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
     // (Cycles would render black or white voxels). Not InvalidArgument: the fuzz driver must see it as a bug.
     for (const auto &grid : grids.source)
-        for (auto it = grid->cbeginValueOn(); it; ++it)
-            if (!std::isfinite(it->x() + it->y() + it->z()))
-                throw std::logic_error("the bake computed a non-finite radiance (NaN or inf); nothing was written");
+        if (!allFinite(grid->tree()))
+            throw std::logic_error("the bake computed a non-finite radiance (NaN or inf); nothing was written");
     clock.lap(&BakeStats::Phases::grids);
     p.report(1.0, "Done");
     if (stats) *stats = local;
