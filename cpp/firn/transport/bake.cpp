@@ -1,5 +1,6 @@
 #include "firn/transport/bake.h"
 
+#include <cstdlib>
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -872,6 +873,22 @@ struct ReturnedLight {
     double sunMissed, sunReturned;  // W: what the diffusion misses of it; all the half-space returns
 };
 
+// The sky on a patch of normal n read as an even part and a beam, from the first moment of its arrival
+// directions per unit irradiance m (IncidentLight::skyAim): m = (1 - share) 2/3 n + share w, w the beam's unit
+// direction towards the light (an even sky's moment is 2/3 n; the share solves |w| = 1). A wall's sky from above
+// only is share 0.57 from 48 degrees above its normal: its light, carried on downwards at g 0.7, leaves less
+// upwards than an even sky's (docs/bake.md Method 5; bench/wall_on_ground_bench.py).
+struct SkyBeam {
+    double share = 0.0;
+    glm::dvec3 towards{0.0};
+};
+SkyBeam skyBeamPart(const glm::dvec3 &m, const glm::dvec3 &n) {
+    const double delta = glm::dot(m, n) - 2.0 / 3.0, across = glm::length(m - glm::dot(m, n) * n);
+    const double share = std::min(1.0, (6.0 * delta + std::sqrt(81.0 * delta * delta + 45.0 * across * across)) / 5.0);
+    if (!(share > 1e-3)) return {};
+    return {share, glm::normalize(m - (1.0 - share) * 2.0 / 3.0 * n)};
+}
+
 // Where a half-space returns a beam entering at cos mu0, relative to where it entered, in transport mean free
 // paths 1/sigma_tr: the mean displacement along the beam's tangential travel and the spread about it (standard
 // deviation along it). Monte Carlo, bench/halfspace_displacement.py (100,000 photons), the means of omega 0.98,
@@ -1014,6 +1031,20 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         const double sky = skyShare * sys.skyIn[i];
         double r0 = sky * (1.0 - 3.0 / 7.0), missed = sky * diffuseMissed;  // W
         glm::dvec3 r1 = -sky * escape1;
+        // A smooth patch's lopsided sky returns as its beam part would, in the sun lobe's shape (a + b n.w + c t.w
+        // against the even 1: the same exitance, a + 2b/3 = 1).
+        const glm::vec3 E = light.skyOnSurface[i];
+        if (peak && std::getenv("FIRN_SKY_AIM") && E.x + E.y + E.z > 0.0f) {
+            const SkyBeam beam = skyBeamPart(glm::dvec3(light.skyAim[i]) * 3.0 / double(E.x + E.y + E.z), n);
+            const double mu0 = std::clamp(glm::dot(beam.towards, n), 0.05, 1.0);
+            if (beam.share > 0.0) {
+                const SunLobe lobe = sunLobe(ch.g, mu0, y);
+                glm::dvec3 t = glm::dot(beam.towards, n) * n - beam.towards;
+                t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
+                const double returned = beam.share * lobe.albedo * skyShare * E[c] * topo.patches[i].area;
+                r0 += returned * (lobe.a - 1.0), r1 += returned * (lobe.b * n + lobe.c * t);
+            }
+        }
         double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0;  // the beams' part
         glm::dvec3 sun1(0.0);
         // The half-space of the snow beneath the patch: a voxel's resistance and the node's below the surface
