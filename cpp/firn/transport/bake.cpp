@@ -1,6 +1,5 @@
 #include "firn/transport/bake.h"
 
-#include <cstdlib>
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -1034,7 +1033,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         // A smooth patch's lopsided sky returns as its beam part would, in the sun lobe's shape (a + b n.w + c t.w
         // against the even 1: the same exitance, a + 2b/3 = 1).
         const glm::vec3 E = light.skyOnSurface[i];
-        if (peak && std::getenv("FIRN_SKY_AIM") && E.x + E.y + E.z > 0.0f) {
+        if (peak && E.x + E.y + E.z > 0.0f) {
             const SkyBeam beam = skyBeamPart(glm::dvec3(light.skyAim[i]) * 3.0 / double(E.x + E.y + E.z), n);
             const double mu0 = std::clamp(glm::dot(beam.towards, n), 0.05, 1.0);
             if (beam.share > 0.0) {
