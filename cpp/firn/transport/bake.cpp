@@ -315,7 +315,10 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
             }
         }
     }
-    const PieceKind kind = large ? kLargePiece : int(piece.size()) <= kSmallPieceVoxels ? kSmallPiece : kTransportThinPiece;
+    // A small piece with no inside whose voxels are not all thin enough for a traced layer is a layer of dense
+    // snow (a dusting one or two voxels thick): a camera sees its voxels' first optical depth, not their mean.
+    const PieceKind kind = large || (notLayer && !hasInside()) ? kLargePiece
+                           : int(piece.size()) <= kSmallPieceVoxels ? kSmallPiece : kTransportThinPiece;
     if (kind != kSmallPiece)
         for (const openvdb::Coord &c : piece) done.setValue(c, kind);
     return kind;
