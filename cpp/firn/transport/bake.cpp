@@ -280,12 +280,21 @@ double axisDepth(Medium::Accessor &density, const openvdb::Coord &c, double redu
     }
 }
 
+// Whether the unknown at `c` has air (no snow, no occluder) on both faces along some axis.
+bool twoSided(const SnowTopology &topo, const openvdb::Coord &c) {
+    const std::int32_t i = topo.index->getValue(c);
+    if (i < 0) return false;
+    for (int a = 0; a < 3; ++a)
+        if (topo.isAirFace(std::size_t(i), 2 * a) && topo.isAirFace(std::size_t(i), 2 * a + 1)) return true;
+    return false;
+}
+
 // The kind of the piece around `seed` (sigma_tr h = reducedPerDensity * density); marks what it visits in `done`.
 // Voxels of density `layerBelow` or more make no traced layer. A fill that meets a large piece's voxel stops, and so
 // does one past both sizes that is no traced layer: each voxel is visited a bounded number of times, however large
 // the snow.
 PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb::Int32Tree> &done,
-                      const openvdb::Coord &seed, double reducedPerDensity, float layerBelow) {
+                      const openvdb::Coord &seed, double reducedPerDensity, float layerBelow, const SnowTopology &topo) {
     const auto reducedVolume = [&](const openvdb::Coord &c) { return std::pow(reducedPerDensity * density.getValue(c), 3.0); };
     std::vector<openvdb::Coord> piece{seed}, stack{seed};
     std::size_t shallow = 0;  // piece[0, shallow) lie less than kMaxTracedPieceDepth deep (checked past both sizes)
@@ -316,8 +325,13 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
         }
     }
     // A small piece with no inside whose voxels are not all thin enough for a traced layer is a layer of dense
-    // snow (a dusting one or two voxels thick): a camera sees its voxels' first optical depth, not their mean.
-    const PieceKind kind = large || (notLayer && !hasInside()) ? kLargePiece
+    // snow (a dusting one or two voxels thick): a camera sees its voxels' first optical depth, not their mean, and
+    // the diffusion's surface patches hold it, unless a voxel is open to air on two opposite faces (its density
+    // gradient cancels there: no side for its patch to face).
+    const auto oneSided = [&] {
+        return std::none_of(piece.begin(), piece.end(), [&](const openvdb::Coord &c) { return twoSided(topo, c); });
+    };
+    const PieceKind kind = large || (notLayer && !hasInside() && oneSided()) ? kLargePiece
                            : int(piece.size()) <= kSmallPieceVoxels ? kSmallPiece : kTransportThinPiece;
     if (kind != kSmallPiece)
         for (const openvdb::Coord &c : piece) done.setValue(c, kind);
@@ -330,7 +344,7 @@ struct TracedSnow {
     std::vector<openvdb::Coord> thin, wholePieces;
 };
 
-TracedSnow thinVoxels(const Medium &medium) {
+TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
     const VolumeOptics &optics = medium.optics();
     const double h = medium.voxelSize(), k = optics.extinctionPerDensity;
     const double leastReduced = 1.0 - std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z}) * optics.g;
@@ -344,7 +358,7 @@ TracedSnow thinVoxels(const Medium &medium) {
     for (auto it = medium.density().cbeginValueOn(); it; ++it) {
         if (!(*it > 0.0f)) continue;
         std::int32_t mark = done.getValue(it.getCoord());
-        if (mark == kUnvisited) mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h, layerBelow);
+        if (mark == kUnvisited) mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h, layerBelow, topo);
         if (mark == kSmallPiece) {
             out.thin.push_back(it.getCoord());
             continue;
@@ -1997,7 +2011,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         [&] {
             tracing = isolatedOnThisThread([&] {
                 const SubProgress progress = beside.step(1);
-                TracedSnow snow = thinVoxels(*scene.medium);
+                TracedSnow snow = thinVoxels(*scene.medium, topo);
                 thin = std::move(snow.thin);
                 if (!snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole, else as before
                     std::vector<openvdb::Coord> whole = thin;
