@@ -331,8 +331,9 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
     const auto oneSided = [&] {
         return std::none_of(piece.begin(), piece.end(), [&](const openvdb::Coord &c) { return twoSided(topo, c); });
     };
-    const PieceKind kind = large || (notLayer && !hasInside() && oneSided()) ? kLargePiece
-                           : int(piece.size()) <= kSmallPieceVoxels ? kSmallPiece : kTransportThinPiece;
+    const bool small = !large && int(piece.size()) <= kSmallPieceVoxels;
+    const PieceKind kind = large || (small && notLayer && !hasInside() && oneSided()) ? kLargePiece
+                           : small ? kSmallPiece : kTransportThinPiece;
     if (kind != kSmallPiece)
         for (const openvdb::Coord &c : piece) done.setValue(c, kind);
     return kind;
