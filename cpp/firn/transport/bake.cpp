@@ -228,10 +228,11 @@ class TracedIndex {
 // lumps of up to 20 optical depths per voxel, 34.8 -> 27.0 %; the balls of 5 cm on 1 cm voxels, 500+ voxels,
 // stay with the diffusion: ball_forward traced whole was 19.7 % against 17.1 %). Connected through faces only,
 // 167 voxels of bits beside the car sample's snow counted as pieces and took 12 s to trace, and the lumps
-// of spray_lumps, touching at edges, made pieces of over 125 voxels. Not a small layer of dense snow (no
-// inside, a voxel too thick or absorbing for a traced layer, every voxel with snow or an occluder on one side of
-// each axis): a dusting of 16 x 16 x 1 voxels of sigma_t h 15 on the ground read 41.2 % per block, bias -42.3 %
-// traced, 11.1 %, +1.6 % diffused (bench/snow_on_ground_bench.py --one-voxel; floating, diffused +15 to +59 %).
+// of spray_lumps, touching at edges, made pieces of over 125 voxels. Not a small layer of dense snow (a voxel
+// too thick or absorbing for a traced layer, no inside or wide in transport mean free paths, every voxel with snow
+// or an occluder on one side of each axis): a dusting of 16 x 16 x 1 voxels of sigma_t h 15 on the ground read
+// 41.2 % per block, bias -42.3 % traced, 11.1 %, +1.6 % diffused, 10 x 10 x 3 of it 23.4 -> 8.6 %
+// (bench/snow_on_ground_bench.py --one-voxel; floating one-voxel layers, diffused, +15 to +59 %).
 // Larger pieces that are thin in transport mean free paths (more than kSmallPieceVoxels voxels, but at most
 // kMaxTracedPieceReducedVolume summed over them in (sigma_tr h)^3: a ball of transport radius 2.5) have no
 // diffusion inside either: ball_forward (5 cm, voxels of optical depth 4, g 0.9, sigma_tr h 0.4: 33 of it, 672
@@ -330,10 +331,10 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
             }
         }
     }
-    // A small piece with no inside whose voxels are not all thin enough for a traced layer is a layer of dense
-    // snow (a dusting one or two voxels thick): a camera sees its voxels' first optical depth, not their mean, and
-    // the diffusion's surface patches hold it, unless a voxel is open to air on two opposite faces (its density
-    // gradient cancels there: no side for its patch to face).
+    // A small piece with no inside (or wide in transport mean free paths) whose voxels are not all thin enough for
+    // a traced layer is a layer of dense snow (a dusting): a camera sees its voxels' first optical depth, not their
+    // mean, and the diffusion's surface patches hold it, unless a voxel is open to air on two opposite faces (its
+    // density gradient cancels there: no side for its patch to face).
     const auto oneSided = [&] {
         return std::none_of(piece.begin(), piece.end(), [&](const openvdb::Coord &c) { return twoSided(topo, c); });
     };
