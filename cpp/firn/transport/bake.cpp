@@ -898,6 +898,29 @@ struct ReturnedLight {
     double sunMissed, sunReturned;  // W: what the diffusion misses of it; all the half-space returns
 };
 
+// The light gathered from other snow onto the surface patches (W/m^2, per channel) and its first moment over the
+// directions it arrives from (grey, as IncidentLight::skyAim); none before the first gathering.
+struct SnowLight {
+    const SurfaceValues<glm::vec3> *light = nullptr, *aim = nullptr;
+};
+
+// The sky on a patch of normal n read as an even part and a beam, from the first moment of its arrival
+// directions per unit irradiance m (IncidentLight::skyAim): m = (1 - share) 2/3 n + share w, w the beam's unit
+// direction towards the light (an even sky's moment is 2/3 n; the share solves |w| = 1). A wall's sky from above
+// only is share 0.57 from 48 degrees above its normal: its light, carried on downwards at g 0.7, leaves less
+// upwards than an even sky's (docs/bake.md Method 5; bench/wall_on_ground_bench.py).
+struct SkyBeam {
+    double share = 0.0;
+    glm::dvec3 towards{0.0};
+};
+SkyBeam skyBeamPart(const glm::dvec3 &m, const glm::dvec3 &n) {
+    const double delta = glm::dot(m, n) - 2.0 / 3.0, across = glm::length(m - glm::dot(m, n) * n);
+    const double share = std::min(1.0, (6.0 * delta + std::sqrt(81.0 * delta * delta + 45.0 * across * across)) / 5.0);
+    const glm::dvec3 towards = m - (1.0 - share) * 2.0 / 3.0 * n;  // times share
+    if (!(share > 1e-3) || glm::dot(towards, n) <= 0.0) return {};  // none, or light skimming the surface only
+    return {share, glm::normalize(towards)};
+}
+
 // Where a half-space returns a beam entering at cos mu0, relative to where it entered, in transport mean free
 // paths 1/sigma_tr: the mean displacement along the beam's tangential travel and the spread about it (standard
 // deviation along it). Monte Carlo, bench/halfspace_displacement.py (100,000 photons), the means of omega 0.98,
@@ -1007,8 +1030,8 @@ void sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SunRetur
 }
 
 // Channel c's light leaving each surface voxel, from its solve.
-void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const ChannelSystem &sys,
-                  const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
+void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
+                  const ChannelSystem &sys, const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
@@ -1040,6 +1063,22 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         const double sky = skyShare * sys.skyIn[i];
         double r0 = sky * (1.0 - 3.0 / 7.0), missed = sky * diffuseMissed;  // W
         glm::dvec3 r1 = -sky * escape1;
+        // A smooth patch's lopsided diffuse light (sky, occluders' reflections and other snow's light, each from
+        // where it arrives) returns as its beam part would, in the sun lobe's shape (a + b n.w + c t.w against the
+        // even 1: the same exitance, a + 2b/3 = 1).
+        const glm::dvec3 E = glm::dvec3(light.skyOnSurface[i]) + (snow.light ? glm::dvec3((*snow.light)[i]) : glm::dvec3(0.0));
+        const double grey = (E.x + E.y + E.z) / 3.0;
+        if (peak && grey > 0.0) {
+            const glm::dvec3 aim = glm::dvec3(light.skyAim[i]) + (snow.aim ? glm::dvec3((*snow.aim)[i]) : glm::dvec3(0.0));
+            const SkyBeam beam = skyBeamPart(aim / grey, n);
+            if (beam.share > 0.0) {
+                const SunLobe lobe = sunLobe(ch.g, std::clamp(glm::dot(beam.towards, n), 0.05, 1.0), y);
+                glm::dvec3 t = glm::dot(beam.towards, n) * n - beam.towards;
+                t = glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
+                const double returned = beam.share * lobe.albedo * sky;
+                r0 += returned * (lobe.a - 1.0), r1 += returned * (lobe.b * n + lobe.c * t);
+            }
+        }
         double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0;  // the beams' part
         glm::dvec3 sun1(0.0);
         // The half-space of the snow beneath the patch: a voxel's resistance and the node's below the surface
@@ -1829,8 +1868,9 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceV
 SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
                                       const SourceValues &source, const MonteCarloVoxels &traced,
                                       const GridValues &values, const SkyRays &rays, std::uint64_t seed,
-                                      const SubProgress &progress) {
+                                      const SubProgress &progress, SurfaceValues<glm::vec3> &aim) {
     SurfaceValues<glm::vec3> out(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
+    aim = out;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);
@@ -1839,15 +1879,17 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!light.snowRays[i]) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
-            glm::dvec3 sum(0.0);
+            glm::dvec3 sum(0.0), towards(0.0);
             for (int k = 0; k < rays.count(); ++k) {
                 if (!(light.snowRays[i] >> k & 1)) continue;
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
-                sum += bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
+                const glm::dvec3 radiance = bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
+                sum += radiance, towards += (radiance.x + radiance.y + radiance.z) / 3.0 * w;
             }
             out.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
+            aim.surface(i) = glm::vec3(kPi * towards / double(rays.count()));
         }
     });
     return out;
@@ -1881,6 +1923,22 @@ void releaseFreedMemory() {
 #endif
 }
 
+// Whether every active value of `tree` is finite: its leaves in parallel (the car's six grids hold 6.9 M values:
+// 0.05-0.06 s on one thread), then its tiles, if any.
+bool allFinite(const openvdb::Vec3fTree &tree) {
+    const auto finite = [](const openvdb::Vec3f &v) { return std::isfinite(v.x() + v.y() + v.z()); };
+    std::atomic<bool> ok{true};
+    openvdb::tree::LeafManager<const openvdb::Vec3fTree>(tree).foreach([&](const auto &leaf, std::size_t) {
+        for (auto it = leaf.cbeginValueOn(); it; ++it)
+            if (!finite(*it)) ok = false;
+    });
+    auto tile = tree.cbeginValueOn();
+    tile.setMaxDepth(tile.getLeafDepth() - 1);
+    for (; tile; ++tile)
+        if (!finite(*tile)) ok = false;
+    return ok;
+}
+
 // The grids read the topology's index and surface patches alone (gridValues, sourceTree): the rest (links,
 // coordinates, densities, faces, neighbourhoods and shell) is freed before they are written. size() is 0 after.
 void keepIndexAndPatches(SnowTopology &topo) {
@@ -1907,6 +1965,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
     std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
     for (auto &channel : phi) channel.assign(topo.size(), 0.0);
     SurfaceValues<glm::vec3> fromSnow;  // W/m^2 gathered from other snow onto surface patches (after the first pass)
+    SurfaceValues<glm::vec3> fromSnowAim;  // its first moment over the directions it arrives from (grey)
     SurfaceValues<glm::vec3> before, older;  // the two gathers before it (bounceTail only)
     SourceValues source;
     for (int pass = 0; pass < passes; ++pass) {
@@ -1920,8 +1979,8 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                 const GridValues values = gridValues(scene, topo, source, traced, preset, settings, true);
                 if (bounceTail) older = std::move(before), before = std::move(fromSnow);
                 fromSnow = snowIrradiance(scene, topo, light, source, traced, values, SkyRays(preset.skySamples),
-                                          settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, gathered));
-                if (preset.skyOverNeighbours) averageOverNeighbours(topo, fromSnow);
+                                          settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, gathered), fromSnowAim);
+                if (preset.skyOverNeighbours) averageOverNeighbours(topo, fromSnow), averageOverNeighbours(topo, fromSnowAim);
                 if (bounceTail && pass + 1 == passes && pass > 1) {
                     addBounceTail(topo, pass > 2 ? &older : nullptr, before, fromSnow);
                     older = before = SurfaceValues<glm::vec3>();
@@ -1958,7 +2017,8 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                         storage.b = std::move(workspace.spare);
                     }
                 }
-                surfaceLight(scene, topo, light, system, phi[c], c, leaving);
+                surfaceLight(scene, topo, light, pass > 0 ? SnowLight{&fromSnow, &fromSnowAim} : SnowLight{}, system, phi[c],
+                             c, leaving);
             }
         }
         SurfaceValues<Source> surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
@@ -2064,9 +2124,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
     // (Cycles would render black or white voxels). Not InvalidArgument: the fuzz driver must see it as a bug.
     for (const auto &grid : grids.source)
-        for (auto it = grid->cbeginValueOn(); it; ++it)
-            if (!std::isfinite(it->x() + it->y() + it->z()))
-                throw std::logic_error("the bake computed a non-finite radiance (NaN or inf); nothing was written");
+        if (!allFinite(grid->tree()))
+            throw std::logic_error("the bake computed a non-finite radiance (NaN or inf); nothing was written");
     clock.lap(&BakeStats::Phases::grids);
     p.report(1.0, "Done");
     if (stats) *stats = local;

@@ -102,12 +102,12 @@ glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const gl
 // occluders in the way send what they reflect once (when `bounce`).
 glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays, bool bounce,
                           Crossing crossing, std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher,
-                          std::uint64_t *snowRays = nullptr) {
+                          std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
     Rng rng(seed ^ 0xB0B0ull, stream);  // for the occluders' reflections
-    glm::dvec3 sum(0.0);
+    glm::dvec3 sum(0.0), towards(0.0);
     std::uint64_t hidden = 0;
     for (int k = 0; k < rays.count(); ++k) {
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
@@ -126,9 +126,11 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
         } else {
             continue;
         }
-        sum += kPi * radiance * transmittance(reduced, column);
+        const glm::dvec3 arriving = kPi * radiance * transmittance(reduced, column);
+        sum += arriving, towards += (arriving.x + arriving.y + arriving.z) / 3.0 * w;
     }
     if (snowRays) *snowRays = hidden;
+    if (aim) *aim = glm::vec3(towards / double(rays.count()));
     return glm::vec3(sum / double(rays.count()));
 }
 
@@ -370,6 +372,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
 
     light.skyOnSurface = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     light.snowRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
+    light.skyAim = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     const SkyRays rays(settings.skySamples);
     light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
     const bool bounce = !scene.occluders->empty();
@@ -381,9 +384,10 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
                 light.skyOnSurface.surface(i) = skyIrradianceAt(scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
-                                                                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i));
+                                                                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i),
+                                                                &light.skyAim.surface(i));
     });
-    if (settings.skyOverNeighbours) averageOverNeighbours(topo, light.skyOnSurface);
+    if (settings.skyOverNeighbours) averageOverNeighbours(topo, light.skyOnSurface), averageOverNeighbours(topo, light.skyAim);
     if (scene.sky.isBlack()) return light;
     parallelChunks(topo.faces.size(), progress, [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);

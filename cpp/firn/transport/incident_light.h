@@ -28,6 +28,10 @@ struct IncidentLight {
     // W/m^2 onto each surface voxel's patch from the sky, past occluders and snow, plus sun and sky light
     // that occluders reflect once towards the snow (0 inside the snow).
     SurfaceValues<glm::vec3> skyOnSurface;
+    // Its first moment over the directions it arrives from (grey: the channels' mean; W/m^2 times a unit vector
+    // towards the light): (2/3) n times the grey irradiance where it arrives evenly, leaning where it is lopsided
+    // (a wall's sky from above only). Where a patch's returned sky leans (bake.cpp, skyBeamPart).
+    SurfaceValues<glm::vec3> skyAim;
     // Per surface voxel: which of its sky rays (SkyRays, bit k for ray k) snow hides; the snow's own light
     // arrives along them instead (gathered after a first solve, bake.cpp).
     SurfaceValues<std::uint64_t> snowRays;
