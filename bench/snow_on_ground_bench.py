@@ -5,8 +5,10 @@ bumpy_plate's snow (tau 15 per voxel, omega 0.999, g 0.7; sun 30 degrees high an
 (albedo 0.5): flat layers 1, 2, 3 and 6 voxels thick (16 x 16 voxels of 1 cm, the ground between the empty row
 under them and their lowest voxel) and bumpy layers 2 +- 1 and 3 +- 1.5 voxels thick (24 x 24, bake_suite.bumpy);
 views (0, 60), (180, 50), (90, 70), 8 x 8 blocks each. References (--samples paths) are cached in --cache.
+--one-voxel: layers one to three voxels thick over 6 to 24 voxels, 1.5 to 15 optical depths per voxel, on the grey
+ground, a black one and none (docs/benchmarks.md, "one-voxel").
 
-    PYTHONPATH=build/python /usr/bin/python3 bench/snow_on_ground_bench.py [--samples 1024] [--cache DIR]
+    PYTHONPATH=build/python /usr/bin/python3 bench/snow_on_ground_bench.py [--samples 1024] [--cache DIR] [--one-voxel]
 """
 
 import argparse
@@ -20,28 +22,38 @@ VIEWS = [(0, 60), (180, 50), (90, 70)]
 
 
 def shapes():
-    """(name, density, ground height in m)."""
+    """(name, density, ground height in m, ground albedo or None, optical depth per voxel)."""
     for layers in (1, 2, 3, 6):
-        yield f"flat {layers}", bs.slab(16, layers) * 300.0, 1.5 * H
+        yield f"flat {layers}", bs.slab(16, layers) * 300.0, 1.5 * H, 0.5, 15.0
     for depth, amplitude in ((2, 1.0), (3, 1.5)):
-        yield f"bumpy {depth} +- {amplitude}", bs.bumpy(24, depth, amplitude) * 300.0, 0.5 * H
+        yield f"bumpy {depth} +- {amplitude}", bs.bumpy(24, depth, amplitude) * 300.0, 0.5 * H, 0.5, 15.0
+
+
+def one_voxel_shapes():
+    for tau in (15.0, 6.0, 3.0, 1.5):
+        for albedo in (0.5, None, 0.0):
+            yield f"1 tau {tau:g} {albedo}", bs.slab(16, 1) * 300.0, 1.5 * H, albedo, tau
+    for width, layers in ((6, 1), (24, 1), (12, 2), (10, 3)):
+        for albedo in (0.5, None):
+            yield f"{width}x{width}x{layers} {albedo}", bs.slab(width, layers) * 300.0, 1.5 * H, albedo, 15.0
 
 
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--samples", type=int, default=1024)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_snow_on_ground"))
+    parser.add_argument("--one-voxel", action="store_true")
     args = parser.parse_args()
     os.makedirs(args.cache, exist_ok=True)
-    for name, density, height in shapes():
-        ground = bs.plate(-1.0, 2.0, -1.0, 2.0, height, (0.5, 0.5, 0.5))
-        case = bs.Case(name.replace(" ", "_"), name, density, H, 1500.0, 300.0, (0.999,) * 3, 0.7, views=VIEWS,
-                       pixels=8, occluders=[ground], samples=args.samples)
+    for name, density, height, albedo, tau in (one_voxel_shapes() if args.one_voxel else shapes()):
+        ground = [] if albedo is None else [bs.plate(-1.0, 2.0, -1.0, 2.0, height, (albedo,) * 3)]
+        case = bs.Case(name.replace(" ", "_"), name, density, H, tau / H, 300.0, (0.999,) * 3, 0.7, views=VIEWS,
+                       pixels=8, occluders=ground, samples=args.samples)
         with tempfile.TemporaryDirectory() as folder:
             r = bs.run_case(case, folder, cache=args.cache)
-        print(f"{name:<16} mean {100 * r['mean']:5.1f} %  worst {100 * r['worst_signed']:+4.0f} %  bias "
+        print(f"{name:<18} mean {100 * r['mean']:5.1f} %  worst {100 * r['worst_signed']:+4.0f} %  bias "
               f"{100 * r['bias']:+5.1f} %  views " + ", ".join(f"{100 * b:+.1f}" for b in r["view_bias"]) +
-              f"  noise {100 * r['noise']:.1f} %", flush=True)
+              f"  noise {100 * r['noise']:.1f} %  traced {r['traced']}", flush=True)
 
 
 if __name__ == "__main__":

@@ -228,7 +228,11 @@ class TracedIndex {
 // lumps of up to 20 optical depths per voxel, 34.8 -> 27.0 %; the balls of 5 cm on 1 cm voxels, 500+ voxels,
 // stay with the diffusion: ball_forward traced whole was 19.7 % against 17.1 %). Connected through faces only,
 // 167 voxels of bits beside the car sample's snow counted as pieces and took 12 s to trace, and the lumps
-// of spray_lumps, touching at edges, made pieces of over 125 voxels.
+// of spray_lumps, touching at edges, made pieces of over 125 voxels. Not a small layer of dense snow (a voxel
+// too thick or absorbing for a traced layer, no inside or wide in transport mean free paths, every voxel with snow
+// or an occluder on one side of each axis): a dusting of 16 x 16 x 1 voxels of sigma_t h 15 on the ground read
+// 41.2 % per block, bias -42.3 % traced, 11.1 %, +1.6 % diffused, 10 x 10 x 3 of it 23.4 -> 8.6 %
+// (bench/snow_on_ground_bench.py --one-voxel; floating one-voxel layers, diffused, +15 to +59 %).
 // Larger pieces that are thin in transport mean free paths (more than kSmallPieceVoxels voxels, but at most
 // kMaxTracedPieceReducedVolume summed over them in (sigma_tr h)^3: a ball of transport radius 2.5) have no
 // diffusion inside either: ball_forward (5 cm, voxels of optical depth 4, g 0.9, sigma_tr h 0.4: 33 of it, 672
@@ -251,6 +255,9 @@ class TracedIndex {
 // the axes, a tilted layer reads up to sqrt(3) deeper and stays with the diffusion sooner.
 constexpr double kTracedOpticalDepth = 1.5, kThickReducedDepth = 2.0;
 constexpr int kSmallPieceVoxels = 343;  // 7^3
+// A small piece larger than this in (sigma_tr h)^3 summed has an inside after all (spray_dense's largest lump 672,
+// a 10 x 10 x 3 layer of sigma_t h 15 27,500: traced -20 %; no case between them measured).
+constexpr double kMaxTracedSmallPieceReducedVolume = 4096.0;
 constexpr double kMaxTracedPieceReducedVolume = 64.0, kMaxTracedPieceDepth = 2.5, kTracedLayerOpticalDepth = 2.25,
                  kTracedLayerAbsorptionDepth = 0.1;
 // At most this many paths in all: beyond it, fewer per voxel (a bake must not grow into a hang).
@@ -280,12 +287,21 @@ double axisDepth(Medium::Accessor &density, const openvdb::Coord &c, double redu
     }
 }
 
+// Whether the unknown at `c` has air (no snow, no occluder) on both faces along some axis.
+bool twoSided(const SnowTopology &topo, const openvdb::Coord &c) {
+    const std::int32_t i = topo.index->getValue(c);
+    if (i < 0) return false;
+    for (int a = 0; a < 3; ++a)
+        if (topo.isAirFace(std::size_t(i), 2 * a) && topo.isAirFace(std::size_t(i), 2 * a + 1)) return true;
+    return false;
+}
+
 // The kind of the piece around `seed` (sigma_tr h = reducedPerDensity * density); marks what it visits in `done`.
 // Voxels of density `layerBelow` or more make no traced layer. A fill that meets a large piece's voxel stops, and so
 // does one past both sizes that is no traced layer: each voxel is visited a bounded number of times, however large
 // the snow.
 PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb::Int32Tree> &done,
-                      const openvdb::Coord &seed, double reducedPerDensity, float layerBelow) {
+                      const openvdb::Coord &seed, double reducedPerDensity, float layerBelow, const SnowTopology &topo) {
     const auto reducedVolume = [&](const openvdb::Coord &c) { return std::pow(reducedPerDensity * density.getValue(c), 3.0); };
     std::vector<openvdb::Coord> piece{seed}, stack{seed};
     std::size_t shallow = 0;  // piece[0, shallow) lie less than kMaxTracedPieceDepth deep (checked past both sizes)
@@ -315,7 +331,17 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
             }
         }
     }
-    const PieceKind kind = large ? kLargePiece : int(piece.size()) <= kSmallPieceVoxels ? kSmallPiece : kTransportThinPiece;
+    // A small piece with no inside (or wide in transport mean free paths) whose voxels are not all thin enough for
+    // a traced layer is a layer of dense snow (a dusting): a camera sees its voxels' first optical depth, not their
+    // mean, and the diffusion's surface patches hold it, unless a voxel is open to air on two opposite faces (its
+    // density gradient cancels there: no side for its patch to face).
+    const auto oneSided = [&] {
+        return std::none_of(piece.begin(), piece.end(), [&](const openvdb::Coord &c) { return twoSided(topo, c); });
+    };
+    const bool small = !large && int(piece.size()) <= kSmallPieceVoxels;
+    const bool wide = reduced > kMaxTracedSmallPieceReducedVolume;
+    const PieceKind kind = large || (small && notLayer && (wide || !hasInside()) && oneSided()) ? kLargePiece
+                           : small ? kSmallPiece : kTransportThinPiece;
     if (kind != kSmallPiece)
         for (const openvdb::Coord &c : piece) done.setValue(c, kind);
     return kind;
@@ -327,7 +353,7 @@ struct TracedSnow {
     std::vector<openvdb::Coord> thin, wholePieces;
 };
 
-TracedSnow thinVoxels(const Medium &medium) {
+TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
     const VolumeOptics &optics = medium.optics();
     const double h = medium.voxelSize(), k = optics.extinctionPerDensity;
     const double leastReduced = 1.0 - std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z}) * optics.g;
@@ -341,7 +367,7 @@ TracedSnow thinVoxels(const Medium &medium) {
     for (auto it = medium.density().cbeginValueOn(); it; ++it) {
         if (!(*it > 0.0f)) continue;
         std::int32_t mark = done.getValue(it.getCoord());
-        if (mark == kUnvisited) mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h, layerBelow);
+        if (mark == kUnvisited) mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h, layerBelow, topo);
         if (mark == kSmallPiece) {
             out.thin.push_back(it.getCoord());
             continue;
@@ -2054,7 +2080,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
         [&] {
             tracing = isolatedOnThisThread([&] {
                 const SubProgress progress = beside.step(1);
-                TracedSnow snow = thinVoxels(*scene.medium);
+                TracedSnow snow = thinVoxels(*scene.medium, topo);
                 thin = std::move(snow.thin);
                 if (!snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole, else as before
                     std::vector<openvdb::Coord> whole = thin;
