@@ -467,7 +467,6 @@ def test_a_lone_lumps_sharp_edges_return_the_grazing_sun_forwards(tmp_path):
     # "lump-lobe").
     import cluster_glow_bench
     import lumps_between_bench
-    optics = firncore.VolumeOptics(*lumps_between_bench.OPTICS_ARGS)
     light = cluster_glow_bench.sun_off_the_neighbours(firncore)
     density, centre, radius = lumps_between_bench.cluster_density(1, False)
     origins, directions = lumps_between_bench.views_of(centre, radius, 14, 16)
@@ -478,7 +477,7 @@ def test_a_lone_lumps_sharp_edges_return_the_grazing_sun_forwards(tmp_path):
                                                       directions[view], light, [lumps_between_bench.plane(-0.03, 0.0)],
                                                       256)
     assert mc_error / mc < 0.05
-    assert baked / mc == pytest.approx(1.0, abs=0.25)
+    assert 0.69 < baked / mc < 1.25  # midway between the linear shape's 0.573 and the peak's 0.795, 6 sigma each
 
 
 def test_a_walls_lowest_voxel_on_the_ground_takes_the_sun_as_the_wall_above(tmp_vdb):

@@ -763,8 +763,8 @@ struct SurfaceLight {
     // ... the beams' light that crosses the snow and leaves through the patch on its far side: a lobe of
     // k = g (l0 in W per channel) about the mean of the beams' directions (per voxel; length <= 1) ...
     glm::vec3 crossing{0.0f}, crossingAxis{0.0f};
-    // ... the suns' light returned sharply forwards (smooth patches; SunPeak), the peaked lobe's p0 per channel
-    // and grey first moment p1 (radiance, source_lobe.h) ...
+    // ... the suns' light returned sharply forwards (smooth patches and sharp edges' faces; SunPeak), the peaked
+    // lobe's p0 per channel and grey first moment p1 (radiance, source_lobe.h) ...
     glm::vec3 peak0{0.0f}, peak1{0.0f};
     // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
     // but spread unevenly over a voxel staircase; the suns' light that escaped at once left out: it leaves
@@ -1065,12 +1065,14 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         glm::dvec3 r1 = -sky * escape1;
         // A smooth patch's lopsided diffuse light (sky, occluders' reflections and other snow's light, each from
         // where it arrives) returns as its beam part would, in the sun lobe's shape (a + b n.w + c t.w against the
-        // even 1: the same exitance, a + 2b/3 = 1).
-        const glm::dvec3 E = glm::dvec3(light.skyOnSurface[i]) + (snow.light ? glm::dvec3((*snow.light)[i]) : glm::dvec3(0.0));
+        // even 1: the same exitance, a + 2b/3 = 1). Not a sharp edge's faces: the moment is over the patch
+        // normal's hemisphere, and an even sky would lean 45 degrees off each face.
+        const glm::dvec3 snowE = snow.light ? glm::dvec3((*snow.light)[i]) : glm::dvec3(0.0);
+        const glm::dvec3 E = glm::dvec3(light.skyOnSurface[i]) + snowE;
         const double grey = (E.x + E.y + E.z) / 3.0;
-        if (peak && grey > 0.0) {
-            const glm::dvec3 aim = glm::dvec3(light.skyAim[i]) + (snow.aim ? glm::dvec3((*snow.aim)[i]) : glm::dvec3(0.0));
-            const SkyBeam beam = skyBeamPart(aim / grey, n);
+        if (!topo.patches[i].sharp && grey > 0.0) {
+            const glm::dvec3 snowAim = snow.aim ? glm::dvec3((*snow.aim)[i]) : glm::dvec3(0.0);
+            const SkyBeam beam = skyBeamPart((glm::dvec3(light.skyAim[i]) + snowAim) / grey, n);
             if (beam.share > 0.0) {
                 const SunLobe lobe = sunLobe(ch.g, std::clamp(glm::dot(beam.towards, n), 0.05, 1.0), y);
                 glm::dvec3 t = glm::dot(beam.towards, n) * n - beam.towards;
