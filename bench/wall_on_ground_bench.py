@@ -21,21 +21,22 @@ import firncore
 
 H = 0.01  # m
 HEIGHTS = (2.25, 3.0, 4.0, 5.0, 6.0, 7.0)  # voxels; the ground at 1.5, the wall's top at 7.5
-
-
 OPTICS = dict(extinction=5.0, albedo=(0.999,) * 3, g=0.7)  # m^2/kg: tau 15 per voxel of the 300 kg/m^3 snow
 
 
-def baked_boxes(folder, light):
-    """The box baked under `light` on each ground (albedo 0, then 0.5): yields (albedo, path, optics, ground)."""
-    density = bs.slab(12, 6) * 300.0  # snow in voxels 2..13 (x, y) and 2..7 (z)
+def baked_box(path, albedo, light):
+    """The box written to `path` and baked under `light` on a ground of `albedo`: (albedo, path, optics, ground)."""
+    bs.write_density(path, bs.slab(12, 6) * 300.0, H)  # snow in voxels 2..13 (x, y) and 2..7 (z)
     optics = firncore.VolumeOptics(OPTICS["extinction"], OPTICS["albedo"], OPTICS["g"])
-    path = os.path.join(folder, "box.vdb")
-    bs.write_density(path, density, H)
+    ground = [bs.plate(-1.0, 2.0, -1.0, 2.0, 1.5 * H, (albedo,) * 3)]  # between the empty row 1 and the snow
+    firncore.bake(path, optics, occluders=ground, quality="FINAL", seed=0, **light)
+    return albedo, path, optics, ground
+
+
+def baked_boxes(folder, light):
+    """The box baked under `light` on each ground (albedo 0, then 0.5)."""
     for albedo in (0.0, 0.5):
-        ground = [bs.plate(-1.0, 2.0, -1.0, 2.0, 1.5 * H, (albedo,) * 3)]
-        firncore.bake(path, optics, occluders=ground, quality="FINAL", seed=0, **light)
-        yield albedo, path, optics, ground
+        yield baked_box(os.path.join(folder, "box.vdb"), albedo, light)
 
 
 def wall_rays(heights, elevation, distance):

@@ -486,18 +486,12 @@ def test_a_walls_lowest_voxel_on_the_ground_takes_the_sun_as_the_wall_above(tmp_
     # Oracle: the core's Monte Carlo (512 paths per ray, noise 1.2 %). Measured: lowest voxel -19.9 %, above -2.9 %
     # when the voxel's normal read the empty row under the ground as air (tilted 45 degrees towards the ground);
     # +4.3 %, +1.8 % since the normal reads its own layer across an occluder (docs/bake.md Method 1).
-    h = 0.01
-    density = bake_suite.slab(12, 6) * 300.0  # snow in voxels 2..13 (x, y) and 2..7 (z)
-    bake_suite.write_density(tmp_vdb, density, h)
-    ground = [bake_suite.plate(-1.0, 2.0, -1.0, 2.0, 1.5 * h, (0.5, 0.5, 0.5))]  # between the empty row 1 and the snow
-    optics = firncore.VolumeOptics(5.0, (0.999,) * 3, 0.7)
+    import wall_on_ground_bench as wall
     light = dict(suns=[firncore.SunLight((math.cos(math.pi / 6), 0.0, 0.5), (1.0,) * 3, 0.0093)],
                  sky=firncore.Sky((0.05,) * 3))
-    firncore.bake(tmp_vdb, optics, occluders=ground, quality="FINAL", seed=0, **light)
-    down = np.array([-math.cos(math.radians(10.0)), 0.0, -math.sin(math.radians(10.0))])
+    _, _, optics, ground = wall.baked_box(tmp_vdb, 0.5, light)
     for heights in ((2.25, 2.75), (3.5, 4.5)):  # voxels: the lowest (its centre at 2), then the next two
-        wall = np.array([[13.5 * h, (y + 0.5) * h, z * h] for y in range(4, 12) for z in heights])
-        origins, directions = wall - 0.2 * down, np.tile(down, (len(wall), 1))
+        origins, directions = wall.wall_rays(heights, 10.0, 0.2)
         reference, error = firncore.monte_carlo_radiance(tmp_vdb, optics, origins, directions, occluders=ground,
                                                          samples=512, seed=5, **light)
         baked = firncore.render_baked(tmp_vdb, optics, origins, directions, occluders=ground)
@@ -512,19 +506,12 @@ def test_a_wall_lit_from_above_only_sends_its_sky_on_downwards(tmp_vdb):
     # ray (noise about 1.5 % per view). Measured: baked / reference +10.7 % from above and -5.5 % from below when
     # the returned sky left evenly (a lean of 17 %); +0.9 %, +0.2 % since it leans as its beam part would
     # (skyBeamPart, docs/bake.md Method 5).
-    h = 0.01
-    density = bake_suite.slab(12, 6) * 300.0  # snow in voxels 2..13 (x, y) and 2..7 (z)
-    bake_suite.write_density(tmp_vdb, density, h)
-    ground = [bake_suite.plate(-1.0, 2.0, -1.0, 2.0, 1.5 * h, (0.0, 0.0, 0.0))]
-    optics = firncore.VolumeOptics(5.0, (0.999,) * 3, 0.7)
+    import wall_on_ground_bench as wall
     sky = firncore.Sky((0.05,) * 3)
-    firncore.bake(tmp_vdb, optics, occluders=ground, quality="FINAL", seed=0, sky=sky)
+    _, _, optics, ground = wall.baked_box(tmp_vdb, 0.0, dict(sky=sky))
     ratios = []
     for elevation in (55.0, -30.0):  # of the view above the horizon
-        e = math.radians(elevation)
-        down = np.array([-math.cos(e), 0.0, -math.sin(e)])
-        wall = np.array([[13.5 * h, (y + 0.5) * h, z * h] for y in range(4, 12) for z in (4.0, 5.0, 6.0)])
-        origins, directions = wall - 0.03 * down, np.tile(down, (len(wall), 1))
+        origins, directions = wall.wall_rays((4.0, 5.0, 6.0), elevation, 0.03)
         reference, error = firncore.monte_carlo_radiance(tmp_vdb, optics, origins, directions, occluders=ground,
                                                          samples=512, seed=5, sky=sky)
         baked = firncore.render_baked(tmp_vdb, optics, origins, directions, occluders=ground)
