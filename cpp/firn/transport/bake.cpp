@@ -996,11 +996,8 @@ double downstreamWeight(const SnowTopology &topo, const SunReturned &from, std::
 // entered before it (docs/bake.md, Method 5).
 void sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SunReturned> &sun, int c, double h,
                           SurfaceValues<SurfaceLight> &out) {
+    SurfaceValues<float> total(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);   // each sender's weights' sum
     SurfaceValues<float> atOnce(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);  // W sent, averaged
-    // Each smooth sender's weights over its neighbourhood (topo.neighbourhood's slots), divided by their sum: an
-    // exp per pair, computed once for sender and receiver (held for this call only, 8 bytes per slot; 0 where the
-    // sender sends nothing; other senders' slots are never read, so not cleared first).
-    const std::unique_ptr<double[]> weight(new double[topo.neighbourhood.size()]);
     auto smooth = [&](std::size_t i) { return topo.patches[i].isSurface() && !topo.patches[i].sharp; };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -1008,20 +1005,12 @@ void sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SunRetur
             const auto [leaving, area] = neighbourhoodOutflow<double>(
                 topo, i, topo.patches[i].normal, [&](std::size_t j) { return double(sun[j].atOnce); });
             atOnce.surface(i) = float(leaving / area * double(topo.patches[i].area));
-            const std::size_t begin = topo.neighbourhoodStart[i], end = topo.neighbourhoodStart[i + 1];
             double sum = 0.0;
-            for (std::size_t k = begin; k < end; ++k) sum += weight[k] = downstreamWeight(topo, sun[i], i, topo.neighbourhood[k], h);
-            const float total = float(sum);
-            for (std::size_t k = begin; k < end; ++k) weight[k] = total > 0.0f ? weight[k] / total : 0.0;
+            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k)
+                sum += downstreamWeight(topo, sun[i], i, topo.neighbourhood[k], h);
+            total.surface(i) = float(sum);
         }
     });
-    // The weight sender i gives receiver j: i's slot holding j (the 3^3 blocks are mutual, j lies in i's
-    // neighbourhood as i in j's).
-    auto weightTo = [&](std::size_t i, std::size_t j) {
-        std::size_t k = topo.neighbourhoodStart[i];
-        while (topo.neighbourhood[k] != j) ++k;
-        return weight[k];
-    };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t j = range.begin(); j != range.end(); ++j) {
             if (!smooth(j)) continue;
@@ -1030,8 +1019,8 @@ void sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SunRetur
             glm::vec3 l1(0.0f);
             for (std::size_t k = topo.neighbourhoodStart[j]; k < topo.neighbourhoodStart[j + 1]; ++k) {
                 const std::uint32_t i = topo.neighbourhood[k];
-                if (!smooth(i)) continue;
-                const double w = weightTo(i, j);
+                if (!smooth(i) || !(total[i] > 0.0f)) continue;
+                const double w = downstreamWeight(topo, sun[i], i, j, h) / total[i];
                 if (w <= 0.0) continue;
                 // what escaped at once in the escape function's shape
                 l0 += float(w * (sun[i].l0 + 3.0 / 7.0 * atOnce[i]));
