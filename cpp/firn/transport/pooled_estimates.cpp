@@ -9,13 +9,6 @@ namespace firn {
 
 namespace {
 
-// a += w b, the estimate's sums but its cost.
-void addScaled(SourceEstimate &a, const SourceEstimate &b, double w) {
-    a.l0 += w * b.l0, a.l1 += w * b.l1, a.beamL0 += w * b.beamL0, a.beamL1 += w * b.beamL1, a.second += w * b.second;
-    for (int i = 0; i < 3; ++i) a.third[i] += w * b.third[i];
-    for (int j = 0; j < kSourceDirections; ++j) a.toward[j] += w * b.toward[j];
-}
-
 bool similarDensity(double a, double b) { return a <= kPooledDensityRatio * b && b <= kPooledDensityRatio * a; }
 
 }  // namespace
@@ -33,20 +26,22 @@ std::vector<SourceEstimate> pooledEstimates(const Medium &medium, const std::vec
         Medium::Accessor density = medium.accessor();
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
             const double own = density.getValue(voxels[v]);
-            SourceEstimate sum = estimates[v];
+            double l0 = channelMean(estimates[v].l0);
+            std::array<double, kSourceDirections> toward = estimates[v].toward;
+            int neighbours = 0;
             for (int dx = -1; dx <= 1; ++dx)
                 for (int dy = -1; dy <= 1; ++dy)
                     for (int dz = -1; dz <= 1; ++dz) {
                         const openvdb::Coord c = voxels[v].offsetBy(dx, dy, dz);
                         const std::int32_t n = index.getValue(c);
-                        if (n >= 0 && std::size_t(n) != v && similarDensity(density.getValue(c), own))
-                            addScaled(sum, estimates[std::size_t(n)], 1.0);
+                        if (n < 0 || std::size_t(n) == v || !similarDensity(density.getValue(c), own)) continue;
+                        const SourceEstimate &other = estimates[std::size_t(n)];
+                        l0 += channelMean(other.l0), ++neighbours;
+                        for (int j = 0; j < kSourceDirections; ++j) toward[j] += other.toward[j];
                     }
-            const double pooledMean = channelMean(sum.l0), ownMean = channelMean(estimates[v].l0);
-            if (!(pooledMean > 0.0)) continue;  // no light to take the shape of: its own
-            SourceEstimate &shaped = out[v] = SourceEstimate{};
-            addScaled(shaped, sum, ownMean / pooledMean);
-            shaped.l0 = estimates[v].l0, shaped.steps = estimates[v].steps;
+            if (neighbours < kMinPooledNeighbours || !(l0 > 0.0)) continue;  // its own
+            const double scale = channelMean(estimates[v].l0) / l0;
+            for (int j = 0; j < kSourceDirections; ++j) out[v].toward[j] = scale * toward[j];
         }
     });
     return out;
