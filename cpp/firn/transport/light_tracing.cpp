@@ -312,8 +312,8 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
         }
         progress.report(0.8 * double(last) / double(chunks));
     }
-    // The photons' light: per photon, over the voxel's integral of sigma_t, its shape pooled over neighbours
-    // (pooled_estimates.h); then each voxel's beams.
+    // The photons' light: per photon, over the voxel's integral of sigma_t, its source by direction summed over a
+    // flat uniform layer (pooled_estimates.h); then each voxel's beams.
     std::vector<SourceEstimate> scattered(voxels.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 64), [&](const auto &range) {
         Medium::Accessor density = medium.accessor();
@@ -323,7 +323,7 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
                                     double(plan.photons) * extinctionIntegral(medium, density, voxels[v]), medium.optics());
         }
     });
-    std::vector<SourceEstimate> out = pooledEstimates(medium, voxels, scattered);
+    std::vector<SourceEstimate> out = pooledEstimates(medium, index, voxels, scattered);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 64), [&](const auto &range) {
         progress.throwIfCancelled();
         for (std::size_t v = range.begin(); v != range.end(); ++v)

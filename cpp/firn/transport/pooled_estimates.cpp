@@ -13,13 +13,9 @@ bool similarDensity(double a, double b) { return a <= kPooledDensityRatio * b &&
 
 }  // namespace
 
-std::vector<SourceEstimate> pooledEstimates(const Medium &medium, const std::vector<openvdb::Coord> &voxels,
+std::vector<SourceEstimate> pooledEstimates(const Medium &medium, const openvdb::Int32Tree &indexTree,
+                                            const std::vector<openvdb::Coord> &voxels,
                                             const std::vector<SourceEstimate> &estimates) {
-    openvdb::Int32Tree indexTree(-1);
-    {
-        openvdb::tree::ValueAccessor<openvdb::Int32Tree> index(indexTree);
-        for (std::size_t v = 0; v < voxels.size(); ++v) index.setValue(voxels[v], std::int32_t(v));
-    }
     std::vector<SourceEstimate> out(estimates);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 64), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(indexTree);

@@ -20,7 +20,9 @@ namespace firn {
 // biased curved pieces (ball_forward -2.7 -> -12 %) and pooled nothing worth it anywhere (docs/benchmarks.md, pooled).
 constexpr double kPooledDensityRatio = 1.1;
 constexpr int kMinPooledNeighbours = 17;
-std::vector<SourceEstimate> pooledEstimates(const Medium &medium, const std::vector<openvdb::Coord> &voxels,
+// `index`: voxel -> its place in `voxels` and `estimates`, -1 elsewhere.
+std::vector<SourceEstimate> pooledEstimates(const Medium &medium, const openvdb::Int32Tree &index,
+                                            const std::vector<openvdb::Coord> &voxels,
                                             const std::vector<SourceEstimate> &estimates);
 
 }  // namespace firn
