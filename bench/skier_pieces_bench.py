@@ -5,7 +5,7 @@ bench does, against firncore.monte_carlo_radiance (references kept in the folder
      through other pieces (0: the piece is lit as if alone), and the ray's optical depth through that piece;
   2. one piece in ten in place, the other nine 3 m below out of view (the voxel count, and so the small-piece
      path of bake.cpp, kept): the pieces alone, against a reference of the kept pieces only.
-Pieces: voxels connected through faces, edges or corners, as bake.cpp's smallPiece.
+Pieces: voxels connected through faces, edges or corners, as bake_thin_snow.cpp's pieceAround.
 
 PYTHONPATH=build/python /usr/bin/python3 bench/skier_pieces_bench.py [--folder /tmp/firn_skier_light] [--samples 64]
     [--source-scale N]  (the bake's source grids N density voxels each; 0: as the budget gives, 3-4 here)

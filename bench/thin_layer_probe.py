@@ -1,5 +1,5 @@
 """Slabs beside bench/bake_suite.py's slab_thin, baked against fresh Monte Carlo references (docs/benchmarks.md,
-thin-slab): where a layer thin in transport mean free paths is better traced whole than diffused (bake.cpp,
+thin-slab): where a layer thin in transport mean free paths is better traced whole than diffused (bake_thin_snow.cpp,
 kMaxTracedPieceDepth, kTracedLayerOpticalDepth, kTracedLayerAbsorptionDepth). One row per slab: mean / worst / bias
 over the blocks, the views' biases, the traced voxels. Run the same line on main's build for the other side.
 

@@ -78,8 +78,9 @@ def test_conservative_thin_ball_under_uniform_sky_glows_with_the_sky(tmp_vdb):
     # single scattering in the second, peaked lobe to 4.8 % (the goal) and 15.4 %, bias -2.1 % and -7.1 %
     # against the suite's 16384-path references. ball_thin_forward stays short of the goal, guarded: 15.4 %, bias
     # -7.1 % with the peaked lobe holding the beams' single scattering only, 9.1 %, +0.2 % with the two lobes
-    # fitted to the source's first four Legendre moments (bake.cpp, tracedSourceByMoments); 7.0 %, +0.5 % (ball_thin 4.0 %)
-    # over 4 seeds with 1024 paths per voxel where that is cheap (bake.cpp, planGathering).
+    # fitted to the source's first four Legendre moments (traced_source.h, tracedSourceByMoments); 7.0 %, +0.5 %
+    # (ball_thin 4.0 %) over 4 seeds with 1024 paths per voxel where that is cheap (bake_traced_voxels.cpp,
+    # planGathering).
     ("ball_thin", 0.06, 0.05),
     ("ball_thin_forward", 0.12, 0.05),
 ])
@@ -132,9 +133,9 @@ def test_ramp_in_front_of_a_lit_rim_carries_the_returned_grazing_sun(folder):
     # sun's forward return, while the core's Monte Carlo finds the lit top's forward return travelling through
     # that ramp (its source there 0.3-0.4 W/m^2/sr against the bake's 0.15-0.2 on ball_issue). With the ramp's
     # sunlit voxels carrying the peaked lobes of the smooth surface voxels within two voxels whose peak travels
-    # towards them (bake.cpp, forwardPeakThrough), against these 1024 paths (noise 5.0 %, 3.1 %, 2.5 %): ball_issue
-    # view -40.1 % -> -32.0 %; ball_grey (omega 0.9, g 0.6) view -32.9 % -> -24.1 %, its worst block -61 % -> -48 %;
-    # ball_clean (omega 1 - 1e-7, g 0.85, 5 mm voxels) worst block -60 % -> -48 % (docs/bake.md, Accuracy).
+    # towards them (bake_grid_values.cpp, forwardPeakThrough), against these 1024 paths (noise 5.0 %, 3.1 %, 2.5 %):
+    # ball_issue view -40.1 % -> -32.0 %; ball_grey (omega 0.9, g 0.6) view -32.9 % -> -24.1 %, its worst block -61 % ->
+    # -48 %; ball_clean (omega 1 - 1e-7, g 0.85, 5 mm voxels) worst block -60 % -> -48 % (docs/bake.md, Accuracy).
     issue = baked_against_reference(folder, "ball_issue", 1024, [(180, 0)])
     assert issue["view_bias"][0] > -0.36, issue["view_bias"]
     grey = baked_against_reference(folder, "ball_grey", 1024, [(180, 0)])
@@ -164,9 +165,9 @@ def test_sunward_faces_of_absorbing_balls_return_what_a_half_space_returns(folde
     # The issue's ball (omega 0.98, g 0.85) and the grey one (omega 0.9, g 0.6) seen from the sun's side and from
     # above, against the core's Monte Carlo (1024 paths; noise 8.2 % and 3.4 % per block). The voxel scheme returns
     # of a beam at steep incidence more than a half-space of the snow does, at grazing less (0.387 against 0.353,
-    # the sun lobe table's plane albedo, at mu0 1 for the issue's snow: bake.cpp, schemeBeamAlbedo). Without the
-    # difference (main with the diffuse step): bias +7.1 % and +8.7 %, the grey ball's mean 14.5 %; with it leaving
-    # in the escape function's shape (surfaceLight) +6.2 % and +7.4 %, 12.0 %. Subtracting the 1D diffusion's
+    # the sun lobe table's plane albedo, at mu0 1 for the issue's snow: bake_diffusion_system.cpp, schemeBeamAlbedo).
+    # Without the difference (main with the diffuse step): bias +7.1 % and +8.7 %, the grey ball's mean 14.5 %; with it
+    # leaving in the escape function's shape (surfaceLight) +6.2 % and +7.4 %, 12.0 %. Subtracting the 1D diffusion's
     # a' / ((1 + 3 kappa D mu0) (1 + 2 kappa D)) instead gave +3.7 %, +5.0 %, 10.7 %, but flat slabs 9 % too dark
     # (test_flat_absorbing_slab_returns_a_half_space_albedo_of_the_sun; docs/bake.md, Accuracy).
     issue = baked_against_reference(folder, "ball_issue", 1024, [(0, 0), (0, 60)])
@@ -180,8 +181,8 @@ def test_light_flowing_along_a_ball_surface_leaves_leaning_the_way_it_flows(fold
     # against the sun, against the core's Monte Carlo (1024 paths). The diffusion's radiance (phi + 3 F . w) / 4 pi
     # holds the flux along the surface, which the escape function (the flux across it) does not: on the sunward face
     # the fluence falls away from the point under the sun, past the terminator away from the lit side, and the light
-    # leaves leaning that way (bake.cpp, surfaceLight: 3 F_t / phi added to the exit form, no exitance moved).
-    # Without it (main d0f6311) the views read +5.5, +6.9, -30.2 % and +7.1, +7.8, -19.1 %; with it +1.5, +2.6,
+    # leaves leaning that way (bake_surface_light.cpp, surfaceLight: 3 F_t / phi added to the exit form, no exitance
+    # moved). Without it (main d0f6311) the views read +5.5, +6.9, -30.2 % and +7.1, +7.8, -19.1 %; with it +1.5, +2.6,
     # -27.3 % and +3.8, +4.1, -17.0 % (docs/bake.md, Accuracy: the terminator).
     for name, against in (("ball_issue", -0.29), ("ball_grey", -0.18)):
         result = baked_against_reference(folder, name, 1024, [(0, 0), (0, 60), (180, 0)])
@@ -208,10 +209,10 @@ def test_sun_entering_before_the_terminator_leaves_past_it(folder):
     # The sun entering a ball at grazing incidence just before the terminator leaves downstream: a half-space returns
     # a beam 0.6-0.7 transport mean free paths further along its travel, +-0.8-1.3 (bench/halfspace_displacement.py),
     # and on a ball the light crosses the terminator so. The half-space model returned it at the patch it entered; the
-    # light it returns at once leaves downstream by that displacement (bake.cpp, sunLeavingDownstream). The sun's
-    # radiance along the normal at psi 85, 90, 95, 100 degrees, summed, baked over the core's Monte Carlo (4096 paths,
-    # seed 7; seed 11: 0.62, 0.34 -> 0.75, 0.47): main 9719e11 returned 0.57 (ball_issue) and 0.32 (ball_grey), this
-    # 0.69 and 0.44 (docs/bake.md, Accuracy: the terminator).
+    # light it returns at once leaves downstream by that displacement (bake_sun_downstream.cpp, sunLeavingDownstream).
+    # The sun's radiance along the normal at psi 85, 90, 95, 100 degrees, summed, baked over the core's Monte Carlo
+    # (4096 paths, seed 7; seed 11: 0.62, 0.34 -> 0.75, 0.47): main 9719e11 returned 0.57 (ball_issue) and 0.32
+    # (ball_grey), this 0.69 and 0.44 (docs/bake.md, Accuracy: the terminator).
     for name, least in (("ball_issue", 0.63), ("ball_grey", 0.39)):
         baked, reference = sun_leaving_along_the_normal(folder, name, [85, 90, 95, 100])
         assert baked.sum() / reference.sum() > least, (name, baked / reference)
@@ -219,9 +220,9 @@ def test_sun_entering_before_the_terminator_leaves_past_it(folder):
 
 @pytest.mark.parametrize("omega, g, tau_per_voxel", bake_flat_slab.SNOWS)
 def test_flat_absorbing_slab_returns_a_half_space_albedo_of_the_sun(folder, omega, g, tau_per_voxel):
-    # The sun's half-space correction (bake.cpp, surfaceLight) subtracts what the voxel scheme itself returns of a
-    # beam (schemeBeamAlbedo: 0.266 overhead for omega 0.9, g 0.6 at tau 5 per voxel) from the sun lobe table's
-    # albedo. A wide flat slab under sun alone, its baked radiance integrated over the hemisphere
+    # The sun's half-space correction (bake_surface_light.cpp, surfaceLight) subtracts what the voxel scheme itself
+    # returns of a beam (schemeBeamAlbedo: 0.266 overhead for omega 0.9, g 0.6 at tau 5 per voxel) from the sun lobe
+    # table's albedo. A wide flat slab under sun alone, its baked radiance integrated over the hemisphere
     # (bench/bake_flat_slab.py); oracle: the core's 1D Monte Carlo of the half-space (slab_monte_carlo, tau inf).
     # Without the correction the slabs returned +11.6 %, -9.8 % (omega 0.9; sun at 90 and 30 deg) and +10.3 %,
     # -6.6 % (omega 0.98); subtracting the 1D diffusion's a' / ((1 + 3 kappa D mu0) (1 + 2 kappa D)) instead (0.281
@@ -235,8 +236,8 @@ def test_flat_absorbing_slab_returns_a_half_space_albedo_of_the_sun(folder, omeg
 
 def test_forward_light_crossing_a_ball_leaves_its_far_side(folder):
     # A 5 cm ball (voxels of optical depth 4, omega 0.999, g 0.9) seen against the sun: the sun's forward-
-    # scattered beam crosses it and leaves through the far side's surface (bake.cpp, crossing beams). Without
-    # that light the view is 30 % too dark against the core's Monte Carlo (these 1024 paths; 31 % against the
+    # scattered beam crosses it and leaves through the far side's surface (bake_surface_light.cpp, crossing beams).
+    # Without that light the view is 30 % too dark against the core's Monte Carlo (these 1024 paths; 31 % against the
     # suite's 4096), with it 18 % (20 %; docs/bake.md, Accuracy). Guarded at 25 %.
     result = baked_against_reference(folder, "ball_forward", 1024, [(180, 0)])
     assert -0.25 < result["view_bias"][0] < 0.05
@@ -247,8 +248,8 @@ def test_ball_thin_in_transport_mean_free_paths_is_light_traced_whole(folder):
     # free paths (sigma_tr h 0.4), 672 voxels. Diffused (all but its 120 thinnest fringe voxels) it read 14.9 %
     # per block against the suite's 16384-path reference (worst +62 %; rays through its fringe alone 22.7 %, the
     # inside +-20 % across the sun); light traced whole, as a piece of at most 64 in (sigma_tr h)^3 summed
-    # (bake.cpp, thinVoxels), 8.0 % (worst -31 %; docs/bake.md, Accuracy). Against these 4096 paths (noise about
-    # 6.1 % per block): diffused 15.3 % (120 voxels traced), light traced whole 8.8 %.
+    # (bake_thin_snow.cpp, thinVoxels), 8.0 % (worst -31 %; docs/bake.md, Accuracy). Against these 4096 paths (noise
+    # about 6.1 % per block): diffused 15.3 % (120 voxels traced), light traced whole 8.8 %.
     result = baked_against_reference(folder, "ball_forward", 4096)
     assert result["traced"] == int((case("ball_forward").density > 0).sum())
     assert result["mean"] < 0.12, result["mean"]
@@ -259,7 +260,7 @@ def test_layer_thin_in_transport_mean_free_paths_is_traced_whole(folder):
     # transport mean free paths thick, 1728 voxels, too wide for the pieces traced whole by their volume. A
     # diffusion across three voxels has no inside: diffused it read 8.0 % per block against the suite's 16384
     # paths (worst -34 %, bias -2.7 %, seen from above -8 %); traced whole, as a piece no voxel of which lies 2.5
-    # transport mean free paths deep (bake.cpp, axisDepth), 6.2 % (+17 %, +0.9 %, -3 %). Against these 1024
+    # transport mean free paths deep (bake_thin_snow.cpp, axisDepth), 6.2 % (+17 %, +0.9 %, -3 %). Against these 1024
     # paths (noise 3.8 % per block): diffused 8.4 %, from above -7.7 %; traced whole 6.7 %, -2.5 %.
     result = baked_against_reference(folder, "slab_thin", 1024)
     assert result["traced"] == int((case("slab_thin").density > 0).sum())
@@ -270,8 +271,9 @@ def test_layer_thin_in_transport_mean_free_paths_is_traced_whole(folder):
 def test_layer_of_optically_thick_voxels_keeps_the_diffusion(folder):
     # slab_thin's layer with voxels of optical depth 3 (omega 0.99, g 0.6; sigma_tr h 1.2, 1.8 transport mean free
     # paths deep): a voxel's mean source is no longer what a camera sees of its first optical depth. Against 4096
-    # paths per block: diffused 6.3 % (views -4, -2, +4, -5 %), traced whole 10.4 % (-8, -8, +11, +3 %; bake.cpp,
-    # kTracedLayerOpticalDepth). Against these 1024 paths (noise 3.7 %): diffused 7.0 %, traced whole 11.2 %.
+    # paths per block: diffused 6.3 % (views -4, -2, +4, -5 %), traced whole 10.4 % (-8, -8, +11, +3 %;
+    # bake_thin_snow.cpp, kTracedLayerOpticalDepth). Against these 1024 paths (noise 3.7 %): diffused 7.0 %, traced
+    # whole 11.2 %.
     c = bake_suite.Case("slab_tau3", "", bake_suite.slab(24, 3) * 100, 0.01, 300.0, 100.0, (0.99,) * 3, 0.6,
                         views=case("slab_thin").views, samples=1024)
     result = bake_suite.run_case(c, folder, cache=None)
@@ -285,7 +287,7 @@ def test_small_layer_of_dense_snow_on_the_ground_keeps_the_diffusion(folder, wid
     # per voxel, omega 0.999, g 0.7; sigma_tr h 4.5) on a grey ground (albedo 0.5) under the sun 30 degrees high and
     # the sky. Oracle: the core's Monte Carlo (1024 paths per block, noise 4.1-4.5 % per block). Their 256 and 300
     # voxels made small pieces traced whole, and a traced voxel's mean source is not what a camera sees of its first
-    # optical depth: 41.2 % per block, bias -42.3 %; 23.4 %, -20.0 %. Diffused (bake.cpp, pieceAround: a dense
+    # optical depth: 41.2 % per block, bias -42.3 %; 23.4 %, -20.0 %. Diffused (bake_thin_snow.cpp, pieceAround: a dense
     # layer with no inside, or wide in transport mean free paths, whose voxels each face the air on one side only)
     # 11.1 %, +1.6 %; 8.6 %, +0.3 %.
     h = 0.01
@@ -366,8 +368,8 @@ def test_forward_scattering_traced_voxels_are_light_traced_at_the_gatherings_cos
     # reference of the core's Monte Carlo (2048 paths per block). Gathered per voxel (1024 paths each), a path's
     # next-event estimates weigh the sun by Henyey-Greenstein (2000x across directions at g 0.85): mean error 7.5 %,
     # the baked render's spread across the seeds 4.9 % per block (seeds 3-5, 6-8: 7.8, 7.7 %; 5.1, 5.0 %; main
-    # 34901b0). Light traced within three quarters of the gathering's steps (bake.cpp, kLightTracedShare; about the
-    # same processor seconds): 6.9, 6.8, 7.0 %; spreads 3.9, 4.2, 3.9 % (docs/bake.md, Method 3).
+    # 34901b0). Light traced within three quarters of the gathering's steps (bake_traced_voxels.cpp, kLightTracedShare;
+    # about the same processor seconds): 6.9, 6.8, 7.0 %; spreads 3.9, 4.2, 3.9 % (docs/bake.md, Method 3).
     result = over_seeds_against_reference(folder, "ball_thin_forward", 2048, seeds=3)
     assert result["mean"] < 0.073, result["mean"]
     assert result["spread"] < 0.045, result["spread"]
@@ -396,8 +398,8 @@ def test_dense_lumps_show_what_cameras_see_of_their_first_optical_depth(folder):
 def test_traced_voxels_estimates_are_stratified_cheap_ones_longer_and_deterministic(tmp_vdb):
     # ball_thin (voxels of optical depth 1, all 160 traced; omega 0.999, g 0.5). Each traced voxel's points and
     # gathering directions come from a randomly shifted R5 Kronecker sequence (monte_carlo.cpp), and paths this
-    # cheap are traced 1024 per voxel instead of 256 (bake.cpp, planGathering: 0.2 processor seconds in all).
-    # Two seeds' renders differ by 0.8 % per block on average (|a - b| / (a + b) over the suite's blocks): 1.4 %
+    # cheap are traced 1024 per voxel instead of 256 (bake_traced_voxels.cpp, planGathering: 0.2 processor seconds in
+    # all). Two seeds' renders differ by 0.8 % per block on average (|a - b| / (a + b) over the suite's blocks): 1.4 %
     # with the sequence alone, 1.9 % with independent draws at 256 paths (main 37060a5). Same seed, same grids, on
     # 1 or 2 threads. Its accuracy against the core's Monte Carlo: test_small_balls_match_monte_carlo (4.0 % mean
     # over 4 seeds against 4.8 % before; docs/bake.md, Method 3).

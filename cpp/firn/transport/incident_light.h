@@ -30,7 +30,7 @@ struct IncidentLight {
     SurfaceValues<glm::vec3> skyOnSurface;
     // Its first moment over the directions it arrives from (grey: the channels' mean; W/m^2 times a unit vector
     // towards the light): (2/3) n times the grey irradiance where it arrives evenly, leaning where it is lopsided
-    // (a wall's sky from above only). Where a patch's returned sky leans (bake.cpp, skyBeamPart).
+    // (a wall's sky from above only). Where a patch's returned sky leans (bake_surface_light.cpp, skyBeamPart).
     SurfaceValues<glm::vec3> skyAim;
     // Per surface voxel: which of its sky rays (SkyRays, bit k for ray k) snow hides; the snow's own light
     // arrives along them instead (gathered after a first solve, bake.cpp).

@@ -82,7 +82,7 @@ class Medium {
         // `limit` (kg/m^2) and returns what it has.
         double column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double limit);
         // The steps column() has taken so far (each a density read, or a jump over cells without snow): its work
-        // in tracking-step equivalents, for a budget (bake.cpp, planGathering).
+        // in tracking-step equivalents, for a budget (bake_traced_voxels.cpp, planGathering).
         long columnSteps() const { return columnSteps_; }
 
         // Walks the ray from t = 0 to tMax (m) in steps of at most `step` voxels, calling visit(midpoint in index

@@ -25,9 +25,9 @@ struct Ray {
 // The direction the brightest sun's beam travels (0 without suns).
 glm::dvec3 brightestBeam(const Scene &scene);
 
-// The directions the traced source is also gathered in (bake.cpp fits its lobes to them), unit: the cube's 6
-// faces, 12 edges and 8 corners, and about the beam's travel (brightestBeam; +z without one) the axis and rings
-// of 6 at 10 and 25 degrees, where the peaked lobe falls by 3 and 20 times at g 0.87.
+// The directions the traced source is also gathered in (bake_traced_voxels.cpp fits its lobes to them), unit: the
+// cube's 6 faces, 12 edges and 8 corners, and about the beam's travel (brightestBeam; +z without one) the axis and
+// rings of 6 at 10 and 25 degrees, where the peaked lobe falls by 3 and 20 times at g 0.87.
 constexpr int kSourceDirections = 39;
 using SourceDirections = std::array<glm::dvec3, kSourceDirections>;
 SourceDirections sourceDirections(const glm::dvec3 &beamTravel);

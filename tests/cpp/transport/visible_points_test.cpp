@@ -1,5 +1,5 @@
 // The points drawn where cameras see a thick voxel (visible_points.h): their draws are work the bake's budget
-// counts (SourceEstimate::steps, bake.cpp planGathering).
+// counts (SourceEstimate::steps, bake_traced_voxels.cpp planGathering).
 #include "firn/transport/visible_points.h"
 
 #include <cstdio>

@@ -1,0 +1,87 @@
+#pragma once
+
+// One colour channel's diffusion system: the voxel scheme's operator, sources and surface terms.
+
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "firn/transport/incident_light.h"
+#include "firn/transport/multigrid.h"
+#include "firn/transport/scene.h"
+#include "firn/transport/snow_topology.h"
+#include "firn/util/progress.h"
+
+namespace firn::bake {
+
+// One colour channel of the optics. Lengths below are "resistances": 3 times the reduced optical depth,
+// the diffusion distance in units of D (the Marshak boundary sits 2 beyond the last scattering).
+struct Channel {
+    double k, omega, g;
+    double sigmaT(double rho) const { return k * rho; }
+    double sigmaTrPerDensity() const { return (1.0 - omega * g) * k; }
+    double sigmaTr(double rho) const { return sigmaTrPerDensity() * rho; }  // sigma_a + sigma_s (1 - g)
+    double reducedAlbedo() const { return omega * (1.0 - g) / (1.0 - omega * g); }
+    double beta() const { return std::sqrt((1.0 - omega) / (3.0 * (1.0 - omega * g))); }  // kappa D
+    // What a half-space returns of diffuse light by this diffusion (Marshak's condition, extrapolation 2D):
+    // (1 - 2 kappa D) / (1 + 2 kappa D). The voxel scheme returns it so to four digits (its links are exact).
+    double diffuseAlbedo() const { return (1.0 - 2.0 * beta()) / (1.0 + 2.0 * beta()); }
+};
+
+// A solved channel's operator and right-hand side, handed to the next channel's system: of the same sizes, their
+// pages are reused rather than mapped and cleared afresh (the kernel's page clearing was 6 % of the car's bake).
+struct ChannelStorage {
+    Stencil<float> A;
+    std::vector<float> remainder;
+    std::vector<double> b;
+};
+
+// The diffusion system of one channel plus what the surface needs afterwards.
+struct ChannelSystem {
+    Stencil<float> A;              // what the solver keeps of the operator (MultigridSolver)
+    std::vector<float> remainder;  // diag minus the conductances, summed in double
+    std::vector<double> b;  // W: diffuse sources at the voxel nodes
+    // Surface voxels only (what crosses air faces):
+    SurfaceValues<float> escaped;             // W: light leaving through air faces without reaching the node
+    SurfaceValues<float> sunEscaped;          // W: of it, the beams' light (scattered above the node)
+    SurfaceValues<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
+    std::vector<SurfaceValues<float>> sunIn;  // per beam (sun or lamp), W entering through air faces
+    SurfaceValues<float> skyIn;               // W entering through air faces
+    // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
+    // returned at once (m^2), so that light from other snow adds to the sources as sky light does.
+    SurfaceValues<float> skyToNode, skyReturned;
+    SurfaceValues<float> area;  // m^2, surface patch
+
+    ChannelSystem(const SnowTopology &topo, std::size_t beams, ChannelStorage storage)
+        : A(std::move(storage.A)), remainder(std::move(storage.remainder)), b(std::move(storage.b)),
+          escaped(surfaceZeros(topo)), sunEscaped(surfaceZeros(topo)), outConductance(surfaceZeros(topo)),
+          sunIn(beams, surfaceZeros(topo)), skyIn(surfaceZeros(topo)), skyToNode(surfaceZeros(topo)),
+          skyReturned(surfaceZeros(topo)), area(surfaceZeros(topo)) {
+        b.assign(topo.size(), 0.0);
+    }
+    static SurfaceValues<float> surfaceZeros(const SnowTopology &topo) {
+        return SurfaceValues<float>(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);
+    }
+
+    // Adds diffuse irradiance (W/m^2) on the surface patches.
+    void addDiffuse(const SurfaceValues<glm::vec3> &irradiance, int c) {
+        for (std::size_t i = 0; i < b.size(); ++i) {
+            if (!(area[i] > 0.0f)) continue;  // not a surface voxel
+            const double E = irradiance[i][c];
+            b[i] += E * skyToNode[i], escaped.surface(i) += E * skyReturned[i], skyIn.surface(i) += E * area[i];
+        }
+    }
+    // Frees what only the assembly and addDiffuse read (12 bytes per surface voxel), before the solver is built.
+    void releaseDiffuseTerms() { skyToNode = skyReturned = area = SurfaceValues<float>(); }
+};
+
+// What the voxel scheme returns of a beam entering a half-space of uniform snow (bake_diffusion_system.cpp).
+double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, double across);
+
+// Channel c's diffusion system, in `storage`'s vectors.
+ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, int c,
+                       const SubProgress &progress, ChannelStorage storage);
+
+}  // namespace firn::bake

@@ -1,0 +1,398 @@
+#include "firn/transport/bake_grid_values.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+#include <openvdb/tools/Morphology.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "firn/transport/incident_light.h"
+#include "firn/util/sampling.h"
+#include "firn/util/version.h"
+
+namespace firn::bake {
+
+namespace {
+
+// The radiance the surface voxels around voxel c (outside the snow) show towards it: their values
+// weighted by how much their surface faces c (a voxel beside an edge takes the side's, one above it the
+// top's). False if no surface voxel is near.
+bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
+                   openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const SourceValues &source,
+                   Source &S) {
+    double total = 0.0;
+    int count = 0;
+    glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0);
+    glm::dmat3 l1(0.0);
+    for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dz = -1; dz <= 1; ++dz) {
+                const std::int32_t j = index.getValue(c.offsetBy(-dx, -dy, -dz));
+                if (j < 0 || !topo.patches[j].isSurface()) continue;
+                const double w = std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
+                const Source v = source[j];
+                l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
+                peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
+                total += w, ++count;
+            }
+    if (count == 0) return false;
+    if (total <= 0.0) {  // nothing faces c: plain average
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) {
+                    const std::int32_t j = index.getValue(c.offsetBy(dx, dy, dz));
+                    if (j < 0 || !topo.patches[j].isSurface()) continue;
+                    const Source v = source[j];
+                    l0 += glm::dvec3(v.l0), l1 += glm::dmat3(v.l1), total += 1.0;
+                    peak0 += glm::dvec3(v.peak0), peak1 += glm::dvec3(v.peak1);
+                }
+    }
+    S.l0 = glm::vec3(l0 / total);
+    S.l1 = glm::mat3(l1 / total);
+    S.peak0 = glm::vec3(peak0 / total), S.peak1 = glm::vec3(peak1 / total);
+    return true;
+}
+
+// at: the voxels with values -> their place in `values` (by leaf of `leaves`), with leaves only where values are
+// (over all the grids' leaves it took 17 bytes per unknown on the car).
+void placeValues(const LeafValues &values, const openvdb::tree::LeafManager<const openvdb::BoolTree> &leaves,
+                 openvdb::Int32Tree &at) {
+    for (std::size_t l = 0; l < leaves.leafCount(); ++l)
+        if (!values.emptyIn(l)) at.touchLeaf(leaves.leaf(l).origin());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        for (std::size_t l = range.begin(); l != range.end(); ++l) {
+            if (values.emptyIn(l)) continue;
+            openvdb::Int32Tree::LeafNodeType &leaf = *at.probeLeaf(leaves.leaf(l).origin());
+            values.forEachIn(l, [&](std::size_t k) { leaf.setValueOnly(values.values[k].first, std::int32_t(k)); });
+        }
+    });
+}
+
+// Whether voxel c is a corner of a cell where the trilinear density can be non-zero: elsewhere the gathering
+// reads no value (bakedRadianceAlong skips samples without snow).
+bool besideSnow(Medium::Accessor &density, const openvdb::Coord &c) {
+    for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dz = -1; dz <= 1; ++dz)
+                if (density.getValue(c.offsetBy(dx, dy, dz)) > 0.0f) return true;
+    return false;
+}
+
+// Grid k < 4 of BakedGrids' value from a broad lobe: l0, then l1's x, y and z (RGB).
+openvdb::Vec3f broadComponent(const BroadLobe &S, int k) {
+    return k == 0 ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z) : openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1]);
+}
+
+}  // namespace
+
+// Grid k of BakedGrids' value from a source function: the broad lobe's four, then the peaked lobe's p0 and p1.
+openvdb::Vec3f sourceComponent(const Source &S, int k) {
+    return k < 4 ? broadComponent(S, k) : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
+                                                 : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
+}
+
+namespace {
+
+// The grids' values (BakedGrids::Values) of a source function.
+BakedGrids::Values sourceComponents(const Source &S) {
+    BakedGrids::Values out;
+    for (int k = 0; k < int(BakedGrids::kCount); ++k) out[k] = sourceComponent(S, k);
+    return out;
+}
+
+// The on-states of a voxel mask within `radius` (at most 4) of voxel c, read from the at most eight leaves that
+// hold them (found once) instead of looked up voxel by voxel.
+class BlockMask {
+  public:
+    BlockMask(openvdb::tree::ValueAccessor<const openvdb::BoolTree> &mask, const openvdb::Coord &c, int radius)
+        : split_(((c.x() - radius) & ~7) + 8, ((c.y() - radius) & ~7) + 8, ((c.z() - radius) & ~7) + 8) {
+        for (int a = 0; a < 2; ++a)
+            for (int b = 0; b < 2; ++b)
+                for (int d = 0; d < 2; ++d)
+                    leaves_[a][b][d] = mask.probeConstLeaf(split_.offsetBy(8 * a - 8, 8 * b - 8, 8 * d - 8));
+    }
+    bool isOn(const openvdb::Coord &v) const {  // v within the radius of c
+        const openvdb::BoolTree::LeafNodeType *leaf =
+            leaves_[v.x() >= split_.x()][v.y() >= split_.y()][v.z() >= split_.z()];
+        return leaf && leaf->isValueOn(v);
+    }
+
+  private:
+    openvdb::Coord split_;  // the upper leaves' origin
+    const openvdb::BoolTree::LeafNodeType *leaves_[2][2][2];
+};
+
+// The returned grazing sun carried through the density ramp: voxel c (outside the unknowns, carrying its surface's
+// radiance) in front of smooth surface voxels within two voxels whose peaked lobe (the sun returned sharply
+// forwards, Method 5) travels towards it takes their peaked lobes where these are over twice its own (elsewhere
+// its surface holds as much: a march towards the suns saved), weighted by the cosine squared between a lobe's
+// axis and the way to c and by how much its surface faces c, in the share of the suns' light that reaches c
+// uncollided (sunlit). On a lit rim seen against the sun the camera ray crosses the ramp at the
+// top and becomes opaque in its camera side, whose own surface voxels take the sun at grazing incidence and
+// hold little peak (mu0 0-0.2), while the light there is the lit top's forward return travelling through
+// (ball_issue's top row: the reference's source 0.3-0.4 in the ramp's first optical depth, the bake's 0.15-0.2;
+// ball_grey's top row seen against the sun -55 -> -37 %). Not across sharp edges (a peak whose way to c passes
+// an edge voxel: their faces' light leaves face by face; slab_thick 4.4 -> 4.7 % with them, and left out
+// wherever an edge voxel lay beside c, ball_issue's side rims seen against the sun stayed at -59 %), nor from
+// traced voxels (their peak is their own beams' scattering). bench/bake_suite.py: docs/bake.md, Accuracy.
+//
+// peaks: the surface voxels holding a peaked lobe, read from the at most eight leaves around c (BlockMask): an
+// index lookup for each of the 124 voxels around c took most of this walk's time.
+void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c,
+                        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
+                        TracedIndex &tracedIndex, const SourceValues &source,
+                        openvdb::tree::ValueAccessor<const openvdb::BoolTree> &peaks, Medium::ColumnMarcher &marcher,
+                        Source &S) {
+    struct Offset {
+        openvdb::Coord from;  // c minus the way to c
+        glm::dvec3 towards;   // unit
+        bool beside;          // within one voxel
+        openvdb::Coord lo, hi;  // the voxels around the midpoint of the way, from `from`
+    };
+    static const std::vector<Offset> offsets = [] {
+        const auto half = [](int v, bool up) { return int(up ? std::ceil(v / 2.0) : std::floor(v / 2.0)); };
+        std::vector<Offset> out;
+        for (int dx = -2; dx <= 2; ++dx)
+            for (int dy = -2; dy <= 2; ++dy)
+                for (int dz = -2; dz <= 2; ++dz)
+                    if (dx || dy || dz)
+                        out.push_back({openvdb::Coord(-dx, -dy, -dz), glm::normalize(glm::dvec3(dx, dy, dz)),
+                                       std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) == 1,
+                                       openvdb::Coord(half(dx, false), half(dy, false), half(dz, false)),
+                                       openvdb::Coord(half(dx, true), half(dy, true), half(dz, true))});
+        return out;
+    }();
+    const auto sharpAt = [&](const openvdb::Coord &v) {
+        const std::int32_t k = index.getValue(v);
+        return k >= 0 && topo.patches[k].sharp;
+    };
+    const BlockMask peakAt(peaks, c, 2);
+    glm::dvec3 p0(0.0), p1(0.0);
+    double total = 0.0;
+    for (const Offset &o : offsets) {
+        const openvdb::Coord from = c + o.from;
+        if (!peakAt.isOn(from)) continue;
+        const std::int32_t j = index.getValue(from);
+        if (!o.beside && (sharpAt(from + o.lo) || sharpAt(from + o.hi))) continue;  // its light passes an edge
+        const double facing = glm::dot(topo.patches[j].normal, o.towards);
+        if (facing <= 0.0 || tracedIndex.getValue(from) >= 0) continue;
+        const Source v = source[j];
+        const double along = glm::dot(glm::normalize(glm::dvec3(v.peak1)), o.towards);
+        if (along <= 0.0) continue;
+        const double w = along * along * facing;
+        p0 += w * glm::dvec3(v.peak0), p1 += w * glm::dvec3(v.peak1), total += w;
+    }
+    if (!(total > 0.0) || (p0.x + p0.y + p0.z) / total <= 2.0 * double(S.peak0.x + S.peak0.y + S.peak0.z)) return;
+    const Medium &medium = *scene.medium;
+    const glm::dvec3 centre = medium.voxelCentre(c);
+    double arriving = 0.0, outside = 0.0;
+    for (std::size_t b = 0; b < scene.suns.size(); ++b) {
+        arriving += beamAt(scene, b, centre, 1, 0, 0, marcher, nullptr, Crossing::Uncollided).irradiance.y;
+        outside += scene.suns[b].irradiance.y;
+    }
+    const double lit = outside > 0.0 ? arriving / outside : 0.0;
+    S.peak0 = glm::vec3(lit * p0 / total + (1.0 - lit) * glm::dvec3(S.peak0));
+    S.peak1 = glm::vec3(lit * p1 / total + (1.0 - lit) * glm::dvec3(S.peak1));
+}
+
+}  // namespace
+
+// gathering: the values the gathering reads alone (those beside snow, besideSnow: the grids carry the surface's
+// radiance two voxels out, the gathering needs one), without the returned grazing sun carried through the ramp
+// (forwardPeakThrough: what cameras see of a lit rim; the sky rays between snow surfaces hardly meet it, and it
+// cost the car 0.8 processor seconds there).
+GridValues gridValues(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
+                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
+                      bool gathering) {
+    const Medium &medium = *scene.medium;
+    const VolumeOptics &optics = medium.optics();
+    GridValues out;
+    out.topology = std::make_shared<openvdb::BoolTree>(medium.density().tree(), false, openvdb::TopologyCopy());
+    openvdb::tools::dilateActiveValues(*out.topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    openvdb::tree::LeafManager<const openvdb::BoolTree> leaves(*out.topology);
+    using Pairs = std::vector<VoxelValues>;
+
+    // Average of the 26 neighbours accepted by `take`, read by `value`; false if none.
+    auto average = [](const openvdb::Coord &c, const auto &take, const auto &value, Source &S) {
+        int count = 0;
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) {
+                    const openvdb::Coord n = c.offsetBy(dx, dy, dz);
+                    if (!take(n)) continue;
+                    const Source v = value(n);
+                    S.l0 += v.l0, S.l1 += v.l1, S.peak0 += v.peak0, S.peak1 += v.peak1, ++count;
+                }
+        if (count) S.l0 /= double(count), S.l1 /= double(count), S.peak0 /= double(count), S.peak1 /= double(count);
+        return count > 0;
+    };
+    // Where forwardPeakThrough may find a peak: within two voxels of a smooth surface voxel holding one (the car's
+    // grids took 4.6 processor seconds searching around every voxel next to a surface voxel, 4.3-4.4 so, 3.3 without).
+    // peaks: smooth surface voxels holding a peaked lobe. A sharp edge's peak (its faces' grazing sun) stays its
+    // own: carried through the ramp too, ball_issue's view against the sun read -29 % (-27 % without).
+    openvdb::BoolTree nearPeak(false), peaks(false);
+    if (!gathering) {
+        std::vector<bool> peaked(source.broad.size(), false);  // by unknown
+        for (const PeakedLobes::Peak &peak : source.peaked.peaks())
+            peaked[peak.key] = glm::length(peak.peak1) > 0.0f;
+        for (auto it = topo.index->cbeginValueOn(); it; ++it)
+            if (const std::int32_t j = *it; j >= 0 && peaked[j] && topo.patches[j].isSurface() && !topo.patches[j].sharp)
+                peaks.setValueOn(it.getCoord());
+        nearPeak.topologyUnion(peaks);
+        openvdb::tools::dilateActiveValues(nearPeak, 2, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                           openvdb::tools::IGNORE_TILES);
+    }
+    // Where facingAverage can find a surface voxel (within one voxel of one) and, beyond that, where a voxel can
+    // have a carried neighbour (within one of those or of a traced voxel): elsewhere neither looks at 26
+    // neighbours (the car's 3 M voxels of margin and fringe took 78 M lookups for 0.8 M values).
+    openvdb::BoolTree nearSurface(*topo.index, false, openvdb::TopologyCopy());
+    openvdb::tree::LeafManager<openvdb::BoolTree>(nearSurface).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
+        const auto &indexLeaf = *topo.index->probeConstLeaf(leaf.origin());
+        for (auto it = leaf.beginValueOn(); it; ++it)
+            if (!topo.patches[std::size_t(indexLeaf.getValue(it.pos()))].isSurface()) it.setValueOff();
+    });
+    openvdb::tools::dilateActiveValues(nearSurface, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    openvdb::BoolTree nearCarried(nearSurface);
+    nearCarried.topologyUnion(*traced.index);
+    openvdb::tools::dilateActiveValues(nearCarried, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    // First: traced voxels, and the voxels next to surface voxels (unknowns hold their own source).
+    Pairs perLeaf(leaves.leafCount());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        TracedIndex tracedIndex(traced);
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak), peaksAt(peaks), nearSurfaceAt(nearSurface);
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t l = range.begin(); l != range.end(); ++l)
+            for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
+                const openvdb::Coord c = it.getCoord();
+                const std::int32_t t = tracedIndex.getValue(c);
+                Source S;
+                if (t >= 0) S = traced.source[t];
+                else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0 || !facingAverage(topo, c, index, source, S))
+                    continue;
+                else if (nearPeakAt.isValueOn(c))
+                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
+                perLeaf[l].add(it.pos(), S);
+            }
+    });
+    // The second block adds at most a value per voxel near the carried ones or holding snow.
+    LeafValues carried(std::move(perLeaf), nearCarried.activeVoxelCount() + medium.density().activeVoxelCount());
+    out.at = std::make_shared<openvdb::Int32Tree>(-1);
+    placeValues(carried, leaves, *out.at);
+    // Then: one voxel further out, and thin snow on its own.
+    perLeaf = Pairs(leaves.leafCount());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> carriedSlot(*out.at);
+        TracedIndex tracedIndex(traced);
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearCarriedAt(nearCarried);
+        Medium::Accessor density = medium.accessor();
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t l = range.begin(); l != range.end(); ++l)
+            for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
+                const openvdb::Coord c = it.getCoord();
+                if (index.getValue(c) >= 0 || carriedSlot.getValue(c) >= 0) continue;
+                const bool mayBeNear = nearCarriedAt.isValueOn(c), snow = density.getValue(c) > 0.0f;
+                if (!mayBeNear && !snow) continue;  // no value
+                if (gathering && !snow && !besideSnow(density, c)) continue;
+                Source S;
+                const bool near = mayBeNear && average(c, [&](const openvdb::Coord &n) {
+                    return carriedSlot.getValue(n) >= 0 && (index.getValue(n) < 0 || tracedIndex.getValue(n) >= 0); },
+                                          [&](const openvdb::Coord &n) { return carried[carriedSlot.getValue(n)]; },
+                                          S);
+                if (!near && snow) {
+                    const glm::dvec3 centre = medium.voxelCentre(c);
+                    for (std::size_t b = 0; b < beamCount(scene); ++b) {
+                        const glm::dvec3 beam = glm::dvec3(beamAt(scene, b, centre, preset.sunSamples, settings.seed,
+                                                                  std::uint64_t(l), marcher).irradiance) *
+                                                optics.albedo * kInvFourPi;
+                        S.addPeak(beam, crossingAnisotropy(optics.g), -towardsBeam(scene, b, centre));
+                    }
+                }
+                if (near || snow) perLeaf[l].add(it.pos(), S);
+            }
+    });
+    out.beyond.emplace(std::move(carried), std::move(perLeaf));
+    placeValues(*out.beyond, leaves, *out.at);
+    return out;
+}
+
+namespace {
+
+// Grid k of BakedGrids (l0, then l1's x, y and z) at the density's resolution.
+openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology &topo, const SourceValues &source,
+                                   const MonteCarloVoxels &traced, int k) {
+    auto tree = std::make_shared<openvdb::Vec3fTree>(*values.topology, openvdb::Vec3f(0.0f), openvdb::TopologyCopy());
+    openvdb::tree::LeafManager<openvdb::Vec3fTree> leaves(*tree);  // in the topology's leaf order
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        TracedIndex tracedIndex(traced);
+        for (std::size_t l = range.begin(); l != range.end(); ++l) {
+            auto &leaf = leaves.leaf(l);
+            for (auto it = leaf.beginValueOn(); it; ++it) {
+                const openvdb::Coord c = it.getCoord();
+                if (const std::int32_t i = index.getValue(c); i >= 0 && tracedIndex.getValue(c) < 0)
+                    it.setValue(k < 4 ? broadComponent(source.broad[i], k) : sourceComponent(source[i], k));
+            }
+            const LeafValues &beyond = *values.beyond;
+            beyond.forEachIn(l, [&](std::size_t m) {
+                leaf.setValueOnly(beyond.values[m].first, k < 4 ? broadComponent(beyond.values[m].second, k)
+                                                                : sourceComponent(beyond[m], k));
+            });
+        }
+    });
+    return tree;
+}
+
+}  // namespace
+
+// Grid k of BakedGrids from its tree, `scale` times the voxel size of `density`, for optics of extinction
+// `extinctionPerDensity` (m^2/kg).
+openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scale, const openvdb::FloatGrid &density,
+                                   double extinctionPerDensity, const BakeSettings &settings) {
+    auto grid = openvdb::Vec3fGrid::create(std::move(tree));
+    grid->setTransform(density.transform().copy());
+    if (scale > 1) grid->transform().preScale(double(scale));
+    grid->setName(BakedGrids::kNames[k]);
+    grid->setVectorType(openvdb::VEC_INVARIANT);
+    grid->insertMeta("firn_units", openvdb::StringMetadata("W/m^2/sr (source function: emission / extinction)"));
+    grid->insertMeta("firn_extinction_per_density", openvdb::DoubleMetadata(extinctionPerDensity));
+    grid->insertMeta("firn_bake_quality",
+                     openvdb::StringMetadata(settings.quality == BakeQuality::Draft   ? "DRAFT"
+                                             : settings.quality == BakeQuality::Final ? "FINAL"
+                                                                                      : "REFERENCE"));
+    grid->insertMeta("firn_bake_seed", openvdb::Int64Metadata(openvdb::Int64(settings.seed)));
+    grid->insertMeta("firn_version", openvdb::StringMetadata(kVersion));
+    return grid;
+}
+
+// The source grids at `scale` times the density's voxel size. At the density's resolution each grid is built
+// before the next; coarser, all six are coarsened together from the values directly (coarsenedSources), none
+// built at the density's resolution.
+BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
+                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
+    GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
+    BakedGrids out;
+    if (scale == 1) {
+        values.at = nullptr;  // only the coarsening's readers (BakedValuesSampler) read it
+        for (int k = 0; k < int(BakedGrids::kCount); ++k)
+            out.source[k] = sourceGrid(sourceTree(values, topo, source, traced, k), k, scale, scene.medium->density(),
+                                       scene.medium->optics().extinctionPerDensity, settings);
+        return out;
+    }
+    const auto newReader = [&] {
+        return [baked = std::make_shared<BakedValuesSampler>(topo, source, traced, values)](const openvdb::Coord &c) {
+            return sourceComponents(baked->at(c));
+        };
+    };
+    auto trees = coarsenedSources(*values.topology, newReader, scene.medium->density().tree(), scale);
+    for (int k = 0; k < int(BakedGrids::kCount); ++k)
+        out.source[k] = sourceGrid(std::move(trees[k]), k, scale, scene.medium->density(),
+                                   scene.medium->optics().extinctionPerDensity, settings);
+    return out;
+}
+
+}  // namespace firn::bake

@@ -1,0 +1,163 @@
+#pragma once
+
+// What the source grids hold beyond the unknowns, and the grids written from it.
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tree/LeafManager.h>
+
+#include "firn/transport/bake.h"
+#include "firn/transport/bake_preset.h"
+#include "firn/transport/bake_source_function.h"
+#include "firn/transport/bake_traced_voxels.h"
+#include "firn/transport/baked_grids.h"
+#include "firn/transport/scene.h"
+#include "firn/transport/snow_topology.h"
+#include "firn/transport/source_lobe.h"
+
+namespace firn::bake {
+
+using VoxelValue = std::pair<openvdb::Index, BroadLobe>;  // offset in its leaf, value
+
+// Source functions at voxels, in order: broad lobes, with the peaked lobes by place (PeakedLobes).
+struct VoxelValues {
+    std::vector<VoxelValue> values;
+    PeakedLobes peaked;
+
+    void add(openvdb::Index offset, const Source &S) {
+        peaked.add(values.size(), S);
+        values.emplace_back(offset, S);
+    }
+    void append(const VoxelValues &other, std::size_t begin, std::size_t end) {  // other's values [begin, end)
+        for (auto peak = other.peaked.from(begin); peak != other.peaked.peaks().end() && peak->key < end; ++peak)
+            peaked.push({std::uint32_t(values.size() + peak->key - begin), peak->peak0, peak->peak1});
+        values.insert(values.end(), other.values.begin() + begin, other.values.begin() + end);
+    }
+    Source operator[](std::size_t k) const { return peaked.with(values[k].second, k); }
+};
+
+// Values by leaf of the grids' topology: leaf l's lie at [start[l], start[l + 1]) and, where a second block was
+// appended after the first, at [later[l], later[l + 1]).
+struct LeafValues : VoxelValues {
+    std::vector<std::size_t> start, later;
+
+    // One block: perLeaf's values leaf by leaf (consumed), with room for `more` values after them, so that a
+    // second block appended within it does not move the first (the old array and the new together were the car's
+    // gathering peak). Room never written holds no memory (the pages of a large array are the system's until used).
+    LeafValues(std::vector<VoxelValues> &&perLeaf, std::size_t more) : start{0} {
+        std::size_t total = 0;
+        for (const auto &leaf : perLeaf) total += leaf.values.size();
+        values.reserve(total + more);
+        for (VoxelValues &leaf : perLeaf) {
+            append(leaf, 0, leaf.values.size());
+            leaf = VoxelValues();  // (= {} would keep its capacity)
+            start.push_back(values.size());
+        }
+        later.assign(start.size(), values.size());
+    }
+    // first's block taken over as it is (a copy of it was the gathering's and the grids' memory peak), then
+    // `then`'s values leaf by leaf (consumed).
+    LeafValues(LeafValues &&first, std::vector<VoxelValues> &&then)
+        : VoxelValues(std::move(first)), start(std::move(first.start)), later{values.size()} {
+        std::size_t total = values.size();
+        for (const auto &leaf : then) total += leaf.values.size();
+        values.reserve(total);
+        for (VoxelValues &leaf : then) {
+            append(leaf, 0, leaf.values.size());
+            leaf = VoxelValues();
+            later.push_back(values.size());
+        }
+    }
+    template <typename Body>
+    void forEachIn(std::size_t l, const Body &body) const {  // body(k) for leaf l's values
+        for (std::size_t k = start[l]; k < start[l + 1]; ++k) body(k);
+        for (std::size_t k = later[l]; k < later[l + 1]; ++k) body(k);
+    }
+    bool emptyIn(std::size_t l) const { return start[l] == start[l + 1] && later[l] == later[l + 1]; }
+};
+
+// What the source grids hold, worked out once so that the grids can be written one at a time (a grid at
+// the density's resolution takes 12 bytes for every voxel of its leaves: the four of one lobe took ~250 bytes per unknown on
+// the car sample, docs/bake.md Memory).
+// Over the snow's voxels and a margin of three: unknowns hold their source function. Outside them (the
+// density ramp and surface fringes) the radiance of the nearest surface voxels is carried out two voxels, so
+// the renderer's trilinear ramp sees a constant ratio of emission to extinction; voxels too thin for the
+// solve, away from any surface, hold their single scattering; the outermost ring holds zeros (Cycles reads
+// Vec3 grids' edges wrongly).
+struct GridValues {
+    openvdb::BoolTree::Ptr topology;  // the snow's voxels and the margin
+    // Voxels other than the unknowns (traced unknowns among them), leaf by leaf: those holding a surface's
+    // radiance or a traced source, then those one voxel further out and thin snow on its own.
+    std::optional<LeafValues> beyond;
+    openvdb::Int32Tree::Ptr at;  // voxel -> its place in beyond, -1 elsewhere
+};
+
+// What the source grids hold beyond the unknowns (`gathering`: what the gathering between snow surfaces reads).
+GridValues gridValues(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
+                      const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
+                      bool gathering);
+
+// Grid k of BakedGrids' value from a source function.
+openvdb::Vec3f sourceComponent(const Source &S, int k);
+
+// Grid k of BakedGrids from its tree, `scale` times the voxel size of `density`, with its metadata.
+openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scale, const openvdb::FloatGrid &density,
+                                   double extinctionPerDensity, const BakeSettings &settings);
+
+// BakedGrids' values at a point of the density's index space before the grids are written: read from the
+// unknowns' source and the values beyond them, trilinear as BoxSampler reads a grid (the same values, bit for
+// bit). The last cell's corners are kept: the gathering's half-voxel steps read each cell about twice. One per
+// thread.
+class BakedValuesSampler {
+  public:
+    BakedValuesSampler(const SnowTopology &topo, const SourceValues &source, const MonteCarloVoxels &traced,
+                       const GridValues &values)
+        : source_(source), beyond_(*values.beyond), index_(*topo.index), traced_(traced), at_(*values.at) {}
+
+    BakedGrids::Values operator()(const openvdb::Vec3d &ijk) {
+        const openvdb::Coord lower = floorCoord(ijk);
+        if (!cached_ || lower != cell_) {
+            for (int a = 0; a < 2; ++a)
+                for (int b = 0; b < 2; ++b)
+                    for (int c = 0; c < 2; ++c) {
+                        const Source S = at(lower.offsetBy(a, b, c));
+                        for (int g = 0; g < int(BakedGrids::kCount); ++g) corners_[g][a][b][c] = sourceComponent(S, g);
+                    }
+            cell_ = lower, cached_ = true;
+        }
+        const openvdb::Vec3R uvw = ijk - lower.asVec3d();
+        BakedGrids::Values out;
+        for (int g = 0; g < int(BakedGrids::kCount); ++g)
+            out[g] = openvdb::tools::BoxSampler::trilinearInterpolation(corners_[g], uvw);
+        return out;
+    }
+
+    // The value at voxel c (what the grids hold there at the density's resolution).
+    Source at(const openvdb::Coord &c) {
+        if (const std::int32_t i = index_.getValue(c); i >= 0 && traced_.getValue(c) < 0) return source_[i];
+        const std::int32_t k = at_.getValue(c);
+        return k >= 0 ? beyond_[k] : Source{};
+    }
+
+  private:
+    const SourceValues &source_;
+    const LeafValues &beyond_;
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_;
+    TracedIndex traced_;
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> at_;
+    bool cached_ = false;
+    openvdb::Coord cell_;  // the cell whose corners corners_ holds
+    openvdb::Vec3f corners_[BakedGrids::kCount][2][2][2];
+};
+
+// The source grids at `scale` times the density's voxel size.
+BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
+                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale);
+
+}  // namespace firn::bake

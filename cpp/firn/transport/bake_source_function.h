@@ -1,0 +1,87 @@
+#pragma once
+
+// The source function of every unknown: the diffusion's inside, the surface's radiance, traced voxels.
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "firn/transport/bake_surface_light.h"
+#include "firn/transport/bake_traced_voxels.h"
+#include "firn/transport/incident_light.h"
+#include "firn/transport/scene.h"
+#include "firn/transport/snow_topology.h"
+#include "firn/transport/source_lobe.h"
+#include "firn/util/progress.h"
+
+namespace firn::bake {
+
+// Source functions' peaked lobes where they are not zero, by key (an unknown, a place among the grids' values):
+// the beams' single scattering lies beneath the shell that takes the surface's radiance (composeSource) and
+// above where the snow blocks the beams (639,023 of 2.7 M unknowns on the car sample; held for all, they
+// took 24 bytes per unknown while the source is gathered and written).
+class PeakedLobes {
+  public:
+    struct Peak {
+        std::uint32_t key;
+        glm::vec3 peak0, peak1;
+    };
+    const std::vector<Peak> &peaks() const { return peaks_; }  // in key order
+    static bool holds(const Source &S) { return S.peak0 != glm::vec3(0.0f) || S.peak1 != glm::vec3(0.0f); }
+    void add(std::size_t key, const Source &S) {  // keys in increasing order
+        if (holds(S)) push({std::uint32_t(key), S.peak0, S.peak1});
+    }
+    void push(const Peak &peak) {  // keys in increasing order
+        const std::size_t word = peak.key / 64;
+        if (word >= held_.size()) before_.resize(word + 1, std::uint32_t(peaks_.size())), held_.resize(word + 1, 0);
+        held_[word] |= std::uint64_t(1) << (peak.key % 64);
+        peaks_.push_back(peak);
+    }
+    std::vector<Peak>::const_iterator from(std::size_t key) const {  // the first peak of key >= key
+        return std::lower_bound(peaks_.begin(), peaks_.end(), key, [](const Peak &p, std::size_t k) { return p.key < k; });
+    }
+    // The source function of that broad lobe and key: its peak found by counting the keys held before it (a
+    // binary search over the car's 640,000 peaks took 0.7 processor seconds of its gathering and grids).
+    Source with(const BroadLobe &broad, std::size_t key) const {
+        Source S;
+        static_cast<BroadLobe &>(S) = broad;
+        const std::size_t word = key / 64, bit = key % 64;
+        if (word < held_.size() && (held_[word] >> bit & 1)) {
+            const Peak &peak = peaks_[before_[word] + __builtin_popcountll(held_[word] & ((std::uint64_t(1) << bit) - 1))];
+            S.peak0 = peak.peak0, S.peak1 = peak.peak1;
+        }
+        return S;
+    }
+
+  private:
+    std::vector<Peak> peaks_;            // in key order, added by push() alone (the bitmap follows it)
+    std::vector<std::uint64_t> held_;    // bit key % 64 of word key / 64: whether key holds a peak
+    std::vector<std::uint32_t> before_;  // per word: the peaks of smaller keys
+};
+
+// The source function of every unknown.
+struct SourceValues {
+    std::vector<BroadLobe> broad;  // per unknown
+    PeakedLobes peaked;            // by unknown
+
+    Source operator[](std::size_t i) const { return peaked.with(broad[i], i); }
+};
+
+// Radiance leaving each surface voxel (its fitted lobe) from the solves' surface light.
+SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
+                                      const SurfaceValues<SurfaceLight> &solved);
+
+// The source function of every unknown from the channels' fluence phi, the surface's radiance and the traced voxels.
+SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                            const std::array<std::vector<double>, 3> &phi, const SurfaceValues<Source> &surface,
+                            const MonteCarloVoxels &traced);
+
+// REFERENCE quality: the surface voxels' radiance path traced (`samples` paths a direction) into `out`.
+void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples, std::uint64_t seed,
+                      SurfaceValues<Source> &out, const SubProgress &progress);
+
+}  // namespace firn::bake

@@ -1,0 +1,128 @@
+#include "firn/transport/bake_sun_downstream.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace firn::bake {
+
+namespace {
+
+// Where a half-space returns a beam entering at cos mu0, relative to where it entered, in transport mean free
+// paths 1/sigma_tr: the mean displacement along the beam's tangential travel and the spread about it (standard
+// deviation along it). Monte Carlo, bench/halfspace_displacement.py (100,000 photons), the means of omega 0.98,
+// g 0.85 and omega 0.9, g 0.6 (within 0.1 of omega 0.9999, g 0.85 for the mean), at mu0 0.05, 0.15, 0.3, 0.5, 0.7, 1.
+struct Displacement {
+    double mean, spread;
+};
+Displacement halfSpaceDisplacement(double mu0) {
+    static constexpr std::array<double, 6> kMu{0.05, 0.15, 0.3, 0.5, 0.7, 1.0};
+    static constexpr std::array<double, 6> kMean{0.58, 0.67, 0.73, 0.71, 0.60, 0.0};
+    static constexpr std::array<double, 6> kSpread{0.81, 0.93, 1.05, 1.17, 1.26, 1.37};
+    std::size_t k = 1;
+    while (k + 1 < kMu.size() && mu0 > kMu[k]) ++k;
+    const double f = std::clamp((mu0 - kMu[k - 1]) / (kMu[k] - kMu[k - 1]), 0.0, 1.0);
+    return {kMean[k - 1] + f * (kMean[k] - kMean[k - 1]), kSpread[k - 1] + f * (kSpread[k] - kSpread[k - 1])};
+}
+
+}  // namespace
+
+// Surface voxel i's downstream kernel (SunReturned::downstream, spread; m): the beams' displacements weighted
+// by the power each lets in, on the snow beneath the patch (channel ch's sigma_tr: one kernel for the three).
+void downstreamKernel(const Scene &scene, const IncidentLight &light, const ChannelSystem &sys, const Channel &ch,
+                      const SnowTopology &topo, std::size_t i, SunReturned &surface) {
+    const glm::dvec3 n = topo.patches[i].normal, centre = scene.medium->voxelCentre(topo.coord[i]);
+    const double transportPath = 1.0 / ch.sigmaTr(densityBeneath(topo, i, n));  // m
+    double power = 0.0, spread = 0.0;
+    glm::dvec3 downstream(0.0);
+    for (std::size_t s = 0; s < light.beams.size(); ++s) {
+        const double P = sys.sunIn[s][i];
+        if (P <= 0.0) continue;
+        const glm::dvec3 d = -towardsBeam(scene, s, centre);
+        const Displacement k = halfSpaceDisplacement(std::clamp(-glm::dot(d, n), 0.05, 1.0));
+        downstream += P * k.mean * travelAlong(d, n);
+        spread += P * k.spread, power += P;
+    }
+    if (power <= 0.0) return;
+    surface.downstream = glm::vec3(transportPath / power * downstream);
+    surface.spread = float(transportPath * spread / power);
+}
+
+namespace {
+
+// The rotation taking unit vector `from` to unit vector `to` (the shorter way; from . to > -1), applied to v.
+glm::dvec3 rotatedWith(const glm::dvec3 &v, const glm::dvec3 &from, const glm::dvec3 &to) {
+    const glm::dvec3 axis = glm::cross(from, to);  // sin times the unit axis
+    const double cos = glm::dot(from, to);
+    return cos * v + glm::cross(axis, v) + axis * (glm::dot(axis, v) / (1.0 + cos));
+}
+
+// The weight surface voxel i's downstream kernel gives surface voxel j of its 3^3 block (before normalizing): a
+// Gaussian of the half-space's displacement (SunReturned::downstream, spread) in i's tangent plane, times j's patch
+// area and the cosine between the normals; smooth patches only.
+double downstreamWeight(const SnowTopology &topo, const SunReturned &from, std::size_t i, std::size_t j, double h) {
+    const SurfacePatch &a = topo.patches[i], &b = topo.patches[j];
+    const double facing = glm::dot(a.normal, b.normal);
+    if (b.sharp || facing <= 0.0) return 0.0;
+    if (from.spread <= 0.0f) return i == j ? 1.0 : 0.0;
+    const openvdb::Coord d = topo.coord[j] - topo.coord[i];
+    glm::dvec3 step = h * glm::dvec3(d.x(), d.y(), d.z());
+    step -= glm::dot(step, a.normal) * a.normal;
+    const glm::dvec3 off = step - glm::dvec3(from.downstream);
+    return facing * b.area * std::exp(-glm::dot(off, off) / (2.0 * double(from.spread) * double(from.spread)));
+}
+
+}  // namespace
+
+// Channel c's sun light each smooth patch returns at once (`sun`; its atOnce averaged over the neighbourhood as the
+// outflow is, for a staircase lets it out unevenly), where it leaves: over the surface voxels of its 3^3 block by
+// downstreamWeight, the weights of each sender summing to one (the power is kept), the forms turned with the normal,
+// added to the receivers' returned light; what escaped at once is taken out of their `leaving`. A flat, evenly lit
+// surface receives what it sends (the flat slabs unchanged); past a terminator the patches downstream take what
+// entered before it (docs/bake.md, Method 5).
+void sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SunReturned> &sun, int c, double h,
+                          SurfaceValues<SurfaceLight> &out) {
+    SurfaceValues<float> total(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);   // each sender's weights' sum
+    SurfaceValues<float> atOnce(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);  // W sent, averaged
+    auto smooth = [&](std::size_t i) { return topo.patches[i].isSurface() && !topo.patches[i].sharp; };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!smooth(i)) continue;
+            const auto [leaving, area] = neighbourhoodOutflow<double>(
+                topo, i, topo.patches[i].normal, [&](std::size_t j) { return double(sun[j].atOnce); });
+            atOnce.surface(i) = float(leaving / area * double(topo.patches[i].area));
+            double sum = 0.0;
+            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k)
+                sum += downstreamWeight(topo, sun[i], i, topo.neighbourhood[k], h);
+            total.surface(i) = float(sum);
+        }
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t j = range.begin(); j != range.end(); ++j) {
+            if (!smooth(j)) continue;
+            const glm::dvec3 to = topo.patches[j].normal;
+            float l0 = 0.0f;
+            glm::vec3 l1(0.0f);
+            for (std::size_t k = topo.neighbourhoodStart[j]; k < topo.neighbourhoodStart[j + 1]; ++k) {
+                const std::uint32_t i = topo.neighbourhood[k];
+                if (!smooth(i) || !(total[i] > 0.0f)) continue;
+                const double w = downstreamWeight(topo, sun[i], i, j, h) / total[i];
+                if (w <= 0.0) continue;
+                // what escaped at once in the escape function's shape
+                l0 += float(w * (sun[i].l0 + 3.0 / 7.0 * atOnce[i]));
+                l1 += glm::vec3(w * (rotatedWith(glm::dvec3(sun[i].l1), topo.patches[i].normal, to) +
+                                     6.0 / 7.0 * atOnce[i] * to));
+            }
+            SurfaceLight &received = out.surface(j);
+            received.returned.l0[c] += l0;
+            received.returned.l1[c] += l1;
+            received.leaving[c] -= sun[j].atOnce;
+        }
+    });
+}
+
+}  // namespace firn::bake

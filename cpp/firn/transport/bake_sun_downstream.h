@@ -1,0 +1,38 @@
+#pragma once
+
+// Where the suns' light a half-space returns leaves: downstream of where it entered.
+
+#include <cstddef>
+
+#include <glm/vec3.hpp>
+
+#include "firn/transport/bake_diffusion_system.h"
+#include "firn/transport/bake_surface_light.h"
+#include "firn/transport/incident_light.h"
+#include "firn/transport/scene.h"
+#include "firn/transport/snow_topology.h"
+
+namespace firn::bake {
+
+// The suns' light the half-space model returns at the smooth patch it entered, which leaves downstream
+// (sunLeavingDownstream, by the half-space's displacement `downstream` +- `spread`, m), one channel's: what the
+// diffusion misses of it and its share of the sun lobe's shape (W and moments), and what escaped at once (W).
+// Held for one channel, from the end of its solve to the end of its surfaceLight (in SurfaceLight, through all
+// three solves, it put the car's peak at 311-313 bytes per active voxel; docs/bake.md, Memory).
+struct SunReturned {
+    float l0 = 0.0f;
+    glm::vec3 l1{0.0f};
+    float atOnce = 0.0f;
+    glm::vec3 downstream{0.0f};
+    float spread = 0.0f;
+};
+
+// Surface voxel i's downstream kernel (`surface`'s downstream and spread) from the beams entering it.
+void downstreamKernel(const Scene &scene, const IncidentLight &light, const ChannelSystem &sys, const Channel &ch,
+                      const SnowTopology &topo, std::size_t i, SunReturned &surface);
+
+// Channel c's sun light each smooth patch returns at once, moved to where it leaves (added to `out`).
+void sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SunReturned> &sun, int c, double h,
+                          SurfaceValues<SurfaceLight> &out);
+
+}  // namespace firn::bake

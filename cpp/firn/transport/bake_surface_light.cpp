@@ -1,0 +1,294 @@
+#include "firn/transport/bake_surface_light.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "firn/transport/bake_sun_downstream.h"
+#include "firn/transport/edge_lobe.h"
+#include "firn/transport/sun_lobe.h"
+#include "firn/util/sampling.h"
+
+namespace firn::bake {
+
+namespace {
+
+// The fluence's gradient along surface voxel i's patch (per m): least squares over the surface voxels of its
+// 3^3 block (weighted by the cosine between their normals and its own), in its tangent plane.
+glm::dvec3 surfaceGradient(const SnowTopology &topo, const std::vector<double> &phi, std::size_t i, double h) {
+    const glm::dvec3 n = topo.patches[i].normal;
+    const glm::dvec3 u = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+    const glm::dvec3 v = glm::cross(n, u);
+    double a = 0.0, b = 0.0, c = 0.0, ru = 0.0, rv = 0.0;
+    for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
+        const std::uint32_t j = topo.neighbourhood[k];
+        const double w = std::max(0.0, glm::dot(n, topo.patches[j].normal));
+        if (j == i || w <= 0.0) continue;
+        const openvdb::Coord d = topo.coord[j] - topo.coord[i];
+        const glm::dvec3 step = h * glm::dvec3(d.x(), d.y(), d.z());
+        const double x = glm::dot(step, u), y = glm::dot(step, v), f = phi[j] - phi[i];
+        a += w * x * x, b += w * x * y, c += w * y * y, ru += w * x * f, rv += w * y * f;
+    }
+    const double det = a * c - b * b;
+    if (det <= 1e-12 * h * h * h * h) return glm::dvec3(0.0);
+    return ((c * ru - b * rv) * u + (a * rv - b * ru) * v) / det;
+}
+
+// kg/m^2 of snow from surface voxel i's centre out through its patch: its air faces' ramps by their shares.
+double patchRampMass(const SnowTopology &topo, std::size_t i) {
+    double mass = 0.0;
+    for (int f = 0; f < 6; ++f)
+        if (topo.patches[i].share[f] > 0.0f)
+            mass += topo.patches[i].share[f] * topo.faces[SnowTopology::faceIndex(topo.link[i][f])].rampMass;
+    return mass;
+}
+
+}  // namespace
+
+// The density of the snow beneath surface voxel i's patch: its neighbour against the normal's largest component
+// (its own where that is no snow).
+double densityBeneath(const SnowTopology &topo, std::size_t i, const glm::dvec3 &n) {
+    const int axis = std::abs(n.x) >= std::max(std::abs(n.y), std::abs(n.z)) ? 0 : std::abs(n.y) >= std::abs(n.z) ? 1 : 2;
+    const std::int32_t link = topo.link[i][2 * axis + (n[axis] > 0.0 ? 0 : 1)];
+    return SnowTopology::isFace(link) ? topo.density[i] : topo.density[std::size_t(link)];
+}
+
+namespace {
+
+// The beam towards w entering surface voxel i through its faces shared with snow, per W/m^2 at its node and m^2 of
+// its patch (schemeBeamAlbedo's `across`: on a flat grid face the cosines to the other axes; a staircase's steps
+// let less in so, the voxel's other air faces none).
+double acrossSnowFaces(const SnowTopology &topo, std::size_t i, const glm::dvec3 &w, double h) {
+    double across = 0.0;
+    for (int f = 0; f < 6; ++f)
+        if (!SnowTopology::isFace(topo.link[i][f])) across += std::max(0.0, glm::dot(faceNormal(f), w));
+    return across * h * h / topo.patches[i].area;
+}
+
+// Light returned through a patch (W and the first moments of its linear radiance), over and above the escape
+// function's share: of the sky (and light from other snow) and of the beams.
+struct ReturnedLight {
+    double sky0;
+    glm::dvec3 sky1;
+    double sun0;
+    glm::dvec3 sun1;
+    double sunShape0;  // of sun0, sun1: the sun lobe's shape beyond the escape function's
+    glm::dvec3 sunShape1;
+    double sunMissed, sunReturned;  // W: what the diffusion misses of it; all the half-space returns
+};
+
+// The sky on a patch of normal n read as an even part and a beam, from the first moment of its arrival
+// directions per unit irradiance m (IncidentLight::skyAim): m = (1 - share) 2/3 n + share w, w the beam's unit
+// direction towards the light (an even sky's moment is 2/3 n; the share solves |w| = 1). A wall's sky from above
+// only is share 0.57 from 48 degrees above its normal: its light, carried on downwards at g 0.7, leaves less
+// upwards than an even sky's (docs/bake.md Method 5; bench/wall_on_ground_bench.py).
+struct SkyBeam {
+    double share = 0.0;
+    glm::dvec3 towards{0.0};
+};
+SkyBeam skyBeamPart(const glm::dvec3 &m, const glm::dvec3 &n) {
+    const double delta = glm::dot(m, n) - 2.0 / 3.0, across = glm::length(m - glm::dot(m, n) * n);
+    const double share = std::min(1.0, (6.0 * delta + std::sqrt(81.0 * delta * delta + 45.0 * across * across)) / 5.0);
+    const glm::dvec3 towards = m - (1.0 - share) * 2.0 / 3.0 * n;  // times share
+    if (!(share > 1e-3) || glm::dot(towards, n) <= 0.0) return {};  // none, or light skimming the surface only
+    return {share, glm::normalize(towards)};
+}
+
+}  // namespace
+
+// The unit direction along a surface of normal n in which light travelling along d moves (0 along the normal).
+glm::dvec3 travelAlong(const glm::dvec3 &d, const glm::dvec3 &n) {
+    const glm::dvec3 t = d - glm::dot(d, n) * n;
+    return glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
+}
+
+// Channel c's light leaving each surface voxel, from its solve.
+void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
+                  const ChannelSystem &sys, const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
+    const Medium &medium = *scene.medium;
+    const VolumeOptics &optics = medium.optics();
+    const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
+    const Channel kernelChannel{optics.extinctionPerDensity, optics.albedo[1], optics.g};  // one kernel for the three
+    SurfaceValues<SunReturned> sun(topo.surfaceSlot, topo.surfaceVoxels());
+    const double y = absorptionParameter(ch.omega, ch.g);
+    // Where the snow absorbs, the diffusion returns other amounts than a half-space of this snow does (the sun
+    // lobe's Monte Carlo table): of diffuse light less (the spherical albedo 0.447 against Marshak's 0.429 at
+    // omega 0.98, g 0.85; 0.330 against 0.300 at omega 0.9, g 0.6), of a beam more at steep incidence and less at
+    // grazing (the voxel scheme's 0.387 against 0.353 at mu0 1, 0.505 against 0.571 at mu0 0.3, omega 0.98,
+    // g 0.85: schemeBeamAlbedo, on the snow beneath the patch). What it misses (negative where it returns too
+    // much) leaves too: an absorbing ball's shadowed side, lit by the sky alone, was 5-9 % too dark, its sunward
+    // face 5-8 % too bright (docs/bake.md, Accuracy).
+    const double diffuseMissed = sphericalAlbedo(ch.g, y) - ch.diffuseAlbedo();
+    const double h = medium.voxelSize();
+    // Sun light that entered returns as a half-space of this snow returns it, with the sun lobe's albedo and
+    // shape; sky light isotropically (a non-absorbing half-space returns uniform sky light so; absorption takes
+    // the escape function's shape from it, by reciprocity with ART's plane albedo). What the diffusion says
+    // beyond that (absorbed sky light, light gone elsewhere, light from deep inside, from the ground or from
+    // neighbouring snow) and what it misses take the escape function's u(mu) = 3/7 + 6/7 mu. So:
+    // leaving = sum returned (shape - u) + (out + missed) u. The returned part (W, moments of a linear form)
+    // through a surface of normal n taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's; with
+    // `peak` (a smooth patch, or each air face of a sharp edge), the suns' light returned sharply forwards leaves as
+    // the peaked lobe instead (SunPeak: at grazing sun the lit rim seen against the sun, bench/bake_halfspace.py),
+    // added to `peak` (radiance), the rest linear:
+    auto returnedThrough = [&](std::size_t i, const glm::dvec3 &n, double skyShare, const auto &beamShare,
+                               SurfaceLight *peak) {
+        const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
+        const double sky = skyShare * sys.skyIn[i];
+        double r0 = sky * (1.0 - 3.0 / 7.0), missed = sky * diffuseMissed;  // W
+        glm::dvec3 r1 = -sky * escape1;
+        // A smooth patch's lopsided diffuse light (sky, occluders' reflections and other snow's light, each from
+        // where it arrives) returns as its beam part would, in the sun lobe's shape (a + b n.w + c t.w against the
+        // even 1: the same exitance, a + 2b/3 = 1). Not a sharp edge's faces: the moment is over the patch
+        // normal's hemisphere, and an even sky would lean 45 degrees off each face.
+        const glm::dvec3 snowE = snow.light ? glm::dvec3((*snow.light)[i]) : glm::dvec3(0.0);
+        const glm::dvec3 E = glm::dvec3(light.skyOnSurface[i]) + snowE;
+        const double grey = (E.x + E.y + E.z) / 3.0;
+        if (!topo.patches[i].sharp && grey > 0.0) {
+            const glm::dvec3 snowAim = snow.aim ? glm::dvec3((*snow.aim)[i]) : glm::dvec3(0.0);
+            const SkyBeam beam = skyBeamPart((glm::dvec3(light.skyAim[i]) + snowAim) / grey, n);
+            if (beam.share > 0.0) {
+                const SunLobe lobe = sunLobe(ch.g, std::clamp(glm::dot(beam.towards, n), 0.05, 1.0), y);
+                const double returned = beam.share * lobe.albedo * sky;
+                r0 += returned * (lobe.a - 1.0);
+                r1 += returned * (lobe.b * n + lobe.c * travelAlong(-beam.towards, n));
+            }
+        }
+        double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0;  // the beams' part
+        glm::dvec3 sun1(0.0);
+        // The half-space of the snow beneath the patch: a voxel's resistance and the node's below the surface
+        // (schemeBeamAlbedo's d, L). A smooth surface's fringe voxel holds less snow where the surface crosses it
+        // (antialiasing), its ramp: the snow's own density for d, not the fringe's (with the fringe's ball_grey
+        // was 12.6 % where it is 11.5 %, docs/bake.md).
+        const double voxelR = 3.0 * h * ch.sigmaTr(densityBeneath(topo, i, n)), nodeR = 3.0 * ch.sigmaTr(patchRampMass(topo, i));
+        for (std::size_t s = 0; s < light.beams.size(); ++s) {
+            const double P = sys.sunIn[s][i] * beamShare(s);
+            if (P <= 0.0) continue;
+            const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
+            const double mu0 = std::clamp(-glm::dot(d, n), 0.05, 1.0);
+            const SunLobe lobe = sunLobe(ch.g, mu0, y);
+            const glm::dvec3 t = travelAlong(d, n);
+            const double returned = P * lobe.albedo;
+            sunReturned += returned;
+            sunMissed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, acrossSnowFaces(topo, i, -d, h)));
+            if (!peak) {
+                sun0 += returned * (lobe.a - 3.0 / 7.0);
+                sun1 += returned * (lobe.b * n + lobe.c * t - escape1);
+                continue;
+            }
+            const SunPeak split = sunPeak(ch.g, mu0, y, lobe);
+            sun0 += returned * ((1.0 - split.share) * split.a() - 3.0 / 7.0);
+            sun1 += returned * ((1.0 - split.share) * (split.b * n + split.c * t) - escape1);
+            const double p0 = split.mean * returned / (kPi * topo.patches[i].area);
+            const glm::dvec3 m = std::cos(split.elevation) * t + std::sin(split.elevation) * n;
+            peak->peak0[c] += float(p0);
+            peak->peak1 += glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part
+        }
+        return ReturnedLight{r0 + missed * 3.0 / 7.0, r1 + missed * escape1, sun0 + sunMissed * 3.0 / 7.0,
+                             sun1 + sunMissed * escape1, sun0, sun1, sunMissed, sunReturned};
+    };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface()) continue;
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+            const SurfacePatch &patch = topo.patches[i];
+            const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
+            SurfaceLight &surface = out.surface(i);
+            const ReturnedLight r = returnedThrough(i, patch.normal, 1.0, [](std::size_t) { return 1.0; },
+                                                    patch.sharp ? nullptr : &surface);
+            // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
+            // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
+            // through the smooth surface or, at a sharp edge, through each air face.
+            const double k = crossingAnisotropy(ch.g);
+            double crossing = 0.0;
+            glm::dvec3 axis(0.0);
+            for (std::size_t s = 0; s < light.beams.size(); ++s) {
+                const double beam = light.beams[s].atVoxel[i][c];
+                const glm::dvec3 d = -towardsBeam(scene, s, centre);
+                for (int f = 0; f < 6 && beam > 0.0; ++f) {
+                    const double cos = glm::dot(d, patch.sharp ? faceNormal(f) : patch.normal);
+                    if (patch.share[f] <= 0.0f || cos <= 0.0) continue;
+                    const double l0 = beam * cos * patch.area * patch.share[f] / (kPi * (1.0 + 3.0 * k * cos));
+                    crossing += l0, axis += l0 * d;
+                }
+            }
+            // Light flowing along the surface leaves leaning the way it flows: the diffusion's radiance
+            // (phi + 3 F . w) / 4 pi holds the tangential flux F_t = -D grad_t phi, which the escape function (the
+            // flux across the surface) does not; added to the exit form relative to phi, 3 F_t / phi, it moves no
+            // exitance (t . w integrates to zero over the hemisphere). Past a ball's terminator the fluence falls
+            // away from the lit side, and on its sunward face away from the point under the sun (docs/bake.md,
+            // Accuracy: the terminator). At most 3/7, so the form stays positive at grazing exit.
+            glm::dvec3 drift(0.0);
+            if (!patch.sharp && phi[i] > 0.0) {
+                const glm::dvec3 g = surfaceGradient(topo, phi, i, h);
+                const double sigmaTr = ch.sigmaTr(densityBeneath(topo, i, patch.normal));
+                drift = -(g - glm::dot(g, patch.normal) * patch.normal) / (sigmaTr * phi[i]);
+                const double length = glm::length(drift);
+                if (length > 3.0 / 7.0) drift *= 3.0 / 7.0 / length;
+            }
+            surface.crossing[c] = float(crossing);
+            if (crossing > 0.0) surface.crossingAxis = glm::vec3(axis / crossing);
+            if (patch.sharp) {
+                surface.returned.l0[c] = float(r.sky0 + r.sun0);
+                surface.returned.l1[c] = glm::vec3(r.sky1 + r.sun1 + leaving * drift);
+                surface.leaving[c] = float(leaving);
+                continue;
+            }
+            // The suns' light the half-space returns at the patch it entered leaves downstream (sunLeavingDownstream):
+            // what escaped at once and what the diffusion misses, with their share of the sun lobe's shape (the
+            // rest of the shape goes with the light the diffusion carries from the node). The peaked lobe stays:
+            // single scattering at grazing sun leaves within a mean free path, a small part of 1/sigma_tr.
+            const double atOnce = sys.sunEscaped[i];
+            const double moved = r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
+            surface.returned.l0[c] = float(r.sky0 + (1.0 - moved) * r.sunShape0);
+            surface.returned.l1[c] = glm::vec3(r.sky1 + (1.0 - moved) * r.sunShape1 + leaving * drift);
+            surface.leaving[c] = float(leaving);
+            SunReturned &sunHere = sun.surface(i);
+            sunHere.l0 = float(moved * r.sunShape0 + r.sunMissed * 3.0 / 7.0);
+            sunHere.l1 = glm::vec3(moved * r.sunShape1 + r.sunMissed * 6.0 / 7.0 * patch.normal);
+            sunHere.atOnce = float(atOnce);
+            // The same kernel for each channel, found again per channel (a loop over the beams): held through the
+            // three solves it would add 16 bytes per surface voxel at the solves' peak (docs/bake.md, Memory).
+            downstreamKernel(scene, light, sys, kernelChannel, topo, i, sunHere);
+        }
+    });
+    // Sharp edges: each air face's own exit radiance (the light returned through it, the exitance of the
+    // surface voxels facing its way, other edge voxels left out as in surfaceRadiance), and the one lobe
+    // fitted to what cameras see of them (edgeLobe). A face the sun enters at grazing incidence returns it
+    // sharply forwards as a smooth surface does: its SunPeak joins the voxel's peaked lobe (a small lump's edges
+    // are its rim against the sun, docs/bake.md Method 5: lump_angles_bench's view 27 degrees off the sun's travel
+    // -39.5 -> -16.0 %).
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        std::vector<FaceExit> faces;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const SurfacePatch &patch = topo.patches[i];
+            if (!patch.sharp) continue;
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+            faces.clear();
+            for (int f = 0; f < 6; ++f) {
+                if (patch.share[f] <= 0.0f) continue;
+                const glm::dvec3 n = faceNormal(f);
+                const ReturnedLight r = returnedThrough(i, n, patch.share[f], [&](std::size_t s) {
+                    const glm::dvec3 w = towardsBeam(scene, s, centre);  // the beam entered each face by its cosine
+                    double total = 0.0;
+                    for (int g = 0; g < 6; ++g)
+                        if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
+                    return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
+                }, &out.surface(i));
+                const auto [leaving, area] =
+                    neighbourhoodOutflow<double>(topo, i, n, [&](std::size_t j) { return double(out[j].leaving[c]); });
+                const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
+                faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
+                                 (r.sky1 + r.sun1) / own + exitance * 6.0 / 7.0 / kPi * n});
+            }
+            const SourceLobe lobe = edgeLobe(faces);
+            out.surface(i).returned.l0[c] = float(lobe.l0);
+            out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);
+        }
+    });
+    sunLeavingDownstream(topo, sun, c, h, out);
+}
+
+}  // namespace firn::bake

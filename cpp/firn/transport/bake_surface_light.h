@@ -1,0 +1,73 @@
+#pragma once
+
+// The light leaving the snow's surface voxels, from a channel's solve.
+
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "firn/transport/bake_diffusion_system.h"
+#include "firn/transport/incident_light.h"
+#include "firn/transport/scene.h"
+#include "firn/transport/snow_topology.h"
+#include "firn/transport/source_lobe.h"
+
+namespace firn::bake {
+
+// What the solve yields for surface voxels, per channel: the light leaving through their patch, as power
+// times angular shape (W; radiance after dividing by pi A).
+struct SurfaceLight {
+    // What returns of the light that entered there, over and above the escape function's share of it
+    // (sharp: it follows shadows; on a sharp edge, SurfacePatch::sharp, the voxel's exit lobe instead, its
+    // faces' light fitted already) ...
+    BroadLobe returned;
+    // ... the beams' light that crosses the snow and leaves through the patch on its far side: a lobe of
+    // k = g (l0 in W per channel) about the mean of the beams' directions (per voxel; length <= 1) ...
+    glm::vec3 crossing{0.0f}, crossingAxis{0.0f};
+    // ... the suns' light returned sharply forwards (smooth patches and sharp edges' faces; SunPeak), the peaked
+    // lobe's p0 per channel and grey first moment p1 (radiance, source_lobe.h) ...
+    glm::vec3 peak0{0.0f}, peak1{0.0f};
+    // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
+    // but spread unevenly over a voxel staircase; the suns' light that escaped at once left out: it leaves
+    // downstream, SunReturned).
+    glm::vec3 leaving{0.0f};
+};
+
+// The light gathered from other snow onto the surface patches (W/m^2, per channel) and its first moment over the
+// directions it arrives from (grey, as IncidentLight::skyAim); none before the first gathering.
+struct SnowLight {
+    const SurfaceValues<glm::vec3> *light = nullptr, *aim = nullptr;
+};
+
+// The light leaving voxel i's neighbourhood towards n (leavingOf(j), W) and its area (m^2): the surface voxels
+// of its 3^3 block weighted by the cosine between n and their normals, voxels on a sharp edge other than i left
+// out (surfaceRadiance says why).
+template <typename T, typename LeavingOf>
+std::pair<T, double> neighbourhoodOutflow(const SnowTopology &topo, std::size_t i, const glm::dvec3 &n,
+                                          const LeavingOf &leavingOf) {
+    T leaving(0.0);
+    double area = 0.0;
+    for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
+        const std::uint32_t j = topo.neighbourhood[k];
+        const SurfacePatch &other = topo.patches[j];
+        const double w = other.sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, other.normal));
+        leaving += w * leavingOf(j);
+        area += w * other.area;
+    }
+    return {leaving, area};
+}
+
+// The density of the snow beneath surface voxel i's patch of normal n.
+double densityBeneath(const SnowTopology &topo, std::size_t i, const glm::dvec3 &n);
+
+// The unit direction along a surface of normal n in which light travelling along d moves.
+glm::dvec3 travelAlong(const glm::dvec3 &d, const glm::dvec3 &n);
+
+// Channel c's light leaving each surface voxel (`out`), from its system and fluence phi.
+void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
+                  const ChannelSystem &sys, const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out);
+
+}  // namespace firn::bake

@@ -1,0 +1,23 @@
+#pragma once
+
+// Which voxels of the snow are traced by Monte Carlo rather than diffused.
+
+#include <vector>
+
+#include <openvdb/openvdb.h>
+
+#include "firn/transport/medium.h"
+#include "firn/transport/snow_topology.h"
+
+namespace firn::bake {
+
+// The voxels traced rather than diffused: `thin`, and the other voxels of transport-thin pieces (`wholePieces`:
+// traced too where light tracing takes them, bakeScattering).
+struct TracedSnow {
+    std::vector<openvdb::Coord> thin, wholePieces;
+};
+
+// The thin voxels and transport-thin pieces of the medium's snow (bake_thin_snow.cpp: what each is, measured).
+TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo);
+
+}  // namespace firn::bake

@@ -1,0 +1,158 @@
+#include "firn/transport/bake_traced_voxels.h"
+
+#include <algorithm>
+#include <atomic>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "firn/transport/light_tracing.h"
+#include "firn/transport/monte_carlo.h"
+#include "firn/transport/traced_source.h"
+
+namespace firn::bake {
+
+namespace {
+
+// Paths per traced voxel: the preset's, fewer when the paths would cost more than kMaxTracedSteps in all
+// (64 at least), or 0 (none traced: the diffusion takes them) when even 64 would. The cost per path is measured
+// on a few voxels first: thin voxels in a large cloud of thin snow still see light that scattered thousands of
+// times, lumps of 20 optical depths per voxel take thousands of tracking steps per path (their shadow rays
+// included), and a bake must not grow into a hang. A path costs its tracking steps plus kStepsPerPath for
+// its start (the gathering's fixed cost: 1.5 us per path on ball_half_tau, at 16 M steps per processor
+// second, as spray_dense's long paths). The budget: a ski spray's frame (774 traced voxels of lumps, 2585
+// steps per path; docs/spray.md) takes 99 paths per voxel, 13.0 % mean error per block (24.9 %, worst
+// +210 %, with 25 paths per voxel: hence 64 at least; 11.3 % with 256). Where all the paths cost little, more
+// of them (up to the preset's cheapTracedSamples, while they cost at most kCheapTracedSteps): a small object's
+// few traced voxels show their estimates' noise, and 1024 paths each cost it well under a processor second
+// (bench/bake_suite.py --seeds 4 at FINAL, 256 -> 1024 paths: ball_thin 4.6 -> 4.0 %, ball_thin_forward 9.8 ->
+// 7.0 %, ball_rgb 8.8 -> 8.0 %, ball_forward 16.4 -> 15.1 %, spray_lumps 12.5 -> 10.2 %, the tracing 0.05 -> 0.2,
+// 0.2 -> 0.9 processor s; spray_dense and ball_half_tau, over the budget at 256 already, as they were). Short
+// paths (at most kShortPathSteps: thin snow in a small object, 34-42 steps on ball_half_tau and a light dusting)
+// may cost up to kShortTracedSteps: a light dusting's 1728 voxels at 1024 paths for the fit by direction
+// (tracedSourceByDirection; its estimates at 256 paths are too noisy; the trace 0.56 -> 2.47 processor s), and
+// ball_half_tau's 2512 at g 0.3 gain too (1.9 -> 1.5 %, the trace 1.04 -> 2.23 s). Long ones keep kCheapTracedSteps: the car's 3 traced voxels in 2.7 M voxels of
+// thick snow (thousands of steps per path) took 0.84 -> 2.94 processor s at kShortTracedSteps, for three voxels.
+// At most this many paths in all: beyond it, fewer per voxel (a bake must not grow into a hang).
+constexpr double kMaxTracedPaths = 2e7;
+constexpr double kStepsPerPath = 20.0;
+constexpr double kCheapTracedSteps = 2e7;                       // about 1.2 processor seconds
+constexpr double kShortPathSteps = 1000.0, kShortTracedSteps = 8e7;  // about 5 processor seconds
+// Forward scattering snow (g >= kMinLightTracedG) is light traced at what gathering its voxels would cost
+// (kLightTracedShare of the pilot's steps: light tracing's sums cost more per counted step, 1.3-1.6x in processor
+// seconds at the same count) where that affords light tracing's least photons (planLightTracing), else gathered:
+// a gathered path's next-event estimates weigh the sun by Henyey-Greenstein, which at g 0.85 spans 2000x as the
+// path turns, while photons scatter by sampling it and add at every collision, shared by the voxels they cross.
+// bench/bake_suite.py --seeds 4, mean error per block and the whole bake's processor seconds (docs/benchmarks.md,
+// trace-noise): ball_thin_forward 6.6 -> 5.5 % (0.24 -> 0.14 s), spray_lumps 10.0 -> 7.6 % (2.45 -> 2.31 s),
+// ball_issue 10.5 -> 10.4 % (0.63 -> 0.49 s), slab_thin_forward 10.0 -> 10.0 % (2.8 -> 2.8-3.2 s, the render's
+// spread across seeds 8.7 -> 4.2 %, worst block +73 -> +41 %); at g 0.5 ball_thin read 4.0 -> 4.2 % (the gate).
+// Not where a voxel is thicker than kMaxLightTracedTau: spray_dense (voxels up to optical depth 20, gathered where
+// cameras see them) light traced read -17 % against -6 % seen against the light, and with only its voxels of
+// optical depth 2 or less light traced +7.2 % against +4.9 % across it; spray_lumps' (up to 6) gained nothing from
+// being gathered where seen (visible-source: 10.1 -> 10.0 %).
+constexpr double kMinLightTracedG = 0.8, kLightTracedShare = 0.75, kMaxLightTracedTau = 10.0;
+
+}  // namespace
+
+GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
+    constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
+    if (voxels.empty()) return {};
+    const MonteCarloReference reference(scene);
+    Medium::Accessor density = scene.medium->accessor();
+    const double budget = kMaxTracedSteps / (double(voxels.size()) * kMinSamples);  // per path, at the least
+    double steps = 0.0, last = 0.0;  // last: voxel v's pilot steps (fewer voxels than pilots repeat theirs)
+    int paths = 0;
+    for (int k = 0; k < kPilotVoxels; ++k) {
+        const std::size_t v = voxels.size() * k / kPilotVoxels;
+        if (k == 0 || v != voxels.size() * (k - 1) / kPilotVoxels) {
+            // As traceSources gathers it: where cameras see it, those points' draws counted too.
+            const bool visible = gatheredWhereSeen(*scene.medium, density, voxels[v]);
+            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v, true, visible).steps) +
+                   kStepsPerPath * kPilotSamples;
+        }
+        steps += last;
+        paths += kPilotSamples;
+        if (steps > budget * kPilotVoxels * kPilotSamples) return {};  // too costly already
+    }
+    const double perPath = steps / paths;
+    const int affordable = int(std::min(kMaxTracedPaths, kMaxTracedSteps / perPath) / double(voxels.size()));
+    if (affordable < kMinSamples) return {};
+    int samples = std::min(affordable, preset.tracedSamples);
+    const double cheap = perPath <= kShortPathSteps ? kShortTracedSteps : kCheapTracedSteps;
+    while (2 * samples <= preset.cheapTracedSamples && perPath * 2.0 * samples * double(voxels.size()) <= cheap)
+        samples *= 2;
+    return {samples, perPath * samples * double(voxels.size())};
+}
+
+namespace {
+
+// The traced voxels' sources from their estimates (`estimate(v)`: voxel v's, called in parallel, gathered by
+// `reference`).
+template <class Estimate>
+MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::vector<openvdb::Coord> &voxels,
+                              const Estimate &estimate, const SubProgress &progress) {
+    MonteCarloVoxels out;
+    out.source.resize(voxels.size());
+    const Medium &medium = *reference.scene().medium;
+    const double g = medium.optics().g;
+    const SourceDirections &directions = reference.directions();
+    std::atomic<std::size_t> done{0};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4), [&](const auto &range) {
+        progress.throwIfCancelled();
+        Medium::Accessor density = medium.accessor();
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t v = range.begin(); v != range.end(); ++v) {
+            out.source[v] = fittedByDirection(medium, density, voxels[v])
+                                ? tracedSourceByDirection(estimate(v), directions, visibilityFrom(medium, marcher, voxels[v], directions), g)
+                                : tracedSourceByMoments(estimate(v), g);
+        }
+        progress.report(double(done += range.size()) / voxels.size());
+    });
+    openvdb::tree::ValueAccessor<openvdb::Int32Tree> index(*out.index);
+    for (std::size_t v = 0; v < voxels.size(); ++v) index.setValue(voxels[v], std::int32_t(v)), out.box.expand(voxels[v]);
+    return out;
+}
+
+}  // namespace
+
+// The source function of the given voxels by brute force (MonteCarloReference::sourceIn), `samples` each.
+MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
+                              std::uint64_t seed, const SubProgress &progress) {
+    const MonteCarloReference reference(scene);
+    const Medium &medium = *scene.medium;
+    return tracedVoxels(reference, voxels, [&](std::size_t v) {
+            Medium::Accessor density = medium.accessor();
+            return reference.sourceIn(voxels[v], samples, seed, v, true, gatheredWhereSeen(medium, density, voxels[v]));
+        }, progress);
+}
+
+// The voxels whose gathering costs more than the budget (planGathering: no paths), by light tracing within it
+// (light_tracing.h); none where even that costs too much (a cloud of lumps inside thick snow: photons
+// scatter thousands of times there), or with lamps (their emission is not sampled) or occluders (planLightTracing).
+MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
+                                   const SubProgress &progress, BakeStats &stats, double budget) {
+    const MonteCarloReference reference(scene);
+    const LightTracingPlan plan = planLightTracing(reference, voxels, budget, seed);
+    if (plan.photons == 0) return MonteCarloVoxels{};
+    const std::vector<SourceEstimate> estimates = lightTracedSources(reference, voxels, plan, seed, progress);
+    stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size(), stats.lightTracingBytes = plan.sumsBytes;
+    // The fit alone left: the photons have run the progress to its end.
+    return tracedVoxels(reference, voxels, [&](std::size_t v) { return estimates[v]; }, SubProgress(nullptr, 0.0, 1.0));
+}
+
+// Forward scattering snow at what gathering it costs (kMinLightTracedG): light traced within kLightTracedShare of
+// the gathering's steps, unless some voxel is thicker than kMaxLightTracedTau (light tracing tallies a voxel's
+// mean, not what cameras see of a thick one). None (empty) there, for broader scattering, without a gathering plan,
+// or where light tracing is not affordable so.
+MonteCarloVoxels lightTracedAtGatheringCost(const Scene &scene, const std::vector<openvdb::Coord> &voxels,
+                                            const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
+                                            BakeStats &stats) {
+    if (plan.paths <= 0 || scene.medium->optics().g < kMinLightTracedG) return {};
+    Medium::Accessor density = scene.medium->accessor();
+    for (const openvdb::Coord &c : voxels)
+        if (voxelOpticalDepth(*scene.medium, density, c) > kMaxLightTracedTau) return {};
+    return lightTraceSources(scene, voxels, seed, progress, stats, kLightTracedShare * plan.steps);
+}
+
+}  // namespace firn::bake

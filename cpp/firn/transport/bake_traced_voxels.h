@@ -1,0 +1,66 @@
+#pragma once
+
+// The source function of the traced voxels (bake_thin_snow.h) by Monte Carlo: gathered or light traced.
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <openvdb/openvdb.h>
+
+#include "firn/transport/bake.h"
+#include "firn/transport/bake_preset.h"
+#include "firn/transport/scene.h"
+#include "firn/transport/source_lobe.h"
+#include "firn/util/progress.h"
+
+namespace firn::bake {
+
+// Voxels whose source function comes from Monte Carlo (snow too thin for the diffusion), not from the solve.
+struct MonteCarloVoxels {
+    openvdb::Int32Tree::Ptr index = std::make_shared<openvdb::Int32Tree>(-1);  // voxel -> source, -1 elsewhere
+    openvdb::CoordBBox box;  // around the voxels (empty: none)
+    std::vector<Source> source;
+};
+
+// Voxel -> MonteCarloVoxels' source, -1 elsewhere; one per thread. Outside the traced voxels' box without a tree
+// lookup: a lookup where the tree holds no node searches its root every time (the car's 3 traced voxels, looked
+// up for each of millions of voxels several times a bake).
+class TracedIndex {
+  public:
+    explicit TracedIndex(const MonteCarloVoxels &traced) : box_(traced.box), index_(*traced.index) {}
+    std::int32_t getValue(const openvdb::Coord &c) { return box_.isInside(c) ? index_.getValue(c) : -1; }
+
+  private:
+    openvdb::CoordBBox box_;
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_;
+};
+
+// At most this many tracking steps for the traced voxels (about 12 processor seconds; planGathering says why),
+// and a quarter of it for transport-thin pieces light traced whole (thinVoxels).
+constexpr double kMaxTracedSteps = 2e8;
+constexpr double kWholePieceTracedSteps = kMaxTracedSteps / 4.0;
+
+// How the traced voxels are gathered: paths per voxel within the budget (0: over it) and what they cost.
+struct GatheringPlan {
+    int paths = 0;       // per voxel; 0: none (over the budget)
+    double steps = 0.0;  // what they all cost, in tracking steps (the pilot's)
+};
+// The paths per voxel to gather `voxels` with, their cost per path measured on a few of them first.
+GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
+                            std::uint64_t seed);
+
+// The voxels' sources gathered by brute force, `samples` paths each.
+MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
+                              std::uint64_t seed, const SubProgress &progress);
+
+// The voxels' sources light traced within `budget` tracking steps; none (empty) where that is not affordable.
+MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
+                                   const SubProgress &progress, BakeStats &stats, double budget = kMaxTracedSteps);
+
+// Forward scattering snow light traced at what gathering it costs; none (empty) where that does not apply.
+MonteCarloVoxels lightTracedAtGatheringCost(const Scene &scene, const std::vector<openvdb::Coord> &voxels,
+                                            const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
+                                            BakeStats &stats);
+
+}  // namespace firn::bake
