@@ -31,7 +31,7 @@ namespace firn {
 
 // The bake's parts (transport/bake_*).
 using bake::ChannelStorage, bake::ChannelSystem, bake::GatheringPlan, bake::GridValues, bake::MonteCarloVoxels,
-    bake::Preset, bake::SnowLight, bake::SourceValues, bake::SurfaceLight, bake::TracedSnow;
+    bake::Preset, bake::SnowIrradiance, bake::SnowLight, bake::SourceValues, bake::SurfaceLight, bake::TracedSnow;
 using bake::assemble, bake::gridValues, bake::lightTracedAtGatheringCost, bake::lightTraceSources, bake::makeGrids,
     bake::planGathering, bake::referenceSurface, bake::snowIrradiance, bake::sourceFunction, bake::sourceGrid,
     bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
@@ -55,7 +55,8 @@ Preset resolve(const BakeSettings &s) {
     if (s.sunSamples > kMaxSunSamples || s.referenceSamples > kMaxReferenceSamples)
         throw InvalidArgument("bake settings: at most " + std::to_string(kMaxSunSamples) + " sun samples and " +
                               std::to_string(kMaxReferenceSamples) + " reference samples");
-    if (s.sourceScale < 0 || s.sourceScale > 4) throw InvalidArgument("bake settings: source scale must be 0 (auto) to 4");
+    if (s.sourceScale < 0 || s.sourceScale > 4)
+        throw InvalidArgument("bake settings: source scale must be 0 (auto) to 4");
     if (s.skySamples) p.skySamples = s.skySamples;
     if (s.sunSamples) p.sunSamples = s.sunSamples;
     if (s.tolerance > 0.0) p.tolerance = s.tolerance;
@@ -117,7 +118,8 @@ namespace {
 int sourceScaleFor(const Medium &medium, const BakeSettings &settings) {
     if (settings.sourceScale > 0) return settings.sourceScale;
     const openvdb::Coord extent = medium.density().evalActiveVoxelBoundingBox().dim();
-    const double boxVoxels = double(extent.x() + 6) * double(extent.y() + 6) * double(extent.z() + 6);  // + extension, ring
+    const double boxVoxels =
+        double(extent.x() + 6) * double(extent.y() + 6) * double(extent.z() + 6);  // + extension, ring
     int scale = 1;
     while (scale < 4 && BakedGrids::kCount * 16.0 * boxVoxels / (scale * scale * scale) > kSourceBudgetBytes) ++scale;
     return scale;
@@ -161,8 +163,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
     const double solved = reference ? kSolvedProgressReference : kSolvedProgress;
     std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
     for (auto &channel : phi) channel.assign(topo.size(), 0.0);
-    SurfaceValues<glm::vec3> fromSnow;  // W/m^2 gathered from other snow onto surface patches (after the first pass)
-    SurfaceValues<glm::vec3> fromSnowAim;  // its first moment over the directions it arrives from (grey)
+    SnowIrradiance fromSnow;  // gathered from other snow onto surface patches (after the first pass)
     SurfaceValues<glm::vec3> before, older;  // the two gathers before it (bounceTail only)
     SourceValues source;
     for (int pass = 0; pass < passes; ++pass) {
@@ -174,12 +175,13 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             p.report(begin, "Gathering light between snow surfaces");
             {
                 const GridValues values = gridValues(scene, topo, source, traced, preset, settings, true);
-                if (bounceTail) older = std::move(before), before = std::move(fromSnow);
+                if (bounceTail) older = std::move(before), before = std::move(fromSnow.irradiance);
                 fromSnow = snowIrradiance(scene, topo, light, source, traced, values, SkyRays(preset.skySamples),
-                                          settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, gathered), fromSnowAim);
-                if (preset.skyOverNeighbours) averageOverNeighbours(topo, fromSnow), averageOverNeighbours(topo, fromSnowAim);
+                                          settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, gathered));
+                if (preset.skyOverNeighbours)
+                    averageOverNeighbours(topo, fromSnow.irradiance), averageOverNeighbours(topo, fromSnow.aim);
                 if (bounceTail && pass + 1 == passes && pass > 1) {
-                    addBounceTail(topo, pass > 2 ? &older : nullptr, before, fromSnow);
+                    addBounceTail(topo, pass > 2 ? &older : nullptr, before, fromSnow.irradiance);
                     older = before = SurfaceValues<glm::vec3>();
                 }
                 source = SourceValues();  // freed (= {} would keep its vectors' capacity)
@@ -194,10 +196,11 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             ChannelStorage storage;
             MultigridSolver::Workspace workspace;
             for (int c = 0; c < 3; ++c) {
-                const SubProgress sub(&p, gathered + (end - gathered) * c / 3.0, gathered + (end - gathered) * (c + 1) / 3.0);
+                const SubProgress sub(&p, gathered + (end - gathered) * c / 3.0,
+                                      gathered + (end - gathered) * (c + 1) / 3.0);
                 p.report(gathered + (end - gathered) * c / 3.0, "Solving multiple scattering");
                 ChannelSystem system = assemble(scene, topo, light, c, sub, std::move(storage));
-                if (pass > 0) system.addDiffuse(fromSnow, c);
+                if (pass > 0) system.addDiffuse(fromSnow.irradiance, c);
                 system.releaseDiffuseTerms();
                 if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
                 if (topo.size() > 0) {
@@ -214,14 +217,15 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                         storage.b = std::move(workspace.spare);
                     }
                 }
-                surfaceLight(scene, topo, light, pass > 0 ? SnowLight{&fromSnow, &fromSnowAim} : SnowLight{}, system, phi[c],
-                             c, leaving);
+                const SnowLight snow = pass > 0 ? SnowLight{&fromSnow.irradiance, &fromSnow.aim} : SnowLight{};
+                surfaceLight(scene, topo, light, snow, system, phi[c], c, leaving);
             }
         }
         SurfaceValues<Source> surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
         if (reference && pass + 1 == passes) {
             p.report(solved, "Path tracing the surface (reference)");
-            referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface, SubProgress(&p, solved, 0.95));
+            referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface,
+                             SubProgress(&p, solved, 0.95));
         }
         source = sourceFunction(scene, topo, light, phi, surface, traced);
         clock.lap(&BakeStats::Phases::solve);
@@ -282,7 +286,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 if (!snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole, else as before
                     std::vector<openvdb::Coord> whole = thin;
                     whole.insert(whole.end(), snow.wholePieces.begin(), snow.wholePieces.end());
-                    traced = lightTraceSources(scene, whole, settings.seed ^ 0x7EACEull, progress, local, kWholePieceTracedSteps);
+                    traced = lightTraceSources(scene, whole, settings.seed ^ 0x7EACEull, progress, local,
+                                               kWholePieceTracedSteps);
                     if (!traced.source.empty()) thin = std::move(whole);
                 }
                 if (traced.source.empty()) {

@@ -27,7 +27,8 @@ struct BoundaryLink {
         : beta(beta_), Rb(Rb_), L(L_), sh(beta_ * L_ * sinhOverX(beta_ * L_)), ch(std::sqrt(1.0 + sh * sh)),
           delta(Rb_ * beta_ * ch + sh) {}
     double conductance() const { return beta / delta; }  // flux out through the boundary per node fluence
-    double mass() const { return beta * (Rb * beta * sh + sh * sh / (ch + 1.0)) / delta; }  // cosh - 1 = sinh^2 / (cosh + 1)
+    // cosh - 1 = sinh^2 / (cosh + 1)
+    double mass() const { return beta * (Rb * beta * sh + sh * sh / (ch + 1.0)) / delta; }
     // A diffuse source at depth R (in resistance) scattering unit power: share reaching the node, and
     // share leaving through the boundary at once.
     double toNode(double R) const { return (Rb * beta * std::cosh(beta * R) + std::sinh(beta * R)) / delta; }
@@ -54,9 +55,11 @@ double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, doubl
     const double beta = std::max(ch.beta(), 1e-9);
     const BoundaryLink top(beta, 2.0, L);
     const auto escaping = [&](double R) { return std::exp(-beta * R) / (1.0 + 2.0 * beta); };
-    const double B0 = std::exp(-L / (3.0 * mu0)), halfPass = std::exp(-d / (6.0 * mu0));  // beam at the top node; sqrt(q)
+    const double B0 = std::exp(-L / (3.0 * mu0)),
+                 halfPass = std::exp(-d / (6.0 * mu0));  // beam at the top node; sqrt(q)
     const double R = beamScatteringDepth(mu0, L), side = across * B0;
-    const double topReturn = (mu0 * (top.toBoundary(R) + top.toNode(R) * escaping(L)) + side * escaping(L)) / (mu0 + side);
+    const double topReturn =
+        (mu0 * (top.toBoundary(R) + top.toNode(R) * escaping(L)) + side * escaping(L)) / (mu0 + side);
     // (1 - q) / (1 - q exp(-beta d)), q = exp(-d / (3 mu0)), exact where the snow is thin
     const double series = std::expm1(-d / (3.0 * mu0)) / std::expm1(-d / (3.0 * mu0) - beta * d);
     return ch.reducedAlbedo() * ((1.0 - B0 * halfPass) * topReturn + B0 * halfPass * series * escaping(L + d));
@@ -135,7 +138,8 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             // Sun beams: the power each face lets in or out; the difference is scattered in this voxel.
             std::array<double, 6> groundLight{};  // W/m^2 occluders under the snow send back in
             for (int f = 0; f < 6; ++f)
-                if (boundary[f] && albedo[f] > 0.0) groundLight[f] = albedo[f] * light.skyUnderSnow[SnowTopology::faceIndex(topo.link[i][f])][c];
+                if (boundary[f] && albedo[f] > 0.0)
+                    groundLight[f] = albedo[f] * light.skyUnderSnow[SnowTopology::faceIndex(topo.link[i][f])][c];
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
             for (std::size_t s = 0; s < light.beams.size(); ++s) {
                 const IncidentLight::Beam &beam = light.beams[s];
@@ -162,7 +166,8 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                         flow[f] = h2 * mu * std::sqrt(Bv * double(beam.atVoxel[link][c]));
                     } else if (topo.faces[SnowTopology::faceIndex(link)].occluder && mu < 0.0) {
                         // The beam reaches the surface under the snow.
-                        const double B = Bv * std::exp(-sigmaTr * topo.faces[SnowTopology::faceIndex(link)].distance / std::max(-mu, 0.05));
+                        const double B = Bv * std::exp(-sigmaTr * topo.faces[SnowTopology::faceIndex(link)].distance /
+                                                       std::max(-mu, 0.05));
                         flow[f] = h2 * mu * B;
                         groundLight[f] += albedo[f] * -mu * B;
                     }

@@ -32,7 +32,8 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
             for (int dz = -1; dz <= 1; ++dz) {
                 const std::int32_t j = index.getValue(c.offsetBy(-dx, -dy, -dz));
                 if (j < 0 || !topo.patches[j].isSurface()) continue;
-                const double w = std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
+                const double w =
+                    std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
                 const Source v = source[j];
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
@@ -83,7 +84,8 @@ bool besideSnow(Medium::Accessor &density, const openvdb::Coord &c) {
 
 // Grid k < 4 of BakedGrids' value from a broad lobe: l0, then l1's x, y and z (RGB).
 openvdb::Vec3f broadComponent(const BroadLobe &S, int k) {
-    return k == 0 ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z) : openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1]);
+    return k == 0 ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z)
+                  : openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1]);
 }
 
 }  // namespace
@@ -211,7 +213,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     const VolumeOptics &optics = medium.optics();
     GridValues out;
     out.topology = std::make_shared<openvdb::BoolTree>(medium.density().tree(), false, openvdb::TopologyCopy());
-    openvdb::tools::dilateActiveValues(*out.topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    openvdb::tools::dilateActiveValues(*out.topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
     openvdb::tree::LeafManager<const openvdb::BoolTree> leaves(*out.topology);
     using Pairs = std::vector<VoxelValues>;
 
@@ -239,7 +242,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
         for (const PeakedLobes::Peak &peak : source.peaked.peaks())
             peaked[peak.key] = glm::length(peak.peak1) > 0.0f;
         for (auto it = topo.index->cbeginValueOn(); it; ++it)
-            if (const std::int32_t j = *it; j >= 0 && peaked[j] && topo.patches[j].isSurface() && !topo.patches[j].sharp)
+            if (const std::int32_t j = *it;
+                j >= 0 && peaked[j] && topo.patches[j].isSurface() && !topo.patches[j].sharp)
                 peaks.setValueOn(it.getCoord());
         nearPeak.topologyUnion(peaks);
         openvdb::tools::dilateActiveValues(nearPeak, 2, openvdb::tools::NN_FACE_EDGE_VERTEX,
@@ -249,21 +253,25 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     // have a carried neighbour (within one of those or of a traced voxel): elsewhere neither looks at 26
     // neighbours (the car's 3 M voxels of margin and fringe took 78 M lookups for 0.8 M values).
     openvdb::BoolTree nearSurface(*topo.index, false, openvdb::TopologyCopy());
-    openvdb::tree::LeafManager<openvdb::BoolTree>(nearSurface).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
-        const auto &indexLeaf = *topo.index->probeConstLeaf(leaf.origin());
-        for (auto it = leaf.beginValueOn(); it; ++it)
-            if (!topo.patches[std::size_t(indexLeaf.getValue(it.pos()))].isSurface()) it.setValueOff();
-    });
-    openvdb::tools::dilateActiveValues(nearSurface, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    openvdb::tree::LeafManager<openvdb::BoolTree>(nearSurface).foreach(
+        [&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
+            const auto &indexLeaf = *topo.index->probeConstLeaf(leaf.origin());
+            for (auto it = leaf.beginValueOn(); it; ++it)
+                if (!topo.patches[std::size_t(indexLeaf.getValue(it.pos()))].isSurface()) it.setValueOff();
+        });
+    openvdb::tools::dilateActiveValues(nearSurface, 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
     openvdb::BoolTree nearCarried(nearSurface);
     nearCarried.topologyUnion(*traced.index);
-    openvdb::tools::dilateActiveValues(nearCarried, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    openvdb::tools::dilateActiveValues(nearCarried, 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
     // First: traced voxels, and the voxels next to surface voxels (unknowns hold their own source).
     Pairs perLeaf(leaves.leafCount());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         TracedIndex tracedIndex(traced);
-        openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak), peaksAt(peaks), nearSurfaceAt(nearSurface);
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak), peaksAt(peaks),
+            nearSurfaceAt(nearSurface);
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t l = range.begin(); l != range.end(); ++l)
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
@@ -271,7 +279,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 const std::int32_t t = tracedIndex.getValue(c);
                 Source S;
                 if (t >= 0) S = traced.source[t];
-                else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0 || !facingAverage(topo, c, index, source, S))
+                else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0 ||
+                         !facingAverage(topo, c, index, source, S))
                     continue;
                 else if (nearPeakAt.isValueOn(c))
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);

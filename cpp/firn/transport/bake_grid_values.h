@@ -83,8 +83,8 @@ struct LeafValues : VoxelValues {
 };
 
 // What the source grids hold, worked out once so that the grids can be written one at a time (a grid at
-// the density's resolution takes 12 bytes for every voxel of its leaves: the four of one lobe took ~250 bytes per unknown on
-// the car sample, docs/bake.md Memory).
+// the density's resolution takes 12 bytes for every voxel of its leaves: the four of one lobe took ~250 bytes per
+// unknown on the car sample, docs/bake.md Memory).
 // Over the snow's voxels and a margin of three: unknowns hold their source function. Outside them (the
 // density ramp and surface fringes) the radiance of the nearest surface voxels is carried out two voxels, so
 // the renderer's trilinear ramp sees a constant ratio of emission to extinction; voxels too thin for the

@@ -12,7 +12,8 @@ struct Preset {
     int referenceSamples;
     int snowBounces;  // passes gathering light between snow surfaces
     int tracedSamples;  // paths per optically thin voxel (thinVoxels)
-    int cheapTracedSamples;  // as many where all of them cost little (kCheapTracedSteps, kShortTracedSteps: planGathering)
+    // As many where all of them cost little (kCheapTracedSteps, kShortTracedSteps: planGathering).
+    int cheapTracedSamples;
     // The sky and the light gathered from other snow averaged over like-facing neighbours (averageOverNeighbours):
     // 9 rays a voxel pooled over its neighbours where 16 were its own (docs/bake.md, Performance).
     bool skyOverNeighbours;

@@ -14,12 +14,11 @@ namespace firn::bake {
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
 // of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch), read
 // from the bake's values as its grids would hold them.
-SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                                      const SourceValues &source, const MonteCarloVoxels &traced,
-                                      const GridValues &values, const SkyRays &rays, std::uint64_t seed,
-                                      const SubProgress &progress, SurfaceValues<glm::vec3> &aim) {
-    SurfaceValues<glm::vec3> out(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
-    aim = out;
+SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                              const SourceValues &source, const MonteCarloVoxels &traced, const GridValues &values,
+                              const SkyRays &rays, std::uint64_t seed, const SubProgress &progress) {
+    SnowIrradiance out{SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f)), {}};
+    out.aim = out.irradiance;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);
@@ -35,10 +34,10 @@ SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
                 const glm::dvec3 radiance = bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
-                sum += radiance, towards += (radiance.x + radiance.y + radiance.z) / 3.0 * w;
+                sum += radiance, towards += greyMoment(radiance, w);
             }
-            out.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
-            aim.surface(i) = glm::vec3(kPi * towards / double(rays.count()));
+            out.irradiance.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
+            out.aim.surface(i) = glm::vec3(kPi * towards / double(rays.count()));
         }
     });
     return out;

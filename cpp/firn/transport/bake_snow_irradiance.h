@@ -16,10 +16,15 @@
 
 namespace firn::bake {
 
-// W/m^2 onto each surface patch from the snow that hides its sky rays, and its first moment (`aim`, grey).
-SurfaceValues<glm::vec3> snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                                      const SourceValues &source, const MonteCarloVoxels &traced,
-                                      const GridValues &values, const SkyRays &rays, std::uint64_t seed,
-                                      const SubProgress &progress, SurfaceValues<glm::vec3> &aim);
+// The light gathered from other snow onto the surface patches (W/m^2, per channel) and its first moment over the
+// directions it arrives from (grey, as IncidentLight::skyAim).
+struct SnowIrradiance {
+    SurfaceValues<glm::vec3> irradiance, aim;
+};
+
+// What each surface patch receives from the snow that hides its sky rays.
+SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                              const SourceValues &source, const MonteCarloVoxels &traced, const GridValues &values,
+                              const SkyRays &rays, std::uint64_t seed, const SubProgress &progress);
 
 }  // namespace firn::bake

@@ -86,8 +86,8 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
                 // against the sun -29 % against -21 %; spray_lumps 20.1 % against 19.7 %; docs/bake.md).
                 const double crossing = solved[i].crossing[c] / topo.patches[i].area;  // its lobe's l0 (radiance)
                 out.surface(i).l0[c] = float(lobe.l0 + crossing);
-                out.surface(i).l1[c] =
-                    glm::vec3(lobe.l1 + 3.0 * crossingAnisotropy(optics.g) * crossing * glm::dvec3(solved[i].crossingAxis));
+                out.surface(i).l1[c] = glm::vec3(lobe.l1 + 3.0 * crossingAnisotropy(optics.g) * crossing *
+                                                 glm::dvec3(solved[i].crossingAxis));
             }
             out.surface(i).peak0 = solved[i].peak0, out.surface(i).peak1 = solved[i].peak1;
         }
@@ -194,7 +194,8 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
                 std::array<std::vector<FaceExit>, 3> faces;
                 for (int f = 0; f < 6; ++f) {
                     if (patch.share[f] <= 0.0f) continue;
-                    const auto form = fitAround(faceNormal(f), topo.size() + i * 6 + std::uint64_t(f));  // streams of its own
+                    const auto form =
+                        fitAround(faceNormal(f), topo.size() + i * 6 + std::uint64_t(f));  // streams of its own
                     for (int c = 0; c < 3; ++c)
                         faces[c].push_back({faceNormal(f), form[c][0], glm::dvec3(form[c][1], form[c][2], form[c][3])});
                 }
@@ -206,7 +207,8 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
             } else {
                 const auto form = fitAround(patch.normal, i);
                 for (int c = 0; c < 3; ++c) {
-                    const SourceLobe lobe = exitLobe(form[c][0], glm::dvec3(form[c][1], form[c][2], form[c][3]), patch.normal);
+                    const SourceLobe lobe =
+                        exitLobe(form[c][0], glm::dvec3(form[c][1], form[c][2], form[c][3]), patch.normal);
                     out.surface(i).l0[c] = float(lobe.l0);
                     out.surface(i).l1[c] = glm::vec3(lobe.l1);
                 }

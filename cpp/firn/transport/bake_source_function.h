@@ -42,7 +42,8 @@ class PeakedLobes {
         peaks_.push_back(peak);
     }
     std::vector<Peak>::const_iterator from(std::size_t key) const {  // the first peak of key >= key
-        return std::lower_bound(peaks_.begin(), peaks_.end(), key, [](const Peak &p, std::size_t k) { return p.key < k; });
+        return std::lower_bound(peaks_.begin(), peaks_.end(), key,
+                                [](const Peak &p, std::size_t k) { return p.key < k; });
     }
     // The source function of that broad lobe and key: its peak found by counting the keys held before it (a
     // binary search over the car's 640,000 peaks took 0.7 processor seconds of its gathering and grids).
@@ -51,7 +52,8 @@ class PeakedLobes {
         static_cast<BroadLobe &>(S) = broad;
         const std::size_t word = key / 64, bit = key % 64;
         if (word < held_.size() && (held_[word] >> bit & 1)) {
-            const Peak &peak = peaks_[before_[word] + __builtin_popcountll(held_[word] & ((std::uint64_t(1) << bit) - 1))];
+            const Peak &peak =
+                peaks_[before_[word] + __builtin_popcountll(held_[word] & ((std::uint64_t(1) << bit) - 1))];
             S.peak0 = peak.peak0, S.peak1 = peak.peak1;
         }
         return S;

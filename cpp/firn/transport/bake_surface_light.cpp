@@ -51,7 +51,9 @@ double patchRampMass(const SnowTopology &topo, std::size_t i) {
 // The density of the snow beneath surface voxel i's patch: its neighbour against the normal's largest component
 // (its own where that is no snow).
 double densityBeneath(const SnowTopology &topo, std::size_t i, const glm::dvec3 &n) {
-    const int axis = std::abs(n.x) >= std::max(std::abs(n.y), std::abs(n.z)) ? 0 : std::abs(n.y) >= std::abs(n.z) ? 1 : 2;
+    const int axis = std::abs(n.x) >= std::max(std::abs(n.y), std::abs(n.z)) ? 0
+                     : std::abs(n.y) >= std::abs(n.z)                        ? 1
+                                                                             : 2;
     const std::int32_t link = topo.link[i][2 * axis + (n[axis] > 0.0 ? 0 : 1)];
     return SnowTopology::isFace(link) ? topo.density[i] : topo.density[std::size_t(link)];
 }
@@ -162,7 +164,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         // (schemeBeamAlbedo's d, L). A smooth surface's fringe voxel holds less snow where the surface crosses it
         // (antialiasing), its ramp: the snow's own density for d, not the fringe's (with the fringe's ball_grey
         // was 12.6 % where it is 11.5 %, docs/bake.md).
-        const double voxelR = 3.0 * h * ch.sigmaTr(densityBeneath(topo, i, n)), nodeR = 3.0 * ch.sigmaTr(patchRampMass(topo, i));
+        const double voxelR = 3.0 * h * ch.sigmaTr(densityBeneath(topo, i, n)),
+                     nodeR = 3.0 * ch.sigmaTr(patchRampMass(topo, i));
         for (std::size_t s = 0; s < light.beams.size(); ++s) {
             const double P = sys.sunIn[s][i] * beamShare(s);
             if (P <= 0.0) continue;
@@ -241,7 +244,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             // rest of the shape goes with the light the diffusion carries from the node). The peaked lobe stays:
             // single scattering at grazing sun leaves within a mean free path, a small part of 1/sigma_tr.
             const double atOnce = sys.sunEscaped[i];
-            const double moved = r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
+            const double moved =
+                r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
             surface.returned.l0[c] = float(r.sky0 + (1.0 - moved) * r.sunShape0);
             surface.returned.l1[c] = glm::vec3(r.sky1 + (1.0 - moved) * r.sunShape1 + leaving * drift);
             surface.leaving[c] = float(leaving);

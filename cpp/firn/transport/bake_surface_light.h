@@ -36,8 +36,8 @@ struct SurfaceLight {
     glm::vec3 leaving{0.0f};
 };
 
-// The light gathered from other snow onto the surface patches (W/m^2, per channel) and its first moment over the
-// directions it arrives from (grey, as IncidentLight::skyAim); none before the first gathering.
+// The light gathered from other snow onto the surface patches and its moment (SnowIrradiance, read in place); none
+// before the first gathering.
 struct SnowLight {
     const SurfaceValues<glm::vec3> *light = nullptr, *aim = nullptr;
 };

@@ -78,9 +78,11 @@ double axisDepth(Medium::Accessor &density, const openvdb::Coord &c, double redu
     }
 }
 
-// Whether the unknown at `c` has air (no snow, no occluder) on both faces along some axis.
-bool twoSided(const SnowTopology &topo, const openvdb::Coord &c) {
-    const std::int32_t i = topo.index->getValue(c);
+// Whether the unknown at `c` has air (no snow, no occluder) on both faces along some axis; `index`: the caller's,
+// of topo.index.
+bool twoSided(const SnowTopology &topo, openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
+              const openvdb::Coord &c) {
+    const std::int32_t i = index.getValue(c);
     if (i < 0) return false;
     for (int a = 0; a < 3; ++a)
         if (topo.isAirFace(std::size_t(i), 2 * a) && topo.isAirFace(std::size_t(i), 2 * a + 1)) return true;
@@ -92,8 +94,11 @@ bool twoSided(const SnowTopology &topo, const openvdb::Coord &c) {
 // does one past both sizes that is no traced layer: each voxel is visited a bounded number of times, however large
 // the snow.
 PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb::Int32Tree> &done,
-                      const openvdb::Coord &seed, double reducedPerDensity, float layerBelow, const SnowTopology &topo) {
-    const auto reducedVolume = [&](const openvdb::Coord &c) { return std::pow(reducedPerDensity * density.getValue(c), 3.0); };
+                      const openvdb::Coord &seed, double reducedPerDensity, float layerBelow, const SnowTopology &topo,
+                      openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
+    const auto reducedVolume = [&](const openvdb::Coord &c) {
+        return std::pow(reducedPerDensity * density.getValue(c), 3.0);
+    };
     std::vector<openvdb::Coord> piece{seed}, stack{seed};
     std::size_t shallow = 0;  // piece[0, shallow) lie less than kMaxTracedPieceDepth deep (checked past both sizes)
     const auto hasInside = [&] {
@@ -127,7 +132,8 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
     // mean, and the diffusion's surface patches hold it, unless a voxel is open to air on two opposite faces (its
     // density gradient cancels there: no side for its patch to face).
     const auto oneSided = [&] {
-        return std::none_of(piece.begin(), piece.end(), [&](const openvdb::Coord &c) { return twoSided(topo, c); });
+        return std::none_of(piece.begin(), piece.end(),
+                            [&](const openvdb::Coord &c) { return twoSided(topo, index, c); });
     };
     const bool small = !large && int(piece.size()) <= kSmallPieceVoxels;
     const bool wide = reduced > kMaxTracedSmallPieceReducedVolume;
@@ -144,17 +150,21 @@ TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
     const VolumeOptics &optics = medium.optics();
     const double h = medium.voxelSize(), k = optics.extinctionPerDensity;
     const double leastReduced = 1.0 - std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z}) * optics.g;
-    const float thinBelow = float(kTracedOpticalDepth / (k * h)), thickFrom = float(kThickReducedDepth / (leastReduced * k * h));
+    const float thinBelow = float(kTracedOpticalDepth / (k * h)),
+                thickFrom = float(kThickReducedDepth / (leastReduced * k * h));
     const double mostAbsorbed = 1.0 - std::min({optics.albedo.x, optics.albedo.y, optics.albedo.z});
-    const float layerBelow = float(std::min(kTracedLayerOpticalDepth, kTracedLayerAbsorptionDepth / mostAbsorbed) / (k * h));
+    const float layerBelow =
+        float(std::min(kTracedLayerOpticalDepth, kTracedLayerAbsorptionDepth / mostAbsorbed) / (k * h));
     TracedSnow out;
     Medium::Accessor density = medium.accessor();
     openvdb::Int32Tree pieces(kUnvisited);
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> done(pieces);
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
     for (auto it = medium.density().cbeginValueOn(); it; ++it) {
         if (!(*it > 0.0f)) continue;
         std::int32_t mark = done.getValue(it.getCoord());
-        if (mark == kUnvisited) mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h, layerBelow, topo);
+        if (mark == kUnvisited)
+            mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h, layerBelow, topo, index);
         if (mark == kSmallPiece) {
             out.thin.push_back(it.getCoord());
             continue;

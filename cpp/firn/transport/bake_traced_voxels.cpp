@@ -14,6 +14,9 @@ namespace firn::bake {
 
 namespace {
 
+// At most this many paths in all: beyond it, fewer per voxel (a bake must not grow into a hang).
+constexpr double kMaxTracedPaths = 2e7;
+
 // Paths per traced voxel: the preset's, fewer when the paths would cost more than kMaxTracedSteps in all
 // (64 at least), or 0 (none traced: the diffusion takes them) when even 64 would. The cost per path is measured
 // on a few voxels first: thin voxels in a large cloud of thin snow still see light that scattered thousands of
@@ -31,12 +34,11 @@ namespace {
 // paths (at most kShortPathSteps: thin snow in a small object, 34-42 steps on ball_half_tau and a light dusting)
 // may cost up to kShortTracedSteps: a light dusting's 1728 voxels at 1024 paths for the fit by direction
 // (tracedSourceByDirection; its estimates at 256 paths are too noisy; the trace 0.56 -> 2.47 processor s), and
-// ball_half_tau's 2512 at g 0.3 gain too (1.9 -> 1.5 %, the trace 1.04 -> 2.23 s). Long ones keep kCheapTracedSteps: the car's 3 traced voxels in 2.7 M voxels of
-// thick snow (thousands of steps per path) took 0.84 -> 2.94 processor s at kShortTracedSteps, for three voxels.
-// At most this many paths in all: beyond it, fewer per voxel (a bake must not grow into a hang).
-constexpr double kMaxTracedPaths = 2e7;
-constexpr double kStepsPerPath = 20.0;
-constexpr double kCheapTracedSteps = 2e7;                       // about 1.2 processor seconds
+// ball_half_tau's 2512 at g 0.3 gain too (1.9 -> 1.5 %, the trace 1.04 -> 2.23 s). Long ones keep kCheapTracedSteps:
+// the car's 3 traced voxels in 2.7 M voxels of thick snow (thousands of steps per path) took 0.84 -> 2.94 processor s
+// at kShortTracedSteps, for three voxels.
+constexpr double kStepsPerPath = 20.0;                               // a path's start, in tracking steps
+constexpr double kCheapTracedSteps = 2e7;                            // about 1.2 processor seconds
 constexpr double kShortPathSteps = 1000.0, kShortTracedSteps = 8e7;  // about 5 processor seconds
 // Forward scattering snow (g >= kMinLightTracedG) is light traced at what gathering its voxels would cost
 // (kLightTracedShare of the pilot's steps: light tracing's sums cost more per counted step, 1.3-1.6x in processor
@@ -55,7 +57,8 @@ constexpr double kMinLightTracedG = 0.8, kLightTracedShare = 0.75, kMaxLightTrac
 
 }  // namespace
 
-GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed) {
+GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
+                            std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
     if (voxels.empty()) return {};
     const MonteCarloReference reference(scene);
@@ -104,13 +107,15 @@ MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::v
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
             out.source[v] = fittedByDirection(medium, density, voxels[v])
-                                ? tracedSourceByDirection(estimate(v), directions, visibilityFrom(medium, marcher, voxels[v], directions), g)
+                                ? tracedSourceByDirection(estimate(v), directions,
+                                                          visibilityFrom(medium, marcher, voxels[v], directions), g)
                                 : tracedSourceByMoments(estimate(v), g);
         }
         progress.report(double(done += range.size()) / voxels.size());
     });
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> index(*out.index);
-    for (std::size_t v = 0; v < voxels.size(); ++v) index.setValue(voxels[v], std::int32_t(v)), out.box.expand(voxels[v]);
+    for (std::size_t v = 0; v < voxels.size(); ++v)
+        index.setValue(voxels[v], std::int32_t(v)), out.box.expand(voxels[v]);
     return out;
 }
 

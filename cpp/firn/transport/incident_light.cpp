@@ -59,7 +59,8 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
         const double tau = optics.extinctionPerDensity * piece.column;
         const double uncollided = std::exp(-tau);
         const double alone = forwardShare(0.5 * (piece.far - piece.near), piece.near, tau, optics.g);
-        const double beside = blocks.windowedColumn(point, w, piece.near, piece.far, piece.near * forwardConeWidth(tau, optics.g));
+        const double beside =
+            blocks.windowedColumn(point, w, piece.near, piece.far, piece.near * forwardConeWidth(tau, optics.g));
         const double share = std::min(1.0, std::max(alone, beside / piece.column));
         through *= uncollided + (glm::exp(-reduced * piece.column) - uncollided) * share;
     };
@@ -100,9 +101,9 @@ glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const gl
 
 // Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
 // occluders in the way send what they reflect once (when `bounce`).
-glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays, bool bounce,
-                          Crossing crossing, std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher,
-                          std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr) {
+glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
+                          bool bounce, Crossing crossing, std::uint64_t seed, std::uint64_t stream,
+                          Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
@@ -113,7 +114,8 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
         const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
         if (hit && !bounce && !snowRays) continue;  // brings nothing, and no one asks whether snow lies along it
-        const double column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
+        const double column =
+            marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
         if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
         if (column >= limit) continue;
         glm::dvec3 radiance;
@@ -121,13 +123,14 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
             radiance = scene.sky.radianceFrom(w);
         } else if (bounce) {
             const glm::dvec3 normal(hit->normal);
-            radiance = reflectedByOccluder(scene, p + double(hit->distance) * w, glm::dot(normal, w) < 0.0 ? normal : -normal,
-                                           scene.occluders->albedo(hit->triangle), rng, marcher);
+            radiance =
+                reflectedByOccluder(scene, p + double(hit->distance) * w, glm::dot(normal, w) < 0.0 ? normal : -normal,
+                                    scene.occluders->albedo(hit->triangle), rng, marcher);
         } else {
             continue;
         }
         const glm::dvec3 arriving = kPi * radiance * transmittance(reduced, column);
-        sum += arriving, towards += (arriving.x + arriving.y + arriving.z) / 3.0 * w;
+        sum += arriving, towards += greyMoment(arriving, w);
     }
     if (snowRays) *snowRays = hidden;
     if (aim) *aim = glm::vec3(towards / double(rays.count()));
@@ -167,7 +170,8 @@ struct Steps {
     const openvdb::Coord *end() const { return offset.data() + count; }
 };
 Steps stepsTowards(const glm::dvec3 &w) {
-    const int axis = int(std::max_element(&w.x, &w.x + 3, [](double a, double b) { return std::abs(a) < std::abs(b); }) - &w.x);
+    const int axis =
+        int(std::max_element(&w.x, &w.x + 3, [](double a, double b) { return std::abs(a) < std::abs(b); }) - &w.x);
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     Steps steps;
     for (int bu = 0; bu < 2; ++bu)
@@ -218,8 +222,8 @@ glm::dvec3 towardsBeam(const Scene &scene, std::size_t b, const glm::dvec3 &poin
 }
 
 BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
-                  std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint, Crossing crossing,
-                  const BlockMasses *blocks) {
+                  std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint,
+                  Crossing crossing, const BlockMasses *blocks) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const bool sun = b < scene.suns.size();
@@ -248,18 +252,21 @@ BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, in
         if (!scene.occluders->empty()) {
             visible = 0;
             for (int s = 0; s < samples; ++s) {
-                const glm::dvec3 d = samples == 1 ? light.direction : sampleSunDirection(light, rng.uniform(), rng.uniform());
+                const glm::dvec3 d =
+                    samples == 1 ? light.direction : sampleSunDirection(light, rng.uniform(), rng.uniform());
                 visible += !caster.occluded(from, glm::vec3(d), 1e-5f);
             }
         }
         sum = light.irradiance * double(visible);
     } else {
         const Lamp &lamp = scene.lamps[b - scene.suns.size()];
-        if (lamp.shape != Lamp::Shape::Rectangle && lamp.shape != Lamp::Shape::Ellipse && lamp.radius == 0.0) samples = 1;
+        if (lamp.shape != Lamp::Shape::Rectangle && lamp.shape != Lamp::Shape::Ellipse && lamp.radius == 0.0)
+            samples = 1;
         for (int s = 0; s < samples; ++s) {
             const LampSample l = sampleLamp(lamp, glm::dvec3(from), rng.uniform(), rng.uniform());
             if (l.irradiance == Rgb(0.0)) continue;
-            if (!caster.occluded(from, glm::vec3(l.direction), 1e-5f, float(l.distance * (1.0 - 1e-6)))) sum += l.irradiance;
+            if (!caster.occluded(from, glm::vec3(l.direction), 1e-5f, float(l.distance * (1.0 - 1e-6))))
+                sum += l.irradiance;
         }
     }
     out.irradiance = glm::vec3(snow * sum / double(samples));
@@ -270,7 +277,8 @@ SkyRays::SkyRays(int samples) : strata_(std::clamp(int(std::lround(std::sqrt(dou
 
 glm::dvec3 SkyRays::direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const {
     Rng rng(seed, stream * 64 + std::uint64_t(k));
-    return sampleCosineHemisphere(normal, (k / strata_ + rng.uniform()) / strata_, (k % strata_ + rng.uniform()) / strata_);
+    return sampleCosineHemisphere(normal, (k / strata_ + rng.uniform()) / strata_,
+                                  (k % strata_ + rng.uniform()) / strata_);
 }
 
 void averageOverNeighbours(const SnowTopology &topo, SurfaceValues<glm::vec3> &values) {
@@ -315,9 +323,9 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     IncidentLight light;
     const double jobs = double(beamCount(scene) + 1);
     // Only the patches' beams read it (Crossing::Spreading): built here when there are beams, freed before the solves.
-    const BlockMasses blocks = beamCount(scene) > 0
-                                   ? BlockMasses(medium.density(), medium.voxelSize(), medium.indexToWorld(glm::dvec3(0.0)))
-                                   : BlockMasses();
+    const BlockMasses blocks =
+        beamCount(scene) > 0 ? BlockMasses(medium.density(), medium.voxelSize(), medium.indexToWorld(glm::dvec3(0.0)))
+                             : BlockMasses();
 
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
         IncidentLight::Beam beam;
@@ -361,8 +369,8 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                     // edges fall where they do on the snow.
                     const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
                     const glm::dvec3 from = patchOutsideAlong(medium, topo, i, towardsBeam(scene, b, centre), density);
-                    beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher, &surface,
-                                                       Crossing::Spreading, &blocks).irradiance;
+                    beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher,
+                                                       &surface, Crossing::Spreading, &blocks).irradiance;
                 }
             }
         });
@@ -383,11 +391,12 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         Medium::Accessor density = medium.accessor();
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
-                light.skyOnSurface.surface(i) = skyIrradianceAt(scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
-                                                                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i),
-                                                                &light.skyAim.surface(i));
+                light.skyOnSurface.surface(i) = skyIrradianceAt(
+                    scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
+                    Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i));
     });
-    if (settings.skyOverNeighbours) averageOverNeighbours(topo, light.skyOnSurface), averageOverNeighbours(topo, light.skyAim);
+    if (settings.skyOverNeighbours)
+        averageOverNeighbours(topo, light.skyOnSurface), averageOverNeighbours(topo, light.skyAim);
     if (scene.sky.isBlack()) return light;
     parallelChunks(topo.faces.size(), progress, [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);

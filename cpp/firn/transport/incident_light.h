@@ -51,6 +51,12 @@ class SkyRays {
     int strata_;
 };
 
+// Light arriving along unit direction w (per channel) as its part of the grey first moment (IncidentLight::skyAim):
+// the channels' mean times w.
+inline glm::dvec3 greyMoment(const glm::dvec3 &light, const glm::dvec3 &w) {
+    return (light.x + light.y + light.z) / 3.0 * w;
+}
+
 struct IncidentLightSettings {
     int skySamples = 16;  // rays per face, cosine-weighted, stratified
     int sunSamples = 4;   // points on each sun's disc or lamp per shadow test
