@@ -505,13 +505,15 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 // A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels'
 // mean source (the one both its air neighbours carry) is not: at sigma_t h 15, lit from above, the top views read
 // -34 % (docs/bake.md, Method 3). Its traced voxels thicker than kMaxDirectionFitTau open to air on both faces
-// along an axis gather one source more for each of those faces (`samples` paths each: MonteCarloReference::sourceIn
+// along an axis gather one source more for each of those faces (MonteCarloReference::sourceIn
 // with the face), which the air neighbour there carries (faceCarried). A face's paths are a quarter of the voxel's
 // own (64 at least): the floating 16 x 16 x 1 layer at sigma_t h 15 read 9.7 % against 9.0 % with all of them, its
 // trace 4.2 against 7.3 processor seconds (2.97 without face sources; bench/snow_on_ground_bench.py --float).
+// None where the gathering's `plan` and the faces' paths together would cost more than kMaxTracedSteps.
 constexpr int kFacePathShare = 4;
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
-                    int samples, std::uint64_t seed, MonteCarloVoxels &traced) {
+                    const GatheringPlan &plan, std::uint64_t seed, MonteCarloVoxels &traced) {
+    const int samples = std::max(64, plan.paths / kFacePathShare);
     const Medium &medium = *scene.medium;
     Medium::Accessor density = medium.accessor();
     traced.facesAt.assign(voxels.size(), -1);
@@ -528,6 +530,11 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
         traced.faces.push_back(faces);
         for (int f = 0; f < 6; ++f)
             if (faces.open >> f & 1u) jobs.emplace_back(v, f);
+    }
+    const double faceSteps = plan.steps / (double(plan.paths) * voxels.size()) * samples * jobs.size();
+    if (plan.steps + faceSteps > kMaxTracedSteps) {
+        traced.facesAt.clear(), traced.faces.clear();
+        return;
     }
     const MonteCarloReference reference(scene);
     const double g = medium.optics().g;
@@ -2154,7 +2161,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                         traced = plan.paths > 0 || thin.empty()
                                      ? traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress)
                                      : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
-                        if (plan.paths > 0) addFaceSources(scene, topo, thin, std::max(64, plan.paths / kFacePathShare), settings.seed ^ 0xFACEull, traced);
+                        if (plan.paths > 0) addFaceSources(scene, topo, thin, plan, settings.seed ^ 0xFACEull, traced);
                     }
                 }
                 progress.report(1.0);  // none traced, or light traced (its fit does not report)
