@@ -195,7 +195,10 @@ std::vector<glm::dvec3> facePoints(const Medium &medium, const openvdb::Coord &v
         }
         steps += kSteps;
         if (!(sum > 0.0)) continue;
-        const double target = -std::log1p(u[2] * std::expm1(-sum));
+        // A camera ray at mu = cos(angle to the normal), cosine-weighted (projected area) and stratified over the
+        // points, reaches the normal's optical depth mu t at its own t.
+        const double mu = std::sqrt((s + 0.5) / samples);
+        const double target = mu * -std::log1p(u[2] * std::expm1(-sum / mu));
         const int i = int(std::lower_bound(tau.begin(), tau.end(), target) - tau.begin());
         const double before = i > 0 ? tau[i - 1] : 0.0, step = tau[std::min(i, kSteps - 1)] - before;
         const double t = (i + (step > 0.0 ? (target - before) / step : 0.5)) * 2.0 / kSteps;
