@@ -195,7 +195,6 @@ struct SourceValues {
     Source operator[](std::size_t i) const { return peaked.with(broad[i], i); }
 };
 
-// Voxels whose source function comes from Monte Carlo (snow too thin for the diffusion), not from the solve.
 // The sources a traced voxel's air neighbours carry where it is open to air on both faces along an axis
 // (twoSided) and thick: each face's own, gathered where a camera sees that face (addFaceSources).
 struct FaceSources {
@@ -203,6 +202,7 @@ struct FaceSources {
     unsigned open = 0;             // bit f: face f holds one
 };
 
+// Voxels whose source function comes from Monte Carlo (snow too thin for the diffusion), not from the solve.
 struct MonteCarloVoxels {
     openvdb::Int32Tree::Ptr index = std::make_shared<openvdb::Int32Tree>(-1);  // voxel -> source, -1 elsewhere
     openvdb::CoordBBox box;  // around the voxels (empty: none)
@@ -505,13 +505,12 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 // A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels'
 // mean source (the one both its air neighbours carry) is not: at sigma_t h 15, lit from above, the top views read
 // -34 % (docs/bake.md, Method 3). Its traced voxels thicker than kMaxDirectionFitTau open to air on both faces
-// along an axis gather one source more for each of those faces (MonteCarloReference::sourceIn
-// with the face), which the air neighbour there carries (faceCarried): the 16 x 16 x 1 layer at sigma_t h 15 from
-// above 33.3 -> 9.1 % per block, bias -34.4 -> -4.1 %, from below 52.4 -> 19.2 %, +47.0 -> +16.3 %. A face's paths are a quarter of the voxel's
-// own (64 at least): the floating 16 x 16 x 1 layer at sigma_t h 15 read 9.7 % against 9.0 % with all of them (its
-// points along the normal), the trace 4.2 against 7.3 processor seconds (2.97 without face sources;
-// bench/snow_on_ground_bench.py --float).
-// None where the gathering's `plan` and the faces' paths together would cost more than kMaxTracedSteps.
+// along an axis gather one source more for each of those faces (MonteCarloReference::sourceIn with the face),
+// which the air neighbour there carries (faceCarried): the 16 x 16 x 1 layer at sigma_t h 15 from above 33.3 ->
+// 9.1 % per block, bias -34.4 -> -4.1 %, from below 52.4 -> 19.2 %, +47.0 -> +16.3 % (bench/snow_on_ground_bench.py
+// --float). A face's paths are a quarter of the voxel's own (64 at least): the layer read 9.7 % against 9.0 % with
+// all of them (its points along the normal), the trace 4.2 against 7.3 processor seconds (2.97 without face
+// sources). None where the gathering's `plan` and the faces' paths together would cost more than kMaxTracedSteps.
 constexpr int kFacePathShare = 4;
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
                     const GatheringPlan &plan, std::uint64_t seed, MonteCarloVoxels &traced) {
