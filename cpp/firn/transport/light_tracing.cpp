@@ -11,6 +11,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/pooled_estimates.h"
 #include "firn/transport/traced_source.h"
 #include "firn/util/color.h"
 #include "firn/util/sampling.h"
@@ -311,17 +312,22 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
         }
         progress.report(0.8 * double(last) / double(chunks));
     }
-    // Each voxel's beams, then the photons' light: per photon, over the voxel's integral of sigma_t.
-    std::vector<SourceEstimate> out(voxels.size());
+    // The photons' light: per photon, over the voxel's integral of sigma_t, its source by direction summed over a
+    // flat uniform layer (pooled_estimates.h); then each voxel's beams.
+    std::vector<SourceEstimate> scattered(voxels.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 64), [&](const auto &range) {
-        progress.throwIfCancelled();
         Medium::Accessor density = medium.accessor();
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
-            out[v] = reference.sourceIn(voxels[v], plan.beamSamples, seed ^ kBeamSeed, v, false);
             const std::int32_t slot = sums.towardSlot[v];
-            out[v] += sourceOf(sums.light[v], slot >= 0 ? &sums.toward[std::size_t(slot)] : nullptr,
-                               double(plan.photons) * extinctionIntegral(medium, density, voxels[v]), medium.optics());
+            scattered[v] = sourceOf(sums.light[v], slot >= 0 ? &sums.toward[std::size_t(slot)] : nullptr,
+                                    double(plan.photons) * extinctionIntegral(medium, density, voxels[v]), medium.optics());
         }
+    });
+    std::vector<SourceEstimate> out = pooledEstimates(medium, index, voxels, scattered);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 64), [&](const auto &range) {
+        progress.throwIfCancelled();
+        for (std::size_t v = range.begin(); v != range.end(); ++v)
+            out[v] += reference.sourceIn(voxels[v], plan.beamSamples, seed ^ kBeamSeed, v, false);
     });
     out.front().steps += steps;  // the photons' steps, counted once
     progress.report(1.0);
