@@ -32,7 +32,7 @@ namespace firn {
 // The bake's parts (transport/bake_*).
 using bake::ChannelStorage, bake::ChannelSystem, bake::GatheringPlan, bake::GridValues, bake::MonteCarloVoxels,
     bake::Preset, bake::SnowIrradiance, bake::SnowLight, bake::SourceValues, bake::SurfaceLight, bake::TracedSnow;
-using bake::assemble, bake::gridValues, bake::lightTracedAtGatheringCost, bake::lightTraceSources, bake::makeGrids,
+using bake::addFaceSources, bake::assemble, bake::gridValues, bake::lightTracedAtGatheringCost, bake::lightTraceSources, bake::makeGrids,
     bake::planGathering, bake::referenceSurface, bake::snowIrradiance, bake::sourceFunction, bake::sourceGrid,
     bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
 using bake::kWholePieceTracedSteps;
@@ -298,6 +298,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                         traced = plan.paths > 0 || thin.empty()
                                      ? traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress)
                                      : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
+                        if (plan.paths > 0) addFaceSources(scene, topo, thin, plan, settings.seed ^ 0xFACEull, traced);
                     }
                 }
                 progress.report(1.0);  // none traced, or light traced (its fit does not report)

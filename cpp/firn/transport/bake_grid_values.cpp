@@ -57,6 +57,26 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
     return true;
 }
 
+// What air voxel c carries of its face neighbours' face sources (MonteCarloVoxels::faces) towards it, averaged;
+// false where none holds one.
+bool faceCarried(const openvdb::Coord &c, TracedIndex &tracedIndex, const MonteCarloVoxels &traced, Source &S) {
+    if (traced.faces.empty()) return false;
+    Source sum;
+    int count = 0;
+    for (int f = 0; f < 6; ++f) {
+        openvdb::Coord n = c;
+        n[f / 2] -= f % 2 ? 1 : -1;  // the neighbour whose face f is c's
+        const std::int32_t t = tracedIndex.getValue(n);
+        if (t < 0 || traced.facesAt[t] < 0 || !(traced.faces[traced.facesAt[t]].open >> f & 1u)) continue;
+        const Source &v = traced.faces[traced.facesAt[t]].source[f];
+        sum.l0 += v.l0, sum.l1 += v.l1, sum.peak0 += v.peak0, sum.peak1 += v.peak1, ++count;
+    }
+    if (!count) return false;
+    S.l0 = sum.l0 / float(count), S.l1 = sum.l1 / float(count);
+    S.peak0 = sum.peak0 / float(count), S.peak1 = sum.peak1 / float(count);
+    return true;
+}
+
 // at: the voxels with values -> their place in `values` (by leaf of `leaves`), with leaves only where values are
 // (over all the grids' leaves it took 17 bytes per unknown on the car).
 void placeValues(const LeafValues &values, const openvdb::tree::LeafManager<const openvdb::BoolTree> &leaves,
@@ -279,9 +299,9 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 const std::int32_t t = tracedIndex.getValue(c);
                 Source S;
                 if (t >= 0) S = traced.source[t];
-                else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0 ||
-                         !facingAverage(topo, c, index, source, S))
-                    continue;
+                else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0) continue;
+                else if (faceCarried(c, tracedIndex, traced, S)) {}
+                else if (!facingAverage(topo, c, index, source, S)) continue;
                 else if (nearPeakAt.isValueOn(c))
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
                 perLeaf[l].add(it.pos(), S);

@@ -6,6 +6,13 @@
 
 namespace firn::bake {
 
+unsigned twoSidedFaces(const SnowTopology &topo, std::size_t i) {
+    unsigned open = 0;
+    for (int a = 0; a < 3; ++a)
+        if (topo.isAirFace(i, 2 * a) && topo.isAirFace(i, 2 * a + 1)) open |= 3u << (2 * a);
+    return open;
+}
+
 namespace {
 
 // Voxels optically thinner than kTracedOpticalDepth (partly filled voxels of thrown snow, thin flakes, a
@@ -83,10 +90,7 @@ double axisDepth(Medium::Accessor &density, const openvdb::Coord &c, double redu
 bool twoSided(const SnowTopology &topo, openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
               const openvdb::Coord &c) {
     const std::int32_t i = index.getValue(c);
-    if (i < 0) return false;
-    for (int a = 0; a < 3; ++a)
-        if (topo.isAirFace(std::size_t(i), 2 * a) && topo.isAirFace(std::size_t(i), 2 * a + 1)) return true;
-    return false;
+    return i >= 0 && twoSidedFaces(topo, std::size_t(i)) != 0;
 }
 
 // The kind of the piece around `seed` (sigma_tr h = reducedPerDensity * density); marks what it visits in `done`.

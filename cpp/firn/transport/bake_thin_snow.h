@@ -2,6 +2,7 @@
 
 // Which voxels of the snow are traced by Monte Carlo rather than diffused.
 
+#include <cstddef>
 #include <vector>
 
 #include <openvdb/openvdb.h>
@@ -16,6 +17,10 @@ namespace firn::bake {
 struct TracedSnow {
     std::vector<openvdb::Coord> thin, wholePieces;
 };
+
+// The faces of unknown i on the axes along which it has air (no snow, no occluder) on both faces: bit f for face f
+// (-x, +x, -y, +y, -z, +z).
+unsigned twoSidedFaces(const SnowTopology &topo, std::size_t i);
 
 // The thin voxels and transport-thin pieces of the medium's snow (bake_thin_snow.cpp: what each is, measured).
 TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo);

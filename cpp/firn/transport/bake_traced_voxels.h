@@ -2,6 +2,7 @@
 
 // The source function of the traced voxels (bake_thin_snow.h) by Monte Carlo: gathered or light traced.
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -11,16 +12,26 @@
 #include "firn/transport/bake.h"
 #include "firn/transport/bake_preset.h"
 #include "firn/transport/scene.h"
+#include "firn/transport/snow_topology.h"
 #include "firn/transport/source_lobe.h"
 #include "firn/util/progress.h"
 
 namespace firn::bake {
+
+// The sources a traced voxel's air neighbours carry where it is open to air on both faces along an axis
+// (twoSided) and thick: each face's own, gathered where a camera sees that face (addFaceSources).
+struct FaceSources {
+    std::array<Source, 6> source;  // by face, -x, +x, -y, +y, -z, +z
+    unsigned open = 0;             // bit f: face f holds one
+};
 
 // Voxels whose source function comes from Monte Carlo (snow too thin for the diffusion), not from the solve.
 struct MonteCarloVoxels {
     openvdb::Int32Tree::Ptr index = std::make_shared<openvdb::Int32Tree>(-1);  // voxel -> source, -1 elsewhere
     openvdb::CoordBBox box;  // around the voxels (empty: none)
     std::vector<Source> source;
+    std::vector<std::int32_t> facesAt;  // per source: its place in faces, -1 (or empty) where none
+    std::vector<FaceSources> faces;
 };
 
 // Voxel -> MonteCarloVoxels' source, -1 elsewhere; one per thread. Outside the traced voxels' box without a tree
@@ -53,6 +64,11 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
 // The voxels' sources gathered by brute force, `samples` paths each.
 MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
                               std::uint64_t seed, const SubProgress &progress);
+
+// The face sources (FaceSources) of the gathered `voxels` that are thick and open to air on both faces along an
+// axis, added to `traced` (none where they would cost more than kMaxTracedSteps with the gathering's `plan`).
+void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
+                    const GatheringPlan &plan, std::uint64_t seed, MonteCarloVoxels &traced);
 
 // The voxels' sources light traced within `budget` tracking steps; none (empty) where that is not affordable.
 MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
