@@ -305,8 +305,8 @@ def test_floating_layer_one_voxel_thick_shows_each_faces_first_optical_depth(fol
     # bumpy_plate's snow (omega 0.999, g 0.7) with air on both sides, under the sun 30 degrees high and the sky.
     # Its 256 voxels are traced (a small piece, two-sided), and a traced voxel's mean source, which the air on both
     # sides carried, is not what a camera sees of the face it looks at: the views from above read 33.3 % per block,
-    # bias -34.4 %. With each air neighbour carrying its face's own source (bake.cpp, addFaceSources): 9.1 %,
-    # -4.1 %. Oracle: the core's Monte Carlo, 1024 paths per block (noise 4.3 % per block; over the 192 blocks
+    # bias -34.4 %. With each air neighbour carrying its face's own source (bake_traced_voxels.cpp, addFaceSources):
+    # 9.1 %, -4.1 %. Oracle: the core's Monte Carlo, 1024 paths per block (noise 4.3 % per block; over the 192 blocks
     # the bias's noise is about 0.3 %).
     c = bake_suite.Case("float_16x16x1", "", bake_suite.slab(16, 1) * 300.0, 0.01, 1500.0, 300.0, (0.999,) * 3, 0.7,
                         views=[(0, 60), (180, 50), (90, 70)], samples=1024)
