@@ -32,9 +32,9 @@ namespace firn {
 // The bake's parts (transport/bake_*).
 using bake::ChannelStorage, bake::ChannelSystem, bake::GatheringPlan, bake::GridValues, bake::MonteCarloVoxels,
     bake::Preset, bake::SnowIrradiance, bake::SnowLight, bake::SourceValues, bake::SurfaceLight, bake::TracedSnow;
-using bake::addFaceSources, bake::assemble, bake::gridValues, bake::lightTracedAtGatheringCost, bake::lightTraceSources, bake::makeGrids,
-    bake::planGathering, bake::referenceSurface, bake::snowIrradiance, bake::sourceFunction, bake::sourceGrid,
-    bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
+using bake::addFaceSources, bake::assemble, bake::gridValues, bake::lightTracedAtGatheringCost, bake::lightTraceSources,
+    bake::makeGrids, bake::planGathering, bake::referenceSurface, bake::snowIrradiance, bake::sourceFunction,
+    bake::sourceGrid, bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
 using bake::kWholePieceTracedSteps;
 
 namespace {
