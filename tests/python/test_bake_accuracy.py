@@ -148,12 +148,13 @@ def test_lit_tops_forward_return_crosses_the_camera_side_ramp_it_shades_from_the
     # Seen against the sun, ball_issue's top row becomes opaque in the one-voxel density ramp on the camera's side
     # of the lit top (branch backlit: 0.63 of the view's missing 1.02 there), where the sun arrives through the
     # top's own snow. The lit top's forward return still crosses that ramp: the sun's transmittance that weighs the
-    # carried peaks (bake.cpp, forwardPeakThrough) is delta-scaled by the share omega g that scattering keeps going
-    # forwards. Against the core's Monte Carlo (these 1024 paths: the view's sum of 52 blocks of 2-5 % noise each, under
-    # 1 % together; the suite's 16384 paths): -27 % before, -17 % with it (docs/bake.md, Accuracy; docs/benchmarks.md,
-    # seen-sun). The sunward views stay within test_sun_lit_ball_is_right_where_the_surface_model_can_hold's 12 %.
+    # carried peaks (bake.cpp, forwardPeakThrough) is delta-scaled by the forward share omega g^2 (delta-Eddington).
+    # Against the core's Monte Carlo (these 1024 paths, median block noise 7.5 %: the view's sum of 52 blocks about
+    # 1 %): -26.6 % before, -20.5 % with it (the suite's 16384 paths the same to 0.1 point; docs/bake.md, Accuracy;
+    # docs/benchmarks.md, seen-sun); the bound lies midway, 3 points from each. The view from the sun's side stays
+    # +1.1 %.
     issue = baked_against_reference(folder, "ball_issue", 1024, [(180, 0), (0, 0)])
-    assert issue["view_bias"][0] > -0.22, issue["view_bias"]
+    assert issue["view_bias"][0] > -0.235, issue["view_bias"]
     assert abs(issue["view_bias"][1]) < 0.05, issue["view_bias"]
 
 
