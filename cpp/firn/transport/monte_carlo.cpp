@@ -330,7 +330,7 @@ Rgb PhotonTracer::radianceArriving(const Ray &ray, Rng &rng) { return tracer_->s
 long PhotonTracer::steps() const { return tracer_->steps; }
 
 SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
-                                             std::uint64_t stream, bool scattered, bool visible) const {
+                                             std::uint64_t stream, bool scattered, bool visible, int face) const {
     PathTracer tracer(*this, !scattered);  // the per-voxel gathering's draws as they were (bench/bake_suite.py)
     Rng rng(seed, stream);
     const Medium &medium = *scene_.medium;
@@ -344,12 +344,14 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     // Where cameras see a thick voxel: points drawn so, of equal weight (VisiblePoints).
     std::vector<glm::dvec3> seen;
     long seenSteps = 0;  // their draws' work (the bake's budget counts it: planGathering)
-    if (visible) {
+    if (visible || face >= 0) {
         KroneckerSequence candidates(rng);
-        seen = visiblePoints(medium, voxel, directions_, samples, [&] {
+        const auto next = [&] {
             const std::array<double, 5> u = candidates.next();
             return std::array<double, 3>{u[0], u[1], u[2]};
-        }, rng, seenSteps);
+        };
+        seen = face >= 0 ? facePoints(medium, voxel, face, samples, next, seenSteps)
+                         : visiblePoints(medium, voxel, directions_, samples, next, rng, seenSteps);
     }
     for (int s = 0; s < samples; ++s) {
         const std::array<double, 5> u = points.next();

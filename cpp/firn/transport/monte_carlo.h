@@ -127,9 +127,10 @@ class MonteCarloReference {
     // Without `scattered`, the direct beams only (beamL0, beamL1 and their share of the moments): what light
     // tracing leaves to each voxel (light_tracing.h). With `visible`, the points drawn where cameras see the
     // voxel's stored source instead, of equal weight (VisiblePoints: in a voxel of many optical depths, its first
-    // optical depth from each side, and the trilinear hat's reach).
+    // optical depth from each side, and the trilinear hat's reach). With `face` (0..5: -x, +x, -y, +y, -z, +z),
+    // drawn where a camera looking straight at that air face sees it (facePoints), of equal weight.
     SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream,
-                            bool scattered = true, bool visible = false) const;
+                            bool scattered = true, bool visible = false, int face = -1) const;
 
     const Scene &scene() const { return scene_; }
     // Where every estimate of this reference gathers the exact source (sourceIn, light tracing's tallies), and

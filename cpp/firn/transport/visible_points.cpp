@@ -169,4 +169,44 @@ std::vector<glm::dvec3> visiblePoints(const Medium &medium, const openvdb::Coord
     return out;
 }
 
+std::vector<glm::dvec3> facePoints(const Medium &medium, const openvdb::Coord &voxel, int face, int samples,
+                                   const std::function<std::array<double, 3>()> &next, long &steps) {
+    constexpr int kSteps = 64;  // over the two voxels' chord: 1/32 voxel, optical depth 0.5 at sigma_t h 15
+    const int a = face / 2;
+    const double side = face % 2 ? 1.0 : -1.0, h = medium.voxelSize(), k = medium.optics().extinctionPerDensity;
+    Medium::ColumnMarcher marcher(medium);
+    std::vector<glm::dvec3> out;
+    out.reserve(samples);
+    std::array<double, kSteps> tau{};  // optical depth at each step's end
+    for (int s = 0; s < samples; ++s) {
+        const std::array<double, 3> u = next();
+        glm::dvec3 y(0.0);  // index space about the voxel's centre: from the air neighbour's centre inwards
+        y[a] = side, y[(a + 1) % 3] = u[0] - 0.5, y[(a + 2) % 3] = u[1] - 0.5;
+        const glm::dvec3 centre = glm::dvec3(voxel.x(), voxel.y(), voxel.z()) + y;
+        const auto at = [&](double t) {
+            glm::dvec3 p = centre;
+            p[a] -= side * t;
+            return p;
+        };
+        double sum = 0.0;
+        for (int i = 0; i < kSteps; ++i) {
+            const glm::dvec3 p = at((i + 0.5) * 2.0 / kSteps);
+            tau[i] = sum += k * marcher.densityAt(openvdb::Vec3d(p.x, p.y, p.z)) * 2.0 / kSteps * h;
+        }
+        steps += kSteps;
+        if (!(sum > 0.0)) continue;
+        // A camera ray at mu = cos(angle to the normal), cosine-weighted (projected area) and stratified over the
+        // points, reaches the normal's optical depth mu t at its own t.
+        const double mu = std::sqrt((s + 0.5) / samples);
+        const double target = mu * -std::log1p(u[2] * std::expm1(-sum / mu));
+        const int i = int(std::lower_bound(tau.begin(), tau.end(), target) - tau.begin());
+        const double before = i > 0 ? tau[i - 1] : 0.0, step = tau[std::min(i, kSteps - 1)] - before;
+        const double t = (i + (step > 0.0 ? (target - before) / step : 0.5)) * 2.0 / kSteps;
+        const glm::dvec3 p = at(std::min(t, 2.0));
+        out.push_back(medium.indexToWorld(p));
+    }
+    if (int(out.size()) < samples) out.clear();  // none seen (a voxel of snow always is)
+    return out;
+}
+
 }  // namespace firn
