@@ -298,7 +298,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                         traced = plan.paths > 0 || thin.empty()
                                      ? traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress)
                                      : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
-                        if (plan.paths > 0) addFaceSources(scene, topo, thin, plan, settings.seed ^ 0xFACEull, traced);
+                        if (plan.paths > 0)
+                            addFaceSources(scene, topo, thin, plan, settings.seed ^ 0xFACEull, progress, traced);
                     }
                 }
                 progress.report(1.0);  // none traced, or light traced (its fit does not report)

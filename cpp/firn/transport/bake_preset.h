@@ -2,8 +2,6 @@
 
 // The bake's sample counts and tolerance for its quality (resolve, bake.cpp).
 
-
-
 namespace firn::bake {
 
 struct Preset {

@@ -150,7 +150,8 @@ constexpr int kFacePathShare = 4;
 // all of them (its points along the normal), the trace 4.2 against 7.3 processor seconds (2.97 without face
 // sources). None where the gathering's `plan` and the faces' paths together would cost more than kMaxTracedSteps.
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
-                    const GatheringPlan &plan, std::uint64_t seed, MonteCarloVoxels &traced) {
+                    const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
+                    MonteCarloVoxels &traced) {
     const int samples = std::max(64, plan.paths / kFacePathShare);
     const Medium &medium = *scene.medium;
     Medium::Accessor density = medium.accessor();
@@ -176,6 +177,7 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     const MonteCarloReference reference(scene);
     const double g = medium.optics().g;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 4), [&](const auto &range) {
+        progress.throwIfCancelled();  // up to kMaxTracedSteps of paths (Esc keeps the previous bake)
         for (std::size_t j = range.begin(); j != range.end(); ++j) {
             const auto [v, f] = jobs[j];
             const SourceEstimate S =

@@ -68,7 +68,8 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 // The face sources (FaceSources) of the gathered `voxels` that are thick and open to air on both faces along an
 // axis, added to `traced` (none where they would cost more than kMaxTracedSteps with the gathering's `plan`).
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
-                    const GatheringPlan &plan, std::uint64_t seed, MonteCarloVoxels &traced);
+                    const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
+                    MonteCarloVoxels &traced);
 
 // The voxels' sources light traced within `budget` tracking steps; none (empty) where that is not affordable.
 MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,

@@ -319,8 +319,9 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
         Medium::Accessor density = medium.accessor();
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
             const std::int32_t slot = sums.towardSlot[v];
-            scattered[v] = sourceOf(sums.light[v], slot >= 0 ? &sums.toward[std::size_t(slot)] : nullptr,
-                                    double(plan.photons) * extinctionIntegral(medium, density, voxels[v]), medium.optics());
+            const double weights = double(plan.photons) * extinctionIntegral(medium, density, voxels[v]);
+            scattered[v] = sourceOf(sums.light[v], slot >= 0 ? &sums.toward[std::size_t(slot)] : nullptr, weights,
+                                    medium.optics());
         }
     });
     std::vector<SourceEstimate> out = pooledEstimates(medium, index, voxels, scattered);

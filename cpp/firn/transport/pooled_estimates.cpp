@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/traced_source.h"
 #include "firn/util/color.h"
 
 namespace firn {
@@ -21,6 +22,8 @@ std::vector<SourceEstimate> pooledEstimates(const Medium &medium, const openvdb:
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(indexTree);
         Medium::Accessor density = medium.accessor();
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
+            // Only voxels fitted by direction hold a `toward`; an unfitted neighbour's l0 would dilute the sum.
+            if (!fittedByDirection(medium, density, voxels[v])) continue;
             const double own = density.getValue(voxels[v]);
             double l0 = channelMean(estimates[v].l0);
             std::array<double, kSourceDirections> toward = estimates[v].toward;
@@ -30,7 +33,9 @@ std::vector<SourceEstimate> pooledEstimates(const Medium &medium, const openvdb:
                     for (int dz = -1; dz <= 1; ++dz) {
                         const openvdb::Coord c = voxels[v].offsetBy(dx, dy, dz);
                         const std::int32_t n = index.getValue(c);
-                        if (n < 0 || std::size_t(n) == v || !similarDensity(density.getValue(c), own)) continue;
+                        if (n < 0 || std::size_t(n) == v || !similarDensity(density.getValue(c), own) ||
+                            !fittedByDirection(medium, density, c))
+                            continue;
                         const SourceEstimate &other = estimates[std::size_t(n)];
                         l0 += channelMean(other.l0), ++neighbours;
                         for (int j = 0; j < kSourceDirections; ++j) toward[j] += other.toward[j];
