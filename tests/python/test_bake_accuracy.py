@@ -150,13 +150,15 @@ def test_lit_tops_forward_return_crosses_the_camera_side_ramp_it_shades_from_the
     # of the lit top (branch backlit: 0.63 of the view's missing 1.02 there), where the sun arrives through the
     # top's own snow. The lit top's forward return still crosses that ramp: the sun's transmittance that weighs the
     # carried peaks (bake_grid_values.cpp, forwardPeakThrough) is delta-scaled by the forward share omega g^2
-    # (delta-Eddington).
+    # (delta-Eddington), and where more, so is the peaks' own way through the ramp from their voxel's boundary
+    # (rampCrossing).
     # Against the core's Monte Carlo (these 1024 paths, median block noise 7.5 %: the view's sum of 52 blocks about
-    # 1 %): -26.6 % before, -20.5 % with it (the suite's 16384 paths the same to 0.1 point; docs/bake.md, Accuracy;
-    # docs/benchmarks.md, seen-sun); the bound lies midway, 3 points from each. The view from the sun's side stays
-    # +1.1 %.
+    # 1 %): -26.6 % with neither, -20.5 % with the sun's alone (branch seen-sun), -17.0 % with both (branch lit-top;
+    # the suite's 16384 paths the same to 0.1 point; docs/bake.md, Accuracy; docs/benchmarks.md, seen-sun and
+    # lit-top); the bound lies midway, 1.7 points (beyond the sum's noise) from each. The view from the sun's side
+    # stays +1.1 %.
     issue = baked_against_reference(folder, "ball_issue", 1024, [(180, 0), (0, 0)])
-    assert issue["view_bias"][0] > -0.235, issue["view_bias"]
+    assert issue["view_bias"][0] > -0.1875, issue["view_bias"]
     assert abs(issue["view_bias"][1]) < 0.05, issue["view_bias"]
 
 
