@@ -1,8 +1,10 @@
 #include "firn/transport/bake_grid_values.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
@@ -212,7 +214,9 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     const double forwardKept = optics.albedo.y * optics.g * optics.g;
     const glm::dvec3 centre = medium.voxelCentre(c);
     glm::dvec3 p0(0.0), p1(0.0);
-    double total = 0.0, crossing = 0.0;
+    double total = 0.0;
+    std::array<std::pair<openvdb::Coord, double>, 124> taken;  // the peaks taken (of the 124 offsets) and weights
+    std::size_t takenCount = 0;
     for (const Offset &o : offsets) {
         const openvdb::Coord from = c + o.from;
         if (!peakAt.isOn(from)) continue;
@@ -225,9 +229,13 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
         if (along <= 0.0) continue;
         const double w = along * along * facing;
         p0 += w * glm::dvec3(v.peak0), p1 += w * glm::dvec3(v.peak1), total += w;
-        crossing += w * rampCrossing(medium, medium.voxelCentre(from), centre, forwardKept, marcher);
+        taken[takenCount++] = {from, w};
     }
     if (!(total > 0.0) || (p0.x + p0.y + p0.z) / total <= 2.0 * double(S.peak0.x + S.peak0.y + S.peak0.z)) return;
+    double crossing = 0.0;
+    for (std::size_t k = 0; k < takenCount; ++k)
+        crossing += taken[k].second * rampCrossing(medium, medium.voxelCentre(taken[k].first), centre, forwardKept,
+                                                   marcher);
     double arriving = 0.0, outside = 0.0;
     for (std::size_t b = 0; b < scene.suns.size(); ++b) {
         arriving += beamAt(scene, b, centre, 1, 0, 0, marcher, nullptr, Crossing::Uncollided).irradiance.y;
