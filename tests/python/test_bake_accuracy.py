@@ -139,12 +139,13 @@ def test_ramp_in_front_of_a_lit_rim_carries_the_returned_grazing_sun(folder):
     # Then ball_issue's top row became opaque in the one-voxel density ramp on the camera's side of the lit top
     # (branch backlit: 0.63 of the view's missing 1.02 there), where the sun arrives through the top's own snow; the
     # sun's transmittance that weighs the carried peaks is delta-scaled by the forward share omega g^2
-    # (delta-Eddington; branch seen-sun): against these 1024 paths (median block noise 7.5 %: the view's sum of 52
-    # blocks about 1 %) -26.6 % -> -20.5 % (the suite's 16384 paths the same to 0.1 point; docs/bake.md, Accuracy;
-    # docs/benchmarks.md, seen-sun); the bound lies midway, 3 points from each. The view from the sun's side stays
-    # +1.1 %.
+    # (delta-Eddington; branch seen-sun), and where more, so is the peaks' own way through the ramp from their
+    # voxel's boundary (rampCrossing; branch lit-top): against these 1024 paths (median block noise 7.5 %: the view's
+    # sum of 52 blocks about 1 %) -26.6 % with neither, -20.5 % with the sun's alone, -17.0 % with both (the suite's
+    # 16384 paths the same to 0.1 point; docs/bake.md, Accuracy; docs/benchmarks.md, seen-sun and lit-top); the bound
+    # lies midway, 1.7 points (beyond the sum's noise) from each. The view from the sun's side stays +1.1 %.
     issue = baked_against_reference(folder, "ball_issue", 1024, [(180, 0), (0, 0)])
-    assert issue["view_bias"][0] > -0.235, issue["view_bias"]
+    assert issue["view_bias"][0] > -0.1875, issue["view_bias"]
     assert abs(issue["view_bias"][1]) < 0.05, issue["view_bias"]
     grey = baked_against_reference(folder, "ball_grey", 1024, [(180, 0)])
     assert grey["view_bias"][0] > -0.28, grey["view_bias"]
