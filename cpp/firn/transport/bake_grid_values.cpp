@@ -166,8 +166,8 @@ double rampCrossing(const Medium &medium, const glm::dvec3 &from, const glm::dve
 // radiance) in front of smooth surface voxels within two voxels whose peaked lobe (the sun returned sharply
 // forwards, Method 5) travels towards it takes their peaked lobes where these are over twice its own (elsewhere
 // its surface holds as much: a march towards the suns saved), weighted by the cosine squared between a lobe's
-// axis and the way to c and by how much its surface faces c, in the share of the suns' light that reaches c
-// uncollided (sunlit). On a lit rim seen against the sun the camera ray crosses the ramp at the
+// axis and the way to c and by how much its surface faces c, in the share that reaches c (below: the suns' or
+// the peaks' own delta-scaled transmittance, the larger). On a lit rim seen against the sun the camera ray crosses the ramp at the
 // top and becomes opaque in its camera side, whose own surface voxels take the sun at grazing incidence and
 // hold little peak (mu0 0-0.2), while the light there is the lit top's forward return travelling through
 // (ball_issue's top row: the reference's source 0.3-0.4 in the ramp's first optical depth, the bake's 0.15-0.2;
