@@ -31,7 +31,8 @@ namespace firn {
 
 // The bake's parts (transport/bake_*).
 using bake::ChannelStorage, bake::ChannelSystem, bake::GatheringPlan, bake::GridValues, bake::MonteCarloVoxels,
-    bake::Preset, bake::SnowIrradiance, bake::SnowLight, bake::SourceValues, bake::SurfaceLight, bake::TracedSnow;
+    bake::Preset, bake::SnowIrradiance, bake::SnowLight, bake::SourceValues, bake::SurfaceLight, bake::SurfaceTerms,
+    bake::TracedSnow;
 using bake::addFaceSources, bake::assemble, bake::gridValues, bake::lightTracedAtGatheringCost, bake::lightTraceSources,
     bake::makeGrids, bake::planGathering, bake::referenceSurface, bake::snowIrradiance, bake::sourceFunction,
     bake::sourceGrid, bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
@@ -189,7 +190,10 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             releaseFreedMemory();  // the previous pass's values
             clock.lap(&BakeStats::Phases::gather);
         }
-        SurfaceValues<SurfaceLight> leaving(topo.surfaceSlot, topo.surfaceVoxels());
+        // Each channel's surface terms, held from its solve until the three channels' surfaces are worked out
+        // together (their geometry and neighbours read once): the light leaving the surface is not held through
+        // the solves.
+        std::array<SurfaceTerms, 3> terms;
         {
             // The pass's three solves in the same vectors (held no longer than the pass's solves: the source
             // function and the gathering come after).
@@ -217,11 +221,17 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                         storage.b = std::move(workspace.spare);
                     }
                 }
-                const SnowLight snow = pass > 0 ? SnowLight{&fromSnow.irradiance, &fromSnow.aim} : SnowLight{};
-                surfaceLight(scene, topo, light, snow, system, phi[c], c, leaving);
+                terms[c] = std::move(system.surface);
             }
         }
-        SurfaceValues<Source> surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
+        SurfaceValues<Source> surface;
+        {
+            SurfaceValues<SurfaceLight> leaving(topo.surfaceSlot, topo.surfaceVoxels());
+            const SnowLight snow = pass > 0 ? SnowLight{&fromSnow.irradiance, &fromSnow.aim} : SnowLight{};
+            surfaceLight(scene, topo, light, snow, terms, phi, leaving);
+            terms = {};
+            surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
+        }  // the light leaving, freed before the source function
         if (reference && pass + 1 == passes) {
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface,

@@ -113,7 +113,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     if (facing > 0.0 && !patch.sharp) area = h2 * facing;
                     const BoundaryLink &b = boundary[f].emplace(beta, 2.0, 3.0 * ch.sigmaTr(face.rampMass));
                     const double shareOfPatch = patch.area * patch.share[f];  // m^2
-                    sys.outConductance.surface(i) += area * b.conductance();
+                    sys.surface.outConductance.surface(i) += area * b.conductance();
                     sys.skyToNode.surface(i) += 4.0 * shareOfPatch * b.conductance();
                     sys.skyReturned.surface(i) += shareOfPatch * b.diffuseReturned();
                 } else {
@@ -180,14 +180,14 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 if (patchIn <= 0.0) continue;
                 // Into a surface voxel through its air faces: the beam scatters at its mean depth
                 // (beamScatteringDepth); what scatters above the node partly escapes at once.
-                sys.sunIn[s].surface(i) += patchIn;
+                sys.surface.sunIn[s].surface(i) += patchIn;
                 for (int f = 0; f < 6; ++f) {
                     if (entering[f] <= 0.0) continue;
                     const double P = scattered * entering[f], L = boundary[f]->L;
                     const double R = beamScatteringDepth(muIn[f], L);
                     source += boundary[f]->toNode(R) * P;
-                    sys.escaped.surface(i) += boundary[f]->toBoundary(R) * P;
-                    sys.sunEscaped.surface(i) += boundary[f]->toBoundary(R) * P;
+                    sys.surface.escaped.surface(i) += boundary[f]->toBoundary(R) * P;
+                    sys.surface.sunEscaped.surface(i) += boundary[f]->toBoundary(R) * P;
                 }
             }
             // Light reflected by occluders under the snow enters diffusely through their faces.
@@ -200,9 +200,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             sys.remainder[i] = float(rowRemainder(diag, conductance, topo.link[i]));
             sys.b[i] = source + sky * sys.skyToNode[i];
             if (!patch.isSurface()) continue;
-            sys.escaped.surface(i) += sky * sys.skyReturned[i];
+            sys.surface.escaped.surface(i) += sky * sys.skyReturned[i];
             sys.area.surface(i) = patch.area;
-            sys.skyIn.surface(i) = sky * sys.area[i];
+            sys.surface.skyIn.surface(i) = sky * sys.area[i];
         }
     }, tbb::simple_partitioner());  // runs of at most 1024 unknowns: SharedLinks' buffer stays small
     return sys;

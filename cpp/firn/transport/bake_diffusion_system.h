@@ -38,17 +38,22 @@ struct ChannelStorage {
     std::vector<double> b;
 };
 
-// The diffusion system of one channel plus what the surface needs afterwards.
-struct ChannelSystem {
-    Stencil<float> A;              // what the solver keeps of the operator (MultigridSolver)
-    std::vector<float> remainder;  // diag minus the conductances, summed in double
-    std::vector<double> b;  // W: diffuse sources at the voxel nodes
-    // Surface voxels only (what crosses air faces):
+// What crosses a channel's air faces, per surface voxel: what the light leaving the surface (surfaceLight) reads of
+// the channel's system, held from its solve until the three channels' surfaces are worked out together.
+struct SurfaceTerms {
     SurfaceValues<float> escaped;             // W: light leaving through air faces without reaching the node
     SurfaceValues<float> sunEscaped;          // W: of it, the beams' light (scattered above the node)
     SurfaceValues<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
     std::vector<SurfaceValues<float>> sunIn;  // per beam (sun or lamp), W entering through air faces
     SurfaceValues<float> skyIn;               // W entering through air faces
+};
+
+// The diffusion system of one channel plus what the surface needs afterwards.
+struct ChannelSystem {
+    Stencil<float> A;              // what the solver keeps of the operator (MultigridSolver)
+    std::vector<float> remainder;  // diag minus the conductances, summed in double
+    std::vector<double> b;  // W: diffuse sources at the voxel nodes
+    SurfaceTerms surface;   // surface voxels only (what crosses air faces)
     // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
     // returned at once (m^2), so that light from other snow adds to the sources as sky light does.
     SurfaceValues<float> skyToNode, skyReturned;
@@ -56,9 +61,9 @@ struct ChannelSystem {
 
     ChannelSystem(const SnowTopology &topo, std::size_t beams, ChannelStorage storage)
         : A(std::move(storage.A)), remainder(std::move(storage.remainder)), b(std::move(storage.b)),
-          escaped(surfaceZeros(topo)), sunEscaped(surfaceZeros(topo)), outConductance(surfaceZeros(topo)),
-          sunIn(beams, surfaceZeros(topo)), skyIn(surfaceZeros(topo)), skyToNode(surfaceZeros(topo)),
-          skyReturned(surfaceZeros(topo)), area(surfaceZeros(topo)) {
+          surface{surfaceZeros(topo), surfaceZeros(topo), surfaceZeros(topo),
+                  std::vector<SurfaceValues<float>>(beams, surfaceZeros(topo)), surfaceZeros(topo)},
+          skyToNode(surfaceZeros(topo)), skyReturned(surfaceZeros(topo)), area(surfaceZeros(topo)) {
         b.assign(topo.size(), 0.0);
     }
     static SurfaceValues<float> surfaceZeros(const SnowTopology &topo) {
@@ -70,7 +75,8 @@ struct ChannelSystem {
         for (std::size_t i = 0; i < b.size(); ++i) {
             if (!(area[i] > 0.0f)) continue;  // not a surface voxel
             const double E = irradiance[i][c];
-            b[i] += E * skyToNode[i], escaped.surface(i) += E * skyReturned[i], skyIn.surface(i) += E * area[i];
+            b[i] += E * skyToNode[i], surface.escaped.surface(i) += E * skyReturned[i];
+            surface.skyIn.surface(i) += E * area[i];
         }
     }
     // Frees what only the assembly and addDiffuse read (12 bytes per surface voxel), before the solver is built.

@@ -33,7 +33,7 @@ Displacement halfSpaceDisplacement(double mu0) {
 
 // Surface voxel i's downstream kernel (SunReturned::downstream, spread; m): the beams' displacements weighted
 // by the power each lets in, on the snow beneath the patch (channel ch's sigma_tr: one kernel for the three).
-void downstreamKernel(const Scene &scene, const IncidentLight &light, const ChannelSystem &sys, const Channel &ch,
+void downstreamKernel(const Scene &scene, const IncidentLight &light, const SurfaceTerms &sys, const Channel &ch,
                       const SnowTopology &topo, std::size_t i, SunReturned &surface) {
     const glm::dvec3 n = topo.patches[i].normal, centre = scene.medium->voxelCentre(topo.coord[i]);
     const double transportPath = 1.0 / ch.sigmaTr(densityBeneath(topo, i, n));  // m
@@ -61,66 +61,95 @@ glm::dvec3 rotatedWith(const glm::dvec3 &v, const glm::dvec3 &from, const glm::d
     return cos * v + glm::cross(axis, v) + axis * (glm::dot(axis, v) / (1.0 + cos));
 }
 
-// The weight surface voxel i's downstream kernel gives surface voxel j of its 3^3 block (before normalizing): a
-// Gaussian of the half-space's displacement (SunReturned::downstream, spread) in i's tangent plane, times j's patch
-// area and the cosine between the normals; smooth patches only.
-double downstreamWeight(const SnowTopology &topo, const SunReturned &from, std::size_t i, std::size_t j, double h) {
-    const SurfacePatch &a = topo.patches[i], &b = topo.patches[j];
+// The weights surface voxel i's downstream kernels (one per channel) give surface voxel j of its 3^3 block (before
+// normalizing): a Gaussian of the half-space's displacement (SunReturned::downstream, spread) in i's tangent plane,
+// times j's patch area and the cosine between the normals; smooth patches only. a, b: i's and j's patches; d: j's
+// voxel less i's.
+glm::dvec3 downstreamWeights(const SurfacePatch &a, const std::array<const SunReturned *, 3> &from,
+                             const SurfacePatch &b, const openvdb::Coord &d, double h) {
     const double facing = glm::dot(a.normal, b.normal);
-    if (b.sharp || facing <= 0.0) return 0.0;
-    if (from.spread <= 0.0f) return i == j ? 1.0 : 0.0;
-    const openvdb::Coord d = topo.coord[j] - topo.coord[i];
+    if (b.sharp || facing <= 0.0) return glm::dvec3(0.0);
     glm::dvec3 step = h * glm::dvec3(d.x(), d.y(), d.z());
     step -= glm::dot(step, a.normal) * a.normal;
-    const glm::dvec3 off = step - glm::dvec3(from.downstream);
-    return facing * b.area * std::exp(-glm::dot(off, off) / (2.0 * double(from.spread) * double(from.spread)));
+    const double weighted = facing * b.area;
+    glm::dvec3 weight;
+    for (int c = 0; c < 3; ++c) {
+        const SunReturned &kernel = *from[c];
+        if (kernel.spread <= 0.0f) {
+            weight[c] = d == openvdb::Coord(0) ? 1.0 : 0.0;
+            continue;
+        }
+        const glm::dvec3 off = step - glm::dvec3(kernel.downstream);
+        weight[c] = weighted * std::exp(-glm::dot(off, off) / (2.0 * double(kernel.spread) * double(kernel.spread)));
+    }
+    return weight;
 }
 
 }  // namespace
 
-// Channel c's sun light each smooth patch returns at once (`sun`; its atOnce averaged over the neighbourhood as the
-// outflow is, for a staircase lets it out unevenly), where it leaves: over the surface voxels of its 3^3 block by
-// downstreamWeight, the weights of each sender summing to one (the power is kept), the forms turned with the normal,
+// The three channels' sun light each smooth patch returns at once (`sun`; its atOnce averaged over the neighbourhood as
+// the outflow is, for a staircase lets it out unevenly), where it leaves: over the surface voxels of its 3^3 block by
+// downstreamWeights, the weights of each sender summing to one (the power is kept), the forms turned with the normal,
 // added to the receivers' returned light; what escaped at once is taken out of their `leaving`. A flat, evenly lit
 // surface receives what it sends (the flat slabs unchanged); past a terminator the patches downstream take what
-// entered before it (docs/bake.md, Method 5).
-void sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SunReturned> &sun, int c, double h,
+// entered before it (docs/bake.md, Method 5). The channels share each pair's reads (the loops are bound by them).
+void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValues<SunReturned>, 3> &sun, double h,
                           SurfaceValues<SurfaceLight> &out) {
-    SurfaceValues<float> total(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);   // each sender's weights' sum
-    SurfaceValues<float> atOnce(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);  // W sent, averaged
-    auto smooth = [&](std::size_t i) { return topo.patches[i].isSurface() && !topo.patches[i].sharp; };
+    // By surface slot: each neighbour's slot looked up once.
+    const std::vector<std::int32_t> &slot = *topo.surfaceSlot;
+    const std::vector<SurfacePatch> &patch = topo.patches.values();
+    auto sent = [&](std::int32_t s) {
+        return std::array<const SunReturned *, 3>{&sun[0].values()[s], &sun[1].values()[s], &sun[2].values()[s]};
+    };
+    std::vector<glm::vec3> total(topo.surfaceVoxels(), glm::vec3(0.0f));   // each sender's weights' sum
+    std::vector<glm::vec3> atOnce(topo.surfaceVoxels(), glm::vec3(0.0f));  // W sent, averaged
+    auto smooth = [&](std::int32_t s) { return s >= 0 && patch[s].isSurface() && !patch[s].sharp; };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!smooth(i)) continue;
-            const auto [leaving, area] = neighbourhoodOutflow<double>(
-                topo, i, topo.patches[i].normal, [&](std::size_t j) { return double(sun[j].atOnce); });
-            atOnce.surface(i) = float(leaving / area * double(topo.patches[i].area));
-            double sum = 0.0;
-            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k)
-                sum += downstreamWeight(topo, sun[i], i, topo.neighbourhood[k], h);
-            total.surface(i) = float(sum);
+            const std::int32_t si = slot[i];
+            if (!smooth(si)) continue;
+            const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(topo, i, patch[si].normal, [&](std::size_t j) {
+                return glm::dvec3(sun[0][j].atOnce, sun[1][j].atOnce, sun[2][j].atOnce);
+            });
+            atOnce[si] = glm::vec3(leaving / area * double(patch[si].area));
+            const auto from = sent(si);
+            glm::dvec3 sum(0.0);
+            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
+                const std::uint32_t j = topo.neighbourhood[k];
+                sum += downstreamWeights(patch[si], from, patch[slot[j]], topo.coord[j] - topo.coord[i], h);
+            }
+            total[si] = glm::vec3(sum);
         }
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t j = range.begin(); j != range.end(); ++j) {
-            if (!smooth(j)) continue;
-            const glm::dvec3 to = topo.patches[j].normal;
-            float l0 = 0.0f;
-            glm::vec3 l1(0.0f);
+            const std::int32_t sj = slot[j];
+            if (!smooth(sj)) continue;
+            const glm::dvec3 to = patch[sj].normal;
+            glm::vec3 l0(0.0f);
+            glm::mat3 l1(0.0f);  // column c: channel c's
             for (std::size_t k = topo.neighbourhoodStart[j]; k < topo.neighbourhoodStart[j + 1]; ++k) {
                 const std::uint32_t i = topo.neighbourhood[k];
-                if (!smooth(i) || !(total[i] > 0.0f)) continue;
-                const double w = downstreamWeight(topo, sun[i], i, j, h) / total[i];
-                if (w <= 0.0) continue;
-                // what escaped at once in the escape function's shape
-                l0 += float(w * (sun[i].l0 + 3.0 / 7.0 * atOnce[i]));
-                l1 += glm::vec3(w * (rotatedWith(glm::dvec3(sun[i].l1), topo.patches[i].normal, to) +
-                                     6.0 / 7.0 * atOnce[i] * to));
+                const std::int32_t si = slot[i];
+                if (!smooth(si)) continue;
+                const auto from = sent(si);
+                const glm::dvec3 weights = downstreamWeights(patch[si], from, patch[sj], topo.coord[j] - topo.coord[i], h);
+                for (int c = 0; c < 3; ++c) {
+                    if (!(total[si][c] > 0.0f)) continue;
+                    const double w = weights[c] / total[si][c];
+                    if (w <= 0.0) continue;
+                    // what escaped at once in the escape function's shape
+                    l0[c] += float(w * (from[c]->l0 + 3.0 / 7.0 * atOnce[si][c]));
+                    l1[c] += glm::vec3(w * (rotatedWith(glm::dvec3(from[c]->l1), patch[si].normal, to) +
+                                            6.0 / 7.0 * atOnce[si][c] * to));
+                }
             }
             SurfaceLight &received = out.surface(j);
-            received.returned.l0[c] += l0;
-            received.returned.l1[c] += l1;
-            received.leaving[c] -= sun[j].atOnce;
+            for (int c = 0; c < 3; ++c) {
+                received.returned.l0[c] += l0[c];
+                received.returned.l1[c] += l1[c];
+                received.leaving[c] -= sun[c][j].atOnce;
+            }
         }
     });
 }

@@ -2,6 +2,7 @@
 
 // Where the suns' light a half-space returns leaves: downstream of where it entered.
 
+#include <array>
 #include <cstddef>
 
 #include <glm/vec3.hpp>
@@ -28,11 +29,11 @@ struct SunReturned {
 };
 
 // Surface voxel i's downstream kernel (`surface`'s downstream and spread) from the beams entering it.
-void downstreamKernel(const Scene &scene, const IncidentLight &light, const ChannelSystem &sys, const Channel &ch,
+void downstreamKernel(const Scene &scene, const IncidentLight &light, const SurfaceTerms &sys, const Channel &ch,
                       const SnowTopology &topo, std::size_t i, SunReturned &surface);
 
-// Channel c's sun light each smooth patch returns at once, moved to where it leaves (added to `out`).
-void sunLeavingDownstream(const SnowTopology &topo, const SurfaceValues<SunReturned> &sun, int c, double h,
+// The three channels' sun light each smooth patch returns at once, moved to where it leaves (added to `out`).
+void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValues<SunReturned>, 3> &sun, double h,
                           SurfaceValues<SurfaceLight> &out);
 
 }  // namespace firn::bake

@@ -16,25 +16,33 @@ namespace firn::bake {
 
 namespace {
 
-// The fluence's gradient along surface voxel i's patch (per m): least squares over the surface voxels of its
-// 3^3 block (weighted by the cosine between their normals and its own), in its tangent plane.
-glm::dvec3 surfaceGradient(const SnowTopology &topo, const std::vector<double> &phi, std::size_t i, double h) {
+// The three channels' fluence gradients along surface voxel i's patch (per m): least squares over the surface voxels
+// of its 3^3 block (weighted by the cosine between their normals and its own), in its tangent plane.
+std::array<glm::dvec3, 3> surfaceGradients(const SnowTopology &topo, const std::array<std::vector<double>, 3> &phi,
+                                           std::size_t i, double h) {
     const glm::dvec3 n = topo.patches[i].normal;
     const glm::dvec3 u = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
     const glm::dvec3 v = glm::cross(n, u);
-    double a = 0.0, b = 0.0, c = 0.0, ru = 0.0, rv = 0.0;
+    double a = 0.0, b = 0.0, c = 0.0;
+    std::array<double, 3> ru{}, rv{};
     for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
         const std::uint32_t j = topo.neighbourhood[k];
         const double w = std::max(0.0, glm::dot(n, topo.patches[j].normal));
         if (j == i || w <= 0.0) continue;
         const openvdb::Coord d = topo.coord[j] - topo.coord[i];
         const glm::dvec3 step = h * glm::dvec3(d.x(), d.y(), d.z());
-        const double x = glm::dot(step, u), y = glm::dot(step, v), f = phi[j] - phi[i];
-        a += w * x * x, b += w * x * y, c += w * y * y, ru += w * x * f, rv += w * y * f;
+        const double x = glm::dot(step, u), y = glm::dot(step, v);
+        a += w * x * x, b += w * x * y, c += w * y * y;
+        for (int ch = 0; ch < 3; ++ch) {
+            const double f = phi[ch][j] - phi[ch][i];
+            ru[ch] += w * x * f, rv[ch] += w * y * f;
+        }
     }
     const double det = a * c - b * b;
-    if (det <= 1e-12 * h * h * h * h) return glm::dvec3(0.0);
-    return ((c * ru - b * rv) * u + (a * rv - b * ru) * v) / det;
+    std::array<glm::dvec3, 3> gradient{};
+    if (det <= 1e-12 * h * h * h * h) return gradient;
+    for (int ch = 0; ch < 3; ++ch) gradient[ch] = ((c * ru[ch] - b * rv[ch]) * u + (a * rv[ch] - b * ru[ch]) * v) / det;
+    return gradient;
 }
 
 // kg/m^2 of snow from surface voxel i's centre out through its patch: its air faces' ramps by their shares.
@@ -107,15 +115,16 @@ glm::dvec3 travelAlong(const glm::dvec3 &d, const glm::dvec3 &n) {
     return glm::length(t) > 1e-9 ? glm::normalize(t) : glm::dvec3(0.0);
 }
 
-// Channel c's light leaving each surface voxel, from its solve.
+// The three channels' light leaving each surface voxel, from their solves: per voxel the channels in turn, the
+// geometry and the neighbours read once for the three.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
-                  const ChannelSystem &sys, const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out) {
+                  const std::array<SurfaceTerms, 3> &terms, const std::array<std::vector<double>, 3> &phi,
+                  SurfaceValues<SurfaceLight> &out) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
-    const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
     const Channel kernelChannel{optics.extinctionPerDensity, optics.albedo[1], optics.g};  // one kernel for the three
-    SurfaceValues<SunReturned> sun(topo.surfaceSlot, topo.surfaceVoxels());
-    const double y = absorptionParameter(ch.omega, ch.g);
+    std::array<SurfaceValues<SunReturned>, 3> sun;
+    for (auto &channel : sun) channel = SurfaceValues<SunReturned>(topo.surfaceSlot, topo.surfaceVoxels());
     // Where the snow absorbs, the diffusion returns other amounts than a half-space of this snow does (the sun
     // lobe's Monte Carlo table): of diffuse light less (the spherical albedo 0.447 against Marshak's 0.429 at
     // omega 0.98, g 0.85; 0.330 against 0.300 at omega 0.9, g 0.6), of a beam more at steep incidence and less at
@@ -123,40 +132,53 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // g 0.85: schemeBeamAlbedo, on the snow beneath the patch). What it misses (negative where it returns too
     // much) leaves too: an absorbing ball's shadowed side, lit by the sky alone, was 5-9 % too dark, its sunward
     // face 5-8 % too bright (docs/bake.md, Accuracy).
-    const double diffuseMissed = sphericalAlbedo(ch.g, y) - ch.diffuseAlbedo();
+    struct ChannelOptics {
+        Channel ch;
+        double y, diffuseMissed;
+    };
+    std::array<ChannelOptics, 3> channels;
+    for (int c = 0; c < 3; ++c) {
+        const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
+        const double y = absorptionParameter(ch.omega, ch.g);
+        channels[c] = {ch, y, sphericalAlbedo(ch.g, y) - ch.diffuseAlbedo()};
+    }
     const double h = medium.voxelSize();
+    // The part of a smooth patch's diffuse light that arrives as a beam (skyBeamPart; none at a sharp edge).
+    auto skyBeamOn = [&](std::size_t i) {
+        const glm::dvec3 snowE = snow.light ? glm::dvec3((*snow.light)[i]) : glm::dvec3(0.0);
+        const glm::dvec3 E = glm::dvec3(light.skyOnSurface[i]) + snowE;
+        const double grey = (E.x + E.y + E.z) / 3.0;
+        if (topo.patches[i].sharp || !(grey > 0.0)) return SkyBeam{};
+        const glm::dvec3 snowAim = snow.aim ? glm::dvec3((*snow.aim)[i]) : glm::dvec3(0.0);
+        return skyBeamPart((glm::dvec3(light.skyAim[i]) + snowAim) / grey, topo.patches[i].normal);
+    };
     // Sun light that entered returns as a half-space of this snow returns it, with the sun lobe's albedo and
     // shape; sky light isotropically (a non-absorbing half-space returns uniform sky light so; absorption takes
     // the escape function's shape from it, by reciprocity with ART's plane albedo). What the diffusion says
     // beyond that (absorbed sky light, light gone elsewhere, light from deep inside, from the ground or from
     // neighbouring snow) and what it misses take the escape function's u(mu) = 3/7 + 6/7 mu. So:
-    // leaving = sum returned (shape - u) + (out + missed) u. The returned part (W, moments of a linear form)
+    // leaving = sum returned (shape - u) + (out + missed) u. Channel c's returned part (W, moments of a linear form)
     // through a surface of normal n taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's; with
     // `peak` (a smooth patch, or each air face of a sharp edge), the suns' light returned sharply forwards leaves as
     // the peaked lobe instead (SunPeak: at grazing sun the lit rim seen against the sun, bench/bake_halfspace.py),
     // added to `peak` (radiance), the rest linear:
-    auto returnedThrough = [&](std::size_t i, const glm::dvec3 &n, double skyShare, const auto &beamShare,
-                               SurfaceLight *peak) {
+    auto returnedThrough = [&](int c, std::size_t i, const glm::dvec3 &n, double skyShare, const SkyBeam &beam,
+                               const auto &beamShare, SurfaceLight *peak) {
+        const Channel &ch = channels[c].ch;
+        const double y = channels[c].y;
         const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
-        const double sky = skyShare * sys.skyIn[i];
-        double r0 = sky * (1.0 - 3.0 / 7.0), missed = sky * diffuseMissed;  // W
+        const double sky = skyShare * terms[c].skyIn[i];
+        double r0 = sky * (1.0 - 3.0 / 7.0), missed = sky * channels[c].diffuseMissed;  // W
         glm::dvec3 r1 = -sky * escape1;
         // A smooth patch's lopsided diffuse light (sky, occluders' reflections and other snow's light, each from
         // where it arrives) returns as its beam part would, in the sun lobe's shape (a + b n.w + c t.w against the
         // even 1: the same exitance, a + 2b/3 = 1). Not a sharp edge's faces: the moment is over the patch
         // normal's hemisphere, and an even sky would lean 45 degrees off each face.
-        const glm::dvec3 snowE = snow.light ? glm::dvec3((*snow.light)[i]) : glm::dvec3(0.0);
-        const glm::dvec3 E = glm::dvec3(light.skyOnSurface[i]) + snowE;
-        const double grey = (E.x + E.y + E.z) / 3.0;
-        if (!topo.patches[i].sharp && grey > 0.0) {
-            const glm::dvec3 snowAim = snow.aim ? glm::dvec3((*snow.aim)[i]) : glm::dvec3(0.0);
-            const SkyBeam beam = skyBeamPart((glm::dvec3(light.skyAim[i]) + snowAim) / grey, n);
-            if (beam.share > 0.0) {
-                const SunLobe lobe = sunLobe(ch.g, std::clamp(glm::dot(beam.towards, n), 0.05, 1.0), y);
-                const double returned = beam.share * lobe.albedo * sky;
-                r0 += returned * (lobe.a - 1.0);
-                r1 += returned * (lobe.b * n + lobe.c * travelAlong(-beam.towards, n));
-            }
+        if (beam.share > 0.0) {
+            const SunLobe lobe = sunLobe(ch.g, std::clamp(glm::dot(beam.towards, n), 0.05, 1.0), y);
+            const double returned = beam.share * lobe.albedo * sky;
+            r0 += returned * (lobe.a - 1.0);
+            r1 += returned * (lobe.b * n + lobe.c * travelAlong(-beam.towards, n));
         }
         double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0;  // the beams' part
         glm::dvec3 sun1(0.0);
@@ -167,7 +189,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         const double voxelR = 3.0 * h * ch.sigmaTr(densityBeneath(topo, i, n)),
                      nodeR = 3.0 * ch.sigmaTr(patchRampMass(topo, i));
         for (std::size_t s = 0; s < light.beams.size(); ++s) {
-            const double P = sys.sunIn[s][i] * beamShare(s);
+            const double P = terms[c].sunIn[s][i] * beamShare(s);
             if (P <= 0.0) continue;
             const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
             const double mu0 = std::clamp(-glm::dot(d, n), 0.05, 1.0);
@@ -197,65 +219,71 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             if (!topo.patches[i].isSurface()) continue;
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
             const SurfacePatch &patch = topo.patches[i];
-            const double leaving = sys.escaped[i] + sys.outConductance[i] * phi[i];
             SurfaceLight &surface = out.surface(i);
-            const ReturnedLight r = returnedThrough(i, patch.normal, 1.0, [](std::size_t) { return 1.0; },
-                                                    patch.sharp ? nullptr : &surface);
-            // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
-            // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
-            // through the smooth surface or, at a sharp edge, through each air face.
-            const double k = crossingAnisotropy(ch.g);
-            double crossing = 0.0;
-            glm::dvec3 axis(0.0);
-            for (std::size_t s = 0; s < light.beams.size(); ++s) {
-                const double beam = light.beams[s].atVoxel[i][c];
-                const glm::dvec3 d = -towardsBeam(scene, s, centre);
-                for (int f = 0; f < 6 && beam > 0.0; ++f) {
-                    const double cos = glm::dot(d, patch.sharp ? faceNormal(f) : patch.normal);
-                    if (patch.share[f] <= 0.0f || cos <= 0.0) continue;
-                    const double l0 = beam * cos * patch.area * patch.share[f] / (kPi * (1.0 + 3.0 * k * cos));
-                    crossing += l0, axis += l0 * d;
-                }
-            }
+            const SkyBeam skyBeam = skyBeamOn(i);
             // Light flowing along the surface leaves leaning the way it flows: the diffusion's radiance
             // (phi + 3 F . w) / 4 pi holds the tangential flux F_t = -D grad_t phi, which the escape function (the
             // flux across the surface) does not; added to the exit form relative to phi, 3 F_t / phi, it moves no
             // exitance (t . w integrates to zero over the hemisphere). Past a ball's terminator the fluence falls
             // away from the lit side, and on its sunward face away from the point under the sun (docs/bake.md,
             // Accuracy: the terminator). At most 3/7, so the form stays positive at grazing exit.
-            glm::dvec3 drift(0.0);
-            if (!patch.sharp && phi[i] > 0.0) {
-                const glm::dvec3 g = surfaceGradient(topo, phi, i, h);
-                const double sigmaTr = ch.sigmaTr(densityBeneath(topo, i, patch.normal));
-                drift = -(g - glm::dot(g, patch.normal) * patch.normal) / (sigmaTr * phi[i]);
-                const double length = glm::length(drift);
-                if (length > 3.0 / 7.0) drift *= 3.0 / 7.0 / length;
-            }
-            surface.crossing[c] = float(crossing);
-            if (crossing > 0.0) surface.crossingAxis = glm::vec3(axis / crossing);
-            if (patch.sharp) {
-                surface.returned.l0[c] = float(r.sky0 + r.sun0);
-                surface.returned.l1[c] = glm::vec3(r.sky1 + r.sun1 + leaving * drift);
+            const std::array<glm::dvec3, 3> gradient =
+                patch.sharp ? std::array<glm::dvec3, 3>{} : surfaceGradients(topo, phi, i, h);
+            for (int c = 0; c < 3; ++c) {
+                const Channel &ch = channels[c].ch;
+                const double leaving = terms[c].escaped[i] + terms[c].outConductance[i] * phi[c][i];
+                const ReturnedLight r = returnedThrough(c, i, patch.normal, 1.0, skyBeam, [](std::size_t) { return 1.0; },
+                                                        patch.sharp ? nullptr : &surface);
+                // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
+                // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
+                // through the smooth surface or, at a sharp edge, through each air face.
+                const double k = crossingAnisotropy(ch.g);
+                double crossing = 0.0;
+                glm::dvec3 axis(0.0);
+                for (std::size_t s = 0; s < light.beams.size(); ++s) {
+                    const double beam = light.beams[s].atVoxel[i][c];
+                    const glm::dvec3 d = -towardsBeam(scene, s, centre);
+                    for (int f = 0; f < 6 && beam > 0.0; ++f) {
+                        const double cos = glm::dot(d, patch.sharp ? faceNormal(f) : patch.normal);
+                        if (patch.share[f] <= 0.0f || cos <= 0.0) continue;
+                        const double l0 = beam * cos * patch.area * patch.share[f] / (kPi * (1.0 + 3.0 * k * cos));
+                        crossing += l0, axis += l0 * d;
+                    }
+                }
+                glm::dvec3 drift(0.0);
+                if (!patch.sharp && phi[c][i] > 0.0) {
+                    const glm::dvec3 g = gradient[c];
+                    const double sigmaTr = ch.sigmaTr(densityBeneath(topo, i, patch.normal));
+                    drift = -(g - glm::dot(g, patch.normal) * patch.normal) / (sigmaTr * phi[c][i]);
+                    const double length = glm::length(drift);
+                    if (length > 3.0 / 7.0) drift *= 3.0 / 7.0 / length;
+                }
+                surface.crossing[c] = float(crossing);
+                if (crossing > 0.0) surface.crossingAxis = glm::vec3(axis / crossing);
+                if (patch.sharp) {
+                    surface.returned.l0[c] = float(r.sky0 + r.sun0);
+                    surface.returned.l1[c] = glm::vec3(r.sky1 + r.sun1 + leaving * drift);
+                    surface.leaving[c] = float(leaving);
+                    continue;
+                }
+                // The suns' light the half-space returns at the patch it entered leaves downstream
+                // (sunLeavingDownstream): what escaped at once and what the diffusion misses, with their share of the
+                // sun lobe's shape (the rest of the shape goes with the light the diffusion carries from the node).
+                // The peaked lobe stays: single scattering at grazing sun leaves within a mean free path, a small
+                // part of 1/sigma_tr.
+                const double atOnce = terms[c].sunEscaped[i];
+                const double moved =
+                    r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
+                surface.returned.l0[c] = float(r.sky0 + (1.0 - moved) * r.sunShape0);
+                surface.returned.l1[c] = glm::vec3(r.sky1 + (1.0 - moved) * r.sunShape1 + leaving * drift);
                 surface.leaving[c] = float(leaving);
-                continue;
+                SunReturned &sunHere = sun[c].surface(i);
+                sunHere.l0 = float(moved * r.sunShape0 + r.sunMissed * 3.0 / 7.0);
+                sunHere.l1 = glm::vec3(moved * r.sunShape1 + r.sunMissed * 6.0 / 7.0 * patch.normal);
+                sunHere.atOnce = float(atOnce);
+                // The same kernel for each channel, found per channel from its beams' power (a loop over the beams).
+                downstreamKernel(scene, light, terms[c], kernelChannel, topo, i, sunHere);
             }
-            // The suns' light the half-space returns at the patch it entered leaves downstream (sunLeavingDownstream):
-            // what escaped at once and what the diffusion misses, with their share of the sun lobe's shape (the
-            // rest of the shape goes with the light the diffusion carries from the node). The peaked lobe stays:
-            // single scattering at grazing sun leaves within a mean free path, a small part of 1/sigma_tr.
-            const double atOnce = sys.sunEscaped[i];
-            const double moved =
-                r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
-            surface.returned.l0[c] = float(r.sky0 + (1.0 - moved) * r.sunShape0);
-            surface.returned.l1[c] = glm::vec3(r.sky1 + (1.0 - moved) * r.sunShape1 + leaving * drift);
-            surface.leaving[c] = float(leaving);
-            SunReturned &sunHere = sun.surface(i);
-            sunHere.l0 = float(moved * r.sunShape0 + r.sunMissed * 3.0 / 7.0);
-            sunHere.l1 = glm::vec3(moved * r.sunShape1 + r.sunMissed * 6.0 / 7.0 * patch.normal);
-            sunHere.atOnce = float(atOnce);
-            // The same kernel for each channel, found again per channel (a loop over the beams): held through the
-            // three solves it would add 16 bytes per surface voxel at the solves' peak (docs/bake.md, Memory).
-            downstreamKernel(scene, light, sys, kernelChannel, topo, i, sunHere);
         }
     });
     // Sharp edges: each air face's own exit radiance (the light returned through it, the exitance of the
@@ -270,29 +298,31 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const SurfacePatch &patch = topo.patches[i];
             if (!patch.sharp) continue;
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
-            faces.clear();
-            for (int f = 0; f < 6; ++f) {
-                if (patch.share[f] <= 0.0f) continue;
-                const glm::dvec3 n = faceNormal(f);
-                const ReturnedLight r = returnedThrough(i, n, patch.share[f], [&](std::size_t s) {
-                    const glm::dvec3 w = towardsBeam(scene, s, centre);  // the beam entered each face by its cosine
-                    double total = 0.0;
-                    for (int g = 0; g < 6; ++g)
-                        if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
-                    return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
-                }, &out.surface(i));
-                const auto [leaving, area] =
-                    neighbourhoodOutflow<double>(topo, i, n, [&](std::size_t j) { return double(out[j].leaving[c]); });
-                const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
-                faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
-                                 (r.sky1 + r.sun1) / own + exitance * 6.0 / 7.0 / kPi * n});
+            for (int c = 0; c < 3; ++c) {
+                faces.clear();
+                for (int f = 0; f < 6; ++f) {
+                    if (patch.share[f] <= 0.0f) continue;
+                    const glm::dvec3 n = faceNormal(f);
+                    const ReturnedLight r = returnedThrough(c, i, n, patch.share[f], SkyBeam{}, [&](std::size_t s) {
+                        const glm::dvec3 w = towardsBeam(scene, s, centre);  // the beam entered each face by its cosine
+                        double total = 0.0;
+                        for (int g = 0; g < 6; ++g)
+                            if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
+                        return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
+                    }, &out.surface(i));
+                    const auto [leaving, area] = neighbourhoodOutflow<double>(
+                        topo, i, n, [&](std::size_t j) { return double(out[j].leaving[c]); });
+                    const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
+                    faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
+                                     (r.sky1 + r.sun1) / own + exitance * 6.0 / 7.0 / kPi * n});
+                }
+                const SourceLobe lobe = edgeLobe(faces);
+                out.surface(i).returned.l0[c] = float(lobe.l0);
+                out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);
             }
-            const SourceLobe lobe = edgeLobe(faces);
-            out.surface(i).returned.l0[c] = float(lobe.l0);
-            out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);
         }
     });
-    sunLeavingDownstream(topo, sun, c, h, out);
+    sunLeavingDownstream(topo, sun, h, out);
 }
 
 }  // namespace firn::bake

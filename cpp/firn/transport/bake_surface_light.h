@@ -2,6 +2,7 @@
 
 // The light leaving the snow's surface voxels, from a channel's solve.
 
+#include <array>
 #include <cstddef>
 #include <utility>
 #include <vector>
@@ -66,8 +67,9 @@ double densityBeneath(const SnowTopology &topo, std::size_t i, const glm::dvec3 
 // The unit direction along a surface of normal n in which light travelling along d moves.
 glm::dvec3 travelAlong(const glm::dvec3 &d, const glm::dvec3 &n);
 
-// Channel c's light leaving each surface voxel (`out`), from its system and fluence phi.
+// The three channels' light leaving each surface voxel (`out`), from their systems' surface terms and fluences phi.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
-                  const ChannelSystem &sys, const std::vector<double> &phi, int c, SurfaceValues<SurfaceLight> &out);
+                  const std::array<SurfaceTerms, 3> &terms, const std::array<std::vector<double>, 3> &phi,
+                  SurfaceValues<SurfaceLight> &out);
 
 }  // namespace firn::bake
