@@ -298,6 +298,11 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const SurfacePatch &patch = topo.patches[i];
             if (!patch.sharp) continue;
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+            std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
+            for (int f = 0; f < 6; ++f)
+                if (patch.share[f] > 0.0f)
+                    outflow[f] = neighbourhoodOutflow<glm::dvec3>(
+                        topo, i, faceNormal(f), [&](std::size_t j) { return glm::dvec3(out[j].leaving); });
             for (int c = 0; c < 3; ++c) {
                 faces.clear();
                 for (int f = 0; f < 6; ++f) {
@@ -310,8 +315,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                             if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
                         return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
                     }, &out.surface(i));
-                    const auto [leaving, area] = neighbourhoodOutflow<double>(
-                        topo, i, n, [&](std::size_t j) { return double(out[j].leaving[c]); });
+                    const double leaving = outflow[f].first[c], area = outflow[f].second;
                     const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
                     faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
                                      (r.sky1 + r.sun1) / own + exitance * 6.0 / 7.0 / kPi * n});
