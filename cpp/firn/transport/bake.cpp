@@ -208,7 +208,8 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                 system.releaseDiffuseTerms();
                 if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
                 if (topo.size() > 0) {
-                    MultigridSolver solver(std::move(system.A), std::move(system.remainder));
+                    // The channel before's levels taken over: the rows, blocks and colours are the same.
+                    MultigridSolver solver(std::move(system.A), std::move(system.remainder), &workspace);
                     releaseFreedMemory();  // what building the hierarchy freed, before CG's vectors
                     // Passes before the last only feed the gathering between surfaces: 0.1 % will do.
                     const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, 1e-3) : preset.tolerance;
@@ -217,7 +218,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                     stats.iterations[c] += result.iterations;
                     stats.relativeResidual[c] = result.relativeResidual;
                     if (c + 1 < 3) {
-                        std::tie(storage.A, storage.remainder) = std::move(solver).release();
+                        std::tie(storage.A, storage.remainder) = std::move(solver).release(&workspace);
                         storage.b = std::move(workspace.spare);
                     }
                 }

@@ -108,9 +108,10 @@ void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValu
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const std::int32_t si = slot[i];
             if (!smooth(si)) continue;
-            const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(topo, i, patch[si].normal, [&](std::size_t j) {
+            const auto atOnceOf = [&](std::size_t j) {
                 return glm::dvec3(sun[0][j].atOnce, sun[1][j].atOnce, sun[2][j].atOnce);
-            });
+            };
+            const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(topo, i, patch[si].normal, atOnceOf);
             atOnce[si] = glm::vec3(leaving / area * double(patch[si].area));
             const auto from = sent(si);
             glm::dvec3 sum(0.0);
@@ -133,7 +134,8 @@ void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValu
                 const std::int32_t si = slot[i];
                 if (!smooth(si)) continue;
                 const auto from = sent(si);
-                const glm::dvec3 weights = downstreamWeights(patch[si], from, patch[sj], topo.coord[j] - topo.coord[i], h);
+                const glm::dvec3 weights =
+                    downstreamWeights(patch[si], from, patch[sj], topo.coord[j] - topo.coord[i], h);
                 for (int c = 0; c < 3; ++c) {
                     if (!(total[si][c] > 0.0f)) continue;
                     const double w = weights[c] / total[si][c];

@@ -18,8 +18,8 @@ namespace firn::bake {
 // The suns' light the half-space model returns at the smooth patch it entered, which leaves downstream
 // (sunLeavingDownstream, by the half-space's displacement `downstream` +- `spread`, m), one channel's: what the
 // diffusion misses of it and its share of the sun lobe's shape (W and moments), and what escaped at once (W).
-// Held for one channel, from the end of its solve to the end of its surfaceLight (in SurfaceLight, through all
-// three solves, it put the car's peak at 311-313 bytes per active voxel; docs/bake.md, Memory).
+// Held for the three channels while surfaceLight works out their surfaces, after the pass's solves (in SurfaceLight,
+// through all three solves, it put the car's peak at 311-313 bytes per active voxel; docs/bake.md, Memory).
 struct SunReturned {
     float l0 = 0.0f;
     glm::vec3 l1{0.0f};

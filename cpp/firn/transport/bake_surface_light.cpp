@@ -232,8 +232,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             for (int c = 0; c < 3; ++c) {
                 const Channel &ch = channels[c].ch;
                 const double leaving = terms[c].escaped[i] + terms[c].outConductance[i] * phi[c][i];
-                const ReturnedLight r = returnedThrough(c, i, patch.normal, 1.0, skyBeam, [](std::size_t) { return 1.0; },
-                                                        patch.sharp ? nullptr : &surface);
+                const auto whole = [](std::size_t) { return 1.0; };
+                const ReturnedLight r =
+                    returnedThrough(c, i, patch.normal, 1.0, skyBeam, whole, patch.sharp ? nullptr : &surface);
                 // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
                 // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
                 // through the smooth surface or, at a sharp edge, through each air face.

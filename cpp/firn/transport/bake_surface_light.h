@@ -1,6 +1,6 @@
 #pragma once
 
-// The light leaving the snow's surface voxels, from a channel's solve.
+// The light leaving the snow's surface voxels, from the three channels' solves.
 
 #include <array>
 #include <cstddef>
@@ -18,7 +18,7 @@
 
 namespace firn::bake {
 
-// What the solve yields for surface voxels, per channel: the light leaving through their patch, as power
+// What the solves yield for surface voxels, per channel: the light leaving through their patch, as power
 // times angular shape (W; radiance after dividing by pi A).
 struct SurfaceLight {
     // What returns of the light that entered there, over and above the escape function's share of it

@@ -123,15 +123,14 @@ void prepare(Level &level) {
     level.b.assign(n, 0.0), level.x.assign(n, 0.0);
 }
 
-// The next level: 2x2x2 blocks of this one; returns false when that would barely shrink it.
-bool coarsen(Level &fine, Level &coarse) {
+// The next level's rows: 2x2x2 blocks of this one's voxels (fine.members, coarse's voxels; `block`: each fine row's
+// block, its row there); returns false when that would barely shrink it.
+bool aggregate(Level &fine, Level &coarse, std::vector<std::uint32_t> &block) {
     const Stencil<float> &A = fine.A;
-    const Stencil<float>::Neighbours &N = *A.neighbour;
     const std::size_t n = A.size();
     openvdb::Int32Tree index(-1);
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> access(index);
-    std::vector<std::uint32_t> aggregate(n);  // row -> row of the next level
-    Stencil<float> &C = coarse.A;
+    block.resize(n);
     auto coord = std::make_shared<std::vector<openvdb::Coord>>();
     for (std::size_t i = 0; i < n; ++i) {
         const openvdb::Coord &c = (*A.coord)[i];
@@ -142,22 +141,40 @@ bool coarsen(Level &fine, Level &coarse) {
             access.setValue(cc, id);
             coord->push_back(cc);
         }
-        aggregate[i] = std::uint32_t(id);
+        block[i] = std::uint32_t(id);
     }
     const std::size_t nc = coord->size();
-    C.coord = std::move(coord);
+    coarse.A.coord = std::move(coord);
     if (nc > n * 3 / 4) return false;
-    using StencilOperator = Stencil<float>;
 
     // Members of each block, in fine order (CSR).
     fine.membersStart.assign(nc + 1, 0);
-    for (std::uint32_t a : aggregate) ++fine.membersStart[a + 1];
+    for (std::uint32_t a : block) ++fine.membersStart[a + 1];
     for (std::size_t I = 0; I < nc; ++I) fine.membersStart[I + 1] += fine.membersStart[I];
     fine.members.resize(n);
     std::vector<std::uint32_t> fill(fine.membersStart.begin(), fine.membersStart.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) fine.members[fill[aggregate[i]]++] = std::uint32_t(i);
+    for (std::size_t i = 0; i < n; ++i) fine.members[fill[block[i]]++] = std::uint32_t(i);
+    return true;
+}
 
-    auto neighbour = std::make_shared<Stencil<float>::Neighbours>(nc);
+// Each fine row's block (its row on the next level), from the blocks' members.
+std::vector<std::uint32_t> blockOfRows(const Level &fine) {
+    std::vector<std::uint32_t> block(fine.A.size());
+    parallelRows(fine.membersStart.size() - 1, [&](std::size_t I) {
+        for (std::uint32_t m = fine.membersStart[I]; m < fine.membersStart[I + 1]; ++m)
+            block[fine.members[m]] = std::uint32_t(I);
+    });
+    return block;
+}
+
+// The next level's operator summed from this one's over its blocks (`block`: each fine row's), and where `neighbour`
+// is given (a fresh build; levels taken over have theirs) the next level's neighbours.
+void sumCoarseOperator(const Level &fine, const std::vector<std::uint32_t> &block, Level &coarse,
+                       Stencil<float>::Neighbours *neighbour) {
+    const Stencil<float> &A = fine.A;
+    const Stencil<float>::Neighbours &N = *A.neighbour;
+    const std::size_t nc = fine.membersStart.size() - 1;
+    Stencil<float> &C = coarse.A;
     C.conductance.assign(nc, {});
     C.diag.assign(nc, 0.0);
     // A block's neighbour along an axis is the block its members' links on that side cross into (a voxel's
@@ -168,7 +185,7 @@ bool coarsen(Level &fine, Level &coarse) {
             double remainder = 0.0;  // sums in double, stored in float
             std::array<double, 6> crossing{};
             std::array<std::int32_t, 6> across;
-            across.fill(StencilOperator::kNone);
+            across.fill(Stencil<float>::kNone);
             for (std::uint32_t m = fine.membersStart[I]; m < fine.membersStart[I + 1]; ++m) {
                 const std::uint32_t i = fine.members[m];
                 remainder += A.diag[i];
@@ -176,19 +193,27 @@ bool coarsen(Level &fine, Level &coarse) {
                     const std::int32_t j = N[i][k];
                     if (j < 0) continue;
                     remainder -= A.conductance[i][k];
-                    if (aggregate[j] != I) crossing[k] += A.conductance[i][k], across[k] = std::int32_t(aggregate[j]);
+                    if (block[j] != I) crossing[k] += A.conductance[i][k], across[k] = std::int32_t(block[j]);
                 }
             }
             double diag = remainder;
             for (int k = 0; k < 6; ++k) {
-                (*neighbour)[I][k] = across[k];
+                if (neighbour) (*neighbour)[I][k] = across[k];
                 C.conductance[I][k] = float(across[k] < 0 ? 0.0 : 0.5 * crossing[k]);
                 diag += C.conductance[I][k];
             }
             C.diag[I] = float(diag);
         }
     });
-    C.neighbour = std::move(neighbour);
+}
+
+// The next level: 2x2x2 blocks of this one; returns false when that would barely shrink it.
+bool coarsen(Level &fine, Level &coarse) {
+    std::vector<std::uint32_t> block;
+    if (!aggregate(fine, coarse, block)) return false;
+    auto neighbour = std::make_shared<Stencil<float>::Neighbours>(fine.membersStart.size() - 1);
+    sumCoarseOperator(fine, block, coarse, neighbour.get());
+    coarse.A.neighbour = std::move(neighbour);
     return true;
 }
 
@@ -322,18 +347,29 @@ Stencil<float> singlePrecision(const StencilOperator &A) {
 
 MultigridSolver::MultigridSolver(StencilOperator fine) : MultigridSolver(singlePrecision(fine), remainderOf(fine)) {}
 
-MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remainder)
-    : hierarchy_(std::make_unique<Hierarchy>()) {
+MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remainder, Workspace *workspace) {
+    const bool takeOver = workspace && workspace->levels && workspace->levels->levels.front().colour.size() == fine.size();
+    hierarchy_ = takeOver ? std::move(workspace->levels) : std::make_shared<Hierarchy>();
     Hierarchy &h = *hierarchy_;
-    h.levels.emplace_back();
-    h.levels.back().A = std::move(fine);
-    h.remainder = std::move(remainder);
-    while (h.levels.back().A.size() > kDenseLimit) {
-        Level next;
-        if (!coarsen(h.levels.back(), next)) break;
-        h.levels.push_back(std::move(next));
+    if (takeOver) {
+        // The levels' rows, blocks and colours as they were: only the coarse operators are summed again (their
+        // vectors b and x are written before they are read).
+        h.levels.front().A = std::move(fine);
+        h.remainder = std::move(remainder);
+        for (std::size_t l = 0; l + 1 < h.levels.size(); ++l)
+            sumCoarseOperator(h.levels[l], blockOfRows(h.levels[l]), h.levels[l + 1], nullptr);
+    } else {
+        h.levels.emplace_back();
+        h.levels.back().A = std::move(fine);
+        h.remainder = std::move(remainder);
+        while (h.levels.back().A.size() > kDenseLimit) {
+            Level next;
+            if (!coarsen(h.levels.back(), next)) break;
+            h.levels.push_back(std::move(next));
+        }
+        for (Level &level : h.levels) prepare(level);
     }
-    for (Level &level : h.levels) prepare(level);
+    h.cholesky.clear();
     if (h.levels.back().A.size() <= kDenseLimit) h.cholesky = denseCholesky(h.levels.back().A);
     for (Level &level : h.levels) level.A.coord.reset();  // they only placed the rows in colours and blocks
 }
@@ -342,9 +378,10 @@ MultigridSolver::~MultigridSolver() = default;
 
 int MultigridSolver::levelCount() const { return int(hierarchy_->levels.size()); }
 
-std::pair<Stencil<float>, std::vector<float>> MultigridSolver::release() && {
+std::pair<Stencil<float>, std::vector<float>> MultigridSolver::release(Workspace *workspace) && {
     std::pair<Stencil<float>, std::vector<float>> out{std::move(hierarchy_->levels.front().A),
                                                        std::move(hierarchy_->remainder)};
+    if (workspace) workspace->levels = std::move(hierarchy_);
     hierarchy_.reset();
     return out;
 }

@@ -52,10 +52,23 @@ inline double rowRemainder(double diag, const std::array<double, 6> &conductance
 // the iteration count does not grow with the domain.
 class MultigridSolver {
   public:
+    // The vectors conjugate gradients work in, for a caller that solves systems of one size in turn: kept
+    // between solves, their pages are reused rather than mapped and cleared afresh (the bake's three channels).
+    // A spent solver's levels (release) serve the next solver of the same rows and neighbours: their blocks,
+    // neighbours and colours depend on the voxels alone, so only its coarse operators are summed again.
+    struct Hierarchy;  // levels, defined in multigrid.cpp
+    struct Workspace {
+        std::vector<double> p, z;
+        std::vector<double> spare;          // b's storage after a solve (holding its last residual)
+        std::shared_ptr<Hierarchy> levels;  // a spent solver's levels, or none
+    };
+
     explicit MultigridSolver(StencilOperator fine);
     // The same from the operator already in single precision and its remainder (diag minus the conductances,
     // summed in double): what the solver keeps of it (the bake assembles them so, without a double copy).
-    MultigridSolver(Stencil<float> fine, std::vector<float> remainder);
+    // With a workspace holding a spent solver's levels for the same rows and neighbours (release), their layout is
+    // taken over: the same solver as a fresh build, bit for bit.
+    MultigridSolver(Stencil<float> fine, std::vector<float> remainder, Workspace *workspace = nullptr);
     ~MultigridSolver();
 
     struct Result {
@@ -66,13 +79,6 @@ class MultigridSolver {
     // rounding noise ends in 0/0 (NaN everywhere). Smaller tolerances are raised to it.
     static constexpr double kFinestTolerance = 1e-12;
 
-    // The vectors conjugate gradients work in, for a caller that solves systems of one size in turn: kept
-    // between solves, their pages are reused rather than mapped and cleared afresh (the bake's three channels).
-    struct Workspace {
-        std::vector<double> p, z;
-        std::vector<double> spare;  // b's storage after a solve (holding its last residual)
-    };
-
     // x holds the initial guess on entry and is iterated in place; b is taken (pass it with std::move where it
     // is not needed after) and holds the residual meanwhile. Throws Cancelled when progress is cancelled (x then
     // holds the last iterate).
@@ -80,18 +86,16 @@ class MultigridSolver {
                  const SubProgress &progress, Workspace *workspace = nullptr) const;
 
     // The finest level's operator and remainder handed back, the solver spent: their storage can hold the next
-    // system of the same size.
-    std::pair<Stencil<float>, std::vector<float>> release() &&;
+    // system of the same size; given a workspace, the levels go to it for the next solver of the same rows.
+    std::pair<Stencil<float>, std::vector<float>> release(Workspace *workspace = nullptr) &&;
 
     int levelCount() const;
-
-    struct Hierarchy;  // levels, defined in multigrid.cpp
 
   private:
     Result iterate(std::vector<double> &b, std::vector<double> &x, double relativeTolerance, int maxIterations,
                    const SubProgress &progress, Workspace &workspace) const;
 
-    std::unique_ptr<Hierarchy> hierarchy_;
+    std::shared_ptr<Hierarchy> hierarchy_;
 };
 
 }  // namespace firn

@@ -139,6 +139,40 @@ TEST(Multigrid, SolvesInAnEarlierSolvesVectorsAsInFreshOnes) {
     EXPECT_EQ(reused, fresh);
 }
 
+// The bake's next channel takes over a spent solver's levels (release into the workspace): the same rows and
+// neighbours, another operator. Its coarse operators summed again over the kept blocks give the iterates of a fresh
+// build bit for bit, and the levels are those a fresh build makes.
+TEST(Multigrid, TakesOverASpentSolversLevelsAsAFreshBuild) {
+    const StencilOperator first = ballProblem(12, 1e-2), second = ballProblem(12, 1e-4);
+    const std::size_t n = second.size();
+    std::vector<double> b(n);
+    for (std::size_t i = 0; i < n; ++i) b[i] = (*second.coord)[i].z() > 4 ? 1.0 : 0.0;
+    std::vector<double> fresh(n, 0.0);
+    const MultigridSolver freshSolver(second);
+    const auto freshResult = freshSolver.solve(b, fresh, 1e-9, 100, SubProgress(nullptr, 0, 1));
+
+    MultigridSolver::Workspace workspace;
+    std::vector<double> x(n, 0.0);
+    MultigridSolver solver(first);
+    solver.solve(b, x, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
+    auto [A, remainder] = std::move(solver).release(&workspace);
+    ASSERT_NE(workspace.levels, nullptr);
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 6; ++k) A.conductance[i][k] = float(second.conductance[i][k]);
+        A.diag[i] = float(second.diag[i]);
+        remainder[i] = float(rowRemainder(second.diag[i], second.conductance[i], (*second.neighbour)[i]));
+    }
+    A.coord = second.coord, A.neighbour = second.neighbour;
+    std::vector<double> reused(n, 0.0);
+    const MultigridSolver taken(std::move(A), std::move(remainder), &workspace);
+    EXPECT_EQ(workspace.levels, nullptr);  // taken over, not copied
+    EXPECT_EQ(taken.levelCount(), freshSolver.levelCount());
+    const auto takenResult = taken.solve(b, reused, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
+    EXPECT_GT(takenResult.iterations, 1);
+    EXPECT_EQ(takenResult.iterations, freshResult.iterations);
+    EXPECT_EQ(reused, fresh);
+}
+
 TEST(Multigrid, HonoursCancellation) {
     StencilOperator A = ballProblem(10, 1e-6);
     std::vector<double> b(A.size(), 1.0), x(A.size(), 0.0);
