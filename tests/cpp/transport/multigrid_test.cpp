@@ -105,72 +105,73 @@ TEST(Multigrid, BlocksThatTouchWithoutLinksStayApart) {
     }
 }
 
+// Two systems on the same voxels (a ball's, two absorptions), a right-hand side, and the second solved by a fresh
+// solver in fresh vectors.
+struct TwoSystems {
+    StencilOperator first = ballProblem(12, 1e-2), second = ballProblem(12, 1e-4);
+    std::size_t n = second.size();
+    std::vector<double> b = rightHandSide(second), fresh = std::vector<double>(n, 0.0);
+    MultigridSolver freshSolver{second};
+    MultigridSolver::Result freshResult = freshSolver.solve(b, fresh, 1e-9, 100, SubProgress(nullptr, 0, 1));
+
+    static std::vector<double> rightHandSide(const StencilOperator &A) {
+        std::vector<double> b(A.size());
+        for (std::size_t i = 0; i < A.size(); ++i) b[i] = (*A.coord)[i].z() > 4 ? 1.0 : 0.0;
+        return b;
+    }
+    // The first solved in `workspace` and spent (its levels to the workspace when `keepLevels`), the second
+    // written over its operator's storage, as the bake's assembly does.
+    std::pair<Stencil<float>, std::vector<float>> secondInFirstsStorage(MultigridSolver::Workspace &workspace,
+                                                                         bool keepLevels) const {
+        std::vector<double> x(n, 0.0);
+        MultigridSolver solver(first);
+        solver.solve(b, x, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
+        auto [A, remainder] = std::move(solver).release(keepLevels ? &workspace : nullptr);
+        for (std::size_t i = 0; i < n; ++i) {
+            for (int k = 0; k < 6; ++k) A.conductance[i][k] = float(second.conductance[i][k]);
+            A.diag[i] = float(second.diag[i]);
+            remainder[i] = float(rowRemainder(second.diag[i], second.conductance[i], (*second.neighbour)[i]));
+        }
+        A.coord = second.coord, A.neighbour = second.neighbour;
+        return {std::move(A), std::move(remainder)};
+    }
+};
+
 // The bake solves a pass's three channels in the same vectors (release(), Workspace): a solve in the vectors an
 // earlier solve of another system left behind takes the same iterates, bit for bit, as one in fresh vectors.
 TEST(Multigrid, SolvesInAnEarlierSolvesVectorsAsInFreshOnes) {
-    const StencilOperator first = ballProblem(12, 1e-2), second = ballProblem(12, 1e-4);
-    const std::size_t n = second.size();
-    std::vector<double> b(n);
-    for (std::size_t i = 0; i < n; ++i) b[i] = (*second.coord)[i].z() > 4 ? 1.0 : 0.0;
-    std::vector<double> fresh(n, 0.0);
-    const auto freshResult = MultigridSolver(second).solve(b, fresh, 1e-9, 100, SubProgress(nullptr, 0, 1));
-
+    const TwoSystems systems;
     MultigridSolver::Workspace workspace;
-    std::vector<double> x(n, 0.0);
-    MultigridSolver solver(first);
-    solver.solve(b, x, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
-    auto [A, remainder] = std::move(solver).release();
-    ASSERT_EQ(A.size(), n);
-    ASSERT_EQ(remainder.size(), n);
-    ASSERT_EQ(workspace.spare.size(), n);
-    // The second system written over the first's storage, as the bake's assembly does.
-    for (std::size_t i = 0; i < n; ++i) {
-        for (int k = 0; k < 6; ++k) A.conductance[i][k] = float(second.conductance[i][k]);
-        A.diag[i] = float(second.diag[i]);
-        remainder[i] = float(rowRemainder(second.diag[i], second.conductance[i], (*second.neighbour)[i]));
-    }
-    A.coord = second.coord, A.neighbour = second.neighbour;
+    auto [A, remainder] = systems.secondInFirstsStorage(workspace, false);
+    ASSERT_EQ(A.size(), systems.n);
+    ASSERT_EQ(remainder.size(), systems.n);
+    ASSERT_EQ(workspace.spare.size(), systems.n);
+    EXPECT_EQ(workspace.levels, nullptr);
     std::vector<double> reusedB = std::move(workspace.spare);
-    std::copy(b.begin(), b.end(), reusedB.begin());
-    std::vector<double> reused(n, 0.0);
+    std::copy(systems.b.begin(), systems.b.end(), reusedB.begin());
+    std::vector<double> reused(systems.n, 0.0);
     const auto reusedResult = MultigridSolver(std::move(A), std::move(remainder))
                                   .solve(std::move(reusedB), reused, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
-    EXPECT_EQ(reusedResult.iterations, freshResult.iterations);
-    EXPECT_EQ(reused, fresh);
+    EXPECT_EQ(reusedResult.iterations, systems.freshResult.iterations);
+    EXPECT_EQ(reused, systems.fresh);
 }
 
 // The bake's next channel takes over a spent solver's levels (release into the workspace): the same rows and
 // neighbours, another operator. Its coarse operators summed again over the kept blocks give the iterates of a fresh
 // build bit for bit, and the levels are those a fresh build makes.
 TEST(Multigrid, TakesOverASpentSolversLevelsAsAFreshBuild) {
-    const StencilOperator first = ballProblem(12, 1e-2), second = ballProblem(12, 1e-4);
-    const std::size_t n = second.size();
-    std::vector<double> b(n);
-    for (std::size_t i = 0; i < n; ++i) b[i] = (*second.coord)[i].z() > 4 ? 1.0 : 0.0;
-    std::vector<double> fresh(n, 0.0);
-    const MultigridSolver freshSolver(second);
-    const auto freshResult = freshSolver.solve(b, fresh, 1e-9, 100, SubProgress(nullptr, 0, 1));
-
+    const TwoSystems systems;
     MultigridSolver::Workspace workspace;
-    std::vector<double> x(n, 0.0);
-    MultigridSolver solver(first);
-    solver.solve(b, x, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
-    auto [A, remainder] = std::move(solver).release(&workspace);
+    auto [A, remainder] = systems.secondInFirstsStorage(workspace, true);
     ASSERT_NE(workspace.levels, nullptr);
-    for (std::size_t i = 0; i < n; ++i) {
-        for (int k = 0; k < 6; ++k) A.conductance[i][k] = float(second.conductance[i][k]);
-        A.diag[i] = float(second.diag[i]);
-        remainder[i] = float(rowRemainder(second.diag[i], second.conductance[i], (*second.neighbour)[i]));
-    }
-    A.coord = second.coord, A.neighbour = second.neighbour;
-    std::vector<double> reused(n, 0.0);
     const MultigridSolver taken(std::move(A), std::move(remainder), &workspace);
     EXPECT_EQ(workspace.levels, nullptr);  // taken over, not copied
-    EXPECT_EQ(taken.levelCount(), freshSolver.levelCount());
-    const auto takenResult = taken.solve(b, reused, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
+    EXPECT_EQ(taken.levelCount(), systems.freshSolver.levelCount());
+    std::vector<double> reused(systems.n, 0.0);
+    const auto takenResult = taken.solve(systems.b, reused, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
     EXPECT_GT(takenResult.iterations, 1);
-    EXPECT_EQ(takenResult.iterations, freshResult.iterations);
-    EXPECT_EQ(reused, fresh);
+    EXPECT_EQ(takenResult.iterations, systems.freshResult.iterations);
+    EXPECT_EQ(reused, systems.fresh);
 }
 
 TEST(Multigrid, HonoursCancellation) {
