@@ -79,26 +79,6 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
     return largest(through) >= kMinTransmittance ? through : glm::dvec3(0.0);
 }
 
-// Radiance (W/m^2/sr) an occluder sends from point q (unit normal n facing the viewer) after one
-// reflection of sun and sky light, each estimated with one ray.
-glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
-                               Rng &rng, Medium::ColumnMarcher &marcher) {
-    const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
-    const double limit = columnLimit(reduced);
-    const glm::dvec3 p = q + 1e-5 * n;
-    glm::dvec3 irradiance(0.0);
-    for (std::size_t b = 0; b < beamCount(scene); ++b) {
-        const double cosine = glm::dot(n, towardsBeam(scene, b, p));
-        if (cosine > 0.0) irradiance += cosine * glm::dvec3(beamAt(scene, b, p, 1, 0, 0, marcher).irradiance);
-    }
-    const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
-    if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
-        const double column = marcher.column(p, w, std::numeric_limits<double>::infinity(), limit);
-        if (column < limit) irradiance += kPi * scene.sky.radianceFrom(w) * transmittance(reduced, column);
-    }
-    return albedo * irradiance / kPi;
-}
-
 // Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
 // occluders in the way send what they reflect once (when `bounce`).
 glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
@@ -195,6 +175,24 @@ void parallelChunks(std::size_t n, const SubProgress &progress, const Body &body
 }
 
 }  // namespace
+
+glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
+                               Rng &rng, Medium::ColumnMarcher &marcher) {
+    const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
+    const double limit = columnLimit(reduced);
+    const glm::dvec3 p = q + 1e-5 * n;
+    glm::dvec3 irradiance(0.0);
+    for (std::size_t b = 0; b < beamCount(scene); ++b) {
+        const double cosine = glm::dot(n, towardsBeam(scene, b, p));
+        if (cosine > 0.0) irradiance += cosine * glm::dvec3(beamAt(scene, b, p, 1, 0, 0, marcher).irradiance);
+    }
+    const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
+    if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
+        const double column = marcher.column(p, w, std::numeric_limits<double>::infinity(), limit);
+        if (column < limit) irradiance += kPi * scene.sky.radianceFrom(w) * transmittance(reduced, column);
+    }
+    return albedo * irradiance / kPi;
+}
 
 double forwardConeWidth(double opticalDepth, double g) {
     const double scatterings = opticalDepth > 1e-6 ? opticalDepth / -std::expm1(-opticalDepth) : 1.0;

@@ -9,6 +9,7 @@
 #include "firn/transport/scene.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/util/progress.h"
+#include "firn/util/random.h"
 
 namespace firn {
 
@@ -117,5 +118,10 @@ struct BeamSample {
 BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
                   std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint = nullptr,
                   Crossing crossing = Crossing::Beam, const BlockMasses *blocks = nullptr);
+
+// Radiance (W/m^2/sr) an occluder sends from point q (unit normal n facing the viewer) after one reflection of
+// sun and sky light, each estimated with one ray.
+glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
+                               Rng &rng, Medium::ColumnMarcher &marcher);
 
 }  // namespace firn
