@@ -314,7 +314,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     local.surfaceVoxels = topo.surfaceVoxels();
     const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
     // Snow hides some patch's sky, or occluders send the snow's light back (bake_snow_irradiance.cpp): gather.
-    const bool hidden = !scene.occluders->empty() ||
+    const bool hidden = light.skyMeetsOccluders ||
                         std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
     // Small pieces and thin snow left to the diffusion (too many to trace: a skier's thousands of lumps) light
     // each other over many bounces: one more gather, and the rest of the bounces from the last two (addBounceTail).

@@ -61,7 +61,7 @@ SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, cons
                               const SkyRays &rays, std::uint64_t seed, const SubProgress &progress) {
     SnowIrradiance out{SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f)), {}};
     out.aim = out.irradiance;
-    const bool occluders = !scene.occluders->empty();
+    const bool occluders = light.skyMeetsOccluders;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);

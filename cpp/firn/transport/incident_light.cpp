@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -83,7 +84,8 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
 // occluders in the way send what they reflect once (when `bounce`).
 glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
                           bool bounce, Crossing crossing, std::uint64_t seed, std::uint64_t stream,
-                          Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr) {
+                          Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr,
+                          bool *meetsOccluder = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
@@ -94,6 +96,7 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
         const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
         if (hit && !bounce && !snowRays) continue;  // brings nothing, and no one asks whether snow lies along it
+        if (hit && meetsOccluder) *meetsOccluder = true;
         const double column =
             marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
         if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
@@ -384,15 +387,20 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
     const std::uint64_t seed = settings.seed ^ 0x5C1Eull;
+    std::atomic<bool> meetsOccluder(false);
     parallelChunks(topo.size(), progress, [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);
         Medium::Accessor density = medium.accessor();
+        bool meets = false;
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
                 light.skyOnSurface.surface(i) = skyIrradianceAt(
                     scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
-                    Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i));
+                    Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i),
+                    &meets);
+        if (meets) meetsOccluder = true;
     });
+    light.skyMeetsOccluders = meetsOccluder;
     if (settings.skyOverNeighbours)
         averageOverNeighbours(topo, light.skyOnSurface), averageOverNeighbours(topo, light.skyAim);
     if (scene.sky.isBlack()) return light;
