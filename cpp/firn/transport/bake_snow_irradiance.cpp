@@ -38,8 +38,8 @@ glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher,
     const glm::dvec3 q = p + double(hit->distance) * w + 1e-5 * n;
     const glm::dvec3 v = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
     const auto next = scene.occluders->caster().intersect(glm::vec3(q), glm::vec3(v), 1e-5f);
-    glm::dvec3 arriving(bakedRadianceAlong(scene, marcher, baked, Ray{q, v},
-                                           next ? double(next->distance) : std::numeric_limits<double>::infinity(), 0.5));
+    const double reach = next ? double(next->distance) : std::numeric_limits<double>::infinity();
+    glm::dvec3 arriving(bakedRadianceAlong(scene, marcher, baked, Ray{q, v}, reach, 0.5));
     if (next) {
         const glm::dvec3 other(next->normal);
         arriving += reflectedByOccluder(scene, q + double(next->distance) * v,
@@ -79,7 +79,8 @@ SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, cons
                 const glm::dvec3 radiance = bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
                 sum += radiance, towards += greyMoment(radiance, w);
             }
-            if (occluders) sum += occludersSendBack(scene, marcher, baked, topo, rays, light.snowRays[i], p, seed, i, towards);
+            if (occluders)
+                sum += occludersSendBack(scene, marcher, baked, topo, rays, light.snowRays[i], p, seed, i, towards);
             out.irradiance.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
             out.aim.surface(i) = glm::vec3(kPi * towards / double(rays.count()));
         }
