@@ -325,7 +325,9 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
     local.surfaceVoxels = topo.surfaceVoxels();
     const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
-    const bool hidden = std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
+    // Snow hides some patch's sky, or occluders send the snow's light back (bake_snow_irradiance.cpp): gather.
+    const bool hidden = light.skyMeetsOccluders ||
+                        std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
     // Small pieces and thin snow left to the diffusion (too many to trace: a skier's thousands of lumps) light
     // each other over many bounces: one more gather, and the rest of the bounces from the last two (addBounceTail).
     const bool untracedPieces = !thin.empty() && traced.source.empty();

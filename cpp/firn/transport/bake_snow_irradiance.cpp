@@ -1,5 +1,6 @@
 #include "firn/transport/bake_snow_irradiance.h"
 
+#include <algorithm>
 #include <limits>
 
 #include <tbb/blocked_range.h>
@@ -7,9 +8,50 @@
 
 #include "firn/transport/baked_grids.h"
 #include "firn/transport/monte_carlo.h"
+#include "firn/util/random.h"
 #include "firn/util/sampling.h"
 
 namespace firn::bake {
+
+namespace {
+
+// The snow's light that occluders send back along patch i's sky rays that snow does not hide (W/m^2/sr summed
+// over those rays; `towards` gets its grey first moment): the ground under thrown snow, lit by the snow above it.
+// The first solve's light holds the occluders' reflection of sun and sky only (reflectedByOccluder). One of the
+// rays, drawn at random, stands for all of them (its light times their count), intersected alone: the car's
+// patches meet the body and the ground by the million. The occluder's radiance from one cosine-weighted ray from
+// the hit: the baked snow along it, and where it meets another occluder, that one's reflected sun and sky.
+glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher, BakedValuesSampler &baked,
+                             const SnowTopology &topo, const SkyRays &rays, std::uint64_t hidden, const glm::dvec3 &p,
+                             std::uint64_t seed, std::size_t i, glm::dvec3 &towards) {
+    const int open = rays.count() - __builtin_popcountll(hidden);
+    if (open == 0) return glm::dvec3(0.0);
+    Rng rng(seed ^ 0x0CC1ull, i);
+    int skip = std::min(int(rng.uniform() * open), open - 1);  // the drawn ray's rank among the open ones
+    int k = 0;
+    while (hidden >> k & 1 || skip-- > 0) ++k;
+    const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
+    const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+    if (!hit) return glm::dvec3(0.0);
+    const glm::dvec3 facing(hit->normal);
+    const glm::dvec3 n = glm::normalize(glm::dot(facing, w) < 0.0 ? facing : -facing);
+    const glm::dvec3 q = p + double(hit->distance) * w + 1e-5 * n;
+    const glm::dvec3 v = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
+    const auto next = scene.occluders->caster().intersect(glm::vec3(q), glm::vec3(v), 1e-5f);
+    const double reach = next ? double(next->distance) : std::numeric_limits<double>::infinity();
+    glm::dvec3 arriving(bakedRadianceAlong(scene, marcher, baked, Ray{q, v}, reach, 0.5));
+    if (next) {
+        const glm::dvec3 other(next->normal);
+        arriving += reflectedByOccluder(scene, q + double(next->distance) * v,
+                                        glm::normalize(glm::dot(other, v) < 0.0 ? other : -other),
+                                        scene.occluders->albedo(next->triangle), rng, marcher);
+    }
+    const glm::dvec3 radiance = double(open) * glm::dvec3(scene.occluders->albedo(hit->triangle)) * arriving;
+    towards += greyMoment(radiance, w);
+    return radiance;
+}
+
+}  // namespace
 
 // Light that surface voxels receive from other snow across the air (a valley between bumps, the inside
 // of a hollow): the baked snow's radiance along the sky rays that snow hides (W/m^2 onto each patch), read
@@ -19,13 +61,14 @@ SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, cons
                               const SkyRays &rays, std::uint64_t seed, const SubProgress &progress) {
     SnowIrradiance out{SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f)), {}};
     out.aim = out.irradiance;
+    const bool occluders = light.skyMeetsOccluders;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);
         Medium::Accessor density = scene.medium->accessor();
         BakedValuesSampler baked(topo, source, traced, values);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!light.snowRays[i]) continue;
+            if (!light.snowRays[i] && !(occluders && topo.patches[i].isSurface())) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
             glm::dvec3 sum(0.0), towards(0.0);
             for (int k = 0; k < rays.count(); ++k) {
@@ -36,6 +79,8 @@ SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, cons
                 const glm::dvec3 radiance = bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
                 sum += radiance, towards += greyMoment(radiance, w);
             }
+            if (occluders)
+                sum += occludersSendBack(scene, marcher, baked, topo, rays, light.snowRays[i], p, seed, i, towards);
             out.irradiance.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
             out.aim.surface(i) = glm::vec3(kPi * towards / double(rays.count()));
         }

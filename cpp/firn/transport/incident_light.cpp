@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -79,31 +80,12 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
     return largest(through) >= kMinTransmittance ? through : glm::dvec3(0.0);
 }
 
-// Radiance (W/m^2/sr) an occluder sends from point q (unit normal n facing the viewer) after one
-// reflection of sun and sky light, each estimated with one ray.
-glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
-                               Rng &rng, Medium::ColumnMarcher &marcher) {
-    const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
-    const double limit = columnLimit(reduced);
-    const glm::dvec3 p = q + 1e-5 * n;
-    glm::dvec3 irradiance(0.0);
-    for (std::size_t b = 0; b < beamCount(scene); ++b) {
-        const double cosine = glm::dot(n, towardsBeam(scene, b, p));
-        if (cosine > 0.0) irradiance += cosine * glm::dvec3(beamAt(scene, b, p, 1, 0, 0, marcher).irradiance);
-    }
-    const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
-    if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
-        const double column = marcher.column(p, w, std::numeric_limits<double>::infinity(), limit);
-        if (column < limit) irradiance += kPi * scene.sky.radianceFrom(w) * transmittance(reduced, column);
-    }
-    return albedo * irradiance / kPi;
-}
-
 // Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
 // occluders in the way send what they reflect once (when `bounce`).
 glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
                           bool bounce, Crossing crossing, std::uint64_t seed, std::uint64_t stream,
-                          Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr) {
+                          Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr,
+                          bool *meetsOccluder = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
@@ -114,6 +96,7 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
         const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
         if (hit && !bounce && !snowRays) continue;  // brings nothing, and no one asks whether snow lies along it
+        if (hit && meetsOccluder) *meetsOccluder = true;
         const double column =
             marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
         if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
@@ -195,6 +178,24 @@ void parallelChunks(std::size_t n, const SubProgress &progress, const Body &body
 }
 
 }  // namespace
+
+glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
+                               Rng &rng, Medium::ColumnMarcher &marcher) {
+    const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
+    const double limit = columnLimit(reduced);
+    const glm::dvec3 p = q + 1e-5 * n;
+    glm::dvec3 irradiance(0.0);
+    for (std::size_t b = 0; b < beamCount(scene); ++b) {
+        const double cosine = glm::dot(n, towardsBeam(scene, b, p));
+        if (cosine > 0.0) irradiance += cosine * glm::dvec3(beamAt(scene, b, p, 1, 0, 0, marcher).irradiance);
+    }
+    const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
+    if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
+        const double column = marcher.column(p, w, std::numeric_limits<double>::infinity(), limit);
+        if (column < limit) irradiance += kPi * scene.sky.radianceFrom(w) * transmittance(reduced, column);
+    }
+    return albedo * irradiance / kPi;
+}
 
 double forwardConeWidth(double opticalDepth, double g) {
     const double scatterings = opticalDepth > 1e-6 ? opticalDepth / -std::expm1(-opticalDepth) : 1.0;
@@ -386,15 +387,20 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
     const std::uint64_t seed = settings.seed ^ 0x5C1Eull;
+    std::atomic<bool> meetsOccluder(false);
     parallelChunks(topo.size(), progress, [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);
         Medium::Accessor density = medium.accessor();
+        bool meets = false;
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
                 light.skyOnSurface.surface(i) = skyIrradianceAt(
                     scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
-                    Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i));
+                    Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i),
+                    &meets);
+        if (meets) meetsOccluder = true;
     });
+    light.skyMeetsOccluders = meetsOccluder;
     if (settings.skyOverNeighbours)
         averageOverNeighbours(topo, light.skyOnSurface), averageOverNeighbours(topo, light.skyAim);
     if (scene.sky.isBlack()) return light;

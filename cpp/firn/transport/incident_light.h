@@ -9,6 +9,7 @@
 #include "firn/transport/scene.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/util/progress.h"
+#include "firn/util/random.h"
 
 namespace firn {
 
@@ -35,6 +36,9 @@ struct IncidentLight {
     // Per surface voxel: which of its sky rays (SkyRays, bit k for ray k) snow hides; the snow's own light
     // arrives along them instead (gathered after a first solve, bake.cpp).
     SurfaceValues<std::uint64_t> snowRays;
+    // Whether some patch's sky ray meets an occluder across the air: occluders then send the snow's light back
+    // (gathered after a first solve, bake_snow_irradiance.cpp).
+    bool skyMeetsOccluders = false;
     // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
     std::vector<glm::vec3> skyUnderSnow;
 };
@@ -117,5 +121,10 @@ struct BeamSample {
 BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
                   std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint = nullptr,
                   Crossing crossing = Crossing::Beam, const BlockMasses *blocks = nullptr);
+
+// Radiance (W/m^2/sr) an occluder sends from point q (unit normal n facing the viewer) after one reflection of
+// sun and sky light, each estimated with one ray.
+glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
+                               Rng &rng, Medium::ColumnMarcher &marcher);
 
 }  // namespace firn
