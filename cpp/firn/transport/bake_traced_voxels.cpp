@@ -9,6 +9,7 @@
 #include "firn/transport/bake_thin_snow.h"
 #include "firn/transport/light_tracing.h"
 #include "firn/transport/monte_carlo.h"
+#include "firn/transport/pooled_estimates.h"
 #include "firn/transport/traced_source.h"
 
 namespace firn::bake {
@@ -138,17 +139,88 @@ namespace {
 // A face's paths: a quarter of the voxel's own, 64 at least (addFaceSources).
 constexpr int kFacePathShare = 4;
 
+// A face job: voxel, face (0..5).
+using FaceJob = std::pair<std::size_t, int>;
+
+double greyMean(const Rgb &c) { return (c.x + c.y + c.z) / 3.0; }
+
+// The estimates' source towards each direction pooled over the face's neighbours in its plane that hold the same
+// face (their density within kPooledDensityRatio: a flat layer), scaled to each one's own mean, as light tracing
+// pools a flat layer's (pooled_estimates.h): 64 paths per face, split by the hat, hold about 20 paths' worth each.
+std::vector<FaceEstimate> pooledOverFace(const Medium &medium, const MonteCarloVoxels &traced,
+                                         const std::vector<openvdb::Coord> &voxels, const std::vector<FaceJob> &jobs,
+                                         const std::vector<FaceEstimate> &estimates) {
+    std::vector<int> jobAt(voxels.size() * 6, -1);
+    for (std::size_t j = 0; j < jobs.size(); ++j) jobAt[jobs[j].first * 6 + jobs[j].second] = int(j);
+    Medium::Accessor density = medium.accessor();
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*traced.index);
+    std::vector<FaceEstimate> out = estimates;
+    for (std::size_t j = 0; j < jobs.size(); ++j) {
+        const auto [v, f] = jobs[j];
+        const double rho = density.getValue(voxels[v]);
+        FaceEstimate sum;
+        for (int da = -1; da <= 1; ++da)
+            for (int db = -1; db <= 1; ++db) {
+                openvdb::Coord n = voxels[v];
+                n[(f / 2 + 1) % 3] += da, n[(f / 2 + 2) % 3] += db;
+                const std::int32_t t = index.getValue(n);
+                const int k = t < 0 ? -1 : jobAt[std::size_t(t) * 6 + f];
+                if (k < 0 || !(std::max(density.getValue(n) / rho, rho / density.getValue(n)) <= kPooledDensityRatio))
+                    continue;
+                sum.carried += estimates[k].carried, sum.shown += estimates[k].shown;
+            }
+        const auto pool = [](SourceEstimate &own, const SourceEstimate &pooled) {
+            if (!(greyMean(pooled.l0) > 0.0)) return;
+            const double scale = greyMean(own.l0) / greyMean(pooled.l0);
+            for (int k = 0; k < kSourceDirections; ++k) own.toward[k] = pooled.toward[k] * scale;
+        };
+        pool(out[j].carried, sum.carried), pool(out[j].shown, sum.shown);
+    }
+    return out;
+}
+
+// The voxel's own value from what it shows the cameras of its open faces (jobs [first, last), all the voxel's):
+// towards each direction, what it shows the face that direction leaves through most (along its outward normal),
+// the moments the faces' mean, fitted by direction.
+Source shownByFaces(const MonteCarloReference &reference, Medium::ColumnMarcher &marcher, const openvdb::Coord &voxel,
+                    const std::vector<FaceJob> &jobs, const std::vector<FaceEstimate> &estimates, std::size_t first,
+                    std::size_t last) {
+    const SourceDirections &directions = reference.directions();
+    SourceEstimate S;
+    for (std::size_t j = first; j < last; ++j) S += estimates[j].shown;
+    const double n = double(last - first);
+    S.l0 /= n, S.l1 /= n, S.beamL0 /= n, S.beamL1 /= n, S.second /= n;
+    for (glm::dmat3 &t : S.third) t /= n;
+    for (double &t : S.toward) t /= n;
+    for (int k = 0; k < kSourceDirections; ++k) {
+        double nearest = 0.0;
+        for (std::size_t j = first; j < last; ++j) {
+            const int f = jobs[j].second;
+            const double out = (f % 2 ? 1.0 : -1.0) * directions[k][f / 2];
+            if (out > nearest) nearest = out, S.toward[k] = estimates[j].shown.toward[k];
+        }
+    }
+    const Medium &medium = *reference.scene().medium;
+    return tracedSourceByDirection(S, directions, visibilityFrom(medium, marcher, voxel, directions),
+                                   medium.optics().g);
+}
+
 }  // namespace
 
 // A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels'
-// mean source (the one both its air neighbours carry) is not: at sigma_t h 15, lit from above, the top views read
+// mean source (the one both its air neighbours carried) is not: at sigma_t h 15, lit from above, the top views read
 // -34 % (docs/bake.md, Method 3). Its traced voxels thicker than kMaxDirectionFitTau open to air on both faces
-// along an axis gather one source more for each of those faces (MonteCarloReference::sourceIn with the face),
-// which the air neighbour there carries (faceCarried): the 16 x 16 x 1 layer at sigma_t h 15 from above 33.3 ->
-// 9.1 % per block, bias -34.4 -> -4.1 %, from below 52.4 -> 19.2 %, +47.0 -> +16.3 % (bench/snow_on_ground_bench.py
-// --float). A face's paths are a quarter of the voxel's own (64 at least): the layer read 9.7 % against 9.0 % with
-// all of them (its points along the normal), the trace 4.2 against 7.3 processor seconds (2.97 without face
-// sources). None where the gathering's `plan` and the faces' paths together would cost more than kMaxTracedSteps.
+// along an axis gather, for each of those faces, where that face's cameras collide (faceSourceIn): the light there
+// split by the trilinear hat between what the air neighbour across the face carries (faceCarried) and what the
+// voxel's own value shows those cameras (FaceSources::shown; towards each direction the face its cameras look
+// through), each fitted by direction, the estimates' directions pooled over the layer (pooledOverFace). The
+// voxel's mean stays what its other neighbours carry (a layer's rim seen edge-on). The 16 x 16 x 1 layer at
+// sigma_t h 15 (bench/snow_on_ground_bench.py --float): from above 33.3 % per block (main before float-voxel) ->
+// 9.1 % (faces carried their whole collisions' source, the voxel its mean) -> 8.8 %, from below 52.4 -> 19.2 ->
+// 10.4 %: seen from below the mean is 46 % brighter than what the voxel shows there (the sun-lit top's light,
+// forward), from above 32 % darker (docs/benchmarks.md, float-under). A face's paths are a quarter of the
+// voxel's own (64 at least). None where the gathering's `plan` and the faces' paths together would cost more than
+// kMaxTracedSteps.
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
                     const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced) {
@@ -157,7 +229,7 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     Medium::Accessor density = medium.accessor();
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
     traced.facesAt.assign(voxels.size(), -1);
-    std::vector<std::pair<std::size_t, int>> jobs;  // (voxel, face)
+    std::vector<FaceJob> jobs;  // by voxel
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         const std::int32_t i = index.getValue(voxels[v]);
         if (i < 0 || !(voxelOpticalDepth(medium, density, voxels[v]) > kMaxDirectionFitTau)) continue;
@@ -175,14 +247,29 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
         return;
     }
     const MonteCarloReference reference(scene);
-    const double g = medium.optics().g;
+    std::vector<FaceEstimate> estimates(jobs.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 4), [&](const auto &range) {
         progress.throwIfCancelled();  // up to kMaxTracedSteps of paths (Esc keeps the previous bake)
         for (std::size_t j = range.begin(); j != range.end(); ++j) {
             const auto [v, f] = jobs[j];
-            const SourceEstimate S =
-                reference.sourceIn(voxels[v], samples, seed, voxels.size() * (1 + f) + v, true, false, f);
-            traced.faces[traced.facesAt[v]].source[f] = tracedSourceByMoments(S, g);
+            estimates[j] = reference.faceSourceIn(voxels[v], f, samples, seed, voxels.size() * (1 + f) + v);
+        }
+    });
+    estimates = pooledOverFace(medium, traced, voxels, jobs, estimates);
+    const SourceDirections &directions = reference.directions();
+    const double g = medium.optics().g;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 16), [&](const auto &range) {
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t j = range.begin(); j != range.end(); ++j) {
+            const auto [v, f] = jobs[j];
+            FaceSources &faces = traced.faces[traced.facesAt[v]];
+            faces.source[f] = tracedSourceByDirection(estimates[j].carried, directions,
+                                                      visibilityFrom(medium, marcher, voxels[v], directions), g);
+            if (j == 0 || jobs[j - 1].first != v) {  // the voxel's first job: its own value
+                std::size_t last = j;
+                while (last < jobs.size() && jobs[last].first == v) ++last;
+                faces.shown = shownByFaces(reference, marcher, voxels[v], jobs, estimates, j, last);
+            }
         }
     });
 }

@@ -169,13 +169,13 @@ std::vector<glm::dvec3> visiblePoints(const Medium &medium, const openvdb::Coord
     return out;
 }
 
-std::vector<glm::dvec3> facePoints(const Medium &medium, const openvdb::Coord &voxel, int face, int samples,
-                                   const std::function<std::array<double, 3>()> &next, long &steps) {
+std::vector<FacePoint> facePoints(const Medium &medium, const openvdb::Coord &voxel, int face, int samples,
+                                  const std::function<std::array<double, 3>()> &next, long &steps) {
     constexpr int kSteps = 64;  // over the two voxels' chord: 1/32 voxel, optical depth 0.5 at sigma_t h 15
     const int a = face / 2;
     const double side = face % 2 ? 1.0 : -1.0, h = medium.voxelSize(), k = medium.optics().extinctionPerDensity;
     Medium::ColumnMarcher marcher(medium);
-    std::vector<glm::dvec3> out;
+    std::vector<FacePoint> out;
     out.reserve(samples);
     std::array<double, kSteps> tau{};  // optical depth at each step's end
     for (int s = 0; s < samples; ++s) {
@@ -203,7 +203,7 @@ std::vector<glm::dvec3> facePoints(const Medium &medium, const openvdb::Coord &v
         const double before = i > 0 ? tau[i - 1] : 0.0, step = tau[std::min(i, kSteps - 1)] - before;
         const double t = (i + (step > 0.0 ? (target - before) / step : 0.5)) * 2.0 / kSteps;
         const glm::dvec3 p = at(std::min(t, 2.0));
-        out.push_back(medium.indexToWorld(p));
+        out.push_back({medium.indexToWorld(p), 1.0 - std::abs(1.0 - std::min(t, 2.0)), target, sum});
     }
     if (int(out.size()) < samples) out.clear();  // none seen (a voxel of snow always is)
     return out;

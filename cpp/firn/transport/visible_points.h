@@ -81,7 +81,14 @@ std::vector<glm::dvec3> visiblePoints(const Medium &medium, const openvdb::Coord
 // directions cosine-weighted about the normal (stratified; its lateral travel left out: along the normal
 // alone, the 16 x 16 x 1 layer at sigma_t h 15 read 9.7 % from above, 20.4 % from below, against 9.1, 19.2 %), from
 // `next`'s points of [0, 1)^3. Adds the density lookups to `steps`.
-std::vector<glm::dvec3> facePoints(const Medium &medium, const openvdb::Coord &voxel, int face, int samples,
-                                   const std::function<std::array<double, 3>()> &next, long &steps);
+// Each with the voxel's share of the trilinear hat there along the face's axis (1 at its centre, 0 at the air
+// neighbour's): what of a camera's collision there the render reads from the voxel's own value.
+struct FacePoint {
+    glm::dvec3 p;              // m, world space
+    double voxelShare = 0.0;
+    double depth = 0.0, chord = 0.0;  // optical depth along the normal to p and over the two voxels
+};
+std::vector<FacePoint> facePoints(const Medium &medium, const openvdb::Coord &voxel, int face, int samples,
+                                  const std::function<std::array<double, 3>()> &next, long &steps);
 
 }  // namespace firn
