@@ -144,12 +144,19 @@ using FaceJob = std::pair<std::size_t, int>;
 
 double greyMean(const Rgb &c) { return (c.x + c.y + c.z) / 3.0; }
 
-// The estimates' source towards each direction pooled over the face's neighbours in its plane that hold the same
-// face (their density within kPooledDensityRatio: a flat layer), scaled to each one's own mean, as light tracing
-// pools a flat layer's (pooled_estimates.h): 64 paths per face, split by the hat, hold about 20 paths' worth each.
+// Where a face lies in a flat layer: at least this many of its voxel's 8 neighbours in the face's plane hold the
+// same face, their density within kPooledDensityRatio (a layer's rim has 5). Elsewhere (a lump's thin part,
+// spray_dense: 20.2 % over 4 seeds with all its faces so, against 19.2 %) the face's air neighbour carries the
+// whole collisions' source, fitted to its moments, and the voxel keeps its own.
+constexpr int kMinLayerNeighbours = 5;
+
+// The estimates' source towards each direction pooled over the face's layer neighbours (kMinLayerNeighbours),
+// scaled to each one's own mean, as light tracing pools a flat layer's (pooled_estimates.h): 64 paths per face,
+// split by the hat, hold about 20 paths' worth each. `inLayer`: per job, whether its face lies in a flat layer.
 std::vector<FaceEstimate> pooledOverFace(const Medium &medium, const MonteCarloVoxels &traced,
                                          const std::vector<openvdb::Coord> &voxels, const std::vector<FaceJob> &jobs,
-                                         const std::vector<FaceEstimate> &estimates) {
+                                         const std::vector<FaceEstimate> &estimates, std::vector<bool> &inLayer) {
+    inLayer.assign(jobs.size(), false);
     std::vector<int> jobAt(voxels.size() * 6, -1);
     for (std::size_t j = 0; j < jobs.size(); ++j) jobAt[jobs[j].first * 6 + jobs[j].second] = int(j);
     Medium::Accessor density = medium.accessor();
@@ -159,6 +166,7 @@ std::vector<FaceEstimate> pooledOverFace(const Medium &medium, const MonteCarloV
         const auto [v, f] = jobs[j];
         const double rho = density.getValue(voxels[v]);
         FaceEstimate sum;
+        int neighbours = -1;  // not itself
         for (int da = -1; da <= 1; ++da)
             for (int db = -1; db <= 1; ++db) {
                 openvdb::Coord n = voxels[v];
@@ -167,8 +175,9 @@ std::vector<FaceEstimate> pooledOverFace(const Medium &medium, const MonteCarloV
                 const int k = t < 0 ? -1 : jobAt[std::size_t(t) * 6 + f];
                 if (k < 0 || !(std::max(density.getValue(n) / rho, rho / density.getValue(n)) <= kPooledDensityRatio))
                     continue;
-                sum.carried += estimates[k].carried, sum.shown += estimates[k].shown;
+                sum.carried += estimates[k].carried, sum.shown += estimates[k].shown, ++neighbours;
             }
+        if (!(inLayer[j] = neighbours >= kMinLayerNeighbours)) continue;
         const auto pool = [](SourceEstimate &own, const SourceEstimate &pooled) {
             if (!(greyMean(pooled.l0) > 0.0)) return;
             const double scale = greyMean(own.l0) / greyMean(pooled.l0);
@@ -176,6 +185,18 @@ std::vector<FaceEstimate> pooledOverFace(const Medium &medium, const MonteCarloV
         };
         pool(out[j].carried, sum.carried), pool(out[j].shown, sum.shown);
     }
+    return out;
+}
+
+// The source over all of a face's collisions, carried and shown together (their moments).
+SourceEstimate whole(const FaceEstimate &S) {
+    SourceEstimate out;
+    const auto add = [&out](const SourceEstimate &e, double w) {
+        out.l0 += w * e.l0, out.l1 += w * e.l1, out.beamL0 += w * e.beamL0, out.beamL1 += w * e.beamL1;
+        out.second += w * e.second;
+        for (int i = 0; i < 3; ++i) out.third[i] += w * e.third[i];
+    };
+    add(S.carried, 1.0 - S.shownShare), add(S.shown, S.shownShare);
     return out;
 }
 
@@ -255,7 +276,8 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
             estimates[j] = reference.faceSourceIn(voxels[v], f, samples, seed, voxels.size() * (1 + f) + v);
         }
     });
-    estimates = pooledOverFace(medium, traced, voxels, jobs, estimates);
+    std::vector<bool> inLayer;
+    estimates = pooledOverFace(medium, traced, voxels, jobs, estimates, inLayer);
     const SourceDirections &directions = reference.directions();
     const double g = medium.optics().g;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 16), [&](const auto &range) {
@@ -263,13 +285,16 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
         for (std::size_t j = range.begin(); j != range.end(); ++j) {
             const auto [v, f] = jobs[j];
             FaceSources &faces = traced.faces[traced.facesAt[v]];
-            faces.source[f] = tracedSourceByDirection(estimates[j].carried, directions,
-                                                      visibilityFrom(medium, marcher, voxels[v], directions), g);
-            if (j == 0 || jobs[j - 1].first != v) {  // the voxel's first job: its own value
-                std::size_t last = j;
-                while (last < jobs.size() && jobs[last].first == v) ++last;
-                faces.shown = shownByFaces(reference, marcher, voxels[v], jobs, estimates, j, last);
-            }
+            faces.source[f] = inLayer[j] ? tracedSourceByDirection(estimates[j].carried, directions,
+                                                                   visibilityFrom(medium, marcher, voxels[v], directions), g)
+                                         : tracedSourceByMoments(whole(estimates[j]), g);
+            if (j > 0 && jobs[j - 1].first == v) continue;
+            // The voxel's first job: its own value.
+            std::size_t last = j;
+            bool layer = true;
+            for (; last < jobs.size() && jobs[last].first == v; ++last) layer = layer && inLayer[last];
+            faces.shown = layer ? shownByFaces(reference, marcher, voxels[v], jobs, estimates, j, last)
+                                : traced.source[v];
         }
     });
 }
