@@ -59,6 +59,15 @@ constexpr double kMinLightTracedG = 0.8, kLightTracedShare = 0.75, kMaxLightTrac
 
 }  // namespace
 
+namespace {
+
+// How a traced voxel is gathered: where cameras see it (gatheredWhereSeen), else spread over it.
+Gathering gathering(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &voxel) {
+    return gatheredWhereSeen(medium, density, voxel) ? Gathering::WhereSeen : Gathering::Spread;
+}
+
+}  // namespace
+
 GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                             std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
@@ -72,9 +81,8 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
         const std::size_t v = voxels.size() * k / kPilotVoxels;
         if (k == 0 || v != voxels.size() * (k - 1) / kPilotVoxels) {
             // As traceSources gathers it: where cameras see it, those points' draws counted too.
-            const bool visible = gatheredWhereSeen(*scene.medium, density, voxels[v]);
-            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v, true, visible).steps) +
-                   kStepsPerPath * kPilotSamples;
+            const Gathering how = gathering(*scene.medium, density, voxels[v]);
+            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v, how).steps) + kStepsPerPath * kPilotSamples;
         }
         steps += last;
         paths += kPilotSamples;
@@ -130,7 +138,7 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
     const Medium &medium = *scene.medium;
     return tracedVoxels(reference, voxels, [&](std::size_t v) {
             Medium::Accessor density = medium.accessor();
-            return reference.sourceIn(voxels[v], samples, seed, v, true, gatheredWhereSeen(medium, density, voxels[v]));
+            return reference.sourceIn(voxels[v], samples, seed, v, gathering(medium, density, voxels[v]));
         }, progress);
 }
 

@@ -338,7 +338,8 @@ Rgb PhotonTracer::radianceArriving(const Ray &ray, Rng &rng) { return tracer_->s
 long PhotonTracer::steps() const { return tracer_->steps; }
 
 SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
-                                             std::uint64_t stream, bool scattered, bool visible) const {
+                                             std::uint64_t stream, Gathering how) const {
+    const bool scattered = how != Gathering::BeamsOnly;
     PathTracer tracer(*this, !scattered);  // the per-voxel gathering's draws as they were (bench/bake_suite.py)
     Rng rng(seed, stream);
     const Medium &medium = *scene_.medium;
@@ -352,7 +353,7 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     // Where cameras see a thick voxel: points drawn so, of equal weight (VisiblePoints).
     std::vector<glm::dvec3> seen;
     long seenSteps = 0;  // their draws' work (the bake's budget counts it: planGathering)
-    if (visible) {
+    if (how == Gathering::WhereSeen) {
         KroneckerSequence candidates(rng);
         seen = visiblePoints(medium, voxel, directions_, samples, threeOf(candidates), rng, seenSteps);
     }

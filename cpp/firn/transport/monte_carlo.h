@@ -118,6 +118,16 @@ struct RadianceEstimate {
 // Estimates, for each camera ray, the radiance the snow scatters towards the camera: paths whose first
 // event is a scattering in the medium. It excludes what a renderer draws itself behind the snow (sky and
 // surfaces seen through it, attenuated by exp(-tau)); that is exactly what the baked emission stands for.
+// What MonteCarloReference::sourceIn gathers, and where its points lie.
+enum class Gathering {
+    Spread,     // all orders, the points spread over the voxel, weighted by extinction
+    WhereSeen,  // all orders, the points drawn where cameras see the voxel's stored source, of equal weight
+                // (VisiblePoints: in a voxel of many optical depths, its first optical depth from each side, and
+                // the trilinear hat's reach)
+    BeamsOnly,  // the direct beams only, spread (beamL0, beamL1 and their share of the moments): what light
+                // tracing leaves to each voxel (light_tracing.h)
+};
+
 class MonteCarloReference {
   public:
     explicit MonteCarloReference(Scene scene);
@@ -135,12 +145,9 @@ class MonteCarloReference {
     // the Henyey-Greenstein phase function to first order in w, with the exact fluence phi and flux F; the
     // direct beams' share apart; the higher moments of the directions the light travels, which tell how peaked
     // the source is; and the exact source in directions().
-    // Without `scattered`, the direct beams only (beamL0, beamL1 and their share of the moments): what light
-    // tracing leaves to each voxel (light_tracing.h). With `visible`, the points drawn where cameras see the
-    // voxel's stored source instead, of equal weight (VisiblePoints: in a voxel of many optical depths, its first
-    // optical depth from each side, and the trilinear hat's reach).
+    // `how`: see Gathering.
     SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream,
-                            bool scattered = true, bool visible = false) const;
+                            Gathering how = Gathering::Spread) const;
 
     // What cameras looking at the air face `face` (0..5: -x, +x, -y, +y, -z, +z) of a thick voxel see of it, from
     // `samples` points where they collide (facePoints), all orders: split by the trilinear hat between the air
