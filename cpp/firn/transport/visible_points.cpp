@@ -23,6 +23,11 @@ double exitDistance(const glm::dvec3 &y, const glm::dvec3 &d) {
     return std::max(t, 0.0);
 }
 
+// The optical depth at which a ray collides within `chord` of it, given it collides there: u in [0, 1) inverts
+// the truncated exponential, -log(1 - u (1 - exp(-chord))) (VisiblePoints::draw's free flight, facePoints' camera
+// ray).
+double collisionDepth(double u, double chord) { return -std::log1p(u * std::expm1(-chord)); }
+
 int stepsAlong(double length) { return std::max(1, int(std::ceil(length * kStepsPerVoxel))); }
 
 // A coordinate across a face of the hat's box from u in [0, 1], drawn by the hat's tent 1 - |x|.
@@ -101,7 +106,7 @@ VisiblePoints::Candidate VisiblePoints::draw(int i, const std::array<double, 3> 
     std::array<double, 4 * kStepsPerVoxel> sigma{};  // the box's chord is at most 2 sqrt(3) voxels
     double chord = 0.0;
     for (int s = 0; s < n; ++s) chord += (sigma[s] = sigmaT(entry - (s + 0.5) * dt * w)) * dt * h;
-    double target = -std::log1p(u[2] * std::expm1(-chord)), t = length;
+    double target = collisionDepth(u[2], chord), t = length;
     for (int s = 0; s < n; ++s) {
         const double step = sigma[s] * dt * h;
         if (target <= step && step > 0.0) {
@@ -198,7 +203,7 @@ std::vector<FacePoint> facePoints(const Medium &medium, const openvdb::Coord &vo
         // A camera ray at mu = cos(angle to the normal), cosine-weighted (projected area) and stratified over the
         // points, reaches the normal's optical depth mu t at its own t.
         const double mu = std::sqrt((s + 0.5) / samples);
-        const double target = mu * -std::log1p(u[2] * std::expm1(-sum / mu));
+        const double target = mu * collisionDepth(u[2], sum / mu);
         const int i = int(std::lower_bound(tau.begin(), tau.end(), target) - tau.begin());
         const double before = i > 0 ? tau[i - 1] : 0.0, step = tau[std::min(i, kSteps - 1)] - before;
         const double t = (i + (step > 0.0 ? (target - before) / step : 0.5)) * 2.0 / kSteps;
