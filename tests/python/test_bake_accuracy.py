@@ -331,7 +331,7 @@ def test_floating_layer_one_voxel_thick_shows_its_underside_what_it_sees(folder)
     # holds the sun-lit top's forward light: towards a camera below it was 46 % brighter than what the voxel shows
     # there, so the underside read 19.2 % per block, bias +16.3 % (branch float-voxel). With the voxel's own value
     # what it shows each face's cameras, split from its air neighbours' by the hat (bake_traced_voxels.cpp,
-    # addFaceSources; monte_carlo.h, faceSourceIn): 10.4 %, +2.6 %. Oracle: the core's Monte Carlo, 1024 paths per
+    # addFaceSources; monte_carlo.h, faceSourceIn): 10.7 %, +3.0 %. Oracle: the core's Monte Carlo, 1024 paths per
     # block (noise 4.9 % per block; the bias's about 0.4 %).
     c = bake_suite.Case("float_16x16x1_below", "", bake_suite.slab(16, 1) * 300.0, 0.01, 1500.0, 300.0,
                         (0.999,) * 3, 0.7, views=[(0, -60), (180, -50), (90, -70)], samples=1024)
