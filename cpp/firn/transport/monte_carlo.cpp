@@ -378,6 +378,18 @@ double collisionDensity(double depth, double chord, double mu) {
     return std::exp(-depth / mu) / (mu * -std::expm1(-chord / mu));
 }
 
+// The same over facePoints' mu, cosine-weighted: the integral of 2 mu collisionDensity over mu (smooth, at most
+// 2 / (1 - exp(-chord))), by the midpoint rule.
+double drawnDensity(double depth, double chord) {
+    constexpr int kNodes = 32;
+    double sum = 0.0;
+    for (int i = 0; i < kNodes; ++i) {
+        const double mu = (i + 0.5) / kNodes;
+        sum += 2.0 * mu * collisionDensity(depth, chord, mu);
+    }
+    return sum / kNodes;
+}
+
 }  // namespace
 
 FaceEstimate MonteCarloReference::faceSourceIn(const openvdb::Coord &voxel, int face, int samples,
@@ -399,22 +411,20 @@ FaceEstimate MonteCarloReference::faceSourceIn(const openvdb::Coord &voxel, int 
     ArrivingToward carriedToward, shownToward;
     std::array<double, kSourceDirections> carriedTowardWeights{}, shownTowardWeights{};
     double carriedWeights = 0.0, shownWeights = 0.0;
-    const int n = int(seen.size());
     for (const FacePoint &p : seen) {
         const std::array<double, 5> u = points.next();
         ArrivingLight one;
         ArrivingToward oneToward;
         tracer.sampleArriving(p.p, 1.0, u[3], u[4], rng, one, oneToward, true);
-        carried.addScaled(one, (1.0 - p.voxelShare)), shown.addScaled(one, p.voxelShare);
-        carriedWeights += (1.0 - p.voxelShare), shownWeights += p.voxelShare;
-        double drawn = 0.0;
-        for (int s = 0; s < n; ++s) drawn += collisionDensity(p.depth, p.chord, std::sqrt((s + 0.5) / n));
-        drawn /= n;
+        const double air = 1.0 - p.voxelShare;
+        carried.addScaled(one, air), shown.addScaled(one, p.voxelShare);
+        carriedWeights += air, shownWeights += p.voxelShare;
+        const double drawn = drawnDensity(p.depth, p.chord);
         for (int k = 0; k < kSourceDirections; ++k) {
             const double w = mu[k] > 0.0 ? collisionDensity(p.depth, p.chord, mu[k]) / drawn : 1.0;
-            carriedToward.toward[k] += w * ((1.0 - p.voxelShare)) * oneToward.toward[k];
+            carriedToward.toward[k] += w * air * oneToward.toward[k];
             shownToward.toward[k] += w * p.voxelShare * oneToward.toward[k];
-            carriedTowardWeights[k] += w * ((1.0 - p.voxelShare)), shownTowardWeights[k] += w * p.voxelShare;
+            carriedTowardWeights[k] += w * air, shownTowardWeights[k] += w * p.voxelShare;
         }
     }
     for (int k = 0; k < kSourceDirections; ++k) {  // sourceOf divides by the weights of the moments
