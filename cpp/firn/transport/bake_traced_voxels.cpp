@@ -210,11 +210,10 @@ SourceEstimate whole(const FaceEstimate &S) {
 
 // The voxel's own value from what it shows the cameras of its open faces (jobs [first, last), all the voxel's):
 // towards each direction, what it shows the face that direction leaves through most (along its outward normal),
-// the moments the faces' mean, fitted by direction.
-Source shownByFaces(const MonteCarloReference &reference, Medium::ColumnMarcher &marcher, const openvdb::Coord &voxel,
+// the moments the faces' mean, fitted by direction (`visibility`: visibilityFrom the voxel).
+Source shownByFaces(const SourceDirections &directions, const DirectionWeights &visibility, double g,
                     const std::vector<FaceJob> &jobs, const std::vector<FaceEstimate> &estimates, std::size_t first,
                     std::size_t last) {
-    const SourceDirections &directions = reference.directions();
     SourceEstimate S;
     for (std::size_t j = first; j < last; ++j) S += estimates[j].shown;
     const double n = double(last - first);
@@ -229,9 +228,7 @@ Source shownByFaces(const MonteCarloReference &reference, Medium::ColumnMarcher 
             if (out > nearest) nearest = out, S.toward[k] = estimates[j].shown.toward[k];
         }
     }
-    const Medium &medium = *reference.scene().medium;
-    return tracedSourceByDirection(S, directions, visibilityFrom(medium, marcher, voxel, directions),
-                                   medium.optics().g);
+    return tracedSourceByDirection(S, directions, visibility, g);
 }
 
 }  // namespace
@@ -289,21 +286,24 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     estimates = pooledOverFace(medium, traced, voxels, jobs, estimates, inLayer);
     const SourceDirections &directions = reference.directions();
     const double g = medium.optics().g;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 16), [&](const auto &range) {
+    std::vector<std::size_t> firstJob;  // per voxel with faces, its first job
+    for (std::size_t j = 0; j < jobs.size(); ++j)
+        if (j == 0 || jobs[j - 1].first != jobs[j].first) firstJob.push_back(j);
+    firstJob.push_back(jobs.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, firstJob.size() - 1, 8), [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);
-        for (std::size_t j = range.begin(); j != range.end(); ++j) {
-            const auto [v, f] = jobs[j];
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const std::size_t first = firstJob[i], last = firstJob[i + 1], v = jobs[first].first;
+            const DirectionWeights visibility = visibilityFrom(medium, marcher, voxels[v], directions);
             FaceSources &faces = traced.faces[traced.facesAt[v]];
-            faces.source[f] = inLayer[j] ? tracedSourceByDirection(estimates[j].carried, directions,
-                                                                   visibilityFrom(medium, marcher, voxels[v], directions), g)
-                                         : tracedSourceByMoments(whole(estimates[j]), g);
-            if (j > 0 && jobs[j - 1].first == v) continue;
-            // The voxel's first job: its own value.
-            std::size_t last = j;
             bool layer = true;
-            for (; last < jobs.size() && jobs[last].first == v; ++last) layer = layer && inLayer[last];
-            faces.shown = layer ? shownByFaces(reference, marcher, voxels[v], jobs, estimates, j, last)
-                                : traced.source[v];
+            for (std::size_t j = first; j < last; ++j) {
+                faces.source[jobs[j].second] = inLayer[j]
+                                                   ? tracedSourceByDirection(estimates[j].carried, directions, visibility, g)
+                                                   : tracedSourceByMoments(whole(estimates[j]), g);
+                layer = layer && inLayer[j];
+            }
+            faces.shown = layer ? shownByFaces(directions, visibility, g, jobs, estimates, first, last) : traced.source[v];
         }
     });
 }
