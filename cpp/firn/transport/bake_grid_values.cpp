@@ -60,6 +60,11 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
     return true;
 }
 
+// Traced voxel t's grid value: what it shows its faces' cameras where it has face sources, else its source.
+const Source &ownValue(const MonteCarloVoxels &traced, std::int32_t t) {
+    return !traced.faces.empty() && traced.facesAt[t] >= 0 ? traced.faces[traced.facesAt[t]].shown : traced.source[t];
+}
+
 // What air voxel c carries of its face neighbours' face sources (MonteCarloVoxels::faces) towards it, averaged;
 // false where none holds one.
 bool faceCarried(const openvdb::Coord &c, TracedIndex &tracedIndex, const MonteCarloVoxels &traced, Source &S) {
@@ -331,7 +336,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 const openvdb::Coord c = it.getCoord();
                 const std::int32_t t = tracedIndex.getValue(c);
                 Source S;
-                if (t >= 0) S = traced.source[t];
+                if (t >= 0) S = ownValue(traced, t);
                 else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
                 else if (!facingAverage(topo, c, index, source, S)) continue;

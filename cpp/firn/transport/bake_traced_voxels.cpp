@@ -9,6 +9,7 @@
 #include "firn/transport/bake_thin_snow.h"
 #include "firn/transport/light_tracing.h"
 #include "firn/transport/monte_carlo.h"
+#include "firn/transport/pooled_estimates.h"
 #include "firn/transport/traced_source.h"
 
 namespace firn::bake {
@@ -58,6 +59,15 @@ constexpr double kMinLightTracedG = 0.8, kLightTracedShare = 0.75, kMaxLightTrac
 
 }  // namespace
 
+namespace {
+
+// How a traced voxel is gathered: where cameras see it (gatheredWhereSeen), else spread over it.
+Gathering gathering(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &voxel) {
+    return gatheredWhereSeen(medium, density, voxel) ? Gathering::WhereSeen : Gathering::Spread;
+}
+
+}  // namespace
+
 GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                             std::uint64_t seed) {
     constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
@@ -71,9 +81,8 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
         const std::size_t v = voxels.size() * k / kPilotVoxels;
         if (k == 0 || v != voxels.size() * (k - 1) / kPilotVoxels) {
             // As traceSources gathers it: where cameras see it, those points' draws counted too.
-            const bool visible = gatheredWhereSeen(*scene.medium, density, voxels[v]);
-            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v, true, visible).steps) +
-                   kStepsPerPath * kPilotSamples;
+            const Gathering how = gathering(*scene.medium, density, voxels[v]);
+            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v, how).steps) + kStepsPerPath * kPilotSamples;
         }
         steps += last;
         paths += kPilotSamples;
@@ -129,7 +138,7 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
     const Medium &medium = *scene.medium;
     return tracedVoxels(reference, voxels, [&](std::size_t v) {
             Medium::Accessor density = medium.accessor();
-            return reference.sourceIn(voxels[v], samples, seed, v, true, gatheredWhereSeen(medium, density, voxels[v]));
+            return reference.sourceIn(voxels[v], samples, seed, v, gathering(medium, density, voxels[v]));
         }, progress);
 }
 
@@ -138,17 +147,107 @@ namespace {
 // A face's paths: a quarter of the voxel's own, 64 at least (addFaceSources).
 constexpr int kFacePathShare = 4;
 
+// A face job: voxel, face (0..5).
+using FaceJob = std::pair<std::size_t, int>;
+
+double greyMean(const Rgb &c) { return (c.x + c.y + c.z) / 3.0; }
+
+// Where a face lies in a flat layer: at least this many of its voxel's 8 neighbours in the face's plane hold the
+// same face, their density within kPooledDensityRatio (a layer's rim has 5). Elsewhere (a lump's thin part,
+// spray_dense: 20.2 % over 4 seeds with all its faces so, against 19.2 %) the face's air neighbour carries the
+// whole collisions' source, fitted to its moments, and the voxel keeps its own.
+constexpr int kMinLayerNeighbours = 5;
+
+// The estimates' source towards each direction pooled over the face's layer neighbours (kMinLayerNeighbours),
+// scaled to each one's own mean, as light tracing pools a flat layer's (pooled_estimates.h): 64 paths per face,
+// split by the hat, hold about 20 paths' worth each. `inLayer`: per job, whether its face lies in a flat layer.
+std::vector<FaceEstimate> pooledOverFace(const Medium &medium, const MonteCarloVoxels &traced,
+                                         const std::vector<openvdb::Coord> &voxels, const std::vector<FaceJob> &jobs,
+                                         const std::vector<FaceEstimate> &estimates, std::vector<bool> &inLayer) {
+    inLayer.assign(jobs.size(), false);
+    std::vector<int> jobAt(voxels.size() * 6, -1);
+    for (std::size_t j = 0; j < jobs.size(); ++j) jobAt[jobs[j].first * 6 + jobs[j].second] = int(j);
+    Medium::Accessor density = medium.accessor();
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*traced.index);
+    std::vector<FaceEstimate> out = estimates;
+    for (std::size_t j = 0; j < jobs.size(); ++j) {
+        const auto [v, f] = jobs[j];
+        const double rho = density.getValue(voxels[v]);
+        FaceEstimate sum;
+        int neighbours = -1;  // not itself
+        for (int da = -1; da <= 1; ++da)
+            for (int db = -1; db <= 1; ++db) {
+                openvdb::Coord n = voxels[v];
+                n[(f / 2 + 1) % 3] += da, n[(f / 2 + 2) % 3] += db;
+                const std::int32_t t = index.getValue(n);
+                const int k = t < 0 ? -1 : jobAt[std::size_t(t) * 6 + f];
+                if (k < 0 || !(std::max(density.getValue(n) / rho, rho / density.getValue(n)) <= kPooledDensityRatio))
+                    continue;
+                sum.carried += estimates[k].carried, sum.shown += estimates[k].shown, ++neighbours;
+            }
+        if (!(inLayer[j] = neighbours >= kMinLayerNeighbours)) continue;
+        const auto pool = [](SourceEstimate &own, const SourceEstimate &pooled) {
+            if (!(greyMean(pooled.l0) > 0.0)) return;
+            const double scale = greyMean(own.l0) / greyMean(pooled.l0);
+            for (int k = 0; k < kSourceDirections; ++k) own.toward[k] = pooled.toward[k] * scale;
+        };
+        pool(out[j].carried, sum.carried), pool(out[j].shown, sum.shown);
+    }
+    return out;
+}
+
+// The source over all of a face's collisions, carried and shown together (their moments).
+SourceEstimate whole(const FaceEstimate &S) {
+    SourceEstimate out;
+    const auto add = [&out](const SourceEstimate &e, double w) {
+        out.l0 += w * e.l0, out.l1 += w * e.l1, out.beamL0 += w * e.beamL0, out.beamL1 += w * e.beamL1;
+        out.second += w * e.second;
+        for (int i = 0; i < 3; ++i) out.third[i] += w * e.third[i];
+    };
+    add(S.carried, 1.0 - S.shownShare), add(S.shown, S.shownShare);
+    return out;
+}
+
+// The voxel's own value from what it shows the cameras of its open faces (jobs [first, last), all the voxel's):
+// towards each direction, what it shows the face that direction leaves through most (along its outward normal),
+// the moments the faces' mean, fitted by direction (`visibility`: visibilityFrom the voxel).
+Source shownByFaces(const SourceDirections &directions, const DirectionWeights &visibility, double g,
+                    const std::vector<FaceJob> &jobs, const std::vector<FaceEstimate> &estimates, std::size_t first,
+                    std::size_t last) {
+    SourceEstimate S;
+    for (std::size_t j = first; j < last; ++j) S += estimates[j].shown;
+    const double n = double(last - first);
+    S.l0 /= n, S.l1 /= n, S.beamL0 /= n, S.beamL1 /= n, S.second /= n;
+    for (glm::dmat3 &t : S.third) t /= n;
+    for (double &t : S.toward) t /= n;
+    for (int k = 0; k < kSourceDirections; ++k) {
+        double nearest = 0.0;
+        for (std::size_t j = first; j < last; ++j) {
+            const int f = jobs[j].second;
+            const double out = (f % 2 ? 1.0 : -1.0) * directions[k][f / 2];
+            if (out > nearest) nearest = out, S.toward[k] = estimates[j].shown.toward[k];
+        }
+    }
+    return tracedSourceByDirection(S, directions, visibility, g);
+}
+
 }  // namespace
 
 // A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels'
-// mean source (the one both its air neighbours carry) is not: at sigma_t h 15, lit from above, the top views read
+// mean source (the one both its air neighbours carried) is not: at sigma_t h 15, lit from above, the top views read
 // -34 % (docs/bake.md, Method 3). Its traced voxels thicker than kMaxDirectionFitTau open to air on both faces
-// along an axis gather one source more for each of those faces (MonteCarloReference::sourceIn with the face),
-// which the air neighbour there carries (faceCarried): the 16 x 16 x 1 layer at sigma_t h 15 from above 33.3 ->
-// 9.1 % per block, bias -34.4 -> -4.1 %, from below 52.4 -> 19.2 %, +47.0 -> +16.3 % (bench/snow_on_ground_bench.py
-// --float). A face's paths are a quarter of the voxel's own (64 at least): the layer read 9.7 % against 9.0 % with
-// all of them (its points along the normal), the trace 4.2 against 7.3 processor seconds (2.97 without face
-// sources). None where the gathering's `plan` and the faces' paths together would cost more than kMaxTracedSteps.
+// along an axis gather, for each of those faces, where that face's cameras collide (faceSourceIn). In a flat
+// layer (kMinLayerNeighbours) the light there is split by the trilinear hat between what the air neighbour across
+// the face carries (faceCarried) and what the voxel's own value shows those cameras (FaceSources::shown; towards
+// each direction the face its cameras look through), each fitted by direction, the estimates' directions pooled
+// over the layer (pooledOverFace); the voxel's mean stays what its other neighbours carry (a layer's rim seen
+// edge-on). The 16 x 16 x 1 layer at sigma_t h 15 (bench/snow_on_ground_bench.py --float): from above 33.3 % per
+// block (main before float-voxel) -> 9.1 % (faces carried their whole collisions' source, the voxel its mean) ->
+// 8.8 %, from below 52.4 -> 19.2 -> 10.7 %: seen from below the mean is 46 % brighter than what the voxel shows
+// there (the sun-lit top's light, forward), from above 32 % darker (docs/benchmarks.md, float-under; at sigma_t h
+// 3 from above 6.5 -> 8.0 %). A face's paths are a quarter of the
+// voxel's own (64 at least). None where the gathering's `plan` and the faces' paths together would cost more than
+// kMaxTracedSteps.
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
                     const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced) {
@@ -157,7 +256,7 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     Medium::Accessor density = medium.accessor();
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
     traced.facesAt.assign(voxels.size(), -1);
-    std::vector<std::pair<std::size_t, int>> jobs;  // (voxel, face)
+    std::vector<FaceJob> jobs;  // by voxel
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         const std::int32_t i = index.getValue(voxels[v]);
         if (i < 0 || !(voxelOpticalDepth(medium, density, voxels[v]) > kMaxDirectionFitTau)) continue;
@@ -175,14 +274,36 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
         return;
     }
     const MonteCarloReference reference(scene);
-    const double g = medium.optics().g;
+    std::vector<FaceEstimate> estimates(jobs.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 4), [&](const auto &range) {
         progress.throwIfCancelled();  // up to kMaxTracedSteps of paths (Esc keeps the previous bake)
         for (std::size_t j = range.begin(); j != range.end(); ++j) {
             const auto [v, f] = jobs[j];
-            const SourceEstimate S =
-                reference.sourceIn(voxels[v], samples, seed, voxels.size() * (1 + f) + v, true, false, f);
-            traced.faces[traced.facesAt[v]].source[f] = tracedSourceByMoments(S, g);
+            estimates[j] = reference.faceSourceIn(voxels[v], f, samples, seed, voxels.size() * (1 + f) + v);
+        }
+    });
+    std::vector<bool> inLayer;
+    estimates = pooledOverFace(medium, traced, voxels, jobs, estimates, inLayer);
+    const SourceDirections &directions = reference.directions();
+    const double g = medium.optics().g;
+    std::vector<std::size_t> firstJob;  // per voxel with faces, its first job
+    for (std::size_t j = 0; j < jobs.size(); ++j)
+        if (j == 0 || jobs[j - 1].first != jobs[j].first) firstJob.push_back(j);
+    firstJob.push_back(jobs.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, firstJob.size() - 1, 8), [&](const auto &range) {
+        Medium::ColumnMarcher marcher(medium);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const std::size_t first = firstJob[i], last = firstJob[i + 1], v = jobs[first].first;
+            const DirectionWeights visibility = visibilityFrom(medium, marcher, voxels[v], directions);
+            FaceSources &faces = traced.faces[traced.facesAt[v]];
+            bool layer = true;
+            for (std::size_t j = first; j < last; ++j) {
+                faces.source[jobs[j].second] = inLayer[j]
+                                                   ? tracedSourceByDirection(estimates[j].carried, directions, visibility, g)
+                                                   : tracedSourceByMoments(whole(estimates[j]), g);
+                layer = layer && inLayer[j];
+            }
+            faces.shown = layer ? shownByFaces(directions, visibility, g, jobs, estimates, first, last) : traced.source[v];
         }
     });
 }

@@ -257,7 +257,7 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
     double beamSteps = 0.0;
     for (int k = 0; k < kPilotVoxels; ++k) {
         const std::size_t v = voxels.size() * k / kPilotVoxels;
-        beamSteps += double(reference.sourceIn(voxels[v], kPilotSamples, seed ^ kBeamSeed, v, false).steps);
+        beamSteps += double(reference.sourceIn(voxels[v], kPilotSamples, seed ^ kBeamSeed, v, Gathering::BeamsOnly).steps);
     }
     const double perBeamSample = std::max(beamSteps / (kPilotVoxels * kPilotSamples), 1.0);
     plan.beamSamples = std::clamp(int(kBeamShare * maxSteps / (perBeamSample * double(voxels.size()))),
@@ -328,7 +328,7 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 64), [&](const auto &range) {
         progress.throwIfCancelled();
         for (std::size_t v = range.begin(); v != range.end(); ++v)
-            out[v] += reference.sourceIn(voxels[v], plan.beamSamples, seed ^ kBeamSeed, v, false);
+            out[v] += reference.sourceIn(voxels[v], plan.beamSamples, seed ^ kBeamSeed, v, Gathering::BeamsOnly);
     });
     out.front().steps += steps;  // the photons' steps, counted once
     progress.report(1.0);

@@ -55,6 +55,14 @@ class KroneckerSequence {
     std::array<double, 5> alpha_{}, x_{};
 };
 
+// Points of [0, 1)^3 from the sequence's first three coordinates (the draws of VisiblePoints and facePoints).
+std::function<std::array<double, 3>()> threeOf(KroneckerSequence &sequence) {
+    return [&sequence] {
+        const std::array<double, 5> u = sequence.next();
+        return std::array<double, 3>{u[0], u[1], u[2]};
+    };
+}
+
 }  // namespace
 
 // One path tracer per thread: holds a density accessor.
@@ -330,7 +338,8 @@ Rgb PhotonTracer::radianceArriving(const Ray &ray, Rng &rng) { return tracer_->s
 long PhotonTracer::steps() const { return tracer_->steps; }
 
 SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
-                                             std::uint64_t stream, bool scattered, bool visible, int face) const {
+                                             std::uint64_t stream, Gathering how) const {
+    const bool scattered = how != Gathering::BeamsOnly;
     PathTracer tracer(*this, !scattered);  // the per-voxel gathering's draws as they were (bench/bake_suite.py)
     Rng rng(seed, stream);
     const Medium &medium = *scene_.medium;
@@ -344,14 +353,9 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     // Where cameras see a thick voxel: points drawn so, of equal weight (VisiblePoints).
     std::vector<glm::dvec3> seen;
     long seenSteps = 0;  // their draws' work (the bake's budget counts it: planGathering)
-    if (visible || face >= 0) {
+    if (how == Gathering::WhereSeen) {
         KroneckerSequence candidates(rng);
-        const auto next = [&] {
-            const std::array<double, 5> u = candidates.next();
-            return std::array<double, 3>{u[0], u[1], u[2]};
-        };
-        seen = face >= 0 ? facePoints(medium, voxel, face, samples, next, seenSteps)
-                         : visiblePoints(medium, voxel, directions_, samples, next, rng, seenSteps);
+        seen = visiblePoints(medium, voxel, directions_, samples, threeOf(candidates), rng, seenSteps);
     }
     for (int s = 0; s < samples; ++s) {
         const std::array<double, 5> u = points.next();
@@ -363,6 +367,74 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
     }
     SourceEstimate out = sourceOf(sum, &toward, weights, medium.optics());
     out.steps = tracer.steps + seenSteps;
+    return out;
+}
+
+namespace {
+
+// The density of a camera ray's collisions at optical depth `depth` along a face's normal, the ray at mu to the
+// normal and stopped within the normal's optical depth `chord` (facePoints).
+double collisionDensity(double depth, double chord, double mu) {
+    return std::exp(-depth / mu) / (mu * -std::expm1(-chord / mu));
+}
+
+// The same over facePoints' mu, cosine-weighted: the integral of 2 mu collisionDensity over mu (smooth, at most
+// 2 / (1 - exp(-chord))), by the midpoint rule.
+double drawnDensity(double depth, double chord) {
+    constexpr int kNodes = 32;
+    double sum = 0.0;
+    for (int i = 0; i < kNodes; ++i) {
+        const double mu = (i + 0.5) / kNodes;
+        sum += 2.0 * mu * collisionDensity(depth, chord, mu);
+    }
+    return sum / kNodes;
+}
+
+}  // namespace
+
+FaceEstimate MonteCarloReference::faceSourceIn(const openvdb::Coord &voxel, int face, int samples,
+                                               std::uint64_t seed, std::uint64_t stream) const {
+    PathTracer tracer(*this, false);
+    Rng rng(seed, stream);
+    const Medium &medium = *scene_.medium;
+    KroneckerSequence points(rng), candidates(rng);
+    long seenSteps = 0;
+    const std::vector<FacePoint> seen = facePoints(medium, voxel, face, samples, threeOf(candidates), seenSteps);
+    // Each point's light split by the hat: the air neighbour's share to what it carries, the voxel's to what
+    // the voxel shows this face's cameras (one path each). Towards a direction leaving through the face at mu to
+    // its normal, the points reweighted to that camera's collisions (collisionDensity over the points' own, the
+    // mixture of facePoints' mu).
+    const glm::dvec3 normal = glm::dvec3(face / 2 == 0, face / 2 == 1, face / 2 == 2) * (face % 2 ? 1.0 : -1.0);
+    std::array<double, kSourceDirections> mu{};
+    for (int k = 0; k < kSourceDirections; ++k) mu[k] = glm::dot(directions_[k], normal);
+    ArrivingLight carried, shown;
+    ArrivingToward carriedToward, shownToward;
+    std::array<double, kSourceDirections> carriedTowardWeights{}, shownTowardWeights{};
+    double carriedWeights = 0.0, shownWeights = 0.0;
+    for (const FacePoint &p : seen) {
+        const std::array<double, 5> u = points.next();
+        ArrivingLight one;
+        ArrivingToward oneToward;
+        tracer.sampleArriving(p.p, 1.0, u[3], u[4], rng, one, oneToward, true);
+        const double air = 1.0 - p.voxelShare;
+        carried.addScaled(one, air), shown.addScaled(one, p.voxelShare);
+        carriedWeights += air, shownWeights += p.voxelShare;
+        const double drawn = drawnDensity(p.depth, p.chord);
+        for (int k = 0; k < kSourceDirections; ++k) {
+            const double w = mu[k] > 0.0 ? collisionDensity(p.depth, p.chord, mu[k]) / drawn : 1.0;
+            carriedToward.toward[k] += w * air * oneToward.toward[k];
+            shownToward.toward[k] += w * p.voxelShare * oneToward.toward[k];
+            carriedTowardWeights[k] += w * air, shownTowardWeights[k] += w * p.voxelShare;
+        }
+    }
+    for (int k = 0; k < kSourceDirections; ++k) {  // sourceOf divides by the weights of the moments
+        if (carriedTowardWeights[k] > 0.0) carriedToward.toward[k] *= carriedWeights / carriedTowardWeights[k];
+        if (shownTowardWeights[k] > 0.0) shownToward.toward[k] *= shownWeights / shownTowardWeights[k];
+    }
+    FaceEstimate out{sourceOf(carried, &carriedToward, carriedWeights, medium.optics()),
+                     sourceOf(shown, &shownToward, shownWeights, medium.optics()),
+                     shownWeights / std::max(carriedWeights + shownWeights, 1e-300)};
+    out.carried.steps = tracer.steps + seenSteps;
     return out;
 }
 
@@ -421,6 +493,11 @@ void ArrivingLight::add(const Rgb &fluence, const glm::dvec3 &travel, bool beam,
     for (int i = 0; i < 3; ++i) third[i] += travel[i] * tt;
 }
 
+void ArrivingLight::addScaled(const ArrivingLight &o, double w) {
+    phi += w * o.phi, phiBeam += w * o.phiBeam, flux += w * o.flux, fluxBeam += w * o.fluxBeam, second += w * o.second;
+    for (int i = 0; i < 3; ++i) third[i] += w * o.third[i];
+}
+
 ArrivingLight &ArrivingLight::operator+=(const ArrivingLight &o) {
     phi += o.phi, phiBeam += o.phiBeam, flux += o.flux, fluxBeam += o.fluxBeam, second += o.second;
     for (int i = 0; i < 3; ++i) third[i] += o.third[i];
@@ -431,6 +508,10 @@ void ArrivingToward::add(const Rgb &fluence, const glm::dvec3 &travel, const Vol
                          const SourceDirections &directions) {
     const double grey = greyScattered(fluence, optics);
     for (int j = 0; j < kSourceDirections; ++j) toward[j] += grey * henyeyGreenstein(glm::dot(travel, directions[j]), optics.g);
+}
+
+void ArrivingToward::addScaled(const ArrivingToward &o, double w) {
+    for (int j = 0; j < kSourceDirections; ++j) toward[j] += w * o.toward[j];
 }
 
 ArrivingToward &ArrivingToward::operator+=(const ArrivingToward &o) {

@@ -53,6 +53,15 @@ struct SourceEstimate {
 
 SourceEstimate &operator+=(SourceEstimate &a, const SourceEstimate &b);
 
+// The source cameras see where they collide in front of a face of a voxel, read as the render reads it: each
+// collision's light weighted by the trilinear hat of the air neighbour across the face (`carried`: what that
+// neighbour holds) and by the voxel's (`shown`: what the voxel's own value shows those cameras); carried and
+// shown read there give the light they saw, on average (MonteCarloReference::faceSourceIn).
+struct FaceEstimate {
+    SourceEstimate carried, shown;
+    double shownShare = 0.0;  // the voxel's mean hat share over the collisions
+};
+
 // Light arriving at the points of a voxel, summed: fluence (W/m^2) and flux (column c: channel c's vector, W/m^2
 // along the direction light travels), scattered light and the lights' direct beams apart, and the second and
 // third moments of the directions t light travels, weighted by what the snow scatters of it (albedo, grey).
@@ -64,6 +73,7 @@ struct ArrivingLight {
 
     // Light of `fluence` travelling along `travel`: a direct beam's, or scattered light's.
     void add(const Rgb &fluence, const glm::dvec3 &travel, bool beam, const VolumeOptics &optics);
+    void addScaled(const ArrivingLight &other, double weight);
     ArrivingLight &operator+=(const ArrivingLight &other);
 };
 
@@ -74,6 +84,7 @@ struct ArrivingToward {
     std::array<double, kSourceDirections> toward{};  // sum of mean(albedo phi) HG(t . w_j) (SourceDirections)
 
     void add(const Rgb &fluence, const glm::dvec3 &travel, const VolumeOptics &optics, const SourceDirections &directions);
+    void addScaled(const ArrivingToward &other, double weight);
     ArrivingToward &operator+=(const ArrivingToward &other);
 };
 
@@ -107,6 +118,16 @@ struct RadianceEstimate {
 // Estimates, for each camera ray, the radiance the snow scatters towards the camera: paths whose first
 // event is a scattering in the medium. It excludes what a renderer draws itself behind the snow (sky and
 // surfaces seen through it, attenuated by exp(-tau)); that is exactly what the baked emission stands for.
+// What MonteCarloReference::sourceIn gathers, and where its points lie.
+enum class Gathering {
+    Spread,     // all orders, the points spread over the voxel, weighted by extinction
+    WhereSeen,  // all orders, the points drawn where cameras see the voxel's stored source, of equal weight
+                // (VisiblePoints: in a voxel of many optical depths, its first optical depth from each side, and
+                // the trilinear hat's reach)
+    BeamsOnly,  // the direct beams only, spread (beamL0, beamL1 and their share of the moments): what light
+                // tracing leaves to each voxel (light_tracing.h)
+};
+
 class MonteCarloReference {
   public:
     explicit MonteCarloReference(Scene scene);
@@ -124,13 +145,15 @@ class MonteCarloReference {
     // the Henyey-Greenstein phase function to first order in w, with the exact fluence phi and flux F; the
     // direct beams' share apart; the higher moments of the directions the light travels, which tell how peaked
     // the source is; and the exact source in directions().
-    // Without `scattered`, the direct beams only (beamL0, beamL1 and their share of the moments): what light
-    // tracing leaves to each voxel (light_tracing.h). With `visible`, the points drawn where cameras see the
-    // voxel's stored source instead, of equal weight (VisiblePoints: in a voxel of many optical depths, its first
-    // optical depth from each side, and the trilinear hat's reach). With `face` (0..5: -x, +x, -y, +y, -z, +z),
-    // drawn where a camera looking straight at that air face sees it (facePoints), of equal weight.
+    // `how`: see Gathering.
     SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream,
-                            bool scattered = true, bool visible = false, int face = -1) const;
+                            Gathering how = Gathering::Spread) const;
+
+    // What cameras looking at the air face `face` (0..5: -x, +x, -y, +y, -z, +z) of a thick voxel see of it, from
+    // `samples` points where they collide (facePoints), all orders: split by the trilinear hat between the air
+    // neighbour's value and the voxel's (FaceEstimate). Its steps in `carried`.
+    FaceEstimate faceSourceIn(const openvdb::Coord &voxel, int face, int samples, std::uint64_t seed,
+                              std::uint64_t stream) const;
 
     const Scene &scene() const { return scene_; }
     // Where every estimate of this reference gathers the exact source (sourceIn, light tracing's tallies), and

@@ -23,6 +23,11 @@ double exitDistance(const glm::dvec3 &y, const glm::dvec3 &d) {
     return std::max(t, 0.0);
 }
 
+// The optical depth at which a ray collides within `chord` of it, given it collides there: u in [0, 1) inverts
+// the truncated exponential, -log(1 - u (1 - exp(-chord))) (VisiblePoints::draw's free flight, facePoints' camera
+// ray).
+double collisionDepth(double u, double chord) { return -std::log1p(u * std::expm1(-chord)); }
+
 int stepsAlong(double length) { return std::max(1, int(std::ceil(length * kStepsPerVoxel))); }
 
 // A coordinate across a face of the hat's box from u in [0, 1], drawn by the hat's tent 1 - |x|.
@@ -101,7 +106,7 @@ VisiblePoints::Candidate VisiblePoints::draw(int i, const std::array<double, 3> 
     std::array<double, 4 * kStepsPerVoxel> sigma{};  // the box's chord is at most 2 sqrt(3) voxels
     double chord = 0.0;
     for (int s = 0; s < n; ++s) chord += (sigma[s] = sigmaT(entry - (s + 0.5) * dt * w)) * dt * h;
-    double target = -std::log1p(u[2] * std::expm1(-chord)), t = length;
+    double target = collisionDepth(u[2], chord), t = length;
     for (int s = 0; s < n; ++s) {
         const double step = sigma[s] * dt * h;
         if (target <= step && step > 0.0) {
@@ -169,13 +174,13 @@ std::vector<glm::dvec3> visiblePoints(const Medium &medium, const openvdb::Coord
     return out;
 }
 
-std::vector<glm::dvec3> facePoints(const Medium &medium, const openvdb::Coord &voxel, int face, int samples,
-                                   const std::function<std::array<double, 3>()> &next, long &steps) {
+std::vector<FacePoint> facePoints(const Medium &medium, const openvdb::Coord &voxel, int face, int samples,
+                                  const std::function<std::array<double, 3>()> &next, long &steps) {
     constexpr int kSteps = 64;  // over the two voxels' chord: 1/32 voxel, optical depth 0.5 at sigma_t h 15
     const int a = face / 2;
     const double side = face % 2 ? 1.0 : -1.0, h = medium.voxelSize(), k = medium.optics().extinctionPerDensity;
     Medium::ColumnMarcher marcher(medium);
-    std::vector<glm::dvec3> out;
+    std::vector<FacePoint> out;
     out.reserve(samples);
     std::array<double, kSteps> tau{};  // optical depth at each step's end
     for (int s = 0; s < samples; ++s) {
@@ -198,12 +203,12 @@ std::vector<glm::dvec3> facePoints(const Medium &medium, const openvdb::Coord &v
         // A camera ray at mu = cos(angle to the normal), cosine-weighted (projected area) and stratified over the
         // points, reaches the normal's optical depth mu t at its own t.
         const double mu = std::sqrt((s + 0.5) / samples);
-        const double target = mu * -std::log1p(u[2] * std::expm1(-sum / mu));
+        const double target = mu * collisionDepth(u[2], sum / mu);
         const int i = int(std::lower_bound(tau.begin(), tau.end(), target) - tau.begin());
         const double before = i > 0 ? tau[i - 1] : 0.0, step = tau[std::min(i, kSteps - 1)] - before;
         const double t = (i + (step > 0.0 ? (target - before) / step : 0.5)) * 2.0 / kSteps;
         const glm::dvec3 p = at(std::min(t, 2.0));
-        out.push_back(medium.indexToWorld(p));
+        out.push_back({medium.indexToWorld(p), 1.0 - std::abs(1.0 - std::min(t, 2.0)), target, sum});
     }
     if (int(out.size()) < samples) out.clear();  // none seen (a voxel of snow always is)
     return out;

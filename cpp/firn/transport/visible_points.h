@@ -73,15 +73,24 @@ std::vector<glm::dvec3> visiblePoints(const Medium &medium, const openvdb::Coord
                                       const SourceDirections &directions, int samples,
                                       const std::function<std::array<double, 3>()> &next, Rng &rng, long &steps);
 
+// A point where a camera looking at a voxel's air face collides (facePoints), with the voxel's share of the
+// trilinear hat there along the face's axis (1 at its centre, 0 at the air neighbour's): what of that collision
+// the render reads from the voxel's own value, the rest from the air neighbour's (MonteCarloReference::faceSourceIn).
+struct FacePoint {
+    glm::dvec3 p;                     // m, world space
+    double voxelShare = 0.0;
+    double depth = 0.0, chord = 0.0;  // optical depth along the normal to p, and over the two voxels
+};
+
 // `samples` points of `voxel` where a camera looking straight at its air face `face` (0..5: -x, +x, -y, +y, -z,
-// +z) sees it, for the source its air neighbour there carries (docs/bake.md, Method 3: a floating layer one voxel
-// thick is seen from each side in that side's first optical depth): across the face (uniform), at a collision
-// along the face's inward normal from the neighbour's centre through the voxel (the trilinear density's optical
-// depth, midpoint rule, inverted; given one within those two voxels) at the depth a camera ray sees it from
-// directions cosine-weighted about the normal (stratified; its lateral travel left out: along the normal
-// alone, the 16 x 16 x 1 layer at sigma_t h 15 read 9.7 % from above, 20.4 % from below, against 9.1, 19.2 %), from
-// `next`'s points of [0, 1)^3. Adds the density lookups to `steps`.
-std::vector<glm::dvec3> facePoints(const Medium &medium, const openvdb::Coord &voxel, int face, int samples,
-                                   const std::function<std::array<double, 3>()> &next, long &steps);
+// +z) sees it (docs/bake.md, Method 3: a floating layer one voxel thick is seen from each side in that side's
+// first optical depth): across the face (uniform), at a collision along the face's inward normal from the
+// neighbour's centre through the voxel (the trilinear density's optical depth, midpoint rule, inverted; given one
+// within those two voxels) at the depth a camera ray sees it from directions cosine-weighted about the normal
+// (stratified; its lateral travel left out: along the normal alone, the 16 x 16 x 1 layer at sigma_t h 15 read
+// 9.7 % from above, 20.4 % from below, against 9.1, 19.2 %; branch float-voxel), from `next`'s points of
+// [0, 1)^3. Adds the density lookups to `steps`.
+std::vector<FacePoint> facePoints(const Medium &medium, const openvdb::Coord &voxel, int face, int samples,
+                                  const std::function<std::array<double, 3>()> &next, long &steps);
 
 }  // namespace firn

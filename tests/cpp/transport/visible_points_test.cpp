@@ -56,8 +56,8 @@ TEST(VisiblePoints, TheirWorkCountsInTheEstimatesSteps) {
     Medium::Accessor density = scene.medium->accessor();
     ASSERT_TRUE(gatheredWhereSeen(*scene.medium, density, voxel));
     constexpr int kSamples = 64;
-    const long over = reference.sourceIn(voxel, kSamples, 9, 0, true, false).steps;
-    const long seen = reference.sourceIn(voxel, kSamples, 9, 0, true, true).steps;
+    const long over = reference.sourceIn(voxel, kSamples, 9, 0, Gathering::Spread).steps;
+    const long seen = reference.sourceIn(voxel, kSamples, 9, 0, Gathering::WhereSeen).steps;
     std::printf("steps per path: over the voxel %.0f, where seen %.0f\n", double(over) / kSamples, double(seen) / kSamples);
     EXPECT_GT(seen, over);
 }
