@@ -154,9 +154,10 @@ void keepIndexAndPatches(SnowTopology &topo) {
 constexpr double kSolvedProgress = 0.9, kSolvedProgressReference = 0.5;
 
 // The source function of every unknown: per pass (the later ones gather the light between snow surfaces
-// first), a diffusion solve per channel. One channel at a time, its system assembled and its solver built
-// again each pass: keeping the three tripled the bake's memory, and rebuilding them costs a few per cent of a
-// solve. All the solve's data is freed on return, before the grids are written.
+// first), a diffusion solve per channel. One channel at a time, its system assembled again and its solver's
+// levels taken over from the channel before (built afresh each pass): keeping the three systems tripled the bake's
+// memory, and assembling them costs a few per cent of a solve. All the solve's data is freed on return, before the
+// grids are written.
 SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
                                  const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
                                  int passes, bool bounceTail, Progress &p, Stopwatch &clock, BakeStats &stats) {

@@ -56,6 +56,9 @@ struct MultigridSolver::Hierarchy {
         mutable std::vector<float> b, x;
     };
     std::vector<Level> levels;
+    // The finest rows' neighbour table the levels were built over: a solver takes them over only for the same
+    // table (another's colours would let a sweep's rows read each other).
+    const Stencil<float>::Neighbours *builtOver = nullptr;
     std::vector<double> cholesky;  // lower factor of the bottom level, dense row-major
     std::vector<float> remainder;  // finest level: diag minus the conductances
 
@@ -348,9 +351,10 @@ Stencil<float> singlePrecision(const StencilOperator &A) {
 MultigridSolver::MultigridSolver(StencilOperator fine) : MultigridSolver(singlePrecision(fine), remainderOf(fine)) {}
 
 MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remainder, Workspace *workspace) {
-    const bool takeOver = workspace && workspace->levels && workspace->levels->levels.front().colour.size() == fine.size();
+    const bool takeOver = workspace && workspace->levels && workspace->levels->builtOver == fine.neighbour.get();
     hierarchy_ = takeOver ? std::move(workspace->levels) : std::make_shared<Hierarchy>();
     Hierarchy &h = *hierarchy_;
+    h.builtOver = fine.neighbour.get();
     if (takeOver) {
         // The levels' rows, blocks and colours as they were: only the coarse operators are summed again (their
         // vectors b and x are written before they are read).

@@ -56,7 +56,7 @@ class MultigridSolver {
     // between solves, their pages are reused rather than mapped and cleared afresh (the bake's three channels).
     // A spent solver's levels (release) serve the next solver of the same rows and neighbours: their blocks,
     // neighbours and colours depend on the voxels alone, so only its coarse operators are summed again.
-    struct Hierarchy;  // levels, defined in multigrid.cpp
+    struct Hierarchy;  // levels, defined in multigrid.cpp (so held by shared_ptr: complete where it is deleted)
     struct Workspace {
         std::vector<double> p, z;
         std::vector<double> spare;          // b's storage after a solve (holding its last residual)
@@ -70,6 +70,9 @@ class MultigridSolver {
     // taken over: the same solver as a fresh build, bit for bit.
     MultigridSolver(Stencil<float> fine, std::vector<float> remainder, Workspace *workspace = nullptr);
     ~MultigridSolver();
+    // Not copied: copies would share the levels' mutable vectors, and one's release would empty the other.
+    MultigridSolver(const MultigridSolver &) = delete;
+    MultigridSolver &operator=(const MultigridSolver &) = delete;
 
     struct Result {
         int iterations = 0;

@@ -108,12 +108,17 @@ TEST(Multigrid, BlocksThatTouchWithoutLinksStayApart) {
 // Two systems on the same voxels (a ball's, two absorptions), a right-hand side, and the second solved by a fresh
 // solver in fresh vectors.
 struct TwoSystems {
-    StencilOperator first = ballProblem(12, 1e-2), second = ballProblem(12, 1e-4);
+    StencilOperator first = ballProblem(12, 1e-2), second = onVoxelsOf(first, ballProblem(12, 1e-4));
     std::size_t n = second.size();
     std::vector<double> b = rightHandSide(second), fresh = std::vector<double>(n, 0.0);
     MultigridSolver freshSolver{second};
     MultigridSolver::Result freshResult = freshSolver.solve(b, fresh, 1e-9, 100, SubProgress(nullptr, 0, 1));
 
+    // `A` reading `voxels`' own voxel and neighbour tables, as the bake's channels read the topology's.
+    static StencilOperator onVoxelsOf(const StencilOperator &voxels, StencilOperator A) {
+        A.coord = voxels.coord, A.neighbour = voxels.neighbour;
+        return A;
+    }
     static std::vector<double> rightHandSide(const StencilOperator &A) {
         std::vector<double> b(A.size());
         for (std::size_t i = 0; i < A.size(); ++i) b[i] = (*A.coord)[i].z() > 4 ? 1.0 : 0.0;
@@ -134,6 +139,13 @@ struct TwoSystems {
         }
         A.coord = second.coord, A.neighbour = second.neighbour;
         return {std::move(A), std::move(remainder)};
+    }
+    // The second's solver built with the first's spent levels in `workspace`; `copied`: over a copy of the
+    // neighbour table (the same rows, another table).
+    MultigridSolver secondAfterFirst(MultigridSolver::Workspace &workspace, bool copied) const {
+        auto [A, remainder] = secondInFirstsStorage(workspace, true);
+        if (copied) A.neighbour = std::make_shared<const StencilOperator::Neighbours>(*A.neighbour);
+        return MultigridSolver(std::move(A), std::move(remainder), &workspace);
     }
 };
 
@@ -158,13 +170,15 @@ TEST(Multigrid, SolvesInAnEarlierSolvesVectorsAsInFreshOnes) {
 
 // The bake's next channel takes over a spent solver's levels (release into the workspace): the same rows and
 // neighbours, another operator. Its coarse operators summed again over the kept blocks give the iterates of a fresh
-// build bit for bit, and the levels are those a fresh build makes.
+// build bit for bit, and the levels are those a fresh build makes. Levels built over another neighbour table (the
+// same rows, copied) are left: their colours and blocks belong to that table.
 TEST(Multigrid, TakesOverASpentSolversLevelsAsAFreshBuild) {
     const TwoSystems systems;
+    MultigridSolver::Workspace elsewhere;
+    EXPECT_EQ(systems.secondAfterFirst(elsewhere, true).levelCount(), systems.freshSolver.levelCount());
+    EXPECT_NE(elsewhere.levels, nullptr);  // left where they were: the solver built its own
     MultigridSolver::Workspace workspace;
-    auto [A, remainder] = systems.secondInFirstsStorage(workspace, true);
-    ASSERT_NE(workspace.levels, nullptr);
-    const MultigridSolver taken(std::move(A), std::move(remainder), &workspace);
+    const MultigridSolver taken = systems.secondAfterFirst(workspace, false);
     EXPECT_EQ(workspace.levels, nullptr);  // taken over, not copied
     EXPECT_EQ(taken.levelCount(), systems.freshSolver.levelCount());
     std::vector<double> reused(systems.n, 0.0);
