@@ -1,30 +1,20 @@
 // The face sources of a floating layer's traced voxels (bake_traced_voxels.h, addFaceSources): up to
 // kMaxTracedSteps of paths, so Esc must stop them.
-#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "box_scene.h"
 #include "firn/transport/bake_traced_voxels.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/util/error.h"
-#include "firn/util/openvdb_library.h"
 
 namespace firn {
 
 namespace {
 
-constexpr double kVoxel = 0.01;  // m
-
 // A layer one voxel thick, 4 x 4 voxels of sigma_t h 15 with air above and below, under a sun.
 Scene floatingLayer() {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
-    grid->fill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 0)), 150.0f);  // sigma_t 1500 / m
-    Scene scene;
-    scene.medium = std::make_shared<Medium>(grid, VolumeOptics{10.0, Rgb(0.999), 0.7});
-    scene.suns = {SunLight{glm::normalize(glm::dvec3(0.866, 0.0, 0.5)), Rgb(1.0), 0.0093}};
-    return scene;
+    return test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 0)), 150.0f,  // 1500 / m
+                          VolumeOptics{10.0, Rgb(0.999), 0.7}, glm::dvec3(0.866, 0.0, 0.5));
 }
 
 }  // namespace

@@ -7,25 +7,17 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "box_scene.h"
 #include "firn/transport/traced_source.h"
-#include "firn/util/openvdb_library.h"
 
 namespace firn {
 
 namespace {
 
-constexpr double kVoxel = 0.01;  // m
-
 // A lump of 8^3 voxels, sigma_t h = 10 (as spray_dense's lumps: thick, g 0.85), under a sun and sky.
 Scene lumpScene() {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
-    grid->fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(7)), 100.0f);  // kg/m^3: sigma_t 1000 / m
-    Scene scene;
-    scene.medium = std::make_shared<Medium>(grid, VolumeOptics{10.0, Rgb(0.99), 0.85});
-    scene.suns = {SunLight{glm::normalize(glm::dvec3(0.5, 0.3, 0.8)), Rgb(1.0), 0.0093}};
+    Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(7)), 100.0f,  // 1000 / m
+                                 VolumeOptics{10.0, Rgb(0.99), 0.85}, glm::dvec3(0.5, 0.3, 0.8));
     scene.sky.radiance = Rgb(0.1);
     return scene;
 }
