@@ -182,6 +182,22 @@ class PathTracer {
 
     double sigmaT(const glm::dvec3 &p) { return k_ * medium_.densityAt(p, accessor_); }
 
+    // Whether p lies inside a closed occluder (the snow's surface mesh under thrown lumps, a body): no light
+    // reaches there, and a path started there bounces off the inside until roulette (some 700 times at the
+    // snow's albedo 0.998). Inside, the rays straight up and straight down both leave through a back face (closed
+    // components wind counter-clockwise seen from outside); an open sheet, turned to face up
+    // (orientOpenSurfaces), never shows its back to both: a point under it sees the ground or nothing below.
+    bool enclosed(const glm::dvec3 &p) const {
+        if (scene_.occluders->empty()) return false;
+        for (const float up : {1.0f, -1.0f}) {
+            const glm::vec3 d(0.0f, 0.0f, up);
+            const std::optional<RayCaster::Hit> hit = scene_.occluders->caster().intersect(
+                glm::vec3(p), d, 0.0f, std::numeric_limits<float>::infinity());
+            if (!hit || !(glm::dot(hit->normal, d) > 0.0f)) return false;
+        }
+        return true;
+    }
+
     long steps = 0;  // tracking steps so far (density lookups), all paths and shadow rays: what a path costs
 
   private:
@@ -361,7 +377,7 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
         const std::array<double, 5> u = points.next();
         const glm::dvec3 p = seen.empty() ? centre + medium.voxelSize() * (glm::dvec3(u[0], u[1], u[2]) - 0.5) : seen[s];
         const double w = seen.empty() ? tracer.sigmaT(p) : 1.0;
-        if (w <= 0.0) continue;
+        if (w <= 0.0 || tracer.enclosed(p)) continue;  // cameras never see inside an occluder
         tracer.sampleArriving(p, w, u[3], u[4], rng, sum, toward, scattered);
         weights += w;
     }
@@ -413,6 +429,7 @@ FaceEstimate MonteCarloReference::faceSourceIn(const openvdb::Coord &voxel, int 
     double carriedWeights = 0.0, shownWeights = 0.0;
     for (const FacePoint &p : seen) {
         const std::array<double, 5> u = points.next();
+        if (tracer.enclosed(p.p)) continue;
         ArrivingLight one;
         ArrivingToward oneToward;
         tracer.sampleArriving(p.p, 1.0, u[3], u[4], rng, one, oneToward, true);
