@@ -26,10 +26,12 @@ glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher,
                              std::uint64_t seed, std::size_t i, glm::dvec3 &towards) {
     const int open = rays.count() - __builtin_popcountll(hidden);
     if (open == 0) return glm::dvec3(0.0);
+    // The same draws every pass (the seed does not change with it): addBounceTail extrapolates from the differences
+    // between passes, which a new draw's noise would swamp.
     Rng rng(seed ^ 0x0CC1ull, i);
     int skip = std::min(int(rng.uniform() * open), open - 1);  // the drawn ray's rank among the open ones
     int k = 0;
-    while (hidden >> k & 1 || skip-- > 0) ++k;
+    while (((hidden >> k) & 1) || skip-- > 0) ++k;
     const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
     const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
     if (!hit) return glm::dvec3(0.0);
@@ -39,12 +41,13 @@ glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher,
     const glm::dvec3 v = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
     const auto next = scene.occluders->caster().intersect(glm::vec3(q), glm::vec3(v), 1e-5f);
     const double reach = next ? double(next->distance) : std::numeric_limits<double>::infinity();
-    glm::dvec3 arriving(bakedRadianceAlong(scene, marcher, baked, Ray{q, v}, reach, 0.5));
+    double through = 1.0;  // the snow's transmittance between the two occluders
+    glm::dvec3 arriving(bakedRadianceAlong(scene, marcher, baked, Ray{q, v}, reach, 0.5, &through));
     if (next) {
         const glm::dvec3 other(next->normal);
-        arriving += reflectedByOccluder(scene, q + double(next->distance) * v,
-                                        glm::normalize(glm::dot(other, v) < 0.0 ? other : -other),
-                                        scene.occluders->albedo(next->triangle), rng, marcher);
+        arriving += through * reflectedByOccluder(scene, q + double(next->distance) * v,
+                                                  glm::normalize(glm::dot(other, v) < 0.0 ? other : -other),
+                                                  scene.occluders->albedo(next->triangle), rng, marcher);
     }
     const glm::dvec3 radiance = double(open) * glm::dvec3(scene.occluders->albedo(hit->triangle)) * arriving;
     towards += greyMoment(radiance, w);
@@ -61,25 +64,25 @@ SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, cons
                               const SkyRays &rays, std::uint64_t seed, const SubProgress &progress) {
     SnowIrradiance out{SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f)), {}};
     out.aim = out.irradiance;
-    const bool occluders = light.skyMeetsOccluders;
+    const bool sendBack = light.occluderShare > 0.0;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);
         Medium::Accessor density = scene.medium->accessor();
         BakedValuesSampler baked(topo, source, traced, values);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!light.snowRays[i] && !(occluders && topo.patches[i].isSurface())) continue;
+            if (!light.snowRays[i] && !(sendBack && topo.patches[i].isSurface())) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
             glm::dvec3 sum(0.0), towards(0.0);
             for (int k = 0; k < rays.count(); ++k) {
-                if (!(light.snowRays[i] >> k & 1)) continue;
+                if (!((light.snowRays[i] >> k) & 1)) continue;
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
                 const glm::dvec3 radiance = bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
                 sum += radiance, towards += greyMoment(radiance, w);
             }
-            if (occluders)
+            if (sendBack)
                 sum += occludersSendBack(scene, marcher, baked, topo, rays, light.snowRays[i], p, seed, i, towards);
             out.irradiance.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
             out.aim.surface(i) = glm::vec3(kPi * towards / double(rays.count()));
