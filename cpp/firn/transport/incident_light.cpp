@@ -83,17 +83,18 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
 
 // Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
 // occluders in the way send what they reflect once (when `bounce`). `occluderAlbedo`: adds the grey albedos of the
-// occluders met by the rays snow does not hide (what they can send the snow's light back with).
+// occluders met by the rays snow does not hide (what they can send the snow's light back with), `occluderRays`
+// marks those rays.
 glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
                           bool bounce, Crossing crossing, std::uint64_t seed, std::uint64_t stream,
                           Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr,
-                          double *occluderAlbedo = nullptr) {
+                          double *occluderAlbedo = nullptr, std::uint64_t *occluderRays = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
     Rng rng(seed ^ 0xB0B0ull, stream);  // for the occluders' reflections
     glm::dvec3 sum(0.0), towards(0.0);
-    std::uint64_t hidden = 0;
+    std::uint64_t hidden = 0, met = 0;
     for (int k = 0; k < rays.count(); ++k) {
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
         const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
@@ -103,7 +104,7 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
         if (thinnest * column > 0.01)
             hidden |= std::uint64_t(1) << k;  // snow glows along this ray
         else if (hit && occluderAlbedo)
-            *occluderAlbedo += channelMean(scene.occluders->albedo(hit->triangle));
+            *occluderAlbedo += channelMean(scene.occluders->albedo(hit->triangle)), met |= std::uint64_t(1) << k;
         if (column >= limit) continue;
         glm::dvec3 radiance;
         if (!hit) {
@@ -120,6 +121,7 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
         sum += arriving, towards += greyMoment(arriving, w);
     }
     if (snowRays) *snowRays = hidden;
+    if (occluderRays) *occluderRays = met;
     if (aim) *aim = glm::vec3(towards / double(rays.count()));
     return glm::vec3(sum / double(rays.count()));
 }
@@ -385,6 +387,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
 
     light.skyOnSurface = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     light.snowRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
+    light.occluderRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
     light.skyAim = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     const SkyRays rays(settings.skySamples);
     light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
@@ -402,7 +405,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                 light.skyOnSurface.surface(i) = skyIrradianceAt(
                     scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
                     Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i),
-                    &albedos);
+                    &albedos, &light.occluderRays.surface(i));
         const std::lock_guard<std::mutex> hold(sumLock);
         albedoSum += albedos;
     });

@@ -36,6 +36,9 @@ struct IncidentLight {
     // Per surface voxel: which of its sky rays (SkyRays, bit k for ray k) snow hides; the snow's own light
     // arrives along them instead (gathered after a first solve, bake.cpp).
     SurfaceValues<std::uint64_t> snowRays;
+    // Per surface voxel: which of the rays snow does not hide meet an occluder (bit k for ray k); occluders send the
+    // snow's light back along them.
+    SurfaceValues<std::uint64_t> occluderRays;
     // The share of the surface patches' sky rays that meet an occluder across the air, each weighted by the
     // occluder's grey albedo: occluders send the snow's light back along them (gathered after a first solve,
     // bake_snow_irradiance.cpp; worth passes of its own only where large, bake.cpp).
