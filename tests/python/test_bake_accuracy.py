@@ -591,14 +591,16 @@ def test_a_walls_lowest_voxel_on_the_ground_takes_the_sun_as_the_wall_above(tmp_
     light = dict(suns=[firncore.SunLight((math.cos(math.pi / 6), 0.0, 0.5), (1.0,) * 3, 0.0093)],
                  sky=firncore.Sky((0.05,) * 3))
     _, _, optics, ground = wall.baked_box(tmp_vdb, 0.5, light)
-    # voxels: the lowest (its centre at 2), then the next two; the bounds keep the tilted normal's -19.9 % out
-    for heights, bound in (((2.25, 2.75), 0.13), ((3.5, 4.5), 0.08)):
+    # voxels: the lowest (its centre at 2), then the next two; the bounds keep the tilted normal's -19.9 % out. The
+    # lowest voxel's upper bound is wider, not its lower: its surplus is known (+13.6 % over a black ground, light the
+    # ground cannot take away), a shortfall would be the ground's light lost again.
+    for heights, (low, high) in (((2.25, 2.75), (-0.08, 0.13)), ((3.5, 4.5), (-0.08, 0.08))):
         origins, directions = wall.wall_rays(heights, 10.0, 0.2)
         reference, error = firncore.monte_carlo_radiance(tmp_vdb, optics, origins, directions, occluders=ground,
                                                          samples=512, seed=5, **light)
         baked = firncore.render_baked(tmp_vdb, optics, origins, directions, occluders=ground)
         assert np.sqrt((error[:, 1] ** 2).sum()) < 0.03 * reference[:, 1].sum()
-        assert baked[:, 1].sum() == pytest.approx(reference[:, 1].sum(), rel=bound)
+        assert low < baked[:, 1].sum() / reference[:, 1].sum() - 1.0 < high
 
 
 def test_a_wall_lit_from_above_only_sends_its_sky_on_downwards(tmp_vdb):

@@ -41,6 +41,11 @@ using bake::kWholePieceTracedSteps;
 namespace {
 
 constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
+// IncidentLight::occluderShare from which the occluders' send-back alone is worth the gathering passes (each one
+// another solve: a 160 x 160 x 30 slab's DRAFT bake 1.2 -> 2.0 processor s). A slab on a ground of albedo 0.5
+// (0.10) gains 3-4 % on its sides, nothing on top; a pile of lumps on a white ground (0.38) 10 points
+// (docs/benchmarks.md "send-back2").
+constexpr double kSendBackWorthPasses = 0.15;
 
 Preset resolve(const BakeSettings &s) {
     Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true}
@@ -326,8 +331,9 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
     local.surfaceVoxels = topo.surfaceVoxels();
     const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
-    // Snow hides some patch's sky, or occluders send the snow's light back (bake_snow_irradiance.cpp): gather.
-    const bool hidden = light.skyMeetsOccluders ||
+    // Snow hides some patch's sky, or occluders send back enough of the snow's light (bake_snow_irradiance.cpp):
+    // gather.
+    const bool hidden = light.occluderShare >= kSendBackWorthPasses ||
                         std::any_of(snowRays.begin(), snowRays.end(), [](std::uint64_t r) { return r != 0; });
     // Small pieces and thin snow left to the diffusion (too many to trace: a skier's thousands of lumps) light
     // each other over many bounces: one more gather, and the rest of the bounces from the last two (addBounceTail).

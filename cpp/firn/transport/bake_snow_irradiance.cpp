@@ -15,22 +15,10 @@ namespace firn::bake {
 
 namespace {
 
-// The snow's light that occluders send back along patch i's sky rays that snow does not hide (W/m^2/sr summed
-// over those rays; `towards` gets its grey first moment): the ground under thrown snow, lit by the snow above it.
-// The first solve's light holds the occluders' reflection of sun and sky only (reflectedByOccluder). One of the
-// rays, drawn at random, stands for all of them (its light times their count), intersected alone: the car's
-// patches meet the body and the ground by the million. The occluder's radiance from one cosine-weighted ray from
-// the hit: the baked snow along it, and where it meets another occluder, that one's reflected sun and sky.
-glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher, BakedValuesSampler &baked,
-                             const SnowTopology &topo, const SkyRays &rays, std::uint64_t hidden, const glm::dvec3 &p,
-                             std::uint64_t seed, std::size_t i, glm::dvec3 &towards) {
-    const int open = rays.count() - __builtin_popcountll(hidden);
-    if (open == 0) return glm::dvec3(0.0);
-    Rng rng(seed ^ 0x0CC1ull, i);
-    int skip = std::min(int(rng.uniform() * open), open - 1);  // the drawn ray's rank among the open ones
-    int k = 0;
-    while (hidden >> k & 1 || skip-- > 0) ++k;
-    const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
+// The first occluder's radiance back along w from p: its albedo times one cosine-weighted ray from the hit, the
+// baked snow along it, and where it meets another occluder, that one's reflected sun and sky through that snow.
+glm::dvec3 sentBackAlong(const Scene &scene, Medium::ColumnMarcher &marcher, BakedValuesSampler &baked,
+                         const glm::dvec3 &p, const glm::dvec3 &w, Rng &rng) {
     const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
     if (!hit) return glm::dvec3(0.0);
     const glm::dvec3 facing(hit->normal);
@@ -39,15 +27,48 @@ glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher,
     const glm::dvec3 v = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
     const auto next = scene.occluders->caster().intersect(glm::vec3(q), glm::vec3(v), 1e-5f);
     const double reach = next ? double(next->distance) : std::numeric_limits<double>::infinity();
-    glm::dvec3 arriving(bakedRadianceAlong(scene, marcher, baked, Ray{q, v}, reach, 0.5));
+    double through = 1.0;  // the snow's transmittance between the two occluders
+    glm::dvec3 arriving(bakedRadianceAlong(scene, marcher, baked, Ray{q, v}, reach, 0.5, &through));
     if (next) {
         const glm::dvec3 other(next->normal);
-        arriving += reflectedByOccluder(scene, q + double(next->distance) * v,
-                                        glm::normalize(glm::dot(other, v) < 0.0 ? other : -other),
-                                        scene.occluders->albedo(next->triangle), rng, marcher);
+        arriving += through * reflectedByOccluder(scene, q + double(next->distance) * v,
+                                                  glm::normalize(glm::dot(other, v) < 0.0 ? other : -other),
+                                                  scene.occluders->albedo(next->triangle), rng, marcher);
     }
-    const glm::dvec3 radiance = double(open) * glm::dvec3(scene.occluders->albedo(hit->triangle)) * arriving;
-    towards += greyMoment(radiance, w);
+    return glm::dvec3(scene.occluders->albedo(hit->triangle)) * arriving;
+}
+
+// The rank-th set bit of `bits`.
+int nthRay(std::uint64_t bits, int rank) {
+    for (; rank > 0; --rank) bits &= bits - 1;
+    return __builtin_ctzll(bits);
+}
+
+// The snow's light that occluders send back along patch i's sky rays that met them, snow not hiding them (`met`;
+// W/m^2/sr summed over those rays; `towards` gets its grey first moment from their mean direction): the ground
+// under thrown snow, lit by the snow above it. The first solve's light holds the occluders' reflection of sun and
+// sky only (reflectedByOccluder). kDraws of the rays, stratified over them, stand for all of them, intersected
+// alone: the car's patches meet the body and the ground by the million.
+glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher, BakedValuesSampler &baked,
+                             const SnowTopology &topo, const SkyRays &rays, std::uint64_t met, const glm::dvec3 &p,
+                             std::uint64_t seed, std::size_t i, glm::dvec3 &towards) {
+    constexpr int kDraws = 2;
+    const int count = __builtin_popcountll(met);
+    if (count == 0) return glm::dvec3(0.0);
+    // The same draws every pass (the seed does not change with it): addBounceTail extrapolates from the differences
+    // between passes, which a new draw's noise would swamp.
+    Rng rng(seed ^ 0x0CC1ull, i);
+    const glm::dvec3 &normal = topo.patches[i].normal;
+    const int draws = std::min(kDraws, count);
+    glm::dvec3 sum(0.0), mean(0.0);
+    for (int d = 0; d < draws; ++d) {
+        const int rank = std::min(int((d + rng.uniform()) / draws * count), count - 1);
+        sum += sentBackAlong(scene, marcher, baked, p, rays.direction(normal, nthRay(met, rank), seed, i), rng);
+    }
+    for (std::uint64_t bits = met; bits; bits &= bits - 1)
+        mean += rays.direction(normal, __builtin_ctzll(bits), seed, i) / double(count);
+    const glm::dvec3 radiance = double(count) / draws * sum;
+    towards += greyMoment(radiance, mean);
     return radiance;
 }
 
@@ -61,26 +82,24 @@ SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, cons
                               const SkyRays &rays, std::uint64_t seed, const SubProgress &progress) {
     SnowIrradiance out{SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f)), {}};
     out.aim = out.irradiance;
-    const bool occluders = light.skyMeetsOccluders;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);
         Medium::Accessor density = scene.medium->accessor();
         BakedValuesSampler baked(topo, source, traced, values);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!light.snowRays[i] && !(occluders && topo.patches[i].isSurface())) continue;
+            if (!light.snowRays[i] && !light.occluderRays[i]) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
             glm::dvec3 sum(0.0), towards(0.0);
             for (int k = 0; k < rays.count(); ++k) {
-                if (!(light.snowRays[i] >> k & 1)) continue;
+                if (!((light.snowRays[i] >> k) & 1)) continue;
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
                 const glm::dvec3 radiance = bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
                 sum += radiance, towards += greyMoment(radiance, w);
             }
-            if (occluders)
-                sum += occludersSendBack(scene, marcher, baked, topo, rays, light.snowRays[i], p, seed, i, towards);
+            sum += occludersSendBack(scene, marcher, baked, topo, rays, light.occluderRays[i], p, seed, i, towards);
             out.irradiance.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
             out.aim.surface(i) = glm::vec3(kPi * towards / double(rays.count()));
         }

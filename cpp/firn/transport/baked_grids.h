@@ -52,10 +52,11 @@ std::array<openvdb::Vec3fTree::Ptr, BakedGrids::kCount> coarsenedSources(const o
 // Integrates the baked emission along a ray as the renderer does: the radiance the baked snow sends back along
 // it (towards its origin) from t = 0 to tMax (m), in steps of at most `step` voxels with the exact exponential of
 // each step. sourceAt(ijk) gives the grids' values (BakedGrids::Values) at a point of the density's index
-// space: SourceGridsSampler, or the bake's own values before it writes its grids.
+// space: SourceGridsSampler, or the bake's own values before it writes its grids. `through`: the transmittance the
+// snow leaves at tMax (what lies beyond is seen through it; under 1e-6 where the march stops early).
 template <typename SourceAt>
 Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, SourceAt &sourceAt, const Ray &ray,
-                       double tMax, double step) {
+                       double tMax, double step, double *through = nullptr) {
     const double k = scene.medium->optics().extinctionPerDensity;
     const glm::dvec3 w = -ray.direction;  // towards the viewer
     Rgb radiance(0.0);
@@ -75,6 +76,7 @@ Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Sourc
         transmittance *= 1.0 - opacity;
         return transmittance > 1e-6;
     });
+    if (through) *through = transmittance;
     return radiance;
 }
 

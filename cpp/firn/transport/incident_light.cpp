@@ -2,15 +2,16 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/util/color.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
 
@@ -81,25 +82,29 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
 }
 
 // Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
-// occluders in the way send what they reflect once (when `bounce`).
+// occluders in the way send what they reflect once (when `bounce`). `occluderAlbedo`: adds the grey albedos of the
+// occluders met by the rays snow does not hide (what they can send the snow's light back with), `occluderRays`
+// marks those rays.
 glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
                           bool bounce, Crossing crossing, std::uint64_t seed, std::uint64_t stream,
                           Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr,
-                          bool *meetsOccluder = nullptr) {
+                          double *occluderAlbedo = nullptr, std::uint64_t *occluderRays = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
     Rng rng(seed ^ 0xB0B0ull, stream);  // for the occluders' reflections
     glm::dvec3 sum(0.0), towards(0.0);
-    std::uint64_t hidden = 0;
+    std::uint64_t hidden = 0, met = 0;
     for (int k = 0; k < rays.count(); ++k) {
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
         const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
         if (hit && !bounce && !snowRays) continue;  // brings nothing, and no one asks whether snow lies along it
-        if (hit && meetsOccluder) *meetsOccluder = true;
         const double column =
             marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
-        if (thinnest * column > 0.01) hidden |= std::uint64_t(1) << k;  // snow glows along this ray
+        if (thinnest * column > 0.01)
+            hidden |= std::uint64_t(1) << k;  // snow glows along this ray
+        else if (hit && occluderAlbedo)
+            *occluderAlbedo += channelMean(scene.occluders->albedo(hit->triangle)), met |= std::uint64_t(1) << k;
         if (column >= limit) continue;
         glm::dvec3 radiance;
         if (!hit) {
@@ -116,6 +121,7 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
         sum += arriving, towards += greyMoment(arriving, w);
     }
     if (snowRays) *snowRays = hidden;
+    if (occluderRays) *occluderRays = met;
     if (aim) *aim = glm::vec3(towards / double(rays.count()));
     return glm::vec3(sum / double(rays.count()));
 }
@@ -381,26 +387,30 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
 
     light.skyOnSurface = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     light.snowRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
+    light.occluderRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
     light.skyAim = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     const SkyRays rays(settings.skySamples);
     light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
     const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
     const std::uint64_t seed = settings.seed ^ 0x5C1Eull;
-    std::atomic<bool> meetsOccluder(false);
+    std::mutex sumLock;
+    double albedoSum = 0.0;  // over the surface patches' rays
     parallelChunks(topo.size(), progress, [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);
         Medium::Accessor density = medium.accessor();
-        bool meets = false;
+        double albedos = 0.0;
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface())
                 light.skyOnSurface.surface(i) = skyIrradianceAt(
                     scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
                     Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i),
-                    &meets);
-        if (meets) meetsOccluder = true;
+                    &albedos, &light.occluderRays.surface(i));
+        const std::lock_guard<std::mutex> hold(sumLock);
+        albedoSum += albedos;
     });
-    light.skyMeetsOccluders = meetsOccluder;
+    if (topo.surfaceVoxels() > 0)
+        light.occluderShare = albedoSum / (double(topo.surfaceVoxels()) * double(rays.count()));
     if (settings.skyOverNeighbours)
         averageOverNeighbours(topo, light.skyOnSurface), averageOverNeighbours(topo, light.skyAim);
     if (scene.sky.isBlack()) return light;

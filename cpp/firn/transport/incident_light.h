@@ -36,9 +36,13 @@ struct IncidentLight {
     // Per surface voxel: which of its sky rays (SkyRays, bit k for ray k) snow hides; the snow's own light
     // arrives along them instead (gathered after a first solve, bake.cpp).
     SurfaceValues<std::uint64_t> snowRays;
-    // Whether some patch's sky ray meets an occluder across the air: occluders then send the snow's light back
-    // (gathered after a first solve, bake_snow_irradiance.cpp).
-    bool skyMeetsOccluders = false;
+    // Per surface voxel: which of the rays snow does not hide meet an occluder (bit k for ray k); occluders send the
+    // snow's light back along them.
+    SurfaceValues<std::uint64_t> occluderRays;
+    // The share of the surface patches' sky rays that meet an occluder across the air, each weighted by the
+    // occluder's grey albedo: occluders send the snow's light back along them (gathered after a first solve,
+    // bake_snow_irradiance.cpp; worth passes of its own only where large, bake.cpp).
+    double occluderShare = 0.0;
     // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
     std::vector<glm::vec3> skyUnderSnow;
 };
