@@ -536,7 +536,8 @@ def test_lumps_resting_on_the_snows_surface_mesh_are_traced_at_their_own_cost(tm
     bake_suite.write_density(tmp_vdb, density, 0.01)
     lowest = min(k for k in range(size) if density[:, :, k].max() > 0)  # voxel k spans (k -+ 0.5) cm
     lo, hi = (-0.5, -0.5, -0.3), (side * 0.01 + 0.5, side * 0.01 + 0.5, lowest * 0.01)
-    corners = np.array([[(lo, hi)[c & 1][0], (lo, hi)[c >> 1 & 1][1], (lo, hi)[c >> 2][2]] for c in range(8)], np.float32)
+    corners = np.array([[(lo, hi)[c & 1][0], (lo, hi)[c >> 1 & 1][1], (lo, hi)[c >> 2][2]] for c in range(8)],
+                       np.float32)
     quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]  # wound outwards
     triangles = np.array([[q[0], q[k], q[k + 1]] for q in quads for k in (1, 2)], np.uint32)
     snow = [(corners, triangles, (0.972, 0.987, 0.998))]

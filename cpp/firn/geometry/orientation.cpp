@@ -65,7 +65,68 @@ struct TrianglesAround {
     }
 };
 
+// Walks the mesh's edge-connected components (vertices welded by exact position).
+class ComponentWalk {
+  public:
+    explicit ComponentWalk(const TriangleMesh &mesh)
+        : mesh_(mesh), welded_(weldedVertices(mesh)), around_(mesh, welded_), reached_(mesh.triangleCount(), 0) {}
+
+    bool reached(std::uint32_t t) const { return reached_[t]; }
+
+    // The component of `seed` (not reached before) into `component`; whether it is open: some edge belongs to no
+    // other triangle.
+    bool walk(std::uint32_t seed, std::vector<std::uint32_t> &component) {
+        component.clear();
+        frontier_.assign(1, seed);
+        reached_[seed] = 1;
+        bool open = false;
+        while (!frontier_.empty()) {
+            const std::uint32_t t = frontier_.back();
+            frontier_.pop_back();
+            component.push_back(t);
+            for (int k = 0; k < 3; ++k) open = !sharedEdge(t, corner(t, k), corner(t, (k + 1) % 3)) || open;
+        }
+        return open;
+    }
+
+  private:
+    std::uint32_t corner(std::uint32_t t, int k) const { return welded_[mesh_.triangles[t][k]]; }
+    bool hasCorner(std::uint32_t t, std::uint32_t v) const {
+        return corner(t, 0) == v || corner(t, 1) == v || corner(t, 2) == v;
+    }
+    // Whether edge (a, b) of t belongs to another triangle; those not reached yet join the frontier.
+    bool sharedEdge(std::uint32_t t, std::uint32_t a, std::uint32_t b) {
+        bool shared = false;
+        for (std::size_t i = around_.first[a]; i < around_.first[a + 1]; ++i) {
+            const std::uint32_t u = around_.ids[i];
+            if (u == t || !hasCorner(u, b)) continue;
+            shared = true;
+            if (!reached_[u]) reached_[u] = 1, frontier_.push_back(u);
+        }
+        return shared;
+    }
+
+    const TriangleMesh &mesh_;
+    std::vector<std::uint32_t> welded_;
+    TrianglesAround around_;
+    std::vector<char> reached_;
+    std::vector<std::uint32_t> frontier_;
+};
+
 }  // namespace
+
+std::vector<char> inClosedSurface(const TriangleMesh &mesh) {
+    const std::size_t n = mesh.triangleCount();
+    std::vector<char> closed(n, 0);
+    if (n == 0) return closed;
+    ComponentWalk components(mesh);
+    std::vector<std::uint32_t> component;
+    for (std::uint32_t seed = 0; seed < n; ++seed) {
+        if (components.reached(seed) || components.walk(seed, component)) continue;
+        for (std::uint32_t t : component) closed[t] = 1;
+    }
+    return closed;
+}
 
 OpenSurfaceTurns findOpenSurfaceTurns(const TriangleMesh &mesh, const glm::vec3 &up) {
     const std::size_t n = mesh.triangleCount();
@@ -77,38 +138,11 @@ OpenSurfaceTurns findOpenSurfaceTurns(const TriangleMesh &mesh, const glm::vec3 
     while (firstDown < n && !down[firstDown]) ++firstDown;
     OpenSurfaceTurns turns;
     if (firstDown == n) return turns;
-    const std::vector<std::uint32_t> welded = weldedVertices(mesh);
-    const TrianglesAround around(mesh, welded);
-    const auto corner = [&](std::uint32_t t, int k) { return welded[mesh.triangles[t][k]]; };
-    const auto hasCorner = [&](std::uint32_t t, std::uint32_t v) {
-        return corner(t, 0) == v || corner(t, 1) == v || corner(t, 2) == v;
-    };
-
-    std::vector<char> reached(n, 0);
-    std::vector<std::uint32_t> component, frontier;
+    ComponentWalk components(mesh);
+    std::vector<std::uint32_t> component;
     for (std::size_t seed = firstDown; seed < n; ++seed) {
-        if (!down[seed] || reached[seed]) continue;
-        // The seed's edge-connected component; open if some edge belongs to no other triangle.
-        component.clear();
-        frontier.assign(1, std::uint32_t(seed));
-        reached[seed] = 1;
-        bool open = false;
-        while (!frontier.empty()) {
-            const std::uint32_t t = frontier.back();
-            frontier.pop_back();
-            component.push_back(t);
-            for (int k = 0; k < 3; ++k) {
-                const std::uint32_t a = corner(t, k), b = corner(t, (k + 1) % 3);
-                bool shared = false;
-                for (std::size_t i = around.first[a]; i < around.first[a + 1]; ++i) {
-                    const std::uint32_t u = around.ids[i];
-                    if (u == t || !hasCorner(u, b)) continue;
-                    shared = true;
-                    if (!reached[u]) reached[u] = 1, frontier.push_back(u);
-                }
-                open = open || !shared;
-            }
-        }
+        if (!down[seed] || components.reached(std::uint32_t(seed))) continue;
+        const bool open = components.walk(std::uint32_t(seed), component);
         if (!open) continue;
         for (std::uint32_t t : component)
             if (down[t]) turns.triangles.push_back(t);

@@ -30,6 +30,10 @@ struct OpenSurfaceTurns {
 };
 OpenSurfaceTurns findOpenSurfaceTurns(const TriangleMesh &mesh, const glm::vec3 &up);
 
+// Per triangle, whether its edge-connected component (welded as orientOpenSurfaces welds) is closed: no edge of
+// one triangle. Only a closed surface has an inside.
+std::vector<char> inClosedSurface(const TriangleMesh &mesh);
+
 // Reverses the winding of the triangles `turns` names.
 void applyTurns(TriangleMesh &mesh, const OpenSurfaceTurns &turns);
 

@@ -82,7 +82,8 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
         if (k == 0 || v != voxels.size() * (k - 1) / kPilotVoxels) {
             // As traceSources gathers it: where cameras see it, those points' draws counted too.
             const Gathering how = gathering(*scene.medium, density, voxels[v]);
-            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v, how).steps) + kStepsPerPath * kPilotSamples;
+            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v, how).steps) +
+                   kStepsPerPath * kPilotSamples;
         }
         steps += last;
         paths += kPilotSamples;
@@ -303,7 +304,8 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
                                                    : tracedSourceByMoments(whole(estimates[j]), g);
                 layer = layer && inLayer[j];
             }
-            faces.shown = layer ? shownByFaces(directions, visibility, g, jobs, estimates, first, last) : traced.source[v];
+            faces.shown =
+                layer ? shownByFaces(directions, visibility, g, jobs, estimates, first, last) : traced.source[v];
         }
     });
 }

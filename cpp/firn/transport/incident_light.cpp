@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <stdexcept>
 
 #include <glm/geometric.hpp>
@@ -280,7 +280,7 @@ BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, in
     return out;
 }
 
-SkyRays::SkyRays(int samples) : strata_(std::clamp(int(std::lround(std::sqrt(double(samples)))), 1, 8)) {}
+SkyRays::SkyRays(int samples) : strata_(std::clamp(int(std::lround(std::sqrt(double(samples)))), 1, kMaxStrata)) {}
 
 glm::dvec3 SkyRays::direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const {
     Rng rng(seed, stream * 64 + std::uint64_t(k));
@@ -394,23 +394,26 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
     const std::uint64_t seed = settings.seed ^ 0x5C1Eull;
-    std::mutex sumLock;
-    double albedoSum = 0.0;  // over the surface patches' rays
+    // The albedos met, summed over the surface patches' rays in fixed point (2^-32): integer sums do not depend on
+    // how the threads split the patches, so the gate on the share (bake.cpp) is the same every run.
+    std::atomic<std::uint64_t> albedoSum{0};
     parallelChunks(topo.size(), progress, [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);
         Medium::Accessor density = medium.accessor();
-        double albedos = 0.0;
-        for (std::size_t i = range.begin(); i != range.end(); ++i)
-            if (topo.patches[i].isSurface())
-                light.skyOnSurface.surface(i) = skyIrradianceAt(
-                    scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
-                    Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i),
-                    &albedos, &light.occluderRays.surface(i));
-        const std::lock_guard<std::mutex> hold(sumLock);
+        std::uint64_t albedos = 0;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface()) continue;
+            double met = 0.0;
+            light.skyOnSurface.surface(i) = skyIrradianceAt(
+                scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
+                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i), &met,
+                &light.occluderRays.surface(i));
+            albedos += std::uint64_t(std::llround(met * 4294967296.0));
+        }
         albedoSum += albedos;
     });
     if (topo.surfaceVoxels() > 0)
-        light.occluderShare = albedoSum / (double(topo.surfaceVoxels()) * double(rays.count()));
+        light.occluderShare = double(albedoSum) / 4294967296.0 / (double(topo.surfaceVoxels()) * double(rays.count()));
     if (settings.skyOverNeighbours)
         averageOverNeighbours(topo, light.skyOnSurface), averageOverNeighbours(topo, light.skyAim);
     if (scene.sky.isBlack()) return light;

@@ -48,9 +48,12 @@ struct IncidentLight {
 };
 
 // The rays a surface patch gathers its sky along: stratified, cosine-weighted around its normal, the k-th
-// depending only on (seed, stream, k), so a later pass can trace the same ones. At most 64.
+// depending only on (seed, stream, k), so a later pass can trace the same ones. At most kMaxRays: a patch's rays
+// are one bit each of a 64-bit mask (IncidentLight::snowRays, occluderRays).
 class SkyRays {
   public:
+    static constexpr int kMaxStrata = 8, kMaxRays = kMaxStrata * kMaxStrata;
+    static_assert(kMaxRays <= 64, "a patch's sky rays are bits of a std::uint64_t");
     explicit SkyRays(int samples);
     int count() const { return strata_ * strata_; }
     glm::dvec3 direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const;

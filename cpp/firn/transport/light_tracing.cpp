@@ -257,7 +257,8 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
     double beamSteps = 0.0;
     for (int k = 0; k < kPilotVoxels; ++k) {
         const std::size_t v = voxels.size() * k / kPilotVoxels;
-        beamSteps += double(reference.sourceIn(voxels[v], kPilotSamples, seed ^ kBeamSeed, v, Gathering::BeamsOnly).steps);
+        beamSteps +=
+            double(reference.sourceIn(voxels[v], kPilotSamples, seed ^ kBeamSeed, v, Gathering::BeamsOnly).steps);
     }
     const double perBeamSample = std::max(beamSteps / (kPilotVoxels * kPilotSamples), 1.0);
     plan.beamSamples = std::clamp(int(kBeamShare * maxSteps / (perBeamSample * double(voxels.size()))),

@@ -184,16 +184,17 @@ class PathTracer {
 
     // Whether p lies inside a closed occluder (the snow's surface mesh under thrown lumps, a body): no light
     // reaches there, and a path started there bounces off the inside until roulette (some 700 times at the
-    // snow's albedo 0.998). Inside, the rays straight up and straight down both leave through a back face (closed
-    // components wind counter-clockwise seen from outside); an open sheet, turned to face up
-    // (orientOpenSurfaces), never shows its back to both: a point under it sees the ground or nothing below.
+    // snow's albedo 0.998). Inside, the rays straight up and straight down both leave through a back face of a
+    // closed surface (wound counter-clockwise seen from outside). Open sheets are not asked, whatever their
+    // winding: snow between a ground wound downwards and a roof above is outside both.
     bool enclosed(const glm::dvec3 &p) const {
-        if (scene_.occluders->empty()) return false;
+        const Occluders &occluders = *scene_.occluders;
+        if (occluders.empty()) return false;
         for (const float up : {1.0f, -1.0f}) {
             const glm::vec3 d(0.0f, 0.0f, up);
-            const std::optional<RayCaster::Hit> hit = scene_.occluders->caster().intersect(
-                glm::vec3(p), d, 0.0f, std::numeric_limits<float>::infinity());
-            if (!hit || !(glm::dot(hit->normal, d) > 0.0f)) return false;
+            const std::optional<RayCaster::Hit> hit =
+                occluders.caster().intersect(glm::vec3(p), d, 0.0f, std::numeric_limits<float>::infinity());
+            if (!hit || !occluders.closed(hit->triangle) || !(glm::dot(hit->normal, d) > 0.0f)) return false;
         }
         return true;
     }

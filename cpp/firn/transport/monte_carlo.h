@@ -109,15 +109,6 @@ struct RadianceEstimate {
     Rgb standardError{0.0};  // of the mean
 };
 
-// Brute-force volumetric path tracing of the scene: the reference the bake is tested against and the
-// REFERENCE quality. It shares no approximation with the bake: delta tracking through the trilinear
-// density with a global majorant, Henyey-Greenstein sampling at every real collision (all orders, no
-// truncation), ratio-tracked shadow rays to the suns and lamps, Lambertian occluders, the sky where paths
-// escape.
-//
-// Estimates, for each camera ray, the radiance the snow scatters towards the camera: paths whose first
-// event is a scattering in the medium. It excludes what a renderer draws itself behind the snow (sky and
-// surfaces seen through it, attenuated by exp(-tau)); that is exactly what the baked emission stands for.
 // What MonteCarloReference::sourceIn gathers, and where its points lie.
 enum class Gathering {
     Spread,     // all orders, the points spread over the voxel, weighted by extinction
@@ -128,6 +119,15 @@ enum class Gathering {
                 // tracing leaves to each voxel (light_tracing.h)
 };
 
+// Brute-force volumetric path tracing of the scene: the reference the bake is tested against and the
+// REFERENCE quality. It shares no approximation with the bake: delta tracking through the trilinear
+// density with a global majorant, Henyey-Greenstein sampling at every real collision (all orders, no
+// truncation), ratio-tracked shadow rays to the suns and lamps, Lambertian occluders, the sky where paths
+// escape.
+//
+// Estimates, for each camera ray, the radiance the snow scatters towards the camera: paths whose first
+// event is a scattering in the medium. It excludes what a renderer draws itself behind the snow (sky and
+// surfaces seen through it, attenuated by exp(-tau)); that is exactly what the baked emission stands for.
 class MonteCarloReference {
   public:
     explicit MonteCarloReference(Scene scene);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "firn/geometry/orientation.h"
 #include "firn/util/error.h"
 
 namespace firn {
@@ -16,6 +17,7 @@ Occluders::Occluders(TriangleMesh mesh, std::vector<Rgb> albedo)
         for (int c = 0; c < 3; ++c)
             if (!std::isfinite(a[c]) || a[c] < 0.0 || a[c] > 1.0)
                 throw InvalidArgument("occluder albedo must lie in [0, 1] per channel");
+    closed_ = inClosedSurface(mesh_);
     caster_ = std::make_shared<RayCaster>(mesh_);
 }
 

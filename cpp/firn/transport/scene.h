@@ -24,10 +24,13 @@ class Occluders {
     const TriangleMesh &mesh() const { return mesh_; }
     const RayCaster &caster() const { return *caster_; }
     const Rgb &albedo(unsigned triangle) const { return albedo_[triangle]; }
+    // Whether the triangle belongs to a closed surface (one with an inside; an open sheet has none).
+    bool closed(unsigned triangle) const { return closed_[triangle]; }
 
   private:
     TriangleMesh mesh_;
     std::vector<Rgb> albedo_;
+    std::vector<char> closed_;
     std::shared_ptr<const RayCaster> caster_ = std::make_shared<RayCaster>(TriangleMesh{});
 };
 

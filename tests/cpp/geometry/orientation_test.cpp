@@ -100,6 +100,17 @@ TEST(OrientOpenSurfaces, TurnsOnlyTheOpenPartsOfAMixedSoup) {
     EXPECT_EQ(facingUp(mesh), 2u + 2u + 6u);  // each box's top (outward) or bottom (inverted), and three planes
 }
 
+// Boxes have an inside whatever their winding, and unwelded; planes have none whatever theirs (the Monte Carlo skips
+// gathering points only inside closed surfaces: a ground wound downwards must not enclose the snow above it).
+TEST(InClosedSurface, NamesTheTrianglesOfClosedComponentsWhateverTheirWinding) {
+    const TriangleMesh mesh = merge({test::box({0, 0, 0}, {1, 1, 1}), reversed(test::box({3, 0, 0}, {4, 1, 1})),
+                                     unwelded(test::box({6, 0, 0}, {7, 1, 1})),  // 3 x 12 triangles
+                                     reversed(test::plane(1.0f, {0, 5, 0})), test::plane(1.0f, {0, 8, 0})});
+    const std::vector<char> closed = inClosedSurface(mesh);
+    ASSERT_EQ(closed.size(), mesh.triangleCount());
+    for (std::size_t t = 0; t < mesh.triangleCount(); ++t) EXPECT_EQ(closed[t] != 0, t < 36) << "triangle " << t;
+}
+
 // The search (on a const mesh) names the triangles the orientation turns, and applying them gives its mesh: the
 // shelter is built from the targets while it runs beside (shelterTargets).
 TEST(OrientOpenSurfaces, FindingTheTurnsLeavesTheMeshAndNamesWhatOrientingTurns) {
