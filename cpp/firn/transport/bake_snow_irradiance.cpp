@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 
+#include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -22,7 +23,7 @@ glm::dvec3 sentBackAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Bak
     const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
     if (!hit) return glm::dvec3(0.0);
     const glm::dvec3 facing(hit->normal);
-    const glm::dvec3 n = glm::normalize(glm::dot(facing, w) < 0.0 ? facing : -facing);
+    const glm::dvec3 n = glm::normalize(glm::faceforward(facing, w, facing));  // towards p
     const glm::dvec3 q = p + double(hit->distance) * w + 1e-5 * n;
     const glm::dvec3 v = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
     const auto next = scene.occluders->caster().intersect(glm::vec3(q), glm::vec3(v), 1e-5f);
@@ -32,7 +33,7 @@ glm::dvec3 sentBackAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Bak
     if (next) {
         const glm::dvec3 other(next->normal);
         arriving += through * reflectedByOccluder(scene, q + double(next->distance) * v,
-                                                  glm::normalize(glm::dot(other, v) < 0.0 ? other : -other),
+                                                  glm::normalize(glm::faceforward(other, v, other)),
                                                   scene.occluders->albedo(next->triangle), rng, marcher);
     }
     return glm::dvec3(scene.occluders->albedo(hit->triangle)) * arriving;

@@ -111,9 +111,8 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
             radiance = scene.sky.radianceFrom(w);
         } else if (bounce) {
             const glm::dvec3 normal(hit->normal);
-            radiance =
-                reflectedByOccluder(scene, p + double(hit->distance) * w, glm::dot(normal, w) < 0.0 ? normal : -normal,
-                                    scene.occluders->albedo(hit->triangle), rng, marcher);
+            radiance = reflectedByOccluder(scene, p + double(hit->distance) * w, glm::faceforward(normal, w, normal),
+                                           scene.occluders->albedo(hit->triangle), rng, marcher);
         } else {
             continue;
         }
