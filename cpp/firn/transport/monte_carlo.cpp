@@ -11,6 +11,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/snow_topology.h"
 #include "firn/transport/visible_points.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
@@ -421,7 +422,7 @@ FaceEstimate MonteCarloReference::faceSourceIn(const openvdb::Coord &voxel, int 
     // the voxel shows this face's cameras (one path each). Towards a direction leaving through the face at mu to
     // its normal, the points reweighted to that camera's collisions (collisionDensity over the points' own, the
     // mixture of facePoints' mu).
-    const glm::dvec3 normal = glm::dvec3(face / 2 == 0, face / 2 == 1, face / 2 == 2) * (face % 2 ? 1.0 : -1.0);
+    const glm::dvec3 normal = faceNormal(face);
     std::array<double, kSourceDirections> mu{};
     for (int k = 0; k < kSourceDirections; ++k) mu[k] = glm::dot(directions_[k], normal);
     ArrivingLight carried, shown;
