@@ -258,6 +258,66 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     S.peak1 = glm::vec3(lit * p1 / total + (1.0 - lit) * glm::dvec3(S.peak1));
 }
 
+// The mean outward normal of the surface voxels around voxel c, each weighted as facingAverage weights it (how
+// much its surface faces c); zero where none faces c.
+glm::dvec3 facingNormal(const SnowTopology &topo, const openvdb::Coord &c,
+                        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
+    glm::dvec3 sum(0.0);
+    for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dz = -1; dz <= 1; ++dz) {
+                const std::int32_t j = index.getValue(c.offsetBy(-dx, -dy, -dz));
+                if ((dx || dy || dz) && j >= 0 && topo.patches[j].isSurface())
+                    sum += std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz)))) *
+                           topo.patches[j].normal;
+            }
+    return glm::length(sum) > 0.0 ? glm::normalize(sum) : sum;
+}
+
+// Surfaces that take a sun at most this grazingly (mu0 = cos of its angle to the normal) leave the sun in their
+// density ramp to the ramp itself (sunInRamp).
+constexpr double kGrazingSunCosine = 0.2;
+
+// The suns' light scattered once in ramp voxel c (outside the unknowns, carrying its surface's radiance) in front of
+// surfaces that take them at grazing incidence or not at all (kGrazingSunCosine): the peaked lobe of k = g about
+// each sun's travel, of mean omega E T / 4 pi, T the uncollided transmittance averaged over c's trilinear hat
+// weighted by the density (what the renderer's emission weighs; 4^3 points), taken where it holds more than c's
+// own peak. A convex surface's ramp reaches into the sun past its terminator, where the surfaces' half-space
+// model has no sun (mu0 <= 0) or little (a lit patch returns E mu0 per area, the ramp beside it scatters E T):
+// ball_grey's side rims and top seen against the sun (bench/bake_suite.py; docs/bake.md, Method 7). The average,
+// not T at c's centre: an air voxel just outside a limb has T = 1 at its centre and the shadowed snow in its hat
+// (the centre's T read ball_grey's equator rims seen against the sun +200 %).
+void sunInRamp(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c,
+               openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::ColumnMarcher &marcher,
+               Source &S) {
+    const glm::dvec3 normal = facingNormal(topo, c, index);
+    if (glm::length(normal) == 0.0) return;
+    const Medium &medium = *scene.medium;
+    const VolumeOptics &optics = medium.optics();
+    constexpr double kPoints[4] = {-0.75, -0.25, 0.25, 0.75};  // voxels from c's centre, per axis
+    Source single;
+    for (std::size_t b = 0; b < scene.suns.size(); ++b) {
+        if (glm::dot(normal, scene.suns[b].direction) >= kGrazingSunCosine) continue;
+        glm::dvec3 irradiance(0.0);
+        double weights = 0.0;
+        for (int k = 0; k < 64; ++k) {
+            const glm::dvec3 offset(kPoints[k % 4], kPoints[k / 4 % 4], kPoints[k / 16]);
+            const glm::dvec3 ijk = glm::dvec3(c.x(), c.y(), c.z()) + offset;
+            const double w = (1.0 - std::abs(offset.x)) * (1.0 - std::abs(offset.y)) * (1.0 - std::abs(offset.z)) *
+                             marcher.densityAt(openvdb::Vec3d(ijk.x, ijk.y, ijk.z));
+            if (w <= 0.0) continue;
+            irradiance += w * glm::dvec3(beamAt(scene, b, medium.indexToWorld(ijk), 1, 0, 0, marcher, nullptr,
+                                                Crossing::Uncollided).irradiance);
+            weights += w;
+        }
+        if (weights > 0.0)
+            single.addPeak(irradiance / weights * glm::dvec3(optics.albedo) * kInvFourPi,
+                           crossingAnisotropy(optics.g), -scene.suns[b].direction);
+    }
+    if (single.peak0.x + single.peak0.y + single.peak0.z > S.peak0.x + S.peak0.y + S.peak0.z)
+        S.peak0 = single.peak0, S.peak1 = single.peak1;
+}
+
 }  // namespace
 
 // gathering: the values the gathering reads alone (those beside snow, besideSnow: the grids carry the surface's
@@ -340,8 +400,10 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
                 else if (!facingAverage(topo, c, index, source, S)) continue;
-                else if (nearPeakAt.isValueOn(c))
+                else if (nearPeakAt.isValueOn(c)) {
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
+                    sunInRamp(scene, topo, c, index, marcher, S);
+                }
                 perLeaf[l].add(it.pos(), S);
             }
     });
