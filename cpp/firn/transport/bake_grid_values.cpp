@@ -276,7 +276,8 @@ class QuarterPointSun {
     void clear() {
         for (auto &known : known_) known.clear();
     }
-    // Sun b's transmittance at index-space point q / 4 (q odd per axis).
+    // Sun b's transmittance at index-space point q / 4 (q odd per axis). The key keeps q's low 21 bits per axis: a
+    // leaf's points (cleared per leaf) differ there.
     double at(std::size_t b, const glm::dvec3 &direction, const openvdb::Coord &q) {
         const std::uint64_t key = std::uint64_t(std::uint32_t(q.x()) & 0x1FFFFFu) |
                                   std::uint64_t(std::uint32_t(q.y()) & 0x1FFFFFu) << 21 |
@@ -306,7 +307,7 @@ class QuarterPointSun {
 // where the surfaces' half-space model has no sun (mu0 <= 0) or little (a lit patch returns E mu0 per area, the ramp
 // beside it scatters E T): ball_grey's rims seen against the sun (bench/bake_suite.py; docs/bake.md, Method 7). The
 // average, not T at c's centre: an air voxel just outside a limb has T = 1 at its centre and shadowed snow in its hat
-// (T at the centre read ball_grey's equator rims seen against the sun +200 %); 3^3 points (the hat's trapezoid
+// (T at the centre read ball_grey's equator rims seen against the sun +200 to +270 %); 3^3 points (the hat's trapezoid
 // rule) lost slab_thick's and box_sharp's gains.
 // normal: the carrying surfaces' (facingAverage), zero where none faces c.
 void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
@@ -420,7 +421,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 const openvdb::Coord c = it.getCoord();
                 const std::int32_t t = tracedIndex.getValue(c);
                 Source S;
-                glm::dvec3 facing;
+                glm::dvec3 facing(0.0);
                 if (t >= 0) S = ownValue(traced, t);
                 else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
