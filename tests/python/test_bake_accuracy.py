@@ -466,8 +466,8 @@ def test_traced_voxels_estimates_are_stratified_cheap_ones_longer_and_determinis
 
 def test_cloud_of_lumps_left_to_the_diffusion_lights_itself_over_many_bounces(tmp_vdb):
     # 216 lumps of 19 voxels (1.2 cm balls on 1 cm voxels, 40 optical depths per voxel, g 0.845: the skier
-    # sample's, docs/spray.md) 5 cm apart in a 31 cm cube: too costly to gather per voxel, and an occluder (far
-    # away, as the skier's body) turns light tracing off, so the diffusion takes them. Under a uniform sky they
+    # sample's, docs/spray.md) 5 cm apart in a 31 cm cube: too costly to gather per voxel, and light tracing turned
+    # off (light_tracing=False), so the diffusion takes them, with a far occluder (as the skier's body). Under a uniform sky they
     # light each other over many bounces; the core's Monte Carlo (all orders) is the oracle. Measured: the bake
     # +0.9 % seen from the side (one gathering bounce, as before: -20 %; two without the rest of the series:
     # -15 %); the reference's noise is under 1 %.
@@ -483,7 +483,7 @@ def test_cloud_of_lumps_left_to_the_diffusion_lights_itself_over_many_bounces(tm
     sky = firncore.Sky((1.0, 1.0, 1.0))
     far = (np.array([[100, 100, -50], [100.1, 100, -50], [100, 100.1, -50]], np.float32), np.array([[0, 1, 2]], np.uint32),
            (0.5, 0.5, 0.5))
-    stats = firncore.bake(tmp_vdb, optics, sky=sky, occluders=[far], quality="DRAFT")
+    stats = firncore.bake(tmp_vdb, optics, sky=sky, occluders=[far], quality="DRAFT", light_tracing=False)
     assert stats["traced_voxels"] == 0
     u = (np.arange(16) + 0.5) / 16 * side * 0.01
     U, V = np.meshgrid(u, u)
