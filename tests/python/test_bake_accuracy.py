@@ -467,7 +467,8 @@ def test_traced_voxels_estimates_are_stratified_cheap_ones_longer_and_determinis
 def test_cloud_of_lumps_left_to_the_diffusion_lights_itself_over_many_bounces(tmp_vdb):
     # 216 lumps of 19 voxels (1.2 cm balls on 1 cm voxels, 40 optical depths per voxel, g 0.845: the skier
     # sample's, docs/spray.md) 5 cm apart in a 31 cm cube: too costly to gather per voxel, and light tracing turned
-    # off (light_tracing=False), so the diffusion takes them, with a far occluder (as the skier's body). Under a uniform sky they
+    # off (light_tracing=False), so the diffusion takes them, with a far occluder (as the skier's body). Under a
+    # uniform sky they
     # light each other over many bounces; the core's Monte Carlo (all orders) is the oracle. Measured: the bake
     # +0.9 % seen from the side (one gathering bounce, as before: -20 %; two without the rest of the series:
     # -15 %); the reference's noise is under 1 %.
@@ -567,15 +568,18 @@ def test_lumps_over_the_snows_surface_mesh_too_many_to_gather_are_light_traced(t
     import spray_light_bench as spray_bench
     tracked, spray = spray_bench.ski_spray(str(tmp_path), firncore.SpraySettings(seed=5))
     voxel = firncore.grid_statistics(tracked, "surface")["voxel_size"]
-    snow = [(*firncore.snow_surface_mesh(tracked, adaptivity=0.5, isovalue=-voxel), spray_bench.OPTICS.white_sky_albedo)]
+    surface = firncore.snow_surface_mesh(tracked, adaptivity=0.5, isovalue=-voxel)
+    snow = [(*surface, spray_bench.OPTICS.white_sky_albedo)]
     light = dict(suns=spray_bench.SUNS, sky=spray_bench.SKY, occluders=snow)
     lit = str(tmp_path / "lit_spray.vdb")
     diffused = firncore.bake(spray, spray_bench.OPTICS, output_path=lit, light_tracing=False, **light)
     assert diffused["traced_voxels"] == diffused["light_traced_voxels"] == 0
     stats = firncore.bake(spray, spray_bench.OPTICS, output_path=lit, **light)
-    assert stats["light_traced_voxels"] == stats["traced_voxels"] == firncore.grid_statistics(spray, "density")["active_voxels"]
+    lumps = firncore.grid_statistics(spray, "density")["active_voxels"]
+    assert stats["light_traced_voxels"] == stats["traced_voxels"] == lumps
     origins, directions, _shape = spray_bench.view("side", 32)
-    reference = firncore.monte_carlo_radiance(spray, spray_bench.OPTICS, origins, directions, samples=64, seed=1, **light)[0]
+    reference = firncore.monte_carlo_radiance(spray, spray_bench.OPTICS, origins, directions, samples=64, seed=1,
+                                              **light)[0]
     baked = firncore.render_baked(lit, spray_bench.OPTICS, origins, directions)
     assert baked.sum() / reference.sum() == pytest.approx(1.0, abs=0.12)
 

@@ -316,7 +316,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 if (traced.source.empty()) {
                     const GatheringPlan plan = planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull);
                     if (lightTracingBesides)
-                        traced = lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);
+                        traced =
+                            lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);
                     if (traced.source.empty()) {
                         local.tracedPaths = plan.paths;
                         if (plan.paths > 0 || thin.empty())

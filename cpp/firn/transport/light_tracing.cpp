@@ -245,8 +245,10 @@ double outsideShare(const Medium &medium, Medium::Accessor &density, PhotonTrace
     const glm::dvec3 centre = medium.voxelCentre(c);
     const double h = medium.voxelSize();
     bool straddles = tracer.enclosed(centre);
-    for (int k = 0; k < 8 && !straddles; ++k)
-        straddles = tracer.enclosed(centre + kCornerProbe * h * glm::dvec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1));
+    for (int k = 0; k < 8 && !straddles; ++k) {
+        const glm::dvec3 corner(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1);
+        straddles = tracer.enclosed(centre + kCornerProbe * h * corner);
+    }
     if (!straddles) return 1.0;
     double outside = 0.0, all = 0.0;
     for (int i = 0; i < kStrata * kStrata * kStrata; ++i) {
@@ -346,8 +348,8 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
         }
         progress.report(0.8 * double(last) / double(chunks));
     }
-    // The photons' light: per photon, over the voxel's integral of sigma_t outside closed occluders, its source by direction summed over a
-    // flat uniform layer (pooled_estimates.h); then each voxel's beams.
+    // The photons' light: per photon, over the voxel's integral of sigma_t outside closed occluders, its source by
+    // direction summed over a flat uniform layer (pooled_estimates.h); then each voxel's beams.
     std::vector<SourceEstimate> scattered(voxels.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 64), [&](const auto &range) {
         Medium::Accessor density = medium.accessor();
