@@ -7,7 +7,7 @@ under them and their lowest voxel) and bumpy layers 2 +- 1 and 3 +- 1.5 voxels t
 views (0, 60), (180, 50), (90, 70), 8 x 8 blocks each. References (--samples paths) are cached in --cache.
 --one-voxel: layers one to three voxels thick over 6 to 24 voxels, 1.5 to 15 optical depths per voxel, on the grey
 ground, a black one and none (docs/benchmarks.md, "one-voxel").
---float: the one-voxel layer floating (no ground), 16 x 16 and 6 x 6 voxels at 15, 6 and 3 optical depths per voxel,
+--float: the one-voxel layer floating (no ground), 16 x 16 and 6 x 6 voxels at 15, 6, 3 and 2 optical depths per voxel,
 seen from above and from below (azimuths as VIEWS, elevations negated), and under the sun alone and the sky alone
 (docs/benchmarks.md, "float-voxel").
 
@@ -46,7 +46,7 @@ def float_shapes():
     """(name, density, optical depth per voxel, views, sun W/m^2, sky W/m^2/sr)."""
     below = [(azimuth, -elevation) for azimuth, elevation in VIEWS]
     for width in (16, 6):
-        for tau in (15.0, 6.0, 3.0):
+        for tau in (15.0, 6.0, 3.0, 2.0):
             for side, views in (("above", VIEWS), ("below", below)):
                 yield f"{width}x{width}x1 tau {tau:g} {side}", bs.slab(width, 1) * 300.0, tau, views, 1.0, 0.05
     for light, sun, sky in (("sun", 1.0, 0.0), ("sky", 0.0, 0.05)):

@@ -145,6 +145,28 @@ TEST(Bake, SameSeedSameResult) {
     }
 }
 
+// The occluders' send-back alone pays the gathering passes only where it brings much (kSendBackWorthPasses,
+// IncidentLight::occluderShare 0.15): a slab of snow, 32 x 32 x 8 voxels at sigma_t h 15, on a wider ground whose
+// albedo is all that differs. Its sides send half their sky rays to the ground and nothing hides any patch's sky,
+// so the ground's albedo times their share decides: on a grey one (0.5: share 0.12) one solve, on a white one
+// (0.97: 0.23) the passes (docs/bake.md Method 6; docs/benchmarks.md "send-back2", "hat-debts").
+TEST(Bake, OnlyABrightGroundSendsEnoughBackForTheGatheringPasses) {
+    const auto passesOver = [](double albedo) {
+        Scene scene = slabScene(1500.0, 0.999, 0.7, 32, 8);
+        scene.suns = {SunLight{glm::normalize(glm::dvec3(0.766, 0.0, 0.643)), Rgb(1.0), 0.0093}};  // 40 degrees high
+        scene.sky.radiance = Rgb(0.3);
+        const float z = float(-8.25 * kVoxel);  // a quarter voxel under the slab's lowest voxel
+        const float v[] = {-1, -1, z, 1, -1, z, 1, 1, z, -1, 1, z};
+        const unsigned t[] = {0, 1, 2, 0, 2, 3};
+        scene.occluders = std::make_shared<Occluders>(makeTriangleMesh(v, 4, t, 2), std::vector<Rgb>(2, Rgb(albedo)));
+        BakeStats stats;
+        bakeScattering(scene, BakeSettings{BakeQuality::Draft}, nullptr, &stats);
+        return stats.passes;
+    };
+    EXPECT_EQ(passesOver(0.5), 1);
+    EXPECT_GT(passesOver(0.97), 1);
+}
+
 TEST(Bake, ReportsProgressAndStopsWhenCancelled) {
     Scene scene = slabScene(2000.0, 0.999, 0.85, 16, 8);
     scene.sky.radiance = Rgb(1.0);
