@@ -721,7 +721,7 @@ def test_ramp_past_the_terminator_scatters_at_least_the_suns_single_scattering(f
     c = case("ball_grey")
     path = os.path.join(folder, "ramp_sun.vdb")
     bake_suite.write_density(path, c.density, c.voxel)
-    firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), seed=0)
+    firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), seed=0, source_scale=1)
     sun = np.array([math.cos(bake_suite.SUN_ELEVATION), 0.0, math.sin(bake_suite.SUN_ELEVATION)])
     centre = (np.array(c.density.shape) - 1) / 2
     voxels = np.argwhere(c.density < 0.5 * c.rho)
@@ -748,3 +748,41 @@ def test_ramp_past_the_terminator_scatters_at_least_the_suns_single_scattering(f
     single = c.omega[1] * c.sun * transmittance[lit] * (1.0 + g) / (4.0 * math.pi * (1.0 - g) ** 2)
     baked = baked_source_toward(path, ramp[lit], -sun)
     assert np.all(baked > 0.9 * single), np.round(baked / single, 2)
+
+
+def test_ramp_single_scattering_keeps_a_second_suns_forward_peak(folder):
+    # Light adds: the grey ball under the suite's 30-degree sun and a second, overhead sun keeps the overhead sun's
+    # forward peak. The voxels beside the snow near the low sun's terminator (the radial normal's mu0 from -0.3 to 0.2
+    # for it: sunInRamp's gate passes it) on the overhead sun's lit side (mu0 >= 0.3: the gate fails it, the surface
+    # model holds its light) carry a peaked lobe; the part of its grey first moment perpendicular to the low sun's
+    # travel is what the low sun's single scattering lacks. Where the overhead sun alone gives that part (>= 0.005
+    # W/m^2/sr, 22 of 80 voxels), the two suns' bake once held 0.41 of it in sum (sunInRamp replaced the voxel's whole
+    # peak by the low sun's single scattering where that summed more, some to 0); kept whole where a sun the
+    # surface takes lights the voxel, 0.83 (the low sun's carried peak leans the other way in some: the bake's carried
+    # peaks through the ramp, forwardPeakThrough, are not a sum over suns). The bound lies midway.
+    import pyopenvdb
+    c = case("ball_grey")
+    low = np.array([math.cos(bake_suite.SUN_ELEVATION), 0.0, math.sin(bake_suite.SUN_ELEVATION)])
+    high = np.array([0.0, 0.0, 1.0])
+    across = -high + np.dot(high, low) * low  # the overhead sun's travel less its part along the low sun's
+    across /= np.linalg.norm(across)
+    snow = np.pad(c.density > 0.0, 1)
+    beside = np.zeros_like(snow)  # within one voxel of snow
+    for shift in np.ndindex(3, 3, 3):
+        beside[1:-1, 1:-1, 1:-1] |= snow[tuple(slice(s, s + n) for s, n in zip(shift, c.density.shape))]
+    voxels = np.argwhere(beside[1:-1, 1:-1, 1:-1] & (c.density < 0.5 * c.rho))
+    radial = voxels - (np.array(c.density.shape) - 1) / 2
+    radial /= np.linalg.norm(radial, axis=1)[:, None]
+    voxels = voxels[(radial @ low > -0.3) & (radial @ low < 0.2) & (radial @ high >= 0.3)]
+    overhead = firncore.SunLight(tuple(high), (c.sun,) * 3, 0.0093)
+    moment = {}  # per voxel the peaked lobe's grey first moment (3 k m mean p0) across
+    for name, suns in (("both", c.suns() + [overhead]), ("high", [overhead])):
+        path = os.path.join(folder, "two_suns_" + name + ".vdb")
+        bake_suite.write_density(path, c.density, c.voxel)
+        firncore.bake(path, c.optics, suns=suns, sky=c.skies(), seed=0)
+        peak1 = next(g for g in pyopenvdb.readAll(path)[0] if g.name == "firn_source_peak_l1").getConstAccessor()
+        moment[name] = np.array([np.dot(peak1.getValue(tuple(int(x) for x in v)), across) for v in voxels])
+    lit = moment["high"] >= 0.005
+    assert lit.sum() >= 15, lit.sum()
+    kept = moment["both"][lit].sum() / moment["high"][lit].sum()
+    assert kept > 0.62, kept

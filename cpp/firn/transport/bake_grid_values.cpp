@@ -300,15 +300,15 @@ class QuarterPointSun {
 };
 
 // The suns' light scattered once in ramp voxel c (outside the unknowns, carrying its surface's radiance) in front of
-// surfaces that take them at grazing incidence or not at all (kGrazingSunCosine): the peaked lobe of k = g about
-// each sun's travel, of mean omega E T / 4 pi, T the snow's uncollided transmittance averaged over c's trilinear
-// hat weighted by the density (what the renderer's emission weighs; 4^3 points), the occluders' shadow taken at c's
-// centre, where it holds more than c's own peak. A convex surface's ramp reaches into the sun past its terminator,
-// where the surfaces' half-space model has no sun (mu0 <= 0) or little (a lit patch returns E mu0 per area, the ramp
-// beside it scatters E T): ball_grey's rims seen against the sun (bench/bake_suite.py; docs/bake.md, Method 7). The
-// average, not T at c's centre: an air voxel just outside a limb has T = 1 at its centre and shadowed snow in its hat
-// (T at the centre read ball_grey's equator rims seen against the sun +200 to +270 %); 3^3 points (the hat's trapezoid
-// rule) lost slab_thick's and box_sharp's gains.
+// surfaces that take them at grazing incidence or not at all (kGrazingSunCosine): the peaked lobe of k = g about each
+// sun's travel, of mean omega E T / 4 pi, T the snow's uncollided transmittance averaged over c's trilinear hat
+// weighted by the density (what the renderer's emission weighs; 4^3 points), the occluders' shadow taken at c's centre,
+// where it holds more than c's own peak and no sun the surfaces take (mu0 >= kGrazingSunCosine) lights c. A convex
+// surface's ramp reaches into the sun past its terminator, where the surfaces' half-space model has no sun (mu0 <= 0)
+// or little (a lit patch returns E mu0 per area, the ramp beside it scatters E T): ball_grey's rims seen against the
+// sun (bench/bake_suite.py; docs/bake.md, Method 7). The average, not T at c's centre: an air voxel just outside a limb
+// has T = 1 at its centre and shadowed snow in its hat (T at the centre read ball_grey's equator rims seen against the
+// sun +200 to +270 %); 3^3 points (the hat's trapezoid rule) lost slab_thick's and box_sharp's gains.
 // normal: the carrying surfaces' (facingAverage), zero where none faces c.
 void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
                QuarterPointSun &sunAt, Source &S) {
@@ -319,10 +319,12 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
     Source single;
     for (std::size_t b = 0; b < scene.suns.size(); ++b) {
         const SunLight &sun = scene.suns[b];
-        if (glm::dot(normal, sun.direction) >= kGrazingSunCosine ||
-            (!scene.occluders->empty() &&
-             scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(sun.direction), 1e-5f)))
+        if (!scene.occluders->empty() &&
+            scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(sun.direction), 1e-5f))
             continue;
+        // Such a sun's forward peak is in c's one carried peak: kept whole (replacing it dropped that peak and its
+        // direction; test_ramp_single_scattering_keeps_a_second_suns_forward_peak).
+        if (glm::dot(normal, sun.direction) >= kGrazingSunCosine) return;
         double transmitted = 0.0, weights = 0.0;
         for (int k = 0; k < 64; ++k) {
             const openvdb::Coord offset(kPoints[k % 4], kPoints[k / 4 % 4], kPoints[k / 16]);
