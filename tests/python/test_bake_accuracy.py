@@ -151,7 +151,10 @@ def test_ramp_in_front_of_a_lit_rim_carries_the_returned_grazing_sun(folder):
     assert grey["view_bias"][0] > -0.28, grey["view_bias"]
     # The worst block here is no longer the top row's: since lit-top it is the equator's rim past the terminator,
     # too bright (main +55.0 % against these 1024 paths; +55.4 % since the ramp's own single scattering, sunInRamp,
-    # branch ball-rims: docs/benchmarks.md).
+    # branch ball-rims: docs/benchmarks.md). Not a double count of the surface model's sun: with sunInRamp gated at
+    # mu0 < 0 (voxels whose surfaces take no sun at all) the block reads +55.4 % too; the ramp there scatters the sun
+    # the surfaces lack (the terminator test below bounds it from below), on a rim over-bright already (its baked
+    # radiance 1.5-2.7x the Monte Carlo's along the ray on main). Hence 0.56, not 0.55.
     assert grey["worst"] < 0.56, grey["worst_signed"]
     clean = baked_against_reference(folder, "ball_clean", 1024, [(180, 0)])
     assert clean["worst"] < 0.55, clean["worst_signed"]
