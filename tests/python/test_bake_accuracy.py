@@ -782,7 +782,7 @@ def test_ramp_single_scattering_keeps_a_second_suns_forward_peak(folder):
     for name, suns in (("both", c.suns() + [overhead]), ("high", [overhead])):
         path = os.path.join(folder, "two_suns_" + name + ".vdb")
         bake_suite.write_density(path, c.density, c.voxel)
-        firncore.bake(path, c.optics, suns=suns, sky=c.skies(), seed=0)
+        firncore.bake(path, c.optics, suns=suns, sky=c.skies(), seed=0, source_scale=1)
         peak1 = next(g for g in pyopenvdb.readAll(path)[0] if g.name == "firn_source_peak_l1").getConstAccessor()
         moment[name] = np.array([np.dot(peak1.getValue(tuple(int(x) for x in v)), across) for v in voxels])
     lit = moment["high"] >= 0.005
