@@ -5,10 +5,11 @@ trace's processor seconds (stats["cpu_seconds"]["trace"]), the photons and the b
 photons add to (stats["light_tracing_bytes"]; a build without that statistic held 792 bytes per light-traced
 voxel: ArrivingLight with the 39 directions' sums in every voxel); then whether both builds' grids are identical.
 At g 0.8 and above the thin voxels are fitted by direction and gather the 39 directions (traced_source.h), below
-not.
+not. `--ground`: an open ground plane (two triangles, albedo 0.5) under the cube as the occluders, the spray's
+usual scene (no closed surface: nothing is enclosed).
 
     /usr/bin/python3 bench/light_tracing_cost.py BUILD_A/python BUILD_B/python [--side 40] [--tau 0.5] [--g 0.7]
-        [--rounds 2]
+        [--rounds 2] [--ground]
 """
 
 import argparse
@@ -21,12 +22,17 @@ import tempfile
 VOXEL = 0.01  # m
 BAKE = r"""
 import json, math, sys
+import numpy as np
 sys.path.insert(0, sys.argv[1])
 import firncore
-path, tau, g = sys.argv[2], float(sys.argv[3]), float(sys.argv[5])
+path, tau, g, ground = sys.argv[2], float(sys.argv[3]), float(sys.argv[5]), float(sys.argv[6])
+z = -0.006  # m: just under the cube's lowest voxels
+occluders = [] if ground <= 0.0 else [(np.array([(-1, -1, z), (ground, -1, z), (ground, ground, z), (-1, ground, z)],
+                                                np.float32), np.array([(0, 1, 2), (0, 2, 3)], np.uint32), (0.5,) * 3)]
 optics = firncore.VolumeOptics(tau / (0.01 * 300.0), (0.999,) * 3, g)  # m^2/kg: tau per voxel at 300 kg/m^3
 sun = firncore.SunLight((math.cos(math.radians(30.0)), 0.0, math.sin(math.radians(30.0))), (1.0,) * 3, 0.0093)
-stats = firncore.bake(path, optics, suns=[sun], sky=firncore.Sky((0.05,) * 3), output_path=sys.argv[4])
+stats = firncore.bake(path, optics, suns=[sun], sky=firncore.Sky((0.05,) * 3), occluders=occluders,
+                      output_path=sys.argv[4])
 print(json.dumps({"trace_cpu_s": stats["cpu_seconds"]["trace"], "photons": stats["photons"],
                   "voxels": stats["light_traced_voxels"],
                   "bytes": stats.get("light_tracing_bytes", 792 * stats["light_traced_voxels"])}))
@@ -44,9 +50,10 @@ def cloud(path, side, density=300.0):
     pyopenvdb.write(path, grids=[grid])
 
 
-def bake(build, path, tau, g, output):
+def bake(build, path, tau, g, output, ground):
     env = dict(os.environ, PYTHONPATH=os.path.abspath(build))
-    out = subprocess.run([sys.executable, "-c", BAKE, os.path.abspath(build), path, str(tau), output, str(g)],
+    out = subprocess.run([sys.executable, "-c", BAKE, os.path.abspath(build), path, str(tau), output, str(g),
+                          str(ground)],
                          env=env, check=True, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -58,6 +65,7 @@ def main():
     parser.add_argument("--tau", type=float, default=0.5)
     parser.add_argument("--g", type=float, default=0.7)
     parser.add_argument("--rounds", type=int, default=2)
+    parser.add_argument("--ground", action="store_true", help="an open ground plane under the cube")
     args = parser.parse_args()
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     from grids_identical import compare
@@ -68,7 +76,8 @@ def main():
         runs = {b: [] for b in args.builds}
         for _ in range(args.rounds):
             for k, b in enumerate(args.builds):
-                runs[b].append(bake(b, density, args.tau, args.g, os.path.join(folder, f"baked{k}.vdb")))
+                runs[b].append(bake(b, density, args.tau, args.g, os.path.join(folder, f"baked{k}.vdb"),
+                                    args.side * VOXEL + 1.0 if args.ground else 0.0))
         for b in args.builds:
             r = runs[b]
             seconds = ", ".join(f"{x['trace_cpu_s']:.2f}" for x in r)

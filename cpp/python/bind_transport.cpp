@@ -391,10 +391,10 @@ firncore.WriteError (an OSError) when the result cannot be written. Returns the 
            const firn::VolumeOptics &optics, const std::vector<firn::SunLight> &suns,
            const std::optional<firn::Sky> &sky, const py::list &occluders, const std::string &quality,
            std::uint64_t seed, std::shared_ptr<firn::Progress> progress, const std::vector<firn::Lamp> &lamps,
-           int sourceScale) {
+           int sourceScale, bool lightTracing) {
             if (paths.empty() || outputPaths.size() != paths.size())
                 throw firn::InvalidArgument("bake_joint: one output path (or None) per VDB path, and at least one");
-            const firn::BakeSettings settings = bakeSettings(quality, seed, 0, 0, 0, sourceScale);
+            const firn::BakeSettings settings = bakeSettings(quality, seed, 0, 0, 0, sourceScale, lightTracing);
             OccluderArrays blockers = occludersFrom(occluders);
             firn::BakeStats stats;
             longCall([&] {
@@ -414,13 +414,15 @@ firncore.WriteError (an OSError) when the result cannot be written. Returns the 
         py::arg("vdb_paths"), py::arg("output_paths"), py::arg("optics"),
         py::arg("suns") = std::vector<firn::SunLight>{}, py::arg("sky") = py::none(), py::arg("occluders") = py::list(),
         py::arg("quality") = "FINAL", py::arg("seed") = 0, py::arg("progress") = nullptr,
-        py::arg("lamps") = std::vector<firn::Lamp>{}, py::arg("source_scale") = 0, R"doc(
+        py::arg("lamps") = std::vector<firn::Lamp>{}, py::arg("source_scale") = 0, py::arg("light_tracing") = true,
+        R"doc(
 Bakes several snow objects lit as one medium (transport/joint_medium.h: a spray's lumps and the tracked snow
 they fly over shade and light each other): the 'density' grids of `vdb_paths` summed on the first one's voxels
 are baked as `bake` does, then each output_paths[i] that is not None gets the grids of vdb_paths[i] with the
 union's baked grids on its own voxels (docs/vdb-contract.md: each object renders its own density times the
 shared source, and the objects add up to the union). A file may hold an empty density (a frame without lumps).
-Every file written atomically, none before the bake is done. Arguments, errors and statistics as `bake`'s.)doc");
+Every file written atomically, none before the bake is done. Arguments (light_tracing too), errors and statistics
+as `bake`'s.)doc");
 
     m.def(
         "write_empty_light",

@@ -3,6 +3,7 @@ Volume sequence with a density grid per frame, and a tracked snow sequence in th
 files; bad input is reported; Clear removes it all. The physics is the core's (tests/python/test_spray.py)."""
 
 import os
+import re
 
 import bpy
 import numpy as np
@@ -388,6 +389,7 @@ def test_bake_sequence_bakes_the_tracked_snow_and_the_lumps_at_every_frame(clean
     assert all(set(firncore.BAKED_GRID_NAMES) <= set(firncore.grid_names(path)) for path in lit)
     assert os.path.basename(tracks.data.filepath).startswith("lit_") and tracks.data.is_sequence
     assert tracks.firn.bake_fingerprint and "Draft light" in tracks.firn.bake_summary
+    assert re.search(r"; \d+\.\d processor s a frame\)", tracks.firn.bake_summary)  # the bakes' stats
     material = tracks.active_material
     assert material is not None and material.get("firn_form", "").startswith("BAKED")
     # The body's shadow: under it at the first frame, open sky at the last (it moved 1 m on), and the reverse

@@ -588,6 +588,11 @@ def test_lumps_over_the_snows_surface_mesh_too_many_to_gather_are_light_traced(t
                                               **light)[0]
     baked = firncore.render_baked(lit, spray_bench.OPTICS, origins, directions)
     assert baked.sum() / reference.sum() == pytest.approx(1.0, abs=0.12)
+    # The joint bake of the tracked snow with the lumps in it (Bake Sequence's other bake) light traces 628 of the
+    # lumps' voxels (docs/spray.md "Light", 17.8 processor s); light_tracing=False keeps its diffusion (0.7 s).
+    joint = firncore.bake_joint([tracked, spray], [None, None], spray_bench.OPTICS,
+                                suns=spray_bench.SUNS, sky=spray_bench.SKY, light_tracing=False)
+    assert joint["light_traced_voxels"] == joint["photons"] == 0
 
 
 def test_a_lone_lumps_sharp_edges_return_the_grazing_sun_forwards(tmp_path):

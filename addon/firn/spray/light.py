@@ -130,33 +130,41 @@ def gather(context, spray, tracks, frames, quality, seed):
 def _bake_frame(job, quality, seed, progress):
     """A frame's two bakes. The tracked snow with the lumps in it, as one medium (firncore.bake_joint): the
     lumps' shadow on the snow, lumps resting in the groove. The lumps with the snow's surface as an occluder that
-    reflects the snow's white-sky albedo (its light under them, its shadow on them): inside the joint medium the
-    lumps' paths would enter the snow and scatter thousands of times, so the bake's budget leaves them to its
-    diffusion (docs/spray.md "Light": 24 % per block against 16 % traced). A frame without lumps gets their lit
-    file with empty light grids, unbaked (without tracks there is nothing else to bake that frame)."""
+    reflects the snow's white-sky albedo (its light under them, its shadow on them). Where the lumps are over the
+    gathering budget both bakes light trace them (docs/spray.md "Light"; some 28 processor s a frame). A frame
+    without lumps gets their lit file with empty light grids, unbaked (without tracks there is nothing else to bake
+    that frame). Returns the bakes' processor seconds (their stats' cpu_seconds)."""
     (snow, spray), (lit, lit_spray) = job["paths"], job["outputs"]
     settings = dict(quality=quality, seed=seed, progress=progress, **core_light(job["inputs"]))
+    seconds = 0.0
     if lit is not None:
-        firncore.bake_joint([snow, spray], [lit, None], job["optics"], **settings)
+        seconds += _processor_seconds(firncore.bake_joint([snow, spray], [lit, None], job["optics"], **settings))
     if firncore.grid_statistics(spray, "density")["active_voxels"] == 0:
         firncore.write_empty_light(spray, lit_spray, job["optics"], quality, seed)
-        return
+        return seconds
     voxel = firncore.grid_statistics(snow, "surface")["voxel_size"]
     vertices, triangles = firncore.snow_surface_mesh(snow, adaptivity=SURFACE_ADAPTIVITY, isovalue=-voxel)
     settings["occluders"].append((vertices, triangles, job["optics"].white_sky_albedo))
-    firncore.bake(spray, job["optics"], output_path=lit_spray, **settings)
+    return seconds + _processor_seconds(firncore.bake(spray, job["optics"], output_path=lit_spray, **settings))
+
+
+def _processor_seconds(stats):
+    return sum(stats["cpu_seconds"].values())
 
 
 def bake_frames(jobs, quality, seed, progress, on_frame=None):
     """Worker thread: bakes each job's snow and lumps into their lit files, then writes its marker. A cancel or
-    an error stops between frames: the frames done stay done (their markers say so)."""
+    an error stops between frames: the frames done stay done (their markers say so). Returns each frame's
+    processor seconds."""
+    seconds = []
     for index, job in enumerate(jobs):
         if on_frame:
             on_frame(index)
         if progress.cancelled:
             raise firncore.Cancelled("cancelled")
-        cache.core_write(_bake_frame, job, quality, seed, progress)
+        seconds.append(cache.core_write(_bake_frame, job, quality, seed, progress))
         _write_marker(os.path.dirname(job["outputs"][1]), job["frame"], job["parts"])
+    return seconds
 
 
 def all_lit(directory, first, last, kind="lit"):

@@ -354,7 +354,7 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
                 bake_operators.render_world({"world": inputs["world"], "jobs": [
                     frame for other in inputs["jobs"] for frame in other["frames"]]}, progress)
                 inputs["world"] = None
-            light.bake_frames(todo, inputs["quality"], inputs["seed"], progress)
+            job["processor_seconds"] = light.bake_frames(todo, inputs["quality"], inputs["seed"], progress)
         return runs
 
     def apply(self, context, inputs, runs):
@@ -388,11 +388,13 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
         return False
 
     def _adopt_light(self, obj, job):
-        frames = job["baked"]
+        frames, seconds = job["baked"], job["processor_seconds"]
         optics = bake_operators.volume_optics_of(obj)
         obj.firn.bake_extinction_per_density = optics.extinction_per_density
+        # What a frame cost (docs/user-guide.md: some 28 processor s with occluders at Final, under 1 without)
+        cost = f"; {sum(seconds) / len(seconds):.1f} processor s a frame" if seconds else ""
         obj.firn.bake_summary = (f"{self.quality.title()} light, frames {job['lit'][0]}-{job['lit'][1]} "
-                                 f"({len(frames)} baked now, the others already were)")
+                                 f"({len(frames)} baked now, the others already were{cost})")
         bake_state.store(obj, {"sequence": light.sequence_digest(job["directory"], job["first"], job["last"])})
         materials.ensure_snow_material(obj)
 

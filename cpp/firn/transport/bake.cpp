@@ -304,8 +304,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 // Light tracing in place of the diffusion where gathering per voxel is over the budget; its other
                 // two uses (transport-thin pieces whole, forward snow at the gathering's cost) were measured without
                 // occluders only: with occluders the diffusion and the gathering keep those voxels, as before.
-                const bool lightTracing = settings.lightTracing;
-                const bool lightTracingBesides = lightTracing && scene.occluders->empty();
+                const bool lightTracingBesides = settings.lightTracing && scene.occluders->empty();
                 if (lightTracingBesides && !snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole
                     std::vector<openvdb::Coord> whole = thin;
                     whole.insert(whole.end(), snow.wholePieces.begin(), snow.wholePieces.end());
@@ -322,7 +321,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                         local.tracedPaths = plan.paths;
                         if (plan.paths > 0 || thin.empty())
                             traced = traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress);
-                        else if (lightTracing)
+                        else if (settings.lightTracing)
                             traced = lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
                         if (plan.paths > 0)
                             addFaceSources(scene, topo, thin, plan, settings.seed ^ 0xFACEull, progress, traced);

@@ -237,7 +237,8 @@ double extinctionIntegral(const Medium &medium, Medium::Accessor &density, const
 // 1 where neither the voxel's centre nor points near its corners are enclosed (off the lattice's planes, where a
 // surface mesh's flat parts lie), else from one point jittered in each of 8^3 strata (`rng`): the midpoint rule
 // on 4^3 points put a box's top at 0.63 of a voxel's height at 0.75 and read that voxel layer's light 49 % bright
-// (LightTracing.CountsALumpsLightOverItsPartOutsideAClosedOccluder); jittered, the share is unbiased.
+// (LightTracing.CountsALumpsLightOverItsPartOutsideAClosedOccluder); jittered, both sums are unbiased and their
+// ratio, the share, is consistent (biased by O(1/points), not unbiased).
 double outsideShare(const Medium &medium, Medium::Accessor &density, PhotonTracer &tracer, const openvdb::Coord &c,
                     Rng &rng) {
     constexpr double kCornerProbe = 0.45;  // voxels from the centre along each axis
@@ -255,9 +256,9 @@ double outsideShare(const Medium &medium, Medium::Accessor &density, PhotonTrace
         const glm::dvec3 stratum(i % kStrata, i / kStrata % kStrata, i / (kStrata * kStrata));
         const glm::dvec3 u = (stratum + glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform())) / double(kStrata);
         const glm::dvec3 p = centre + h * (u - 0.5);
-        const double sigma = medium.densityAt(p, density);
-        all += sigma;
-        if (sigma > 0.0 && !tracer.enclosed(p)) outside += sigma;
+        const double rho = medium.densityAt(p, density);  // kg/m^3: sigma_t's share goes as the density's
+        all += rho;
+        if (rho > 0.0 && !tracer.enclosed(p)) outside += rho;
     }
     return all > 0.0 ? outside / all : 0.0;
 }

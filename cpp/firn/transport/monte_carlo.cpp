@@ -190,7 +190,7 @@ class PathTracer {
     // winding: snow between a ground wound downwards and a roof above is outside both.
     bool enclosed(const glm::dvec3 &p) const {
         const Occluders &occluders = *scene_.occluders;
-        if (occluders.empty()) return false;
+        if (!occluders.anyClosed()) return false;  // skips the casts (none of them could find an inside)
         for (const float up : {1.0f, -1.0f}) {
             const glm::vec3 d(0.0f, 0.0f, up);
             const std::optional<RayCaster::Hit> hit =

@@ -1,5 +1,6 @@
 #include "firn/transport/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -18,6 +19,7 @@ Occluders::Occluders(TriangleMesh mesh, std::vector<Rgb> albedo)
             if (!std::isfinite(a[c]) || a[c] < 0.0 || a[c] > 1.0)
                 throw InvalidArgument("occluder albedo must lie in [0, 1] per channel");
     closed_ = inClosedSurface(mesh_);
+    anyClosed_ = std::find(closed_.begin(), closed_.end(), 1) != closed_.end();
     caster_ = std::make_shared<RayCaster>(mesh_);
 }
 

@@ -26,11 +26,14 @@ class Occluders {
     const Rgb &albedo(unsigned triangle) const { return albedo_[triangle]; }
     // Whether the triangle belongs to a closed surface (one with an inside; an open sheet has none).
     bool closed(unsigned triangle) const { return closed_[triangle]; }
+    // Whether any triangle does: without one nothing is enclosed (most scenes: open ground planes).
+    bool anyClosed() const { return anyClosed_; }
 
   private:
     TriangleMesh mesh_;
     std::vector<Rgb> albedo_;
     std::vector<char> closed_;
+    bool anyClosed_ = false;
     std::shared_ptr<const RayCaster> caster_ = std::make_shared<RayCaster>(TriangleMesh{});
 };
 
