@@ -122,15 +122,7 @@ class BakedValuesSampler {
 
     BakedGrids::Values operator()(const openvdb::Vec3d &ijk) {
         const openvdb::Coord lower = floorCoord(ijk);
-        if (!cached_ || lower != cell_) {
-            for (int a = 0; a < 2; ++a)
-                for (int b = 0; b < 2; ++b)
-                    for (int c = 0; c < 2; ++c) {
-                        const Source S = at(lower.offsetBy(a, b, c));
-                        for (int g = 0; g < int(BakedGrids::kCount); ++g) corners_[g][a][b][c] = sourceComponent(S, g);
-                    }
-            cell_ = lower, cached_ = true;
-        }
+        if (!cached_ || lower != cell_) fill(lower), cell_ = lower, cached_ = true;
         const openvdb::Vec3R uvw = ijk - lower.asVec3d();
         BakedGrids::Values out;
         for (int g = 0; g < int(BakedGrids::kCount); ++g)
@@ -139,13 +131,47 @@ class BakedValuesSampler {
     }
 
     // The value at voxel c (what the grids hold there at the density's resolution).
-    Source at(const openvdb::Coord &c) {
-        if (const std::int32_t i = index_.getValue(c); i >= 0 && traced_.getValue(c) < 0) return source_[i];
-        const std::int32_t k = at_.getValue(c);
-        return k >= 0 ? beyond_[k] : Source{};
-    }
+    Source at(const openvdb::Coord &c) { return valueAt(placeOf(c)); }
 
   private:
+    // Where a voxel's value lies: unknown `index` (source_), place `index` among the values beyond them (beyond_),
+    // or nowhere (zero).
+    struct Place {
+        enum { kNone, kUnknown, kBeyond } kind = kNone;
+        std::size_t index = 0;
+    };
+    Place placeOf(const openvdb::Coord &c) {
+        if (const std::int32_t i = index_.getValue(c); i >= 0 && traced_.getValue(c) < 0)
+            return {Place::kUnknown, std::size_t(i)};
+        const std::int32_t k = at_.getValue(c);
+        return k >= 0 ? Place{Place::kBeyond, std::size_t(k)} : Place{};
+    }
+    Source valueAt(const Place &place) const {
+        return place.kind == Place::kUnknown  ? source_[place.index]
+               : place.kind == Place::kBeyond ? beyond_[place.index]
+                                              : Source{};
+    }
+    template <typename T>
+    static void prefetch(const T *value) {  // both cache lines a value may straddle
+        __builtin_prefetch(value);
+        __builtin_prefetch(reinterpret_cast<const char *>(value) + sizeof(T) - 1);
+    }
+    // The cell's eight corners: all eight found first and their broad lobes asked of memory together, then read
+    // (one after another, each read waited on the last: the car's gathering spent 40 % of its time there).
+    void fill(const openvdb::Coord &lower) {
+        Place places[8];
+        for (int n = 0; n < 8; ++n) {
+            places[n] = placeOf(lower.offsetBy(n >> 2, (n >> 1) & 1, n & 1));
+            if (places[n].kind == Place::kUnknown) prefetch(&source_.broad[places[n].index]);
+            if (places[n].kind == Place::kBeyond) prefetch(&beyond_.values[places[n].index]);
+        }
+        for (int n = 0; n < 8; ++n) {
+            const Source S = valueAt(places[n]);
+            for (int g = 0; g < int(BakedGrids::kCount); ++g)
+                corners_[g][n >> 2][(n >> 1) & 1][n & 1] = sourceComponent(S, g);
+        }
+    }
+
     const SourceValues &source_;
     const LeafValues &beyond_;
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index_;
