@@ -41,7 +41,8 @@ def baked_and_reference(firncore, path, origins, directions, light, samples, cac
     """Green radiance per ray, baked and the Monte Carlo's (mean, error); `cached`: an .npz file for the latter."""
     optics = firncore.VolumeOptics(*OPTICS_ARGS)
     occluders = [plane(-0.03, 0.0)]
-    firncore.bake(path, optics, occluders=occluders, quality="DRAFT", seed=0, source_scale=1, **light)
+    firncore.bake(path, optics, occluders=occluders, quality="DRAFT", seed=0, source_scale=1, light_tracing=False,
+                  **light)
     baked = firncore.render_baked(path, optics, origins, directions, occluders=occluders)[:, 1]
     if cached and os.path.exists(cached):
         reference = np.load(cached)

@@ -10,8 +10,8 @@ omega 0.99998), each case baked (DRAFT) and rendered against `firncore.monte_car
   pile:    the same cluster with centres 5 cm apart resting on a white ground (albedo 0.97).
   cube:    216 lumps 5 cm apart (a 30 cm cube) over a ground 1 cm under it, seen whole from the side: under a
            uniform sky over a grey ground (0.3), and under the sun over a white (0.97) and a black ground.
-400 far lumps (30 cm and more away) put the cluster over the tracing budget; any occluder turns light tracing
-off, so the diffusion takes every lump. Usage:
+400 far lumps (30 cm and more away) put the cluster over the tracing budget, and light tracing is turned off
+(light_tracing=False), so the diffusion takes every lump. Usage:
   PYTHONPATH=build/python /usr/bin/python3 bench/lumps_between_bench.py [--samples 128] [--folder DIR] [--cache DIR]
 --cache keeps the Monte Carlo's sums (one JSON file per case and sample count) and reads them back: a change of the
 bake is measured in a minute or two instead of five.
@@ -80,7 +80,8 @@ def measure(firncore, path, density, origins, directions, light, occluders, samp
     file holding (or to hold) the Monte Carlo's two figures."""
     bake_suite.write_density(path, density, H)
     optics = firncore.VolumeOptics(*OPTICS_ARGS)
-    stats = firncore.bake(path, optics, occluders=occluders, quality="DRAFT", seed=0, source_scale=1, **light)
+    stats = firncore.bake(path, optics, occluders=occluders, quality="DRAFT", seed=0, source_scale=1,
+                          light_tracing=False, **light)
     assert stats["traced_voxels"] == 0 and stats["light_traced_voxels"] == 0
     baked = firncore.render_baked(path, optics, origins, directions, occluders=occluders)[:, 1].sum()
     if cached and os.path.exists(cached):

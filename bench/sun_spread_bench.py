@@ -3,7 +3,7 @@
 
 Two lumps as the skier sample's (lumps_between_bench.lump(): 1.2 cm balls on 1 cm voxels, 40 optical depths per
 voxel at the centre, g 0.845) in line with a sun 26.6 degrees high (towards (2, 0, 1)), A towards the sun and B k (2, 0, 1) cm behind it, over a
-black ground (an occluder: the diffusion takes every lump), 400 far lumps putting them over the tracing budget. B
+black ground, 400 far lumps putting them over the tracing budget (light tracing off: the diffusion takes every lump). B
 is seen from 14 directions, its disk of pixels from just outside it; B alone, then with A in front at each
 separation: baked (DRAFT) / Monte Carlo - 1, and the share of B's light A leaves it, baked and Monte Carlo. The
 beams onto B's sunlit patches cross A: what A scatters forwards reaches B in full when B lies right behind, a

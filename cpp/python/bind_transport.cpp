@@ -272,7 +272,7 @@ the mean of samples x samples directions over it. Runs in parallel without the G
 }
 
 firn::BakeSettings bakeSettings(const std::string &quality, std::uint64_t seed, int skySamples, int sunSamples,
-                               int referenceSamples, int sourceScale) {
+                               int referenceSamples, int sourceScale, bool lightTracing = true) {
     firn::BakeSettings settings;
     settings.quality = parseQuality(quality);
     settings.seed = seed;
@@ -280,6 +280,7 @@ firn::BakeSettings bakeSettings(const std::string &quality, std::uint64_t seed, 
     settings.sunSamples = sunSamples;
     settings.referenceSamples = referenceSamples;
     settings.sourceScale = sourceScale;
+    settings.lightTracing = lightTracing;
     return settings;
 }
 
@@ -348,9 +349,9 @@ void bindTransport(py::module_ &m) {
            const std::optional<firn::Sky> &sky, const py::list &occluders, const std::string &quality,
            std::uint64_t seed, std::shared_ptr<firn::Progress> progress, int skySamples, int sunSamples,
            int referenceSamples, const std::optional<std::string> &outputPath, const std::vector<firn::Lamp> &lamps,
-           int sourceScale) {
+           int sourceScale, bool lightTracing) {
             const firn::BakeSettings settings =
-                bakeSettings(quality, seed, skySamples, sunSamples, referenceSamples, sourceScale);
+                bakeSettings(quality, seed, skySamples, sunSamples, referenceSamples, sourceScale, lightTracing);
             OccluderArrays blockers = occludersFrom(occluders);
             firn::BakeStats stats;
             longCall([&] {
@@ -368,7 +369,8 @@ void bindTransport(py::module_ &m) {
         py::arg("sky") = py::none(), py::arg("occluders") = py::list(), py::arg("quality") = "FINAL",
         py::arg("seed") = 0, py::arg("progress") = nullptr, py::arg("sky_samples") = 0, py::arg("sun_samples") = 0,
         py::arg("reference_samples") = 0, py::arg("output_path") = py::none(),
-        py::arg("lamps") = std::vector<firn::Lamp>{}, py::arg("source_scale") = 0, R"doc(
+        py::arg("lamps") = std::vector<firn::Lamp>{}, py::arg("source_scale") = 0, py::arg("light_tracing") = true,
+        R"doc(
 Bakes the light scattered inside the snow of `vdb_path` (its 'density' grid, kg/m^3), lit by `suns`, `lamps`
 (firncore.Lamp) and `sky`, and writes the file
 back, atomically, with the baked grids BAKED_GRID_NAMES added (docs/vdb-contract.md), or, given `output_path`,
@@ -377,7 +379,9 @@ writes that file instead and leaves `vdb_path` as it was. occluders: list of
 'REFERENCE' (Monte Carlo surface, slow). sky_samples (rays per surface voxel, at most 64), sun_samples
 (points on a sun's disc or a lamp) and reference_samples (paths per direction, REFERENCE) override the quality's
 defaults when non-zero. source_scale: the baked grids' voxel size in density voxels (1: as fine as the
-density; 2: an eighth of the memory Cycles needs for them; 0: the finest within 512 MB of Cycles' memory). Releases the GIL; raises firncore.Cancelled if `progress` is
+density; 2: an eighth of the memory Cycles needs for them; 0: the finest within 512 MB of Cycles' memory).
+light_tracing: False leaves the voxels too costly to gather per voxel to the diffusion, and light traces none
+(docs/bake.md Method 3; for measuring the diffusion). Releases the GIL; raises firncore.Cancelled if `progress` is
 cancelled, ValueError for bad input, firncore.ReadError (an OSError) when `vdb_path` is missing or damaged,
 firncore.WriteError (an OSError) when the result cannot be written. Returns the solve's statistics.)doc");
 

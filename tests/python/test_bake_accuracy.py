@@ -149,7 +149,13 @@ def test_ramp_in_front_of_a_lit_rim_carries_the_returned_grazing_sun(folder):
     assert abs(issue["view_bias"][1]) < 0.05, issue["view_bias"]
     grey = baked_against_reference(folder, "ball_grey", 1024, [(180, 0)])
     assert grey["view_bias"][0] > -0.28, grey["view_bias"]
-    assert grey["worst"] < 0.55, grey["worst_signed"]
+    # The worst block here is no longer the top row's: since lit-top it is the equator's rim past the terminator,
+    # too bright (main +55.0 % against these 1024 paths; +55.4 % since the ramp's own single scattering, sunInRamp,
+    # branch ball-rims: docs/benchmarks.md). Not a double count of the surface model's sun: with sunInRamp gated at
+    # mu0 < 0 (voxels whose surfaces take no sun at all) the block reads +55.4 % too; the ramp there scatters the sun
+    # the surfaces lack (the terminator test below bounds it from below), on a rim over-bright already (its baked
+    # radiance 1.5-2.7x the Monte Carlo's along the ray on main). Hence 0.56, not 0.55.
+    assert grey["worst"] < 0.56, grey["worst_signed"]
     clean = baked_against_reference(folder, "ball_clean", 1024, [(180, 0)])
     assert clean["worst"] < 0.55, clean["worst_signed"]
 
@@ -466,8 +472,9 @@ def test_traced_voxels_estimates_are_stratified_cheap_ones_longer_and_determinis
 
 def test_cloud_of_lumps_left_to_the_diffusion_lights_itself_over_many_bounces(tmp_vdb):
     # 216 lumps of 19 voxels (1.2 cm balls on 1 cm voxels, 40 optical depths per voxel, g 0.845: the skier
-    # sample's, docs/spray.md) 5 cm apart in a 31 cm cube: too costly to gather per voxel, and an occluder (far
-    # away, as the skier's body) turns light tracing off, so the diffusion takes them. Under a uniform sky they
+    # sample's, docs/spray.md) 5 cm apart in a 31 cm cube: too costly to gather per voxel, and light tracing turned
+    # off (light_tracing=False), so the diffusion takes them, with a far occluder (as the skier's body). Under a
+    # uniform sky they
     # light each other over many bounces; the core's Monte Carlo (all orders) is the oracle. Measured: the bake
     # +0.9 % seen from the side (one gathering bounce, as before: -20 %; two without the rest of the series:
     # -15 %); the reference's noise is under 1 %.
@@ -483,7 +490,7 @@ def test_cloud_of_lumps_left_to_the_diffusion_lights_itself_over_many_bounces(tm
     sky = firncore.Sky((1.0, 1.0, 1.0))
     far = (np.array([[100, 100, -50], [100.1, 100, -50], [100, 100.1, -50]], np.float32), np.array([[0, 1, 2]], np.uint32),
            (0.5, 0.5, 0.5))
-    stats = firncore.bake(tmp_vdb, optics, sky=sky, occluders=[far], quality="DRAFT")
+    stats = firncore.bake(tmp_vdb, optics, sky=sky, occluders=[far], quality="DRAFT", light_tracing=False)
     assert stats["traced_voxels"] == 0
     u = (np.arange(16) + 0.5) / 16 * side * 0.01
     U, V = np.meshgrid(u, u)
@@ -555,6 +562,32 @@ def test_lumps_resting_on_the_snows_surface_mesh_are_traced_at_their_own_cost(tm
                                               seed=1, **light)[0]
     baked = firncore.render_baked(tmp_vdb, optics, origins, directions, occluders=snow)
     assert baked.sum() / reference.sum() == pytest.approx(1.0, abs=0.1)
+
+
+def test_lumps_over_the_snows_surface_mesh_too_many_to_gather_are_light_traced(tmp_path):
+    # bench/spray_light_bench.py's ski spray (the last of 12 frames: 793 lump voxels of 2 cm, up to 20 optical depths,
+    # g 0.89) over the snow's surface mesh (closed, one voxel under the surface, the snow's white-sky albedo), as Bake
+    # Sequence bakes the lumps: over the gathering budget. Until branch spray-trace any occluder left such voxels to
+    # the diffusion: +32 % against the core's Monte Carlo of the same scene (64 paths per pixel, 32 x 16 pixels), the
+    # bench's 256-path reference 34 % per block, bias +26 %. Light traced: +4.9 % (the bench over bake seeds 0-3
+    # -0.2 to +1.6 % bias, 8.3-9.8 % per block; docs/bake.md Method 3). light_tracing=False keeps the diffusion.
+    import spray_light_bench as spray_bench
+    tracked, spray = spray_bench.ski_spray(str(tmp_path), firncore.SpraySettings(seed=5))
+    voxel = firncore.grid_statistics(tracked, "surface")["voxel_size"]
+    surface = firncore.snow_surface_mesh(tracked, adaptivity=0.5, isovalue=-voxel)
+    snow = [(*surface, spray_bench.OPTICS.white_sky_albedo)]
+    light = dict(suns=spray_bench.SUNS, sky=spray_bench.SKY, occluders=snow)
+    lit = str(tmp_path / "lit_spray.vdb")
+    diffused = firncore.bake(spray, spray_bench.OPTICS, output_path=lit, light_tracing=False, **light)
+    assert diffused["traced_voxels"] == diffused["light_traced_voxels"] == 0
+    stats = firncore.bake(spray, spray_bench.OPTICS, output_path=lit, **light)
+    lumps = firncore.grid_statistics(spray, "density")["active_voxels"]
+    assert stats["light_traced_voxels"] == stats["traced_voxels"] == lumps
+    origins, directions, _shape = spray_bench.view("side", 32)
+    reference = firncore.monte_carlo_radiance(spray, spray_bench.OPTICS, origins, directions, samples=64, seed=1,
+                                              **light)[0]
+    baked = firncore.render_baked(lit, spray_bench.OPTICS, origins, directions)
+    assert baked.sum() / reference.sum() == pytest.approx(1.0, abs=0.12)
 
 
 def test_a_lone_lumps_sharp_edges_return_the_grazing_sun_forwards(tmp_path):
@@ -647,3 +680,112 @@ def test_a_pile_of_lumps_on_a_white_ground_takes_back_the_light_it_sends_the_gro
     mc_gain, baked_gain = mc_white - mc_black, baked_white - baked_black
     assert math.hypot(error_black, error_white) < 0.05 * mc_gain
     assert 0.72 < baked_gain / mc_gain < 1.25  # midway between 0.63 and 0.81 at the low end; no double count
+
+
+def baked_source_toward(path, voxels, w):
+    """The baked source function (W/m^2/sr) at voxel centres `voxels` (index space) towards unit w, green channel, as
+    the contract reads the six grids (docs/vdb-contract.md): the broad lobe l0, l1 and the peaked lobe p0 with its
+    grey moment p1, each Henyey-Greenstein of k = |moment| / (3 mean), at most firncore.LOBE_MAX_ANISOTROPY."""
+    import pyopenvdb
+    grids = {g.name: g.getConstAccessor() for g in pyopenvdb.readAll(path)[0]}
+
+    def lobe(mean, moment):
+        length = np.linalg.norm(moment)
+        if mean <= 0.0 or length <= 0.0:
+            return max(mean, 0.0)
+        k = min(length / (3.0 * mean), firncore.LOBE_MAX_ANISOTROPY)
+        cosine = np.dot(w, moment) / length
+        return mean * (1.0 - k * k) / (1.0 + k * k - 2.0 * k * cosine) ** 1.5
+
+    out = []
+    for v in voxels:
+        c = tuple(int(x) for x in v)
+        l0 = grids["firn_source"].getValue(c)[1]
+        l1 = np.array([grids["firn_source_" + a].getValue(c)[1] for a in "xyz"])
+        p0 = np.array(grids["firn_source_peak"].getValue(c))
+        p1 = np.array(grids["firn_source_peak_l1"].getValue(c))
+        out.append(lobe(l0, l1) + (p0[1] / p0.mean() * lobe(p0.mean(), p1) if p0.mean() > 0.0 else 0.0))
+    return np.array(out)
+
+
+def test_ramp_past_the_terminator_scatters_at_least_the_suns_single_scattering(folder):
+    # Every order of scattering adds light, so the source function is at least the sun's single scattering,
+    # omega E T HG(g, cos) (HG normalized over 4 pi sr), and a voxel's value, weighed by the renderer's emission over
+    # its trilinear hat, at least that with T averaged over the hat weighted by the density. The grey ball (omega 0.9,
+    # g 0.6, voxels of optical depth 5): the voxels of its density ramp and just outside it (centre under half the
+    # density, the hat holding at least 1 % of a full voxel's snow: what emits), around the limb where the surface
+    # takes the sun at grazing incidence or not at all (the radial normal's mu0 from -0.3 to 0.2), reach into the sun
+    # (T averaged so 0.2 to 0.63: 52 voxels), while the surface voxels whose radiance they carry have no sun in their
+    # half-space model. Towards the sun's travel (where single scattering peaks) main's carried radiance held 0.33 to
+    # 2.0 of that bound (36 of the 52 below 0.9); with the ramp's own single scattering where it holds more
+    # (bake_grid_values.cpp, sunInRamp: the core's T over 4^3 points, this test's over 6^3) 1.13 to 2.0 (docs/bake.md,
+    # Method 7; ball_grey 10.1 -> 9.5 % per block, seen against the sun -12.1 -> -11.1 %). Voxels whose hat holds
+    # less (0.3 % of a voxel's snow, r 6.7 voxels) take their neighbours' average and read 0.73 of it.
+    c = case("ball_grey")
+    path = os.path.join(folder, "ramp_sun.vdb")
+    bake_suite.write_density(path, c.density, c.voxel)
+    firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), seed=0, source_scale=1)
+    sun = np.array([math.cos(bake_suite.SUN_ELEVATION), 0.0, math.sin(bake_suite.SUN_ELEVATION)])
+    centre = (np.array(c.density.shape) - 1) / 2
+    voxels = np.argwhere(c.density < 0.5 * c.rho)
+    radial = (voxels - centre) / np.linalg.norm(voxels - centre, axis=1)[:, None]
+    voxels = voxels[(radial @ sun > -0.3) & (radial @ sun < 0.2)]
+    # T over the hat: 6^3 points, each marched to the sun on tenth-voxel steps through the trilinear density.
+    nodes = (np.arange(6) + 0.5) / 6 * 2.0 - 1.0
+    offsets = np.array(np.meshgrid(nodes, nodes, nodes, indexing="ij")).reshape(3, -1).T
+    hat = np.prod(1.0 - np.abs(offsets), axis=1)
+    steps = np.arange(0.05, 2.0 * max(c.density.shape), 0.1)
+    kappa = c.sigma_t / c.rho * c.voxel  # optical depth per (kg/m^3 * voxel)
+    ramp, transmittance = [], []
+    for v in voxels:
+        weights = hat * bake_suite.trilinear(c.density, v + offsets)
+        if weights.sum() < 0.01 * c.rho * hat.sum():
+            continue  # hardly any snow in its hat: hardly any emission
+        tau = [kappa * 0.1 * bake_suite.trilinear(c.density, p + steps[:, None] * sun).sum() for p in v + offsets]
+        ramp.append(v)
+        transmittance.append(np.sum(weights * np.exp(-np.array(tau))) / weights.sum())
+    ramp, transmittance = np.array(ramp), np.array(transmittance)
+    lit = transmittance >= 0.2
+    assert lit.sum() >= 40, lit.sum()
+    g = c.g
+    single = c.omega[1] * c.sun * transmittance[lit] * (1.0 + g) / (4.0 * math.pi * (1.0 - g) ** 2)
+    baked = baked_source_toward(path, ramp[lit], -sun)
+    assert np.all(baked > 0.9 * single), np.round(baked / single, 2)
+
+
+def test_ramp_single_scattering_keeps_a_second_suns_forward_peak(folder):
+    # Light adds: the grey ball under the suite's 30-degree sun and a second, overhead sun keeps the overhead sun's
+    # forward peak. The voxels beside the snow near the low sun's terminator (the radial normal's mu0 from -0.3 to 0.2
+    # for it: sunInRamp's gate passes it) on the overhead sun's lit side (mu0 >= 0.3: the gate fails it, the surface
+    # model holds its light) carry a peaked lobe; the part of its grey first moment perpendicular to the low sun's
+    # travel is what the low sun's single scattering lacks. Where the overhead sun alone gives that part (>= 0.005
+    # W/m^2/sr, 22 of 80 voxels), the two suns' bake once held 0.41 of it in sum (sunInRamp replaced the voxel's whole
+    # peak by the low sun's single scattering where that summed more, some to 0); kept whole where a sun the
+    # surface takes lights the voxel, 0.83 (the low sun's carried peak leans the other way in some: the bake's carried
+    # peaks through the ramp, forwardPeakThrough, are not a sum over suns). The bound lies midway.
+    import pyopenvdb
+    c = case("ball_grey")
+    low = np.array([math.cos(bake_suite.SUN_ELEVATION), 0.0, math.sin(bake_suite.SUN_ELEVATION)])
+    high = np.array([0.0, 0.0, 1.0])
+    across = -high + np.dot(high, low) * low  # the overhead sun's travel less its part along the low sun's
+    across /= np.linalg.norm(across)
+    snow = np.pad(c.density > 0.0, 1)
+    beside = np.zeros_like(snow)  # within one voxel of snow
+    for shift in np.ndindex(3, 3, 3):
+        beside[1:-1, 1:-1, 1:-1] |= snow[tuple(slice(s, s + n) for s, n in zip(shift, c.density.shape))]
+    voxels = np.argwhere(beside[1:-1, 1:-1, 1:-1] & (c.density < 0.5 * c.rho))
+    radial = voxels - (np.array(c.density.shape) - 1) / 2
+    radial /= np.linalg.norm(radial, axis=1)[:, None]
+    voxels = voxels[(radial @ low > -0.3) & (radial @ low < 0.2) & (radial @ high >= 0.3)]
+    overhead = firncore.SunLight(tuple(high), (c.sun,) * 3, 0.0093)
+    moment = {}  # per voxel the peaked lobe's grey first moment (3 k m mean p0) across
+    for name, suns in (("both", c.suns() + [overhead]), ("high", [overhead])):
+        path = os.path.join(folder, "two_suns_" + name + ".vdb")
+        bake_suite.write_density(path, c.density, c.voxel)
+        firncore.bake(path, c.optics, suns=suns, sky=c.skies(), seed=0, source_scale=1)
+        peak1 = next(g for g in pyopenvdb.readAll(path)[0] if g.name == "firn_source_peak_l1").getConstAccessor()
+        moment[name] = np.array([np.dot(peak1.getValue(tuple(int(x) for x in v)), across) for v in voxels])
+    lit = moment["high"] >= 0.005
+    assert lit.sum() >= 15, lit.sum()
+    kept = moment["both"][lit].sum() / moment["high"][lit].sum()
+    assert kept > 0.62, kept

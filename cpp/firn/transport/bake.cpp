@@ -301,7 +301,12 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 const SubProgress progress = beside.step(1);
                 TracedSnow snow = thinVoxels(*scene.medium, topo);
                 thin = std::move(snow.thin);
-                if (!snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole, else as before
+                // Light tracing in place of the diffusion where gathering per voxel is over the budget; its other
+                // two uses (transport-thin pieces whole, forward snow at the gathering's cost) were measured without
+                // occluders only: with occluders the diffusion and the gathering keep those voxels, as before.
+                const bool lightTracing = settings.lightTracing;
+                const bool lightTracingBesides = lightTracing && scene.occluders->empty();
+                if (lightTracingBesides && !snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole
                     std::vector<openvdb::Coord> whole = thin;
                     whole.insert(whole.end(), snow.wholePieces.begin(), snow.wholePieces.end());
                     traced = lightTraceSources(scene, whole, settings.seed ^ 0x7EACEull, progress, local,
@@ -310,12 +315,15 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 }
                 if (traced.source.empty()) {
                     const GatheringPlan plan = planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull);
-                    traced = lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);
+                    if (lightTracingBesides)
+                        traced =
+                            lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);
                     if (traced.source.empty()) {
                         local.tracedPaths = plan.paths;
-                        traced = plan.paths > 0 || thin.empty()
-                                     ? traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress)
-                                     : lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
+                        if (plan.paths > 0 || thin.empty())
+                            traced = traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress);
+                        else if (lightTracing)
+                            traced = lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
                         if (plan.paths > 0)
                             addFaceSources(scene, topo, thin, plan, settings.seed ^ 0xFACEull, progress, traced);
                     }

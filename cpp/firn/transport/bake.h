@@ -27,6 +27,9 @@ struct BakeSettings {
     // of the voxels, which is what Cycles' memory follows (baked_grids.h: coarsenedSource). 0: the finest whose
     // dense box Cycles will allocate stays within kSourceBudgetBytes.
     int sourceScale = 0;
+    // Light tracing (docs/bake.md Method 3) where gathering per voxel is over the budget; false leaves those voxels
+    // to the diffusion (the tests and benches that measure the diffusion's lumps).
+    bool lightTracing = true;
 };
 
 // What Cycles (dense volume textures, no NanoVDB) may allocate for the six source grids: 16 bytes per voxel

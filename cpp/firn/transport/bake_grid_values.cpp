@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -22,13 +23,14 @@ namespace {
 
 // The radiance the surface voxels around voxel c (outside the snow) show towards it: their values
 // weighted by how much their surface faces c (a voxel beside an edge takes the side's, one above it the
-// top's). False if no surface voxel is near.
+// top's), and their normals so weighted (`facing`, unit; zero where none faces c). False if no surface voxel is
+// near.
 bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const SourceValues &source,
-                   Source &S) {
+                   Source &S, glm::dvec3 &facing) {
     double total = 0.0;
     int count = 0;
-    glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0);
+    glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0), normal(0.0);
     glm::dmat3 l1(0.0);
     for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
@@ -40,9 +42,11 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 const Source v = source[j];
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
+                normal += w * topo.patches[j].normal;
                 total += w, ++count;
             }
     if (count == 0) return false;
+    facing = glm::length(normal) > 0.0 ? glm::normalize(normal) : normal;
     if (total <= 0.0) {  // nothing faces c: plain average
         for (int dx = -1; dx <= 1; ++dx)
             for (int dy = -1; dy <= 1; ++dy)
@@ -242,6 +246,87 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     S.peak1 = glm::vec3(lit * p1 / total + (1.0 - lit) * glm::dvec3(S.peak1));
 }
 
+// Surfaces that take a sun at most this grazingly (mu0 = cos of its angle to the normal) leave the sun in their
+// density ramp to the ramp itself (sunInRamp).
+constexpr double kGrazingSunCosine = 0.2;
+
+// The suns' uncollided transmittance through the snow at the points of a quarter-voxel lattice (index space: odd
+// multiples of 1/4), each point marched once: the 4^3 points sunInRamp averages over a voxel's hat are shared with
+// its neighbours' (a point at c + 1/4 is also c + 1 - 3/4), so a band of ramp voxels marches a few times fewer
+// columns. One per thread, cleared per leaf.
+class QuarterPointSun {
+  public:
+    QuarterPointSun(const Medium &medium, std::size_t suns) : medium_(medium), marcher_(medium), known_(suns) {}
+    void clear() {
+        for (auto &known : known_) known.clear();
+    }
+    // Sun b's transmittance at index-space point q / 4 (q odd per axis). The key keeps q's low 21 bits per axis: a
+    // leaf's points (cleared per leaf) differ there.
+    double at(std::size_t b, const glm::dvec3 &direction, const openvdb::Coord &q) {
+        const std::uint64_t key = std::uint64_t(std::uint32_t(q.x()) & 0x1FFFFFu) |
+                                  std::uint64_t(std::uint32_t(q.y()) & 0x1FFFFFu) << 21 |
+                                  std::uint64_t(std::uint32_t(q.z()) & 0x1FFFFFu) << 42;
+        const auto [it, added] = known_[b].try_emplace(key, 0.0);
+        if (added) {
+            const double perColumn = medium_.optics().extinctionPerDensity;  // m^2/kg: uncollided
+            const double limit = std::log(1e5) / perColumn;  // kg/m^2: the transmittance below 1e-5
+            const double column = marcher_.column(medium_.indexToWorld(glm::dvec3(q.x(), q.y(), q.z()) / 4.0),
+                                                  direction, std::numeric_limits<double>::infinity(), limit);
+            it->second = column < limit ? std::exp(-perColumn * column) : 0.0;
+        }
+        return it->second;
+    }
+
+  private:
+    const Medium &medium_;
+    Medium::ColumnMarcher marcher_;
+    std::vector<std::unordered_map<std::uint64_t, double>> known_;  // per sun
+};
+
+// The suns' light scattered once in ramp voxel c (outside the unknowns, carrying its surface's radiance) in front of
+// surfaces that take them at grazing incidence or not at all (kGrazingSunCosine): the peaked lobe of k = g about each
+// sun's travel, of mean omega E T / 4 pi, T the snow's uncollided transmittance averaged over c's trilinear hat
+// weighted by the density (what the renderer's emission weighs; 4^3 points), the occluders' shadow taken at c's centre,
+// where it holds more than c's own peak and no sun the surfaces take (mu0 >= kGrazingSunCosine) lights c. A convex
+// surface's ramp reaches into the sun past its terminator, where the surfaces' half-space model has no sun (mu0 <= 0)
+// or little (a lit patch returns E mu0 per area, the ramp beside it scatters E T): ball_grey's rims seen against the
+// sun (bench/bake_suite.py; docs/bake.md, Method 7). The average, not T at c's centre: an air voxel just outside a limb
+// has T = 1 at its centre and shadowed snow in its hat (T at the centre read ball_grey's equator rims seen against the
+// sun +200 to +270 %); 3^3 points (the hat's trapezoid rule) lost slab_thick's and box_sharp's gains.
+// normal: the carrying surfaces' (facingAverage), zero where none faces c.
+void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
+               QuarterPointSun &sunAt, Source &S) {
+    if (glm::length(normal) == 0.0) return;
+    const VolumeOptics &optics = scene.medium->optics();
+    constexpr int kPoints[4] = {-3, -1, 1, 3};  // quarter voxels from c's centre, per axis
+    const glm::dvec3 centre = scene.medium->voxelCentre(c);
+    Source single;
+    for (std::size_t b = 0; b < scene.suns.size(); ++b) {
+        const SunLight &sun = scene.suns[b];
+        if (!scene.occluders->empty() &&
+            scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(sun.direction), 1e-5f))
+            continue;
+        // Such a sun's forward peak is in c's one carried peak: kept whole (replacing it dropped that peak and its
+        // direction; test_ramp_single_scattering_keeps_a_second_suns_forward_peak).
+        if (glm::dot(normal, sun.direction) >= kGrazingSunCosine) return;
+        double transmitted = 0.0, weights = 0.0;
+        for (int k = 0; k < 64; ++k) {
+            const openvdb::Coord offset(kPoints[k % 4], kPoints[k / 4 % 4], kPoints[k / 16]);
+            const openvdb::Coord q(4 * c.x() + offset.x(), 4 * c.y() + offset.y(), 4 * c.z() + offset.z());
+            const double w = (4 - std::abs(offset.x())) * (4 - std::abs(offset.y())) * (4 - std::abs(offset.z())) *
+                             marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0);
+            if (w <= 0.0) continue;
+            transmitted += w * sunAt.at(b, sun.direction, q);
+            weights += w;
+        }
+        if (weights > 0.0)
+            single.addPeak(transmitted / weights * glm::dvec3(sun.irradiance) * glm::dvec3(optics.albedo) * kInvFourPi,
+                           crossingAnisotropy(optics.g), -sun.direction);
+    }
+    if (single.peak0.x + single.peak0.y + single.peak0.z > S.peak0.x + S.peak0.y + S.peak0.z)
+        S.peak0 = single.peak0, S.peak1 = single.peak1;
+}
+
 }  // namespace
 
 // gathering: the values the gathering reads alone (those beside snow, besideSnow: the grids carry the surface's
@@ -315,19 +400,25 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak), peaksAt(peaks),
             nearSurfaceAt(nearSurface);
         Medium::ColumnMarcher marcher(medium);
-        for (std::size_t l = range.begin(); l != range.end(); ++l)
+        QuarterPointSun sunAt(medium, scene.suns.size());
+        for (std::size_t l = range.begin(); l != range.end(); ++l) {
+            sunAt.clear();
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
                 const std::int32_t t = tracedIndex.getValue(c);
                 Source S;
+                glm::dvec3 facing(0.0);
                 if (t >= 0) S = ownValue(traced, t);
                 else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
-                else if (!facingAverage(topo, c, index, source, S)) continue;
-                else if (nearPeakAt.isValueOn(c))
+                else if (!facingAverage(topo, c, index, source, S, facing)) continue;
+                else if (nearPeakAt.isValueOn(c)) {
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
+                    sunInRamp(scene, c, facing, marcher, sunAt, S);
+                }
                 perLeaf[l].add(it.pos(), S);
             }
+        }
     });
     // The second block adds at most a value per voxel near the carried ones or holding snow.
     LeafValues carried(std::move(perLeaf), nearCarried.activeVoxelCount() + medium.density().activeVoxelCount());

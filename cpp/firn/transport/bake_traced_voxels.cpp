@@ -312,7 +312,7 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
 
 // The voxels whose gathering costs more than the budget (planGathering: no paths), by light tracing within it
 // (light_tracing.h); none where even that costs too much (a cloud of lumps inside thick snow: photons
-// scatter thousands of times there), or with lamps (their emission is not sampled) or occluders (planLightTracing).
+// scatter thousands of times there), or with lamps (their emission is not sampled: planLightTracing).
 MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
                                    const SubProgress &progress, BakeStats &stats, double budget) {
     const MonteCarloReference reference(scene);

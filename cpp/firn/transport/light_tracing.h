@@ -17,13 +17,15 @@ namespace firn {
 // and all other light arriving there (sky, occluders' reflections, light the medium sent out and the scene
 // returned), one path of the reference traced outwards per photon for its radiance. Inside, the reference's own
 // tracking (PhotonTracer::follow): delta tracking, Henyey-Greenstein, Lambertian occluders, roulette,
-// until the photon leaves the box. Each real collision in a voxel adds the power arriving and its direction to
-// the voxel's sums (the collision estimator of the integral of sigma_t phi and of the moments; divided by the
-// voxel's integral of sigma_t: the extinction-weighted mean sourceIn gives), except a sun beam's first
-// collision: that single scattering is each voxel's sourceIn beams (noise-free peaked lobe). Photon i draws
-// from its own stream and the sums are reduced in fixed chunks in order: the same grids on any thread count.
+// until the photon leaves the box; none starts inside a closed occluder (no light reaches there). Each real
+// collision in a voxel adds the power arriving and its direction to the voxel's sums (the collision estimator of
+// the integral of sigma_t phi and of the moments; divided by the voxel's integral of sigma_t outside closed
+// occluders, as the gathering's points skip their inside: the extinction-weighted mean sourceIn gives), except a
+// sun beam's first collision: that single scattering is each voxel's sourceIn beams (noise-free peaked lobe).
+// Photon i draws from its own stream and the sums are reduced in fixed chunks in order: the same grids on any
+// thread count.
 struct LightTracingPlan {
-    long photons = 0;     // 0: too costly, or lamps or occluders in the scene (planLightTracing): leave the voxels to others
+    long photons = 0;     // 0: too costly, or lamps in the scene (planLightTracing): leave the voxels to others
     int beamSamples = 0;  // points per voxel for the direct beams
     std::size_t sumsBytes = 0;  // the voxels' sums photons add to (ArrivingLight; ArrivingToward where fitted by direction)
 };

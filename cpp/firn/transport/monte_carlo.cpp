@@ -355,6 +355,8 @@ Rgb PhotonTracer::radianceArriving(const Ray &ray, Rng &rng) { return tracer_->s
 
 long PhotonTracer::steps() const { return tracer_->steps; }
 
+bool PhotonTracer::enclosed(const glm::dvec3 &p) const { return tracer_->enclosed(p); }
+
 SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
                                              std::uint64_t stream, Gathering how) const {
     const bool scattered = how != Gathering::BeamsOnly;

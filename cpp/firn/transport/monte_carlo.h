@@ -186,6 +186,9 @@ class PhotonTracer {
 
     long steps() const;  // tracking steps so far
 
+    // Whether p lies inside a closed occluder, where no light reaches (the gathering's test, sourceIn's).
+    bool enclosed(const glm::dvec3 &p) const;
+
   private:
     std::unique_ptr<PathTracer> tracer_;
 };
