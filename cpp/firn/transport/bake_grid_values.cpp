@@ -114,22 +114,6 @@ bool besideSnow(Medium::Accessor &density, const openvdb::Coord &c) {
     return false;
 }
 
-// Grid k < 4 of BakedGrids' value from a broad lobe: l0, then l1's x, y and z (RGB).
-openvdb::Vec3f broadComponent(const BroadLobe &S, int k) {
-    return k == 0 ? openvdb::Vec3f(S.l0.x, S.l0.y, S.l0.z)
-                  : openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1]);
-}
-
-}  // namespace
-
-// Grid k of BakedGrids' value from a source function: the broad lobe's four, then the peaked lobe's p0 and p1.
-openvdb::Vec3f sourceComponent(const Source &S, int k) {
-    return k < 4 ? broadComponent(S, k) : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
-                                                 : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
-}
-
-namespace {
-
 // The grids' values (BakedGrids::Values) of a source function.
 BakedGrids::Values sourceComponents(const Source &S) {
     BakedGrids::Values out;
