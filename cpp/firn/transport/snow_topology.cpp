@@ -138,7 +138,7 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             for (int f = 0; f < 6; ++f) {
                 const double fringe = topo.isAirFace(i, f) ? density.getValue(c + faceStep(f)) : 0.0;
                 if (fringe > 0.0)
-                    gradient += std::pow(fringe / topo.density[i], kFringeNormalExponent) *
+                    gradient += std::pow(std::min(fringe / topo.density[i], 1.0), kFringeNormalExponent) *
                                 sobel(c + faceStep(f));
             }
             glm::dvec3 n = -gradient;
