@@ -1,0 +1,70 @@
+// The surface patches of buildSnowTopology (snow_topology.h): their normals against a shape's own.
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "firn/transport/scene.h"
+#include "firn/transport/snow_topology.h"
+#include "firn/util/error.h"
+#include "firn/util/openvdb_library.h"
+
+namespace firn {
+
+namespace {
+
+// bench/bake_suite.py's ball(): radius r voxels of 1 cm, centred between voxels, its density `rho` falling from
+// full to none over the voxel across the sphere (a one-voxel antialiased surface), in a grid 2r + 6 voxels wide.
+Medium ball(int r, float rho, double extinctionPerDensity) {
+    initializeOpenVdb();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    const int n = 2 * r + 6;
+    const double centre = (n - 1) / 2.0;
+    auto acc = grid->getAccessor();
+    for (int x = 0; x < n; ++x)
+        for (int y = 0; y < n; ++y)
+            for (int z = 0; z < n; ++z) {
+                const double d = glm::length(glm::dvec3(x, y, z) - centre) - r;
+                const double fill = std::clamp(0.5 - d, 0.0, 1.0);
+                if (fill > 0.0) acc.setValue(openvdb::Coord(x, y, z), float(rho * fill));
+            }
+    return Medium(grid, VolumeOptics{extinctionPerDensity, Rgb(0.9), 0.6});
+}
+
+// The largest angle (degrees) between a smooth surface patch's normal and the sphere's, from the ball's centre
+// through the voxel's.
+double worstNormalAngle(const Medium &medium, int r) {
+    const SnowTopology topo = buildSnowTopology(medium, Occluders{}, SubProgress(nullptr, 0.0, 1.0));
+    const double centre = (2 * r + 6 - 1) / 2.0;
+    double worst = 0.0;
+    int patches = 0;
+    for (std::size_t i = 0; i < topo.size(); ++i) {
+        const SurfacePatch &patch = topo.patches[i];
+        if (!patch.isSurface() || patch.sharp) continue;
+        const openvdb::Coord &c = topo.coord[i];
+        const glm::dvec3 radial = glm::normalize(glm::dvec3(c.x(), c.y(), c.z()) - centre);
+        worst = std::max(worst, std::acos(std::clamp(glm::dot(patch.normal, radial), -1.0, 1.0)) * 180.0 / M_PI);
+        ++patches;
+    }
+    EXPECT_GT(patches, 100);
+    return worst;
+}
+
+}  // namespace
+
+// A ball's surface voxel under a fringe nearly as dense as itself (the voxel's optical depth at most 5, so its
+// partly filled neighbour outside is a fringe, Method 1) lies a voxel under the surface: its own gradient hardly
+// changes along the normal, and the fringe's steps across it tilted the normal. On bench/bake_suite.py's ball_grey
+// (r 5 voxels, sigma_t h 5) the caps' 24 full voxels leaned 13.4 degrees off the sphere's normal (main), so the sun
+// entered the caps on the terminator at mu0 0.11 and 0.41 where the sphere takes it at 0.05 and 0.19 (their rims seen
+// across the terminator read +50 %); now 3.4. The sphere's normal is the oracle: from the ball's centre through the
+// voxel's (the patch meets the sphere within a voxel of it). The worst left, 6.2 degrees, are thin voxels of density
+// 0.33 on the diagonals, under no fringe.
+TEST(SnowTopology, NormalsOfAVoxelizedBallUnderItsFringeFollowTheSphere) {
+    EXPECT_LT(worstNormalAngle(ball(5, 100.0f, 5.0), 5), 8.0);
+}
+
+}  // namespace firn
