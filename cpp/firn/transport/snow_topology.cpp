@@ -85,13 +85,14 @@ bool onSharpEdge(const SnowTopology &topo, std::size_t i) {
     return false;
 }
 
-// A fringe voxel in front of a surface voxel weighs in its normal by (its density / the voxel's)^this: a fringe nearly
-// as dense as the voxel holds the surface (the voxel lies a voxel under it, where the density hardly changes along
-// the normal and the fringe's steps across it tilt the gradient), a thin one does not. Against the radial normal of
-// the suite's voxelized balls (bench/bake_suite.py's ball(), 4^3 samples per voxel; mean / worst degrees over the
-// smooth surface voxels): ball_grey's 3.6 / 13.4 without it, exponent 2, 4, 8, 16: 2.1 / 4.5, 2.1 / 3.8, 2.1 / 3.4,
-// 2.2 / 3.4; ball_rgb's 3.5 / 16.1 -> 1.9 / 6.3, 1.7 / 5.2, 1.8 / 3.2, 2.3 / 4.0; ball_issue's and ball_snow's
-// within 0.2 degree either way (docs/benchmarks.md, grey-rims).
+// A fringe voxel in front of a surface voxel (no denser than it) weighs in its normal by (its density / the voxel's)^
+// this: a fringe nearly as dense as the voxel holds the surface (the voxel lies a voxel under it, where the density
+// hardly changes along the normal and the fringe's steps across it tilt the gradient), a thin one does not. Against
+// the sphere's normal at the smooth surface voxels of bench/bake_suite.py's balls (mean / worst degrees;
+// tests/cpp/transport/snow_topology_test.cpp): ball_grey (sigma_t h 5) 2.70 / 13.4 without it; exponent 0, 1, 2, 4,
+// 8, 16: 2.54 / 5.7, 2.11 / 5.1, 1.76 / 4.5, 1.59 / 3.8, 1.56 / 3.4, 1.68 / 3.4; ball_issue (sigma_t h 10) 1.75 /
+// 3.3 without, 3.18 / 5.3, 2.23 / 4.4, 1.66 / 3.8, 1.58 / 3.4, 1.72 / 3.3, 1.75 / 3.3; ball_snow 1.48 / 3.5 without,
+// 1.32-2.13 / 3.5-4.0 with; ball_rgb's none (1.13 / 3.2). docs/benchmarks.md, grey-rims.
 constexpr double kFringeNormalExponent = 8.0;
 
 // Outward normal from the density gradient (a 3x3x3 Sobel stencil, plus each fringe voxel's in front by
@@ -136,10 +137,9 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             const openvdb::Coord &c = topo.coord[i];
             glm::dvec3 gradient = sobel(c);
             for (int f = 0; f < 6; ++f) {
-                const double fringe = topo.isAirFace(i, f) ? density.getValue(c + faceStep(f)) : 0.0;
-                if (fringe > 0.0)
-                    gradient += std::pow(std::min(fringe / topo.density[i], 1.0), kFringeNormalExponent) *
-                                sobel(c + faceStep(f));
+                const double fringe = topo.isAirFace(i, f) ? density.getValue(c + faceStep(f)) / topo.density[i] : 0.0;
+                if (fringe > 0.0 && fringe <= 1.0)  // a denser voxel outside is another surface's fringe
+                    gradient += std::pow(fringe, kFringeNormalExponent) * sobel(c + faceStep(f));
             }
             glm::dvec3 n = -gradient;
             if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
