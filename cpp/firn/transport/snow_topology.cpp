@@ -122,8 +122,8 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             std::array<bool, 6> occluderFace{};
             for (int f = 0; f < 6; ++f)
                 occluderFace[f] = SnowTopology::isFace(topo.link[i][f]) && !topo.isAirFace(i, f);
-            const auto step = [&](int d, int axis) { return d != 0 && occluderFace[2 * axis + (d > 0)] ? 0 : d; };
-            const auto sobel = [&](const openvdb::Coord &c) {
+            const auto sobel = [&](const openvdb::Coord &c, const std::array<bool, 6> &occluder) {
+                const auto step = [&](int d, int axis) { return d != 0 && occluder[2 * axis + (d > 0)] ? 0 : d; };
                 glm::dvec3 gradient(0.0);
                 for (int dx = -1; dx <= 1; ++dx)
                     for (int dy = -1; dy <= 1; ++dy)
@@ -135,11 +135,15 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
                 return gradient;
             };
             const openvdb::Coord &c = topo.coord[i];
-            glm::dvec3 gradient = sobel(c);
+            glm::dvec3 gradient = sobel(c, occluderFace);
             for (int f = 0; f < 6; ++f) {
                 const double fringe = topo.isAirFace(i, f) ? density.getValue(c + faceStep(f)) / topo.density[i] : 0.0;
-                if (fringe > 0.0 && fringe <= 1.0)  // a denser voxel outside is another surface's fringe
-                    gradient += std::pow(fringe, kFringeNormalExponent) * sobel(c + faceStep(f));
+                if (fringe <= 0.0 || fringe > 1.0) continue;  // a denser voxel outside is another surface's fringe
+                // The fringe lies on the voxel's side of its occluders across f (a locally flat occluder goes on
+                // past it), but the voxel behind it is snow: a fringe above a voxel on the ground reads the voxel.
+                std::array<bool, 6> fringeOccluder = occluderFace;
+                fringeOccluder[f ^ 1] = false;
+                gradient += std::pow(fringe, kFringeNormalExponent) * sobel(c + faceStep(f), fringeOccluder);
             }
             glm::dvec3 n = -gradient;
             if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
