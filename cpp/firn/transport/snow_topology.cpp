@@ -139,8 +139,8 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             for (int f = 0; f < 6; ++f) {
                 const double fringe = topo.isAirFace(i, f) ? density.getValue(c + faceStep(f)) / topo.density[i] : 0.0;
                 if (fringe <= 0.0 || fringe > 1.0) continue;  // a denser voxel outside is another surface's fringe
-                // The fringe lies on the voxel's side of its occluders across f (a locally flat occluder goes on
-                // past it), but the voxel behind it is snow: a fringe above a voxel on the ground reads the voxel.
+                // The fringe shares the voxel's occluder faces (a locally flat occluder goes on past it) but for
+                // the one behind the voxel: a fringe above a voxel on the ground reads the voxel under it.
                 std::array<bool, 6> fringeOccluder = occluderFace;
                 fringeOccluder[f ^ 1] = false;
                 gradient += std::pow(fringe, kFringeNormalExponent) * sobel(c + faceStep(f), fringeOccluder);
