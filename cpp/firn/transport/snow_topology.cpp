@@ -85,8 +85,18 @@ bool onSharpEdge(const SnowTopology &topo, std::size_t i) {
     return false;
 }
 
-// Outward normal from the density gradient (a 3x3x3 Sobel stencil), or from the air faces where the
-// gradient is flat or points the wrong way.
+// A fringe voxel in front of a surface voxel (no denser than it) weighs in its normal by (its density / the voxel's)^
+// this: a fringe nearly as dense as the voxel holds the surface (the voxel lies a voxel under it, where the density
+// hardly changes along the normal and the fringe's steps across it tilt the gradient), a thin one does not. Against
+// the sphere's normal at the smooth surface voxels of bench/bake_suite.py's balls (mean / worst degrees;
+// tests/cpp/transport/snow_topology_test.cpp): ball_grey (sigma_t h 5) 2.70 / 13.4 without it; exponent 0, 1, 2, 4,
+// 8, 16: 2.54 / 5.7, 2.11 / 5.1, 1.76 / 4.5, 1.59 / 3.8, 1.56 / 3.4, 1.68 / 3.4; ball_issue (sigma_t h 10) 1.75 /
+// 3.3 without, 3.18 / 5.3, 2.23 / 4.4, 1.66 / 3.8, 1.58 / 3.4, 1.72 / 3.3, 1.75 / 3.3; ball_snow 1.48 / 3.5 without,
+// 1.32-2.13 / 3.5-4.0 with; ball_rgb's none (1.13 / 3.2). docs/benchmarks.md, grey-rims.
+constexpr double kFringeNormalExponent = 8.0;
+
+// Outward normal from the density gradient (a 3x3x3 Sobel stencil, plus each fringe voxel's in front by
+// kFringeNormalExponent), or from the air faces where the gradient is flat or points the wrong way.
 void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
     auto slot = std::make_shared<std::vector<std::int32_t>>(topo.size(), -1);
     std::int32_t surfaceVoxels = 0;
@@ -112,16 +122,29 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             std::array<bool, 6> occluderFace{};
             for (int f = 0; f < 6; ++f)
                 occluderFace[f] = SnowTopology::isFace(topo.link[i][f]) && !topo.isAirFace(i, f);
-            const auto step = [&](int d, int axis) { return d != 0 && occluderFace[2 * axis + (d > 0)] ? 0 : d; };
-            glm::dvec3 gradient(0.0);
+            const auto sobel = [&](const openvdb::Coord &c, const std::array<bool, 6> &occluder) {
+                const auto step = [&](int d, int axis) { return d != 0 && occluder[2 * axis + (d > 0)] ? 0 : d; };
+                glm::dvec3 gradient(0.0);
+                for (int dx = -1; dx <= 1; ++dx)
+                    for (int dy = -1; dy <= 1; ++dy)
+                        for (int dz = -1; dz <= 1; ++dz) {
+                            const double w = (2 - std::abs(dx)) * (2 - std::abs(dy)) * (2 - std::abs(dz));
+                            const double rho = density.getValue(c.offsetBy(step(dx, 0), step(dy, 1), step(dz, 2)));
+                            gradient += w * rho * glm::dvec3(dx, dy, dz);
+                        }
+                return gradient;
+            };
             const openvdb::Coord &c = topo.coord[i];
-            for (int dx = -1; dx <= 1; ++dx)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dz = -1; dz <= 1; ++dz) {
-                        const double w = (2 - std::abs(dx)) * (2 - std::abs(dy)) * (2 - std::abs(dz));
-                        const double rho = density.getValue(c.offsetBy(step(dx, 0), step(dy, 1), step(dz, 2)));
-                        gradient += w * rho * glm::dvec3(dx, dy, dz);
-                    }
+            glm::dvec3 gradient = sobel(c, occluderFace);
+            for (int f = 0; f < 6; ++f) {
+                const double fringe = topo.isAirFace(i, f) ? density.getValue(c + faceStep(f)) / topo.density[i] : 0.0;
+                if (fringe <= 0.0 || fringe > 1.0) continue;  // a denser voxel outside is another surface's fringe
+                // The fringe shares the voxel's occluder faces (a locally flat occluder goes on past it) but for
+                // the one behind the voxel: a fringe above a voxel on the ground reads the voxel under it.
+                std::array<bool, 6> fringeOccluder = occluderFace;
+                fringeOccluder[f ^ 1] = false;
+                gradient += std::pow(fringe, kFringeNormalExponent) * sobel(c + faceStep(f), fringeOccluder);
+            }
             glm::dvec3 n = -gradient;
             if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
             SurfacePatch &patch = topo.patches.surface(i);

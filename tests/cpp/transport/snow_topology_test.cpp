@@ -1,0 +1,133 @@
+// The surface patches of buildSnowTopology (snow_topology.h): their normals against a shape's own.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "firn/geometry/mesh.h"
+#include "firn/transport/scene.h"
+#include "firn/transport/snow_topology.h"
+#include "firn/util/error.h"
+#include "firn/util/openvdb_library.h"
+
+namespace firn {
+
+namespace {
+
+// bench/bake_suite.py's ball(): radius r voxels of 1 cm, centred between voxels, its density `rho` falling from
+// full to none over the voxel across the sphere (a one-voxel antialiased surface), in a grid 2r + 6 voxels wide.
+Medium ball(int r, float rho, double extinctionPerDensity) {
+    initializeOpenVdb();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    const int n = 2 * r + 6;
+    const double centre = (n - 1) / 2.0;
+    auto acc = grid->getAccessor();
+    for (int x = 0; x < n; ++x)
+        for (int y = 0; y < n; ++y)
+            for (int z = 0; z < n; ++z) {
+                const double d = glm::length(glm::dvec3(x, y, z) - centre) - r;
+                const double fill = std::clamp(0.5 - d, 0.0, 1.0);
+                if (fill > 0.0) acc.setValue(openvdb::Coord(x, y, z), float(rho * fill));
+            }
+    return Medium(grid, VolumeOptics{extinctionPerDensity, Rgb(0.9), 0.6});
+}
+
+double degreesBetween(const glm::dvec3 &a, const glm::dvec3 &b) {  // unit vectors
+    return std::acos(std::clamp(glm::dot(a, b), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+// The largest angle (degrees) between a smooth surface patch's normal and the sphere's, from the ball's centre
+// through the voxel's.
+double worstNormalAngle(const Medium &medium, int r) {
+    const SnowTopology topo = buildSnowTopology(medium, Occluders{}, SubProgress(nullptr, 0.0, 1.0));
+    const double centre = (2 * r + 6 - 1) / 2.0;
+    double worst = 0.0;
+    int patches = 0;
+    for (std::size_t i = 0; i < topo.size(); ++i) {
+        const SurfacePatch &patch = topo.patches[i];
+        if (!patch.isSurface() || patch.sharp) continue;
+        const openvdb::Coord &c = topo.coord[i];
+        const glm::dvec3 radial = glm::normalize(glm::dvec3(c.x(), c.y(), c.z()) - centre);
+        worst = std::max(worst, degreesBetween(patch.normal, radial));
+        ++patches;
+    }
+    EXPECT_GT(patches, 100);
+    return worst;
+}
+
+// A layer on a ground (a plate half a voxel under its lowest voxels) whose top rises `rise` voxels per voxel along x
+// from `top0` voxels above the plate, antialiased over a voxel, sigma_t h `tauPerVoxel`; w x w voxels of 1 cm.
+// Returns the largest angle (degrees) between a top patch's normal, away from the layer's sides, and the plane's.
+double worstTiltedLayerAngle(double top0, double rise, double tauPerVoxel) {
+    initializeOpenVdb();
+    const int w = 20;
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    auto acc = grid->getAccessor();
+    for (int x = 0; x < w; ++x)
+        for (int y = 0; y < w; ++y)
+            for (int z = 0; z < 8; ++z) {
+                const double fill = std::clamp(top0 + rise * x - z + 0.5, 0.0, 1.0);
+                if (fill > 0.0) acc.setValue(openvdb::Coord(x, y, z), float(100.0 * fill));
+            }
+    const Medium medium(grid, VolumeOptics{tauPerVoxel, Rgb(0.9), 0.6});
+    const float z = -0.005f, v[] = {-1, -1, z, 1, -1, z, 1, 1, z, -1, 1, z};
+    const unsigned t[] = {0, 1, 2, 0, 2, 3};
+    const Occluders ground(makeTriangleMesh(v, 4, t, 2), std::vector<Rgb>(2, Rgb(0.5)));
+    const SnowTopology topo = buildSnowTopology(medium, ground, SubProgress(nullptr, 0.0, 1.0));
+    const glm::dvec3 plane = glm::normalize(glm::dvec3(-rise, 0.0, 1.0));
+    double worst = 0.0;
+    int patches = 0;
+    for (std::size_t i = 0; i < topo.size(); ++i) {
+        const openvdb::Coord &c = topo.coord[i];
+        const SurfacePatch &patch = topo.patches[i];
+        if (!patch.isSurface() || patch.sharp || c.x() < 3 || c.x() >= w - 3 || c.y() < 3 || c.y() >= w - 3) continue;
+        if (!topo.isAirFace(i, 5)) continue;
+        worst = std::max(worst, degreesBetween(patch.normal, plane));
+        ++patches;
+    }
+    EXPECT_GT(patches, 100);
+    return worst;
+}
+
+}  // namespace
+
+// A ball's surface voxel under a fringe nearly as dense as itself (the voxel's optical depth at most 5, so its
+// partly filled neighbour outside is a fringe, Method 1) lies a voxel under the surface: its own gradient hardly
+// changes along the normal, and the fringe's steps across it tilted the normal. On bench/bake_suite.py's ball_grey
+// (r 5 voxels, sigma_t h 5) the caps' 24 full voxels leaned 13.4 degrees off the sphere's normal (main), so the sun
+// entered the caps on the terminator at mu0 0.11 and 0.41 where the sphere takes it at 0.05 and 0.19 (their rims seen
+// across the terminator read +50 %); now 3.4 at worst (mean 2.70 -> 1.56). The sphere's normal is the oracle: from
+// the ball's centre through the voxel's (the patch meets the sphere within a voxel of it; the thicker balls' worst
+// is 3.3-3.5 either way).
+TEST(SnowTopology, NormalsOfAVoxelizedBallUnderItsFringeFollowTheSphere) {
+    EXPECT_LT(worstNormalAngle(ball(5, 100.0f, 5.0), 5), 6.0);
+}
+
+// The fringe's weight (kFringeNormalExponent) was chosen on ball_grey: the denser balls' surface voxels, under fringes
+// thinner than themselves, keep their normals. bench/bake_suite.py's ball_issue (r 5, sigma_t h 10) and ball_snow
+// (r 8, sigma_t h 20) lean 3.34 and 3.45 degrees off the sphere at worst, as on main without the fringe's stencil (3.3
+// and 3.5, snow_topology.cpp); a fringe weighed in by its density alone (exponent 1) took them to 4.36 and 3.61. The
+// sphere's normal is the oracle, as above; the bounds leave 0.66 and 0.55 degrees of margin.
+TEST(SnowTopology, NormalsOfDenserVoxelizedBallsKeepToTheSphere) {
+    EXPECT_LT(worstNormalAngle(ball(5, 100.0f, 10.0), 5), 4.0);
+    EXPECT_LT(worstNormalAngle(ball(8, 300.0f, 2000.0 / 300.0), 8), 4.0);
+}
+
+// Beside an occluder the fringe's own stencil reads through the voxel behind it: a fringe above a voxel lying on the
+// ground has snow under it, not the ground's emptiness (the voxel's own stencil reads its layer there instead). A
+// layer of ball_grey's snow (sigma_t h 5) on a ground, its top rising 0.05 (0.03) voxels per voxel so that its
+// lowest voxels lie under fringes 0.25-0.9 (0.5-0.9) as dense: its top normals lean 2.36 (1.43) degrees off the plane
+// at worst; 11.2 (5.4) without the fringe's stencil (main), 3.93 (2.37) with the voxel's clamps on the fringe's. The
+// plane's normal is the oracle.
+TEST(SnowTopology, NormalsOfATiltedLayerOnTheGroundUnderItsFringeFollowItsPlane) {
+    EXPECT_LT(worstTiltedLayerAngle(0.6, 0.05, 5.0), 3.0);
+    EXPECT_LT(worstTiltedLayerAngle(0.9, 0.03, 5.0), 2.0);
+}
+
+}  // namespace firn
