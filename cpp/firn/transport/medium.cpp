@@ -109,7 +109,6 @@ Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
     support_ = std::make_shared<openvdb::BoolTree>(density_->tree(), false, openvdb::TopologyCopy());
     openvdb::tools::dilateActiveValues(*support_, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
     markOccupiedBlocks();
-    countOccupiedBlocks();
 }
 
 void Medium::markOccupiedBlocks() {
@@ -126,58 +125,6 @@ void Medium::markOccupiedBlocks() {
             blockOccupied_[level][(std::size_t(b.x()) * n.y() + b.y()) * n.z() + b.z()] = 1;
         }
     }
-}
-
-void Medium::countOccupiedBlocks() {
-    openvdb::CoordBBox box;
-    support_->evalLeafBoundingBox(box);
-    auto counts = [&](int log2) { return ((box.max() - blocksOrigin_) >> log2) + openvdb::Coord(1); };
-    auto entries = [](const openvdb::Coord &n) { return double(n.x() + 1) * (n.y() + 1) * (n.z() + 1); };
-    const double budget = std::max(double(1 << 20), density_->activeVoxelCount() / double(sizeof(std::uint32_t)));
-    occupiedLog2_ = 3;
-    while (occupiedLog2_ < kBlockLog2[2] && entries(counts(occupiedLog2_)) > budget) ++occupiedLog2_;
-    const openvdb::Coord n = occupiedCounts_ = counts(occupiedLog2_);
-    const std::size_t ny = std::size_t(n.y()) + 1, nz = std::size_t(n.z()) + 1;
-    auto at = [&](int x, int y, int z) -> std::uint32_t & { return occupiedBefore_[(x * ny + y) * nz + z]; };
-    occupiedBefore_.assign((std::size_t(n.x()) + 1) * ny * nz, 0);
-    for (auto leaf = support_->cbeginLeaf(); leaf; ++leaf) {
-        if (leaf->isEmpty()) continue;
-        const openvdb::Coord b = (leaf->origin() - blocksOrigin_) >> occupiedLog2_;
-        at(b.x() + 1, b.y() + 1, b.z() + 1) = 1;
-    }
-    for (int x = 1; x <= n.x(); ++x)  // sums along each axis in turn
-        for (int y = 0; y <= n.y(); ++y)
-            for (int z = 0; z <= n.z(); ++z) at(x, y, z) += at(x - 1, y, z);
-    for (int x = 0; x <= n.x(); ++x)
-        for (int y = 1; y <= n.y(); ++y)
-            for (int z = 0; z <= n.z(); ++z) at(x, y, z) += at(x, y - 1, z);
-    for (int x = 0; x <= n.x(); ++x)
-        for (int y = 0; y <= n.y(); ++y)
-            for (int z = 1; z <= n.z(); ++z) at(x, y, z) += at(x, y, z - 1);
-}
-
-std::uint32_t Medium::occupiedIn(const openvdb::Coord &lo, const openvdb::Coord &hi) const {
-    // Blocks lo..hi clipped to the table, as [a, b) per axis.
-    const openvdb::Coord a = openvdb::Coord::maxComponent((lo - blocksOrigin_) >> occupiedLog2_, openvdb::Coord(0));
-    const openvdb::Coord b = openvdb::Coord::minComponent(((hi - blocksOrigin_) >> occupiedLog2_) + openvdb::Coord(1),
-                                                          occupiedCounts_);
-    if (a.x() >= b.x() || a.y() >= b.y() || a.z() >= b.z()) return 0;
-    const std::size_t ny = std::size_t(occupiedCounts_.y()) + 1, nz = std::size_t(occupiedCounts_.z()) + 1;
-    auto at = [&](int x, int y, int z) { return occupiedBefore_[(x * ny + y) * nz + z]; };
-    return at(b.x(), b.y(), b.z()) - at(a.x(), b.y(), b.z()) - at(b.x(), a.y(), b.z()) - at(b.x(), b.y(), a.z()) +
-           at(a.x(), a.y(), b.z()) + at(a.x(), b.y(), a.z()) + at(b.x(), a.y(), a.z()) - at(a.x(), a.y(), a.z());
-}
-
-bool Medium::clearAlong(const openvdb::math::Ray<double> &ray, double t0, double t1) const {
-    // The cells between the segment's ends, a little more for the rounding of ray(t).
-    constexpr double kMargin = 1e-6;  // cells
-    const Vec3d p0 = ray(t0), p1 = ray(t1);
-    const openvdb::Coord lo = floorCoord(minComponent(p0, p1) - Vec3d(kMargin));
-    const openvdb::Coord hi = floorCoord(maxComponent(p0, p1) + Vec3d(kMargin));
-    if (occupiedIn(lo, hi) == 0) return true;
-    // Halves no shorter than a block: a long segment's box holds much it does not cross.
-    const double half = 0.5 * (t0 + t1);
-    return t1 - t0 > double(2 << occupiedLog2_) && clearAlong(ray, t0, half) && clearAlong(ray, half, t1);
 }
 
 int Medium::clearBlockEdge(const openvdb::Coord &cell) const {
@@ -221,9 +168,9 @@ double Medium::densityAt(const glm::dvec3 &world, Accessor &accessor) const {
     return openvdb::tools::BoxSampler::sample(accessor, Vec3d(ijk.x, ijk.y, ijk.z));
 }
 
-Medium::ColumnMarcher::ColumnMarcher(const Medium &medium, bool countsEveryStep)
+Medium::ColumnMarcher::ColumnMarcher(const Medium &medium)
     : medium_(medium), intersector_(*medium.intersector_), accessor_(medium.accessor()), support_(*medium.support_),
-      cell_(0), countsEveryStep_(countsEveryStep) {
+      cell_(0) {
     openvdb::tools::BoxSampler::getValues(corners_, accessor_, cell_);
 }
 
@@ -257,10 +204,6 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
     double tBoundsIn = 0.0, tBoundsOut = 0.0;
     if (!medium_.clipToBounds(origin, direction, tBoundsIn, tBoundsOut)) return sum * h;
     const double tLast = std::min(tMax, tBoundsOut) / h;  // no snow beyond (index space)
-    // Whether to ask, at the next cell without a leaf, if any snow lies ahead: once the ray has left the leaves
-    // around the snow it met (most sky rays meet none further: three quarters of their steps came after the last
-    // snow), asked again only after it meets snow again.
-    bool lookAhead = !countsEveryStep_;
     for (double t = i * kStep; t < tLast;) {
         ++columnSteps_;
         const double dt = std::min(kLongStep, tLast - t);
@@ -270,14 +213,9 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
             if (leaf->isValueOn(cell)) {
                 sum += densityIn(cell, p) * dt;
                 if (sum > sumLimit) break;
-                lookAhead = !countsEveryStep_;
             }
             t += dt;
             continue;
-        }
-        if (lookAhead) {
-            if (medium_.clearAlong(ray, t + 0.5 * dt, tLast)) break;  // the samples left would add nothing
-            lookAhead = false;
         }
         const int edge = std::max(medium_.clearBlockEdge(cell), int(openvdb::BoolTree::LeafNodeType::DIM));
         const double next = std::max(t + 0.5 * dt, blockExit(ray, cell, edge));

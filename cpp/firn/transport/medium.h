@@ -67,24 +67,19 @@ class Medium {
     using SupportAccessor = openvdb::tree::ValueAccessor<const openvdb::BoolTree>;
     SupportAccessor supportAccessor() const { return SupportAccessor(*support_); }
     int emptyBlockEdge(const openvdb::Coord &cell, SupportAccessor &support) const;
-    // False where a cell that may hold snow could lie along ray(t) for t in [t0, t1] (index space); true where
-    // none does (the blocks around the segment, or around its halves, hold no leaf of the support).
-    bool clearAlong(const openvdb::math::Ray<double> &ray, double t0, double t1) const;
 
     // Integrates the density along rays (kg/m^2), skipping cells and blocks without snow. One per thread
     // (cheap copies).
     class ColumnMarcher {
       public:
-        // `countsEveryStep`: columnSteps() is read as a budget (VisiblePoints), so column() walks on where no
-        // snow lies ahead rather than stop (the count, and the budget's samples, as they were).
-        explicit ColumnMarcher(const Medium &medium, bool countsEveryStep = false);
+        explicit ColumnMarcher(const Medium &medium);
         // The density (kg/m^3) at a point of index space, trilinear as BoxSampler::sample reads it (the same
         // value bit for bit), from the last cell's eight values when the point lies in the same cell: walks in
         // half-voxel steps read each cell about twice.
         double densityAt(const openvdb::Vec3d &ijk) { return densityIn(floorCoord(ijk), ijk); }
         // Mass column between t = 0 and tMax (m) along origin + t * direction (unit), midpoint rule on
         // half-voxel steps while the ray starts in snow, whole-voxel steps beyond; stops once the column exceeds
-        // `limit` (kg/m^2) and returns what it has, or once no cell that may hold snow lies ahead (clearAlong).
+        // `limit` (kg/m^2) and returns what it has.
         double column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double limit);
         // The steps column() has taken so far (each a density read, or a jump over cells without snow): its work
         // in tracking-step equivalents, for a budget (bake_traced_voxels.cpp, planGathering).
@@ -139,7 +134,6 @@ class Medium {
         openvdb::Coord cell_;  // the cell whose eight density values corners_ holds
         float corners_[2][2][2];
         long columnSteps_ = 0;
-        bool countsEveryStep_;
     };
 
   private:
@@ -160,14 +154,6 @@ class Medium {
     openvdb::Coord blocksOrigin_;
     std::array<openvdb::Coord, 3> blockCounts_;
     std::array<std::vector<std::uint8_t>, 3> blockOccupied_;
-    // Blocks of 2^occupiedLog2_ cells (8^3, the support's leaves, unless the table would grow past a byte per
-    // active voxel) from blocksOrigin_: occupiedBefore_[(x * ny + y) * nz + z] counts the occupied blocks below
-    // (x, y, z) on every axis (sizes n + 1), so that any box of blocks is counted in eight reads (clearAlong).
-    void countOccupiedBlocks();
-    std::uint32_t occupiedIn(const openvdb::Coord &lo, const openvdb::Coord &hi) const;  // cells, inclusive
-    int occupiedLog2_ = 3;
-    openvdb::Coord occupiedCounts_;  // blocks per axis
-    std::vector<std::uint32_t> occupiedBefore_;
 };
 
 }  // namespace firn

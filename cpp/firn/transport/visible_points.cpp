@@ -45,7 +45,7 @@ double tentDensity(const glm::dvec3 &e) {
 
 VisiblePoints::VisiblePoints(const Medium &medium, const openvdb::Coord &voxel, const SourceDirections &directions,
                              int candidates)
-    : medium_(medium), marcher_(medium, true), centre_(voxel.x(), voxel.y(), voxel.z()), directions_(directions) {
+    : medium_(medium), marcher_(medium), centre_(voxel.x(), voxel.y(), voxel.z()), directions_(directions) {
     const DirectionWeights visibility = visibilityFrom(medium, marcher_, voxel, directions);
     std::array<double, kSourceDirections> cumulative{};
     double total = 0.0;
