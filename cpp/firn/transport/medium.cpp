@@ -173,8 +173,7 @@ Medium::DensitySampler::DensitySampler(const Medium &medium) : accessor_(medium.
 }
 
 Medium::ColumnMarcher::ColumnMarcher(const Medium &medium)
-    : medium_(medium), intersector_(*medium.intersector_), density_(medium), support_(*medium.support_),
-      leafOrigin_(0), leaf_(support_.probeConstLeaf(leafOrigin_)) {}
+    : medium_(medium), intersector_(*medium.intersector_), density_(medium), support_(*medium.support_) {}
 
 double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax,
                                      double limit) {
@@ -211,7 +210,7 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
         const double dt = std::min(kLongStep, tLast - t);
         const Vec3d p = ray(t + 0.5 * dt);
         const openvdb::Coord cell = floorCoord(p);
-        if (const openvdb::BoolTree::LeafNodeType *leaf = supportLeaf(cell)) {
+        if (const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell)) {
             if (leaf->isValueOn(cell)) {
                 sum += density_.in(cell, p) * dt;
                 if (sum > sumLimit) break;
@@ -230,7 +229,7 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
 int Medium::ColumnMarcher::lastEmptySample(const openvdb::math::Ray<double> &ray, const Vec3d &p, double t0, double dt,
                                            int i, int steps) {
     const openvdb::Coord cell = floorCoord(p);
-    const openvdb::BoolTree::LeafNodeType *leaf = supportLeaf(cell);
+    const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell);
     const int edge = leaf ? firn::emptyBlockEdge(leaf->getValueMask(), cell) : int(openvdb::BoolTree::LeafNodeType::DIM);
     if (edge == 0) return i - 1;
     if (edge == 1) return i;

@@ -141,20 +141,10 @@ class Medium {
         int lastEmptySample(const openvdb::math::Ray<double> &ray, const openvdb::Vec3d &p, double t0, double dt, int i,
                             int steps);
 
-        // The support's leaf holding `cell` (null: none), the last one's kept: walks read each leaf's cells in
-        // turn, and the accessor's look-up was a call per step.
-        const openvdb::BoolTree::LeafNodeType *supportLeaf(const openvdb::Coord &cell) {
-            const openvdb::Coord origin = cell & ~int(openvdb::BoolTree::LeafNodeType::DIM - 1);
-            if (origin != leafOrigin_) leafOrigin_ = origin, leaf_ = support_.probeConstLeaf(origin);
-            return leaf_;
-        }
-
         const Medium &medium_;
         openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0> intersector_;
         DensitySampler density_;
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> support_;
-        openvdb::Coord leafOrigin_;  // the origin of the leaf (or empty block) leaf_ is for
-        const openvdb::BoolTree::LeafNodeType *leaf_;
         long columnSteps_ = 0;
     };
 
