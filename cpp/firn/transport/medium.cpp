@@ -168,11 +168,12 @@ double Medium::densityAt(const glm::dvec3 &world, Accessor &accessor) const {
     return openvdb::tools::BoxSampler::sample(accessor, Vec3d(ijk.x, ijk.y, ijk.z));
 }
 
-Medium::ColumnMarcher::ColumnMarcher(const Medium &medium)
-    : medium_(medium), intersector_(*medium.intersector_), accessor_(medium.accessor()), support_(*medium.support_),
-      cell_(0) {
+Medium::DensitySampler::DensitySampler(const Medium &medium) : accessor_(medium.accessor()), cell_(0) {
     openvdb::tools::BoxSampler::getValues(corners_, accessor_, cell_);
 }
+
+Medium::ColumnMarcher::ColumnMarcher(const Medium &medium)
+    : medium_(medium), intersector_(*medium.intersector_), density_(medium), support_(*medium.support_) {}
 
 double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax,
                                      double limit) {
@@ -211,7 +212,7 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
         const openvdb::Coord cell = floorCoord(p);
         if (const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell)) {
             if (leaf->isValueOn(cell)) {
-                sum += densityIn(cell, p) * dt;
+                sum += density_.in(cell, p) * dt;
                 if (sum > sumLimit) break;
             }
             t += dt;

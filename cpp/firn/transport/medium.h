@@ -68,15 +68,37 @@ class Medium {
     SupportAccessor supportAccessor() const { return SupportAccessor(*support_); }
     int emptyBlockEdge(const openvdb::Coord &cell, SupportAccessor &support) const;
 
+    // The density (kg/m^3) at points of index space, trilinear as BoxSampler::sample reads it (densityAt: the same
+    // value bit for bit), from the last cell's eight values when a point lies in the same cell: walks in half-voxel
+    // steps read each cell about twice, tracking through dense snow (steps of a mean free path) a dozen times.
+    // One per thread.
+    class DensitySampler {
+      public:
+        explicit DensitySampler(const Medium &medium);
+        double at(const openvdb::Vec3d &ijk) { return in(floorCoord(ijk), ijk); }
+        double at(const glm::dvec3 &ijk) { return at(openvdb::Vec3d(ijk.x, ijk.y, ijk.z)); }
+        // `cell`: floorCoord(ijk).
+        double in(const openvdb::Coord &cell, const openvdb::Vec3d &ijk) {
+            if (cell != cell_) {
+                cell_ = cell;
+                openvdb::tools::BoxSampler::getValues(corners_, accessor_, cell);
+            }
+            return openvdb::tools::BoxSampler::trilinearInterpolation(corners_, ijk - cell.asVec3d());
+        }
+
+      private:
+        Accessor accessor_;
+        openvdb::Coord cell_;  // the cell whose eight density values corners_ holds
+        float corners_[2][2][2];
+    };
+
     // Integrates the density along rays (kg/m^2), skipping cells and blocks without snow. One per thread
     // (cheap copies).
     class ColumnMarcher {
       public:
         explicit ColumnMarcher(const Medium &medium);
-        // The density (kg/m^3) at a point of index space, trilinear as BoxSampler::sample reads it (the same
-        // value bit for bit), from the last cell's eight values when the point lies in the same cell: walks in
-        // half-voxel steps read each cell about twice.
-        double densityAt(const openvdb::Vec3d &ijk) { return densityIn(floorCoord(ijk), ijk); }
+        // The density (kg/m^3) at a point of index space (DensitySampler).
+        double densityAt(const openvdb::Vec3d &ijk) { return density_.at(ijk); }
         // Mass column between t = 0 and tMax (m) along origin + t * direction (unit), midpoint rule on
         // half-voxel steps while the ray starts in snow, whole-voxel steps beyond; stops once the column exceeds
         // `limit` (kg/m^2) and returns what it has.
@@ -112,14 +134,6 @@ class Medium {
         }
 
       private:
-        double densityIn(const openvdb::Coord &cell, const openvdb::Vec3d &ijk) {
-            if (cell != cell_) {
-                cell_ = cell;
-                openvdb::tools::BoxSampler::getValues(corners_, accessor_, cell);
-            }
-            return openvdb::tools::BoxSampler::trilinearInterpolation(corners_, ijk - cell.asVec3d());
-        }
-
         // Samples ray(t0 + (j + 0.5) dt) of a walk (index space): if sample i, at p, lies in a cell without
         // snow, the last sample j >= i (below `steps`) still inside the largest empty aligned block (8^3, 4^3,
         // 2^3 or the cell) that holds p, so that the walk goes on after it; else i - 1. The samples skipped
@@ -129,10 +143,8 @@ class Medium {
 
         const Medium &medium_;
         openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0> intersector_;
-        Accessor accessor_;
+        DensitySampler density_;
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> support_;
-        openvdb::Coord cell_;  // the cell whose eight density values corners_ holds
-        float corners_[2][2][2];
         long columnSteps_ = 0;
     };
 

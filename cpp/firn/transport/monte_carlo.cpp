@@ -74,7 +74,7 @@ class PathTracer {
         : skipEmpty_(skipEmpty),
           scene_(reference.scene()),
           medium_(*scene_.medium),
-          accessor_(medium_.accessor()),
+          density_(medium_),
           support_(medium_.supportAccessor()),
           k_(medium_.optics().extinctionPerDensity),
           sigmaBar_(std::max(medium_.maxSigmaT(), 1e-12)),
@@ -181,7 +181,7 @@ class PathTracer {
         }
     }
 
-    double sigmaT(const glm::dvec3 &p) { return k_ * medium_.densityAt(p, accessor_); }
+    double sigmaT(const glm::dvec3 &p) { return k_ * density_.at(medium_.worldToIndex(p)); }
 
     // Whether p lies inside a closed occluder (the snow's surface mesh under thrown lumps, a body): no light
     // reaches there, and a path started there bounces off the inside until roulette (some 700 times at the
@@ -312,7 +312,7 @@ class PathTracer {
     bool skipEmpty_;
     const Scene &scene_;
     const Medium &medium_;
-    Medium::Accessor accessor_;
+    Medium::DensitySampler density_;  // tracking reads each cell many times
     Medium::SupportAccessor support_;
     double k_, sigmaBar_;
     const SourceDirections &directions_;  // where the source is gathered besides its moments (sourceIn)

@@ -48,6 +48,37 @@ TEST(Medium, MarchIntegratesEverySnowyCell) {
     EXPECT_GT(snowyRays, 50);  // the rays do cross snow
 }
 
+// Tracking reads the density through DensitySampler, the last cell's eight values kept: it must read what
+// Medium::densityAt (OpenVDB's BoxSampler, the one definition of the density) reads, bit for bit, whether a point
+// lies in the last cell, a new one, or one read before. Oracle: Medium::densityAt itself.
+TEST(Medium, DensitySamplerReadsAsDensityAtBitForBit) {
+    constexpr double kVoxel = 0.02;  // m
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    density->transform().postTranslate(openvdb::Vec3d(0.013, -0.4, 1.7));  // an origin off the voxel lattice
+    Rng rng(11, 0);
+    auto acc = density->getAccessor();
+    for (int x = 0; x < 12; ++x)
+        for (int y = 0; y < 12; ++y)
+            for (int z = 0; z < 12; ++z)
+                if (rng.uniform() < 0.6) acc.setValue(openvdb::Coord(x, y, z), float(300.0 * rng.uniform()));
+    const Medium medium(density, VolumeOptics{10.0, Rgb(0.99), 0.8});
+    Medium::DensitySampler sampler(medium);
+    Medium::Accessor read = medium.accessor();
+    int snowy = 0;
+    for (int r = 0; r < 200; ++r) {
+        glm::dvec3 p = medium.indexToWorld(glm::dvec3(-1.0) + 14.0 * glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()));
+        const glm::dvec3 w = sampleUniformCone(glm::dvec3(0.0, 0.0, 1.0), -1.0, rng.uniform(), rng.uniform());
+        for (int i = 0; i < 40; ++i) {  // steps of up to half a voxel, back and forth: cells kept, left and met again
+            p += (i % 7 == 6 ? -2.0 : 1.0) * 0.5 * kVoxel * rng.uniform() * w;
+            const double expected = medium.densityAt(p, read);
+            EXPECT_EQ(sampler.at(medium.worldToIndex(p)), expected) << "ray " << r << " step " << i;
+            snowy += expected > 0.0;
+        }
+    }
+    EXPECT_GT(snowy, 2000);  // most points read snow
+}
+
 // Column steps over air a whole block of 8^3 to 64^3 cells at a time: rays from one lump of snow to another
 // 150 voxels away, across empty 64^3 blocks, must still count both lumps. Oracle: the midpoint rule on steps of
 // 1/64 voxel along the whole ray, reading the density everywhere.
