@@ -36,7 +36,7 @@ using bake::ChannelStorage, bake::ChannelSystem, bake::GatheringPlan, bake::Grid
 using bake::addFaceSources, bake::assemble, bake::gridValues, bake::lightTracedAtGatheringCost, bake::lightTraceSources,
     bake::makeGrids, bake::planGathering, bake::referenceSurface, bake::snowIrradiance, bake::sourceFunction,
     bake::sourceGrid, bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
-using bake::kWholePieceTracedSteps;
+using bake::kMaxTracedSteps, bake::kWholePieceTracedSteps;
 
 namespace {
 
@@ -48,9 +48,9 @@ constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
 constexpr double kSendBackWorthPasses = 0.15;
 
 Preset resolve(const BakeSettings &s) {
-    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true}
-               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true}
-                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false};
+    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true, 0.25}
+               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true, 1.0}
+                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false, 1.0};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
     // Conjugate gradients in double precision stall near 1e-15: asked for less, it iterated on a residual of
@@ -322,7 +322,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                         if (plan.paths > 0 || thin.empty())
                             traced = traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress);
                         else if (settings.lightTracing)
-                            traced = lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
+                            traced = lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local,
+                                                       kMaxTracedSteps, preset.lightTracingShare);
                         if (plan.paths > 0)
                             addFaceSources(scene, topo, thin, plan, settings.seed ^ 0xFACEull, progress, traced);
                     }
