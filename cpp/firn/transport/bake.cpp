@@ -301,11 +301,11 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 const SubProgress progress = beside.step(1);
                 TracedSnow snow = thinVoxels(*scene.medium, topo);
                 thin = std::move(snow.thin);
-                // Light tracing in place of the diffusion where gathering per voxel is over the budget; its other
-                // two uses (transport-thin pieces whole, forward snow at the gathering's cost) were measured without
-                // occluders only: with occluders the diffusion and the gathering keep those voxels, as before.
-                const bool lightTracingBesides = settings.lightTracing && scene.occluders->empty();
-                if (lightTracingBesides && !snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole
+                // Light tracing in place of the diffusion where gathering per voxel is over the budget, and its other
+                // two uses (transport-thin pieces whole, forward snow at the gathering's cost), with occluders as
+                // without (branch trace-quality: over a ground, on a closed box, under a shading plate, as right or
+                // better than the diffusion and the gathering; docs/bake.md Method 3).
+                if (settings.lightTracing && !snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole
                     std::vector<openvdb::Coord> whole = thin;
                     whole.insert(whole.end(), snow.wholePieces.begin(), snow.wholePieces.end());
                     traced = lightTraceSources(scene, whole, settings.seed ^ 0x7EACEull, progress, local,
@@ -314,7 +314,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 }
                 if (traced.source.empty()) {
                     const GatheringPlan plan = planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull);
-                    if (lightTracingBesides)
+                    if (settings.lightTracing)
                         traced =
                             lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);
                     if (traced.source.empty()) {
