@@ -13,9 +13,9 @@ as /work/draft/spraybake/measure.py); "above", looking down on the snow beside a
 shadow on the snow; the lumps and the snow in view). Rows besides Bake Sequence's: the lumps' part of the joint
 medium's bake (their paths enter the snow: the bake's budget leaves them untraced), the lumps baked alone (no
 snow under them: what the bake gave before) and the tracked snow baked alone (what Bake Sequence baked before).
---dense: the skier sample's lumps instead (1 cm voxels; dense()). --quality: the bakes' (DRAFT light traces within a
-quarter of FINAL's budget: docs/spray.md "Light"). Bake times are processor seconds (stats["cpu_seconds"], all phases): compare those, as wall seconds vary with the
-machine's load. The references are kept in the folder (same seeds: the same values) for the next run.
+--dense: the skier sample's lumps instead (1 cm voxels; dense()). --quality: the bakes' (DRAFT light traces a quarter
+of FINAL's photons: docs/spray.md "Light"). Bake times are processor seconds (stats["cpu_seconds"], all phases):
+compare those, as wall seconds vary with the machine's load. The references are kept in the folder (same seeds: the same values) for the next run.
 """
 
 import argparse
