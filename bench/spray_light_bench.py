@@ -7,14 +7,15 @@ Carlo of lumps and snow as one medium (firncore.monte_carlo_radiance of firncore
 Henyey-Greenstein phase function, none of the bake's approximations).
 
 PYTHONPATH=build/python /usr/bin/python3 bench/spray_light_bench.py [--samples 256] [--above-samples 64]
-    [--pixels 48] [--adaptivity 0.5] [--folder DIR] [--dense]
+    [--pixels 48] [--adaptivity 0.5] [--folder DIR] [--dense] [--quality FINAL]
 Views (orthographic): "side", from -y over the spray above the snow (the lumps alone in view; 4 x 4-pixel blocks
 as /work/draft/spraybake/measure.py); "above", looking down on the snow beside and under the spray (the spray's
 shadow on the snow; the lumps and the snow in view). Rows besides Bake Sequence's: the lumps' part of the joint
 medium's bake (their paths enter the snow: the bake's budget leaves them untraced), the lumps baked alone (no
 snow under them: what the bake gave before) and the tracked snow baked alone (what Bake Sequence baked before).
---dense: the skier sample's lumps instead (1 cm voxels; dense()). Bake times are processor seconds (stats["cpu_seconds"], all phases): compare those, as wall seconds vary with the
-machine's load. The references are kept in the folder (same seeds: the same values) for the next run.
+--dense: the skier sample's lumps instead (1 cm voxels; dense()). --quality: the bakes' (DRAFT light traces a quarter
+of FINAL's photons: docs/spray.md "Light"). Bake times are processor seconds (stats["cpu_seconds"], all phases):
+compare those, as wall seconds vary with the machine's load. The references are kept in the folder (same seeds: the same values) for the next run.
 """
 
 import argparse
@@ -93,9 +94,10 @@ def dense(args, folder):
     voxel = firncore.grid_statistics(tracked, "surface")["voxel_size"]
     surface = firncore.snow_surface_mesh(tracked, adaptivity=args.adaptivity, isovalue=-voxel)
     occluders = [(*surface, OPTICS.white_sky_albedo)]
-    print("bake (FINAL, seed 0):")
+    print(f"bake ({args.quality}, seed 0):")
     timed("lumps over the snow surface", lambda: firncore.bake(spray, OPTICS, suns=SUNS, sky=SKY, occluders=occluders,
-                                                                output_path=path("lit_spray.vdb")))
+                                                                output_path=path("lit_spray.vdb"),
+                                                                quality=args.quality))
     origins, directions, shape = view("side", args.pixels)
     references = []
     for seed in (1, 2):
@@ -118,6 +120,7 @@ def main():
     parser.add_argument("--pixels", type=int, default=48, help="columns of a view (rows: half)")
     parser.add_argument("--folder", default=None, help="keep the files here (default: a temporary folder)")
     parser.add_argument("--dense", action="store_true", help="the skier sample's lumps instead (see dense())")
+    parser.add_argument("--quality", default="FINAL", choices=("DRAFT", "FINAL"), help="of every bake")
     args = parser.parse_args()
     folder = args.folder or tempfile.mkdtemp(prefix="firn_spray_light_")
     os.makedirs(folder, exist_ok=True)
@@ -126,9 +129,10 @@ def main():
     tracked, spray = ski_spray(folder, firncore.SpraySettings(seed=5))
     path = lambda name: os.path.join(folder, name)
     print(f"frame {FRAMES}: lumps {firncore.spray_frame_paths(folder, FRAMES)[0]}")
-    print("bakes (FINAL, seed 0):")
+    quality = args.quality
+    print(f"bakes ({quality}, seed 0):")
     timed("tracked snow, lumps in it", lambda: firncore.bake_joint(
-        [tracked, spray], [path("lit_snow.vdb"), None], OPTICS, suns=SUNS, sky=SKY))
+        [tracked, spray], [path("lit_snow.vdb"), None], OPTICS, suns=SUNS, sky=SKY, quality=quality))
     start = time.time()
     voxel = firncore.grid_statistics(tracked, "surface")["voxel_size"]
     surface = firncore.snow_surface_mesh(tracked, adaptivity=args.adaptivity, isovalue=-voxel)
@@ -136,14 +140,15 @@ def main():
           f"(adaptivity {args.adaptivity})")
     timed("lumps over the snow surface", lambda: firncore.bake(
         spray, OPTICS, suns=SUNS, sky=SKY, occluders=[(*surface, OPTICS.white_sky_albedo)],
-        output_path=path("lit_spray.vdb")))
+        output_path=path("lit_spray.vdb"), quality=quality))
     timed("lumps in the joint medium", lambda: firncore.bake_joint(
-        [tracked, spray], [None, path("joint_spray.vdb")], OPTICS, suns=SUNS, sky=SKY))
-    timed("lumps alone", lambda: firncore.bake(spray, OPTICS, suns=SUNS, sky=SKY, output_path=path("alone.vdb")))
+        [tracked, spray], [None, path("joint_spray.vdb")], OPTICS, suns=SUNS, sky=SKY, quality=quality))
+    timed("lumps alone", lambda: firncore.bake(spray, OPTICS, suns=SUNS, sky=SKY, output_path=path("alone.vdb"),
+                                               quality=quality))
     timed("tracked snow alone", lambda: firncore.bake(tracked, OPTICS, suns=SUNS, sky=SKY,
-                                                       output_path=path("snow_alone.vdb")))
+                                                       output_path=path("snow_alone.vdb"), quality=quality))
     firncore.union_density([tracked, spray], path("union.vdb"))
-    firncore.bake(path("union.vdb"), OPTICS, suns=SUNS, sky=SKY, output_path=path("union_lit.vdb"))
+    firncore.bake(path("union.vdb"), OPTICS, suns=SUNS, sky=SKY, output_path=path("union_lit.vdb"), quality=quality)
     for name, samples in (("side", args.samples), ("above", args.above_samples)):
         origins, directions, shape = view(name, args.pixels)
         start = time.time()

@@ -205,7 +205,7 @@ def _get_bake_state(self):
 
 
 BAKE_QUALITY_ITEMS = (
-    ("DRAFT", "Draft", "Fewer sky and shadow rays, a looser solve: quick previews"),
+    ("DRAFT", "Draft", "Fewer sky and shadow rays and light-traced photons, a looser solve: quick previews"),
     ("FINAL", "Final", "The full-accuracy solve: for renders"),
     ("REFERENCE", "Reference", "Surface voxels by brute-force Monte Carlo: slow, for checking and small scenes"),
 )

@@ -283,6 +283,22 @@ def test_layer_thin_in_transport_mean_free_paths_is_traced_whole(folder):
     assert abs(result["view_bias"][0]) < 0.05, result["view_bias"]
 
 
+def test_layer_thin_in_transport_mean_free_paths_over_the_ground_is_traced_whole_too(folder):
+    # slab_thin's layer 1 cm over a grey ground (albedo 0.5), seen from above. Until branch trace-quality any occluder
+    # kept light tracing's two other uses off (transport-thin pieces traced whole, forward snow at the gathering's
+    # cost: measured without occluders only), and the diffusion took the layer: against 4096 paths per block, seeds
+    # 0-2, 9.0, 9.2, 9.0 % per block, from (0, 60) -9 % each; traced whole 5.9, 5.7, 6.0 %, -2, -1, -2 % (docs/bake.md
+    # Method 3). Against these 1024 paths (noise 3.6 % per block): diffused 9.0 %, from above -8.5 %; traced whole
+    # 6.2 %, -1.8 %.
+    c = case("slab_thin")
+    c.occluders = [bake_suite.plate(-1.0, 2.0, -1.0, 2.0, 0.005, (0.5, 0.5, 0.5))]  # the layer's bottom at 0.015 m
+    c.views, c.samples = [(0, 60), (90, 75), (180, 50)], 1024
+    result = bake_suite.run_case(c, folder, cache=None)
+    assert result["traced"] == int((c.density > 0).sum())
+    assert abs(result["view_bias"][0]) < 0.05, result["view_bias"]
+    assert result["mean"] < 0.075, result["mean"]
+
+
 def test_layer_of_optically_thick_voxels_keeps_the_diffusion(folder):
     # slab_thin's layer with voxels of optical depth 3 (omega 0.99, g 0.6; sigma_tr h 1.2, 1.8 transport mean free
     # paths deep): a voxel's mean source is no longer what a camera sees of its first optical depth. Against 4096
@@ -588,11 +604,25 @@ def test_lumps_over_the_snows_surface_mesh_too_many_to_gather_are_light_traced(t
                                               **light)[0]
     baked = firncore.render_baked(lit, spray_bench.OPTICS, origins, directions)
     assert baked.sum() / reference.sum() == pytest.approx(1.0, abs=0.12)
+    # DRAFT, a preview, traces a quarter of the photons (bake.cpp, Preset::lightTracingShare; until branch
+    # trace-quality as many as FINAL: the bench's lumps 9.9 processor s at either quality, now 2.7, 8.9 -> 10.6 % per
+    # block off) and stays within the same bound: 394,009 photons against 1,632,609, +4.0 % (FINAL +4.9 %).
+    draft = firncore.bake(spray, spray_bench.OPTICS, output_path=lit, quality="DRAFT", **light)
+    assert draft["light_traced_voxels"] == lumps
+    assert 0 < draft["photons"] < stats["photons"] / 2
+    baked = firncore.render_baked(lit, spray_bench.OPTICS, origins, directions)
+    assert baked.sum() / reference.sum() == pytest.approx(1.0, abs=0.12)
     # The joint bake of the tracked snow with the lumps in it (Bake Sequence's other bake) light traces 628 of the
     # lumps' voxels (docs/spray.md "Light", 17.8 processor s); light_tracing=False keeps its diffusion (0.7 s).
     joint = firncore.bake_joint([tracked, spray], [None, None], spray_bench.OPTICS,
                                 suns=spray_bench.SUNS, sky=spray_bench.SKY, light_tracing=False)
     assert joint["light_traced_voxels"] == joint["photons"] == 0
+    # At DRAFT it light traces them with a quarter of FINAL's photons, under the least FINAL accepts (65,536): that
+    # least scales with the share, else the diffusion took them and the snow with the lumps seen from above read
+    # 29.8 % per block off instead of 13.1 % (FINAL 10.2 %; docs/spray.md "Light").
+    joint = firncore.bake_joint([tracked, spray], [None, None], spray_bench.OPTICS,
+                                suns=spray_bench.SUNS, sky=spray_bench.SKY, quality="DRAFT")
+    assert 0 < joint["photons"] < 65536 and joint["light_traced_voxels"] > 0
 
 
 def test_a_lone_lumps_sharp_edges_return_the_grazing_sun_forwards(tmp_path):

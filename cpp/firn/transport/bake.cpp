@@ -36,7 +36,7 @@ using bake::ChannelStorage, bake::ChannelSystem, bake::GatheringPlan, bake::Grid
 using bake::addFaceSources, bake::assemble, bake::gridValues, bake::lightTracedAtGatheringCost, bake::lightTraceSources,
     bake::makeGrids, bake::planGathering, bake::referenceSurface, bake::snowIrradiance, bake::sourceFunction,
     bake::sourceGrid, bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
-using bake::kWholePieceTracedSteps;
+using bake::kMaxTracedSteps, bake::kWholePieceTracedSteps;
 
 namespace {
 
@@ -48,9 +48,9 @@ constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
 constexpr double kSendBackWorthPasses = 0.15;
 
 Preset resolve(const BakeSettings &s) {
-    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true}
-               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true}
-                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false};
+    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true, 0.25}
+               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true, 1.0}
+                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false, 1.0};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
     // Conjugate gradients in double precision stall near 1e-15: asked for less, it iterated on a residual of
@@ -301,20 +301,23 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 const SubProgress progress = beside.step(1);
                 TracedSnow snow = thinVoxels(*scene.medium, topo);
                 thin = std::move(snow.thin);
-                // Light tracing in place of the diffusion where gathering per voxel is over the budget; its other
-                // two uses (transport-thin pieces whole, forward snow at the gathering's cost) were measured without
-                // occluders only: with occluders the diffusion and the gathering keep those voxels, as before.
-                const bool lightTracingBesides = settings.lightTracing && scene.occluders->empty();
-                if (lightTracingBesides && !snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole
+                // Light tracing in place of the diffusion where gathering per voxel is over the budget, and its other
+                // two uses (transport-thin pieces whole, forward snow at the gathering's cost), with occluders as
+                // without (branch trace-quality: over a ground, on a closed box, under a shading plate, better on the
+                // mean per block than the diffusion and the gathering; not everywhere: slab_thin over the ground's
+                // third view -7 -> -10 %, ball_thin_forward over it seed 2 6.9 -> 7.3 %; docs/bake.md Method 3).
+                // Draft traces Preset::lightTracingShare of the photons here and over the budget; at the gathering's
+                // cost, what Draft's gathering costs.
+                if (settings.lightTracing && !snow.wholePieces.empty()) {  // transport-thin pieces: light traced whole
                     std::vector<openvdb::Coord> whole = thin;
                     whole.insert(whole.end(), snow.wholePieces.begin(), snow.wholePieces.end());
                     traced = lightTraceSources(scene, whole, settings.seed ^ 0x7EACEull, progress, local,
-                                               kWholePieceTracedSteps);
+                                               kWholePieceTracedSteps, preset.lightTracingShare);
                     if (!traced.source.empty()) thin = std::move(whole);
                 }
                 if (traced.source.empty()) {
                     const GatheringPlan plan = planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull);
-                    if (lightTracingBesides)
+                    if (settings.lightTracing)
                         traced =
                             lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);
                     if (traced.source.empty()) {
@@ -322,7 +325,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                         if (plan.paths > 0 || thin.empty())
                             traced = traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress);
                         else if (settings.lightTracing)
-                            traced = lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local);
+                            traced = lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local,
+                                                       kMaxTracedSteps, preset.lightTracingShare);
                         if (plan.paths > 0)
                             addFaceSources(scene, topo, thin, plan, settings.seed ^ 0xFACEull, progress, traced);
                     }

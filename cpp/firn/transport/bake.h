@@ -10,7 +10,7 @@
 namespace firn {
 
 enum class BakeQuality {
-    Draft,      // fewer sky and shadow rays, looser solve: for previews
+    Draft,      // fewer sky and shadow rays and photons, looser solve: for previews
     Final,      // the diffusion solve at full accuracy
     Reference,  // surface voxels by brute-force Monte Carlo (slow; for checking and small scenes)
 };

@@ -42,8 +42,9 @@ namespace {
 // the voxels): gathered per voxel, the backward tail of g 0.9 snow's source is too noisy to fit (1024 paths per
 // voxel 13.1 %, bias -9.5 %; 8192 paths 8.6 %, -4.6 %, at 29 processor s), light traced 7.2 %, bias -2.3 % at
 // 5.4 processor s (docs/bake.md, Accuracy), within a quarter of the budget (kWholePieceTracedSteps) 7.8 %, -2.7 %
-// at 1.4 (a tenth: 8.7 %, -4.2 %). Where light tracing is not used (occluders, lamps, over that budget) they are
-// diffused as before. Layers have no inside either: a piece none of whose voxels lies kMaxTracedPieceDepth
+// at 1.4 (a tenth: 8.7 %, -4.2 %); Draft a quarter of that (Preset::lightTracingShare; its seeds 0-1 9.4, 9.8 % at
+// 0.35-0.41 processor s against 8.0, 7.5 % at 1.4-1.5). Where light tracing is not used (lamps, over that budget)
+// they are diffused as before. Layers have no inside either: a piece none of whose voxels lies kMaxTracedPieceDepth
 // transport mean free paths deep (axisDepth: to the air along an axis; a slab up to 5 thick) is traced whole too,
 // however wide, where all its voxels are optically thinner than kTracedLayerOpticalDepth and absorb less than
 // kTracedLayerAbsorptionDepth each (sigma_a h in the most absorbing channel). Measured on 24 x 24 slabs of 3 voxels

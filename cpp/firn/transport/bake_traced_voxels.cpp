@@ -314,9 +314,9 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
 // (light_tracing.h); none where even that costs too much (a cloud of lumps inside thick snow: photons
 // scatter thousands of times there), or with lamps (their emission is not sampled: planLightTracing).
 MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
-                                   const SubProgress &progress, BakeStats &stats, double budget) {
+                                   const SubProgress &progress, BakeStats &stats, double budget, double share) {
     const MonteCarloReference reference(scene);
-    const LightTracingPlan plan = planLightTracing(reference, voxels, budget, seed);
+    const LightTracingPlan plan = planLightTracing(reference, voxels, budget, seed, share);
     if (plan.photons == 0) return MonteCarloVoxels{};
     const std::vector<SourceEstimate> estimates = lightTracedSources(reference, voxels, plan, seed, progress);
     stats.photons = plan.photons, stats.lightTracedVoxels = voxels.size(), stats.lightTracingBytes = plan.sumsBytes;

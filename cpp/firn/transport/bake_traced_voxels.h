@@ -73,9 +73,11 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
                     const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced);
 
-// The voxels' sources light traced within `budget` tracking steps; none (empty) where that is not affordable.
+// The voxels' sources light traced within `share` of `budget` tracking steps (planLightTracing); none (empty) where
+// that is not affordable.
 MonteCarloVoxels lightTraceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, std::uint64_t seed,
-                                   const SubProgress &progress, BakeStats &stats, double budget = kMaxTracedSteps);
+                                   const SubProgress &progress, BakeStats &stats, double budget = kMaxTracedSteps,
+                                   double share = 1.0);
 
 // Forward scattering snow light traced at what gathering it costs; none (empty) where that does not apply.
 MonteCarloVoxels lightTracedAtGatheringCost(const Scene &scene, const std::vector<openvdb::Coord> &voxels,

@@ -274,7 +274,7 @@ openvdb::Int32Tree voxelIndex(const std::vector<openvdb::Coord> &voxels) {
 }  // namespace
 
 LightTracingPlan planLightTracing(const MonteCarloReference &reference, const std::vector<openvdb::Coord> &voxels,
-                                  double maxSteps, std::uint64_t seed) {
+                                  double maxSteps, std::uint64_t seed, double share) {
     // Fewer photons per voxel than kMinPhotonsPerVoxel and the lobes fitted to their noisy moments are biased
     // bright (the skier's lumps on 1 cm voxels, bench/spray_light_bench.py --dense: 10, 39, 280 photons per voxel
     // read 25.4, 18.2, 10.9 % per block, bias +15.2, +7.2, +6.8 %, where the diffusion gave 8.2 %, -2.2 %).
@@ -290,6 +290,7 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
     // points (PathTracer::enclosed).
     LightTracingPlan plan;
     if (voxels.empty() || !reference.scene().lamps.empty()) return plan;
+    const double budget = share * maxSteps;  // tracking steps
     double beamSteps = 0.0;
     for (int k = 0; k < kPilotVoxels; ++k) {
         const std::size_t v = voxels.size() * k / kPilotVoxels;
@@ -297,7 +298,7 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
             double(reference.sourceIn(voxels[v], kPilotSamples, seed ^ kBeamSeed, v, Gathering::BeamsOnly).steps);
     }
     const double perBeamSample = std::max(beamSteps / (kPilotVoxels * kPilotSamples), 1.0);
-    plan.beamSamples = std::clamp(int(kBeamShare * maxSteps / (perBeamSample * double(voxels.size()))),
+    plan.beamSamples = std::clamp(int(kBeamShare * budget / (perBeamSample * double(voxels.size()))),
                                   kMinBeamSamples, kMaxBeamSamples);
     // The pilot's photons in parallel pieces (its sums dropped); what the pilots cost comes out of the budget.
     constexpr long kPilotPieces = 8;
@@ -312,11 +313,12 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
     });
     const double pilotSteps = double(std::accumulate(pieceSteps.begin(), pieceSteps.end(), 0L));
     const double perPhoton = pilotSteps / kPilotPhotons + kStepsPerPhoton;
-    const double photonSteps = maxSteps - beamSteps - pilotSteps - kStepsPerPhoton * kPilotPhotons -
+    const double photonSteps = budget - beamSteps - pilotSteps - kStepsPerPhoton * kPilotPhotons -
                                perBeamSample * plan.beamSamples * double(voxels.size());
     plan.photons = long(std::min(double(kMaxPhotons), std::max(photonSteps, 0.0) / perPhoton));
     plan.sumsBytes = voxels.size() * (sizeof(ArrivingLight) + sizeof(std::int32_t)) + fittedCount(towardSlot) * sizeof(ArrivingToward);
-    if (plan.photons < std::max(double(kMinPhotons), kMinPhotonsPerVoxel * double(voxels.size()))) plan = LightTracingPlan{};
+    if (plan.photons < std::max(share * double(kMinPhotons), kMinPhotonsPerVoxel * double(voxels.size())))
+        plan = LightTracingPlan{};
     return plan;
 }
 

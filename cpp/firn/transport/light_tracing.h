@@ -30,9 +30,12 @@ struct LightTracingPlan {
     std::size_t sumsBytes = 0;  // the voxels' sums photons add to (ArrivingLight; ArrivingToward where fitted by direction)
 };
 
-// The photons and beam points that `maxSteps` tracking steps buy, measured on a pilot of both.
+// The photons and beam points that `share` of `maxSteps` tracking steps buy, measured on a pilot of both; none where
+// fewer photons than `share` of the least (kMinPhotons), or than kMinPhotonsPerVoxel, are affordable. A share under
+// 1 scales the plan down for a preview (BakeQuality::Draft): photons and floor alike, where the per-voxel floor
+// (the lobes' bias) stays.
 LightTracingPlan planLightTracing(const MonteCarloReference &reference, const std::vector<openvdb::Coord> &voxels,
-                                  double maxSteps, std::uint64_t seed);
+                                  double maxSteps, std::uint64_t seed, double share = 1.0);
 
 // The source estimates of `voxels` (as sourceIn's), by light tracing.
 std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &reference,
