@@ -56,9 +56,9 @@ TEST(OutsideShare, CountsAClosedOccluderThinnerThanAVoxel) {
 
 // Faces on the planes of the voxel's cube and of its eighths cut none of them: each lies wholly on one side, exact.
 TEST(OutsideShare, IsExactForFacesOnTheCubesPlanes) {
-X
-    EXPECT_EQ(shares(blockOverABox(-0.5f, 0.01f), 0.5, 1).mean, 0.5);    // its top through the centre
-    EXPECT_EQ(shares(blockOverABox(-0.5f, 0.015f), 0.0, 1).mean, 0.0);   // the cube wholly inside
+    EXPECT_EQ(shares(blockOverABox(-0.5f, 0.005f), 1.0, 1).mean, 1.0);          // the box under the cube's bottom
+    EXPECT_NEAR(shares(blockOverABox(-0.5f, 0.01f), 0.5, 1).mean, 0.5, 1e-12);  // its top through the centre
+    EXPECT_EQ(shares(blockOverABox(-0.5f, 0.015f), 0.0, 1).mean, 0.0);          // the cube wholly inside
 }
 
 // A voxel almost wholly inside (0.01 of it outside, over the box's top 0.49 voxel above its centre): its photon sums
