@@ -1,6 +1,14 @@
 #include "firn/transport/outside_share.h"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <utility>
 #include <vector>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <glm/vector_relational.hpp>
 
 #include "firn/geometry/box_triangle.h"
 
@@ -8,18 +16,39 @@ namespace firn {
 
 namespace {
 
-constexpr int kLevels = 3;  // a cut box is halved down to 1/8 voxel (2^-kLevels), then holds one jittered point
+constexpr int kLevels = 3;      // a box one triangle's plane cuts is halved down to 1/8 voxel (2^-kLevels)
+constexpr int kEdgeLevels = 5;  // one an edge or more triangles cross, down to 1/32 voxel
+constexpr int kColumns = 4;  // per axis, across a smallest cut box split by one triangle's plane
 // Voxels: boxes are tested shrunk by this much, so that a triangle lying on a face (a surface mesh on the lattice's
 // planes) does not cut them; far above the float rounding of the mesh's vertices.
 constexpr double kFaceTolerance = 1e-4;
 
 struct DensitySums {
-    double all = 0.0, outside = 0.0;  // kg: the density's integral over the voxel, and over its part outside
+    double all = 0.0, outside = 0.0;  // kg/m^3 m^3: the density's integral over the voxel, and over its part outside
 };
+
+// Whether the segment [a, b] shares a point with the box [lo, hi] (slabs).
+bool segmentMeetsBox(const glm::dvec3 &a, const glm::dvec3 &b, const glm::dvec3 &lo, const glm::dvec3 &hi) {
+    double t0 = 0.0, t1 = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        const double d = b[k] - a[k];
+        if (d == 0.0) {
+            if (a[k] < lo[k] || a[k] > hi[k]) return false;
+            continue;
+        }
+        double near = (lo[k] - a[k]) / d, far = (hi[k] - a[k]) / d;
+        if (near > far) std::swap(near, far);
+        t0 = std::max(t0, near), t1 = std::min(t1, far);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
 
 // Adds the density's integral over the cube [lo, lo + size] (m), one cell of the trilinear density or part of one,
 // and over its part outside, to `sums`: exact by the midpoint rule where no triangle of `cutting` (closed) crosses
-// it (wholly on one side), else by its eight halves down to kLevels, there one jittered point.
+// it (wholly on one side), else by its eight halves down to kLevels. There a cube that one triangle alone crosses,
+// none of its edges, is split by the triangle's plane: columns along the axis nearest its normal, jittered across,
+// each integrated exactly on either side of the plane; others hold one jittered point.
 class CutCubes {
   public:
     CutCubes(const Medium &medium, Medium::Accessor &density, const Occluders &occluders, const PhotonTracer &tracer,
@@ -30,11 +59,17 @@ class CutCubes {
     void integrate(const glm::dvec3 &lo, double size, int level, const std::vector<unsigned> &cutting,
                    DensitySums &sums) {
         const std::vector<unsigned> crossing = within(lo, size, cutting);
-        if (crossing.empty()) return add(lo + 0.5 * size, size, sums);
-        if (level == kLevels)
-            return add(lo + size * glm::dvec3(rng_.uniform(), rng_.uniform(), rng_.uniform()), size, sums);
-        for (int k = 0; k < 8; ++k)
-            integrate(lo + 0.5 * size * glm::dvec3(k & 1, k >> 1 & 1, k >> 2), 0.5 * size, level + 1, crossing, sums);
+        if (crossing.empty()) return add(lo + 0.5 * size, size * size * size, sums);
+        const bool plane = crossing.size() == 1 && !edgeWithin(crossing[0], lo, size);
+        if (level < (plane ? kLevels : kEdgeLevels)) {
+            for (int k = 0; k < 8; ++k)
+                integrate(lo + 0.5 * size * glm::dvec3(k & 1, k >> 1 & 1, k >> 2), 0.5 * size, level + 1, crossing,
+                          sums);
+        } else if (plane) {
+            split(lo, size, crossing[0], sums);
+        } else {
+            add(lo + size * glm::dvec3(rng_.uniform(), rng_.uniform(), rng_.uniform()), size * size * size, sums);
+        }
     }
 
   private:
@@ -48,11 +83,60 @@ class CutCubes {
         return out;
     }
 
-    // A cube of side `size` (m) standing for its point p.
-    void add(const glm::dvec3 &p, double size, DensitySums &sums) {
-        const double mass = medium_.densityAt(p, density_) * size * size * size;
+    // Whether an edge of triangle t crosses the cube (then its plane's part in the cube may reach past it).
+    bool edgeWithin(unsigned t, const glm::dvec3 &lo, double size) const {
+        for (int k = 0; k < 3; ++k)
+            if (segmentMeetsBox(mesh_.vertex(t, k), mesh_.vertex(t, (k + 1) % 3), lo + tolerance_,
+                                lo + (size - tolerance_)))
+                return true;
+        return false;
+    }
+
+    // A box of `volume` (m^3) standing for its point p.
+    void add(const glm::dvec3 &p, double volume, DensitySums &sums) {
+        const double mass = medium_.densityAt(p, density_) * volume;
         sums.all += mass;
         if (mass > 0.0 && !tracer_.enclosed(p)) sums.outside += mass;
+    }
+
+    // The cube [lo, lo + size] split by the plane of triangle t, its density integrated along kColumns^2 jittered
+    // columns exactly on either side.
+    void split(const glm::dvec3 &lo, double size, unsigned t, DensitySums &sums) {
+        const glm::dvec3 a(mesh_.vertex(t, 0)), n(mesh_.crossNormal(t));
+        const std::array<bool, 2> outside = sidesOutside(t, n, lo, size);  // below, above along n
+        int k = 0;  // the columns' axis
+        for (int i = 1; i < 3; ++i)
+            if (std::abs(n[i]) > std::abs(n[k])) k = i;
+        const int i = (k + 1) % 3, j = (k + 2) % 3;
+        const double cell = size / kColumns;  // m
+        for (int c = 0; c < kColumns * kColumns; ++c) {
+            glm::dvec3 p = lo;
+            p[i] += cell * (c % kColumns + rng_.uniform()), p[j] += cell * (c / kColumns + rng_.uniform());
+            const double cross = std::clamp(p[k] + glm::dot(n, a - p) / n[k], lo[k], lo[k] + size);  // the plane
+            for (int upper = 0; upper < 2; ++upper) {
+                const double from = upper ? cross : lo[k], to = upper ? lo[k] + size : cross;
+                if (to <= from) continue;
+                glm::dvec3 mid = p;
+                mid[k] = 0.5 * (from + to);  // the density is linear along the column within one cell
+                const double mass = medium_.densityAt(mid, density_) * (to - from) * cell * cell;
+                sums.all += mass;
+                if (outside[(upper == 1) == (n[k] > 0.0)]) sums.outside += mass;
+            }
+        }
+    }
+
+    // Whether the sides of triangle t's plane (below, above along its normal n) lie outside, by the enclosed test
+    // at the cube's corners farthest on either side, drawn in by 1 % towards its centre (inside the cube as the
+    // triangles were tested; a side that holds neither holds at most some 1e-6 of the cube); remembered per triangle.
+    std::array<bool, 2> sidesOutside(unsigned t, const glm::dvec3 &n, const glm::dvec3 &lo, double size) {
+        for (const auto &[triangle, sides] : sides_)
+            if (triangle == t) return sides;
+        const glm::dvec3 above = lo + size * glm::dvec3(glm::greaterThan(n, glm::dvec3(0.0))),
+                         below = 2.0 * lo + glm::dvec3(size) - above, centre = lo + 0.5 * size;
+        const std::array<bool, 2> sides{!tracer_.enclosed(glm::mix(below, centre, 0.01)),
+                                        !tracer_.enclosed(glm::mix(above, centre, 0.01))};
+        sides_.emplace_back(t, sides);
+        return sides;
     }
 
     const Medium &medium_;
@@ -61,6 +145,7 @@ class CutCubes {
     const PhotonTracer &tracer_;
     Rng &rng_;
     double tolerance_;  // m
+    std::vector<std::pair<unsigned, std::array<bool, 2>>> sides_;  // sidesOutside's answers
 };
 
 }  // namespace
