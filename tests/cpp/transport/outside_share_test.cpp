@@ -53,7 +53,7 @@ ShareStats shares(const Scene &scene, double exact, int seeds) {
 
 // A closed box 0.37 voxel thick inside the voxel (a ski), between the planes of its centre and of points 0.45 voxel
 // towards its corners: 0.63 of the voxel lies outside it. The 9 probes per voxel (before branch occluder-share)
-// missed it: 1.
+// missed it: 1. Now 0.62998, rms 0.00013 over 64 seeds.
 TEST(OutsideShare, CountsAClosedOccluderThinnerThanAVoxel) {
     const ShareStats s = shares(blockOverABox(0.0105f, 0.0142f), 0.63, 64);
     std::printf("share %.5f (exact 0.63), rms %.5f\n", s.mean, s.rms);
@@ -70,7 +70,8 @@ TEST(OutsideShare, IsExactForFacesOnTheCubesPlanes) {
 
 // A voxel almost wholly inside: the box's top 0.48 voxel above its centre, rising 0.015 along y (0.4725 .. 0.4875
 // voxel over the cube), leaves 0.02 of it outside. Its photon sums are divided by the share: the share's relative
-// error is its light's. One jittered point in each of 8^3 strata (before branch occluder-share) read it with ...
+// error is its light's. One jittered point in each of 8^3 strata (before branch occluder-share) read it with 28 % rms
+// (256 seeds: 0.0204 +- 0.0056), the planes' columns and the edges' 1/32-voxel cubes 0.4 %.
 TEST(OutsideShare, OfAVoxelAlmostWhollyInside) {
     const ShareStats s = shares(blockOverABox(-0.5f, 0.0148f, 0.015f), 0.02, 256);
     std::printf("share %.5f (exact 0.02), rms %.5f (%.1f %%)\n", s.mean, s.rms, 100.0 * s.rms / 0.02);
