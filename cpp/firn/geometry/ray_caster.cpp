@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
@@ -161,7 +162,10 @@ std::vector<unsigned> RayCaster::trianglesInBox(const glm::dvec3 &lo, const glm:
     const glm::dvec3 centre = 0.5 * (lo + hi);
     RTCPointQuery query{};
     query.x = static_cast<float>(centre.x), query.y = static_cast<float>(centre.y), query.z = static_cast<float>(centre.z);
-    query.radius = static_cast<float>(0.5 * glm::length(hi - lo)) * 1.0001f + 1e-7f;  // float rounding culls nothing
+    // Reaching the box's corners from the centre as rounded to float: nothing in the box is culled.
+    const double rounding = std::numeric_limits<float>::epsilon() *
+                            std::max({std::abs(centre.x), std::abs(centre.y), std::abs(centre.z), 1.0});
+    query.radius = static_cast<float>((0.5 * glm::length(hi - lo) + 2.0 * rounding) * 1.0001);
     query.time = 0.0f;
     RTCPointQueryContext context;
     rtcInitPointQueryContext(&context);
