@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <string>
 
 #include <glm/common.hpp>
@@ -23,8 +22,6 @@ Occluders::Occluders(TriangleMesh mesh, std::vector<Rgb> albedo)
             if (!std::isfinite(a[c]) || a[c] < 0.0 || a[c] > 1.0)
                 throw InvalidArgument("occluder albedo must lie in [0, 1] per channel");
     closed_ = inClosedSurface(mesh_);
-    if (std::find(closed_.begin(), closed_.end(), 1) != closed_.end())
-        closedMin_ = glm::dvec3(std::numeric_limits<double>::infinity()), closedMax_ = -closedMin_;
     for (std::size_t t = 0; t < mesh_.triangleCount(); ++t) {
         if (!closed_[t]) continue;
         for (int k = 0; k < 3; ++k) {
