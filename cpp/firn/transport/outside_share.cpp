@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -19,9 +20,16 @@ namespace {
 constexpr int kLevels = 3;      // a cube one triangle's plane cuts is halved down to 1/8 voxel (2^-kLevels)
 constexpr int kEdgeLevels = 5;  // one an edge or more triangles cross, down to 1/32 voxel
 constexpr int kColumns = 4;     // per axis, across a smallest cube split by one triangle's plane
-// Voxels: boxes are tested shrunk by this much, so that a triangle lying on a face (a surface mesh on the lattice's
-// planes) does not cut them; far above the float rounding of the mesh's vertices.
-constexpr double kFaceTolerance = 1e-4;
+constexpr double kFaceTolerance = 1e-4;  // voxels: see faceTolerance
+
+// m: how much the cubes of the voxel of size h (m) about `centre` are tested shrunk, so that a triangle lying on a face
+// (a surface mesh on the lattice's planes) does not cut them: kFaceTolerance of a voxel, or four times the float
+// rounding of the mesh's vertices there where that is more (beyond some 4 m from the origin with 1 cm voxels; a face
+// on a plane would else cut the voxel: its share still right, at a cut voxel's cost).
+double faceTolerance(double h, const glm::dvec3 &centre) {
+    const double reach = std::max({std::abs(centre.x), std::abs(centre.y), std::abs(centre.z)}) + h;  // m
+    return std::max(kFaceTolerance * h, 2.0 * std::numeric_limits<float>::epsilon() * reach);
+}
 
 struct DensitySums {
     double all = 0.0, outside = 0.0;  // kg: the density's integral over the voxel, and over its part outside
@@ -53,9 +61,9 @@ bool segmentMeetsBox(const glm::dvec3 &a, const glm::dvec3 &b, const glm::dvec3 
 class CutCubes {
   public:
     CutCubes(const Medium &medium, Medium::Accessor &density, const Occluders &occluders, const PhotonTracer &tracer,
-             Rng &rng)
+             double tolerance, Rng &rng)
         : medium_(medium), density_(density), mesh_(occluders.mesh()), tracer_(tracer), rng_(rng),
-          tolerance_(kFaceTolerance * medium.voxelSize()) {}
+          tolerance_(tolerance) {}
 
     void integrate(const glm::dvec3 &lo, double size, int level, const std::vector<unsigned> &cutting,
                    DensitySums &sums) {
@@ -160,12 +168,13 @@ class CutCubes {
 // 0.4 % (outside_share_test.cpp).
 double outsideShare(const Medium &medium, Medium::Accessor &density, const Occluders &occluders,
                     const PhotonTracer &tracer, const openvdb::Coord &c, Rng &rng) {
-    const double h = medium.voxelSize(), tolerance = kFaceTolerance * h;
+    const double h = medium.voxelSize();
     const glm::dvec3 centre = medium.voxelCentre(c), lo = centre - 0.5 * h;
+    const double tolerance = faceTolerance(h, centre);
     const std::vector<unsigned> cutting = occluders.closedIn(lo + tolerance, lo + (h - tolerance));
     if (cutting.empty()) return tracer.enclosed(centre) ? 0.0 : 1.0;
     DensitySums sums;
-    CutCubes cubes(medium, density, occluders, tracer, rng);
+    CutCubes cubes(medium, density, occluders, tracer, tolerance, rng);
     for (int k = 0; k < 8; ++k)
         cubes.integrate(lo + 0.5 * h * glm::dvec3(k & 1, k >> 1 & 1, k >> 2), 0.5 * h, 1, cutting, sums);
     return sums.all > 0.0 ? sums.outside / sums.all : 0.0;
