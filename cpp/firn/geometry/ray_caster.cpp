@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/geometry/box_triangle.h"
 #include "firn/geometry/embree.h"
 #include "firn/util/error.h"
 
@@ -57,6 +59,20 @@ bool visitTriangle(RTCPointQueryFunctionArguments *args) {
     q->distance = d;
     args->query->radius = static_cast<float>(d) * 1.0001f + 1e-7f;  // shrink the search, never below the exact d
     return true;
+}
+
+struct BoxQuery {
+    const TriangleMesh *mesh;
+    glm::dvec3 lo, hi;            // m
+    std::vector<unsigned> found;  // triangles in the box
+};
+
+bool visitTriangleInBox(RTCPointQueryFunctionArguments *args) {
+    auto *q = static_cast<BoxQuery *>(args->userPtr);
+    const unsigned t = args->primID;
+    if (triangleOverlapsBox(q->lo, q->hi, q->mesh->vertex(t, 0), q->mesh->vertex(t, 1), q->mesh->vertex(t, 2)))
+        q->found.push_back(t);
+    return false;  // the query's reach unchanged
 }
 
 }  // namespace
@@ -139,6 +155,24 @@ std::optional<double> RayCaster::closestDistance(const glm::dvec3 &point, double
     rtcPointQuery(impl_->embree.scene, &query, &context, visitTriangle, &closest);
     if (closest.distance >= maxDistance) return std::nullopt;
     return closest.distance;
+}
+
+std::vector<unsigned> RayCaster::trianglesInBox(const glm::dvec3 &lo, const glm::dvec3 &hi) const {
+    if (empty_) return {};
+    const glm::dvec3 centre = 0.5 * (lo + hi);
+    RTCPointQuery query{};
+    query.x = static_cast<float>(centre.x), query.y = static_cast<float>(centre.y), query.z = static_cast<float>(centre.z);
+    // Reaching the box's corners from the centre as rounded to float: nothing in the box is culled.
+    const double rounding = std::numeric_limits<float>::epsilon() *
+                            std::max({std::abs(centre.x), std::abs(centre.y), std::abs(centre.z), 1.0});
+    query.radius = static_cast<float>((0.5 * glm::length(hi - lo) + 2.0 * rounding) * 1.0001);
+    query.time = 0.0f;
+    RTCPointQueryContext context;
+    rtcInitPointQueryContext(&context);
+    BoxQuery box{impl_->mesh, lo, hi, {}};
+    rtcPointQuery(impl_->embree.scene, &query, &context, visitTriangleInBox, &box);
+    std::sort(box.found.begin(), box.found.end());
+    return box.found;
 }
 
 }  // namespace firn

@@ -3,6 +3,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
@@ -38,6 +39,10 @@ class RayCaster {
     // Distance (m) from `point` to the nearest triangle, if one lies within `maxDistance` (m); an Embree
     // point query (BVH-culled), the closest point on each candidate triangle computed in double precision.
     std::optional<double> closestDistance(const glm::dvec3 &point, double maxDistance) const;
+
+    // The triangles sharing a point with the axis-aligned box [lo, hi] (m), ascending: an Embree point query about
+    // its centre reaching its corners (BVH-culled), each candidate tested exactly (triangleOverlapsBox).
+    std::vector<unsigned> trianglesInBox(const glm::dvec3 &lo, const glm::dvec3 &hi) const;
 
     bool empty() const { return empty_; }
 

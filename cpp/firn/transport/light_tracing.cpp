@@ -11,6 +11,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/outside_share.h"
 #include "firn/transport/pooled_estimates.h"
 #include "firn/transport/traced_source.h"
 #include "firn/util/color.h"
@@ -232,37 +233,6 @@ double extinctionIntegral(const Medium &medium, Medium::Accessor &density, const
     return medium.optics().extinctionPerDensity * sum * h * h * h;
 }
 
-// The share of the voxel's integral of sigma_t outside closed occluders: photons never collide inside one, and the
-// gathering skips its points there (sourceIn: the voxel's source is that of its part outside, what cameras see).
-// 1 where neither the voxel's centre nor points near its corners are enclosed (off the lattice's planes, where a
-// surface mesh's flat parts lie), else from one point jittered in each of 8^3 strata (`rng`): the midpoint rule
-// on 4^3 points put a box's top at 0.63 of a voxel's height at 0.75 and read that voxel layer's light 49 % bright
-// (LightTracing.CountsALumpsLightOverItsPartOutsideAClosedOccluder); jittered, both sums are unbiased and their
-// ratio, the share, is consistent (biased by O(1/points), not unbiased).
-double outsideShare(const Medium &medium, Medium::Accessor &density, PhotonTracer &tracer, const openvdb::Coord &c,
-                    Rng &rng) {
-    constexpr double kCornerProbe = 0.45;  // voxels from the centre along each axis
-    constexpr int kStrata = 8;             // per axis
-    const glm::dvec3 centre = medium.voxelCentre(c);
-    const double h = medium.voxelSize();
-    bool straddles = tracer.enclosed(centre);
-    for (int k = 0; k < 8 && !straddles; ++k) {
-        const glm::dvec3 corner(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1);
-        straddles = tracer.enclosed(centre + kCornerProbe * h * corner);
-    }
-    if (!straddles) return 1.0;
-    double outside = 0.0, all = 0.0;
-    for (int i = 0; i < kStrata * kStrata * kStrata; ++i) {
-        const glm::dvec3 stratum(i % kStrata, i / kStrata % kStrata, i / (kStrata * kStrata));
-        const glm::dvec3 u = (stratum + glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform())) / double(kStrata);
-        const glm::dvec3 p = centre + h * (u - 0.5);
-        const double rho = medium.densityAt(p, density);  // kg/m^3: sigma_t's share goes as the density's
-        all += rho;
-        if (rho > 0.0 && !tracer.enclosed(p)) outside += rho;
-    }
-    return all > 0.0 ? outside / all : 0.0;
-}
-
 // Voxel -> its index in `voxels`, -1 elsewhere.
 openvdb::Int32Tree voxelIndex(const std::vector<openvdb::Coord> &voxels) {
     openvdb::Int32Tree index(-1);
@@ -328,6 +298,7 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
                                                const SubProgress &progress) {
     if (voxels.empty() || plan.photons <= 0) return {};
     const Medium &medium = *reference.scene().medium;
+    const Occluders &occluders = *reference.scene().occluders;
     const openvdb::Int32Tree index = voxelIndex(voxels);
     const BoxEmitter emitter(reference);
     VoxelSums sums(medium, voxels);
@@ -361,7 +332,7 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
             const std::int32_t slot = sums.towardSlot[v];
             Rng rng(seed ^ kOutsideSeed, v);
             const double weights = double(plan.photons) * extinctionIntegral(medium, density, voxels[v]) *
-                                   outsideShare(medium, density, tracer, voxels[v], rng);
+                                   outsideShare(medium, density, occluders, tracer, voxels[v], rng);
             scattered[v] = sourceOf(sums.light[v], slot >= 0 ? &sums.toward[std::size_t(slot)] : nullptr, weights,
                                     medium.optics());
         }

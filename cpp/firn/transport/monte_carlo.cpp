@@ -190,11 +190,12 @@ class PathTracer {
     // winding: snow between a ground wound downwards and a roof above is outside both.
     bool enclosed(const glm::dvec3 &p) const {
         const Occluders &occluders = *scene_.occluders;
-        if (!occluders.anyClosed()) return false;  // skips the casts (none of them could find an inside)
+        const glm::vec3 from(p);  // the rays' origin
+        if (!occluders.mayEnclose(from)) return false;  // skips the casts (none of them could find an inside)
         for (const float up : {1.0f, -1.0f}) {
             const glm::vec3 d(0.0f, 0.0f, up);
             const std::optional<RayCaster::Hit> hit =
-                occluders.caster().intersect(glm::vec3(p), d, 0.0f, std::numeric_limits<float>::infinity());
+                occluders.caster().intersect(from, d, 0.0f, std::numeric_limits<float>::infinity());
             if (!hit || !occluders.closed(hit->triangle) || !(glm::dot(hit->normal, d) > 0.0f)) return false;
         }
         return true;

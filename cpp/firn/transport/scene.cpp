@@ -4,6 +4,9 @@
 #include <cmath>
 #include <string>
 
+#include <glm/common.hpp>
+#include <glm/vector_relational.hpp>
+
 #include "firn/geometry/orientation.h"
 #include "firn/util/error.h"
 
@@ -19,8 +22,26 @@ Occluders::Occluders(TriangleMesh mesh, std::vector<Rgb> albedo)
             if (!std::isfinite(a[c]) || a[c] < 0.0 || a[c] > 1.0)
                 throw InvalidArgument("occluder albedo must lie in [0, 1] per channel");
     closed_ = inClosedSurface(mesh_);
-    anyClosed_ = std::find(closed_.begin(), closed_.end(), 1) != closed_.end();
+    for (std::size_t t = 0; t < mesh_.triangleCount(); ++t) {
+        if (!closed_[t]) continue;
+        for (int k = 0; k < 3; ++k) {
+            closedMin_ = glm::min(closedMin_, glm::dvec3(mesh_.vertex(t, k)));
+            closedMax_ = glm::max(closedMax_, glm::dvec3(mesh_.vertex(t, k)));
+        }
+    }
     caster_ = std::make_shared<RayCaster>(mesh_);
+}
+
+bool Occluders::mayEnclose(const glm::vec3 &p) const {
+    const glm::dvec3 at(p);
+    return glm::all(glm::greaterThanEqual(at, closedMin_)) && glm::all(glm::lessThanEqual(at, closedMax_));
+}
+
+std::vector<unsigned> Occluders::closedIn(const glm::dvec3 &lo, const glm::dvec3 &hi) const {
+    if (glm::any(glm::greaterThan(lo, closedMax_)) || glm::any(glm::lessThan(hi, closedMin_))) return {};
+    std::vector<unsigned> in = caster_->trianglesInBox(lo, hi);
+    in.erase(std::remove_if(in.begin(), in.end(), [&](unsigned t) { return !closed_[t]; }), in.end());
+    return in;
 }
 
 void validate(const Scene &scene) {

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -26,14 +27,20 @@ class Occluders {
     const Rgb &albedo(unsigned triangle) const { return albedo_[triangle]; }
     // Whether the triangle belongs to a closed surface (one with an inside; an open sheet has none).
     bool closed(unsigned triangle) const { return closed_[triangle]; }
-    // Whether any triangle does: without one nothing is enclosed (most scenes: open ground planes).
-    bool anyClosed() const { return anyClosed_; }
+    // False where `p` lies off the closed triangles' bounding box (always, without one: most scenes, open ground
+    // planes): then not both of the rays from it straight up and down meet one, so it is enclosed by none.
+    bool mayEnclose(const glm::vec3 &p) const;
+    // The closed triangles sharing a point with the axis-aligned box [lo, hi] (m), ascending; none, at the cost of a
+    // bounding-box check, where the box lies off all closed triangles' bounding box.
+    std::vector<unsigned> closedIn(const glm::dvec3 &lo, const glm::dvec3 &hi) const;
 
   private:
     TriangleMesh mesh_;
     std::vector<Rgb> albedo_;
     std::vector<char> closed_;
-    bool anyClosed_ = false;
+    // m: the closed triangles' bounding box; without one empty, [+inf, -inf], which holds no point.
+    glm::dvec3 closedMin_{std::numeric_limits<double>::infinity()};
+    glm::dvec3 closedMax_{-std::numeric_limits<double>::infinity()};
     std::shared_ptr<const RayCaster> caster_ = std::make_shared<RayCaster>(TriangleMesh{});
 };
 
