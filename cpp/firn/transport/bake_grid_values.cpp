@@ -252,8 +252,8 @@ constexpr double kGrazingSunCosine = 0.2;
 // The suns' uncollided transmittance through the snow at the points of a quarter-voxel lattice (index space: odd
 // multiples of 1/4), each point marched once: the 4^3 points sunInRamp averages over a voxel's hat are shared with
 // its neighbours' (a point at c + 1/4 is also c + 1 - 3/4), so a band of ramp voxels marches a few times fewer
-// columns. One per thread, its points those of one leaf at a time, in a dense array (18^3 a sun: an 8^3 leaf's
-// voxels' points, dilated topology's leaves) whose stamps say which hold this leaf's value (a hash map per sun cost more than the lookups saved).
+// columns. One per thread, holding one leaf's points at a time in a dense array (18^3 a sun for the dilated
+// topology's 8^3 leaves) whose stamps say which hold this leaf's value: no hash map to fill and clear per leaf.
 class QuarterPointSun {
   public:
     QuarterPointSun(const Medium &medium, std::size_t suns)
@@ -265,8 +265,8 @@ class QuarterPointSun {
     }
     // Sun b's transmittance at index-space point q / 4 (q odd per axis, about a voxel of the leaf).
     double at(std::size_t b, const glm::dvec3 &direction, const openvdb::Coord &q) {
-        const std::size_t i = b * kPerSun + std::size_t(((q.x() - first_.x()) / 2 * kPerAxis + (q.y() - first_.y()) / 2) *
-                                                            kPerAxis + (q.z() - first_.z()) / 2);
+        const int x = (q.x() - first_.x()) / 2, y = (q.y() - first_.y()) / 2, z = (q.z() - first_.z()) / 2;
+        const std::size_t i = b * kPerSun + std::size_t((x * kPerAxis + y) * kPerAxis + z);
         if (stamp_[i] != leaf_) {
             const double perColumn = medium_.optics().extinctionPerDensity;  // m^2/kg: uncollided
             const double limit = std::log(1e5) / perColumn;  // kg/m^2: the transmittance below 1e-5
@@ -279,15 +279,15 @@ class QuarterPointSun {
     }
 
   private:
-    // odd quarters from -3/4 before a leaf's first voxel to 3/4 past its last
+    // Odd quarters from -3/4 before a leaf's first voxel to 3/4 past its last.
     static constexpr int kPerAxis = 2 * int(openvdb::BoolTree::LeafNodeType::DIM) + 2;
     static constexpr std::size_t kPerSun = std::size_t(kPerAxis) * kPerAxis * kPerAxis;
     const Medium &medium_;
     Medium::ColumnMarcher marcher_;
-    std::vector<double> known_;           // per sun, then point
-    std::vector<std::uint64_t> stamp_;    // the leaf (leaf_) whose value known_ holds
-    openvdb::Coord first_;                // the leaf's lowest point, in quarters
-    std::uint64_t leaf_ = 0;              // leaves started
+    std::vector<double> known_;         // per sun, then point
+    std::vector<std::uint64_t> stamp_;  // the leaf (leaf_) whose value known_ holds
+    openvdb::Coord first_;              // the leaf's lowest point, in quarters
+    std::uint64_t leaf_ = 0;            // leaves started
 };
 
 // The suns' light scattered once in ramp voxel c (outside the unknowns, carrying its surface's radiance) in front of
