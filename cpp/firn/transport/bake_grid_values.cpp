@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -253,34 +252,42 @@ constexpr double kGrazingSunCosine = 0.2;
 // The suns' uncollided transmittance through the snow at the points of a quarter-voxel lattice (index space: odd
 // multiples of 1/4), each point marched once: the 4^3 points sunInRamp averages over a voxel's hat are shared with
 // its neighbours' (a point at c + 1/4 is also c + 1 - 3/4), so a band of ramp voxels marches a few times fewer
-// columns. One per thread, cleared per leaf.
+// columns. One per thread, holding one leaf's points at a time in a dense array (18^3 a sun for the dilated
+// topology's 8^3 leaves) whose stamps say which hold this leaf's value: no hash map to fill and clear per leaf.
 class QuarterPointSun {
   public:
-    QuarterPointSun(const Medium &medium, std::size_t suns) : medium_(medium), marcher_(medium), known_(suns) {}
-    void clear() {
-        for (auto &known : known_) known.clear();
+    QuarterPointSun(const Medium &medium, std::size_t suns)
+        : medium_(medium), marcher_(medium), known_(suns * kPerSun), stamp_(suns * kPerSun, 0) {}
+    // Starts the points of the 8^3 leaf at origin: none known.
+    void startLeaf(const openvdb::Coord &origin) {
+        first_ = openvdb::Coord(4 * origin.x() - 3, 4 * origin.y() - 3, 4 * origin.z() - 3);
+        ++leaf_;
     }
-    // Sun b's transmittance at index-space point q / 4 (q odd per axis). The key keeps q's low 21 bits per axis: a
-    // leaf's points (cleared per leaf) differ there.
+    // Sun b's transmittance at index-space point q / 4 (q odd per axis, about a voxel of the leaf).
     double at(std::size_t b, const glm::dvec3 &direction, const openvdb::Coord &q) {
-        const std::uint64_t key = std::uint64_t(std::uint32_t(q.x()) & 0x1FFFFFu) |
-                                  std::uint64_t(std::uint32_t(q.y()) & 0x1FFFFFu) << 21 |
-                                  std::uint64_t(std::uint32_t(q.z()) & 0x1FFFFFu) << 42;
-        const auto [it, added] = known_[b].try_emplace(key, 0.0);
-        if (added) {
+        const int x = (q.x() - first_.x()) / 2, y = (q.y() - first_.y()) / 2, z = (q.z() - first_.z()) / 2;
+        const std::size_t i = b * kPerSun + std::size_t((x * kPerAxis + y) * kPerAxis + z);
+        if (stamp_[i] != leaf_) {
             const double perColumn = medium_.optics().extinctionPerDensity;  // m^2/kg: uncollided
             const double limit = std::log(1e5) / perColumn;  // kg/m^2: the transmittance below 1e-5
             const double column = marcher_.column(medium_.indexToWorld(glm::dvec3(q.x(), q.y(), q.z()) / 4.0),
                                                   direction, std::numeric_limits<double>::infinity(), limit);
-            it->second = column < limit ? std::exp(-perColumn * column) : 0.0;
+            known_[i] = column < limit ? std::exp(-perColumn * column) : 0.0;
+            stamp_[i] = leaf_;
         }
-        return it->second;
+        return known_[i];
     }
 
   private:
+    // Odd quarters from -3/4 before a leaf's first voxel to 3/4 past its last.
+    static constexpr int kPerAxis = 2 * int(openvdb::BoolTree::LeafNodeType::DIM) + 2;
+    static constexpr std::size_t kPerSun = std::size_t(kPerAxis) * kPerAxis * kPerAxis;
     const Medium &medium_;
     Medium::ColumnMarcher marcher_;
-    std::vector<std::unordered_map<std::uint64_t, double>> known_;  // per sun
+    std::vector<double> known_;         // per sun, then point
+    std::vector<std::uint64_t> stamp_;  // the leaf (leaf_) whose value known_ holds
+    openvdb::Coord first_;              // the leaf's lowest point, in quarters
+    std::uint64_t leaf_ = 0;            // leaves started
 };
 
 // The suns' light scattered once in ramp voxel c (outside the unknowns, carrying its surface's radiance) in front of
@@ -297,6 +304,12 @@ class QuarterPointSun {
 void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
                QuarterPointSun &sunAt, Source &S) {
     if (glm::length(normal) == 0.0) return;
+    // The occluders' shadow rays below only matter where some sun meets the surfaces grazingly or not at all: where
+    // none does, each sun either returns or adds nothing (and peaks are never negative). The car's ramp, mostly lit.
+    if (std::none_of(scene.suns.begin(), scene.suns.end(), [&](const SunLight &sun) {
+            return glm::dot(normal, sun.direction) < kGrazingSunCosine;
+        }))
+        return;
     const VolumeOptics &optics = scene.medium->optics();
     constexpr int kPoints[4] = {-3, -1, 1, 3};  // quarter voxels from c's centre, per axis
     const glm::dvec3 centre = scene.medium->voxelCentre(c);
@@ -402,7 +415,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
         Medium::ColumnMarcher marcher(medium);
         QuarterPointSun sunAt(medium, scene.suns.size());
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
-            sunAt.clear();
+            sunAt.startLeaf(leaves.leaf(l).origin());
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
                 const std::int32_t t = tracedIndex.getValue(c);
