@@ -131,9 +131,9 @@ def _bake_frame(job, quality, seed, progress):
     """A frame's two bakes. The tracked snow with the lumps in it, as one medium (firncore.bake_joint): the
     lumps' shadow on the snow, lumps resting in the groove. The lumps with the snow's surface as an occluder that
     reflects the snow's white-sky albedo (its light under them, its shadow on them). Where the lumps are over the
-    gathering budget both bakes light trace them (docs/spray.md "Light"; some 28 processor s a frame). A frame
-    without lumps gets their lit file with empty light grids, unbaked (without tracks there is nothing else to bake
-    that frame). Returns the bakes' processor seconds (their stats' cpu_seconds)."""
+    gathering budget both bakes light trace them (docs/spray.md "Light"; some 28 processor s a frame at Final, 7 at
+    Draft). A frame without lumps gets their lit file with empty light grids, unbaked (without tracks there is
+    nothing else to bake that frame). Returns the bakes' processor seconds (their stats' cpu_seconds)."""
     (snow, spray), (lit, lit_spray) = job["paths"], job["outputs"]
     settings = dict(quality=quality, seed=seed, progress=progress, **core_light(job["inputs"]))
     seconds = 0.0

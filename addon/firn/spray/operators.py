@@ -391,7 +391,7 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
         frames, seconds = job["baked"], job["processor_seconds"]
         optics = bake_operators.volume_optics_of(obj)
         obj.firn.bake_extinction_per_density = optics.extinction_per_density
-        # What a frame cost (docs/user-guide.md: some 28 processor s with occluders at Final, under 1 without)
+        # What a frame cost (docs/user-guide.md: some 28 processor s with occluders at Final, 7 at Draft)
         cost = f"; {sum(seconds) / len(seconds):.1f} processor s a frame" if seconds else ""
         obj.firn.bake_summary = (f"{self.quality.title()} light, frames {job['lit'][0]}-{job['lit'][1]} "
                                  f"({len(frames)} baked now, the others already were{cost})")
