@@ -11,7 +11,11 @@ surface falls towards +x) and those facing away. Printed per region: its blocks,
 Lights: "full" against the suite's cached 4096-path reference; "sun only" and "sky only" against fresh core Monte
 Carlo references of --samples paths (cached in --cache; their median relative noise printed).
 
+--worst N lists the N worst blocks of the first light (green): view, pixel (row from the top, column), the depth-one
+point, region, and each light's error and reference radiance there.
+
     PYTHONPATH=build/python python3 bench/plate_err_regions.py [--samples 2048] [--cache DIR] [--lights full,sun,sky]
+        [--worst N]
 """
 
 import argparse
@@ -78,19 +82,39 @@ def report(title, baked, reference, label, view, views):
               f"{100 * (baked[m].sum() / reference[m].sum() - 1):+6.1f}%   " + "     ".join(per_view), flush=True)
 
 
+def worst_blocks(count, results, label, hit, case):
+    """The `count` worst blocks of the first light by green |relative error|, with every light's error there."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rel = {light: baked[:, 1] / reference[:, 1] - 1.0 for light, (baked, reference) in results.items()}
+    first = np.where(label != "", np.abs(rel[next(iter(results))]), -1.0)
+    order = np.argsort(-np.nan_to_num(first, nan=-1.0))[:count]
+    per = case.pixels ** 2
+    print("worst blocks (green): view, row from the top, column, depth-one point (cm), region, " +
+          ", ".join(f"{light} error / reference" for light in results))
+    for i in order:
+        v, p = divmod(int(i), per)
+        row, column = case.pixels - 1 - p // case.pixels, p % case.pixels
+        point = " ".join(f"{100 * x:5.1f}" for x in hit[i])
+        errors = "   ".join(f"{100 * rel[light][i]:+6.1f} % / {results[light][1][i, 1]:.4g}" for light in results)
+        print(f"  {str(case.views[v]):>9} {row:2d} {column:2d}  ({point})  {label[i]:<12} {errors}")
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--samples", type=int, default=2048)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_plate_err"))
     parser.add_argument("--suite-cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     parser.add_argument("--lights", default="full,sun,sky")
+    parser.add_argument("--worst", type=int, default=0, help="list this many worst blocks")
     args = parser.parse_args()
     os.makedirs(args.cache, exist_ok=True)
     case = next(c for c in bs.cases() if c.name == "bumpy_plate")
     origins, directions, tau = bs.views(case)
     seen = tau >= 1.0
-    label = region_of(case, bs.depth_one_points(case, origins, directions, seen), seen)
+    hit = bs.depth_one_points(case, origins, directions, seen)
+    label = region_of(case, hit, seen)
     view = np.repeat(np.arange(len(case.views)), case.pixels ** 2)
+    results = {}
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "bumpy.vdb")
         bs.write_density(path, case.density, case.voxel)
@@ -113,6 +137,9 @@ def main():
             firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
             baked = firncore.render_baked(path, c.optics, origins, directions, occluders=c.occluders)
             report(f"{title}, reference noise {100 * noise:.1f} %", baked, reference, label, view, case.views)
+            results[light] = (baked, reference)
+    if args.worst:
+        worst_blocks(args.worst, results, label, hit, case)
 
 
 if __name__ == "__main__":
