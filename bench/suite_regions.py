@@ -1,0 +1,79 @@
+"""A suite case's error split into the bake's own noise and its bias, per region of what its pixels see
+(docs/benchmarks.md, spray-dense).
+
+Bakes the case with seeds 0..N-1 against the suite's cached reference (bench/bake_suite.py; each pixel one block,
+its three channels averaged as the suite's mean is) and reports, per region, the mean |relative error| of one
+seed's render, of the seeds' mean render (its noise shrunk by sqrt(N): what is left is bias, the reference's noise
+and the mean's own), the baked render's spread across the seeds (relative standard deviation per block) and the
+bias of the sum. Regions by where each pixel's camera ray reaches optical depth 1 of snow: sun-lit or shadowed
+there (the sun's optical depth from that point, under or over 2), and the ray's whole optical depth through the
+snow (a rim or a thin lump: under 20; a lump's core: 20 or more); and per view.
+
+    PYTHONPATH=build/python python3 bench/suite_regions.py [--case spray_dense] [--seeds 4]
+"""
+
+import argparse
+import math
+import os
+import tempfile
+
+import numpy as np
+
+import bake_suite
+
+
+def sun_depth(case, points):
+    """Optical depth from each point towards the sun (NaN points give NaN)."""
+    towards = np.array([math.cos(bake_suite.SUN_ELEVATION), 0.0, math.sin(bake_suite.SUN_ELEVATION)])
+    steps = np.linspace(0.0, 0.5, 2000)
+    out = np.full(len(points), np.nan)
+    for i, p in enumerate(points):
+        if np.all(np.isfinite(p)):
+            line = p + steps[:, None] * towards
+            out[i] = bake_suite.trilinear(case.density, line / case.voxel).sum() * (steps[1] - steps[0]) * case.sigma_t / case.rho
+    return out
+
+
+def row(label, relative, spread, mean_render, reference):
+    """One region's figures: per-seed and seeds' mean |error|, spread, bias (blocks x channels arrays)."""
+    per_seed = np.mean([np.abs(r).mean() for r in relative])
+    of_mean = np.abs(mean_render / reference - 1.0).mean()
+    bias = mean_render.sum() / reference.sum() - 1.0
+    return (f"  {label:<28} {relative.shape[1]:4d} pixels  one seed {100 * per_seed:5.1f} %  seeds' mean "
+            f"{100 * of_mean:5.1f} %  spread {100 * spread.mean():5.1f} %  bias {100 * bias:+5.1f} %")
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--case", default="spray_dense")
+    parser.add_argument("--seeds", type=int, default=4)
+    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    args = parser.parse_args()
+    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    origins, directions, tau = bake_suite.views(case)
+    seen = tau >= 1.0
+    with tempfile.TemporaryDirectory() as folder:
+        runs = [bake_suite.run_case(case, folder, args.cache, seed=seed) for seed in range(args.seeds)]
+        path = os.path.join(folder, case.name + ".vdb")
+        bake_suite.write_density(path, case.density, case.voxel)
+        reference, _, _ = bake_suite.reference(case, path, origins, directions, args.cache)
+    reference = reference[seen]
+    relative = np.array([r["relative"] for r in runs])  # seeds x blocks x channels
+    renders = (relative + 1.0) * reference
+    mean_render = renders.mean(0)
+    spread = renders.std(0, ddof=1) / np.maximum(mean_render, 1e-30)
+    lit = sun_depth(case, bake_suite.depth_one_points(case, origins, directions, seen))[seen] < 2.0
+    core = tau[seen] >= 20.0
+    view = np.repeat(np.arange(len(case.views)), case.pixels ** 2)[seen]
+    print(f"{case.name}, {args.seeds} seeds: one seed's means " + ", ".join(f"{100 * r['mean']:.1f}" for r in runs) + " %")
+    regions = [("all", np.ones(len(reference), bool)),
+               ("lit, core (tau >= 20)", lit & core), ("lit, rim or thin (tau < 20)", lit & ~core),
+               ("shadowed, core", ~lit & core), ("shadowed, rim or thin", ~lit & ~core)]
+    regions += [(f"view {v}", view == i) for i, v in enumerate(case.views)]
+    for label, where in regions:
+        if where.any():
+            print(row(label, relative[:, where], spread[where], mean_render[where], reference[where]), flush=True)
+
+
+if __name__ == "__main__":
+    main()
