@@ -4,7 +4,7 @@ its corners' worst blocks see.
 A camera over the layer's top looking towards +x (the suite's view (180, 50)) skims the layer's far corners through
 the outer part of the +x wall's ramp, from behind the wall's exit: the light travelling into the wall. Rays of that
 view start inside the ramp (x index 29.55, 29.7, 29.85: from 1.5 down to 0.17 optical depths of ramp left before
-the air), 10 x 2 of them over the wall's middle (y 10-19, z 3 and 4), and leave through it; printed per depth: the
+the air along the wall's normal, 2.4 down to 0.26 along the ray), 10 x 2 of them over the wall's middle (y 10-19, z 3 and 4), and leave through it; printed per depth: the
 baked render against the core's Monte Carlo (green, summed), under the case's full light, the sun alone and the sky
 alone.
 
@@ -12,7 +12,6 @@ alone.
 """
 
 import argparse
-import copy
 import math
 import os
 import tempfile
@@ -21,6 +20,7 @@ import numpy as np
 
 import bake_suite as bs
 import firncore
+from plate_err_regions import light_case
 
 STARTS_X = (29.55, 29.7, 29.85)  # voxel index: the wall's last voxel centre at 29, the air beyond 30
 
@@ -37,9 +37,7 @@ def main():
         path = os.path.join(folder, "bumpy.vdb")
         bs.write_density(path, case.density, h)
         for light in ("full", "sun", "sky"):
-            c = copy.copy(case)
-            c.sky = 0.0 if light == "sun" else c.sky
-            c.sun = 0.0 if light == "sky" else c.sun
+            c = light_case(case, light)
             firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
             parts = []
             for x in STARTS_X:

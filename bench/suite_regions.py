@@ -23,7 +23,8 @@ import bake_suite
 
 
 def sun_depth(case, points):
-    """Optical depth from each point towards the sun (NaN points give NaN)."""
+    """Optical depth of the snow from each point towards the sun (NaN points give NaN); occluders are not counted
+    (with --case bumpy_plate the blocks under the plate count as lit)."""
     towards = np.array([math.cos(bake_suite.SUN_ELEVATION), 0.0, math.sin(bake_suite.SUN_ELEVATION)])
     steps = np.linspace(0.0, 0.5, 2000)
     out = np.full(len(points), np.nan)
@@ -49,6 +50,8 @@ def main():
     parser.add_argument("--seeds", type=int, default=4)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args()
+    if args.seeds < 2:
+        parser.error("--seeds must be 2 or more (the spread across seeds)")
     case = next(c for c in bake_suite.cases() if c.name == args.case)
     origins, directions, tau = bake_suite.views(case)
     seen = tau >= 1.0
