@@ -65,12 +65,11 @@ Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Sourc
         const double sigmaT = k * marcher.densityAt(ijk);
         if (sigmaT <= 0.0) return true;
         const BakedGrids::Values source = sourceAt(ijk);  // l0, l1 per axis, p0 (RGB), then p1
-        const glm::dvec3 p1(source[5][0], source[5][1], source[5][2]);
-        const double p0Mean = (double(source[4][0]) + source[4][1] + source[4][2]) / 3.0;
+        const glm::dvec3 peak = peakRadiance(glm::dvec3(source[4][0], source[4][1], source[4][2]),
+                                             glm::dvec3(source[5][0], source[5][1], source[5][2]), w);
         Rgb S;
         for (int c = 0; c < 3; ++c)
-            S[c] = lobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]), w) +
-                   peakRadiance(source[4][c], p0Mean, p1, w);
+            S[c] = lobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]), w) + peak[c];
         const double opacity = 1.0 - std::exp(-sigmaT * dt);
         radiance += transmittance * opacity * S;
         transmittance *= 1.0 - opacity;

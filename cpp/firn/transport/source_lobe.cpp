@@ -34,6 +34,13 @@ double peakRadiance(double p0, double p0Mean, const glm::dvec3 &p1, const glm::d
     return p0Mean > 0.0 ? p0 / p0Mean * lobeRadiance(p0Mean, p1, w) : 0.0;
 }
 
+glm::dvec3 peakRadiance(const glm::dvec3 &p0, const glm::dvec3 &p1, const glm::dvec3 &w) {
+    const double mean = (p0.x + p0.y + p0.z) / 3.0;
+    if (!(mean > 0.0)) return glm::dvec3(0.0);
+    const double shape = lobeRadiance(mean, p1, w);
+    return glm::dvec3(p0.x / mean * shape, p0.y / mean * shape, p0.z / mean * shape);
+}
+
 namespace {
 
 // The fitted lobe of a normalized exit radiance L(w) = max(0, (1 - t) + t m . w) on the hemisphere around z,

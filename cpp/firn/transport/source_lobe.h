@@ -24,6 +24,10 @@ double lobeRadiance(double l0, const glm::dvec3 &l1, const glm::dvec3 &w);
 //   S_peak(w) = p0 / mean(p0) lobeRadiance(mean(p0), p1, w)   (0 where mean(p0) <= 0),
 // mean(p0) = (p0.r + p0.g + p0.b) / 3. Moments sum: peaks along different axes add to one of smaller k.
 double peakRadiance(double p0, double p0Mean, const glm::dvec3 &p1, const glm::dvec3 &w);
+// The three channels' peaked lobes at once (p0 per channel): their shape, the channels' mean's lobe, worked out
+// once (the gathering's samples spent a third of their lobes' time on it twice more); the same values as
+// peakRadiance's, bit for bit.
+glm::dvec3 peakRadiance(const glm::dvec3 &p0, const glm::dvec3 &p1, const glm::dvec3 &w);
 
 // What the grids store for a lobe of mean l0 and anisotropy k about the unit axis m: l1 = 3 k l0 m.
 struct SourceLobe {
