@@ -60,11 +60,15 @@ TEST(SourceLobe, PeakedLobeIsEachChannelsSingleScatteringOfABeam) {
     for (double c : {-1.0, 0.0, 0.7, 1.0}) {
         const glm::dvec3 w = c * d + std::sqrt(1.0 - c * c) * glm::normalize(glm::cross(d, glm::dvec3(0.0, 1.0, 0.0)));
         const double hg = (1.0 - g * g) / std::pow(1.0 + g * g - 2.0 * g * c, 1.5);  // 4 pi HG
-        for (int ch = 0; ch < 3; ++ch)
+        const glm::dvec3 channels = peakRadiance(p0, 3.0 * g * mean * d, w);  // the three at once (the gathering's)
+        for (int ch = 0; ch < 3; ++ch) {
             EXPECT_NEAR(peakRadiance(p0[ch], mean, 3.0 * g * mean * d, w), p0[ch] * hg, 1e-9 * hg) << c << " " << ch;
+            EXPECT_EQ(channels[ch], peakRadiance(p0[ch], mean, 3.0 * g * mean * d, w)) << c << " " << ch;  // bit for bit
+        }
     }
     EXPECT_DOUBLE_EQ(peakRadiance(0.5, mean, glm::dvec3(0.0), d), 0.5);  // no moment: isotropic
     EXPECT_DOUBLE_EQ(peakRadiance(0.0, 0.0, d, d), 0.0);                 // no light
+    EXPECT_EQ(peakRadiance(glm::dvec3(0.0), d, d), glm::dvec3(0.0));
 }
 
 TEST(SourceLobe, SurfaceLobeKeepsTheExitanceAndTheShape) {
