@@ -627,8 +627,8 @@ def test_lumps_over_the_snows_surface_mesh_too_many_to_gather_are_light_traced(t
     # densities (bind_transport.cpp: unionDensity, then bakeScattering) and writes each object's part, which
     # render_baked cannot draw together; union_density writes that union, whose bake is the same bake (the same plan
     # and photons), drawn whole, against the core's Monte Carlo of that union. Oracle: 16 paths per pixel, noise some
-    # 12 % per 4 x 4 block, 3 % on the sum. Measured: bake seeds 0-2 17.1, 17.8, 14.5 % per block, bias +2.1, +2.3, +3.2 %; the
-    # diffusion (light_tracing=False, where the least photons stayed 65,536) 41.3 %, +13.6 %.
+    # 12 % per 4 x 4 block, 3 % on the sum. Measured: bake seeds 0-2 17.1, 17.8, 14.5 % per block, bias +2.1, +2.3,
+    # +3.2 %; the diffusion (light_tracing=False, where the least photons stayed 65,536) 41.3 %, +13.6 %.
     from block_compare import blocks
     union = str(tmp_path / "union.vdb")
     firncore.union_density([tracked, spray], union)
