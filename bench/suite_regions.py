@@ -31,7 +31,8 @@ def sun_depth(case, points):
     for i, p in enumerate(points):
         if np.all(np.isfinite(p)):
             line = p + steps[:, None] * towards
-            out[i] = bake_suite.trilinear(case.density, line / case.voxel).sum() * (steps[1] - steps[0]) * case.sigma_t / case.rho
+            column = bake_suite.trilinear(case.density, line / case.voxel).sum() * (steps[1] - steps[0])
+            out[i] = column * case.sigma_t / case.rho
     return out
 
 
