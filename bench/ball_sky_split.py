@@ -31,6 +31,7 @@ SKY = 0.05  # W/m^2/sr
 RADIUS = 0.05  # m
 EXTINCTION_PER_DENSITY = 1000.0 / 100.0  # m^2/kg: sigma_t 1000/m at 100 kg/m^3
 OPTICS = firncore.VolumeOptics(EXTINCTION_PER_DENSITY, (0.98,) * 3, 0.85)
+DEPTHS = (0.0, 0.5, 1.0, 2.0, 3.0, 5.0)  # optical depths crossed where the rays of part 1 start
 
 
 def optical_depths(density, voxel, origin, direction, steps):
@@ -50,7 +51,7 @@ def rays_into(density, voxel, slab, mu, count=24, seed=2):
         if slab:
             normal = np.array([0.0, 0.0, 1.0])
             target = np.array([centre[0] + rng.uniform(-4, 4) * voxel, centre[1] + rng.uniform(-4, 4) * voxel,
-                               (n[2] - 1) * voxel])
+                               (n[2] - 1) * voxel])  # over the top's middle, in the air above it
         else:
             v = rng.normal(size=3)
             normal = v / np.linalg.norm(v)
@@ -66,10 +67,9 @@ def rays_into(density, voxel, slab, mu, count=24, seed=2):
     return np.array(origins), np.array(directions)
 
 
-DEPTHS = (0.0, 0.5, 1.0, 2.0, 3.0, 5.0)
-
 
 def along_rays(path, density, voxel, slab, mu, samples):
+    """Per start depth: the Monte Carlo's and the bake's mean radiance (in L_sky) and the bake's relative error."""
     origins, directions = rays_into(density, voxel, slab, mu)
     sky = firncore.Sky((SKY,) * 3)
     baked = firncore.render_baked(path, OPTICS, origins, directions)[:, 1].reshape(-1, len(DEPTHS))
@@ -80,6 +80,7 @@ def along_rays(path, density, voxel, slab, mu, samples):
 
 
 def view(path, density, voxel, pixels, samples):
+    """The view's albedo per sky intercepted, and the bake against the Monte Carlo per mu at optical depth 1."""
     n = np.array(density.shape)
     centre = (n - 1) / 2 * voxel
     half = 1.05 * RADIUS
