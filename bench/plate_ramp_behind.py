@@ -7,7 +7,8 @@ voxels with air among their 26 neighbours, and air voxels beside snow: those tha
 outward normal (the density's gradient, smoothed over 3^3) the ray leaves along (n . d > --leaving, d the ray's
 travel: the light it sees travels into that surface; -0.2 counts grazing views too) is the block's "behind" share.
 Blocks binned by that share: their count, share of the summed |relative error|, mean |error| and bias (baked against
-the suite's 4096-path reference, FINAL, seed 0), per view.
+the suite's 4096-path reference, FINAL, seed 0), per view; and the blocks of the outer pixel columns, whose rays run
+inside the +-y cut sides' ramps.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/plate_ramp_behind.py [--leaving 0]
 """
@@ -97,6 +98,16 @@ def main():
             print(f"  {lo:4.2f}-{min(hi, 1.0):4.2f}     {3 * m.sum():>6} {100 * rel[m].sum() / total:5.1f}% "
                   f"{100 * rel[m].mean():5.1f}% {100 * (baked[m].sum() / reference[m].sum() - 1):+6.1f}%   " +
                   "     ".join(per_view))
+    # The suite's pixel grid puts its outer columns at y -0.35 and 29.35 voxels: those rays run along the +-y cut
+    # sides inside their ramps, which they see edge-on.
+    column = np.tile(np.arange(case.pixels ** 2) % case.pixels, len(case.views))
+    edge = (column == 0) | (column == case.pixels - 1)
+    for name, m in (("outer columns (along the +-y sides)", seen & edge), ("the other columns", seen & ~edge)):
+        print(f"  {name}: {3 * m.sum()} blocks, {100 * rel[m].sum() / total:.1f} % of the summed error, mean "
+              f"{100 * rel[m].mean():.1f} %, bias {100 * (baked[m].sum() / reference[m].sum() - 1):+.1f} %; " +
+              ", ".join(f"{case.views[v]} {100 * rel[m & (view == v)].mean():.1f} % / "
+                        f"{100 * (baked[m & (view == v)].sum() / reference[m & (view == v)].sum() - 1):+.1f} %"
+                        for v in range(len(case.views))))
     order = np.argsort(-np.nan_to_num(share, nan=-1.0))[:12]
     print("the blocks of the largest behind share: view, row from the top, column, share, green error")
     for i in order:
