@@ -33,12 +33,31 @@ def box_sum(a):
     return out
 
 
+PAD = 3  # empty voxels around the case's density grid
+
+
+def padded_normals(case):
+    """The case's density padded by PAD empty voxels, and its outward unit normals (the gradient over 3^3)."""
+    rho = np.pad(case.density, PAD)
+    normal = -np.stack(np.gradient(box_sum(rho)), axis=-1)
+    return rho, normal / np.maximum(np.linalg.norm(normal, axis=-1, keepdims=True), 1e-12)
+
+
+def baked_and_reference(case, folder, origins, directions):
+    """The case's density file in folder, baked (FINAL, seed 0): its path, the baked render and the suite's cached
+    reference."""
+    path = os.path.join(folder, case.name + ".vdb")
+    bs.write_density(path, case.density, case.voxel)
+    reference, _, _ = bs.reference(case, path, origins, directions,
+                                   os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders, quality="FINAL",
+                  seed=0)
+    return path, firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders), reference
+
+
 def behind_share(case, origins, directions, seen, leaving):
     """Per ray: the share of its emission weight on surface voxels seen from behind (the module's docstring)."""
-    pad = 3
-    rho = np.pad(case.density, pad)
-    normal = -np.stack(np.gradient(box_sum(rho)), axis=-1)
-    normal /= np.maximum(np.linalg.norm(normal, axis=-1, keepdims=True), 1e-12)
+    rho, normal = padded_normals(case)
     snow = rho > 0.0
     near_air = box_sum(~snow) > 0
     near_snow = box_sum(snow) > 0
@@ -47,7 +66,7 @@ def behind_share(case, origins, directions, seen, leaving):
     dl = steps[1] - steps[0]
     share = np.full(len(origins), np.nan)
     for i in np.nonzero(seen)[0]:
-        p = (origins[i] + steps[:, None] * directions[i]) / case.voxel + pad
+        p = (origins[i] + steps[:, None] * directions[i]) / case.voxel + PAD
         sigma = bs.trilinear(rho, p) * case.sigma_t / case.rho
         w = sigma * np.exp(-np.cumsum(sigma) * dl) * dl
         f = np.floor(p).astype(int)
@@ -73,13 +92,7 @@ def main():
     share = behind_share(case, origins, directions, seen, args.leaving)
     view = np.repeat(np.arange(len(case.views)), case.pixels ** 2)
     with tempfile.TemporaryDirectory() as folder:
-        path = os.path.join(folder, "bumpy.vdb")
-        bs.write_density(path, case.density, case.voxel)
-        reference, _, _ = bs.reference(case, path, origins, directions,
-                                       os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
-        firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
-                      quality="FINAL", seed=0)
-        baked = firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)
+        _, baked, reference = baked_and_reference(case, folder, origins, directions)
     with np.errstate(invalid="ignore", divide="ignore"):
         rel = np.abs(baked / reference - 1.0)
     total = rel[seen].sum()

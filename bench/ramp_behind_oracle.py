@@ -19,10 +19,10 @@ import pyopenvdb
 
 import bake_suite as bs
 import firncore
-from plate_ramp_behind import box_sum
+from plate_ramp_behind import PAD, baked_and_reference, box_sum, padded_normals
 
 
-def scaled_grids(path, mask, pad, factor):
+def scaled_grids(path, mask, factor):
     """The file's grids with the source grids' values at mask (padded density index) scaled, and its metadata."""
     grids, metadata = pyopenvdb.readAll(path)
     for g in grids:
@@ -32,7 +32,7 @@ def scaled_grids(path, mask, pad, factor):
         shape = tuple(np.array(hi) - np.array(lo) + 1)
         values = np.zeros(shape + (3,), np.float32)
         g.copyToArray(values, ijk=lo)
-        at = np.argwhere(np.ones(shape, bool)) + np.array(lo) + pad
+        at = np.argwhere(np.ones(shape, bool)) + np.array(lo) + PAD
         inside = np.all((at >= 0) & (at < np.array(mask.shape)), axis=1)
         chosen = np.zeros(len(at), bool)
         chosen[inside] = mask[at[inside, 0], at[inside, 1], at[inside, 2]]
@@ -51,10 +51,7 @@ def main():
     origins, directions, tau = bs.views(case)
     seen = tau >= 1.0
     per = case.pixels ** 2
-    pad = 3
-    rho = np.pad(case.density, pad)
-    normal = -np.stack(np.gradient(box_sum(rho)), axis=-1)
-    normal /= np.maximum(np.linalg.norm(normal, axis=-1, keepdims=True), 1e-12)
+    rho, normal = padded_normals(case)
     snow = rho > 0.0
     air_beside = ~snow & (box_sum(snow) > 0)
 
@@ -64,17 +61,11 @@ def main():
                 f"bias {100 * (baked[seen].sum() / reference[seen].sum() - 1):+.2f} %")
 
     with tempfile.TemporaryDirectory() as folder:
-        path = os.path.join(folder, "case.vdb")
-        bs.write_density(path, case.density, case.voxel)
-        reference, _, _ = bs.reference(case, path, origins, directions,
-                                       os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
-        firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
-                      quality="FINAL", seed=0)
-        baked = firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)
+        path, baked, reference = baked_and_reference(case, folder, origins, directions)
         oracle = baked.copy()
         for v in range(len(case.views)):
             rays = slice(v * per, (v + 1) * per)
-            grids, metadata = scaled_grids(path, air_beside & (normal @ directions[v * per] > args.leaving), pad,
+            grids, metadata = scaled_grids(path, air_beside & (normal @ directions[v * per] > args.leaving),
                                            args.factor)
             view_path = os.path.join(folder, f"view{v}.vdb")
             pyopenvdb.write(view_path, grids=grids, metadata=metadata)
