@@ -7,10 +7,12 @@ gradient over 3^3) the view's rays leave along (n . d > --leaving) is scaled by 
 bench/ramp_from_behind.py measures in the ramp's outer part (x 29.85: +48 %). Against the suite's cached reference.
 
 --edges (bumpy_plate): instead, for every view, the top snow voxel of each column on the layer's four cut sides (the
-layer's convex top edge), and with --edges-air their air neighbours across the cut sides too.
+layer's convex top edge), and with --edges-air their air neighbours across the cut sides too. --corners (bumpy_plate):
+the four voxel columns where two cut sides meet (the layer's vertical corners, snow and the air above), with --edges
+added to them.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/ramp_behind_oracle.py [--case bumpy_plate] [--factor 0.676]
-        [--leaving 0] [--edges [--edges-air]]
+        [--leaving 0] [--edges [--edges-air]] [--corners]
 """
 
 import argparse
@@ -61,6 +63,16 @@ def cut_top_edges(snow, with_air):
     return edge
 
 
+def corner_columns(snow):
+    """bumpy_plate's four vertical corners in the padded grid: the voxel columns where two cut sides meet."""
+    last = PAD + snow.shape[0] - 2 * PAD - 1
+    corner = np.zeros(snow.shape, bool)
+    for x in (PAD, last):
+        for y in (PAD, last):
+            corner[x, y, :] = True
+    return corner
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--case", default="bumpy_plate")
@@ -68,6 +80,7 @@ def main():
     parser.add_argument("--leaving", type=float, default=0.0)
     parser.add_argument("--edges", action="store_true", help="scale bumpy_plate's cut top edge instead")
     parser.add_argument("--edges-air", action="store_true", help="with --edges: their air neighbours too")
+    parser.add_argument("--corners", action="store_true", help="scale bumpy_plate's four vertical corner columns")
     args = parser.parse_args()
     case = next(c for c in bs.cases() if c.name == args.case)
     origins, directions, tau = bs.views(case)
@@ -87,15 +100,22 @@ def main():
         oracle = baked.copy()
         for v in range(len(case.views)):
             rays = slice(v * per, (v + 1) * per)
-            mask = (cut_top_edges(snow, args.edges_air) if args.edges else
-                    air_beside & (normal @ directions[v * per] > args.leaving))
+            if args.edges or args.corners:
+                mask = corner_columns(snow) if args.corners else np.zeros(snow.shape, bool)
+                if args.edges:
+                    mask |= cut_top_edges(snow, args.edges_air)
+            else:
+                mask = air_beside & (normal @ directions[v * per] > args.leaving)
             grids, metadata = scaled_grids(path, mask, args.factor)
             view_path = os.path.join(folder, f"view{v}.vdb")
             pyopenvdb.write(view_path, grids=grids, metadata=metadata)
             oracle[rays] = firncore.render_baked(view_path, case.optics, origins[rays], directions[rays],
                                                  occluders=case.occluders)
-    scaled = (f"the cut top edge{' and its air neighbours' if args.edges_air else ''}" if args.edges else
-              f"the ramp seen from behind (n . d > {args.leaving})")
+    edges = f"the cut top edge{' and its air neighbours' if args.edges_air else ''}"
+    if args.corners:
+        scaled = "the four corner columns" + (f" and {edges}" if args.edges else "")
+    else:
+        scaled = edges if args.edges else f"the ramp seen from behind (n . d > {args.leaving})"
     print(f"{case.name}: baked {score(baked)}; {scaled} x {args.factor:.3f}: {score(oracle)}")
 
 
