@@ -130,4 +130,36 @@ TEST(SnowTopology, NormalsOfATiltedLayerOnTheGroundUnderItsFringeFollowItsPlane)
     EXPECT_LT(worstTiltedLayerAngle(0.9, 0.03, 5.0), 2.0);
 }
 
+// A wall's vertical edge where a slope runs down to it: a block of full voxels (x, y 0-9 voxels, z up to x + 2,
+// a stair rising a voxel per voxel towards the +x wall) on a ground. Voxel (9, 0, 10) has the +x wall and the -y
+// side in air; the wall goes on flat along +y, the side along -x for one voxel only (the stair's top takes the
+// next). Its light leaves through those two faces, not through one normal blending them: sharp (as bumpy_plate's
+// corner columns under its slope, docs/benchmarks.md plate-corner; main: smooth). (9, 0, 5), flat both ways for
+// two voxels, was sharp already; the stair's own steps (their +z and -x faces, neither flat past the other: a
+// staircase) stay smooth.
+TEST(SnowTopology, AWallsEdgeUnderASlopeIsSharp) {
+    initializeOpenVdb();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    auto acc = grid->getAccessor();
+    for (int x = 0; x < 10; ++x)
+        for (int y = 0; y < 10; ++y)
+            for (int z = 0; z <= x + 2; ++z) acc.setValue(openvdb::Coord(x, y, z), 100.0f);
+    const Medium medium(grid, VolumeOptics{5.0, Rgb(0.9), 0.6});
+    const float z = -0.005f, v[] = {-1, -1, z, 1, -1, z, 1, 1, z, -1, 1, z};
+    const unsigned t[] = {0, 1, 2, 0, 2, 3};
+    const Occluders ground(makeTriangleMesh(v, 4, t, 2), std::vector<Rgb>(2, Rgb(0.5)));
+    const SnowTopology topo = buildSnowTopology(medium, ground, SubProgress(nullptr, 0.0, 1.0));
+    auto sharpAt = [&](int x, int y, int zc) {
+        for (std::size_t i = 0; i < topo.size(); ++i)
+            if (topo.coord[i] == openvdb::Coord(x, y, zc)) return topo.patches[i].sharp;
+        ADD_FAILURE() << "no voxel at " << x << " " << y << " " << zc;
+        return false;
+    };
+    EXPECT_TRUE(sharpAt(9, 0, 10));
+    EXPECT_TRUE(sharpAt(9, 0, 5));
+    EXPECT_FALSE(sharpAt(5, 5, 7));
+}
+
 }  // namespace firn
