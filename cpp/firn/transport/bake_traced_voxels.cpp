@@ -148,6 +148,10 @@ namespace {
 // A face's paths: a quarter of the voxel's own, 64 at least (addFaceSources).
 constexpr int kFacePathShare = 4;
 
+// A traced layer's voxels thicker than this gather their faces open to air on one side (addFaceSources); thinner
+// ones a camera sees through, as kTracedOpticalDepth has it.
+constexpr double kMinLayerFaceTau = 1.5;
+
 // A face job: voxel, face (0..5).
 using FaceJob = std::pair<std::size_t, int>;
 
@@ -249,10 +253,24 @@ Source shownByFaces(const SourceDirections &directions, const DirectionWeights &
 // 3 from above 6.5 -> 8.0 %). A face's paths are a quarter of the
 // voxel's own (64 at least). None where the gathering's `plan` and the faces' paths together would cost more than
 // kMaxTracedSteps.
+FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels) {
+    return {std::max(64, plan.paths / kFacePathShare), plan.steps / (double(plan.paths) * double(voxels)),
+            kMaxTracedSteps - plan.steps, {}};
+}
+
+FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
+                         std::vector<bool> inLayer, std::uint64_t seed) {
+    const GatheringPlan plan = planGathering(scene, preset, voxels, seed);
+    if (plan.paths == 0) return {};
+    return {plan.paths, plan.steps / (double(plan.paths) * double(voxels.size())), kWholePieceTracedSteps,
+            std::move(inLayer)};
+}
+
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
-                    const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
+                    const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced) {
-    const int samples = std::max(64, plan.paths / kFacePathShare);
+    const int samples = how.paths;
+    if (samples == 0) return;  // not affordable
     const Medium &medium = *scene.medium;
     Medium::Accessor density = medium.accessor();
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
@@ -260,17 +278,19 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     std::vector<FaceJob> jobs;  // by voxel
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         const std::int32_t i = index.getValue(voxels[v]);
-        if (i < 0 || !(voxelOpticalDepth(medium, density, voxels[v]) > kMaxDirectionFitTau)) continue;
+        if (i < 0) continue;
+        const double tau = voxelOpticalDepth(medium, density, voxels[v]);
         FaceSources faces;
-        faces.open = twoSidedFaces(topo, std::size_t(i));
+        if (how.inLayer.empty()) faces.open = tau > kMaxDirectionFitTau ? twoSidedFaces(topo, std::size_t(i)) : 0u;
+        else if (how.inLayer[v] && tau > kMinLayerFaceTau)
+            for (int f = 0; f < 6; ++f) faces.open |= unsigned(topo.isAirFace(std::size_t(i), f)) << f;
         if (!faces.open) continue;
         traced.facesAt[v] = std::int32_t(traced.faces.size());
         traced.faces.push_back(faces);
         for (int f = 0; f < 6; ++f)
             if (faces.open >> f & 1u) jobs.emplace_back(v, f);
     }
-    const double faceSteps = plan.steps / (double(plan.paths) * voxels.size()) * samples * jobs.size();
-    if (plan.steps + faceSteps > kMaxTracedSteps) {
+    if (how.stepsPerPath * samples * double(jobs.size()) > how.budget) {
         traced.facesAt.clear(), traced.faces.clear();
         return;
     }
