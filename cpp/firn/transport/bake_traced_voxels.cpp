@@ -238,21 +238,6 @@ Source shownByFaces(const SourceDirections &directions, const DirectionWeights &
 
 }  // namespace
 
-// A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels'
-// mean source (the one both its air neighbours carried) is not: at sigma_t h 15, lit from above, the top views read
-// -34 % (docs/bake.md, Method 3). Its traced voxels thicker than kMaxDirectionFitTau open to air on both faces
-// along an axis gather, for each of those faces, where that face's cameras collide (faceSourceIn). In a flat
-// layer (kMinLayerNeighbours) the light there is split by the trilinear hat between what the air neighbour across
-// the face carries (faceCarried) and what the voxel's own value shows those cameras (FaceSources::shown; towards
-// each direction the face its cameras look through), each fitted by direction, the estimates' directions pooled
-// over the layer (pooledOverFace); the voxel's mean stays what its other neighbours carry (a layer's rim seen
-// edge-on). The 16 x 16 x 1 layer at sigma_t h 15 (bench/snow_on_ground_bench.py --float): from above 33.3 % per
-// block (main before float-voxel) -> 9.1 % (faces carried their whole collisions' source, the voxel its mean) ->
-// 8.8 %, from below 52.4 -> 19.2 -> 10.7 %: seen from below the mean is 46 % brighter than what the voxel shows
-// there (the sun-lit top's light, forward), from above 32 % darker (docs/benchmarks.md, float-under; at sigma_t h
-// 3 from above 6.5 -> 8.0 %). A face's paths are a quarter of the
-// voxel's own (64 at least). None where the gathering's `plan` and the faces' paths together would cost more than
-// kMaxTracedSteps.
 FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels) {
     return {std::max(64, plan.paths / kFacePathShare), plan.steps / (double(plan.paths) * double(voxels)),
             kMaxTracedSteps - plan.steps, {}};
@@ -266,6 +251,24 @@ FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::ve
             std::move(inLayer)};
 }
 
+// A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels'
+// mean source (the one both its air neighbours carried) is not: at sigma_t h 15, lit from above, the top views read
+// -34 % (docs/bake.md, Method 3). Its traced voxels thicker than kMaxDirectionFitTau open to air on both faces
+// along an axis gather, for each of those faces, where that face's cameras collide (faceSourceIn). In a flat
+// layer (kMinLayerNeighbours) the light there is split by the trilinear hat between what the air neighbour across
+// the face carries (faceCarried) and what the voxel's own value shows those cameras (FaceSources::shown; towards
+// each direction the face its cameras look through), each fitted by direction, the estimates' directions pooled
+// over the layer (pooledOverFace); the voxel's mean stays what its other neighbours carry (a layer's rim seen
+// edge-on). The 16 x 16 x 1 layer at sigma_t h 15 (bench/snow_on_ground_bench.py --float): from above 33.3 % per
+// block (main before float-voxel) -> 9.1 % (faces carried their whole collisions' source, the voxel its mean) ->
+// 8.8 %, from below 52.4 -> 19.2 -> 10.7 %: seen from below the mean is 46 % brighter than what the voxel shows
+// there (the sun-lit top's light, forward), from above 32 % darker (docs/benchmarks.md, float-under; at sigma_t h
+// 3 from above 6.5 -> 8.0 %). A face's paths are a quarter of the
+// voxel's own (64 at least). None where the faces' paths would cost more than `how.budget` (what the gathering
+// leaves of kMaxTracedSteps). A traced layer light traced whole (how.inLayer) is seen so too, from one side: its
+// voxels of sigma_t h > kMinLayerFaceTau gather each face open to air, at the gathering's paths per voxel (the
+// light tracing gave them none; a quarter of them, 128, left a 5.9 % spread per block), within kWholePieceTracedSteps:
+// slab_thin 6.2 -> 3.9 % per block, from below (0, -60) +8 -> +3 % (docs/benchmarks.md, slab-thin).
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
                     const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced) {
