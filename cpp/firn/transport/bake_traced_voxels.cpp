@@ -247,8 +247,8 @@ FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::ve
                          std::vector<bool> inLayer, std::uint64_t seed) {
     const GatheringPlan plan = planGathering(scene, preset, voxels, seed);
     if (plan.paths == 0) return {};
-    return {plan.paths, plan.steps / (double(plan.paths) * double(voxels.size())), kWholePieceTracedSteps,
-            std::move(inLayer)};
+    return {plan.paths, plan.steps / (double(plan.paths) * double(voxels.size())),
+            kMaxTracedSteps - kWholePieceTracedSteps, std::move(inLayer)};
 }
 
 // A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels'
@@ -267,8 +267,9 @@ FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::ve
 // voxel's own (64 at least). None where the faces' paths would cost more than `how.budget` (what the gathering
 // leaves of kMaxTracedSteps). A traced layer light traced whole (how.inLayer) is seen so too, from one side: its
 // voxels of sigma_t h > kMinLayerFaceTau gather each face open to air, at the gathering's paths per voxel (the
-// light tracing gave them none; a quarter of them, 128, left a 5.9 % spread per block), within kWholePieceTracedSteps:
-// slab_thin 6.2 -> 3.9 % per block, from below (0, -60) +8 -> +3 % (docs/benchmarks.md, slab-thin).
+// light tracing gave them none; a quarter of them, 128, left a 5.9 % spread per block), within what the light
+// tracing leaves of kMaxTracedSteps (its pilot's estimate for slab_thin's 1440 faces is 3.5e7 steps at seeds 0-1 and
+// 6.6e7 at seed 2): slab_thin 6.2 -> 3.9 % per block, from below (0, -60) +8 -> +3 % (docs/benchmarks.md, slab-thin).
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
                     const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced) {

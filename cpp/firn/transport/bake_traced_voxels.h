@@ -79,7 +79,7 @@ struct FaceGathering {
 // The gathered voxels' faces: a quarter of the voxel's paths, within what the gathering leaves of kMaxTracedSteps.
 FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels);
 // A traced layer's faces (`inLayer` per voxel of `voxels`, light traced whole): as many paths as gathering a voxel
-// would take, within kWholePieceTracedSteps.
+// would take, within what the light tracing leaves of kMaxTracedSteps.
 FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                          std::vector<bool> inLayer, std::uint64_t seed);
 
