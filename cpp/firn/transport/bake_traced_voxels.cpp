@@ -151,6 +151,9 @@ constexpr int kFacePathShare = 4;
 // A traced layer's voxels thicker than this gather their faces open to air on one side (addFaceSources); thinner
 // ones a camera sees through, as kTracedOpticalDepth has it.
 constexpr double kMinLayerFaceTau = 1.5;
+// ... and at least this many paths per face, else none: at 128 (slab_thin, FINAL's 512 / 4) the faces' noise ate what
+// they mended (one seed 6.2 %, as without them), at DRAFT's 64 8.2 % against 6.5 % without (docs/benchmarks.md, slab-thin).
+constexpr int kMinLayerFacePaths = 256;
 
 // A face job: voxel, face (0..5).
 using FaceJob = std::pair<std::size_t, int>;
@@ -246,7 +249,7 @@ FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels) 
 FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                          std::vector<bool> inLayer, std::uint64_t seed) {
     const GatheringPlan plan = planGathering(scene, preset, voxels, seed);
-    if (plan.paths == 0) return {};
+    if (plan.paths < kMinLayerFacePaths) return {};
     return {plan.paths, plan.steps / (double(plan.paths) * double(voxels.size())),
             kMaxTracedSteps - kWholePieceTracedSteps, std::move(inLayer)};
 }
