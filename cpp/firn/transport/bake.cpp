@@ -33,7 +33,8 @@ namespace firn {
 using bake::ChannelStorage, bake::ChannelSystem, bake::GatheringPlan, bake::GridValues, bake::MonteCarloVoxels,
     bake::Preset, bake::SnowIrradiance, bake::SnowLight, bake::SourceValues, bake::SurfaceLight, bake::SurfaceTerms,
     bake::TracedSnow;
-using bake::addFaceSources, bake::assemble, bake::gridValues, bake::lightTracedAtGatheringCost, bake::lightTraceSources,
+using bake::addFaceSources, bake::assemble, bake::gatheredVoxelFaces, bake::gridValues, bake::layerFaces,
+    bake::lightTracedAtGatheringCost, bake::lightTraceSources,
     bake::makeGrids, bake::planGathering, bake::referenceSurface, bake::snowIrradiance, bake::sourceFunction,
     bake::sourceGrid, bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
 using bake::kMaxTracedSteps, bake::kWholePieceTracedSteps;
@@ -313,7 +314,15 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                     whole.insert(whole.end(), snow.wholePieces.begin(), snow.wholePieces.end());
                     traced = lightTraceSources(scene, whole, settings.seed ^ 0x7EACEull, progress, local,
                                                kWholePieceTracedSteps, preset.lightTracingShare);
-                    if (!traced.source.empty()) thin = std::move(whole);
+                    if (!traced.source.empty()) {
+                        std::vector<bool> inLayer(thin.size(), false);
+                        inLayer.insert(inLayer.end(), snow.inLayer.begin(), snow.inLayer.end());
+                        thin = std::move(whole);
+                        if (std::find(inLayer.begin(), inLayer.end(), true) != inLayer.end())
+                            addFaceSources(scene, topo, thin,
+                                           layerFaces(scene, preset, thin, std::move(inLayer), settings.seed ^ 0x7EACEull),
+                                           settings.seed ^ 0xFACEull, progress, traced);
+                    }
                 }
                 if (traced.source.empty()) {
                     const GatheringPlan plan = planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull);
@@ -328,7 +337,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                             traced = lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local,
                                                        kMaxTracedSteps, preset.lightTracingShare);
                         if (plan.paths > 0)
-                            addFaceSources(scene, topo, thin, plan, settings.seed ^ 0xFACEull, progress, traced);
+                            addFaceSources(scene, topo, thin, gatheredVoxelFaces(plan, thin.size()),
+                                           settings.seed ^ 0xFACEull, progress, traced);
                     }
                 }
                 progress.report(1.0);  // none traced, or light traced (its fit does not report)

@@ -63,7 +63,14 @@ constexpr double kMaxTracedSmallPieceReducedVolume = 4096.0;
 constexpr double kMaxTracedPieceReducedVolume = 64.0, kMaxTracedPieceDepth = 2.5, kTracedLayerOpticalDepth = 2.25,
                  kTracedLayerAbsorptionDepth = 0.1;
 // What a piece of connected snow is (26-neighbours of non-zero density), as marked in thinVoxels' `done`.
-enum PieceKind : std::int32_t { kUnvisited = 0, kSmallPiece = 1, kLargePiece = 2, kTransportThinPiece = 3 };
+// kTracedLayer: a transport-thin piece past both sizes, traced whole for having no inside (a layer).
+enum PieceKind : std::int32_t {
+    kUnvisited = 0,
+    kSmallPiece = 1,
+    kLargePiece = 2,
+    kTransportThinPiece = 3,
+    kTracedLayer = 4
+};
 
 // How deep `c` lies in its snow: the least reduced optical depth (sigma_tr h = reducedPerDensity * density per
 // voxel) from its centre to the air along the six axis directions, `enough` at most. The six walks go in step
@@ -143,7 +150,11 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
     const bool small = !large && int(piece.size()) <= kSmallPieceVoxels;
     const bool wide = reduced > kMaxTracedSmallPieceReducedVolume;
     const bool denseLayer = small && notLayer && (wide || !hasInside()) && oneSided();
-    const PieceKind kind = large || denseLayer ? kLargePiece : small ? kSmallPiece : kTransportThinPiece;
+    const bool layer = reduced > kMaxTracedPieceReducedVolume;
+    const PieceKind kind = large || denseLayer ? kLargePiece
+                           : small             ? kSmallPiece
+                           : layer             ? kTracedLayer
+                                               : kTransportThinPiece;
     if (kind != kSmallPiece)
         for (const openvdb::Coord &c : piece) done.setValue(c, kind);
     return kind;
@@ -180,7 +191,10 @@ TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
                 for (int dz = -1; dz <= 1 && !nearThick; ++dz)
                     nearThick = density.getValue(it.getCoord().offsetBy(dx, dy, dz)) >= thickFrom;
         if (!nearThick) out.thin.push_back(it.getCoord());
-        else if (mark == kTransportThinPiece) out.wholePieces.push_back(it.getCoord());
+        else if (mark == kTransportThinPiece || mark == kTracedLayer) {
+            out.wholePieces.push_back(it.getCoord());
+            out.inLayer.push_back(mark == kTracedLayer);
+        }
     }
     return out;
 }

@@ -13,9 +13,11 @@
 namespace firn::bake {
 
 // The voxels traced rather than diffused: `thin`, and the other voxels of transport-thin pieces (`wholePieces`:
-// traced too where light tracing takes them, bakeScattering).
+// traced too where light tracing takes them, bakeScattering; `inLayer`, per whole piece voxel: its piece is a layer,
+// traced whole for having no inside).
 struct TracedSnow {
     std::vector<openvdb::Coord> thin, wholePieces;
+    std::vector<bool> inLayer;
 };
 
 // The faces of unknown i on the axes along which it has air (no snow, no occluder) on both faces: bit f for face f

@@ -148,6 +148,13 @@ namespace {
 // A face's paths: a quarter of the voxel's own, 64 at least (addFaceSources).
 constexpr int kFacePathShare = 4;
 
+// A traced layer's voxels thicker than this gather their faces open to air on one side (addFaceSources); thinner
+// ones a camera sees through, as kTracedOpticalDepth has it.
+constexpr double kMinLayerFaceTau = 1.5;
+// ... and at least this many paths per face, else none: at 128 (slab_thin, FINAL's 512 / 4) the faces' noise ate what
+// they mended (one seed 6.2 %, as without them), at DRAFT's 64 8.2 % against 6.5 % without (docs/benchmarks.md, slab-thin).
+constexpr int kMinLayerFacePaths = 256;
+
 // A face job: voxel, face (0..5).
 using FaceJob = std::pair<std::size_t, int>;
 
@@ -234,6 +241,19 @@ Source shownByFaces(const SourceDirections &directions, const DirectionWeights &
 
 }  // namespace
 
+FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels) {
+    return {std::max(64, plan.paths / kFacePathShare), plan.steps / (double(plan.paths) * double(voxels)),
+            kMaxTracedSteps - plan.steps, {}};
+}
+
+FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
+                         std::vector<bool> inLayer, std::uint64_t seed) {
+    const GatheringPlan plan = planGathering(scene, preset, voxels, seed);
+    if (plan.paths < kMinLayerFacePaths) return {};
+    return {plan.paths, plan.steps / (double(plan.paths) * double(voxels.size())),
+            kMaxTracedSteps - kWholePieceTracedSteps, std::move(inLayer)};
+}
+
 // A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels'
 // mean source (the one both its air neighbours carried) is not: at sigma_t h 15, lit from above, the top views read
 // -34 % (docs/bake.md, Method 3). Its traced voxels thicker than kMaxDirectionFitTau open to air on both faces
@@ -247,12 +267,17 @@ Source shownByFaces(const SourceDirections &directions, const DirectionWeights &
 // 8.8 %, from below 52.4 -> 19.2 -> 10.7 %: seen from below the mean is 46 % brighter than what the voxel shows
 // there (the sun-lit top's light, forward), from above 32 % darker (docs/benchmarks.md, float-under; at sigma_t h
 // 3 from above 6.5 -> 8.0 %). A face's paths are a quarter of the
-// voxel's own (64 at least). None where the gathering's `plan` and the faces' paths together would cost more than
-// kMaxTracedSteps.
+// voxel's own (64 at least). None where the faces' paths would cost more than `how.budget` (what the gathering
+// leaves of kMaxTracedSteps). A traced layer light traced whole (how.inLayer) is seen so too, from one side: its
+// voxels of sigma_t h > kMinLayerFaceTau gather each face open to air, at the gathering's paths per voxel (the
+// light tracing gave them none; a quarter of them, 128, left a 5.9 % spread per block), within what the light
+// tracing leaves of kMaxTracedSteps (its pilot's estimate for slab_thin's 1440 faces is 3.5e7 steps at seeds 0-1 and
+// 6.6e7 at seed 2): slab_thin 6.2 -> 3.9 % per block, from below (0, -60) +8 -> +3 % (docs/benchmarks.md, slab-thin).
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
-                    const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
+                    const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced) {
-    const int samples = std::max(64, plan.paths / kFacePathShare);
+    const int samples = how.paths;
+    if (samples == 0) return;  // not affordable
     const Medium &medium = *scene.medium;
     Medium::Accessor density = medium.accessor();
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
@@ -260,17 +285,19 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     std::vector<FaceJob> jobs;  // by voxel
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         const std::int32_t i = index.getValue(voxels[v]);
-        if (i < 0 || !(voxelOpticalDepth(medium, density, voxels[v]) > kMaxDirectionFitTau)) continue;
+        if (i < 0) continue;
+        const double tau = voxelOpticalDepth(medium, density, voxels[v]);
         FaceSources faces;
-        faces.open = twoSidedFaces(topo, std::size_t(i));
+        if (how.inLayer.empty()) faces.open = tau > kMaxDirectionFitTau ? twoSidedFaces(topo, std::size_t(i)) : 0u;
+        else if (how.inLayer[v] && tau > kMinLayerFaceTau)
+            for (int f = 0; f < 6; ++f) faces.open |= unsigned(topo.isAirFace(std::size_t(i), f)) << f;
         if (!faces.open) continue;
         traced.facesAt[v] = std::int32_t(traced.faces.size());
         traced.faces.push_back(faces);
         for (int f = 0; f < 6; ++f)
             if (faces.open >> f & 1u) jobs.emplace_back(v, f);
     }
-    const double faceSteps = plan.steps / (double(plan.paths) * voxels.size()) * samples * jobs.size();
-    if (plan.steps + faceSteps > kMaxTracedSteps) {
+    if (how.stepsPerPath * samples * double(jobs.size()) > how.budget) {
         traced.facesAt.clear(), traced.faces.clear();
         return;
     }

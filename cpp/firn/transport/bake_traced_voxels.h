@@ -67,10 +67,26 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
 MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
                               std::uint64_t seed, const SubProgress &progress);
 
-// The face sources (FaceSources) of the gathered `voxels` that are thick and open to air on both faces along an
-// axis, added to `traced` (none where they would cost more than kMaxTracedSteps with the gathering's `plan`).
+// Which traced voxels' faces gather their own source (addFaceSources), and at what cost.
+struct FaceGathering {
+    int paths = 0;              // per face
+    double stepsPerPath = 0.0;  // the gathering's pilot's
+    double budget = 0.0;        // tracking steps all the faces may take
+    // Per voxel: it lies in a traced layer (light traced whole), whose faces open to air on one side gather too.
+    // Empty: the gathered voxels, of which those open on both sides along an axis.
+    std::vector<bool> inLayer;
+};
+// The gathered voxels' faces: a quarter of the voxel's paths, within what the gathering leaves of kMaxTracedSteps.
+FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels);
+// A traced layer's faces (`inLayer` per voxel of `voxels`, light traced whole): as many paths as gathering a voxel
+// would take, within what the light tracing leaves of kMaxTracedSteps.
+FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
+                         std::vector<bool> inLayer, std::uint64_t seed);
+
+// The face sources (FaceSources) of the traced `voxels` that are thick and open to air on both faces along an axis
+// or lie in a traced layer (`how`), added to `traced`; none where they would cost more than its budget.
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
-                    const GatheringPlan &plan, std::uint64_t seed, const SubProgress &progress,
+                    const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced);
 
 // The voxels' sources light traced within `share` of `budget` tracking steps (planLightTracing); none (empty) where

@@ -58,15 +58,50 @@ TEST(FaceSources, EachTwoSidedVoxelHoldsItsFacesAndEscStopsThem) {
     const SubProgress none(nullptr, 0.0, 1.0);
     const bake::GatheringPlan plan{64, 64.0 * 1000.0 * double(voxels.size())};
     bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, plan.paths, 3, none);
-    bake::addFaceSources(scene, topo, voxels, plan, 5, none, traced);
+    bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan, voxels.size()), 5, none, traced);
     ASSERT_EQ(traced.faces.size(), voxels.size());
     for (const bake::FaceSources &faces : traced.faces) EXPECT_EQ(faces.open, 0b110000u);  // -z and +z
 
     Progress cancelled;
     cancelled.cancel();
     bake::MonteCarloVoxels again = bake::traceSources(scene, voxels, plan.paths, 3, none);
-    EXPECT_THROW(bake::addFaceSources(scene, topo, voxels, plan, 5, SubProgress(&cancelled, 0.0, 1.0), again),
+    EXPECT_THROW(bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan, voxels.size()), 5,
+                                      SubProgress(&cancelled, 0.0, 1.0), again),
                  Cancelled);
+}
+
+// A traced layer's voxels (light traced whole: FaceGathering::inLayer) hold a source for each face open to air,
+// one-sided too: a 4 x 4 x 3 layer of sigma_t h 2 (the suite's slab_thin) seen from below shows its lower face's
+// first optical depth, not its lowest voxels' mean (docs/benchmarks.md, slab-thin). Gathered per voxel (no
+// inLayer), a voxel open on one side along each axis gets none, as before.
+TEST(FaceSources, ATracedLayersVoxelsHoldTheirOneSidedFaces) {
+    const Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 2)),
+                                       float(2.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.99), 0.6},
+                                       glm::dvec3(0.866, 0.0, 0.5));
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    std::vector<openvdb::Coord> voxels;
+    for (int x = 0; x < 4; ++x)
+        for (int y = 0; y < 4; ++y)
+            for (int z = 0; z < 3; ++z) voxels.emplace_back(x, y, z);
+    const SubProgress none(nullptr, 0.0, 1.0);
+    bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, 64, 3, none);
+    bake::addFaceSources(scene, topo, voxels, {64, 1000.0, 1e12, {}}, 5, none, traced);
+    EXPECT_TRUE(traced.faces.empty());
+    bake::addFaceSources(scene, topo, voxels, {64, 1000.0, 1e12, std::vector<bool>(voxels.size(), true)}, 5, none,
+                         traced);
+    for (std::size_t v = 0; v < voxels.size(); ++v) {
+        const openvdb::Coord &c = voxels[v];
+        unsigned open = 0;  // bit f for face f (-x, +x, -y, +y, -z, +z)
+        for (int a = 0; a < 3; ++a) open |= unsigned(c[a] == 0) << (2 * a) | unsigned(c[a] == (a < 2 ? 3 : 2)) << (2 * a + 1);
+        if (open == 0) {  // the middle voxels: no air face
+            EXPECT_EQ(traced.facesAt[v], -1);
+            continue;
+        }
+        ASSERT_GE(traced.facesAt[v], 0);
+        EXPECT_EQ(traced.faces[std::size_t(traced.facesAt[v])].open, open);
+        for (int f : {4, 5})
+            if (open >> f & 1u) EXPECT_GT(traced.faces[std::size_t(traced.facesAt[v])].source[f].l0.x, 0.0);
+    }
 }
 
 // A face's collisions split by the trilinear hat as the quadrature splits them: at sigma_t h 2, where 17 % of them
