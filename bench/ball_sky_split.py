@@ -106,8 +106,9 @@ def view(path, density, voxel, pixels, samples):
     for lo, hi in ((0.9, 1.01), (0.75, 0.9), (0.6, 0.75), (0.45, 0.6), (0.3, 0.45), (0.0, 0.3)):
         m = seen & (mu >= lo) & (mu < hi)
         if m.any():
+            ratio = baked[m].sum() / reference[m].sum()
             lines.append(f"  mu at tau 1 {lo:.2f}-{min(hi, 1.0):.2f} ({m.sum():3d} pixels): Monte Carlo "
-                         f"{reference[m].mean() / SKY:.3f} L_sky, baked / Monte Carlo {baked[m].sum() / reference[m].sum():.3f}")
+                         f"{reference[m].mean() / SKY:.3f} L_sky, baked / Monte Carlo {ratio:.3f}")
     return "\n".join(lines)
 
 

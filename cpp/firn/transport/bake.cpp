@@ -318,10 +318,11 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                         std::vector<bool> inLayer(thin.size(), false);
                         inLayer.insert(inLayer.end(), snow.inLayer.begin(), snow.inLayer.end());
                         thin = std::move(whole);
-                        if (std::find(inLayer.begin(), inLayer.end(), true) != inLayer.end())
-                            addFaceSources(scene, topo, thin,
-                                           layerFaces(scene, preset, thin, std::move(inLayer), settings.seed ^ 0x7EACEull),
-                                           settings.seed ^ 0xFACEull, progress, traced);
+                        if (std::find(inLayer.begin(), inLayer.end(), true) != inLayer.end()) {
+                            const bake::FaceGathering faces =
+                                layerFaces(scene, preset, thin, std::move(inLayer), settings.seed ^ 0x7EACEull);
+                            addFaceSources(scene, topo, thin, faces, settings.seed ^ 0xFACEull, progress, traced);
+                        }
                     }
                 }
                 if (traced.source.empty()) {

@@ -149,10 +149,12 @@ namespace {
 constexpr int kFacePathShare = 4;
 
 // A traced layer's voxels thicker than this gather their faces open to air on one side (addFaceSources); thinner
-// ones a camera sees through, as kTracedOpticalDepth has it.
+// ones a camera sees through, as kTracedOpticalDepth has it. Kept equal to kTracedOpticalDepth: the layer's voxels
+// that `thin` holds (marked out of the layer) are thinner and need none.
 constexpr double kMinLayerFaceTau = 1.5;
-// ... and at least this many paths per face, else none: at 128 (slab_thin, FINAL's 512 / 4) the faces' noise ate what
-// they mended (one seed 6.2 %, as without them), at DRAFT's 64 8.2 % against 6.5 % without (docs/benchmarks.md, slab-thin).
+// ... and at least this many paths per face, else none: at 128 (slab_thin at FINAL: 512 / 4) the faces' noise ate
+// what they mended (one seed 6.2 %, as without them), at DRAFT's 64 8.2 % against 6.5 % without (docs/benchmarks.md,
+// slab-thin).
 constexpr int kMinLayerFacePaths = 256;
 
 // A face job: voxel, face (0..5).

@@ -19,8 +19,9 @@
 namespace firn::bake {
 
 // The sources a traced voxel's air neighbours carry where it is open to air on both faces along an axis
-// (twoSided) and thick: each face's own, gathered where a camera sees that face, and the voxel's own grid value,
-// what it shows those cameras (addFaceSources).
+// (twoSided) and thick, or on any face where it lies in a traced layer (FaceGathering::inLayer): each face's own,
+// gathered where a camera sees that face, and the voxel's own grid value, what it shows those cameras
+// (addFaceSources).
 struct FaceSources {
     std::array<Source, 6> source;  // by face, -x, +x, -y, +y, -z, +z
     unsigned open = 0;             // bit f: face f holds one

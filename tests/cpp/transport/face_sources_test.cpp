@@ -92,7 +92,8 @@ TEST(FaceSources, ATracedLayersVoxelsHoldTheirOneSidedFaces) {
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         const openvdb::Coord &c = voxels[v];
         unsigned open = 0;  // bit f for face f (-x, +x, -y, +y, -z, +z)
-        for (int a = 0; a < 3; ++a) open |= unsigned(c[a] == 0) << (2 * a) | unsigned(c[a] == (a < 2 ? 3 : 2)) << (2 * a + 1);
+        for (int a = 0; a < 3; ++a)
+            open |= unsigned(c[a] == 0) << (2 * a) | unsigned(c[a] == (a < 2 ? 3 : 2)) << (2 * a + 1);
         if (open == 0) {  // the middle voxels: no air face
             EXPECT_EQ(traced.facesAt[v], -1);
             continue;
