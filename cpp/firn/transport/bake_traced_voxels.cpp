@@ -243,17 +243,25 @@ Source shownByFaces(const SourceDirections &directions, const DirectionWeights &
 
 }  // namespace
 
+namespace {
+
+// Tracking steps a path of the plan's pilot takes on average over its `voxels`.
+double stepsPerPath(const GatheringPlan &plan, std::size_t voxels) {
+    return plan.steps / (double(plan.paths) * double(voxels));
+}
+
+}  // namespace
+
 FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels) {
-    return {std::max(64, plan.paths / kFacePathShare), plan.steps / (double(plan.paths) * double(voxels)),
-            kMaxTracedSteps - plan.steps, {}};
+    return {std::max(64, plan.paths / kFacePathShare), stepsPerPath(plan, voxels), kMaxTracedSteps - plan.steps, {}};
 }
 
 FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                          std::vector<bool> inLayer, std::uint64_t seed) {
     const GatheringPlan plan = planGathering(scene, preset, voxels, seed);
     if (plan.paths < kMinLayerFacePaths) return {};
-    return {plan.paths, plan.steps / (double(plan.paths) * double(voxels.size())),
-            kMaxTracedSteps - kWholePieceTracedSteps, std::move(inLayer)};
+    return {plan.paths, stepsPerPath(plan, voxels.size()), kMaxTracedSteps - kWholePieceTracedSteps,
+            std::move(inLayer)};
 }
 
 // A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels'
