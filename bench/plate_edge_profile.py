@@ -10,11 +10,12 @@ The rows y 0, 11 and 22 cross the bumps at the same phase (cos(2 pi y / 11 h) = 
 meet the top within 2.5 voxels of the sunlit +x wall: the layer's corner with the cut side at y 0 or 29).
 --omega W: the snow's single-scattering albedo instead of the case's 0.999 (a shorter diffusion length).
 --zero X,Y (repeatable): the baked render with every source grid cleared over the voxel column (X, Y) (an oracle: how
-much of a row's reading that column's voxels hold); --no-peak: with the peaked lobe's grids cleared.
+much of a row's reading that column's voxels hold); --no-peak: with the peaked lobe's grids cleared; --quality: the
+bake's (REFERENCE path traces every surface voxel's exit: what the grids' lobes can hold when their light is right).
 
     PYTHONPATH=build/python /usr/bin/python3 bench/plate_edge_profile.py [--view 180,50] [--light full|sun|sky]
         [--rows -0.35,0,0.5,1,2,4,8,11,22,29] [--samples 2048] [--split 19] [--omega 0.99]
-        [--zero 29,0 --zero 29,1] [--no-peak]
+        [--zero 29,0 --zero 29,1] [--no-peak] [--quality REFERENCE]
 """
 
 import argparse
@@ -59,6 +60,7 @@ def main():
     parser.add_argument("--omega", type=float, help="single-scattering albedo instead of the case's")
     parser.add_argument("--zero", action="append", default=[], help="X,Y: clear the sources over that column")
     parser.add_argument("--no-peak", action="store_true", help="clear the peaked lobe's grids")
+    parser.add_argument("--quality", default="FINAL", help="the bake's quality (REFERENCE: the surface path traced)")
     args = parser.parse_args()
     case = light_case(next(c for c in bs.cases() if c.name == "bumpy_plate"), args.light)
     if args.omega is not None:
@@ -71,14 +73,14 @@ def main():
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "bumpy.vdb")
         bs.write_density(path, case.density, h)
-        firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders, quality="FINAL",
+        firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders, quality=args.quality,
                       seed=0)
         if args.zero or args.no_peak:
             shown = os.path.join(folder, "cleared.vdb")
             cleared(path, [tuple(int(v) for v in c.split(",")) for c in args.zero], args.no_peak, shown)
         else:
             shown = path
-        print(f"bumpy_plate, view ({args.view}), {args.light} light: green, rows summed over x 3-26")
+        print(f"bumpy_plate, view ({args.view}), {args.light} light, {args.quality}: green, rows summed over x 3-26")
         xs = np.arange(3, 27)
         for y in (float(v) for v in args.rows.split(",")):
             origins = np.array([[x * h, y * h, 14 * h] for x in xs])
