@@ -315,12 +315,10 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                     traced = lightTraceSources(scene, whole, settings.seed ^ 0x7EACEull, progress, local,
                                                kWholePieceTracedSteps, preset.lightTracingShare);
                     if (!traced.source.empty()) {
-                        std::vector<bool> inLayer(thin.size(), false);
-                        inLayer.insert(inLayer.end(), snow.inLayer.begin(), snow.inLayer.end());
                         thin = std::move(whole);
-                        if (std::find(inLayer.begin(), inLayer.end(), true) != inLayer.end()) {
+                        if (std::find(snow.inLayer.begin(), snow.inLayer.end(), true) != snow.inLayer.end()) {
                             const bake::FaceGathering faces =
-                                layerFaces(scene, preset, thin, std::move(inLayer), settings.seed ^ 0x7EACEull);
+                                layerFaces(scene, preset, thin, std::move(snow.inLayer), settings.seed ^ 0x7EACEull);
                             addFaceSources(scene, topo, thin, faces, settings.seed ^ 0xFACEull, progress, traced);
                         }
                     }

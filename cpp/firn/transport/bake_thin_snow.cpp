@@ -176,6 +176,7 @@ TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
     openvdb::Int32Tree pieces(kUnvisited);
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> done(pieces);
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+    std::vector<bool> wholeInLayer;  // per voxel of out.wholePieces
     for (auto it = medium.density().cbeginValueOn(); it; ++it) {
         if (!(*it > 0.0f)) continue;
         std::int32_t mark = done.getValue(it.getCoord());
@@ -193,9 +194,11 @@ TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
         if (!nearThick) out.thin.push_back(it.getCoord());
         else if (mark == kTransportThinPiece || mark == kTracedLayer) {
             out.wholePieces.push_back(it.getCoord());
-            out.inLayer.push_back(mark == kTracedLayer);
+            wholeInLayer.push_back(mark == kTracedLayer);
         }
     }
+    out.inLayer.assign(out.thin.size(), false);
+    out.inLayer.insert(out.inLayer.end(), wholeInLayer.begin(), wholeInLayer.end());
     return out;
 }
 

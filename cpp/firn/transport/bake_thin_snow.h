@@ -13,8 +13,8 @@
 namespace firn::bake {
 
 // The voxels traced rather than diffused: `thin`, and the other voxels of transport-thin pieces (`wholePieces`:
-// traced too where light tracing takes them, bakeScattering; `inLayer`, per whole piece voxel: its piece is a layer,
-// traced whole for having no inside).
+// traced too where light tracing takes them, bakeScattering; `inLayer`, per voxel of `thin` then `wholePieces`, the
+// order the bake traces them whole in: its piece is a layer, traced whole for having no inside; never a thin one).
 struct TracedSnow {
     std::vector<openvdb::Coord> thin, wholePieces;
     std::vector<bool> inLayer;
