@@ -352,9 +352,9 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
 constexpr int kSkyBands = 3, kSkyAzimuths = 6;
 
 // The curvature (per voxel, positive convex) of the surface around surface voxel j at cj: least squares over the
-// surface voxels k of its 3^3 block (weighted by the cosine between their normals and j's) of n_k . t_k = kappa |t_k|^2,
-// t_k their offsets from the block's weighted mean across n_j; a sphere of R voxels gives 1 / R, flat snow 0. (The grids
-// keep the topology's index and patches alone: the neighbours by the index.)
+// surface voxels k of its 3^3 block (weighted by the cosine between their normals and j's) of
+// n_k . t_k = kappa |t_k|^2, t_k their offsets from the block's weighted mean across n_j; a sphere of R voxels gives
+// 1 / R, flat snow 0. (The grids keep the topology's index and patches alone: the neighbours by the index.)
 double surfaceCurvature(const SnowTopology &topo, const openvdb::Coord &cj,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
     const glm::dvec3 n = topo.patches[std::size_t(index.getValue(cj))].normal;
