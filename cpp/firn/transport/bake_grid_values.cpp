@@ -20,15 +20,18 @@ namespace firn::bake {
 
 namespace {
 
+// The offset of voxel k = 0..26 of a 3^3 block from its centre (13 is the centre), x fastest.
+openvdb::Coord blockOffset(int k) { return openvdb::Coord(k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1); }
+
 // The radiance the surface voxels around voxel c (outside the snow) show towards it: their values
 // weighted by how much their surface faces c (a voxel beside an edge takes the side's, one above it the
 // top's), and their normals so weighted (`facing`, unit; zero where none faces c). False if no surface voxel is
-// near.
+// near. `carrier`: the surface voxel facing c most (the first in blockOffset's order among equals), where one does.
 bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const SourceValues &source,
-                   Source &S, glm::dvec3 &facing) {
-    double total = 0.0;
-    int count = 0;
+                   Source &S, glm::dvec3 &facing, openvdb::Coord &carrier) {
+    double total = 0.0, most = 0.0;
+    int count = 0, mostAt = 27;
     glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0), normal(0.0);
     glm::dmat3 l1(0.0);
     for (int dx = -1; dx <= 1; ++dx)
@@ -38,6 +41,9 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 if (j < 0 || !topo.patches[j].isSurface()) continue;
                 const double w =
                     std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
+                const int k = (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);  // blockOffset(k): (dx, dy, dz)
+                if (w > most || (w == most && w > 0.0 && k < mostAt))
+                    most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
                 const Source v = source[j];
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
@@ -351,10 +357,10 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
 // at c's centre.
 constexpr int kSkyBands = 3, kSkyAzimuths = 6;
 
-// The curvature (per voxel, positive convex) of the surface around surface voxel j at cj: least squares over the
-// surface voxels k of its 3^3 block (weighted by the cosine between their normals and j's) of
-// n_k . t_k = kappa |t_k|^2, t_k their offsets from the block's weighted mean across n_j; a sphere of R voxels gives
-// 1 / R, flat snow 0. (The grids keep the topology's index and patches alone: the neighbours by the index.)
+// The curvature (per voxel, positive convex) of the surface around surface voxel j at cj: over the surface voxels k
+// of its 3^3 block, weighted by the cosine w_k between their normals and j's, the ratio
+// sum w_k n_k . t_k / sum w_k |t_k|^2, t_k their offsets from the block's weighted mean across n_j (so sum w_k t_k = 0:
+// a sphere of R voxels with exact normals gives 1 / R), flat snow 0. The neighbours are found by the topology's index.
 double surfaceCurvature(const SnowTopology &topo, const openvdb::Coord &cj,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
     const glm::dvec3 n = topo.patches[std::size_t(index.getValue(cj))].normal;
@@ -364,10 +370,10 @@ double surfaceCurvature(const SnowTopology &topo, const openvdb::Coord &cj,
     glm::dvec3 mean(0.0);
     double total = 0.0;
     for (int k = 0; k < 27; ++k) {
-        const openvdb::Coord d(k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1);
+        const openvdb::Coord d = blockOffset(k);
         const std::int32_t i = index.getValue(cj + d);
         if (i < 0 || !topo.patches[std::size_t(i)].isSurface()) continue;
-        const double w = std::max(0.0, glm::dot(n, topo.patches[std::size_t(i)].normal));
+        const double w = glm::dot(n, topo.patches[std::size_t(i)].normal);
         if (w <= 0.0) continue;
         near[count] = {glm::dvec3(d.x(), d.y(), d.z()), topo.patches[std::size_t(i)].normal}, weight[count++] = w;
         mean += w * glm::dvec3(d.x(), d.y(), d.z()), total += w;
@@ -382,40 +388,31 @@ double surfaceCurvature(const SnowTopology &topo, const openvdb::Coord &cj,
     return spread > 1e-6 ? bending / spread : 0.0;
 }
 
-// Whether the surface carrying ramp voxel c (the surface voxel facing it most, as facingAverage weighs them) curves
-// away faster than a sphere of kSkyRampRadius voxels: only there is the sky the ramp sees below its plane past the
-// snow's limb worth its marches (a ball of 10 voxels misses 1 % of its sky, of 5 voxels 7 %: docs/benchmarks.md,
-// backlit-balls 2; the 5-voxel balls read kappa 0.20-0.25). The car's 710 k ramp voxels: 39 k pass (73 k at 8 voxels).
+// Whether the surface carrying a ramp voxel (`carrier`, the surface voxel facing it most: facingAverage) curves away
+// faster than a sphere of kSkyRampRadius voxels: only there is the sky the ramp sees below its plane past the snow's
+// limb worth its marches (a ball of 10 voxels misses 1 % of its sky, of 5 voxels 7 %: docs/benchmarks.md,
+// backlit-balls 2; the 5-voxel balls read kappa 0.20-0.25). Of the car's 710 k ramp voxels 39 k pass beside thick
+// snow (73 k at 8 voxels).
 constexpr double kSkyRampRadius = 5.5;  // voxels
 
-bool onConvexSurface(const SnowTopology &topo, const openvdb::Coord &c,
+bool onConvexSurface(const SnowTopology &topo, const openvdb::Coord &carrier,
                      openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
-    double best = 0.0;
-    openvdb::Coord carrier;
-    bool found = false;
-    for (int k = 0; k < 27; ++k) {
-        const openvdb::Coord d(k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1);
-        const std::int32_t j = k == 13 ? -1 : index.getValue(c - d);  // 13: c itself
-        if (j < 0 || !topo.patches[j].isSurface()) continue;
-        const double w = glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(d.x(), d.y(), d.z())));
-        if (w > best) best = w, carrier = c - d, found = true;
-    }
-    return found && surfaceCurvature(topo, carrier, index) * kSkyRampRadius > 1.0;
+    return surfaceCurvature(topo, carrier, index) * kSkyRampRadius > 1.0;
 }
 
 void skyInRamp(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c, const glm::dvec3 &normal,
-               openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::Accessor &density,
-               Medium::ColumnMarcher &marcher, Source &S) {
-    if (glm::length(normal) == 0.0 || scene.sky.isBlack() || !onConvexSurface(topo, c, index)) return;
+               const openvdb::Coord &carrier, openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
+               Medium::Accessor &density, Medium::ColumnMarcher &marcher, Source &S) {
+    if (glm::length(normal) == 0.0 || scene.sky.isBlack() || !onConvexSurface(topo, carrier, index)) return;
     const Medium &medium = *scene.medium;
     const double perColumn = medium.optics().extinctionPerDensity;  // m^2/kg: uncollided
     // Only the ramp of optically thick snow: where the snow beside c is thinner than a fringe (kFringeOpticalDepth,
     // buildSnowTopology's float threshold), the light crossing it is the surface's own (ball_thin, slab_thin,
-    // spray_lumps read +0.3 to +1.5 points of bias).
+    // spray_lumps read +0.3, +0.3 and +1.1 points of bias).
     const float fringeDensity = float(kFringeOpticalDepth / (perColumn * medium.voxelSize()));  // kg/m^3
     bool thick = false;
     for (int k = 0; k < 27 && !thick; ++k)
-        thick = density.getValue(c.offsetBy(k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1)) >= fringeDensity;
+        thick = density.getValue(c + blockOffset(k)) >= fringeDensity;
     if (!thick) return;
     // c's trilinear hat by the midpoint rule on 2^3 points (half voxels from c's centre; 4^3 cost 8 times more for
     // the suite's figures within 0.1 points).
@@ -474,9 +471,10 @@ void skyInRamp(const Scene &scene, const SnowTopology &topo, const openvdb::Coor
 }  // namespace
 
 // gathering: the values the gathering reads alone (those beside snow, besideSnow: the grids carry the surface's
-// radiance two voxels out, the gathering needs one), without the returned grazing sun carried through the ramp
-// (forwardPeakThrough: what cameras see of a lit rim; the sky rays between snow surfaces hardly meet it, and it
-// cost the car 0.8 processor seconds there).
+// radiance two voxels out, the gathering needs one), without the ramp's own light: the returned grazing sun carried
+// through it (forwardPeakThrough; it cost the car 0.8 processor seconds there), the suns and the sky from below its
+// plane scattered once in it (sunInRamp: no peaks are marked when gathering; skyInRamp). What cameras see of a lit
+// rim; the sky rays between snow surfaces hardly meet it.
 GridValues gridValues(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
                       const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
                       bool gathering) {
@@ -552,16 +550,17 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 const openvdb::Coord c = it.getCoord();
                 const std::int32_t t = tracedIndex.getValue(c);
                 Source S;
-                glm::dvec3 facing(0.0);
+                glm::dvec3 facing(0.0);  // the carrying surfaces' normal
+                openvdb::Coord carrier;  // and the surface voxel facing c most
                 if (t >= 0) S = ownValue(traced, t);
                 else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
-                else if (!facingAverage(topo, c, index, source, S, facing)) continue;
+                else if (!facingAverage(topo, c, index, source, S, facing, carrier)) continue;
                 else if (nearPeakAt.isValueOn(c)) {
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
                     sunInRamp(scene, c, facing, marcher, sunAt, S);
                 }
-                if (!gathering) skyInRamp(scene, topo, c, facing, index, density, marcher, S);
+                if (!gathering) skyInRamp(scene, topo, c, facing, carrier, index, density, marcher, S);
                 perLeaf[l].add(it.pos(), S);
             }
         }
