@@ -1,6 +1,6 @@
 // The bake against the independent Monte Carlo reference (monte_carlo.h: brute-force path tracing of the
 // same medium, lights and occluders, sharing none of the bake's approximations) on a heterogeneous
-// scene: a bumpy snow layer on a coloured ground, a plate above it casting a shadow.
+// scene: a bumpy snow layer on a coloured ground, a plate above it casting a shadow; and a sky-lit ball.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -208,7 +208,7 @@ openvdb::FloatGrid::Ptr issueBall() {
 // light it sends back, summed over the view, against the reference. The density ramp over a convex surface sees sky
 // from below the surface's plane through the thin snow past the limb, which the surface's half-space model lacks
 // (skyInRamp, bake_grid_values.cpp): without it the bake reads 0.9258 of the reference, with it 0.9362 (standard
-// error 0.0008; bench/ball_sky_split.py's view, 4 x 8 directions: -6.8, -5.6 %). The rest of the deficit is the
+// error 0.0008; bench/ball_sky_split.py's view (180 deg, 0 deg): -6.8 -> -5.7 %). The rest of the deficit is the
 // fringe's (docs/bake.md, Accuracy).
 TEST(BakeVersusMonteCarlo, SkyLitBallKeepsTheSkyItsRampSeesFromBelow) {
     Scene scene;
