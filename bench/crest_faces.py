@@ -4,8 +4,8 @@ of a voxel the baked render against the core's Monte Carlo, along REFERENCE's 12
 out through the voxel's centre). Which face's light the bake misses, not only the voxel's sum.
 
 Faces: those whose neighbour holds at most half the snow's density (the grid's outside is air). Per face: the Monte
-Carlo's mean radiance (green) over the 12 rays, its relative standard error, and each bake's error over all 12 and per ring of mu; sun alone by
-default (--light).
+Carlo's mean radiance (green) over the 12 rays, its relative standard error, and each bake's error over all 12 and per
+ring of mu; sun alone by default (--light).
 
     PYTHONPATH=build/python /usr/bin/python3 bench/crest_faces.py [--light sun|sky|full] [--samples 1024]
         [--quality FINAL,REFERENCE] [--voxels 0,5,6:0,5,5:...]

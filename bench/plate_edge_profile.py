@@ -73,8 +73,8 @@ def main():
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "bumpy.vdb")
         bs.write_density(path, case.density, h)
-        firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders, quality=args.quality,
-                      seed=0)
+        firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
+                      quality=args.quality, seed=0)
         if args.zero or args.no_peak:
             shown = os.path.join(folder, "cleared.vdb")
             cleared(path, [tuple(int(v) for v in c.split(",")) for c in args.zero], args.no_peak, shown)
