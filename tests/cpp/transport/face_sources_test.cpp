@@ -111,10 +111,11 @@ TEST(FaceSources, ATracedLayersVoxelsHoldTheirOneSidedFaces) {
     }
 }
 
-// A gathered lump's voxels thicker than 2 optical depths hold a source for each face open to air, one-sided too
-// (a 4 x 4 x 4 lump of sigma_t h 8: a camera sees its faces' first optical depth, not the voxels' mean over 8;
-// docs/benchmarks.md, spray-lump-faces). Before, only voxels open to air on both faces along an axis gathered their faces. Where the faces at half the
-// voxel's paths would pass the budget they take a quarter; where those would too, none.
+// A gathered lump's voxels thicker than 2 optical depths hold a source for each face open to air, one-sided too (a 4 x
+// 4 x 4 lump of sigma_t h 8: a camera sees its faces' first optical depth, not the voxels' mean over 8;
+// docs/benchmarks.md, spray-lump-faces). Before, only voxels open to air on both faces along an axis gathered their
+// faces. Where the faces at half the voxel's paths would pass the budget they take a quarter; where those would too,
+// none.
 TEST(FaceSources, AGatheredLumpsThickVoxelsHoldTheirOneSidedFaces) {
     const Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 3)),
                                        float(8.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.999), 0.85},
