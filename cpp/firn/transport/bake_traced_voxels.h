@@ -18,8 +18,8 @@
 
 namespace firn::bake {
 
-// The sources a traced voxel's air neighbours carry where it is open to air on both faces along an axis
-// (twoSided) and thick, or on any face where it lies in a traced layer (FaceGathering::inLayer): each face's own,
+// The sources a traced voxel's air neighbours carry where it is gathered and thick, or lies in a traced layer
+// (FaceGathering::inLayer), on each face open to air: each face's own,
 // gathered where a camera sees that face, and the voxel's own grid value, what it shows those cameras
 // (addFaceSources).
 struct FaceSources {
@@ -70,22 +70,24 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 
 // Which traced voxels' faces gather their own source (addFaceSources), and at what cost.
 struct FaceGathering {
-    int paths = 0;              // per face
+    int paths = 0;              // per face, where the budget holds them
+    int fewestPaths = 0;        // else halved down to these; none where even these pass the budget
     double stepsPerPath = 0.0;  // the gathering's pilot's
     double budget = 0.0;        // tracking steps all the faces may take
     // Per voxel: it lies in a traced layer (light traced whole), whose faces open to air on one side gather too.
-    // Empty: the gathered voxels, of which those open on both sides along an axis.
+    // Empty: the gathered voxels, of which the thick ones.
     std::vector<bool> inLayer;
 };
-// The gathered voxels' faces: a quarter of the voxel's paths, within what the gathering leaves of kMaxTracedSteps.
+// The gathered voxels' faces: half the voxel's paths, else a quarter, within what the gathering leaves of
+// kMaxTracedSteps.
 FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels);
 // A traced layer's faces (`inLayer` per voxel of `voxels`, light traced whole): as many paths as gathering a voxel
 // would take, within what the light tracing leaves of kMaxTracedSteps.
 FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                          std::vector<bool> inLayer, std::uint64_t seed);
 
-// The face sources (FaceSources) of the traced `voxels` that are thick and open to air on both faces along an axis
-// or lie in a traced layer (`how`), added to `traced`; none where they would cost more than its budget.
+// The face sources (FaceSources) of the traced `voxels` that are gathered and thick or lie in a traced layer
+// (`how`), added to `traced`; none where they would cost more than its budget.
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
                     const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced);

@@ -48,7 +48,8 @@ double shownShareByQuadrature(double tau) {
 
 }  // namespace
 
-// Every voxel holds a source for each of its two air faces; cancelled, the faces' paths stop (Cancelled).
+// Every voxel holds a source for each of its air faces (the rim's sides too); cancelled, the faces' paths stop
+// (Cancelled).
 TEST(FaceSources, EachTwoSidedVoxelHoldsItsFacesAndEscStopsThem) {
     const Scene scene = floatingLayer();
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
@@ -60,7 +61,12 @@ TEST(FaceSources, EachTwoSidedVoxelHoldsItsFacesAndEscStopsThem) {
     bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, plan.paths, 3, none);
     bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan, voxels.size()), 5, none, traced);
     ASSERT_EQ(traced.faces.size(), voxels.size());
-    for (const bake::FaceSources &faces : traced.faces) EXPECT_EQ(faces.open, 0b110000u);  // -z and +z
+    for (std::size_t v = 0; v < voxels.size(); ++v) {
+        const openvdb::Coord &c = voxels[v];
+        const unsigned sides = unsigned(c.x() == 0) | unsigned(c.x() == 3) << 1 | unsigned(c.y() == 0) << 2 |
+                               unsigned(c.y() == 3) << 3;
+        EXPECT_EQ(traced.faces[std::size_t(traced.facesAt[v])].open, 0b110000u | sides);  // -z, +z and the rim's
+    }
 
     Progress cancelled;
     cancelled.cancel();
@@ -85,9 +91,9 @@ TEST(FaceSources, ATracedLayersVoxelsHoldTheirOneSidedFaces) {
             for (int z = 0; z < 3; ++z) voxels.emplace_back(x, y, z);
     const SubProgress none(nullptr, 0.0, 1.0);
     bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, 64, 3, none);
-    bake::addFaceSources(scene, topo, voxels, {64, 1000.0, 1e12, {}}, 5, none, traced);
+    bake::addFaceSources(scene, topo, voxels, {64, 64, 1000.0, 1e12, {}}, 5, none, traced);
     EXPECT_TRUE(traced.faces.empty());
-    bake::addFaceSources(scene, topo, voxels, {64, 1000.0, 1e12, std::vector<bool>(voxels.size(), true)}, 5, none,
+    bake::addFaceSources(scene, topo, voxels, {64, 64, 1000.0, 1e12, std::vector<bool>(voxels.size(), true)}, 5, none,
                          traced);
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         const openvdb::Coord &c = voxels[v];
@@ -103,6 +109,49 @@ TEST(FaceSources, ATracedLayersVoxelsHoldTheirOneSidedFaces) {
         for (int f : {4, 5})
             if (open >> f & 1u) EXPECT_GT(traced.faces[std::size_t(traced.facesAt[v])].source[f].l0.x, 0.0);
     }
+}
+
+// A gathered lump's voxels thicker than 2 optical depths hold a source for each face open to air, one-sided too (a 4 x
+// 4 x 4 lump of sigma_t h 8: a camera sees its faces' first optical depth, not the voxels' mean over 8;
+// docs/benchmarks.md, spray-lump-faces). Before, only voxels open to air on both faces along an axis gathered their
+// faces. Where the faces at half the voxel's paths would pass the budget they take a quarter; where those would too,
+// none.
+TEST(FaceSources, AGatheredLumpsThickVoxelsHoldTheirOneSidedFaces) {
+    const Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 3)),
+                                       float(8.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.999), 0.85},
+                                       glm::dvec3(0.866, 0.0, 0.5));
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    std::vector<openvdb::Coord> voxels;
+    for (int x = 0; x < 4; ++x)
+        for (int y = 0; y < 4; ++y)
+            for (int z = 0; z < 4; ++z) voxels.emplace_back(x, y, z);
+    const SubProgress none(nullptr, 0.0, 1.0);
+    const bake::GatheringPlan plan{256, 256.0 * 1000.0 * double(voxels.size())};
+    bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, plan.paths, 3, none);
+    bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan, voxels.size()), 5, none, traced);
+    for (std::size_t v = 0; v < voxels.size(); ++v) {
+        const openvdb::Coord &c = voxels[v];
+        unsigned open = 0;  // bit f for face f (-x, +x, -y, +y, -z, +z)
+        for (int a = 0; a < 3; ++a) open |= unsigned(c[a] == 0) << (2 * a) | unsigned(c[a] == 3) << (2 * a + 1);
+        if (open == 0) {
+            EXPECT_EQ(traced.facesAt[v], -1);
+            continue;
+        }
+        ASSERT_GE(traced.facesAt[v], 0);
+        const bake::FaceSources &faces = traced.faces[std::size_t(traced.facesAt[v])];
+        EXPECT_EQ(faces.open, open);
+        for (int f = 0; f < 6; ++f)
+            if (open >> f & 1u) EXPECT_GT(faces.source[f].l0.x + faces.source[f].peak0.x, 0.0f);
+    }
+
+    const auto facesWithin = [&](double budget) {
+        bake::MonteCarloVoxels again = bake::traceSources(scene, voxels, 64, 3, none);
+        bake::addFaceSources(scene, topo, voxels, {128, 64, 1000.0, budget, {}}, 5, none, again);
+        return again.faces.size();
+    };
+    const double faceCount = 4 * 4 * 6;  // the lump's faces open to air
+    EXPECT_EQ(facesWithin(1000.0 * 64 * faceCount * 1.5), 56u);  // a quarter's paths fit: all 56 surface voxels
+    EXPECT_EQ(facesWithin(1000.0 * 64 * faceCount * 0.5), 0u);
 }
 
 // A face's collisions split by the trilinear hat as the quadrature splits them: at sigma_t h 2, where 17 % of them
