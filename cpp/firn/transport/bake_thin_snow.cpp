@@ -6,14 +6,16 @@
 
 namespace firn::bake {
 
+namespace {
+
+// The faces of unknown i on the axes along which it has air (no snow, no occluder) on both faces: bit f for face f
+// (-x, +x, -y, +y, -z, +z).
 unsigned twoSidedFaces(const SnowTopology &topo, std::size_t i) {
     unsigned open = 0;
     for (int a = 0; a < 3; ++a)
         if (topo.isAirFace(i, 2 * a) && topo.isAirFace(i, 2 * a + 1)) open |= 3u << (2 * a);
     return open;
 }
-
-namespace {
 
 // Voxels optically thinner than kTracedOpticalDepth (partly filled voxels of thrown snow, thin flakes, a
 // small object's thin fringe) are too thin for a voxel diffusion and take the exact fluence and flux from

@@ -20,10 +20,6 @@ struct TracedSnow {
     std::vector<bool> inLayer;
 };
 
-// The faces of unknown i on the axes along which it has air (no snow, no occluder) on both faces: bit f for face f
-// (-x, +x, -y, +y, -z, +z).
-unsigned twoSidedFaces(const SnowTopology &topo, std::size_t i);
-
 // The thin voxels and transport-thin pieces of the medium's snow (bake_thin_snow.cpp: what each is, measured).
 TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo);
 

@@ -268,24 +268,24 @@ FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::ve
 // A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels' mean
 // source (the one both its air neighbours carried) is not: at sigma_t h 15, lit from above, the top views read -34 %
 // (docs/bake.md, Method 3). Its gathered voxels thicker than kMaxDirectionFitTau gather, for each face open to air,
-// where that face's cameras collide (faceSourceIn); so do a lump's, one-sided too (a camera sees a face's first
-// optical depth, not the voxel's mean): spray_dense over 4 seeds 19.1 -> 17.9 % per block (docs/benchmarks.md,
-// spray-lump-faces). In a flat
-// layer (kMinLayerNeighbours) the light there is split by the trilinear hat between what the air neighbour across the
-// face carries (faceCarried) and what the voxel's own value shows those cameras (FaceSources::shown; towards each
-// direction the face its cameras look through), each fitted by direction, the estimates' directions pooled over the
-// layer (pooledOverFace); the voxel's mean stays what its other neighbours carry (a layer's rim seen edge-on). The 16 x
-// 16 x 1 layer at sigma_t h 15 (bench/snow_on_ground_bench.py --float): from above 33.3 % per block (main before
-// float-voxel) -> 9.1 % (faces carried their whole collisions' source, the voxel its mean) -> 8.8 %, from below 52.4 ->
-// 19.2 -> 10.7 %: seen from below the mean is 46 % brighter than what the voxel shows there (the sun-lit top's light,
-// forward), from above 32 % darker (docs/benchmarks.md, float-under; at sigma_t h 3 from above 6.5 -> 8.0 %). A face's
-// paths are half the voxel's own where they fit `how.budget` (what the gathering leaves of kMaxTracedSteps), else a
-// quarter (64 at least: spray_dense's 471 faces at 128 paths; at 64 18.7 %, their noise ate most of what they mend);
-// none where even those would cost more. A traced layer light traced whole (how.inLayer) is seen so too, from one side:
-// its voxels of sigma_t h > kMinLayerFaceTau gather each face open to air, at the gathering's paths per voxel (the
-// light tracing gave them none; a quarter of them, 128, left a 5.9 % spread per block), within what the light tracing
-// leaves of kMaxTracedSteps (its pilot's estimate for slab_thin's 1440 faces is 3.5e7 steps at seeds 0-1 and 6.6e7 at
-// seed 2): slab_thin 6.2 -> 3.9 % per block, from below (0, -60) +8 -> +3 % (docs/benchmarks.md, slab-thin).
+// where that face's cameras collide (faceSourceIn); so do a lump's, one-sided too (a camera sees a face's first optical
+// depth, not the voxel's mean): spray_dense over 4 seeds 19.1 -> 17.9 % per block (docs/benchmarks.md,
+// spray-lump-faces). In a flat layer (kMinLayerNeighbours) the light there is split by the trilinear hat between what
+// the air neighbour across the face carries (faceCarried) and what the voxel's own value shows those cameras
+// (FaceSources::shown; towards each direction the face its cameras look through), each fitted by direction, the
+// estimates' directions pooled over the layer (pooledOverFace); the voxel's mean stays what its other neighbours carry
+// (a layer's rim seen edge-on). The 16 x 16 x 1 layer at sigma_t h 15 (bench/snow_on_ground_bench.py --float): from
+// above 33.3 % per block (main before float-voxel) -> 9.1 % (faces carried their whole collisions' source, the voxel
+// its mean) -> 8.8 %, from below 52.4 -> 19.2 -> 10.7 %: seen from below the mean is 46 % brighter than what the voxel
+// shows there (the sun-lit top's light, forward), from above 32 % darker (docs/benchmarks.md, float-under; at sigma_t h
+// 3 from above 6.5 -> 8.0 %). A face's paths are half the voxel's own where they fit `how.budget` (what the gathering
+// leaves of kMaxTracedSteps), else a quarter (64 at least: spray_dense's 471 faces at 128 paths; at 64 18.7 %, their
+// noise ate most of what they mend); none where even those would cost more. A traced layer light traced whole
+// (how.inLayer) is seen so too, from one side: its voxels of sigma_t h > kMinLayerFaceTau gather each face open to air,
+// at the gathering's paths per voxel (the light tracing gave them none; a quarter of them, 128, left a 5.9 % spread per
+// block), within what the light tracing leaves of kMaxTracedSteps (its pilot's estimate for slab_thin's 1440 faces is
+// 3.5e7 steps at seeds 0-1 and 6.6e7 at seed 2): slab_thin 6.2 -> 3.9 % per block, from below (0, -60) +8 -> +3 %
+// (docs/benchmarks.md, slab-thin).
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
                     const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced) {

@@ -106,8 +106,11 @@ TEST(FaceSources, ATracedLayersVoxelsHoldTheirOneSidedFaces) {
         }
         ASSERT_GE(traced.facesAt[v], 0);
         EXPECT_EQ(traced.faces[std::size_t(traced.facesAt[v])].open, open);
-        for (int f : {4, 5})
-            if (open >> f & 1u) EXPECT_GT(traced.faces[std::size_t(traced.facesAt[v])].source[f].l0.x, 0.0);
+        for (int f : {4, 5}) {
+            if (open >> f & 1u) {
+                EXPECT_GT(traced.faces[std::size_t(traced.facesAt[v])].source[f].l0.x, 0.0);
+            }
+        }
     }
 }
 
@@ -140,8 +143,11 @@ TEST(FaceSources, AGatheredLumpsThickVoxelsHoldTheirOneSidedFaces) {
         ASSERT_GE(traced.facesAt[v], 0);
         const bake::FaceSources &faces = traced.faces[std::size_t(traced.facesAt[v])];
         EXPECT_EQ(faces.open, open);
-        for (int f = 0; f < 6; ++f)
-            if (open >> f & 1u) EXPECT_GT(faces.source[f].l0.x + faces.source[f].peak0.x, 0.0f);
+        for (int f = 0; f < 6; ++f) {
+            if (open >> f & 1u) {
+                EXPECT_GT(faces.source[f].l0.x + faces.source[f].peak0.x, 0.0f);
+            }
+        }
     }
 
     const auto facesWithin = [&](double budget) {
