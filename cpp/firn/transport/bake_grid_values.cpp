@@ -357,37 +357,6 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
 // at c's centre.
 constexpr int kSkyBands = 3, kSkyAzimuths = 6;
 
-// The curvature (per voxel, positive convex) of the surface around surface voxel j at cj: over the surface voxels k
-// of its 3^3 block, weighted by the cosine w_k between their normals and j's, the ratio
-// sum w_k n_k . t_k / sum w_k |t_k|^2, t_k their offsets from the block's weighted mean across n_j (so sum w_k t_k = 0:
-// a sphere of R voxels with exact normals gives 1 / R), flat snow 0. The neighbours are found by the topology's index.
-double surfaceCurvature(const SnowTopology &topo, const openvdb::Coord &cj,
-                        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
-    const glm::dvec3 n = topo.patches[std::size_t(index.getValue(cj))].normal;
-    std::array<std::pair<glm::dvec3, glm::dvec3>, 27> near;  // offsets (voxels) and normals
-    std::array<double, 27> weight{};
-    int count = 0;
-    glm::dvec3 mean(0.0);
-    double total = 0.0;
-    for (int k = 0; k < 27; ++k) {
-        const openvdb::Coord d = blockOffset(k);
-        const std::int32_t i = index.getValue(cj + d);
-        if (i < 0 || !topo.patches[std::size_t(i)].isSurface()) continue;
-        const double w = glm::dot(n, topo.patches[std::size_t(i)].normal);
-        if (w <= 0.0) continue;
-        near[count] = {glm::dvec3(d.x(), d.y(), d.z()), topo.patches[std::size_t(i)].normal}, weight[count++] = w;
-        mean += w * glm::dvec3(d.x(), d.y(), d.z()), total += w;
-    }
-    if (total <= 0.0) return 0.0;
-    mean /= total;
-    double bending = 0.0, spread = 0.0;
-    for (int k = 0; k < count; ++k) {
-        const glm::dvec3 p = near[k].first - mean, t = p - glm::dot(p, n) * n;
-        bending += weight[k] * glm::dot(near[k].second, t), spread += weight[k] * glm::dot(t, t);
-    }
-    return spread > 1e-6 ? bending / spread : 0.0;
-}
-
 // Whether the surface carrying a ramp voxel (`carrier`, the surface voxel facing it most: facingAverage) curves away
 // faster than a sphere of kSkyRampRadius voxels: only there is the sky the ramp sees below its plane past the snow's
 // limb worth its marches (a ball of 10 voxels misses 1 % of its sky, of 5 voxels 7 %: docs/benchmarks.md,

@@ -1,6 +1,7 @@
 #include "firn/transport/snow_topology.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -373,6 +374,33 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
     computeShell(medium, topo, shellVoxels);
     progress.report(1.0);
     return topo;
+}
+
+double surfaceCurvature(const SnowTopology &topo, const openvdb::Coord &cj,
+                        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
+    const glm::dvec3 n = topo.patches[std::size_t(index.getValue(cj))].normal;
+    std::array<std::pair<glm::dvec3, glm::dvec3>, 27> near;  // offsets (voxels) and normals
+    std::array<double, 27> weight{};
+    int count = 0;
+    glm::dvec3 mean(0.0);
+    double total = 0.0;
+    for (int k = 0; k < 27; ++k) {
+        const openvdb::Coord d(k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1);
+        const std::int32_t i = index.getValue(cj + d);
+        if (i < 0 || !topo.patches[std::size_t(i)].isSurface()) continue;
+        const double w = glm::dot(n, topo.patches[std::size_t(i)].normal);
+        if (w <= 0.0) continue;
+        near[count] = {glm::dvec3(d.x(), d.y(), d.z()), topo.patches[std::size_t(i)].normal}, weight[count++] = w;
+        mean += w * glm::dvec3(d.x(), d.y(), d.z()), total += w;
+    }
+    if (total <= 0.0) return 0.0;
+    mean /= total;
+    double bending = 0.0, spread = 0.0;
+    for (int k = 0; k < count; ++k) {
+        const glm::dvec3 p = near[k].first - mean, t = p - glm::dot(p, n) * n;
+        bending += weight[k] * glm::dot(near[k].second, t), spread += weight[k] * glm::dot(t, t);
+    }
+    return spread > 1e-6 ? bending / spread : 0.0;
 }
 
 }  // namespace firn

@@ -162,4 +162,40 @@ TEST(SnowTopology, AWallsEdgeUnderASlopeIsSharp) {
     EXPECT_FALSE(sharpAt(5, 5, 7));
 }
 
+// The surface's curvature per voxel (surfaceCurvature, which gates the sky a convex ramp sees from below its plane,
+// bake_grid_values.cpp's skyInRamp): a sphere of R voxels curves at 1 / R (the geometric oracle), a flat top at 0. On
+// bench/bake_suite.py's ball of 5 voxels (sigma_t h 10, ball_issue's) the smooth surface voxels lie about half a voxel
+// inside the sphere, so their mean reads between 1 / 5.5 and 1 / 4.5; a flat layer's top away from its sides reads 0,
+// so the gate (kappa > 1 / 5.5) marches over the ball and never over flat snow.
+TEST(SnowTopology, SurfaceCurvatureIsOneOverTheRadiusOnABallAndZeroOnAFlatTop) {
+    const Medium sphere = ball(5, 100.0f, 10.0);
+    const SnowTopology topo = buildSnowTopology(sphere, Occluders{}, SubProgress(nullptr, 0.0, 1.0));
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+    double sum = 0.0;
+    int patches = 0;
+    for (std::size_t i = 0; i < topo.size(); ++i)
+        if (topo.patches[i].isSurface() && !topo.patches[i].sharp)
+            sum += surfaceCurvature(topo, topo.coord[i], index), ++patches;
+    ASSERT_GT(patches, 100);
+    EXPECT_GT(sum / patches, 1.0 / 5.5);
+    EXPECT_LT(sum / patches, 1.0 / 4.5);
+
+    initializeOpenVdb();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    grid->fill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(19, 19, 3)), 100.0f);
+    const SnowTopology flat =
+        buildSnowTopology(Medium(grid, VolumeOptics{10.0, Rgb(0.9), 0.6}), Occluders{}, SubProgress(nullptr, 0.0, 1.0));
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> flatIndex(*flat.index);
+    int tops = 0;
+    for (std::size_t i = 0; i < flat.size(); ++i) {
+        const openvdb::Coord &c = flat.coord[i];
+        if (c.z() != 3 || c.x() < 3 || c.x() > 16 || c.y() < 3 || c.y() > 16) continue;
+        EXPECT_NEAR(surfaceCurvature(flat, c, flatIndex), 0.0, 1e-9) << c;
+        ++tops;
+    }
+    EXPECT_EQ(tops, 14 * 14);
+}
+
 }  // namespace firn
