@@ -424,14 +424,14 @@ void skyInRamp(const Scene &scene, const SnowTopology &topo, const openvdb::Coor
     for (int i = 0; i < kSkyBands; ++i)
         for (int j = 0; j < kSkyAzimuths; ++j) {
             const glm::dvec3 d = direction(i, j);
+            // The occluders' one shadow ray before the hat's marches: a direction an occluder hides needs none.
+            if (!scene.occluders->empty() && scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(d), 1e-5f))
+                continue;
             double transmitted = 0.0;
             for (int k = 0; k < points; ++k)
                 if (const double column = columnTo(hat[k].first, d); column < limit)
                     transmitted += hat[k].second * std::exp(-perColumn * column);
-            if (transmitted <= 0.0 ||
-                (!scene.occluders->empty() &&
-                 scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(d), 1e-5f)))
-                continue;
+            if (transmitted <= 0.0) continue;
             arriving += transmitted / weights * kSolidAngle * scene.sky.radianceFrom(d);
         }
     S.l0 += glm::vec3(arriving * glm::dvec3(medium.optics().albedo) * kInvFourPi);
