@@ -15,7 +15,6 @@ one's share of the Monte Carlo's light and the render's over it.
 """
 
 import argparse
-import math
 import os
 import tempfile
 
