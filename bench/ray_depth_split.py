@@ -104,7 +104,8 @@ def main():
     def line(label, where):
         if where.any():
             print(f"  {label:<28} {where.sum():4d} cells  Monte Carlo {100 * m[where].sum() / total:5.1f} %  "
-                  f"render {100 * r[where].sum() / total:5.1f} %  render / Monte Carlo {r[where].sum() / m[where].sum():5.2f}")
+                  f"render {100 * r[where].sum() / total:5.1f} %  "
+                  f"render / Monte Carlo {r[where].sum() / m[where].sum():5.2f}")
 
     for n in range(4):
         line(f"crossing {n + 1}", order == n)
