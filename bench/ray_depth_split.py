@@ -56,9 +56,7 @@ def main():
     args = parser.parse_args()
     case = next(c for c in bake_suite.cases() if c.name == args.case)
     origins, directions, tau = bake_suite.views(case)
-    seen = tau >= 1.0
-    lit = suite_regions.sun_depth(case, bake_suite.depth_one_points(case, origins, directions, seen)) < 2.0
-    core = tau >= 20.0
+    seen, lit, core = suite_regions.regions(case, origins, directions, tau)
     pick = np.nonzero(seen & eval(args.region, {}, {"lit": lit, "core": core}))[0]
     points, owner, transmittance, cell = [], [], [], []
     for p in pick:
