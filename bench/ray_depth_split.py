@@ -58,15 +58,14 @@ def main():
     origins, directions, tau = bake_suite.views(case)
     seen, lit, core = suite_regions.regions(case, origins, directions, tau)
     pick = np.nonzero(seen & eval(args.region, {}, {"lit": lit, "core": core}))[0]
-    points, owner, transmittance, cell = [], [], [], []
+    points, owner, distance, transmittance = [], [], [], []
     for p in pick:
         t, T = cuts(case, origins[p], directions[p])
         for j in range(len(t)):
             points.append(origins[p] + t[j] * directions[p])
             owner.append(p)
+            distance.append(t[j])
             transmittance.append(T[j])
-            middle = 0.5 * (t[j] + t[min(j + 1, len(t) - 1)])
-            cell.append(np.round((origins[p] + middle * directions[p]) / case.voxel).astype(int))
     points, owner, transmittance = np.array(points), np.array(owner), np.array(transmittance)
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, case.name + ".vdb")
@@ -87,7 +86,8 @@ def main():
             for name, L in (("render", render), ("mc", mc)):
                 light[name].append(transmittance[j] * L[j] - transmittance[k] * L[k])
             order.append(n)
-            c = tuple(cell[j])
+            middle = 0.5 * (distance[j] + distance[k])
+            c = tuple(np.round((origins[p] + middle * directions[p]) / case.voxel).astype(int))
             inside = all(0 <= c[a] < case.density.shape[a] for a in range(3))
             kind.append(case.density[c] * case.sigma_t / case.rho * case.voxel if inside else 0.0)
     r, m, order, kind = np.array(light["render"]), np.array(light["mc"]), np.array(order), np.array(kind)
