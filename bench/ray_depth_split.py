@@ -6,9 +6,11 @@ lump's core or a rim), each camera ray is cut where it crosses the voxel cells' 
 one voxel across), from the snow's first density to optical depth 8. The light the render and the Monte Carlo send
 back from the ray beyond a point is the radiance of a ray started there (`firncore.render_baked` and
 `firncore.monte_carlo_radiance` from a point inside the snow); what a cell [a, b] sends to the camera is
-T(a) L(a) - T(b) L(b), T the snow's transmittance from the camera (the same trilinear density both use). Reported
-per crossing (first cell, second, ...) and per cell kind (traced or not, by its optical depth sigma_t h): each
-one's share of the Monte Carlo's light and the render's over it.
+T(a) L(a) - T(b) L(b), T the snow's transmittance from the camera (the same trilinear density both use). The cuts and T
+count the snow alone, not the case's occluders (the render and the Monte Carlo do count them). Each ray is scanned 2.0 m
+from its camera, as bake_suite.depth_one_points does: past the far side of every suite case (its rays span 6 of the
+view's radii, 0.99 m at most, bumpy_plate's). Reported per crossing (first cell, second, ...) and per cell kind (traced
+or not, by its optical depth sigma_t h): each one's share of the Monte Carlo's light and the render's over it.
 
     PYTHONPATH=build/python python3 bench/ray_depth_split.py [--case spray_dense] [--region "lit & core"]
         [--seed 0] [--samples 4096]
