@@ -46,8 +46,9 @@ def main():
     parser.add_argument("--sun", type=float, default=30.0, help="the sun's angle from the normal, degrees")
     parser.add_argument("--cam", default="0:0", help="the camera's polar:azimuth about the normal, degrees")
     parser.add_argument("--sky", type=float, default=0.05, help="uniform sky, W/m^2/sr (0: sun alone)")
-    parser.add_argument("--samples", type=int, default=4096)
-    parser.add_argument("--n", type=int, default=4)
+    parser.add_argument("--samples", type=int, default=4096, help="Monte Carlo paths per ray")
+    parser.add_argument("--n", type=int, default=4,
+                        help="rays per side of the bundle (n x n parallel rays over 3 voxels across the point)")
     args = parser.parse_args()
     case = next(c for c in bake_suite.cases() if c.name == args.optics)
     density, point, normal, tangent = point_frame(args.shape, case, args.radius)

@@ -6,9 +6,11 @@ lump's core or a rim), each camera ray is cut where it crosses the voxel cells' 
 one voxel across), from the snow's first density to optical depth 8. The light the render and the Monte Carlo send
 back from the ray beyond a point is the radiance of a ray started there (`firncore.render_baked` and
 `firncore.monte_carlo_radiance` from a point inside the snow); what a cell [a, b] sends to the camera is
-T(a) L(a) - T(b) L(b), T the snow's transmittance from the camera (the same trilinear density both use). Reported
-per crossing (first cell, second, ...) and per cell kind (traced or not, by its optical depth sigma_t h): each
-one's share of the Monte Carlo's light and the render's over it.
+T(a) L(a) - T(b) L(b), T the snow's transmittance from the camera (the same trilinear density both use). The cuts and T
+count the snow alone, not the case's occluders (the render and the Monte Carlo do count them). Each ray is scanned 2.0 m
+from its camera, as bake_suite.depth_one_points does: past the far side of every suite case (its rays span 6 of the
+view's radii, 0.99 m at most, bumpy_plate's). Reported per crossing (first cell, second, ...) and per cell kind (traced
+or not, by its optical depth sigma_t h): each one's share of the Monte Carlo's light and the render's over it.
 
     PYTHONPATH=build/python python3 bench/ray_depth_split.py [--case spray_dense] [--region "lit & core"]
         [--seed 0] [--samples 4096]
@@ -56,19 +58,16 @@ def main():
     args = parser.parse_args()
     case = next(c for c in bake_suite.cases() if c.name == args.case)
     origins, directions, tau = bake_suite.views(case)
-    seen = tau >= 1.0
-    lit = suite_regions.sun_depth(case, bake_suite.depth_one_points(case, origins, directions, seen)) < 2.0
-    core = tau >= 20.0
+    seen, lit, core = suite_regions.regions(case, origins, directions, tau)
     pick = np.nonzero(seen & eval(args.region, {}, {"lit": lit, "core": core}))[0]
-    points, owner, transmittance, cell = [], [], [], []
+    points, owner, distance, transmittance = [], [], [], []
     for p in pick:
         t, T = cuts(case, origins[p], directions[p])
         for j in range(len(t)):
             points.append(origins[p] + t[j] * directions[p])
             owner.append(p)
+            distance.append(t[j])
             transmittance.append(T[j])
-            middle = 0.5 * (t[j] + t[min(j + 1, len(t) - 1)])
-            cell.append(np.round((origins[p] + middle * directions[p]) / case.voxel).astype(int))
     points, owner, transmittance = np.array(points), np.array(owner), np.array(transmittance)
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, case.name + ".vdb")
@@ -89,7 +88,8 @@ def main():
             for name, L in (("render", render), ("mc", mc)):
                 light[name].append(transmittance[j] * L[j] - transmittance[k] * L[k])
             order.append(n)
-            c = tuple(cell[j])
+            middle = 0.5 * (distance[j] + distance[k])
+            c = tuple(np.round((origins[p] + middle * directions[p]) / case.voxel).astype(int))
             inside = all(0 <= c[a] < case.density.shape[a] for a in range(3))
             kind.append(case.density[c] * case.sigma_t / case.rho * case.voxel if inside else 0.0)
     r, m, order, kind = np.array(light["render"]), np.array(light["mc"]), np.array(order), np.array(kind)

@@ -36,6 +36,14 @@ def sun_depth(case, points):
     return out
 
 
+def regions(case, origins, directions, tau):
+    """Per pixel: seen (the ray's optical depth through the snow at least 1), lit (the sun's optical depth under 2
+    where a seen ray reaches depth 1) and core (the ray's optical depth 20 or more)."""
+    seen = tau >= 1.0
+    lit = sun_depth(case, bake_suite.depth_one_points(case, origins, directions, seen)) < 2.0
+    return seen, lit, tau >= 20.0
+
+
 def row(label, relative, spread, mean_render, reference):
     """One region's figures: per-seed and seeds' mean |error|, spread, bias (blocks x channels arrays)."""
     per_seed = np.mean([np.abs(r).mean() for r in relative])
@@ -55,7 +63,7 @@ def main():
         parser.error("--seeds must be 2 or more (the spread across seeds)")
     case = next(c for c in bake_suite.cases() if c.name == args.case)
     origins, directions, tau = bake_suite.views(case)
-    seen = tau >= 1.0
+    seen, lit, core = regions(case, origins, directions, tau)
     with tempfile.TemporaryDirectory() as folder:
         runs = [bake_suite.run_case(case, folder, args.cache, seed=seed) for seed in range(args.seeds)]
         path = os.path.join(folder, case.name + ".vdb")
@@ -66,15 +74,14 @@ def main():
     renders = (relative + 1.0) * reference
     mean_render = renders.mean(0)
     spread = renders.std(0, ddof=1) / np.maximum(mean_render, 1e-30)
-    lit = sun_depth(case, bake_suite.depth_one_points(case, origins, directions, seen))[seen] < 2.0
-    core = tau[seen] >= 20.0
+    lit, core = lit[seen], core[seen]
     view = np.repeat(np.arange(len(case.views)), case.pixels ** 2)[seen]
     print(f"{case.name}, {args.seeds} seeds: one seed's means " + ", ".join(f"{100 * r['mean']:.1f}" for r in runs) + " %")
-    regions = [("all", np.ones(len(reference), bool)),
-               ("lit, core (tau >= 20)", lit & core), ("lit, rim or thin (tau < 20)", lit & ~core),
-               ("shadowed, core", ~lit & core), ("shadowed, rim or thin", ~lit & ~core)]
-    regions += [(f"view {v}", view == i) for i, v in enumerate(case.views)]
-    for label, where in regions:
+    groups = [("all", np.ones(len(reference), bool)),
+              ("lit, core (tau >= 20)", lit & core), ("lit, rim or thin (tau < 20)", lit & ~core),
+              ("shadowed, core", ~lit & core), ("shadowed, rim or thin", ~lit & ~core)]
+    groups += [(f"view {v}", view == i) for i, v in enumerate(case.views)]
+    for label, where in groups:
         if where.any():
             print(row(label, relative[:, where], spread[where], mean_render[where], reference[where]), flush=True)
 
