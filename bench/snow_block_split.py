@@ -9,9 +9,10 @@ cell is exact: the trilinear density, midpoint rule on 0.25 mm steps, the sun's 
 0.5 mm steps, Henyey-Greenstein at the ray's angle to the sun's travel; the rest of the Monte Carlo's sun alone is
 its multiple scattering (sun more). Per cell also the voxel's density and mu0, the sun's cosine to the ball's normal
 there (the ball's centre to the voxel).
+--exits: the sun alone leaving the limb along the block's ray, by direction (exits' docstring).
 
     PYTHONPATH=build/python python3 bench/snow_block_split.py [--case ball_snow] [--view 180,0] [--pixels 40,47]
-        [--seed 0] [--samples 2048]
+        [--seed 0] [--samples 2048] [--exits]
 """
 
 import argparse
@@ -49,6 +50,39 @@ def single_scattering(case, origin, direction, a, b):
     return float((k * rho[inside] * albedo * phase * case.sun * camera[inside] * sun).sum() * STEP)
 
 
+def exits(case, args):
+    """The sun alone leaving the ball along the block's limb: at points at the block ray's optical depth 1 radius,
+    (x, 7.7, 3.3) voxels off the centre (x -1.94 is the ray's own), towards exit cosines mu whose tangent part points
+    the camera's way (azimuth 0, the sun's travel 30 deg off it) or away (180): the Monte Carlo against the bake."""
+    origins, directions, _ = bake_suite.views(case)
+    view = case.views.index(tuple(int(x) for x in args.view.split(",")))
+    j = view * case.pixels ** 2 + int(args.pixels.split(",")[0])
+    centre = (np.array(case.density.shape) - 1) / 2 * case.voxel
+    depth_one = bake_suite.depth_one_points(case, origins[j:j + 1], directions[j:j + 1], [True])[0]
+    radius = np.linalg.norm(depth_one - centre)
+    starts, ways, labels = [], [], []
+    for x in (-1.94, -0.5, 1.0, 2.5):
+        n = np.array([x, 7.7, 3.3]) / np.linalg.norm([x, 7.7, 3.3])
+        camera = -directions[j] - (-directions[j] @ n) * n
+        camera /= np.linalg.norm(camera)
+        for mu, azimuth in ((0.05, 0), (0.18, 0), (0.4, 0), (0.18, 180)):
+            w = mu * n + math.sqrt(1 - mu * mu) * (camera if azimuth == 0 else -camera)
+            starts.append(centre + radius * n + 0.05 * w)
+            ways.append(-w)
+            labels.append(f"x {x:+.2f} mu0 {n @ sun_towards():+.2f}  mu {mu:.2f} azimuth {azimuth:3d}")
+    starts, ways = np.array(starts), np.array(ways)
+    with tempfile.TemporaryDirectory() as folder:
+        path = os.path.join(folder, case.name + ".vdb")
+        bake_suite.write_density(path, case.density, case.voxel)
+        firncore.bake(path, case.optics, suns=case.suns(), quality="FINAL", seed=args.seed)
+        baked = firncore.render_baked(path, case.optics, starts, ways)[:, 1]
+        mc, err = firncore.monte_carlo_radiance(path, case.optics, starts, ways, suns=case.suns(),
+                                                samples=args.samples, seed=5)
+    print(f"{case.name}, sun alone, leaving the limb: Monte Carlo (+-), bake, bake / Monte Carlo")
+    for label, m, e, b in zip(labels, mc[:, 1], err[:, 1], baked):
+        print(f"  {label}: {m:.4f} ({e:.4f})  {b:.4f}  {b / m:.2f}")
+
+
 def without_peaks(path):
     """The grids of a baked file with the peaked lobes' (firn_source_peak*) cleared."""
     grids = list(pyopenvdb.readAll(path)[0])
@@ -66,8 +100,11 @@ def main():
     parser.add_argument("--seed", type=int, default=0, help="the bake's")
     parser.add_argument("--samples", type=int, default=2048, help="Monte Carlo paths per point")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--exits", action="store_true", help="the sun alone leaving the limb, by direction")
     args = parser.parse_args()
     case = next(c for c in bake_suite.cases() if c.name == args.case)
+    if args.exits:
+        return exits(case, args)
     origins, directions, _ = bake_suite.views(case)
     view = case.views.index(tuple(int(x) for x in args.view.split(",")))
     pick = [view * case.pixels ** 2 + int(p) for p in args.pixels.split(",")]
