@@ -188,64 +188,6 @@ void parallelChunks(std::size_t n, const SubProgress &progress, const Body &body
     });
 }
 
-// Snow transmittance from `point` towards beam b; `blocks` where the snow leaves less than 1e-5 of the light.
-glm::dvec3 snowTowardsBeam(const Scene &scene, std::size_t b, const glm::dvec3 &point, Crossing crossing,
-                           const BlockMasses *blockMasses, Medium::ColumnMarcher &marcher, bool &blocks) {
-    const glm::dvec3 w = towardsBeam(scene, b, point);
-    const double reach = b < scene.suns.size() ? std::numeric_limits<double>::infinity()
-                                               : glm::length(scene.lamps[b - scene.suns.size()].position - point);
-    if (crossing == Crossing::Spreading) {
-        if (!blockMasses) throw std::logic_error("Crossing::Spreading needs the snow's block masses");
-        const glm::dvec3 snow = spreadingTransmittance(*scene.medium, *blockMasses, point, w, reach, marcher);
-        blocks = snow == glm::dvec3(0.0);
-        return snow;
-    }
-    const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
-    const double limit = columnLimit(reduced);
-    const double column = marcher.column(point, w, reach, limit);
-    blocks = column >= limit;
-    return transmittance(reduced, column);
-}
-
-// Beam b's irradiance (W/m^2) seen past the occluders from `from`, summed over `samples` points of a sun's disc or
-// a lamp (one for a point lamp), and how many.
-struct LightSum {
-    glm::dvec3 sum{0.0};
-    int samples = 1;
-};
-
-LightSum lightPastOccluders(const Scene &scene, std::size_t b, const glm::vec3 &from, int samples,
-                            std::uint64_t seed, std::uint64_t stream) {
-    const RayCaster &caster = scene.occluders->caster();
-    Rng rng(seed, stream);
-    LightSum out;
-    if (b < scene.suns.size()) {
-        const SunLight &light = scene.suns[b];
-        int visible = samples;
-        if (!scene.occluders->empty()) {
-            visible = 0;
-            for (int s = 0; s < samples; ++s) {
-                const glm::dvec3 d =
-                    samples == 1 ? light.direction : sampleSunDirection(light, rng.uniform(), rng.uniform());
-                visible += !caster.occluded(from, glm::vec3(d), 1e-5f);
-            }
-        }
-        out.sum = light.irradiance * double(visible);
-    } else {
-        const Lamp &lamp = scene.lamps[b - scene.suns.size()];
-        if (lamp.shape != Lamp::Shape::Rectangle && lamp.shape != Lamp::Shape::Ellipse && lamp.radius == 0.0)
-            samples = 1;
-        for (int s = 0; s < samples; ++s) {
-            const LampSample l = sampleLamp(lamp, glm::dvec3(from), rng.uniform(), rng.uniform());
-            if (l.irradiance == Rgb(0.0)) continue;
-            if (!caster.occluded(from, glm::vec3(l.direction), 1e-5f, float(l.distance * (1.0 - 1e-6))))
-                out.sum += l.irradiance;
-        }
-    }
-    out.samples = samples;
-    return out;
-}
-
 }  // namespace
 
 glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const glm::dvec3 &n, const Rgb &albedo,
@@ -257,9 +199,12 @@ glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const gl
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
         const double cosine = glm::dot(n, towardsBeam(scene, b, p));
         if (!(cosine > 0.0)) continue;
-        // On the car the occluders hide three in four of the suns the snow lets through.
-        irradiance += cosine * glm::dvec3(beamAt(scene, b, p, 1, 0, 0, marcher, nullptr, Crossing::Beam, nullptr,
-                                                 BeamOrder::OccludersFirst).irradiance);
+        // A sun the occluders hide adds nothing: asked before beamAt's march through the snow, which costs more
+        // (on the car the occluders hide three in four of the suns the snow lets through). The same query beamAt
+        // asks of its one sample.
+        const RayCaster &caster = scene.occluders->caster();
+        if (b < scene.suns.size() && caster.occluded(glm::vec3(p), glm::vec3(scene.suns[b].direction), 1e-5f)) continue;
+        irradiance += cosine * glm::dvec3(beamAt(scene, b, p, 1, 0, 0, marcher).irradiance);
     }
     const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
     if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
@@ -296,18 +241,53 @@ glm::dvec3 towardsBeam(const Scene &scene, std::size_t b, const glm::dvec3 &poin
 
 BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
                   std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint,
-                  Crossing crossing, const BlockMasses *blocks, BeamOrder order) {
-    const glm::vec3 from(shadowPoint ? *shadowPoint : point);
-    LightSum light;
-    if (order == BeamOrder::OccludersFirst) {
-        light = lightPastOccluders(scene, b, from, samples, seed, stream);
-        if (light.sum == glm::dvec3(0.0)) return {};
-    }
+                  Crossing crossing, const BlockMasses *blocks) {
+    const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
+    const double limit = columnLimit(reduced);
+    const bool sun = b < scene.suns.size();
+    const glm::dvec3 w = towardsBeam(scene, b, point);
+    const double reach = sun ? std::numeric_limits<double>::infinity()
+                             : glm::length(scene.lamps[b - scene.suns.size()].position - point);
     BeamSample out;
-    const glm::dvec3 snow = snowTowardsBeam(scene, b, point, crossing, blocks, marcher, out.snowBlocks);
+    glm::dvec3 snow;
+    if (crossing == Crossing::Spreading) {
+        if (!blocks) throw std::logic_error("Crossing::Spreading needs the snow's block masses");
+        snow = spreadingTransmittance(*scene.medium, *blocks, point, w, reach, marcher);
+        out.snowBlocks = snow == glm::dvec3(0.0);
+    } else {
+        const double column = marcher.column(point, w, reach, limit);
+        out.snowBlocks = column >= limit;
+        snow = transmittance(reduced, column);
+    }
     if (out.snowBlocks) return out;
-    if (order == BeamOrder::SnowFirst) light = lightPastOccluders(scene, b, from, samples, seed, stream);
-    out.irradiance = glm::vec3(snow * light.sum / double(light.samples));
+    const glm::vec3 from(shadowPoint ? *shadowPoint : point);
+    const RayCaster &caster = scene.occluders->caster();
+    Rng rng(seed, stream);
+    glm::dvec3 sum(0.0);
+    if (sun) {
+        const SunLight &light = scene.suns[b];
+        int visible = samples;
+        if (!scene.occluders->empty()) {
+            visible = 0;
+            for (int s = 0; s < samples; ++s) {
+                const glm::dvec3 d =
+                    samples == 1 ? light.direction : sampleSunDirection(light, rng.uniform(), rng.uniform());
+                visible += !caster.occluded(from, glm::vec3(d), 1e-5f);
+            }
+        }
+        sum = light.irradiance * double(visible);
+    } else {
+        const Lamp &lamp = scene.lamps[b - scene.suns.size()];
+        if (lamp.shape != Lamp::Shape::Rectangle && lamp.shape != Lamp::Shape::Ellipse && lamp.radius == 0.0)
+            samples = 1;
+        for (int s = 0; s < samples; ++s) {
+            const LampSample l = sampleLamp(lamp, glm::dvec3(from), rng.uniform(), rng.uniform());
+            if (l.irradiance == Rgb(0.0)) continue;
+            if (!caster.occluded(from, glm::vec3(l.direction), 1e-5f, float(l.distance * (1.0 - 1e-6))))
+                sum += l.irradiance;
+        }
+    }
+    out.irradiance = glm::vec3(snow * sum / double(samples));
     return out;
 }
 
@@ -408,8 +388,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                     const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
                     const glm::dvec3 from = patchOutsideAlong(medium, topo, i, towardsBeam(scene, b, centre), density);
                     beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher,
-                                                       &surface, Crossing::Spreading, &blocks,
-                                                       BeamOrder::OccludersFirst).irradiance;
+                                                       &surface, Crossing::Spreading, &blocks).irradiance;
                 }
             }
         });

@@ -122,18 +122,12 @@ struct BeamSample {
     bool snowBlocks = false;     // the snow in front leaves less than 1e-5 of it
 };
 
-// Which beamAt asks first: the snow (its march) or the occluders (Embree's shadow rays). OccludersFirst skips
-// the march, which costs more, where the occluders hide the light, and then leaves `snowBlocks` false: for
-// callers that read only the irradiance. The irradiance is the same either way.
-enum class BeamOrder { SnowFirst, OccludersFirst };
-
 // Beam b at a point: snow transmittance from `point` towards the light times the light's irradiance
 // seen past occluders from `shadowPoint` (default: the same point), over `samples` points of a sun's disc
 // or a lamp. Crossing::Spreading reads the snow's `blocks` (its mass per coarse block).
 BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
                   std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint = nullptr,
-                  Crossing crossing = Crossing::Beam, const BlockMasses *blocks = nullptr,
-                  BeamOrder order = BeamOrder::SnowFirst);
+                  Crossing crossing = Crossing::Beam, const BlockMasses *blocks = nullptr);
 
 // Radiance (W/m^2/sr) an occluder sends from point q (unit normal n facing the viewer) after one reflection of
 // sun and sky light, each estimated with one ray.
