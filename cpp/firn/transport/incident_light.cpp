@@ -102,9 +102,11 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
     const RayCaster &caster = scene.occluders->caster();
     for (int k = 0; k < rays.count(); ++k) {
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
-        if (anyHit && caster.occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) continue;
-        const std::optional<RayCaster::Hit> hit =
-            anyHit ? std::nullopt : caster.intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+        std::optional<RayCaster::Hit> hit;
+        if (!anyHit)
+            hit = caster.intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+        else if (caster.occluded(glm::vec3(p), glm::vec3(w), 1e-5f))
+            continue;
         const double column =
             marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
         if (thinnest * column > 0.01)
@@ -195,6 +197,7 @@ glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const gl
     const glm::dvec3 reduced = reducedExtinctionPerDensity(scene.medium->optics());
     const double limit = columnLimit(reduced);
     const glm::dvec3 p = q + 1e-5 * n;
+    const RayCaster &caster = scene.occluders->caster();
     glm::dvec3 irradiance(0.0);
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
         const double cosine = glm::dot(n, towardsBeam(scene, b, p));
@@ -202,12 +205,11 @@ glm::dvec3 reflectedByOccluder(const Scene &scene, const glm::dvec3 &q, const gl
         // A sun the occluders hide adds nothing: asked before beamAt's march through the snow, which costs more
         // (on the car the occluders hide three in four of the suns the snow lets through). The same query beamAt
         // asks of its one sample.
-        const RayCaster &caster = scene.occluders->caster();
         if (b < scene.suns.size() && caster.occluded(glm::vec3(p), glm::vec3(scene.suns[b].direction), 1e-5f)) continue;
         irradiance += cosine * glm::dvec3(beamAt(scene, b, p, 1, 0, 0, marcher).irradiance);
     }
     const glm::dvec3 w = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
-    if (!scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
+    if (!caster.occluded(glm::vec3(p), glm::vec3(w), 1e-5f)) {
         const double column = marcher.column(p, w, std::numeric_limits<double>::infinity(), limit);
         if (column < limit) irradiance += kPi * scene.sky.radianceFrom(w) * transmittance(reduced, column);
     }
