@@ -182,7 +182,6 @@ TEST(FaceSources, AGatheredLumpsThickVoxelsHoldTheirOneSidedFaces) {
     EXPECT_EQ(facesWithin(1000.0 * 64 * faceCount * 0.5), 0u);
 }
 
-
 // A floating layer's rim voxel shows its cameras below what its top and bottom faces show them, as a middle voxel
 // does, not its mean (the sun-lit top's light, forward: at sigma_t h 15 the mean is 46 % brighter seen from below;
 // docs/benchmarks.md, float-under). Its side faces, open to air on one side, once turned it to its mean: the
