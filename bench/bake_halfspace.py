@@ -36,6 +36,19 @@ def henyey_greenstein(g, cos):
     return (1.0 - g * g) / (4.0 * math.pi * d ** 1.5)
 
 
+def scatter(d, g, rng):
+    """The unit directions d (one per row) after a Henyey-Greenstein scattering: two uniform draws per row."""
+    u = rng.random(len(d))
+    cos = 1.0 - 2.0 * u if g == 0.0 else (1.0 + g * g - ((1.0 - g * g) / (1.0 - g + 2.0 * g * u)) ** 2) / (2.0 * g)
+    phi = 2.0 * math.pi * rng.random(len(d))
+    a = np.where(np.abs(d[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
+    t1 = np.cross(a, d)
+    t1 /= np.linalg.norm(t1, axis=1)[:, None]
+    t2 = np.cross(d, t1)
+    sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
+    return cos[:, None] * d + sin[:, None] * (np.cos(phi)[:, None] * t1 + np.sin(phi)[:, None] * t2)
+
+
 def half_space(omega, g, mu0, view, photons, seed):
     """pi L / (mu0 E) towards the unit `view` (frame: normal z, sun travelling towards +x), and A(mu0).
 
@@ -51,15 +64,7 @@ def half_space(omega, g, mu0, view, photons, seed):
     while len(w):
         radiance += np.sum(w * omega * henyey_greenstein(g, d @ view) * np.exp(-z / mu) / mu)
         w = w * omega
-        u = rng.random(len(w))
-        cos = 1.0 - 2.0 * u if g == 0.0 else (1.0 + g * g - ((1.0 - g * g) / (1.0 - g + 2.0 * g * u)) ** 2) / (2.0 * g)
-        phi = 2.0 * math.pi * rng.random(len(w))
-        a = np.where(np.abs(d[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
-        t1 = np.cross(a, d)
-        t1 /= np.linalg.norm(t1, axis=1)[:, None]
-        t2 = np.cross(d, t1)
-        sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
-        d = cos[:, None] * d + sin[:, None] * (np.cos(phi)[:, None] * t1 + np.sin(phi)[:, None] * t2)
+        d = scatter(d, g, rng)
         z = z - d[:, 2] * -np.log(rng.random(len(w)))
         escaped = z < 0.0
         returned += w[escaped].sum()

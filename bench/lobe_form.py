@@ -18,21 +18,7 @@ import os
 
 import numpy as np
 
-
-def hg(g, cos):
-    return (1.0 - g * g) / (4.0 * math.pi * (1.0 + g * g - 2.0 * g * cos) ** 1.5)
-
-
-def scatter(d, g, rng):
-    u = rng.random(len(d))
-    cos = (1.0 + g * g - ((1.0 - g * g) / (1.0 - g + 2.0 * g * u)) ** 2) / (2.0 * g)
-    phi = 2.0 * math.pi * rng.random(len(d))
-    a = np.where(np.abs(d[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
-    t1 = np.cross(a, d)
-    t1 /= np.linalg.norm(t1, axis=1)[:, None]
-    t2 = np.cross(d, t1)
-    sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
-    return cos[:, None] * d + sin[:, None] * (np.cos(phi)[:, None] * t1 + np.sin(phi)[:, None] * t2)
+from bake_halfspace import henyey_greenstein, scatter
 
 
 def sphere_grid(n_mu, n_phi, upper_only):
@@ -58,7 +44,8 @@ def half_space_exits(omega, g, mu0, views, photons, seed):
     mu = views[:, 2]
     single, multiple, first = np.zeros(len(views)), np.zeros(len(views)), True
     while len(w):
-        est = (w[:, None] * omega * hg(g, d @ views.T) * np.exp(-z[:, None] / mu[None, :]) / mu[None, :]).sum(0)
+        est = (w[:, None] * omega * henyey_greenstein(g, d @ views.T)
+               * np.exp(-z[:, None] / mu[None, :]) / mu[None, :]).sum(0)
         if first:
             single += est
         else:
@@ -78,8 +65,9 @@ def half_space_exits(omega, g, mu0, views, photons, seed):
 def layer_source(omega, g, tau, sun_elevation, views, photons, seed, bins=3):
     """The multiply scattered source function per unit extinction, in each of `bins` depth slices of a layer
     of optical thickness tau (z from 0 at the bottom to tau), lit from above by a unit beam travelling down at
-    sun_elevation from the layer's plane, towards +x (the suite's sun is at -x: mirrored views): a collision estimator, omega HG(d . view) per collision
-    after the first, divided by the slice's optical thickness and the beam's flux through the layer."""
+    sun_elevation from the layer's plane, towards +x (the suite's sun is at -x: mirrored views): a collision
+    estimator, omega HG(d . view) per collision after the first, divided by the slice's optical thickness and the
+    beam's flux through the layer."""
     rng = np.random.default_rng(seed)
     mu0 = math.sin(sun_elevation)
     d = np.tile([math.cos(sun_elevation), 0.0, -mu0], (photons, 1))
@@ -95,7 +83,7 @@ def layer_source(omega, g, tau, sun_elevation, views, photons, seed, bins=3):
         inside = (z >= 0.0) & (z <= tau)
         d, z, w = d[inside], z[inside], w[inside]
         b = np.minimum((z / tau * bins).astype(int), bins - 1)
-        val = w[:, None] * omega * hg(g, d @ views.T)
+        val = w[:, None] * omega * henyey_greenstein(g, d @ views.T)
         for i in range(bins):
             out[i] += val[b == i].sum(0)
         w = w * omega
@@ -188,10 +176,12 @@ CANDIDATES = [
     ("HG (the grids' broad lobe)", [0.3, 0.3, 0.0], hg_shape),
     ("(1) HG + q P2(cos), axial mu^2 about l1", [0.3, 0.3, 0.0, 0.0], p2_shape),
     ("(1) HG + quadrupole (5)", [0.3, 0.3, 0.0, 0, 0, 0, 0, 0], quad_shape),
-    ("(2) two broad HG lobes", [[0.3, 0.3, 0.0, 0.7, 0.3, 1.5, 0.0], [0.3, 0.3, 0.0, 0.7, 0.3, 1.5, math.pi], [0.3, 0.3, 0.0, 0.7, -0.3, 0.2, 0.0]], two_lobe_shape),
+    ("(2) two broad HG lobes", [[0.3, 0.3, 0.0, 0.7, 0.3, 1.5, 0.0], [0.3, 0.3, 0.0, 0.7, 0.3, 1.5, math.pi],
+                                [0.3, 0.3, 0.0, 0.7, -0.3, 0.2, 0.0]], two_lobe_shape),
     ("(3) (1 + k^2 - 2k cos)^-p, k of either sign", [0.3, 0.3, 0.0, 0.0], power_shape),
     ("(1') no HG: max(0, l0 + l1.w + q P2), axial", [[0.9, 0.3, 0.0, 0.0], [0.5, 0.3, 0.0, -0.3]], linear_p2_shape),
-    ("(1') no HG: max(0, l0 + l1.w + quadrupole)", [[0.9, 0.3, 0.0, 0, 0, 0, 0, 0], [0.5, 0.3, 0.0, 0, 0, 0, 0, -0.1]], sh2_shape),
+    ("(1') no HG: max(0, l0 + l1.w + quadrupole)",
+     [[0.9, 0.3, 0.0, 0, 0, 0, 0, 0], [0.5, 0.3, 0.0, 0, 0, 0, 0, -0.1]], sh2_shape),
 ]
 
 
@@ -213,7 +203,8 @@ def fit_surface(target, views, dw, peak_axis=None, peak_k=0.85):
             return (weight * ((model(p) - target) / scale) ** 2).sum() / weight.sum()
         tail = [0.3] if peak is not None else []
         fits = [nelder_mead(cost, list(x0) + tail) for x0 in as_starts(starts)]
-        if out and shape not in (linear_p2_shape, sh2_shape):  # also from the HG fit with the extension switched off: never worse than HG (nested forms)
+        # also from the HG fit with the extension switched off: never worse than HG (nested forms)
+        if out and shape not in (linear_p2_shape, sh2_shape):
             fits.append(nelder_mead(cost, nested_start(best, starts, len(tail))))
         p = min(fits, key=cost)
         best = best if out else p
@@ -236,8 +227,8 @@ def as_starts(starts):
 def fit_layer(target, views, dw, penalty, peak):
     """Each candidate fitted to target over the sphere, relative error weighted by dw, its mean and first
     moment held to the target's, beside a peaked lobe about the beam (k = g, its mean free: the bake's
-    peaked lobe holds the single scattering and what keeps the beam's direction), by a penalty (times the squared relative difference: 10^4 holds them, 0 is
-    a free fit as tracedSourceByDirection's)."""
+    peaked lobe holds the single scattering and what keeps the beam's direction), by a penalty (times the squared
+    relative difference: 10^4 holds them, 0 is a free fit as tracedSourceByDirection's)."""
     mean = (target * dw).sum()
     moment = (target[:, None] * views * dw[:, None]).sum(0)
     out, best = [], None
@@ -284,35 +275,42 @@ def fit_all(path, layer_photons=400000):
     for mu0 in (1.0, 0.87):
         target = mirrored(data[f"a_{mu0}"].mean(0).sum(0), SURFACE_VIEWS)
         sun = np.array([math.sqrt(1 - mu0 * mu0), 0.0, -mu0])
-        print(f"(a) half-space, omega 0.9999 g 0.85, mu0 {mu0}: the top ring (mu {1 - 0.5 / n_mu:.3f}) {ring(target, -1):.3f}")
+        print(f"(a) half-space, omega 0.9999 g 0.85, mu0 {mu0}: "
+              f"the top ring (mu {1 - 0.5 / n_mu:.3f}) {ring(target, -1):.3f}")
         for name, model in fit_surface(target, views, dw, sun):
-            print(f"  {name:48s} rms {100 * rms(model, target, views[:, 2] * dw):5.1f} % (rings {100 * rms(ring_means(model), ring_means(target), ring_means(views[:, 2] * dw)):4.1f} %)  top ring "
-                  f"{100 * (ring(model, -1) / ring(target, -1) - 1):+5.1f} %   mu 0.06 ring {100 * (ring(model, 0) / ring(target, 0) - 1):+5.1f} %")
+            rings = rms(ring_means(model), ring_means(target), ring_means(views[:, 2] * dw))
+            print(f"  {name:48s} rms {100 * rms(model, target, views[:, 2] * dw):5.1f} % (rings {100 * rings:4.1f} %)  "
+                  f"top ring {100 * (ring(model, -1) / ring(target, -1) - 1):+5.1f} %   "
+                  f"mu 0.06 ring {100 * (ring(model, 0) / ring(target, 0) - 1):+5.1f} %")
     for mu0 in (0.05, 0.15, 0.3, 0.44):
         target = mirrored(data[f"c_{mu0}"].mean(0).sum(0), SURFACE_VIEWS)
         sun = np.array([math.sqrt(1 - mu0 * mu0), 0.0, -mu0])
         t = target.reshape(n_mu, n_phi)
-        fb = lambda x: (x[1, [0, -1]].mean() / x[1, [n_phi // 2 - 1, n_phi // 2]].mean())  # mu 0.19, azimuth 11 / 169 deg
+        # mu 0.19, azimuth 11 / 169 deg
+        fb = lambda x: (x[1, [0, -1]].mean() / x[1, [n_phi // 2 - 1, n_phi // 2]].mean())
         print(f"(c) half-space, grazing sun mu0 {mu0}: forward / backward at mu 0.19 {fb(t):.2f}")
         for name, model in fit_surface(target, views, dw, sun):
             m = model.reshape(n_mu, n_phi)
-            print(f"  {name:48s} rms {100 * rms(model, target, views[:, 2] * dw):5.1f} %   forward {100 * (m[1, [0, -1]].mean() / t[1, [0, -1]].mean() - 1):+5.1f} %"
+            print(f"  {name:48s} rms {100 * rms(model, target, views[:, 2] * dw):5.1f} %   "
+                  f"forward {100 * (m[1, [0, -1]].mean() / t[1, [0, -1]].mean() - 1):+5.1f} %"
                   f"  backward {100 * (m[1, [7, 8]].mean() / t[1, [7, 8]].mean() - 1):+5.1f} %  f/b {fb(m):.2f}")
     lv, ldw = sphere_grid(*LAYER_VIEWS, upper_only=False)
     multiple = mirrored(layer_source(*LAYER, lv, layer_photons, 7, bins=3)[1], LAYER_VIEWS)  # the middle voxel
     beam = np.array([math.cos(LAYER[3]), 0.0, -math.sin(LAYER[3])])
     mu0 = math.sin(LAYER[3])  # the single scattering at mid-depth, per unit extinction, E mu0 = 1
-    single = LAYER[0] * hg(LAYER[1], lv @ beam) * math.exp(-0.5 * LAYER[2] / mu0) / mu0
+    single = LAYER[0] * henyey_greenstein(LAYER[1], lv @ beam) * math.exp(-0.5 * LAYER[2] / mu0) / mu0
     total = single + multiple
     ring45 = np.abs(lv @ beam - math.cos(math.radians(45.0))) < 0.06
     print(f"(b) layer tau 3, omega 0.9999 g 0.87, sun 30 deg, middle third: the 45 deg ring's max / min "
-          f"{total[ring45].max() / total[ring45].min():.2f} (multiple alone {multiple[ring45].max() / multiple[ring45].min():.2f})")
+          f"{total[ring45].max() / total[ring45].min():.2f} "
+          f"(multiple alone {multiple[ring45].max() / multiple[ring45].min():.2f})")
     camera = np.argmax(lv @ np.array([0.26, 0.0, -0.97]))  # slab_thin_forward's (180, -75) camera, mirrored
     for penalty, how in ((1e4, "mean and first moment kept"), (0.0, "fitted freely")):
         print(f"  {how}:")
         for name, f in fit_layer(total, lv, ldw, penalty, lobe(LAYER[1], lv @ beam)):
             print(f"  {name:48s} rms {100 * rms(f, total, ldw):5.1f} %   45 deg ring rms "
-                  f"{100 * rms(f[ring45], total[ring45], ldw[ring45]):5.1f} %   camera below {100 * (f[camera] / total[camera] - 1):+5.1f} %")
+                  f"{100 * rms(f[ring45], total[ring45], ldw[ring45]):5.1f} %   "
+                  f"camera below {100 * (f[camera] / total[camera] - 1):+5.1f} %")
 
 
 SURFACE_VIEWS = (8, 16)  # mu x azimuth cells over the outgoing hemisphere
