@@ -20,9 +20,6 @@ namespace firn::bake {
 
 namespace {
 
-// The offset of voxel k = 0..26 of a 3^3 block from its centre (13 is the centre), x fastest.
-openvdb::Coord blockOffset(int k) { return openvdb::Coord(k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1); }
-
 // The radiance the surface voxels around voxel c (outside the snow) show towards it: their values
 // weighted by how much their surface faces c (a voxel beside an edge takes the side's, one above it the
 // top's), and their normals so weighted (`facing`, unit; zero where none faces c). False if no surface voxel is

@@ -385,7 +385,7 @@ double surfaceCurvature(const SnowTopology &topo, const openvdb::Coord &cj,
     glm::dvec3 mean(0.0);
     double total = 0.0;
     for (int k = 0; k < 27; ++k) {
-        const openvdb::Coord d(k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1);
+        const openvdb::Coord d = blockOffset(k);
         const std::int32_t i = index.getValue(cj + d);
         if (i < 0 || !topo.patches[std::size_t(i)].isSurface()) continue;
         const double w = glm::dot(n, topo.patches[std::size_t(i)].normal);

@@ -125,6 +125,9 @@ constexpr double kFringeOpticalDepth = 5.0;
 SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress,
                                int shellVoxels = 1);
 
+// The offset of voxel k = 0..26 of a 3^3 block from its centre (13 is the centre), x fastest.
+inline openvdb::Coord blockOffset(int k) { return openvdb::Coord(k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1); }
+
 // The curvature (per voxel, positive convex) of the surface around surface voxel j at cj: over the surface voxels k
 // of its 3^3 block, weighted by the cosine w_k between their normals and j's, the ratio
 // sum w_k n_k . t_k / sum w_k |t_k|^2, t_k their offsets from the block's weighted mean across n_j (so sum w_k t_k = 0:
