@@ -128,7 +128,7 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
         const openvdb::Coord c = stack.back();
         stack.pop_back();
         for (int i = 0; i < 27 && !large; ++i) {
-            const openvdb::Coord n = c.offsetBy(i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1);
+            const openvdb::Coord n = c + blockOffset(i);
             if (i == 13 || !(density.getValue(n) > 0.0f)) continue;
             const std::int32_t mark = done.getValue(n);
             if (mark == kLargePiece) large = true;
