@@ -92,6 +92,16 @@ def flat():
               f"+- {e[:, 1].mean() / math.sqrt(len(origins)):.4f}, baked {b[:, 1].mean():.4f}")
 
 
+def write_without_peaks(path, out):
+    """A baked file with the peaked lobes' grids (firn_source_peak*) cleared, its file metadata kept (the grids'
+    half-voxel shift, firn_half_voxel_shift, is there: without it the render reads them half a voxel off)."""
+    grids, metadata = pyopenvdb.readAll(path)
+    for grid in grids:
+        if grid.name.startswith("firn_source_peak"):
+            grid.clear()
+    pyopenvdb.write(out, grids=list(grids), metadata=metadata)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--case", default="ball_issue")
@@ -128,12 +138,8 @@ def main():
                           f"baked {b[k].sum():.3f} ({b[k].sum() / m[k].sum() - 1:+.0%}), missing {m[k].sum() - b[k].sum():+.3f}")
     against = [i for i, view in enumerate(case.views) if tuple(view) == (180, 0)][0]
     rows = [against * per + i for i in TOP_ROWS if seen[against * per + i]]
-    grids = list(pyopenvdb.readAll(path)[0])
-    for grid in grids:
-        if grid.name.startswith("firn_source_peak"):
-            grid.clear()
     broad_path = os.path.join(folder, "broad.vdb")
-    pyopenvdb.write(broad_path, grids=grids)
+    write_without_peaks(path, broad_path)
     broad = firncore.render_baked(broad_path, case.optics, origins, directions)
     print(f"\n  view (180, 0)'s top two rows: block, reference, baked, its peaked lobe's part, exact single scattering, mu0, mu_v")
     for j in rows:

@@ -25,7 +25,7 @@ import pyopenvdb
 
 import bake_suite
 import firncore
-from backlit_probe import sun_towards
+from backlit_probe import sun_towards, write_without_peaks
 from ray_depth_split import cuts
 
 STEP = 0.00025  # m, along the camera ray
@@ -83,15 +83,6 @@ def exits(case, args):
         print(f"  {label}: {m:.4f} ({e:.4f})  {b:.4f}  {b / m:.2f}")
 
 
-def without_peaks(path):
-    """The grids of a baked file with the peaked lobes' (firn_source_peak*) cleared."""
-    grids = list(pyopenvdb.readAll(path)[0])
-    for grid in grids:
-        if grid.name.startswith("firn_source_peak"):
-            grid.clear()
-    return grids
-
-
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--case", default="ball_snow")
@@ -118,7 +109,7 @@ def main():
         firncore.bake(sun_path, case.optics, suns=case.suns(), quality="FINAL", seed=args.seed)
         firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), quality="FINAL", seed=args.seed)
         broad_path = os.path.join(folder, "broad.vdb")
-        pyopenvdb.write(broad_path, grids=without_peaks(path))
+        write_without_peaks(path, broad_path)
         for p in pick:
             t, T = cuts(case, origins[p], directions[p])
             points = origins[p] + t[:, None] * directions[p]
