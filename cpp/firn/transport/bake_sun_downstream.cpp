@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdlib>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
@@ -62,18 +61,7 @@ glm::dvec3 rotatedWith(const glm::dvec3 &v, const glm::dvec3 &from, const glm::d
     return cos * v + glm::cross(axis, v) + axis * (glm::dot(axis, v) / (1.0 + cos));
 }
 
-// How far (voxels, each axis) a patch's returned sun reaches: its displacement and two spreads, at most kMaxReach.
-// The half-space spreads it over several 1/sigma_tr (ball_snow: 7.5 cm, 7.5 voxels); the cube of side 2 kMaxReach + 1
-// is read per sender and per receiver, so the cost grows as its volume.
-static const int kMaxReach = std::getenv("FIRN_REACH") ? std::atoi(std::getenv("FIRN_REACH")) : 1;  // TEMP
-int reachOf(const std::array<const SunReturned *, 3> &from, double h) {
-    double far = 0.0;
-    for (const SunReturned *kernel : from)
-        far = std::max(far, double(glm::length(kernel->downstream)) + 2.0 * double(kernel->spread));
-    return std::clamp(int(std::ceil(far / h)), 1, kMaxReach);
-}
-
-// The weights surface voxel i's downstream kernels (one per channel) give surface voxel j within its reach (before
+// The weights surface voxel i's downstream kernels (one per channel) give surface voxel j of its 3^3 block (before
 // normalizing): a Gaussian of the half-space's displacement (SunReturned::downstream, spread) in i's tangent plane,
 // times j's patch area and the cosine between the normals; smooth patches only. a, b: i's and j's patches; d: j's
 // voxel less i's.
@@ -97,18 +85,6 @@ glm::dvec3 downstreamWeights(const SurfacePatch &a, const std::array<const SunRe
     return weight;
 }
 
-// Calls f(j) for each unknown j within `reach` voxels (each axis) of coordinate c.
-template <typename F>
-void forEachWithin(openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const openvdb::Coord &c, int reach,
-                   F &&f) {
-    for (int dz = -reach; dz <= reach; ++dz)
-        for (int dy = -reach; dy <= reach; ++dy)
-            for (int dx = -reach; dx <= reach; ++dx) {
-                const std::int32_t j = index.getValue(c.offsetBy(dx, dy, dz));
-                if (j >= 0) f(std::size_t(j));
-            }
-}
-
 }  // namespace
 
 // The three channels' sun light each smooth patch returns at once (`sun`; its atOnce averaged over the neighbourhood as
@@ -127,10 +103,8 @@ void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValu
     };
     std::vector<glm::vec3> total(topo.surfaceVoxels(), glm::vec3(0.0f));   // each sender's weights' sum
     std::vector<glm::vec3> atOnce(topo.surfaceVoxels(), glm::vec3(0.0f));  // W sent, averaged
-    std::vector<std::int8_t> reach(topo.surfaceVoxels(), 0);               // voxels
     auto smooth = [&](std::int32_t s) { return s >= 0 && patch[s].isSurface() && !patch[s].sharp; };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const std::int32_t si = slot[i];
             if (!smooth(si)) continue;
@@ -140,30 +114,28 @@ void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValu
             const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(topo, i, patch[si].normal, atOnceOf);
             atOnce[si] = glm::vec3(leaving / area * double(patch[si].area));
             const auto from = sent(si);
-            reach[si] = std::int8_t(reachOf(from, h));
             glm::dvec3 sum(0.0);
-            forEachWithin(index, topo.coord[i], reach[si], [&](std::size_t j) {
-                if (slot[j] >= 0 && patch[slot[j]].isSurface())
-                    sum += downstreamWeights(patch[si], from, patch[slot[j]], topo.coord[j] - topo.coord[i], h);
-            });
+            for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
+                const std::uint32_t j = topo.neighbourhood[k];
+                sum += downstreamWeights(patch[si], from, patch[slot[j]], topo.coord[j] - topo.coord[i], h);
+            }
             total[si] = glm::vec3(sum);
         }
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         for (std::size_t j = range.begin(); j != range.end(); ++j) {
             const std::int32_t sj = slot[j];
             if (!smooth(sj)) continue;
             const glm::dvec3 to = patch[sj].normal;
             glm::vec3 l0(0.0f);
             glm::mat3 l1(0.0f);  // column c: channel c's
-            forEachWithin(index, topo.coord[j], kMaxReach, [&](std::size_t i) {
+            for (std::size_t k = topo.neighbourhoodStart[j]; k < topo.neighbourhoodStart[j + 1]; ++k) {
+                const std::uint32_t i = topo.neighbourhood[k];
                 const std::int32_t si = slot[i];
-                if (!smooth(si)) return;
-                const openvdb::Coord d = topo.coord[j] - topo.coord[i];
-                if (std::max({std::abs(d.x()), std::abs(d.y()), std::abs(d.z())}) > reach[si]) return;
+                if (!smooth(si)) continue;
                 const auto from = sent(si);
-                const glm::dvec3 weights = downstreamWeights(patch[si], from, patch[sj], d, h);
+                const glm::dvec3 weights =
+                    downstreamWeights(patch[si], from, patch[sj], topo.coord[j] - topo.coord[i], h);
                 for (int c = 0; c < 3; ++c) {
                     if (!(total[si][c] > 0.0f)) continue;
                     const double w = weights[c] / total[si][c];
@@ -173,7 +145,7 @@ void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValu
                     l1[c] += glm::vec3(w * (rotatedWith(glm::dvec3(from[c]->l1), patch[si].normal, to) +
                                             6.0 / 7.0 * atOnce[si][c] * to));
                 }
-            });
+            }
             SurfaceLight &received = out.surface(j);
             for (int c = 0; c < 3; ++c) {
                 received.returned.l0[c] += l0[c];

@@ -1,4 +1,3 @@
-#include <cstdlib>
 #include "firn/transport/bake_surface_light.h"
 
 #include <algorithm>
@@ -275,7 +274,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 // part of 1/sigma_tr.
                 const double atOnce = terms[c].sunEscaped[i];
                 const double moved =
-                    std::getenv("FIRN_MOVEALL") ? 1.0 : r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
+                    r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
                 surface.returned.l0[c] = float(r.sky0 + (1.0 - moved) * r.sunShape0);
                 surface.returned.l1[c] = glm::vec3(r.sky1 + (1.0 - moved) * r.sunShape1 + leaving * drift);
                 surface.leaving[c] = float(leaving);
