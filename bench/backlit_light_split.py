@@ -42,9 +42,10 @@ def main():
     print(f"{case.name}, view {args.view}, green, W/m^2/sr summed over the pixels; {args.samples} paths per pixel")
     for label, m in (("all", seen), ("rim (tau < 30)", seen & (tau < 30)), ("core", seen & (tau >= 30))):
         sun, sky = mc["sun"][m].sum(), mc["sky"][m].sum()
+        both = (baked["sun"][m] + baked["sky"][m]).sum() / (sun + sky) - 1
         print(f"  {label:<15} {m.sum():3d} pixels: Monte Carlo sun {sun:.4f} (once {once[m].sum():.4f}, more "
               f"{sun - once[m].sum():.4f}), sky {sky:.4f}; baked sun {baked['sun'][m].sum() / sun - 1:+.1%}, sky "
-              f"{baked['sky'][m].sum() / sky - 1:+.1%}, both {(baked['sun'][m] + baked['sky'][m]).sum() / (sun + sky) - 1:+.1%}")
+              f"{baked['sky'][m].sum() / sky - 1:+.1%}, both {both:+.1%}")
 
 
 if __name__ == "__main__":

@@ -25,6 +25,7 @@ import firncore
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bake_suite  # noqa: E402
+from bake_halfspace import henyey_greenstein  # noqa: E402
 
 EXITS = ((0.05, "forward"), (0.18, "forward"), (0.4, "forward"), (0.18, "backward"))
 HEIGHT = 0.012  # m: the rays start above the top's ramp (one voxel of 1 cm)
@@ -32,16 +33,14 @@ HEIGHT = 0.012  # m: the rays start above the top's ramp (one voxel of 1 cm)
 
 def single_scattering(case, sun, mu0, w):
     """A half-space's exit radiance of the sun (1 W/m^2) scattered once towards w: omega mu0 / (mu0 + mu) HG."""
-    cos = float(-sun @ w)
-    hg = (1 - case.g ** 2) / (4 * math.pi * (1 + case.g ** 2 - 2 * case.g * cos) ** 1.5)
-    return case.omega[1] * mu0 / (mu0 + w[2]) * hg
+    return case.omega[1] * mu0 / (mu0 + w[2]) * henyey_greenstein(case.g, float(-sun @ w))
 
 
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--optics", default="ball_snow", help="the bench/bake_suite.py case whose snow to use")
     parser.add_argument("--width", type=int, default=64, help="voxels across (the lit sides far from the point)")
-    parser.add_argument("--layers", type=int, default=16)
+    parser.add_argument("--layers", type=int, default=16, help="voxels deep")
     parser.add_argument("--mu0", default="0.15,0.3,0.44", help="the sun's cosines to the normal")
     parser.add_argument("--samples", type=int, default=4096, help="Monte Carlo paths per ray")
     parser.add_argument("--n", type=int, default=2, help="rays per side of each bundle")

@@ -21,7 +21,6 @@ import os
 import tempfile
 
 import numpy as np
-import pyopenvdb
 
 import bake_suite
 import firncore
