@@ -61,13 +61,14 @@ std::vector<openvdb::Coord> layerVoxels() {
     return voxels;
 }
 
-// The voxels' sources at `paths` each and their faces' (gatheredVoxelFaces).
-bake::MonteCarloVoxels tracedWithFaces(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int paths) {
+// The voxels' sources at `paths` each and their faces' (gatheredVoxelFaces), the faces' paths reporting to
+// `faceProgress`.
+bake::MonteCarloVoxels tracedWithFaces(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int paths,
+                                       const SubProgress &faceProgress = SubProgress(nullptr, 0.0, 1.0)) {
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    const SubProgress none(nullptr, 0.0, 1.0);
     const bake::GatheringPlan plan{paths, paths * 1000.0 * double(voxels.size())};
-    bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, plan.paths, 3, none);
-    bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan, voxels.size()), 5, none, traced);
+    bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, plan.paths, 3, SubProgress(nullptr, 0.0, 1.0));
+    bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan, voxels.size()), 5, faceProgress, traced);
     return traced;
 }
 
@@ -87,15 +88,9 @@ TEST(FaceSources, EachTwoSidedVoxelHoldsItsFacesAndEscStopsThem) {
         EXPECT_EQ(traced.faces[std::size_t(traced.facesAt[v])].open, 0b110000u | sides);  // -z, +z and the rim's
     }
 
-    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    const SubProgress none(nullptr, 0.0, 1.0);
-    const bake::GatheringPlan plan{64, 64.0 * 1000.0 * double(voxels.size())};
     Progress cancelled;
     cancelled.cancel();
-    bake::MonteCarloVoxels again = bake::traceSources(scene, voxels, plan.paths, 3, none);
-    EXPECT_THROW(bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan, voxels.size()), 5,
-                                      SubProgress(&cancelled, 0.0, 1.0), again),
-                 Cancelled);
+    EXPECT_THROW(tracedWithFaces(scene, voxels, 64, SubProgress(&cancelled, 0.0, 1.0)), Cancelled);
 }
 
 // A traced layer's voxels (light traced whole: FaceGathering::inLayer) hold a source for each face open to air,
