@@ -23,7 +23,7 @@ def main():
     parser.add_argument("--view", default="180,0", help="azimuth, elevation (deg)")
     parser.add_argument("--samples", type=int, default=4096, help="Monte Carlo paths per pixel")
     args = parser.parse_args()
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     case.views = [tuple(int(x) for x in args.view.split(","))]
     origins, directions, tau = bake_suite.views(case)
     seen = tau >= 1.0

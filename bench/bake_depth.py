@@ -31,7 +31,7 @@ def main():
     parser.add_argument("--samples", type=int, default=4096, help="Monte Carlo paths per point")
     parser.add_argument("--steps", type=int, default=18, help="points along each ray, half a voxel apart")
     args = parser.parse_args()
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, case.name + ".vdb")
         bake_suite.write_density(path, case.density, case.voxel)

@@ -59,7 +59,7 @@ def main():
     parser.add_argument("--quality", default="FINAL")
     parser.add_argument("--samples", type=int, default=2048, help="Monte Carlo paths per ray")
     args = parser.parse_args()
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     origins, directions, labels = rays(case)
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, case.name + ".vdb")

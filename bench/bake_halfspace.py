@@ -83,7 +83,7 @@ def main():
     parser.add_argument("--photons", type=int, default=3000)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args()
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     radius, channel = RADIUS[case.name], 1
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, case.name + ".vdb")

@@ -80,7 +80,7 @@ def main():
     parser.add_argument("--classes", action="store_true", help="rim against core rays over the case's views")
     parser.add_argument("--seeds", type=int, default=1)
     args = parser.parse_args()
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     if args.classes:
         classes(case, args.seeds)
     if args.pixels:

@@ -106,6 +106,11 @@ def slab(width, layers, pad=2):
     return fill
 
 
+def slab_top(fill, layers, h, pad=2):
+    """The point (m) half a voxel under the middle of slab(width, layers, pad)'s top: its last layer's centre."""
+    return np.array([(fill.shape[0] - 1) / 2 * h, (fill.shape[1] - 1) / 2 * h, (pad + layers - 0.5) * h])
+
+
 def bumpy(side, depth, amplitude):
     X, Y, Z = grid((side, side, depth + amplitude + 3))
     top = depth + amplitude * np.sin(2 * np.pi * X / 14.0) * np.cos(2 * np.pi * Y / 11.0)
@@ -136,6 +141,14 @@ def plate(x0, x1, y0, y1, z, albedo):
 
 
 ROUND = [(0, 0), (90, 0), (180, 0), (0, 60)]  # towards the sun, terminator, against the sun, from above
+
+
+def case(name):
+    """The suite's case of that name (ValueError naming the cases if none)."""
+    found = [c for c in cases() if c.name == name]
+    if not found:
+        raise ValueError(f"no suite case {name!r}; the cases: {', '.join(c.name for c in cases())}")
+    return found[0]
 
 
 def cases():

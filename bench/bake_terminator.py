@@ -61,7 +61,7 @@ def main():
     parser.add_argument("--angles", default="60,75,85,90,95,100,105,110,120,135,150",
                         help="psi, degrees from the sunward pole through the top (90: the terminator)")
     args = parser.parse_args()
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     angles = [float(a) for a in args.angles.split(",")]
     if args.voxel > 0.0:
         radius = float(re.search(r"r (\d+) cm", case.what).group(1)) / 100.0

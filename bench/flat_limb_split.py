@@ -47,10 +47,10 @@ def main():
     parser.add_argument("--azimuth", type=float, default=29.0,
                         help="the forward exits' tangent part off the sun's travel, degrees (the ball's limb: 27-31)")
     args = parser.parse_args()
-    case = next(c for c in bake_suite.cases() if c.name == args.optics)
+    case = bake_suite.case(args.optics)
     h = case.voxel
     density = bake_suite.slab(args.width, args.layers) * case.density.max()
-    top = np.array([(density.shape[0] - 1) / 2 * h, (density.shape[1] - 1) / 2 * h, (2 + args.layers - 0.5) * h])
+    top = bake_suite.slab_top(density, args.layers, h)
     offsets = ((np.arange(args.n) + 0.5) / args.n * 2.0 - 1.0) * 1.5 * h
     print(f"flat slab of {args.optics} ({args.width} x {args.width} x {args.layers} voxels), sun alone, leaving the "
           f"top, azimuth {args.azimuth:g}: Monte Carlo (+-), of it once, bake, bake / Monte Carlo; {args.samples} "

@@ -42,7 +42,7 @@ def main():
     args = parser.parse_args()
     sky = firncore.Sky((SKY,) * 3)
     for name in args.cases.split(","):
-        case = next(c for c in bake_suite.cases() if c.name == name)
+        case = bake_suite.case(name)
         for cut in (float(x) for x in args.cuts.split(",")):
             density = case.density.copy()
             density[density < cut * case.rho] = 0.0

@@ -94,7 +94,7 @@ def main():
     parser.add_argument("--bake-only", action="store_true", help="no Monte Carlo run (ratios only from --cache)")
     args = parser.parse_args()
 
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     thetas = [float(x) for x in args.thetas.split(",")]
     radii = [float(x) for x in args.radii.split(",")]
     sphere, hemisphere = fibonacci(args.sphere), fibonacci(args.hemisphere, hemisphere=True)

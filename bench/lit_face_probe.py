@@ -30,7 +30,7 @@ def point_frame(shape, case, radius):
     h, peak = case.voxel, case.density.max()
     if shape == "slab":
         density = bake_suite.slab(32, 12) * peak
-        point = np.array([(density.shape[0] - 1) / 2 * h, (density.shape[1] - 1) / 2 * h, (2 + 12 - 0.5) * h])
+        point = bake_suite.slab_top(density, 12, h)
         return density, point, np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])
     density = bake_suite.ball(radius, h) * peak
     centre = (density.shape[0] - 1) / 2 * h
@@ -50,7 +50,7 @@ def main():
     parser.add_argument("--n", type=int, default=4,
                         help="rays per side of the bundle (n x n parallel rays over 3 voxels across the point)")
     args = parser.parse_args()
-    case = next(c for c in bake_suite.cases() if c.name == args.optics)
+    case = bake_suite.case(args.optics)
     density, point, normal, tangent = point_frame(args.shape, case, args.radius)
     binormal = np.cross(normal, tangent)
     s = math.radians(args.sun)

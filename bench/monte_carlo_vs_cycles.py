@@ -64,7 +64,7 @@ def main():
     import bake_suite
     from firn.material import nodes as materials
 
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     case.views = [(float(a), 0.0) for a in args.views.split(",")]
     case.samples = args.mc_samples or case.samples
     directory = tempfile.mkdtemp(prefix="firn_mc_cycles_")

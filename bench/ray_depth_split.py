@@ -56,7 +56,7 @@ def main():
     parser.add_argument("--samples", type=int, default=4096, help="Monte Carlo paths per point")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args()
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     origins, directions, tau = bake_suite.views(case)
     seen, lit, core = suite_regions.regions(case, origins, directions, tau)
     pick = np.nonzero(seen & eval(args.region, {}, {"lit": lit, "core": core}))[0]

@@ -92,7 +92,7 @@ def main():
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     parser.add_argument("--exits", action="store_true", help="the sun alone leaving the limb, by direction")
     args = parser.parse_args()
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     if args.exits:
         return exits(case, args)
     origins, directions, _ = bake_suite.views(case)

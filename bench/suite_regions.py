@@ -61,7 +61,7 @@ def main():
     args = parser.parse_args()
     if args.seeds < 2:
         parser.error("--seeds must be 2 or more (the spread across seeds)")
-    case = next(c for c in bake_suite.cases() if c.name == args.case)
+    case = bake_suite.case(args.case)
     origins, directions, tau = bake_suite.views(case)
     seen, lit, core = regions(case, origins, directions, tau)
     with tempfile.TemporaryDirectory() as folder:

@@ -17,7 +17,7 @@ def main():
     tau, omega, g, layers = float(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3]), int(sys.argv[4])
     width = int(sys.argv[5]) if len(sys.argv) > 5 else 24
     samples = int(sys.argv[6]) if len(sys.argv) > 6 else 4096
-    slab_thin = next(c for c in bake_suite.cases() if c.name == "slab_thin")
+    slab_thin = bake_suite.case("slab_thin")
     case = bake_suite.Case(f"layer_{tau}_{omega}_{g}_{layers}x{width}", "", bake_suite.slab(width, layers) * 100.0,
                            0.01, tau * 100.0, 100.0, (omega,) * 3, g, views=slab_thin.views, samples=samples)
     cache = os.path.join(tempfile.gettempdir(), "firn_thin_layer_probe")
