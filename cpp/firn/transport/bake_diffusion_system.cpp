@@ -37,6 +37,18 @@ struct BoundaryLink {
     double diffuseReturned() const { return (sh - 2.0 * beta * ch) / delta; }
 };
 
+// Past the terminator a beam grazes through the density ramp above a patch facing away from it (irradiance B, W/m^2,
+// in the ramp a voxel out): no beam enters through such a patch, but the ramp cells in front of its air faces
+// scatter it, each over a voxel's length of its own density, and half of that (isotropic after the similarity's
+// reduction) comes in. W into the node. The truth's outer node past the terminator is fed so (its net flux there points
+// inwards; docs/benchmarks.md, limb-skin). `rampShare` m^2 per face, `rampTau` the cells' reduced optical depth.
+double rampInflow(double aPrime, double B, const std::array<double, 6> &rampShare,
+                  const std::array<double, 6> &rampTau) {
+    double scattered = 0.0;
+    for (int f = 0; f < 6; ++f) scattered += rampShare[f] * -std::expm1(-rampTau[f]);
+    return 0.5 * aPrime * B * scattered;
+}
+
 // Where a beam entering at cosine mu scatters within a stretch L (resistance) above the node: at mean resistance
 // 3 mu (reduced depth mu below the surface), cut at the node.
 double beamScatteringDepth(double mu, double L) { return 3.0 * mu * (1.0 - std::exp(-L / (3.0 * mu))); }
@@ -92,6 +104,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             std::array<std::optional<BoundaryLink>, 6> boundary;
             std::array<double, 6> albedo{};   // occluder faces
             std::array<double, 6> conductance{};  // to the neighbours
+            std::array<double, 6> rampShare{}, rampTau{};  // air faces' patch area (m^2), their ramp cell's reduced tau
             for (int f = 0; f < 6; ++f) {
                 const std::int32_t link = topo.link[i][f];
                 if (!SnowTopology::isFace(link)) {
@@ -113,6 +126,8 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     if (facing > 0.0 && !patch.sharp) area = h2 * facing;
                     const BoundaryLink &b = boundary[f].emplace(beta, 2.0, 3.0 * ch.sigmaTr(face.rampMass));
                     const double shareOfPatch = patch.area * patch.share[f];  // m^2
+                    rampShare[f] = shareOfPatch;
+                    rampTau[f] = ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f))) * h;
                     sys.surface.outConductance.surface(i) += area * b.conductance();
                     sys.skyToNode.surface(i) += 4.0 * shareOfPatch * b.conductance();
                     sys.skyReturned.surface(i) += shareOfPatch * b.diffuseReturned();
@@ -158,6 +173,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     if (flow > 0.0) entering[f] = flow, muIn[f] = mu;
                 }
                 const double patchIn = in;
+                if (patchIn <= 0.0 && Bs > 0.0) source += rampInflow(aPrime, Bs, rampShare, rampTau);
                 std::array<double, 6> flow{};  // W through each link and occluder face, positive inwards
                 for (int f = 0; f < 6; ++f) {
                     const double mu = glm::dot(faceNormal(f), w);

@@ -337,6 +337,11 @@ glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std
     return surface + height / std::max(glm::dot(n, w), 1.0 / 3.0) * w;
 }
 
+// A patch facing away from a beam takes the beam in the ramp above it where the light meets the patch's normal at
+// cosine above this: grazing rays skim a ball's one-voxel ramp to acos(R / (R + h/2)) past the terminator (20-25
+// degrees on the suite's balls of 5-8 voxels), and behind that the ramp lies in the body's shadow.
+constexpr double kRampBeamCosine = -0.5;
+
 IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                                    const IncidentLightSettings &settings, const SubProgress &progress) {
     const Medium &medium = *scene.medium;
@@ -391,6 +396,12 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                     const glm::dvec3 from = patchOutsideAlong(medium, topo, i, towardsBeam(scene, b, centre), density);
                     beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher,
                                                        &surface, Crossing::Spreading, &blocks).irradiance;
+                } else if (topo.patches[i].isSurface() &&
+                           glm::dot(topo.patches[i].normal, towardsBeam(scene, b, centre)) > kRampBeamCosine) {
+                    // Past the terminator: the beam in the density ramp a voxel out along the normal (rampInflow).
+                    const glm::dvec3 ramp = centre + medium.voxelSize() * topo.patches[i].normal;
+                    beam.atSurface.surface(i) =
+                        beamAt(scene, b, ramp, settings.sunSamples, seed, 2 * i + 1, marcher).irradiance;
                 }
             }
         });

@@ -23,7 +23,9 @@ struct IncidentLight {
     // occluders (averaged over the sun's disc or the lamp).
     struct Beam {
         std::vector<glm::vec3> atVoxel;      // at each unknown's centre
-        SurfaceValues<glm::vec3> atSurface;  // just outside each surface voxel's patch (0 inside the snow)
+        // Just outside each surface voxel's patch facing the light (0 inside the snow); past the terminator, in the
+        // density ramp a voxel out along the normal of a patch facing away (within kRampBeamCosine).
+        SurfaceValues<glm::vec3> atSurface;
     };
     std::vector<Beam> beams;
     // W/m^2 onto each surface voxel's patch from the sky, past occluders and snow, plus sun and sky light
