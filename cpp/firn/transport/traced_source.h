@@ -51,11 +51,12 @@ Source tracedSourceByDirection(const SourceEstimate &S, const SourceDirections &
                                const DirectionWeights &visibility, double g);
 
 // The two lobes fitted to the exact source S.toward gathered in `directions` (grey): the peaked lobe about the
-// beams' axis m (unit), k from 0.5 to min(g, kMaxLobeAnisotropy) by steps of 0.01 (or none), the best; the
-// broad lobe's linear form l0 + l1 . w. Weighted least squares in relative error against `moments` (the lobes
-// fitted to the moments: weights that do not depend on the directional estimates, as their own values would,
-// which favour those drawn low), each direction weighted by `visibility` too. The channels in the ratio of the
-// estimate's means. None where the estimate holds no light or no fit is finite.
+// beams' axis m (unit), k from 0.5 to min(g, kMaxLobeAnisotropy) by steps of 0.01 (or none), the fits at each k
+// averaged by their likelihood (the best one where the estimate is exact); the broad lobe's linear form
+// l0 + l1 . w. Weighted least squares in relative error against `moments` (the lobes fitted to the moments:
+// weights that do not depend on the directional estimates, as their own values would, which favour those drawn
+// low), each direction weighted by `visibility` too. The channels in the ratio of the estimate's means. None
+// where the estimate holds no light or no fit is finite.
 std::optional<Source> fitByDirection(const SourceEstimate &S, const SourceDirections &directions,
                                      const DirectionWeights &visibility, const glm::dvec3 &m, double g,
                                      const Source &moments);
