@@ -29,10 +29,9 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                    Source &S, glm::dvec3 &facing, openvdb::Coord &carrier) {
     double total = 0.0, most = 0.0;
     int count = 0, mostAt = 27;
-    glm::dvec3 l0(0.0), q(0.0), peak0(0.0), peak1(0.0), normal(0.0);
+    glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0), normal(0.0);
     glm::dmat3 l1(0.0);
-    double surface = 0.0;
-    glm::dvec3 axis(0.0);
+    double flattening = 0.0;
     for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
             for (int dz = -1; dz <= 1; ++dz) {
@@ -44,8 +43,7 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
                 const Source v = source[j];
-                l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1), q += w * glm::dvec3(v.q);
-                surface += w * v.surface, axis += w * glm::dvec3(v.axis);
+                l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1), flattening += w * v.flattening;
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
                 normal += w * topo.patches[j].normal;
                 total += w, ++count;
@@ -60,13 +58,13 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                     if (j < 0 || !topo.patches[j].isSurface()) continue;
                     const Source v = source[j];
                     l0 += glm::dvec3(v.l0), l1 += glm::dmat3(v.l1), total += 1.0;
-                    q += glm::dvec3(v.q), surface += v.surface, axis += glm::dvec3(v.axis);
+                    flattening += v.flattening;
                     peak0 += glm::dvec3(v.peak0), peak1 += glm::dvec3(v.peak1);
                 }
     }
     S.l0 = glm::vec3(l0 / total);
     S.l1 = glm::mat3(l1 / total);
-    S.q = glm::vec3(q / total), S.surface = float(surface / total), S.axis = glm::vec3(axis / total);
+    S.flattening = float(flattening / total);
     S.peak0 = glm::vec3(peak0 / total), S.peak1 = glm::vec3(peak1 / total);
     return true;
 }
@@ -468,10 +466,10 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                     if (!take(n)) continue;
                     const Source v = value(n);
                     S.l0 += v.l0, S.l1 += v.l1, S.peak0 += v.peak0, S.peak1 += v.peak1, ++count;
-                    S.q += v.q, S.surface += v.surface, S.axis += v.axis;
+                    S.flattening += v.flattening;
                 }
         if (count) S.l0 /= double(count), S.l1 /= double(count), S.peak0 /= double(count), S.peak1 /= double(count);
-        if (count) S.q /= double(count), S.surface /= double(count), S.axis /= double(count);
+        if (count) S.flattening /= float(count);
         return count > 0;
     };
     // Where forwardPeakThrough may find a peak: within two voxels of a smooth surface voxel holding one (the car's

@@ -114,12 +114,7 @@ inline openvdb::Vec3f sourceComponent(const Source &S, int k) {
     return k < 4    ? broadComponent(S, k)
            : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
            : k == 5 ? openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z)
-                    : [&] {
-                          const float q = S.relativeQ(), len = std::sqrt(S.axis.x * S.axis.x + S.axis.y * S.axis.y + S.axis.z * S.axis.z);
-                          if (!(q < 0.0f) || !(len > 0.0f) || !(S.surface > 0.0f)) return openvdb::Vec3f(0.0f);
-                          const float r = std::sqrt(-q) / len;
-                          return openvdb::Vec3f(r * S.axis.x, r * S.axis.y, r * S.axis.z);
-                      }();
+                    : openvdb::Vec3f(S.flattening, 0.0f, 0.0f);
 }
 
 // Grid k of BakedGrids from its tree, `scale` times the voxel size of `density`, with its metadata.

@@ -75,28 +75,26 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
             const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
             const double own = kPi * topo.patches[i].area;
             const BroadLobe &returned = solved[i].returned;
-            const bool sharp = topo.patches[i].sharp;
-            double exit = 0.0, all = 0.0;  // the exit form's l0 and all of it, the channels summed
-            for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w + e2 (n . w)^2: its surface form
-                const SurfaceForm form =
-                    sharp ? SurfaceForm{returned.l0[c], 0.0, glm::dvec3(returned.l1[c])}  // its lobe, fitted already
-                          : surfaceForm(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
-                                        glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n,
-                                        returned.q[c] / own);
+            double flattened = 0.0, leavingHere = 0.0;  // W, the channels summed
+            for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
+                const double e0 = returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi);
+                const glm::dvec3 e1 = glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n;
+                const SourceLobe lobe = topo.patches[i].sharp
+                                            ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
+                                            : exitLobe(e0, e1, n);
                 // The crossing beams, added by their moments: light scattered forwards many times is broader
                 // than one scattering's peak (in the peaked lobe, k = g: ball_forward 17.6 % against 17.1 %, seen
                 // against the sun -29 % against -21 %; spray_lumps 20.1 % against 19.7 %; docs/bake.md).
                 const double crossing = solved[i].crossing[c] / topo.patches[i].area;  // its lobe's l0 (radiance)
-                out.surface(i).l0[c] = float(form.l0 + crossing);
-                out.surface(i).l1[c] = glm::vec3(form.l1 + 3.0 * crossingAnisotropy(optics.g) * crossing *
+                out.surface(i).l0[c] = float(lobe.l0 + crossing);
+                out.surface(i).l1[c] = glm::vec3(lobe.l1 + 3.0 * crossingAnisotropy(optics.g) * crossing *
                                                  glm::dvec3(solved[i].crossingAxis));
-                out.surface(i).q[c] = float(form.q);
-                exit += std::max(0.0, form.l0), all += std::max(0.0, form.l0) + crossing;
+                flattened += returned.flattened[c];
+                leavingHere += own * (std::max(0.0, e0 + 2.0 / 3.0 * glm::dot(e1, n)) + crossing);
             }
-            // A sharp edge keeps its lobe; the crossing beams' light is a lobe (forward light, which a
-            // quadratic cannot hold).
-            out.surface(i).surface = sharp || !(all > 0.0) ? 0.0f : float(exit / all);
-            out.surface(i).axis = glm::vec3(n);
+            // The returned suns' flattening, in their share of what leaves (a sharp edge's faces keep their lobe).
+            out.surface(i).flattening =
+                topo.patches[i].sharp || !(leavingHere > 0.0) ? 0.0f : float(std::min(0.5, flattened / leavingHere));
             out.surface(i).peak0 = solved[i].peak0, out.surface(i).peak1 = solved[i].peak1;
         }
     });
@@ -118,9 +116,7 @@ void composeSource(const SnowTopology &topo, const SurfaceValues<Source> &surfac
         if (owner >= 0) {
             S.l0 = w * surface[owner].l0 + (1.0f - w) * S.l0;
             S.l1 = w * surface[owner].l1 + (1.0f - w) * S.l1;
-            S.q = w * surface[owner].q + (1.0f - w) * S.q;
-            S.surface = w * surface[owner].surface + (1.0f - w) * S.surface;
-            S.axis = w * surface[owner].axis + (1.0f - w) * S.axis;
+            S.flattening = w * surface[owner].flattening + (1.0f - w) * S.flattening;
             S.peak0 = w * surface[owner].peak0 + (1.0f - w) * S.peak0;
             S.peak1 = w * surface[owner].peak1 + (1.0f - w) * S.peak1;
         }
@@ -225,7 +221,7 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
                 }
             }
             out.surface(i).peak0 = out.surface(i).peak1 = glm::vec3(0.0f);  // the traced radiance is all of it
-            out.surface(i).q = glm::vec3(0.0f), out.surface(i).surface = 0.0f;  // its fitted lobe
+            out.surface(i).flattening = 0.0f;  // its fitted lobe
             progress.report(double(++done) / surface.size());
         }
     });

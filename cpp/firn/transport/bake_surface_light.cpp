@@ -88,10 +88,7 @@ struct ReturnedLight {
     double sunShape0;  // of sun0, sun1: the sun lobe's shape beyond the escape function's
     glm::dvec3 sunShape1;
     double sunMissed, sunReturned;  // W: what the diffusion misses of it; all the half-space returns
-    double sky2;  // the sky beam's (n . w)^2 term (curved form only)
-    double curved0;  // the sun lobe's shape as sunShape0, sunShape1 in the curved form (the linear one unless asked
-    glm::dvec3 curved1;  // for), and its (n . w)^2 term: what stays at the patch (what moves downstream leaves linear)
-    double curved2;
+    double flattened;  // W: the returned suns (their linear rest) weighted by their lobe's lobeFlattening
 };
 
 // The sky on a patch of normal n read as an even part and a beam, from the first moment of its arrival
@@ -109,6 +106,27 @@ SkyBeam skyBeamPart(const glm::dvec3 &m, const glm::dvec3 &n) {
     const glm::dvec3 towards = m - (1.0 - share) * 2.0 / 3.0 * n;  // times share
     if (!(share > 1e-3) || glm::dot(towards, n) <= 0.0) return {};  // none, or light skimming the surface only
     return {share, glm::normalize(towards)};
+}
+
+// How far the stored lobe of a sun lobe's linear form (exitLobe's HG) must be flattened at its top to reach the
+// half-space's own top, the curved form's largest value over the outgoing hemisphere (both fitted to the same Monte
+// Carlo, sun_lobe_table.inc): 1 - curved max / HG max, at least 0. The HG is convex towards its axis and, with the
+// exitance kept, overshoots there where the truth is flat (docs/benchmarks.md lobe-form, lit-hg-blend); its
+// grazing side, which the absorbing balls' limbs need (surface-quad), is left as it is.
+double lobeFlattening(const SunLobe &lobe) {
+    const glm::dvec3 n(0.0, 0.0, 1.0), t(1.0, 0.0, 0.0);
+    const SourceLobe hg = exitLobe(lobe.a, lobe.b * n + lobe.c * t, n);
+    const double length = glm::length(hg.l1);
+    if (!(hg.l0 > 0.0) || !(length > 0.0)) return 0.0;
+    const double top = lobeRadiance(hg.l0, hg.l1, hg.l1 / length);
+    const SunLobe::Curved &f = lobe.curved;
+    double most = 0.0;
+    constexpr int kSteps = 180;  // exit directions in the plane of n and t, 1 degree apart
+    for (int k = 0; k <= kSteps; ++k) {
+        const double theta = kPi * (double(k) / kSteps - 0.5), mu = std::cos(theta);
+        most = std::max(most, f.a + f.b * mu + f.d * mu * mu + f.c * std::sin(theta));
+    }
+    return std::clamp(1.0 - most / top, 0.0, 0.5);
 }
 
 }  // namespace
@@ -165,8 +183,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // through a surface of normal n taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's; with
     // `peak` (a smooth patch, or each air face of a sharp edge), the suns' light returned sharply forwards leaves as
     // the peaked lobe instead (SunPeak: at grazing sun the lit rim seen against the sun, bench/bake_halfspace.py),
-    // added to `peak` (radiance), the rest linear, or with `curved` (a smooth patch, whose grid value shows it) in the
-    // sun lobe's curved form, its (n . w)^2 terms apart:
+    // added to `peak` (radiance), the rest linear; with `curved` (a smooth patch, whose grid value shows it) also the
+    // returned suns weighted by how far their stored lobe overshoots the half-space's top (lobeFlattening):
     auto returnedThrough = [&](int c, std::size_t i, const glm::dvec3 &n, double skyShare, const SkyBeam &beam,
                                const auto &beamShare, SurfaceLight *peak, bool curved) {
         const Channel &ch = channels[c].ch;
@@ -179,17 +197,14 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         // where it arrives) returns as its beam part would, in the sun lobe's shape (a + b n.w + c t.w against the
         // even 1: the same exitance, a + 2b/3 = 1). Not a sharp edge's faces: the moment is over the patch
         // normal's hemisphere, and an even sky would lean 45 degrees off each face.
-        double sky2 = 0.0;
         if (beam.share > 0.0) {
             const SunLobe lobe = sunLobe(ch.g, std::clamp(glm::dot(beam.towards, n), 0.05, 1.0), y);
-            const SunLobe::Curved form = formOf(lobe, curved);
             const double returned = beam.share * lobe.albedo * sky;
-            r0 += returned * (form.a - 1.0);
-            r1 += returned * (form.b * n + form.c * travelAlong(-beam.towards, n));
-            sky2 = returned * form.d;
+            r0 += returned * (lobe.a - 1.0);
+            r1 += returned * (lobe.b * n + lobe.c * travelAlong(-beam.towards, n));
         }
-        double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0, curved0 = 0.0, curved2 = 0.0;  // the beams' part
-        glm::dvec3 sun1(0.0), curved1(0.0);
+        double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0, flattened = 0.0;  // the beams' part
+        glm::dvec3 sun1(0.0);
         // The half-space of the snow beneath the patch: a voxel's resistance and the node's below the surface
         // (schemeBeamAlbedo's d, L). A smooth surface's fringe voxel holds less snow where the surface crosses it
         // (antialiasing), its ramp: the snow's own density for d, not the fringe's (with the fringe's ball_grey
@@ -202,7 +217,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
             const double mu0 = std::clamp(-glm::dot(d, n), 0.05, 1.0);
             const SunLobe lobe = sunLobe(ch.g, mu0, y);
-            const SunLobe::Curved form = formOf(lobe, false), bent = formOf(lobe, curved && mu0 >= kPeakFadeEnd);
+            const SunLobe::Curved form = formOf(lobe, false);
             const glm::dvec3 t = travelAlong(d, n);
             const double returned = P * lobe.albedo;
             sunReturned += returned;
@@ -212,20 +227,17 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 sun1 += returned * (form.b * n + form.c * t - escape1);
                 continue;
             }
-            const SunPeak split = sunPeak(ch.g, mu0, y, form), splitBent = sunPeak(ch.g, mu0, y, bent);
+            const SunPeak split = sunPeak(ch.g, mu0, y, form);
             sun0 += returned * ((1.0 - split.share) * split.a() - 3.0 / 7.0);
             sun1 += returned * ((1.0 - split.share) * (split.b * n + split.c * t) - escape1);
-            curved0 += returned * ((1.0 - splitBent.share) * splitBent.a() - 3.0 / 7.0);
-            curved1 += returned * ((1.0 - splitBent.share) * (splitBent.b * n + splitBent.c * t) - escape1);
-            curved2 += returned * (1.0 - splitBent.share) * splitBent.d;
+            if (curved) flattened += returned * (1.0 - split.share) * lobeFlattening(lobe);
             const double p0 = split.mean * returned / (kPi * topo.patches[i].area);
             const glm::dvec3 m = std::cos(split.elevation) * t + std::sin(split.elevation) * n;
             peak->peak0[c] += float(p0);
             peak->peak1 += glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part
         }
         return ReturnedLight{r0 + missed * 3.0 / 7.0, r1 + missed * escape1, sun0 + sunMissed * 3.0 / 7.0,
-                             sun1 + sunMissed * escape1, sun0, sun1, sunMissed, sunReturned, sky2, curved0,
-                             curved1, curved2};
+                             sun1 + sunMissed * escape1, sun0, sun1, sunMissed, sunReturned, flattened};
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -289,9 +301,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 const double atOnce = terms[c].sunEscaped[i];
                 const double moved =
                     r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
-                surface.returned.l0[c] = float(r.sky0 + (1.0 - moved) * r.curved0);
-                surface.returned.l1[c] = glm::vec3(r.sky1 + (1.0 - moved) * r.curved1 + leaving * drift);
-                surface.returned.q[c] = float(r.sky2 + (1.0 - moved) * r.curved2);  // the e2 term, until surfaceRadiance
+                surface.returned.l0[c] = float(r.sky0 + (1.0 - moved) * r.sunShape0);
+                surface.returned.l1[c] = glm::vec3(r.sky1 + (1.0 - moved) * r.sunShape1 + leaving * drift);
+                surface.returned.flattened[c] = float((1.0 - moved) * r.flattened);  // W, until surfaceRadiance
                 surface.leaving[c] = float(leaving);
                 SunReturned &sunHere = sun[c].surface(i);
                 sunHere.l0 = float(moved * r.sunShape0 + r.sunMissed * 3.0 / 7.0);

@@ -65,20 +65,14 @@ Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Sourc
     marcher.march(ray.origin, ray.direction, tMax, step, [&](const openvdb::Vec3d &ijk, double dt) {
         const double sigmaT = k * marcher.densityAt(ijk);
         if (sigmaT <= 0.0) return true;
-        const BakedGrids::Values source = sourceAt(ijk);  // l0, l1 per axis, p0 (RGB), p1, (surface, q / l0)
+        const BakedGrids::Values source = sourceAt(ijk);  // l0, l1 per axis, p0 (RGB), p1, (flattening, 0, 0)
         const glm::dvec3 peak = peakRadiance(glm::dvec3(source[4][0], source[4][1], source[4][2]),
                                              glm::dvec3(source[5][0], source[5][1], source[5][2]), w);
         Rgb S;
         for (int c = 0; c < 3; ++c)
-        {
-            const glm::dvec3 Q(source[6][0], source[6][1], source[6][2]);  // sqrt(-q / l0) n
-            const double q2 = glm::dot(Q, Q);
-            const glm::dvec3 l1(source[1][c], source[2][c], source[3][c]);
-            S[c] = (q2 > 0.0 ? std::max(0.0, source[0][c] + glm::dot(l1, w) -
-                                                 q2 * source[0][c] * 0.5 * (3.0 * std::pow(glm::dot(Q, w), 2) / q2 - 1.0))
-                             : lobeRadiance(source[0][c], l1, w)) +
+            S[c] = flattenedLobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]),
+                                         source[6][0], w) +
                    peak[c];
-        }
         const double opacity = 1.0 - std::exp(-sigmaT * dt);
         radiance += transmittance * opacity * S;
         transmittance *= 1.0 - opacity;
