@@ -31,7 +31,6 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
     int count = 0, mostAt = 27;
     glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0), normal(0.0);
     glm::dmat3 l1(0.0);
-    double flattening = 0.0;
     for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
             for (int dz = -1; dz <= 1; ++dz) {
@@ -43,7 +42,7 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
                 const Source v = source[j];
-                l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1), flattening += w * v.flattening;
+                l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
                 normal += w * topo.patches[j].normal;
                 total += w, ++count;
@@ -58,13 +57,11 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                     if (j < 0 || !topo.patches[j].isSurface()) continue;
                     const Source v = source[j];
                     l0 += glm::dvec3(v.l0), l1 += glm::dmat3(v.l1), total += 1.0;
-                    flattening += v.flattening;
                     peak0 += glm::dvec3(v.peak0), peak1 += glm::dvec3(v.peak1);
                 }
     }
     S.l0 = glm::vec3(l0 / total);
     S.l1 = glm::mat3(l1 / total);
-    S.flattening = float(flattening / total);
     S.peak0 = glm::vec3(peak0 / total), S.peak1 = glm::vec3(peak1 / total);
     return true;
 }
@@ -466,10 +463,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                     if (!take(n)) continue;
                     const Source v = value(n);
                     S.l0 += v.l0, S.l1 += v.l1, S.peak0 += v.peak0, S.peak1 += v.peak1, ++count;
-                    S.flattening += v.flattening;
                 }
         if (count) S.l0 /= double(count), S.l1 /= double(count), S.peak0 /= double(count), S.peak1 /= double(count);
-        if (count) S.flattening /= float(count);
         return count > 0;
     };
     // Where forwardPeakThrough may find a peak: within two voxels of a smooth surface voxel holding one (the car's

@@ -111,10 +111,8 @@ inline openvdb::Vec3f broadComponent(const BroadLobe &S, int k) {
                   : openvdb::Vec3f(S.l1[0][k - 1], S.l1[1][k - 1], S.l1[2][k - 1]);
 }
 inline openvdb::Vec3f sourceComponent(const Source &S, int k) {
-    return k < 4    ? broadComponent(S, k)
-           : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
-           : k == 5 ? openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z)
-                    : openvdb::Vec3f(S.flattening, 0.0f, 0.0f);
+    return k < 4 ? broadComponent(S, k) : k == 4 ? openvdb::Vec3f(S.peak0.x, S.peak0.y, S.peak0.z)
+                                                 : openvdb::Vec3f(S.peak1.x, S.peak1.y, S.peak1.z);
 }
 
 // Grid k of BakedGrids from its tree, `scale` times the voxel size of `density`, with its metadata.

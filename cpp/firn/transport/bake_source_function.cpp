@@ -75,13 +75,12 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
             const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
             const double own = kPi * topo.patches[i].area;
             const BroadLobe &returned = solved[i].returned;
-            double flattened = 0.0, leavingHere = 0.0;  // W, the channels summed
             for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
-                const double e0 = returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi);
-                const glm::dvec3 e1 = glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n;
-                const SourceLobe lobe = topo.patches[i].sharp
-                                            ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
-                                            : exitLobe(e0, e1, n);
+                const SourceLobe lobe =
+                    topo.patches[i].sharp
+                        ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
+                        : exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
+                                   glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
                 // The crossing beams, added by their moments: light scattered forwards many times is broader
                 // than one scattering's peak (in the peaked lobe, k = g: ball_forward 17.6 % against 17.1 %, seen
                 // against the sun -29 % against -21 %; spray_lumps 20.1 % against 19.7 %; docs/bake.md).
@@ -89,12 +88,7 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
                 out.surface(i).l0[c] = float(lobe.l0 + crossing);
                 out.surface(i).l1[c] = glm::vec3(lobe.l1 + 3.0 * crossingAnisotropy(optics.g) * crossing *
                                                  glm::dvec3(solved[i].crossingAxis));
-                flattened += returned.flattened[c];
-                leavingHere += own * (std::max(0.0, e0 + 2.0 / 3.0 * glm::dot(e1, n)) + crossing);
             }
-            // The returned suns' flattening, in their share of what leaves (a sharp edge's faces keep their lobe).
-            out.surface(i).flattening =
-                topo.patches[i].sharp || !(leavingHere > 0.0) ? 0.0f : float(std::min(0.5, flattened / leavingHere));
             out.surface(i).peak0 = solved[i].peak0, out.surface(i).peak1 = solved[i].peak1;
         }
     });
@@ -116,7 +110,6 @@ void composeSource(const SnowTopology &topo, const SurfaceValues<Source> &surfac
         if (owner >= 0) {
             S.l0 = w * surface[owner].l0 + (1.0f - w) * S.l0;
             S.l1 = w * surface[owner].l1 + (1.0f - w) * S.l1;
-            S.flattening = w * surface[owner].flattening + (1.0f - w) * S.flattening;
             S.peak0 = w * surface[owner].peak0 + (1.0f - w) * S.peak0;
             S.peak1 = w * surface[owner].peak1 + (1.0f - w) * S.peak1;
         }
@@ -221,7 +214,6 @@ void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples,
                 }
             }
             out.surface(i).peak0 = out.surface(i).peak1 = glm::vec3(0.0f);  // the traced radiance is all of it
-            out.surface(i).flattening = 0.0f;  // its fitted lobe
             progress.report(double(++done) / surface.size());
         }
     });

@@ -88,7 +88,6 @@ struct ReturnedLight {
     double sunShape0;  // of sun0, sun1: the sun lobe's shape beyond the escape function's
     glm::dvec3 sunShape1;
     double sunMissed, sunReturned;  // W: what the diffusion misses of it; all the half-space returns
-    double flattened;  // W: the returned suns (their linear rest) weighted by their lobe's lobeFlattening
 };
 
 // The sky on a patch of normal n read as an even part and a beam, from the first moment of its arrival
@@ -106,27 +105,6 @@ SkyBeam skyBeamPart(const glm::dvec3 &m, const glm::dvec3 &n) {
     const glm::dvec3 towards = m - (1.0 - share) * 2.0 / 3.0 * n;  // times share
     if (!(share > 1e-3) || glm::dot(towards, n) <= 0.0) return {};  // none, or light skimming the surface only
     return {share, glm::normalize(towards)};
-}
-
-// How far the stored lobe of a sun lobe's linear form (exitLobe's HG) must be flattened at its top to reach the
-// half-space's own top, the curved form's largest value over the outgoing hemisphere (both fitted to the same Monte
-// Carlo, sun_lobe_table.inc): 1 - curved max / HG max, at least 0. The HG is convex towards its axis and, with the
-// exitance kept, overshoots there where the truth is flat (docs/benchmarks.md lobe-form, lit-hg-blend); its
-// grazing side, which the absorbing balls' limbs need (surface-quad), is left as it is.
-double lobeFlattening(const SunLobe &lobe) {
-    const glm::dvec3 n(0.0, 0.0, 1.0), t(1.0, 0.0, 0.0);
-    const SourceLobe hg = exitLobe(lobe.a, lobe.b * n + lobe.c * t, n);
-    const double length = glm::length(hg.l1);
-    if (!(hg.l0 > 0.0) || !(length > 0.0)) return 0.0;
-    const double top = lobeRadiance(hg.l0, hg.l1, hg.l1 / length);
-    const SunLobe::Curved &f = lobe.curved;
-    double most = 0.0;
-    constexpr int kSteps = 180;  // exit directions in the plane of n and t, 1 degree apart
-    for (int k = 0; k <= kSteps; ++k) {
-        const double theta = kPi * (double(k) / kSteps - 0.5), mu = std::cos(theta);
-        most = std::max(most, f.a + f.b * mu + f.d * mu * mu + f.c * std::sin(theta));
-    }
-    return std::clamp(1.0 - most / top, 0.0, 0.5);
 }
 
 }  // namespace
@@ -183,10 +161,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // through a surface of normal n taking `skyShare` of voxel i's sky light and beamShare(s) of each beam's; with
     // `peak` (a smooth patch, or each air face of a sharp edge), the suns' light returned sharply forwards leaves as
     // the peaked lobe instead (SunPeak: at grazing sun the lit rim seen against the sun, bench/bake_halfspace.py),
-    // added to `peak` (radiance), the rest linear; with `curved` (a smooth patch, whose grid value shows it) also the
-    // returned suns weighted by how far their stored lobe overshoots the half-space's top (lobeFlattening):
+    // added to `peak` (radiance), the rest linear:
     auto returnedThrough = [&](int c, std::size_t i, const glm::dvec3 &n, double skyShare, const SkyBeam &beam,
-                               const auto &beamShare, SurfaceLight *peak, bool curved) {
+                               const auto &beamShare, SurfaceLight *peak) {
         const Channel &ch = channels[c].ch;
         const double y = channels[c].y;
         const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
@@ -203,7 +180,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             r0 += returned * (lobe.a - 1.0);
             r1 += returned * (lobe.b * n + lobe.c * travelAlong(-beam.towards, n));
         }
-        double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0, flattened = 0.0;  // the beams' part
+        double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0;  // the beams' part
         glm::dvec3 sun1(0.0);
         // The half-space of the snow beneath the patch: a voxel's resistance and the node's below the surface
         // (schemeBeamAlbedo's d, L). A smooth surface's fringe voxel holds less snow where the surface crosses it
@@ -217,27 +194,25 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
             const double mu0 = std::clamp(-glm::dot(d, n), 0.05, 1.0);
             const SunLobe lobe = sunLobe(ch.g, mu0, y);
-            const SunLobe::Curved form = formOf(lobe, false);
             const glm::dvec3 t = travelAlong(d, n);
             const double returned = P * lobe.albedo;
             sunReturned += returned;
             sunMissed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, acrossSnowFaces(topo, i, -d, h)));
             if (!peak) {
-                sun0 += returned * (form.a - 3.0 / 7.0);
-                sun1 += returned * (form.b * n + form.c * t - escape1);
+                sun0 += returned * (lobe.a - 3.0 / 7.0);
+                sun1 += returned * (lobe.b * n + lobe.c * t - escape1);
                 continue;
             }
-            const SunPeak split = sunPeak(ch.g, mu0, y, form);
+            const SunPeak split = sunPeak(ch.g, mu0, y, lobe);
             sun0 += returned * ((1.0 - split.share) * split.a() - 3.0 / 7.0);
             sun1 += returned * ((1.0 - split.share) * (split.b * n + split.c * t) - escape1);
-            if (curved) flattened += returned * (1.0 - split.share) * lobeFlattening(lobe);
             const double p0 = split.mean * returned / (kPi * topo.patches[i].area);
             const glm::dvec3 m = std::cos(split.elevation) * t + std::sin(split.elevation) * n;
             peak->peak0[c] += float(p0);
             peak->peak1 += glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part
         }
         return ReturnedLight{r0 + missed * 3.0 / 7.0, r1 + missed * escape1, sun0 + sunMissed * 3.0 / 7.0,
-                             sun1 + sunMissed * escape1, sun0, sun1, sunMissed, sunReturned, flattened};
+                             sun1 + sunMissed * escape1, sun0, sun1, sunMissed, sunReturned};
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -259,8 +234,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 const double leaving = terms[c].escaped[i] + terms[c].outConductance[i] * phi[c][i];
                 const auto whole = [](std::size_t) { return 1.0; };
                 const ReturnedLight r =
-                    returnedThrough(c, i, patch.normal, 1.0, skyBeam, whole, patch.sharp ? nullptr : &surface,
-                                    !patch.sharp);
+                    returnedThrough(c, i, patch.normal, 1.0, skyBeam, whole, patch.sharp ? nullptr : &surface);
                 // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
                 // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
                 // through the smooth surface or, at a sharp edge, through each air face.
@@ -303,7 +277,6 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     r.sunReturned > 0.0 ? std::clamp((atOnce + r.sunMissed) / r.sunReturned, 0.0, 1.0) : 0.0;
                 surface.returned.l0[c] = float(r.sky0 + (1.0 - moved) * r.sunShape0);
                 surface.returned.l1[c] = glm::vec3(r.sky1 + (1.0 - moved) * r.sunShape1 + leaving * drift);
-                surface.returned.flattened[c] = float((1.0 - moved) * r.flattened);  // W, until surfaceRadiance
                 surface.leaving[c] = float(leaving);
                 SunReturned &sunHere = sun[c].surface(i);
                 sunHere.l0 = float(moved * r.sunShape0 + r.sunMissed * 3.0 / 7.0);
@@ -342,7 +315,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                         for (int g = 0; g < 6; ++g)
                             if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
                         return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
-                    }, &out.surface(i), false);
+                    }, &out.surface(i));
                     const double leaving = outflow[f].first[c], area = outflow[f].second;
                     const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
                     faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),

@@ -92,8 +92,7 @@ std::array<openvdb::Vec3fTree::Ptr, BakedGrids::kCount> coarsenedSources(const o
 
 SourceGridsSampler::SourceGridsSampler(const Medium &medium, const BakedGrids &baked)
     : source_{Reader(baked.source[0]->tree()), Reader(baked.source[1]->tree()), Reader(baked.source[2]->tree()),
-              Reader(baked.source[3]->tree()), Reader(baked.source[4]->tree()), Reader(baked.source[5]->tree()),
-              Reader(baked.source[6]->tree())},
+              Reader(baked.source[3]->tree()), Reader(baked.source[4]->tree()), Reader(baked.source[5]->tree())},
       sourceIndexPerDensityIndex_(medium.voxelSize() / baked.source[0]->voxelSize()[0]) {}
 
 BakedGrids::Values SourceGridsSampler::operator()(const openvdb::Vec3d &ijk) {

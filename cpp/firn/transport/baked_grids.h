@@ -24,9 +24,8 @@ namespace firn {
 // Geometry > Incoming). Rendered with absorption sigma_t = k density and emission sigma_t S(w), it gives the
 // snow's scattered radiance.
 struct BakedGrids {
-    static constexpr std::array<const char *, 7> kNames{"firn_source",      "firn_source_x",       "firn_source_y",
-                                                        "firn_source_z",    "firn_source_peak",    "firn_source_peak_l1",
-                                                        "firn_source_q"};
+    static constexpr std::array<const char *, 6> kNames{"firn_source",   "firn_source_x",    "firn_source_y",
+                                                        "firn_source_z", "firn_source_peak", "firn_source_peak_l1"};
     static constexpr std::size_t kCount = kNames.size();
     using Values = std::array<openvdb::Vec3f, kCount>;  // the grids' values at a point, in kNames' order
     std::array<openvdb::Vec3fGrid::Ptr, kCount> source;  // in kNames' order
@@ -65,14 +64,12 @@ Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Sourc
     marcher.march(ray.origin, ray.direction, tMax, step, [&](const openvdb::Vec3d &ijk, double dt) {
         const double sigmaT = k * marcher.densityAt(ijk);
         if (sigmaT <= 0.0) return true;
-        const BakedGrids::Values source = sourceAt(ijk);  // l0, l1 per axis, p0 (RGB), p1, (flattening, 0, 0)
+        const BakedGrids::Values source = sourceAt(ijk);  // l0, l1 per axis, p0 (RGB), then p1
         const glm::dvec3 peak = peakRadiance(glm::dvec3(source[4][0], source[4][1], source[4][2]),
                                              glm::dvec3(source[5][0], source[5][1], source[5][2]), w);
         Rgb S;
         for (int c = 0; c < 3; ++c)
-            S[c] = flattenedLobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]),
-                                         source[6][0], w) +
-                   peak[c];
+            S[c] = lobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]), w) + peak[c];
         const double opacity = 1.0 - std::exp(-sigmaT * dt);
         radiance += transmittance * opacity * S;
         transmittance *= 1.0 - opacity;

@@ -30,12 +30,6 @@ double lobeRadiance(double l0, const glm::dvec3 &l1, const glm::dvec3 &w) {
     return l0 * lobe(std::min(length / (3.0 * l0), kMaxLobeAnisotropy), glm::dot(w, l1) / length);
 }
 
-double flattenedLobeRadiance(double l0, const glm::dvec3 &l1, double flattening, const glm::dvec3 &w) {
-    const double S = lobeRadiance(l0, l1, w), length = glm::length(l1);
-    if (!(flattening > 0.0) || !(length > 0.0)) return S;
-    return std::min(S, (1.0 - flattening) * lobeRadiance(l0, l1, l1 / length));
-}
-
 double peakRadiance(double p0, double p0Mean, const glm::dvec3 &p1, const glm::dvec3 &w) {
     return p0Mean > 0.0 ? p0 / p0Mean * lobeRadiance(p0Mean, p1, w) : 0.0;
 }

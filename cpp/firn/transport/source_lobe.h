@@ -51,22 +51,11 @@ SourceLobe exitLobe(double e0, const glm::dvec3 &e1, const glm::dvec3 &normal);
 // surface: the snow's g, within what a stored lobe holds.
 inline double crossingAnisotropy(double g) { return std::min(g, kMaxLobeAnisotropy); }
 
-// A thick surface's exit radiance under a high sun is flat near the normal and falls steeply towards grazing
-// exit, at every albedo (docs/benchmarks.md lit-hg-blend): the HG lobe of its exitance overshoots at its top
-// (+2.4 % at omega 0.9, g 0.6; +7 % at omega 0.9999, g 0.85, mu0 1). Where a voxel shows such a surface its broad
-// lobe is flattened there: capped at 1 - flattening of its largest value (along l1),
-//   S(w) = min(lobeRadiance(l0, l1, w), (1 - flattening) lobeRadiance(l0, l1, l1 / |l1|)),
-// its grazing side the HG's; flattening 0 is the HG.
-double flattenedLobeRadiance(double l0, const glm::dvec3 &l1, double flattening, const glm::dvec3 &w);
-
-// The broad lobe per channel (W/m^2/sr): mean l0 and first moment 4 pi l1 / 3, flattened at its top by the grey
-// `flattening` (flattenedLobeRadiance). A surface's radiance has no other (the peaked lobe is the beams' light
-// inside the snow).
+// The broad lobe per channel (W/m^2/sr): mean l0 and first moment 4 pi l1 / 3 (lobeRadiance). A surface's
+// radiance has no other (the peaked lobe is the beams' light inside the snow).
 struct BroadLobe {
     glm::vec3 l0{0.0f};
     glm::mat3 l1{0.0f};  // column c: the vector for channel c
-    glm::vec3 flattened{0.0f};  // a surface's returned suns weighted by their flattening (W), until surfaceRadiance
-    float flattening = 0.0f;
 };
 
 // The source function in one voxel, per channel (W/m^2/sr), as the grids store it: the broad lobe and the

@@ -190,12 +190,6 @@ SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t s
     const std::array<double, 2> x = fitLinear(r).first;
     lobe.b = x[0], lobe.c = x[1];
     lobe.a = 1.0 - 2.0 * lobe.b / 3.0;
-    std::array<double, 3> q{};  // mu^2 - 1/2: no flux of its own, as mu - 2/3
-    fitRelative<3>(r, [&](std::size_t b) {
-        const Reflection::Bin &bin = r.bins[b];
-        return std::array<double, 3>{bin.mu - 2.0 / 3.0, bin.mu * bin.mu - 0.5, bin.forward};
-    }, q);
-    lobe.curved = {1.0 - 2.0 * q[0] / 3.0 - q[1] / 2.0, q[0], q[2], q[1]};
     return lobe;
 }
 
@@ -248,11 +242,10 @@ std::array<double, K> interpolate(const Table &table, double g, double mu0, doub
 }  // namespace
 
 SunLobe sunLobe(double g, double mu0, double y) {
-    const std::array<double, 6> v = interpolate<6>(kSunLobeTable, g, mu0, y);  // b, c, A, then curved b, c, d
+    const std::array<double, 3> v = interpolate<3>(kSunLobeTable, g, mu0, y);  // b, c, A
     SunLobe lobe;
     lobe.b = v[0], lobe.c = v[1], lobe.albedo = v[2];
     lobe.a = 1.0 - 2.0 * lobe.b / 3.0;
-    lobe.curved = {1.0 - 2.0 * v[3] / 3.0 - v[5] / 2.0, v[3], v[4], v[5]};
     return lobe;
 }
 
@@ -266,7 +259,7 @@ double sphericalAlbedo(double g, double y) {
     return albedo;
 }
 
-SunPeak sunPeak(double g, double mu0, double y, const SunLobe::Curved &lobe) {
+SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe) {
     const std::array<double, 6> v = interpolate<6>(kSunPeakTable, g, mu0, y);
     SunPeak peak;
     peak.share = v[0], peak.mean = v[1], peak.k = v[2], peak.elevation = v[3], peak.b = v[4], peak.c = v[5];
@@ -275,7 +268,6 @@ SunPeak sunPeak(double g, double mu0, double y, const SunLobe::Curved &lobe) {
     const double rest = 1.0 - s * peak.share;
     peak.b = (s * (1.0 - peak.share) * peak.b + (1.0 - s) * lobe.b) / rest;
     peak.c = (s * (1.0 - peak.share) * peak.c + (1.0 - s) * lobe.c) / rest;
-    peak.d = (1.0 - s) * lobe.d / rest;
     peak.share *= s, peak.mean *= s;
     return peak;
 }

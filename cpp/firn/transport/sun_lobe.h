@@ -14,17 +14,9 @@ namespace firn {
 // error over the outgoing hemisphere, weighted by projected solid angle, with the flux fixed. Absorption
 // changes both: what returns after few scatterings keeps the sun's direction, and absorption takes most from
 // the long paths that would have spread it.
-// Near the normal the half-space's return is flat and towards grazing exit it falls steeply, which the linear form
-// cannot follow (with the flux fixed it overshoots along the normal: +5 % at mu0 1, omega 0.9999, g 0.85;
-// docs/benchmarks.md ball-snow-lit); `curved` is the same fit with a (n . w)^2 term,
-//   pi L(w) / (mu0 E) = A (a + b (n . w) + d (n . w)^2 + c (t . w)),   a + 2b/3 + d/2 = 1,
-// for a surface whose stored radiance can show it (source_lobe.h's surface form).
 struct SunLobe {
     double a = 1.0, b = 0.0, c = 0.0;
     double albedo = 1.0;  // A(mu0)
-    struct Curved {
-        double a = 1.0, b = 0.0, c = 0.0, d = 0.0;
-    } curved;
 };
 
 // The returned sun split in two (the half-space's reflection function R over its albedo A, exitance 1):
@@ -38,8 +30,8 @@ struct SunLobe {
 // photons per entry), k and elevation by search; share 0 where no peak fits better than the linear form alone.
 struct SunPeak {
     double share = 0.0, mean = 0.0, k = 0.0, elevation = 0.0;  // elevation in radians
-    double b = 0.0, c = 0.0, d = 0.0;  // d: the rest's (n . w)^2 term, where it fades into a curved sun lobe
-    double a() const { return 1.0 - 2.0 * b / 3.0 - d / 2.0; }
+    double b = 0.0, c = 0.0;
+    double a() const { return 1.0 - 2.0 * b / 3.0; }
 };
 constexpr double kMinPeakElevationDegrees = 5.0;  // the axis above the horizon: a lobe pointing into the snow
                                                   // hides its mean where no camera looks
@@ -59,14 +51,9 @@ SunLobe sunLobe(double g, double mu0, double y = 0.0);
 // share of uniform sky light it returns (by reciprocity, towards mu it returns L_sky A(mu)).
 double sphericalAlbedo(double g, double y);
 
-// Interpolated in (y, g, mu0) like sunLobe, from sun_peak_table.inc; `lobe`: sunLobe(g, mu0, y)'s form (linear, or
-// curved), which the split fades into (the caller has it already).
-SunPeak sunPeak(double g, double mu0, double y, const SunLobe::Curved &lobe);
-
-// The sun lobe's form the caller can show: curved, or linear (d = 0).
-inline SunLobe::Curved formOf(const SunLobe &lobe, bool curved) {
-    return curved ? lobe.curved : SunLobe::Curved{lobe.a, lobe.b, lobe.c, 0.0};
-}
+// Interpolated in (y, g, mu0) like sunLobe, from sun_peak_table.inc; `lobe` = sunLobe(g, mu0, y), which the
+// split fades into (the caller has it already).
+SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe);
 
 // The table's source: 1D Monte Carlo of a half-space with analog absorption; photons deeper than 30 transport
 // mean free paths return with diffusion's probability exp(-kappa (z + z_b)) in the escape function's shape.

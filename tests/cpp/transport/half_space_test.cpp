@@ -101,7 +101,7 @@ TEST(SunLobe, TableMatchesItsGenerator) {
 TEST(SunPeak, KeepsTheFluxAndHoldsTheGrazingForwardReturn) {
     const double g = 0.85, mu0 = 0.3, y = absorptionParameter(0.98, g);
     const SunLobe lobe = sunLobe(g, mu0, y);
-    const SunPeak peak = sunPeak(g, mu0, y, formOf(lobe, false));
+    const SunPeak peak = sunPeak(g, mu0, y, lobe);
     const glm::dvec3 axis(std::cos(peak.elevation), 0.0, std::sin(peak.elevation));
     auto split = [&](double mu, double phi) {  // R / A towards (mu, phi), phi from the sun's travel
         const double s = std::sqrt(1.0 - mu * mu);
