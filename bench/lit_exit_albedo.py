@@ -60,7 +60,8 @@ def measure(omega, g, mu0, photons, seed):
     _, linear = fit(linear_shape, [[1.0, 0.0]], truth, views, dw)
     _, hg_of_linear = fit(hg_shape, [[0.3, 0.3, 0.0]], linear, views, dw)
     _, hg = fit(hg_shape, [[0.3, 0.3, 0.0]], truth, views, dw)
-    p, poly = fit(linear_p2_shape, [[0.9, 0.3, 0.0, 0.0], [0.5, 0.3, 0.0, -0.3]], truth, views, dw)
+    p, poly = fit(linear_p2_shape, [[0.9, 0.3, 0.0, 0.0], [0.5, 0.3, 0.0, -0.3], [0.5, 0.0, 0.0, -0.8], [0.3, 0.6, 0.0, 0.3]],
+                  truth, views, dw)
     return truth, {"HG(lin)": hg_of_linear, "HG": hg, "poly": poly}, p
 
 
