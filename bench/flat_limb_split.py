@@ -45,6 +45,8 @@ def main():
     parser.add_argument("--mu0", default="0.15,0.3,0.44", help="the sun's cosines to the normal")
     parser.add_argument("--samples", type=int, default=4096, help="Monte Carlo paths per ray")
     parser.add_argument("--n", type=int, default=2, help="rays per side of each bundle")
+    parser.add_argument("--top-fill", type=float, default=0.0,
+                        help="fill of one partly filled layer over the top (0: none; the exits end on it)")
     parser.add_argument("--exits", default=EXITS,
                         help="exits as mu@azimuth, the azimuth of the exit's tangent part off the sun's travel in "
                              "degrees (0 forward, 180 backward; the ball's forward limb: 27-31)")
@@ -52,10 +54,13 @@ def main():
     case = bake_suite.case(args.optics)
     h = case.voxel
     density = bake_suite.slab(args.width, args.layers) * case.density.max()
+    if args.top_fill > 0.0:  # a partly filled layer over the top, as the balls' antialiased surface has
+        density[2:-2, 2:-2, 2 + args.layers] = args.top_fill * case.density.max()
     exits = [tuple(float(x) for x in e.split("@")) for e in args.exits.split(",")]
-    top = bake_suite.slab_top(density, args.layers, h)
+    top = bake_suite.slab_top(density, args.layers + (args.top_fill > 0.0), h)  # the exits end on the top layer
     offsets = ((np.arange(args.n) + 0.5) / args.n * 2.0 - 1.0) * 1.5 * h
-    print(f"flat slab of {args.optics} ({args.width} x {args.width} x {args.layers} voxels), sun alone, leaving the "
+    print(f"flat slab of {args.optics} ({args.width} x {args.width} x {args.layers} voxels, top fill "
+          f"{args.top_fill:g}), sun alone, leaving the "
           f"top: Monte Carlo (+-), of it once, bake, bake / Monte Carlo; {args.samples} "
           f"paths per ray, "
           f"{args.n ** 2} rays")
