@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "firn/transport/medium.h"
 
@@ -31,39 +30,6 @@ SnowCeiling::SnowCeiling(const Medium &medium) : medium_(medium) {
             ceiling_[std::size_t(y) * nx_ + x] = c;
             highest_ = std::max(highest_, c);
         }
-    for (std::size_t level = 0; level < tiles_.size(); ++level) {
-        const int edge = kTileEdges[level];
-        Tiles &tiles = tiles_[level];
-        tiles.nx = nx_ / edge + 1, tiles.ny = ny_ / edge + 1;
-        tiles.highest.assign(std::size_t(tiles.nx) * tiles.ny, kNone);
-        for (int y = 0; y < ny_; ++y)
-            for (int x = 0; x < nx_; ++x) {
-                const int c = ceiling_[std::size_t(y) * nx_ + x];
-                // Into every tile whose widened box holds column (x, y): its own and the neighbours one column away.
-                for (int ty = (y - 1) / edge; ty <= std::min((y + 1) / edge, tiles.ny - 1); ++ty)
-                    for (int tx = (x - 1) / edge; tx <= std::min((x + 1) / edge, tiles.nx - 1); ++tx) {
-                        if (tx < 0 || ty < 0) continue;
-                        int &t = tiles.highest[std::size_t(ty) * tiles.nx + tx];
-                        t = std::max(t, c);
-                    }
-            }
-    }
-}
-
-std::size_t SnowCeiling::bytes() const {
-    std::size_t n = ceiling_.capacity();
-    for (const Tiles &tiles : tiles_) n += tiles.highest.capacity();
-    return n * sizeof(int);
-}
-
-double SnowCeiling::tileExit(const glm::dvec3 &o, const glm::dvec3 &direction, int tx, int ty, int edge) const {
-    double exit = std::numeric_limits<double>::infinity();
-    const double low[2] = {double(min_.x() + tx * edge), double(min_.y() + ty * edge)};
-    for (int a = 0; a < 2; ++a) {
-        if (direction[a] > 0.0) exit = std::min(exit, (low[a] + edge - o[a]) / direction[a]);
-        if (direction[a] < 0.0) exit = std::min(exit, (low[a] - o[a]) / direction[a]);
-    }
-    return exit;
 }
 
 int SnowCeiling::ceiling(int x, int y) const {
@@ -82,7 +48,7 @@ bool SnowCeiling::clearAbove(const glm::dvec3 &origin, const glm::dvec3 &directi
     const glm::dvec3 o = medium_.worldToIndex(origin);
     const double top = double(highest_ + min_.z()) + 1.0;  // every point at or above it lies above all snow
     const double xLow = min_.x(), xHigh = min_.x() + nx_, yLow = min_.y(), yHigh = min_.y() + ny_;
-    for (double t = 0.0;;) {
+    for (double t = 0.0;; t += 1.0) {
         const glm::dvec3 a = o + t * direction, b = o + (t + 1.0) * direction;
         if (a.z - kMargin >= top) return true;
         // Beyond the map's columns and moving away: no snow further on.
@@ -90,28 +56,11 @@ bool SnowCeiling::clearAbove(const glm::dvec3 &origin, const glm::dvec3 &directi
             (direction.y >= 0.0 && a.y - kMargin >= yHigh) || (direction.y <= 0.0 && a.y + kMargin <= yLow))
             return true;
         const int cellZ = int(std::floor(a.z - kMargin));
-        // Above the whole tile holding a (coarsest first): on to where the ray leaves it. Its points up to there
-        // lie within the tile, or within the margin of it, at or above a's z.
-        const double tileJump = [&] {
-            for (std::size_t level = 0; level < tiles_.size(); ++level) {
-                const int edge = kTileEdges[level];
-                const Tiles &tiles = tiles_[level];
-                const int tx = int(std::floor((a.x - min_.x()) / edge)), ty = int(std::floor((a.y - min_.y()) / edge));
-                if (tx < 0 || ty < 0 || tx >= tiles.nx || ty >= tiles.ny) return t;  // the plain steps decide
-                if (cellZ > tiles.highest[std::size_t(ty) * tiles.nx + tx]) return tileExit(o, direction, tx, ty, edge);
-            }
-            return t;
-        }();
-        if (tileJump > t) {
-            t = tileJump;
-            continue;
-        }
         const int x0 = int(std::floor(std::min(a.x, b.x) - kMargin)), x1 = int(std::floor(std::max(a.x, b.x) + kMargin));
         const int y0 = int(std::floor(std::min(a.y, b.y) - kMargin)), y1 = int(std::floor(std::max(a.y, b.y) + kMargin));
         for (int y = y0; y <= y1; ++y)
             for (int x = x0; x <= x1; ++x)
                 if (cellZ <= ceiling(x, y)) return false;
-        t += 1.0;
     }
 }
 

@@ -1,6 +1,5 @@
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -16,7 +15,7 @@ class Medium;
 // the density is exactly 0, so a ray rising out of the snow that passes above every column's ceiling where it
 // crosses that column reads no snow at all: most surface patches' sky rays (83 % of their column steps on the car,
 // docs/benchmarks.md), proven empty by a walk over this 2-D map instead of the 3-D column walk. Built once per bake
-// (computeIncidentLight), 4 bytes per column of the active box (and 4 per tile of 8 x 8 and 64 x 64 columns).
+// (computeIncidentLight), 4 bytes per column of the active box.
 class SnowCeiling {
   public:
     explicit SnowCeiling(const Medium &medium);
@@ -28,7 +27,7 @@ class SnowCeiling {
     // The highest cell z over the cell column (x, y) whose corners hold a non-zero density; below every cell
     // (kNone) where none does.
     int ceiling(int x, int y) const;
-    std::size_t bytes() const;
+    std::size_t bytes() const { return ceiling_.capacity() * sizeof(int); }
 
     static constexpr int kNone = -(1 << 30);
 
@@ -38,16 +37,6 @@ class SnowCeiling {
     int nx_ = 0, ny_ = 0;
     int highest_ = kNone;  // the highest ceiling of all
     std::vector<int> ceiling_;  // x fastest
-    // The highest ceiling per aligned tile of kTileEdges columns (from min_), over the tile widened by one column
-    // each side (a walk's points near a tile's edge may round into the next): proven rays cross a tile at a time.
-    static constexpr std::array<int, 2> kTileEdges{64, 8};
-    struct Tiles {
-        int nx = 0, ny = 0;
-        std::vector<int> highest;
-    };
-    std::array<Tiles, 2> tiles_;
-    // The ray's parameter (voxels) where it leaves the tile of `edge` columns holding (x, y); from index-space o.
-    double tileExit(const glm::dvec3 &o, const glm::dvec3 &direction, int tx, int ty, int edge) const;
 };
 
 }  // namespace firn

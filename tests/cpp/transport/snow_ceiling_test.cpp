@@ -66,9 +66,7 @@ TEST(SnowCeiling, ProvesOnlyRaysThatReadNoSnow) {
         const glm::dvec3 w = sampleUniformCone(glm::dvec3(0.0, 0.0, 1.0), 0.02, rng.uniform(), rng.uniform());
         const bool snow = readsSnow(medium, ijk, w);
         const bool clear = ceiling.clearAbove(medium.indexToWorld(ijk), w);
-        if (clear) {
-            EXPECT_FALSE(snow) << ijk.x << " " << ijk.y << " " << ijk.z << " towards " << w.x << " " << w.y << " " << w.z;
-        }
+        if (clear) EXPECT_FALSE(snow) << ijk.x << " " << ijk.y << " " << ijk.z << " towards " << w.x << " " << w.y << " " << w.z;
         proven += clear, clearRays += !snow;
     }
     // Rays that start above z = 5 are all proven; those below it that rise past the block's side are not always.
