@@ -12,7 +12,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "firn/transport/snow_ceiling.h"
 #include "firn/util/color.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
@@ -89,8 +88,7 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
 // marks those rays.
 glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
                           bool bounce, Crossing crossing, std::uint64_t seed, std::uint64_t stream,
-                          Medium::ColumnMarcher &marcher, const SnowCeiling &ceiling,
-                          std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr,
+                          Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr,
                           double *occluderAlbedo = nullptr, std::uint64_t *occluderRays = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
@@ -109,11 +107,8 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
             hit = caster.intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
         else if (caster.occluded(glm::vec3(p), glm::vec3(w), 1e-5f))
             continue;
-        // Most rays rise clear of the snow: the ceiling proves their column 0 without the 3-D walk.
         const double column =
-            ceiling.clearAbove(p, w)
-                ? 0.0
-                : marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
+            marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
         if (thinnest * column > 0.01)
             hidden |= std::uint64_t(1) << k;  // snow glows along this ray
         else if (hit && occluderAlbedo)
@@ -408,7 +403,6 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     light.occluderRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
     light.skyAim = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     const SkyRays rays(settings.skySamples);
-    const SnowCeiling ceiling(medium);
     light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
     const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
@@ -425,7 +419,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             double met = 0.0;
             light.skyOnSurface.surface(i) = skyIrradianceAt(
                 scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
-                Crossing::Uncollided, seed, i, marcher, ceiling, &light.snowRays.surface(i), &light.skyAim.surface(i), &met,
+                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i), &met,
                 &light.occluderRays.surface(i));
             albedos += std::uint64_t(std::llround(met * 4294967296.0));
         }
@@ -448,7 +442,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             const glm::dvec3 ground = medium.voxelCentre(topo.coord[face.voxel]) + double(face.distance) * n;
             if (marcher.column(ground, up, std::numeric_limits<double>::infinity(), limit) >= limit) continue;
             light.skyUnderSnow[f] = skyIrradianceAt(scene, ground, up, rays, false, Crossing::Beam, seed,
-                                                    topo.size() + f, marcher, ceiling);
+                                                    topo.size() + f, marcher);
         }
     });
     return light;
