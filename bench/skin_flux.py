@@ -10,7 +10,8 @@ diffuses. The bake's beam is attenuated with sigma_t' (docs/bake.md, Method 2: f
 with the beam), so the light scattered forwards that the beam carries, (e^-tau' - e^-tau) along the sun's travel, is
 no part of what its diffusion must carry: "diffuse" subtracts it from phi and F before the ratio. kappa L: the outer
 node's e-fold rate along the surface, -d ln phi / ds, times the diffusion length 1 / sqrt(3 sigma_a sigma_t'): 1 where
-the skin's light falls along the surface as a bulk diffusion mode does (absorption alone). The sun alone, green channel, W/m^2 per W/m^2 of sun. docs/benchmarks.md, limb-skin.
+the skin's light falls along the surface as a bulk diffusion mode does (absorption alone). The sun alone, green
+channel, W/m^2 per W/m^2 of sun. docs/benchmarks.md, limb-skin.
 
     PYTHONPATH=build/python python3 bench/skin_flux.py [--cases ball_issue,ball_grey,ball_forward,ball_snow]
         [--thetas 60,75,85,90,95,100,105,110,120] [--dtheta 5] [--samples 64] [--sphere 48]
@@ -33,8 +34,8 @@ def snow_quantities(case):
     """sigma_t h, omega, g, sigma_t' h, and the diffusion length 1 / sqrt(3 sigma_a sigma_t') per voxel (green)."""
     sigma_t, omega, g, h = case.sigma_t, case.omega[1], case.g, case.voxel
     reduced = (1 - omega * g) * sigma_t
-    length = 1 / math.sqrt(3 * (1 - omega) * sigma_t * reduced)
-    return sigma_t * h, omega, g, reduced * h, length / h
+    length_m = 1 / math.sqrt(3 * (1 - omega) * sigma_t * reduced)
+    return sigma_t * h, omega, g, reduced * h, length_m / h
 
 
 def forward_beam(case, points, step=0.0005):
@@ -97,7 +98,7 @@ def main():
     sphere = fibonacci(args.sphere)
     for name in args.cases.split(","):
         case = bake_suite.case(name)
-        tau, omega, g, reduced, length = snow_quantities(case)
+        tau, omega, g, reduced, length_voxels = snow_quantities(case)
         # the antialiased ball's filled volume is the sphere's
         radius = (3 / (4 * math.pi) * case.density.sum() / case.density.max()) ** (1 / 3) * case.voxel
         h = case.voxel
@@ -108,25 +109,28 @@ def main():
             phi, phi_err, Fn, Fn_err, Ft, Ft_err, beam = skin_light(case, path, thetas, radii, sphere, args.samples)
         D = h / (3 * reduced)  # m: 1 / (3 sigma_t')
         print(f"{name}: sigma_t h {tau:.1f}, omega {omega}, g {g}, sigma_t' h {reduced:.2f} (1/sigma_t' "
-              f"{100 * h / reduced:.2f} cm), diffusion length {length:.2f} h; R {100 * radius:.1f} cm; "
+              f"{100 * h / reduced:.2f} cm), diffusion length {length_voxels:.2f} h; R {100 * radius:.1f} cm; "
               f"{args.sphere} x {args.samples} paths per point")
         print("diffuse: the Monte Carlo less the beam's forward part (its phi at the outer node in [])")
         print("theta  outer node (R - h/2): phi (+-)       F_t (+-)          Fick_t   F_t/Fick  F_n (+-)          "
               "|  node beneath: phi      F_t      Fick_t   F_t/Fick | phi out/in  Fick_n(out)  F_n/Fick_n  kappa L")
         for t in centres:
-            i, lo, hi = thetas.index(t), thetas.index(round(t - args.dtheta, 6)), thetas.index(round(t + args.dtheta, 6))
+            i = thetas.index(t)
+            lo, hi = thetas.index(round(t - args.dtheta, 6)), thetas.index(round(t + args.dtheta, 6))
             row = f"{t:5.0f}"
             for k in range(2):
                 arc = radii[k] * math.radians(2 * args.dtheta)
                 fick = -D * (phi[hi, k] - phi[lo, k]) / arc
                 if k == 0:
-                    row += (f"  {phi[i, k]:.4f} ({phi_err[i, k]:.4f}) [{beam[i, k]:.3f}]  {Ft[i, k]:+.4f} ({Ft_err[i, k]:.4f})  "
-                            f"{fick:+.4f}  {Ft[i, k] / fick:6.2f}   {Fn[i, k]:+.4f} ({Fn_err[i, k]:.4f})  |")
+                    row += (f"  {phi[i, k]:.4f} ({phi_err[i, k]:.4f}) [{beam[i, k]:.3f}]  "
+                            f"{Ft[i, k]:+.4f} ({Ft_err[i, k]:.4f})  {fick:+.4f}  {Ft[i, k] / fick:6.2f}   "
+                            f"{Fn[i, k]:+.4f} ({Fn_err[i, k]:.4f})  |")
                 else:
                     row += f"  {phi[i, k]:.4f}  {Ft[i, k]:+.4f}  {fick:+.4f}  {Ft[i, k] / fick:6.2f} |"
             fick_n = -D * (phi[i, 0] - phi[i, 1]) / h
             kappa = -math.log(phi[hi, 0] / phi[lo, 0]) / (radii[0] * math.radians(2 * args.dtheta))  # 1/m
-            row += f"  {phi[i, 0] / phi[i, 1]:.2f}  {fick_n:+.4f}  {Fn[i, 0] / fick_n:6.2f}  {kappa * length * h:6.2f}"
+            row += (f"  {phi[i, 0] / phi[i, 1]:.2f}  {fick_n:+.4f}  {Fn[i, 0] / fick_n:6.2f}  "
+                    f"{kappa * length_voxels * h:6.2f}")
             print(row)
 
 

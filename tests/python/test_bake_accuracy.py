@@ -227,7 +227,8 @@ def test_sun_entering_before_the_terminator_leaves_past_it(folder):
     # light it returns at once leaves downstream by that displacement (bake_sun_downstream.cpp, sunLeavingDownstream).
     # The sun's radiance along the normal at psi 85, 90, 95, 100 degrees, summed, baked over the core's Monte Carlo
     # (4096 paths, seed 7; seed 11: 0.62, 0.34 -> 0.75, 0.47): main 9719e11 returned 0.57 (ball_issue) and 0.32
-    # (ball_grey), this 0.69 and 0.44 (docs/bake.md, Accuracy: the terminator).
+    # (ball_grey), that branch 0.69 and 0.44; main 844cd72 (with the ramp's inflow at 95-100) 0.90 and 0.64 (seed 11:
+    # 0.98, 0.68) (docs/bake.md, Accuracy: the terminator).
     for name, least in (("ball_issue", 0.63), ("ball_grey", 0.39)):
         baked, reference = sun_leaving_along_the_normal(folder, name, [85, 90, 95, 100])
         assert baked.sum() / reference.sum() > least, (name, baked / reference)
@@ -239,11 +240,12 @@ def test_sun_grazing_the_ramp_past_the_terminator_feeds_the_outer_node(folder):
     # node points inwards there (bench/skin_flux.py). No beam enters through a patch facing away from the sun, so the
     # diffusion's outer node held 0.26-0.41 of the truth's fluence at 95-115 degrees (ball_issue); the ramp's inflow
     # (bake_diffusion_system.cpp, rampInflow) gives 0.67-1.01. The sun's radiance along the normal at psi 100, 105,
-    # 110 degrees, summed, baked over the core's Monte Carlo (4096 paths, seed 7): main 2c528ec 0.55 (ball_issue) and
-    # 0.70 (ball_grey), this 0.82 and 0.87 (docs/benchmarks.md, limb-skin).
+    # 110 degrees, summed, baked over the core's Monte Carlo (4096 paths, seed 7; seed 11: 0.86, 0.91): main 2c528ec
+    # 0.55 (ball_issue) and 0.70 (ball_grey), this 0.82 and 0.87 (docs/benchmarks.md, limb-skin). No brighter than the
+    # truth: twice the inflow (all the ramp's scattering into the node) reads 1.09 and 1.04 (seed 11: 1.15, 1.09).
     for name, least in (("ball_issue", 0.70), ("ball_grey", 0.78)):
         baked, reference = sun_leaving_along_the_normal(folder, name, [100, 105, 110])
-        assert baked.sum() / reference.sum() > least, (name, baked / reference)
+        assert least < baked.sum() / reference.sum() < 1.0, (name, baked / reference)
 
 
 @pytest.mark.parametrize("omega, g, tau_per_voxel", bake_flat_slab.SNOWS)

@@ -41,7 +41,13 @@ struct BoundaryLink {
 // in the ramp a voxel out): no beam enters through such a patch, but the ramp cells in front of its air faces
 // scatter it, each over a voxel's length of its own density, and half of that (isotropic after the similarity's
 // reduction) comes in. W into the node. The truth's outer node past the terminator is fed so (its net flux there points
-// inwards; docs/benchmarks.md, limb-skin). `rampShare` m^2 per face, `rampTau` the cells' reduced optical depth.
+// inwards on ball_issue and ball_grey; docs/benchmarks.md, limb-skin). `rampShare` m^2 per face, `rampTau` the cells'
+// reduced optical depth. The half goes to the node itself, not split in the boundary stretch the cell lies in as a lit
+// patch's beam is (toNode at the cell's depth of all it scatters): split so, the sun leaving along the normal at
+// 100-110 degrees fell from 0.82 and 0.87 of the truth to 0.77 and 0.78, the suite's absorbing balls 0.1 point worse
+// (docs/benchmarks.md, review-mends48). Only patches facing away take it: a lit patch at cosine 0.02 takes mu0 B A,
+// one at -0.02 about a' B A (1 - e^-tau') / 2, some ten times more on ball_issue (tau' 0.8 estimated); the lit
+// patches' ramp is not counted, a jump at mu0 0 (max of the two below a grazing cosine would close it; not tried).
 double rampInflow(double aPrime, double B, const std::array<double, 6> &rampShare,
                   const std::array<double, 6> &rampTau) {
     double scattered = 0.0;
@@ -127,6 +133,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     const BoundaryLink &b = boundary[f].emplace(beta, 2.0, 3.0 * ch.sigmaTr(face.rampMass));
                     const double shareOfPatch = patch.area * patch.share[f];  // m^2
                     rampShare[f] = shareOfPatch;
+                    // One read per air face, beams or none: cheap beside the face's ramp mass.
                     rampTau[f] = ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f))) * h;
                     sys.surface.outConductance.surface(i) += area * b.conductance();
                     sys.skyToNode.surface(i) += 4.0 * shareOfPatch * b.conductance();
@@ -158,7 +165,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
             for (std::size_t s = 0; s < light.beams.size(); ++s) {
                 const IncidentLight::Beam &beam = light.beams[s];
-                const double Bv = beam.atVoxel[i][c], Bs = beam.atSurface[i][c];  // W/m^2
+                // W/m^2. Bs: facing the light, the beam outside the patch; facing away, the beam in the ramp
+                // (rampInflow; incident_light.h, atSurface).
+                const double Bv = beam.atVoxel[i][c], Bs = beam.atSurface[i][c];
                 if (Bv <= 0.0 && Bs <= 0.0) continue;
                 const glm::dvec3 w = towardsBeam(scene, s, centre);
                 // Through the surface patch (facing the light: in, else out; at a sharp edge face by face) and

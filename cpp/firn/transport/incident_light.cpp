@@ -339,7 +339,10 @@ glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std
 
 // A patch facing away from a beam takes the beam in the ramp above it where the light meets the patch's normal at
 // cosine above this: grazing rays skim a ball's one-voxel ramp to acos(R / (R + h/2)) past the terminator (20-25
-// degrees on the suite's balls of 5-8 voxels), and behind that the ramp lies in the body's shadow.
+// degrees on the suite's balls of 5-8 voxels), and behind that the ramp lies in the body's shadow. The bound,
+// cos >= -sqrt(1 - R^2 / r^2) at r = R + h/2, does not depend on the light's distance: it holds for lamps as for
+// the sun. On large bodies (a car panel, R 100 h: 6 degrees) the patches to 60 degrees past take a ray that finds
+// the body's shadow.
 constexpr double kRampBeamCosine = -0.5;
 
 IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
@@ -398,7 +401,10 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                                                        &surface, Crossing::Spreading, &blocks).irradiance;
                 } else if (topo.patches[i].isSurface() &&
                            glm::dot(topo.patches[i].normal, towardsBeam(scene, b, centre)) > kRampBeamCosine) {
-                    // Past the terminator: the beam in the density ramp a voxel out along the normal (rampInflow).
+                    // Past the terminator: the beam in the density ramp a voxel out along the normal (rampInflow),
+                    // attenuated by sigma_tr as at the voxels: the grazing path runs through this body's own ramp.
+                    // Other snow in front (a lump before the ball) passes its forward-scattered light on as beam
+                    // here, which the patches' Crossing::Spreading would not: over-credited, untested.
                     const glm::dvec3 ramp = centre + medium.voxelSize() * topo.patches[i].normal;
                     beam.atSurface.surface(i) =
                         beamAt(scene, b, ramp, settings.sunSamples, seed, 2 * i + 1, marcher).irradiance;

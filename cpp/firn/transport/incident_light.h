@@ -23,8 +23,9 @@ struct IncidentLight {
     // occluders (averaged over the sun's disc or the lamp).
     struct Beam {
         std::vector<glm::vec3> atVoxel;      // at each unknown's centre
-        // Just outside each surface voxel's patch facing the light (0 inside the snow); past the terminator, in the
-        // density ramp a voxel out along the normal of a patch facing away (within kRampBeamCosine).
+        // Two things by the patch's side: facing the light, just outside the patch; facing away (cos > -0.5 to the
+        // light, kRampBeamCosine in incident_light.cpp), the beam in the density ramp a voxel out along the normal
+        // (rampInflow). 0 elsewhere. A reader must tell the two apart by the patch's facing.
         SurfaceValues<glm::vec3> atSurface;
     };
     std::vector<Beam> beams;
