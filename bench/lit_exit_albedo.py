@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from lobe_form import (SURFACE_VIEWS, half_space_exits, hg_shape, linear_p2_shape, mirrored, nelder_mead,
-                       sphere_grid)
+                       ring_means, sphere_grid)
 
 SNOWS = [(0.9, 0.6, "ball_grey"), (0.95, 0.7, "ball_rgb red"), (0.98, 0.85, "ball_issue"),
          (0.99, 0.7, "ball_rgb green"), (0.999, 0.7, "ball_rgb blue"), (0.9999, 0.85, "ball_snow")]
@@ -49,10 +49,6 @@ def linear_shape(p, v):
     return np.maximum(0.0, 1.0 + p[0] * v[:, 2] + p[1] * v[:, 0])
 
 
-def rings(x):
-    return x.reshape(SURFACE_VIEWS).mean(1)
-
-
 def measure(omega, g, mu0, photons, seed):
     views, dw = sphere_grid(*SURFACE_VIEWS, upper_only=True)
     single, multiple = half_space_exits(omega, g, mu0, views, photons, seed)
@@ -60,7 +56,8 @@ def measure(omega, g, mu0, photons, seed):
     _, linear = fit(linear_shape, [[1.0, 0.0]], truth, views, dw)
     _, hg_of_linear = fit(hg_shape, [[0.3, 0.3, 0.0]], linear, views, dw)
     _, hg = fit(hg_shape, [[0.3, 0.3, 0.0]], truth, views, dw)
-    p, poly = fit(linear_p2_shape, [[0.9, 0.3, 0.0, 0.0], [0.5, 0.3, 0.0, -0.3], [0.5, 0.0, 0.0, -0.8], [0.3, 0.6, 0.0, 0.3]],
+    p, poly = fit(linear_p2_shape,
+                  [[0.9, 0.3, 0.0, 0.0], [0.5, 0.3, 0.0, -0.3], [0.5, 0.0, 0.0, -0.8], [0.3, 0.6, 0.0, 0.3]],
                   truth, views, dw)
     return truth, {"HG(lin)": hg_of_linear, "HG": hg, "poly": poly}, p
 
@@ -79,9 +76,9 @@ def main():
             if omega > args.omega_max:
                 continue
             truth, forms, p = measure(omega, g, mu0, args.photons, 17 + k)
-            t = rings(truth)
-            errors = "  ".join(f"{label} {100 * (rings(f)[-1] / t[-1] - 1):+5.1f} {100 * (rings(f)[-2] / t[-2] - 1):+5.1f}"
-                               f" {100 * (rings(f)[0] / t[0] - 1):+5.1f}" for label, f in forms.items())
+            t = ring_means(truth)
+            errors = "  ".join(label + " " + " ".join(f"{100 * (ring_means(f)[r] / t[r] - 1):+5.1f}"
+                                                      for r in (-1, -2, 0)) for label, f in forms.items())
             print(f"  omega {omega:<6} g {g:.2f} y {similarity(omega, g):.3f} ({name:14s}) "
                   f"{' '.join(f'{v:.3f}' for v in t)}  top/mean {t[-1] / t.mean():.3f}\n"
                   f"      {errors}   poly q/l0 {p[3]:+.3f}", flush=True)
