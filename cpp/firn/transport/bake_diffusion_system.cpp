@@ -41,19 +41,18 @@ struct BoundaryLink {
 // in the ramp a voxel out): no beam enters through such a patch, but the ramp cells in front of its air faces
 // scatter it, each over a voxel's length of its own density, and half of that (isotropic after the similarity's
 // reduction) comes in. W into the node. The truth's outer node past the terminator is fed so (its net flux there points
-// inwards on ball_issue and ball_grey; docs/benchmarks.md, limb-skin). `rampShare` m^2 per face, `rampTau` the cells'
-// reduced optical depth. The half goes to the node itself, not split in the boundary stretch the cell lies in as a lit
+// inwards on ball_issue and ball_grey; docs/benchmarks.md, limb-skin). `rampScatter` (m^2): over the air faces,
+// each face's share of the patch times what its ramp cell scatters, 1 - e^-tau' (rampScattering). The half goes to
+// the node itself, not split in the boundary stretch the cell lies in as a lit
 // patch's beam is (toNode at the cell's depth of all it scatters): split so, the sun leaving along the normal at
 // 100-110 degrees fell from 0.82 and 0.87 of the truth to 0.77 and 0.78, the suite's absorbing balls 0.1 point worse
 // (docs/benchmarks.md, review-mends48). Only patches facing away take it: a lit patch at cosine 0.02 takes mu0 B A,
 // one at -0.02 about a' B A (1 - e^-tau') / 2, some ten times more on ball_issue (tau' 0.8 estimated); the lit
 // patches' ramp is not counted, a jump at mu0 0 (max of the two below a grazing cosine would close it; not tried).
-double rampInflow(double aPrime, double B, const std::array<double, 6> &rampShare,
-                  const std::array<double, 6> &rampTau) {
-    double scattered = 0.0;
-    for (int f = 0; f < 6; ++f) scattered += rampShare[f] * -std::expm1(-rampTau[f]);
-    return 0.5 * aPrime * B * scattered;
-}
+double rampInflow(double aPrime, double B, double rampScatter) { return 0.5 * aPrime * B * rampScatter; }
+
+// One air face's term of rampScatter (m^2): its share of the patch, its ramp cell's reduced optical depth over a voxel.
+double rampScattering(double share, double tau) { return share * -std::expm1(-tau); }
 
 // Where a beam entering at cosine mu scatters within a stretch L (resistance) above the node: at mean resistance
 // 3 mu (reduced depth mu below the surface), cut at the node.
@@ -110,7 +109,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             std::array<std::optional<BoundaryLink>, 6> boundary;
             std::array<double, 6> albedo{};   // occluder faces
             std::array<double, 6> conductance{};  // to the neighbours
-            std::array<double, 6> rampShare{}, rampTau{};  // air faces' patch area (m^2), their ramp cell's reduced tau
+            double rampScatter = 0.0;  // m^2 (rampInflow)
             for (int f = 0; f < 6; ++f) {
                 const std::int32_t link = topo.link[i][f];
                 if (!SnowTopology::isFace(link)) {
@@ -132,9 +131,9 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     if (facing > 0.0 && !patch.sharp) area = h2 * facing;
                     const BoundaryLink &b = boundary[f].emplace(beta, 2.0, 3.0 * ch.sigmaTr(face.rampMass));
                     const double shareOfPatch = patch.area * patch.share[f];  // m^2
-                    rampShare[f] = shareOfPatch;
                     // One read per air face, beams or none: cheap beside the face's ramp mass.
-                    rampTau[f] = ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f))) * h;
+                    rampScatter += rampScattering(
+                        shareOfPatch, ch.sigmaTr(density.getValue(topo.coord[i] + faceStep(f))) * h);
                     sys.surface.outConductance.surface(i) += area * b.conductance();
                     sys.skyToNode.surface(i) += 4.0 * shareOfPatch * b.conductance();
                     sys.skyReturned.surface(i) += shareOfPatch * b.diffuseReturned();
@@ -182,7 +181,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     if (flow > 0.0) entering[f] = flow, muIn[f] = mu;
                 }
                 const double patchIn = in;
-                if (patchIn <= 0.0 && Bs > 0.0) source += rampInflow(aPrime, Bs, rampShare, rampTau);
+                if (patchIn <= 0.0 && Bs > 0.0) source += rampInflow(aPrime, Bs, rampScatter);
                 std::array<double, 6> flow{};  // W through each link and occluder face, positive inwards
                 for (int f = 0; f < 6; ++f) {
                     const double mu = glm::dot(faceNormal(f), w);

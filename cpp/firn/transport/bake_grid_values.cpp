@@ -83,11 +83,11 @@ bool faceCarried(const openvdb::Coord &c, TracedIndex &tracedIndex, const MonteC
         const std::int32_t t = tracedIndex.getValue(n);
         if (t < 0 || traced.facesAt[t] < 0 || !(traced.faces[traced.facesAt[t]].open >> f & 1u)) continue;
         const Source &v = traced.faces[traced.facesAt[t]].source[f];
-        sum.l0 += v.l0, sum.l1 += v.l1, sum.peak0 += v.peak0, sum.peak1 += v.peak1, ++count;
+        sum.add(v), ++count;
     }
     if (!count) return false;
-    S.l0 = sum.l0 / float(count), S.l1 = sum.l1 / float(count);
-    S.peak0 = sum.peak0 / float(count), S.peak1 = sum.peak1 / float(count);
+    sum.divideBy(float(count));
+    S = sum;
     return true;
 }
 
@@ -462,9 +462,9 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                     const openvdb::Coord n = c.offsetBy(dx, dy, dz);
                     if (!take(n)) continue;
                     const Source v = value(n);
-                    S.l0 += v.l0, S.l1 += v.l1, S.peak0 += v.peak0, S.peak1 += v.peak1, ++count;
+                    S.add(v), ++count;
                 }
-        if (count) S.l0 /= double(count), S.l1 /= double(count), S.peak0 /= double(count), S.peak1 /= double(count);
+        if (count) S.divideBy(float(count));
         return count > 0;
     };
     // Where forwardPeakThrough may find a peak: within two voxels of a smooth surface voxel holding one (the car's

@@ -390,22 +390,23 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             Medium::ColumnMarcher marcher(medium);
             Medium::Accessor density = medium.accessor();
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
-                if (topo.patches[i].isSurface() && topo.patches[i].facesTowards(towardsBeam(scene, b, centre))) {
+                const SurfacePatch &patch = topo.patches[i];
+                if (!patch.isSurface()) continue;
+                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), w = towardsBeam(scene, b, centre);
+                if (patch.facesTowards(w)) {
                     // Snow in the way from the line through the patch along the light, past the density ramp
                     // (patchOutsideAlong); occluders' shadow on the surface itself (half a voxel out), so shadow
                     // edges fall where they do on the snow.
-                    const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * topo.patches[i].normal;
-                    const glm::dvec3 from = patchOutsideAlong(medium, topo, i, towardsBeam(scene, b, centre), density);
+                    const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * patch.normal;
+                    const glm::dvec3 from = patchOutsideAlong(medium, topo, i, w, density);
                     beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher,
                                                        &surface, Crossing::Spreading, &blocks).irradiance;
-                } else if (topo.patches[i].isSurface() &&
-                           glm::dot(topo.patches[i].normal, towardsBeam(scene, b, centre)) > kRampBeamCosine) {
+                } else if (glm::dot(patch.normal, w) > kRampBeamCosine) {
                     // Past the terminator: the beam in the density ramp a voxel out along the normal (rampInflow),
                     // attenuated by sigma_tr as at the voxels: the grazing path runs through this body's own ramp.
                     // Other snow in front (a lump before the ball) passes its forward-scattered light on as beam
                     // here, which the patches' Crossing::Spreading would not: over-credited, untested.
-                    const glm::dvec3 ramp = centre + medium.voxelSize() * topo.patches[i].normal;
+                    const glm::dvec3 ramp = centre + medium.voxelSize() * patch.normal;
                     beam.atSurface.surface(i) =
                         beamAt(scene, b, ramp, settings.sunSamples, seed, 2 * i + 1, marcher).irradiance;
                 }

@@ -68,6 +68,11 @@ struct Source : BroadLobe {
         peak0 += glm::vec3(mean);
         peak1 += glm::vec3(k * (mean.x + mean.y + mean.z) * m);  // 3 k m (the channels' mean)
     }
+    // Sums and means of sources, part by part: adds w times o; divides by d.
+    void add(const Source &o, float w = 1.0f) {
+        l0 += w * o.l0, l1 += w * o.l1, peak0 += w * o.peak0, peak1 += w * o.peak1;
+    }
+    void divideBy(float d) { l0 /= d, l1 /= d, peak0 /= d, peak1 /= d; }
 };
 
 }  // namespace firn

@@ -168,11 +168,10 @@ std::optional<Source> fitByDirection(const SourceEstimate &S, const SourceDirect
         one.l0 = glm::vec3(fit.l0 * share);
         for (int c = 0; c < 3; ++c) one.l1[c] = glm::vec3(fit.l1 * share[c]);
         if (fit.peak > 0.0) one.addPeak(fit.peak * share, fit.k, m);
-        out.l0 += float(w) * one.l0, out.l1 += float(w) * one.l1;
-        out.peak0 += float(w) * one.peak0, out.peak1 += float(w) * one.peak1;
+        out.add(one, float(w));
         total += w;
     }
-    out.l0 /= float(total), out.l1 /= float(total), out.peak0 /= float(total), out.peak1 /= float(total);
+    out.divideBy(float(total));
     capBroad(out);
     return out;
 }
