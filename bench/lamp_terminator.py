@@ -14,8 +14,8 @@ dark). The references are cached under --cache by case, light and samples.
     PYTHONPATH=build/python python3 bench/lamp_terminator.py [--cases ball_grey,ball_issue] [--lights sun,point,...]
 
 --sweep: the terminator crossing patches (the ramp's jump at mu0 = 0): the sun alone rotated in 0.5 degree steps
-about the y axis, the baked source (broad l0 + peaked, green, W/m^2/sr) of the surface voxels in the sun's plane
-whose normals lie 80-100 degrees from the sun at elevation 30, printed against mu0 = cos(normal, sun).
+about the y axis (elevation 18-42), the baked source (broad l0 + peaked, green, W/m^2/sr) of the outer voxels (centres beyond R - h) in the sun's
+plane whose lie 80-100 degrees from the sun at elevation 30, printed against mu0 = cos(normal, sun).
 """
 
 import argparse
@@ -139,11 +139,12 @@ def sweep(name, folder):
     voxels = []
     for i, k in zip(*np.nonzero(case.density[:, j, :] > 0.0)):
         n = np.array([i, j, k]) * case.voxel - centre
+        outer = np.linalg.norm(n) > 0.05 - case.voxel  # the balls' radius 5 cm: the outer layer
         n /= np.linalg.norm(n)
-        if 0.5 <= case.density[i, j, k] < 1.0 and abs(math.degrees(math.acos(np.dot(n, TOWARDS))) - 90.0) < 10.0:
+        if outer and abs(math.degrees(math.acos(np.dot(n, TOWARDS))) - 90.0) < 10.0:
             voxels.append(((i, j, k), n))
     rows = []
-    for elevation in np.arange(10.0, 50.01, 0.5):
+    for elevation in np.arange(18.0, 42.01, 0.5):
         write_density(path, case.density, case.voxel)
         e = math.radians(elevation)
         sun = np.array([math.cos(e), 0.0, math.sin(e)])
@@ -153,7 +154,7 @@ def sweep(name, folder):
         read = lambda g, c: np.array(grids[g].getConstAccessor().getValue(tuple(int(x) for x in c)))
         rows.append([(float(np.dot(n, sun)), float(read("firn_source", c)[1] + read("firn_source_peak", c)[1]))
                      for c, n in voxels])
-    print(f"{name}: the sun alone, elevation 10-50 degrees in 0.5 steps; per surface voxel (i, j, k): mu0, source")
+    print(f"{name}: the sun alone, elevation 18-42 degrees in 0.5 steps; per surface voxel (i, j, k): mu0, source")
     for v, (c, _) in enumerate(voxels):
         print(f"  {c}: " + " ".join(f"{mu:+.3f}:{src:.4f}" for mu, src in (r[v] for r in rows) if abs(mu) < 0.12))
 
