@@ -14,8 +14,9 @@ dark). The references are cached under --cache by case, light and samples.
     PYTHONPATH=build/python python3 bench/lamp_terminator.py [--cases ball_grey,ball_issue] [--lights sun,point,...]
 
 --sweep: the terminator crossing patches (the ramp's jump at mu0 = 0): the sun alone rotated in 0.5 degree steps
-about the y axis (elevation 18-42), the baked source (broad l0 + peaked, green, W/m^2/sr) of the outer voxels (centres beyond R - h) in the sun's
-plane whose lie 80-100 degrees from the sun at elevation 30, printed against mu0 = cos(normal, sun).
+about the y axis (elevation 18-42), the baked source (broad l0 + peaked, green, W/m^2/sr) of the outer voxels
+(centres beyond R - h) in the sun's plane whose normals lie 80-100 degrees from the sun at elevation 30, printed
+against mu0 = cos(normal, sun).
 """
 
 import argparse
@@ -112,11 +113,13 @@ def measure(case, kind, folder, cache, samples=None):
     cosine = local_cosine(case, kind, np.nan_to_num(points))
     per = case.pixels ** 2
     m, b = mean[seen], baked[seen]
-    relative = b / np.maximum(m, 1e-30) - 1.0
+    relative = b[m > 0] / m[m > 0] - 1.0  # blocks no path reached (a point lamp's far side) left out
     row = {"mean": np.abs(relative).mean(), "worst": relative.flat[np.abs(relative).argmax()],
            "bias": b.sum() / m.sum() - 1.0, "noise": np.median(error[seen] / np.maximum(m, 1e-30)), "bake_s": seconds}
-    row["views"] = [baked[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum() /
-                    mean[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum() - 1.0 for v in range(len(case.views))]
+    row["views"] = []
+    for v in range(len(case.views)):
+        part = slice(v * per, (v + 1) * per)
+        row["views"].append(baked[part][seen[part]].sum() / mean[part][seen[part]].sum() - 1.0)
     row["bands"] = []
     for v in range(len(case.views)):
         part = np.zeros(len(seen), dtype=bool)

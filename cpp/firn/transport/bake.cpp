@@ -252,8 +252,8 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
     return source;
 }
 
-// The scene with its area lamps in pieces at most twice as wide as their distance to the snow's bounds (lampPieces): each piece
-// a beam from its own direction.
+// The scene with its area lamps in pieces at most twice as wide as their distance to the snow's bounds (lampPieces):
+// each piece a beam from its own direction.
 Scene withLampPieces(const Scene &scene) {
     Scene out = scene;
     out.lamps.clear();
