@@ -252,6 +252,19 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
     return source;
 }
 
+// The scene with its area lamps in pieces at most twice as wide as their distance to the snow's bounds (lampPieces):
+// each piece a beam from its own direction.
+Scene withLampPieces(const Scene &scene) {
+    Scene out = scene;
+    out.lamps.clear();
+    const Medium &medium = *scene.medium;
+    for (const Lamp &lamp : scene.lamps) {
+        const glm::dvec3 nearest = glm::clamp(lamp.position, medium.boundsMin(), medium.boundsMax());
+        for (const Lamp &piece : lampPieces(lamp, glm::length(lamp.position - nearest))) out.lamps.push_back(piece);
+    }
+    return out;
+}
+
 }  // namespace
 
 BakedGrids emptyBakedGrids(const openvdb::FloatGrid &density, const VolumeOptics &optics,
@@ -264,8 +277,9 @@ BakedGrids emptyBakedGrids(const openvdb::FloatGrid &density, const VolumeOptics
     return out;
 }
 
-BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
-    validate(scene);
+BakedGrids bakeScattering(const Scene &given, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
+    validate(given);
+    const Scene scene = withLampPieces(given);
     const Preset preset = resolve(settings);
     const int sourceScale = sourceScaleFor(*scene.medium, settings);
     Progress quiet;

@@ -69,6 +69,31 @@ LampSample sampleLamp(const Lamp &lamp, const glm::dvec3 &x, double u1, double u
     return s;
 }
 
+std::vector<Lamp> lampPieces(const Lamp &lamp, double distance) {
+    const auto across = [&](double size) {
+        return distance > 0.0 ? std::clamp(int(std::ceil(size / (2.0 * distance))), 1, kMaxLampPieces) : kMaxLampPieces;
+    };
+    if (!lamp.isArea()) return {lamp};
+    const int nx = across(lamp.sizeX), ny = across(lamp.sizeY);
+    if (nx == 1 && ny == 1) return {lamp};
+    const glm::dvec3 bitangent = glm::cross(lamp.axis, lamp.tangent);
+    std::vector<Lamp> pieces;
+    for (int i = 0; i < nx; ++i)
+        for (int j = 0; j < ny; ++j) {
+            const double u = (i + 0.5) / nx - 0.5, v = (j + 0.5) / ny - 0.5;  // of the size, from the centre
+            if (lamp.shape == Lamp::Shape::Ellipse && u * u + v * v > 0.25) continue;
+            Lamp piece = lamp;
+            piece.shape = Lamp::Shape::Rectangle;
+            piece.position += u * lamp.sizeX * lamp.tangent + v * lamp.sizeY * bitangent;
+            piece.sizeX = lamp.sizeX / nx, piece.sizeY = lamp.sizeY / ny;
+            pieces.push_back(piece);
+        }
+    if (lamp.shape == Lamp::Shape::Ellipse)  // the cells' area to the ellipse's
+        for (Lamp &piece : pieces)
+            piece.emission *= 0.25 * kPi * nx * ny / double(pieces.size());
+    return pieces;
+}
+
 void validate(const Lamp &lamp) {
     const Rgb &e = lamp.emission;
     if (!(std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z)) || e.x < 0.0 || e.y < 0.0 || e.z < 0.0)
