@@ -19,7 +19,7 @@ import numpy as np
 
 import bake_suite as bs
 import firncore
-from plate_err_regions import REGIONS, region_of
+from plate_err_regions import REGIONS, cached_monte_carlo, region_of
 
 BLACK = (0.0, 0.0, 0.0)
 
@@ -62,14 +62,10 @@ def main():
         for name in names:
             c = variant(case, name)
             file = os.path.join(args.cache, f"{name}_{args.samples}.npz")
-            if not os.path.exists(file):
-                mean, error = firncore.monte_carlo_radiance(path, c.optics, origins, directions, suns=c.suns(),
-                                                            sky=c.skies(), occluders=c.occluders,
-                                                            samples=args.samples, seed=11)
-                np.savez(file, mean=mean, error=error)
+            truth, _ = cached_monte_carlo(file, path, c, origins, directions, args.samples)
             firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
             baked = firncore.render_baked(path, c.optics, origins, directions, occluders=c.occluders)
-            light[name] = (baked.mean(1), np.load(file)["mean"].mean(1))
+            light[name] = (baked.mean(1), truth.mean(1))
     print(f"bumpy_plate, {args.samples} paths: per variant the Monte Carlo's sum and the bake's error; per part "
           f"({names[0]} - variant) its share of {names[0]}'s light, truth / bake")
     print(f"{'region':12s}" + "".join(f"{n:>21s}" for n in names))
