@@ -61,6 +61,17 @@ def light_case(case, light):
     return c
 
 
+def cached_monte_carlo(file, path, case, origins, directions, samples):
+    """The core's Monte Carlo of `case` along the rays (seed 11), (mean, standard error), kept in `file`."""
+    if not os.path.exists(file):
+        mean, error = firncore.monte_carlo_radiance(path, case.optics, origins, directions, suns=case.suns(),
+                                                    sky=case.skies(), occluders=case.occluders, samples=samples,
+                                                    seed=11)
+        np.savez(file, mean=mean, error=error)
+    data = np.load(file)
+    return data["mean"], data["error"]
+
+
 def report(title, baked, reference, label, view, views):
     with np.errstate(invalid="ignore", divide="ignore"):  # blocks not seen: NaN, left out below
         rel = np.abs(baked / reference - 1.0)  # (N, 3)
@@ -125,13 +136,7 @@ def main():
                 title = f"full (suite reference, {case.samples} paths)"
             else:
                 file = os.path.join(args.cache, f"{light}_{args.samples}.npz")
-                if not os.path.exists(file):
-                    mean, err = firncore.monte_carlo_radiance(path, c.optics, origins, directions, suns=c.suns(),
-                                                              sky=c.skies(), occluders=c.occluders,
-                                                              samples=args.samples, seed=11)
-                    np.savez(file, mean=mean, error=err)
-                data = np.load(file)
-                reference, error = data["mean"], data["error"]
+                reference, error = cached_monte_carlo(file, path, c, origins, directions, args.samples)
                 title = f"{light} only ({args.samples} paths)"
             noise = np.median(error[seen] / np.maximum(reference[seen], 1e-30))
             firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
