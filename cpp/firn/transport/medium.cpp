@@ -8,7 +8,6 @@
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/Morphology.h>
 
-#include "firn/transport/snow_ceiling.h"
 #include "firn/util/error.h"
 #include "firn/util/openvdb_library.h"
 
@@ -110,7 +109,6 @@ Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
     support_ = std::make_shared<openvdb::BoolTree>(density_->tree(), false, openvdb::TopologyCopy());
     openvdb::tools::dilateActiveValues(*support_, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
     markOccupiedBlocks();
-    ceiling_ = std::make_unique<SnowCeiling>(*density_);
 }
 
 void Medium::markOccupiedBlocks() {
@@ -207,9 +205,6 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
     double tBoundsIn = 0.0, tBoundsOut = 0.0;
     if (!medium_.clipToBounds(origin, direction, tBoundsIn, tBoundsOut)) return sum * h;
     const double tLast = std::min(tMax, tBoundsOut) / h;  // no snow beyond (index space)
-    // A rising ray's first step out of the snow's leaves asks the ceiling once whether all of the rest lies above
-    // the snow (most sky rays off a surface: the jumps from there to the bounds are most of their steps).
-    bool ceilingAsked = !(dir.z() > 0.0);
     for (double t = i * kStep; t < tLast;) {
         ++columnSteps_;
         const double dt = std::min(kLongStep, tLast - t);
@@ -222,11 +217,6 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
             }
             t += dt;
             continue;
-        }
-        if (!ceilingAsked) {
-            ceilingAsked = true;
-            const Vec3d here = ray(t);
-            if (medium_.ceiling().clearAbove(glm::dvec3(here.x(), here.y(), here.z()), direction)) break;
         }
         const int edge = std::max(medium_.clearBlockEdge(cell), int(openvdb::BoolTree::LeafNodeType::DIM));
         const double next = std::max(t + 0.5 * dt, blockExit(ray, cell, edge));

@@ -17,8 +17,6 @@
 
 namespace firn {
 
-class SnowCeiling;
-
 // The cell (voxel index) holding a point of index space: floor of each coordinate, without std::floor's
 // rounding-mode work (marches call it for every sample).
 inline openvdb::Coord floorCoord(const openvdb::Vec3d &ijk) {
@@ -69,8 +67,6 @@ class Medium {
     using SupportAccessor = openvdb::tree::ValueAccessor<const openvdb::BoolTree>;
     SupportAccessor supportAccessor() const { return SupportAccessor(*support_); }
     int emptyBlockEdge(const openvdb::Coord &cell, SupportAccessor &support) const;
-    // The snow's top per column of cells: proves rays that rise out of the snow's leaves empty (column()).
-    const SnowCeiling &ceiling() const { return *ceiling_; }
 
     // The density (kg/m^3) at points of index space, trilinear as BoxSampler::sample reads it (densityAt: the same
     // value bit for bit), from the last cell's eight values when a point lies in the same cell: walks in half-voxel
@@ -105,7 +101,7 @@ class Medium {
         double densityAt(const openvdb::Vec3d &ijk) { return density_.at(ijk); }
         // Mass column between t = 0 and tMax (m) along origin + t * direction (unit), midpoint rule on
         // half-voxel steps while the ray starts in snow, whole-voxel steps beyond; stops once the column exceeds
-        // `limit` (kg/m^2) and returns what it has, or once the ceiling proves the rest of a rising ray empty.
+        // `limit` (kg/m^2) and returns what it has.
         double column(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double limit);
         // The steps column() has taken so far (each a density read, or a jump over cells without snow): its work
         // in tracking-step equivalents, for a budget (bake_traced_voxels.cpp, planGathering).
@@ -170,7 +166,6 @@ class Medium {
     openvdb::Coord blocksOrigin_;
     std::array<openvdb::Coord, 3> blockCounts_;
     std::array<std::vector<std::uint8_t>, 3> blockOccupied_;
-    std::unique_ptr<SnowCeiling> ceiling_;
 };
 
 }  // namespace firn

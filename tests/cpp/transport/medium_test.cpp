@@ -134,46 +134,4 @@ TEST(Medium, ColumnCountsItsSteps) {
     EXPECT_EQ(marcher.columnSteps(), 6 + 5);
 }
 
-// Sky rays rising off ground snow (a field of 256^2 voxels, 4 deep) beside a floating slab 20 voxels across (z 40 to
-// 43): once the walk leaves the snow's leaves, the ceiling (SnowCeiling) ends a ray that passes above all snow
-// ahead of it, so it takes a few steps where the walk would jump leaf by leaf through the ground's occupied blocks
-// to the bounds (16 steps on this ray without the ceiling, 9 with it); rays that meet the floating slab, or pass under it, are walked on
-// and keep their snow. Oracle: the midpoint rule on steps of 1/64 voxel along the ray, reading the density everywhere.
-TEST(Medium, ColumnEndsOnceTheRestOfARisingRayIsAboveTheSnow) {
-    constexpr double kVoxel = 0.02;  // m
-    constexpr float kRho = 300.0f;   // kg/m^3
-    auto density = openvdb::FloatGrid::create(0.0f);
-    density->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
-    density->fill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(255, 255, 3)), kRho);
-    density->fill(openvdb::CoordBBox(openvdb::Coord(150, 100, 40), openvdb::Coord(169, 119, 43)), kRho);
-    density->tree().voxelizeActiveTiles();
-    const Medium medium(density, VolumeOptics{10.0, Rgb(0.99), 0.8});
-    Medium::Accessor read = medium.accessor();
-    auto brute = [&](const glm::dvec3 &from, const glm::dvec3 &w) {
-        double sum = 0.0;
-        for (int i = 0; i < 300 * 64; ++i) sum += medium.densityAt(from + (i + 0.5) / 64.0 * kVoxel * w, read);
-        return sum * kVoxel / 64.0;
-    };
-    const glm::dvec3 from = medium.indexToWorld(glm::dvec3(60.5, 110.5, 4.5));  // a patch one voxel above the top
-    const double elevation = 0.5;                                              // rad
-    struct Ray {
-        glm::dvec3 w;
-        bool meetsSlab;
-    };
-    const glm::dvec3 away(-std::cos(elevation), 0.0, std::sin(elevation));
-    // Towards the floating slab: to its far top edge (z 43.6, in the trilinear ramp over its top voxels), through
-    // it, and under it.
-    auto towards = [&](double x, double z) {
-        return Ray{glm::normalize(medium.indexToWorld(glm::dvec3(x, 110.5, z)) - from), true};
-    };
-    for (const Ray &ray : {Ray{away, false}, towards(169.5, 43.6), towards(160.0, 41.5), towards(160.0, 30.0)}) {
-        Medium::ColumnMarcher marcher(medium);
-        const double column = marcher.column(from, ray.w, 1e30, 1e30), exact = brute(from, ray.w);
-        EXPECT_NEAR(column, exact, 0.05 * kRho * kVoxel) << ray.w.z;
-        if (ray.meetsSlab) continue;
-        EXPECT_EQ(column, 0.0);
-        EXPECT_LE(marcher.columnSteps(), 10);
-    }
-}
-
 }  // namespace firn
