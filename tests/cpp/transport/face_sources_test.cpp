@@ -65,6 +65,22 @@ std::vector<openvdb::Coord> layerVoxels() {
     return voxels;
 }
 
+// A 4 x 4 x 4 lump of sigma_t h 8 of forward scattering snow under a sun 30 degrees high from +x.
+Scene sunlitLump() {
+    return test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 3)),
+                          float(8.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.999), 0.85},
+                          glm::dvec3(0.866, 0.0, 0.5));
+}
+
+// The lump's voxels, x major, then y, then z.
+std::vector<openvdb::Coord> lumpVoxels() {
+    std::vector<openvdb::Coord> voxels;
+    for (int x = 0; x < 4; ++x)
+        for (int y = 0; y < 4; ++y)
+            for (int z = 0; z < 4; ++z) voxels.emplace_back(x, y, z);
+    return voxels;
+}
+
 // The voxels' sources at `paths` each and their faces' (gatheredVoxelFaces), the faces' paths reporting to
 // `faceProgress`.
 bake::MonteCarloVoxels tracedWithFaces(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int paths,
@@ -141,14 +157,9 @@ TEST(FaceSources, ATracedLayersVoxelsHoldTheirOneSidedFaces) {
 // faces. Where the faces at half the voxel's paths would pass the budget they take a quarter; where those would too,
 // none.
 TEST(FaceSources, AGatheredLumpsThickVoxelsHoldTheirOneSidedFaces) {
-    const Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 3)),
-                                       float(8.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.999), 0.85},
-                                       glm::dvec3(0.866, 0.0, 0.5));
+    const Scene scene = sunlitLump();
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    std::vector<openvdb::Coord> voxels;
-    for (int x = 0; x < 4; ++x)
-        for (int y = 0; y < 4; ++y)
-            for (int z = 0; z < 4; ++z) voxels.emplace_back(x, y, z);
+    const std::vector<openvdb::Coord> voxels = lumpVoxels();
     const SubProgress none(nullptr, 0.0, 1.0);
     const bake::GatheringPlan plan{256, 256.0 * 1000.0 * double(voxels.size())};
     bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, plan.paths, 3, none);
@@ -208,18 +219,10 @@ TEST(FaceSources, AFloatingLayersRimVoxelShowsWhatItsFacesShow) {
 // voxels around it face it (facingAverage), not the edge voxels' means, which their moments fit reads 0.96 of the
 // converged ones towards the sun-lit views at 256 paths (docs/benchmarks.md, spray-air, spray-lit-faces).
 TEST(FaceSources, TheAirBesideALumpsSunlitEdgeCarriesItsLitFaces) {
-    const Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 3)),
-                                       float(8.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.999), 0.85},
-                                       glm::dvec3(0.866, 0.0, 0.5));
+    const Scene scene = sunlitLump();
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    std::vector<openvdb::Coord> voxels;  // x major, then y, then z
-    for (int x = 0; x < 4; ++x)
-        for (int y = 0; y < 4; ++y)
-            for (int z = 0; z < 4; ++z) voxels.emplace_back(x, y, z);
-    const SubProgress none(nullptr, 0.0, 1.0);
-    const bake::GatheringPlan plan{256, 256.0 * 1000.0 * double(voxels.size())};
-    bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, plan.paths, 3, none);
-    bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan, voxels.size()), 5, none, traced);
+    const std::vector<openvdb::Coord> voxels = lumpVoxels();
+    const bake::MonteCarloVoxels traced = tracedWithFaces(scene, voxels, 256);
     bake::SourceValues source;  // every unknown traced: its traced source
     source.broad.resize(topo.size());
     for (std::size_t v = 0; v < voxels.size(); ++v)
