@@ -21,7 +21,8 @@ namespace firn::bake {
 namespace {
 
 // What traced voxel n shows a neighbour at `offset`: the mean of its lit faces that face it (FaceSources::lit),
-// else `own`, its mean. A lump's sunlit skin holds its first optical depth's light in those faces.
+// else `own`, its mean. A face's source is unbiased where the voxel's moments fit reads the sun-lit views 4 % dark
+// at 256 paths (docs/benchmarks.md, spray-air); its unlit faces, taken too, put the rims up (spray-lit-faces).
 Source litFacesToward(const openvdb::Coord &n, const openvdb::Coord &offset, TracedIndex &tracedIndex,
                       const MonteCarloVoxels &traced, const Source &own) {
     const std::int32_t t = tracedIndex.getValue(n);
@@ -61,7 +62,8 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 const int k = (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);  // blockOffset(k): (dx, dy, dz)
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
-                const Source v = litFacesToward(c.offsetBy(-dx, -dy, -dz), {dx, dy, dz}, tracedIndex, traced, source[j]);
+                const Source v =
+                    litFacesToward(c.offsetBy(-dx, -dy, -dz), {dx, dy, dz}, tracedIndex, traced, source[j]);
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
                 normal += w * topo.patches[j].normal;
