@@ -20,13 +20,34 @@ namespace firn::bake {
 
 namespace {
 
+// What traced voxel n shows a neighbour at `offset`: the mean of its lit faces that face it (FaceSources::lit),
+// else `own`, its mean. A face's source is unbiased where the voxel's moments fit reads the sun-lit views 4 % dark
+// at 256 paths (docs/benchmarks.md, spray-air); its unlit faces, taken too, put the rims up (spray-lit-faces).
+Source litFacesToward(const openvdb::Coord &n, const openvdb::Coord &offset, TracedIndex &tracedIndex,
+                      const MonteCarloVoxels &traced, const Source &own) {
+    const std::int32_t t = tracedIndex.getValue(n);
+    if (t < 0 || traced.faces.empty() || traced.facesAt[t] < 0) return own;
+    const FaceSources &faces = traced.faces[traced.facesAt[t]];
+    Source sum;
+    int count = 0;
+    for (int a = 0; a < 3; ++a) {
+        if (offset[a] == 0) continue;
+        const int f = 2 * a + (offset[a] > 0);
+        if (faces.open >> f & faces.lit >> f & 1u) sum.add(faces.source[f]), ++count;
+    }
+    if (!count) return own;
+    sum.divideBy(float(count));
+    return sum;
+}
+
 // The radiance the surface voxels around voxel c (outside the snow) show towards it: their values
 // weighted by how much their surface faces c (a voxel beside an edge takes the side's, one above it the
 // top's), and their normals so weighted (`facing`, unit; zero where none faces c). False if no surface voxel is
 // near. `carrier`: the surface voxel facing c most (the first in blockOffset's order among equals), where one does.
 bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const SourceValues &source,
-                   Source &S, glm::dvec3 &facing, openvdb::Coord &carrier) {
+                   TracedIndex &tracedIndex, const MonteCarloVoxels &traced, Source &S, glm::dvec3 &facing,
+                   openvdb::Coord &carrier) {
     double total = 0.0, most = 0.0;
     int count = 0, mostAt = 27;
     glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0), normal(0.0);
@@ -41,7 +62,8 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 const int k = (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);  // blockOffset(k): (dx, dy, dz)
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
-                const Source v = source[j];
+                const Source v =
+                    litFacesToward(c.offsetBy(-dx, -dy, -dz), {dx, dy, dz}, tracedIndex, traced, source[j]);
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
                 normal += w * topo.patches[j].normal;
@@ -521,7 +543,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 if (t >= 0) S = ownValue(traced, t);
                 else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
-                else if (!facingAverage(topo, c, index, source, S, facing, carrier)) continue;
+                else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, facing, carrier)) continue;
                 else if (nearPeakAt.isValueOn(c)) {
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
                     sunInRamp(scene, c, facing, marcher, sunAt, S);

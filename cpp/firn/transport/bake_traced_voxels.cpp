@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/transport/bake_thin_snow.h"
+#include "firn/transport/incident_light.h"
 #include "firn/transport/light_tracing.h"
 #include "firn/transport/monte_carlo.h"
 #include "firn/transport/pooled_estimates.h"
@@ -161,6 +162,19 @@ constexpr int kMinLayerFacePaths = 256;
 using FaceJob = std::pair<std::size_t, int>;
 
 double greyMean(const Rgb &c) { return (c.x + c.y + c.z) / 3.0; }
+
+// A face is lit where it faces a light and its collisions take that light's beam: the beams scattered once are at
+// least this share of their source (spray_dense, 4 seeds: 0.05 gave the lit cores most, 0.1-0.15 read as it
+// overall; 0 lit the shadowed faces that face the sun: docs/benchmarks.md, spray-lit-faces).
+constexpr double kLitFaceBeamShare = 0.05;
+
+// Whether face f (-x, +x, -y, +y, -z, +z) of the voxel centred at `centre`, its collisions' source `all`, is lit.
+bool litFace(const Scene &scene, const glm::dvec3 &centre, int f, const SourceEstimate &all) {
+    if (!(greyMean(all.beamL0) > kLitFaceBeamShare * greyMean(all.l0))) return false;
+    for (std::size_t b = 0; b < beamCount(scene); ++b)
+        if ((f % 2 ? 1.0 : -1.0) * towardsBeam(scene, b, centre)[f / 2] > 0.0) return true;
+    return false;
+}
 
 // Where a face lies in a flat layer: at least this many of its voxel's 8 neighbours in the face's plane hold the
 // same face, their density within kPooledDensityRatio (a layer's rim has 5). Elsewhere (a lump's thin part,
@@ -356,10 +370,14 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
             const std::size_t first = firstJob[i], last = firstJob[i + 1], v = jobs[first].first;
             const DirectionWeights visibility = visibilityFrom(medium, marcher, voxels[v], directions);
             FaceSources &faces = traced.faces[traced.facesAt[v]];
-            for (std::size_t j = first; j < last; ++j)
+            for (std::size_t j = first; j < last; ++j) {
+                const SourceEstimate all = whole(estimates[j]);
                 faces.source[jobs[j].second] = inLayer[j]
                                                    ? tracedSourceByDirection(estimates[j].carried, directions, visibility, g)
-                                                   : tracedSourceByMoments(whole(estimates[j]), g);
+                                                   : tracedSourceByMoments(all, g);
+                faces.lit |= unsigned(litFace(scene, medium.voxelCentre(voxels[v]), jobs[j].second, all))
+                             << jobs[j].second;
+            }
             faces.shown = showsItsFaces(faces.open, jobs, inLayer, first, last)
                               ? shownByFaces(directions, visibility, g, jobs, estimates, first, last)
                               : traced.source[v];

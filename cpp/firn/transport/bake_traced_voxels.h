@@ -25,6 +25,7 @@ namespace firn::bake {
 struct FaceSources {
     std::array<Source, 6> source;  // by face, -x, +x, -y, +y, -z, +z
     unsigned open = 0;             // bit f: face f holds one
+    unsigned lit = 0;              // bit f: face f faces a light and takes its beam (kLitFaceBeamShare)
     Source shown;                  // the voxel's grid value (its other neighbours carry its mean)
 };
 

@@ -2,12 +2,16 @@
 // kMaxTracedSteps of paths, so Esc must stop them; and how a face's collisions split by the trilinear hat
 // (MonteCarloReference::faceSourceIn).
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 #include <gtest/gtest.h>
 
 #include "box_scene.h"
+#include "firn/transport/bake.h"
 #include "firn/transport/bake_traced_voxels.h"
+#include "firn/transport/bake_grid_values.h"
+#include "firn/transport/traced_source.h"
 #include "firn/transport/monte_carlo.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/transport/source_lobe.h"
@@ -58,6 +62,22 @@ std::vector<openvdb::Coord> layerVoxels() {
     std::vector<openvdb::Coord> voxels;
     for (int x = 0; x < 4; ++x)
         for (int y = 0; y < 4; ++y) voxels.emplace_back(x, y, 0);
+    return voxels;
+}
+
+// A 4 x 4 x 4 lump of sigma_t h 8 of forward scattering snow under a sun 30 degrees high from +x.
+Scene sunlitLump() {
+    return test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 3)),
+                          float(8.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.999), 0.85},
+                          glm::dvec3(0.866, 0.0, 0.5));
+}
+
+// The lump's voxels, x major, then y, then z.
+std::vector<openvdb::Coord> lumpVoxels() {
+    std::vector<openvdb::Coord> voxels;
+    for (int x = 0; x < 4; ++x)
+        for (int y = 0; y < 4; ++y)
+            for (int z = 0; z < 4; ++z) voxels.emplace_back(x, y, z);
     return voxels;
 }
 
@@ -137,14 +157,9 @@ TEST(FaceSources, ATracedLayersVoxelsHoldTheirOneSidedFaces) {
 // faces. Where the faces at half the voxel's paths would pass the budget they take a quarter; where those would too,
 // none.
 TEST(FaceSources, AGatheredLumpsThickVoxelsHoldTheirOneSidedFaces) {
-    const Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 3)),
-                                       float(8.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.999), 0.85},
-                                       glm::dvec3(0.866, 0.0, 0.5));
+    const Scene scene = sunlitLump();
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    std::vector<openvdb::Coord> voxels;
-    for (int x = 0; x < 4; ++x)
-        for (int y = 0; y < 4; ++y)
-            for (int z = 0; z < 4; ++z) voxels.emplace_back(x, y, z);
+    const std::vector<openvdb::Coord> voxels = lumpVoxels();
     const SubProgress none(nullptr, 0.0, 1.0);
     const bake::GatheringPlan plan{256, 256.0 * 1000.0 * double(voxels.size())};
     bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, plan.paths, 3, none);
@@ -196,6 +211,51 @@ TEST(FaceSources, AFloatingLayersRimVoxelShowsWhatItsFacesShow) {
     }
     for (const auto &[x, y] : {std::pair{0, 0}, {0, 3}, {3, 0}, {3, 3}}) {
         EXPECT_EQ(shownOverMean(x, y), 1.0) << "corner voxel " << x << ", " << y;
+    }
+}
+
+// A gathered lump's faces lit by the sun (30 degrees high, from +x) are those facing it that take its beam: +x and
+// +z, not the others. The air beside the sunlit top edge carries those faces' sources, weighted as the surface
+// voxels around it face it (facingAverage), not the edge voxels' means, which their moments fit reads 0.96 of the
+// converged ones towards the sun-lit views at 256 paths (docs/benchmarks.md, spray-air, spray-lit-faces).
+TEST(FaceSources, TheAirBesideALumpsSunlitEdgeCarriesItsLitFaces) {
+    const Scene scene = sunlitLump();
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    const std::vector<openvdb::Coord> voxels = lumpVoxels();
+    const bake::MonteCarloVoxels traced = tracedWithFaces(scene, voxels, 256);
+    bake::SourceValues source;  // every unknown traced: its traced source
+    source.broad.resize(topo.size());
+    for (std::size_t v = 0; v < voxels.size(); ++v)
+        if (const std::int32_t i = topo.index->getValue(voxels[v]); i >= 0) {
+            source.broad[std::size_t(i)] = traced.source[v];
+            source.peaked.add(std::size_t(i), traced.source[v]);
+        }
+    for (std::size_t v = 0; v < voxels.size(); ++v) {
+        if (traced.facesAt[v] < 0) continue;
+        const bake::FaceSources &faces = traced.faces[std::size_t(traced.facesAt[v])];
+        EXPECT_EQ(faces.lit, faces.open & 0b100010u) << "voxel " << voxels[v];  // +x and +z
+    }
+
+    const bake::Preset preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25};
+    const bake::GridValues values = bake::gridValues(scene, topo, source, traced, preset, BakeSettings{}, true);
+    bake::BakedValuesSampler sampler(topo, source, traced, values);
+    const glm::dvec3 w = glm::normalize(glm::dvec3(0.5, 0.0, 0.866));  // towards a camera 60 degrees up
+    for (int y = 1; y <= 2; ++y) {
+        const openvdb::Coord air(4, y, 4);
+        Source expected;  // the faces' sources averaged part by part, as the grids hold them
+        float total = 0.0f;
+        for (int dy = -1; dy <= 1; ++dy) {  // the edge voxels around it, the only snow within one voxel
+            const openvdb::Coord edge(3, y + dy, 3);
+            const std::int32_t i = topo.index->getValue(edge);
+            const glm::dvec3 offset = glm::normalize(glm::dvec3(1.0, -dy, 1.0));  // from the edge voxel to the air
+            const float weight = float(std::max(0.0, glm::dot(topo.patches[std::size_t(i)].normal, offset)));
+            const std::size_t v = std::size_t(3 * 16 + (y + dy) * 4 + 3);
+            const bake::FaceSources &faces = traced.faces[std::size_t(traced.facesAt[v])];
+            expected.add(faces.source[1], 0.5f * weight), expected.add(faces.source[5], 0.5f * weight), total += weight;
+        }
+        expected.divideBy(total);
+        const double carried = redToward(expected, w);
+        EXPECT_NEAR(redToward(sampler.at(air), w), carried, 1e-5 * carried) << "air " << air;
     }
 }
 
