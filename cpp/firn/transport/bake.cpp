@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <ctime>
+#include <limits>
 #ifdef __GLIBC__
 #include <malloc.h>
 #endif
@@ -252,16 +254,51 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
     return source;
 }
 
-// The scene with its area lamps in pieces at most twice as wide as their distance to the snow's bounds (lampPieces):
-// each piece a beam from its own direction.
+// The distance (m) from x to the nearest snow voxel's centre (density above 0; active tiles by their boxes).
+double distanceToSnow(const Medium &medium, const glm::dvec3 &x) {
+    const glm::dvec3 p = medium.worldToIndex(x);
+    double nearest2 = std::numeric_limits<double>::infinity();  // voxels^2
+    openvdb::CoordBBox box;
+    for (auto v = medium.density().cbeginValueOn(); v; ++v) {
+        if (!(*v > 0.0f) || !v.getBoundingBox(box)) continue;
+        const glm::dvec3 d = p - glm::clamp(p, glm::dvec3(box.min().x(), box.min().y(), box.min().z()),
+                                            glm::dvec3(box.max().x(), box.max().y(), box.max().z()));
+        nearest2 = std::min(nearest2, glm::dot(d, d));
+    }
+    return std::sqrt(nearest2) * medium.voxelSize();
+}
+
+// At most this many beams from area lamps' pieces over all lamps (and no fewer than the lamps): each beam costs a
+// march per surface patch and 12 B per snow voxel until the solves end.
+constexpr int kMaxLampBeams = 16;
+
+// The scene lit by its area lamps in pieces (lampPieces) as wide as their distance to the snow allows, the widest
+// counts lowered first while the pieces exceed kMaxLampBeams.
 Scene withLampPieces(const Scene &scene) {
+    const Medium &medium = *scene.medium;
+    std::vector<glm::ivec2> across;
+    int beams = 0;
+    for (const Lamp &lamp : scene.lamps) {
+        // The bounds are nearer than any snow: a lamp whole by them is whole (the voxel scan only for the others).
+        const glm::dvec3 bounded = glm::clamp(lamp.position, medium.boundsMin(), medium.boundsMax());
+        glm::ivec2 n = lampPiecesAcross(lamp, glm::length(lamp.position - bounded));
+        if (n != glm::ivec2(1)) n = lampPiecesAcross(lamp, distanceToSnow(medium, lamp.position));
+        across.push_back(n);
+        beams += n.x * n.y;
+    }
+    const int budget = std::max(kMaxLampBeams, int(scene.lamps.size()));
+    while (beams > budget) {
+        const auto lamp = std::max_element(across.begin(), across.end(), [](const glm::ivec2 &a, const glm::ivec2 &b) {
+            return std::max(a.x, a.y) < std::max(b.x, b.y);
+        });
+        beams -= lamp->x * lamp->y;
+        --(lamp->x >= lamp->y ? lamp->x : lamp->y);
+        beams += lamp->x * lamp->y;
+    }
     Scene out = scene;
     out.lamps.clear();
-    const Medium &medium = *scene.medium;
-    for (const Lamp &lamp : scene.lamps) {
-        const glm::dvec3 nearest = glm::clamp(lamp.position, medium.boundsMin(), medium.boundsMax());
-        for (const Lamp &piece : lampPieces(lamp, glm::length(lamp.position - nearest))) out.lamps.push_back(piece);
-    }
+    for (std::size_t l = 0; l < scene.lamps.size(); ++l)
+        for (const Lamp &piece : lampPieces(scene.lamps[l], across[l])) out.lamps.push_back(piece);
     return out;
 }
 
@@ -277,9 +314,9 @@ BakedGrids emptyBakedGrids(const openvdb::FloatGrid &density, const VolumeOptics
     return out;
 }
 
-BakedGrids bakeScattering(const Scene &given, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
-    validate(given);
-    const Scene scene = withLampPieces(given);
+BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
+    validate(scene);
+    const Scene lit = withLampPieces(scene);  // the beams' lights; the traced voxels' Monte Carlo samples lamps whole
     const Preset preset = resolve(settings);
     const int sourceScale = sourceScaleFor(*scene.medium, settings);
     Progress quiet;
@@ -308,7 +345,7 @@ BakedGrids bakeScattering(const Scene &given, const BakeSettings &settings, Prog
     runBeside(
         [&] {
             light = computeIncidentLight(
-                scene, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
+                lit, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
                 beside.step(0));
         },
         [&] {
@@ -374,11 +411,11 @@ BakedGrids bakeScattering(const Scene &given, const BakeSettings &settings, Prog
     const bool untracedPieces = !thin.empty() && traced.source.empty();
     const int passes = local.passes = hidden ? 1 + preset.snowBounces + (untracedPieces ? 1 : 0) : 1;
     const SourceValues source =
-        solveSources(scene, topo, light, traced, preset, settings, passes, untracedPieces, p, clock, local);
+        solveSources(lit, topo, light, traced, preset, settings, passes, untracedPieces, p, clock, local);
     light = IncidentLight{};  // the grids need it no more
     keepIndexAndPatches(topo);
     p.report(reference ? 0.95 : kSolvedProgress, "Writing the grids");
-    BakedGrids grids = makeGrids(scene, topo, source, traced, preset, settings, sourceScale);
+    BakedGrids grids = makeGrids(lit, topo, source, traced, preset, settings, sourceScale);
     local.sourceScale = sourceScale;
     // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
     // (Cycles would render black or white voxels). Not InvalidArgument: the fuzz driver must see it as a bug.

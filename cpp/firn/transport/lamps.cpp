@@ -25,14 +25,21 @@ double spotFactor(const Lamp &lamp, double cosTheta) {
     return cosTheta * (smooth > 0.0 ? smoothstep(smooth, cosTheta - cosHalf) : 1.0);
 }
 
+glm::dvec3 bitangentOf(const Lamp &lamp) { return glm::cross(lamp.axis, lamp.tangent); }
+
+// The point at (u1, u2) of the lamp's sizeX x sizeY rectangle ((0.5, 0.5) its centre), relative to its centre (m).
+glm::dvec3 rectanglePoint(const Lamp &lamp, double u1, double u2) {
+    return (u1 - 0.5) * lamp.sizeX * lamp.tangent + (u2 - 0.5) * lamp.sizeY * bitangentOf(lamp);
+}
+
 // A point uniform over the area lamp, relative to its centre, and the lamp's area (m^2).
 glm::dvec3 areaPoint(const Lamp &lamp, double u1, double u2, double &area) {
-    const glm::dvec3 bitangent = glm::cross(lamp.axis, lamp.tangent);
     if (lamp.shape == Lamp::Shape::Rectangle) {
         area = lamp.sizeX * lamp.sizeY;
-        return (u1 - 0.5) * lamp.sizeX * lamp.tangent + (u2 - 0.5) * lamp.sizeY * bitangent;
+        return rectanglePoint(lamp, u1, u2);
     }
     area = 0.25 * kPi * lamp.sizeX * lamp.sizeY;
+    const glm::dvec3 bitangent = bitangentOf(lamp);
     const double r = std::sqrt(u1), phi = 2.0 * kPi * u2;
     return 0.5 * r * (std::cos(phi) * lamp.sizeX * lamp.tangent + std::sin(phi) * lamp.sizeY * bitangent);
 }
@@ -69,22 +76,26 @@ LampSample sampleLamp(const Lamp &lamp, const glm::dvec3 &x, double u1, double u
     return s;
 }
 
-std::vector<Lamp> lampPieces(const Lamp &lamp, double distance) {
-    const auto across = [&](double size) {
-        return distance > 0.0 ? std::clamp(int(std::ceil(size / (2.0 * distance))), 1, kMaxLampPieces) : kMaxLampPieces;
+glm::ivec2 lampPiecesAcross(const Lamp &lamp, double distance) {
+    if (!lamp.isArea()) return glm::ivec2(1);
+    const auto across = [&](double size) {  // clamped as a double: a tiny distance would overflow int
+        const double n = distance > 0.0 ? std::ceil(size / (2.0 * distance)) : double(kMaxLampPiecesAcross);
+        return int(std::clamp(n, 1.0, double(kMaxLampPiecesAcross)));
     };
-    if (!lamp.isArea()) return {lamp};
-    const int nx = across(lamp.sizeX), ny = across(lamp.sizeY);
-    if (nx == 1 && ny == 1) return {lamp};
-    const glm::dvec3 bitangent = glm::cross(lamp.axis, lamp.tangent);
+    return {across(lamp.sizeX), across(lamp.sizeY)};
+}
+
+std::vector<Lamp> lampPieces(const Lamp &lamp, const glm::ivec2 &across) {
+    if (!lamp.isArea() || across == glm::ivec2(1)) return {lamp};
+    const int nx = across.x, ny = across.y;
     std::vector<Lamp> pieces;
     for (int i = 0; i < nx; ++i)
         for (int j = 0; j < ny; ++j) {
-            const double u = (i + 0.5) / nx - 0.5, v = (j + 0.5) / ny - 0.5;  // of the size, from the centre
-            if (lamp.shape == Lamp::Shape::Ellipse && u * u + v * v > 0.25) continue;
+            const double u = (i + 0.5) / nx, v = (j + 0.5) / ny;  // the cell's centre, of the size
+            if (lamp.shape == Lamp::Shape::Ellipse && (u - 0.5) * (u - 0.5) + (v - 0.5) * (v - 0.5) > 0.25) continue;
             Lamp piece = lamp;
             piece.shape = Lamp::Shape::Rectangle;
-            piece.position += u * lamp.sizeX * lamp.tangent + v * lamp.sizeY * bitangent;
+            piece.position += rectanglePoint(lamp, u, v);
             piece.sizeX = lamp.sizeX / nx, piece.sizeY = lamp.sizeY / ny;
             pieces.push_back(piece);
         }

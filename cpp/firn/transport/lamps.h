@@ -2,6 +2,7 @@
 
 #include <vector>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "firn/util/color.h"
@@ -41,15 +42,17 @@ struct LampSample {
 // uniform in [0, 1)^2.
 LampSample sampleLamp(const Lamp &lamp, const glm::dvec3 &x, double u1, double u2);
 
-// The lamp as pieces that each light snow `distance` (m) away from one direction: a Point or Spot, or an area lamp
-// at most twice `distance` wide, alone; a larger area lamp as a grid of equal rectangles at most that wide (at most
-// kMaxLampPieces per axis) of its radiance, an Ellipse's as the cells whose centres lie inside it, their radiance
-// scaled to keep its power. The bake lights the snow by each light's direction from the point lit (one beam per
-// light): a large lamp near the snow, seen whole from its centre, left the patches facing away from that centre
-// unlit though they see part of it (ball_grey under a 40 cm square 10 cm away: the render's bias -31 %; in 2 x 2,
-// 4 x 4 or 8 x 8 pieces -6, -7, -6 %: docs/benchmarks.md, ramp-lamps).
-constexpr int kMaxLampPieces = 8;
-std::vector<Lamp> lampPieces(const Lamp &lamp, double distance);
+// An area lamp near the snow as pieces, each a beam from its own direction: the bake lights the snow by each light's
+// direction from the point lit, so a large lamp near the snow, seen whole from its centre, left the patches facing
+// away from that centre unlit though they see part of it (ball_grey under a 40 cm square 10 cm away: the render's
+// bias -31 %; in 2 x 2, 4 x 4 or 8 x 8 pieces -6, -7, -6 %: docs/benchmarks.md, ramp-lamps).
+// Pieces across each side (x, y) that keep each at most twice `distance` (m, from the lamp's centre to the nearest
+// snow) wide, at most kMaxLampPiecesAcross (2 x 2 already holds the figures above); (1, 1) for a Point or Spot.
+constexpr int kMaxLampPiecesAcross = 4;
+glm::ivec2 lampPiecesAcross(const Lamp &lamp, double distance);
+// The lamp as across.x x across.y equal rectangles of its radiance ((1, 1), a Point or a Spot: the lamp itself); an
+// Ellipse's as the cells whose centres lie inside it, their radiance scaled to keep its power.
+std::vector<Lamp> lampPieces(const Lamp &lamp, const glm::ivec2 &across);
 
 // Throws InvalidArgument naming the bad field.
 void validate(const Lamp &lamp);

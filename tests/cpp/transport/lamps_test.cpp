@@ -1,6 +1,7 @@
 #include "firn/transport/lamps.h"
 
 #include <cmath>
+#include <vector>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -78,6 +79,41 @@ TEST(Lamp, AreaLampsMatchTheirViewFactors) {
     Lamp disc = lampAbove(Lamp::Shape::Ellipse, 0.5);
     disc.sizeX = disc.sizeY = 1.2;
     EXPECT_NEAR(irradiance(disc, {0, 0, 0}, {0, 0, 1}) / (kPi * 0.36 / (0.25 + 0.36)), 1.0, 0.01);
+}
+
+// An area lamp in pieces (the bake's beams near the snow) lights as the whole lamp: under the rectangle's centre
+// the sum of its pieces' irradiance is Howell's view factor above, off it the whole lamp's; an ellipse's cells keep
+// its power; a Point or Spot stays whole, and a lamp at no distance takes the most pieces.
+TEST(Lamp, PiecesLightAsTheWholeLamp) {
+    Lamp rectangle = lampAbove(Lamp::Shape::Rectangle, 2.0);
+    rectangle.sizeX = 1.0, rectangle.sizeY = 3.0;
+    EXPECT_EQ(lampPiecesAcross(rectangle, 2.0), glm::ivec2(1, 1));
+    EXPECT_EQ(lampPiecesAcross(rectangle, 0.5), glm::ivec2(1, 3));
+    EXPECT_EQ(lampPiecesAcross(rectangle, 0.0), glm::ivec2(kMaxLampPiecesAcross));
+    EXPECT_EQ(lampPiecesAcross(rectangle, 1e-300), glm::ivec2(kMaxLampPiecesAcross));  // no overflow of int
+    EXPECT_EQ(lampPiecesAcross(lampAbove(Lamp::Shape::Point, 2.0), 0.0), glm::ivec2(1));
+    EXPECT_EQ(lampPieces(lampAbove(Lamp::Shape::Spot, 2.0), {3, 3}).size(), 1u);
+
+    const auto sum = [](const std::vector<Lamp> &pieces, const glm::dvec3 &x) {
+        double e = 0.0;
+        for (const Lamp &piece : pieces) e += irradiance(piece, x, {0, 0, 1});
+        return e;
+    };
+    const std::vector<Lamp> pieces = lampPieces(rectangle, {2, 4});
+    ASSERT_EQ(pieces.size(), 8u);
+    const double X = 0.25, Y = 0.75;
+    const double quarter = 0.5 * (X / std::sqrt(1 + X * X) * std::atan(Y / std::sqrt(1 + X * X)) +
+                                  Y / std::sqrt(1 + Y * Y) * std::atan(X / std::sqrt(1 + Y * Y)));
+    EXPECT_NEAR(sum(pieces, {0, 0, 0}) / (4.0 * quarter), 1.0, 0.01);
+    EXPECT_NEAR(sum(pieces, {1.5, 0.5, 0}) / irradiance(rectangle, {1.5, 0.5, 0}, {0, 0, 1}), 1.0, 0.01);
+
+    Lamp disc = lampAbove(Lamp::Shape::Ellipse, 0.5);
+    disc.sizeX = disc.sizeY = 1.2;
+    double power = 0.0;  // W/sr per unit radiance of the disc: its area
+    const std::vector<Lamp> cells = lampPieces(disc, {4, 4});
+    for (const Lamp &cell : cells) power += cell.emission.x * cell.sizeX * cell.sizeY;
+    EXPECT_EQ(cells.size(), 12u);  // the 4 corner cells' centres lie outside
+    EXPECT_NEAR(power / (kPi * 0.36), 1.0, 1e-12);
 }
 
 TEST(Lamp, RejectsBadSettings) {
