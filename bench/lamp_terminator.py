@@ -32,6 +32,8 @@ import firncore
 from bake_suite import SUN_ELEVATION, case as suite_case, depth_one_points, views, write_density
 
 DISTANCE = 0.15  # m, lamp to the ball's centre
+SPOT_ANGLE_DEG, SPOT_BLEND = 50.0, 0.3  # the spot's cone (degrees) and blend
+AREA_SIZE = (0.4, 0.4)  # m, the rectangle's sides
 TOWARDS = np.array([math.cos(SUN_ELEVATION), 0.0, math.sin(SUN_ELEVATION)])  # unit, from the ball to the light
 BANDS = [("lit", 0.2, 2.0), ("grazing", 0.0, 0.2), ("past", -0.5, 0.0), ("dark", -2.0, -0.5)]
 SAMPLES = {"ball_grey": 16384, "ball_issue": 4096}  # paths per pixel: ball_issue's 16384 take 4.5 minutes a light
@@ -48,16 +50,17 @@ def lamp(kind, case):
     c = centre_of(case)
     position = tuple(c + DISTANCE * TOWARDS)
     axis = tuple(-TOWARDS)
-    if kind == "point":
-        made = lambda e: firncore.Lamp("POINT", position, (e,) * 3)
-    elif kind == "spot":
-        made = lambda e: firncore.Lamp("SPOT", position, (e,) * 3, axis=axis, spot_angle=math.radians(50.0),
-                                       spot_blend=0.3)
-    elif kind == "area":
-        made = lambda e: firncore.Lamp("RECTANGLE", position, (e,) * 3, axis=axis, tangent=(0.0, 1.0, 0.0),
-                                       size=(0.4, 0.4))
-    else:
+    if kind not in ("point", "spot", "area"):
         raise ValueError(f"no light {kind!r}: sun, point, spot, area")
+
+    def made(e):
+        if kind == "point":
+            return firncore.Lamp("POINT", position, (e,) * 3)
+        if kind == "spot":
+            return firncore.Lamp("SPOT", position, (e,) * 3, axis=axis, spot_angle=math.radians(SPOT_ANGLE_DEG),
+                                 spot_blend=SPOT_BLEND)
+        return firncore.Lamp("RECTANGLE", position, (e,) * 3, axis=axis, tangent=(0.0, 1.0, 0.0), size=AREA_SIZE)
+
     radius = 0.05  # the suite's balls
     nearest = tuple(c + radius * TOWARDS)
     unit = made(1.0).irradiance(nearest, tuple(TOWARDS), samples=20000, seed=1)[1]
@@ -66,7 +69,8 @@ def lamp(kind, case):
 
 def reference(case, kind, path, origins, directions, samples, cache):
     """The core's Monte Carlo under light `kind`, cached in folder `cache` (None: not cached)."""
-    key = hashlib.sha1(f"{case.key()} {kind} {DISTANCE} {samples} v1".encode()).hexdigest()[:16]
+    lamps = f"{DISTANCE} {SPOT_ANGLE_DEG} {SPOT_BLEND} {AREA_SIZE}"  # a changed lamp is not read from an old file
+    key = hashlib.sha1(f"{case.key()} {kind} {lamps} {samples} v2".encode()).hexdigest()[:16]
     file = os.path.join(cache, f"{case.name}_{kind}_{key}.npz") if cache else None
     if file and os.path.exists(file):
         data = np.load(file)
@@ -154,7 +158,10 @@ def sweep(name, folder):
         firncore.bake(path, case.optics, suns=[firncore.SunLight(tuple(sun), (1.0,) * 3, 0.0093)], quality="FINAL",
                       seed=0)
         grids = {g.name: g for g in pyopenvdb.readAll(path)[0]}
-        read = lambda g, c: np.array(grids[g].getConstAccessor().getValue(tuple(int(x) for x in c)))
+
+        def read(g, c):
+            return np.array(grids[g].getConstAccessor().getValue(tuple(int(x) for x in c)))
+
         rows.append([(float(np.dot(n, sun)), float(read("firn_source", c)[1] + read("firn_source_peak", c)[1]))
                      for c, n in voxels])
     print(f"{name}: the sun alone, elevation 18-42 degrees in 0.5 steps; per surface voxel (i, j, k): mu0, source")
@@ -182,7 +189,7 @@ def main():
                 r = rows[kind] = measure(case, kind, folder, args.cache)
                 print(f"  {kind:<6} {100 * r['mean']:5.1f}% {100 * r['worst']:+5.0f}% {100 * r['bias']:+5.1f}% "
                       f"{100 * r['noise']:5.1f}%   " + "  ".join(f"{100 * x:+4.0f}%" for x in r["views"]), flush=True)
-            print(f"  by the local cosine to the light (baked / Monte Carlo - 1 of the sums, blocks): "
+            print("  by the local cosine to the light (baked / Monte Carlo - 1 of the sums, blocks): "
                   + ", ".join(f"{n} [{lo}, {hi})" for n, lo, hi in BANDS))
             for kind, r in rows.items():
                 for v, cells in enumerate(r["bands"]):
