@@ -1,20 +1,19 @@
 // The face sources of a floating layer's traced voxels (bake_traced_voxels.h, addFaceSources): up to
-// kMaxTracedSteps of paths, so Esc must stop them; and how a face's collisions split by the trilinear hat
-// (MonteCarloReference::faceSourceIn).
+// kMaxTracedSteps of paths, so Esc must stop them; how a face's collisions split by the trilinear hat
+// (MonteCarloReference::faceSourceIn); which faces are lit, and what the air beside them carries (gridValues).
 #include <cmath>
-#include <cstdio>
 #include <utility>
 
 #include <gtest/gtest.h>
 
 #include "box_scene.h"
 #include "firn/transport/bake.h"
-#include "firn/transport/bake_traced_voxels.h"
 #include "firn/transport/bake_grid_values.h"
-#include "firn/transport/traced_source.h"
+#include "firn/transport/bake_traced_voxels.h"
 #include "firn/transport/monte_carlo.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/transport/source_lobe.h"
+#include "firn/transport/traced_source.h"
 #include "firn/util/error.h"
 
 namespace firn {
