@@ -47,8 +47,7 @@ def main():
         r = bake_measure.measure_fresh(bake_car, folder, seed)
         voxels = r["voxels"]
         print(f"{voxels} active voxels, {r['unknowns']} unknowns, {r['surface_voxels']} surface, "
-              f"{r['traced_voxels']} traced, {r.get('surface_sky_rays', '?')} surface sky rays, iterations {r['iterations']}; "
-              f"peak {r['peak_bytes'] / voxels:.0f} bytes "
+              f"{r['traced_voxels']} traced, iterations {r['iterations']}; peak {r['peak_bytes'] / voxels:.0f} bytes "
               f"per active voxel ({r['peak_bytes'] / 1e6:.0f} MB); load average {load:.1f}")
         # total s below also holds the imports, the inputs' read and the voxel count's read of the file afterwards
         print(f"firncore.bake's own call {r['bake_call_seconds']:.2f} s wall")

@@ -315,7 +315,6 @@ py::dict statsDict(const firn::BakeStats &stats) {
     py::dict d;
     d["unknowns"] = stats.unknowns;
     d["surface_voxels"] = stats.surfaceVoxels;
-    d["surface_sky_rays"] = stats.surfaceSkyRays;
     d["traced_voxels"] = stats.tracedVoxels;
     d["traced_paths"] = stats.tracedPaths;
     d["light_traced_voxels"] = stats.lightTracedVoxels;

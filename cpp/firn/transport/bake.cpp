@@ -51,9 +51,9 @@ constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
 constexpr double kSendBackWorthPasses = 0.15;
 
 Preset resolve(const BakeSettings &s) {
-    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true, true, 0.25}
-               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true, true, 1.0}
-                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false, false, 1.0};
+    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true, 0.25}
+               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true, 1.0}
+                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false, 1.0};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
     // Conjugate gradients in double precision stall near 1e-15: asked for less, it iterated on a residual of
@@ -345,8 +345,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     runBeside(
         [&] {
             light = computeIncidentLight(
-                lit, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours,
-                                preset.skyVisibilityShared},
+                lit, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
                 beside.step(0));
         },
         [&] {
@@ -402,7 +401,6 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     local.unknowns = topo.size();
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
     local.surfaceVoxels = topo.surfaceVoxels();
-    local.surfaceSkyRays = light.surfaceSkyRays;
     const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
     // Snow hides some patch's sky, or occluders send back enough of the snow's light (bake_snow_irradiance.cpp):
     // gather.

@@ -38,7 +38,6 @@ constexpr double kSourceBudgetBytes = 512.0 * 1024 * 1024;
 
 struct BakeStats {
     std::size_t unknowns = 0, airFaces = 0, occluderFaces = 0, surfaceVoxels = 0;
-    std::uint64_t surfaceSkyRays = 0;          // sky rays traced from the surface patches (IncidentLight)
     std::size_t tracedVoxels = 0;              // optically thin voxels lit by Monte Carlo instead of the solve
     int tracedPaths = 0;                       // paths per voxel where traced from them (planGathering)
     std::size_t lightTracedVoxels = 0;         // of which by light tracing (paths from the lights), with

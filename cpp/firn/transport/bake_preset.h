@@ -15,8 +15,6 @@ struct Preset {
     // The sky and the light gathered from other snow averaged over like-facing neighbours (averageOverNeighbours):
     // 9 rays a voxel pooled over its neighbours where 16 were its own (docs/bake.md, Performance).
     bool skyOverNeighbours;
-    // A patch's sky ray open by its like neighbours' agreement is not traced (IncidentLightSettings::skyVisibilityShared).
-    bool skyVisibilityShared;
     // Of light tracing's photons and least photons where gathering per voxel is over its budget and in whole
     // transport-thin pieces (planLightTracing; bake_thin_snow.cpp has ball_forward's figures).
     // Draft's quarter, as its gathered paths (64 of 256): a ski spray's frame (bench/spray_light_bench.py, seed 0;

@@ -82,62 +82,6 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
     return largest(through) >= kMinTransmittance ? through : glm::dvec3(0.0);
 }
 
-// What one sky ray from a patch brings: pi times the radiance arriving along it (its term of the cosine-weighted
-// estimate, W/m^2), the snow it crosses and what stops it.
-struct SkyRaySample {
-    glm::dvec3 arriving{0.0};
-    double column = 0.0;  // kg/m^2 of snow crossed
-    bool hidden = false;    // snow glows along it
-    bool occluded = false;  // it meets an occluder
-    double albedo = 0.0;    // that occluder's grey albedo, where snow does not hide it (nearest-hit queries only)
-    bool open() const { return !hidden && !occluded; }
-};
-
-// Sky ray from p along w (unit). `anyHit`: only whether an occluder stops it counts (Embree's any-hit query, cheaper
-// than the nearest hit); `bounce`: an occluder in the way sends what it reflects once.
-SkyRaySample traceSkyRay(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &w, bool anyHit, bool bounce,
-                         const glm::dvec3 &reduced, double limit, Rng &rng, Medium::ColumnMarcher &marcher) {
-    SkyRaySample s;
-    const RayCaster &caster = scene.occluders->caster();
-    std::optional<RayCaster::Hit> hit;
-    if (!anyHit)
-        hit = caster.intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
-    else if (caster.occluded(glm::vec3(p), glm::vec3(w), 1e-5f))
-        return s.occluded = true, s;
-    s.occluded = hit.has_value();
-    s.column = marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
-    s.hidden = std::min({reduced.x, reduced.y, reduced.z}) * s.column > 0.01;
-    if (hit && !s.hidden) s.albedo = channelMean(scene.occluders->albedo(hit->triangle));
-    if (s.column >= limit) return s;
-    glm::dvec3 radiance;
-    if (!hit) {
-        radiance = scene.sky.radianceFrom(w);
-    } else if (bounce) {
-        const glm::dvec3 normal(hit->normal);
-        radiance = reflectedByOccluder(scene, p + double(hit->distance) * w, glm::faceforward(normal, w, normal),
-                                       scene.occluders->albedo(hit->triangle), rng, marcher);
-    } else {
-        return s;
-    }
-    s.arriving = kPi * radiance * transmittance(reduced, s.column);
-    return s;
-}
-
-// A patch's sky rays summed: the arriving light, its grey first moment, which rays snow hides (bit k for ray k),
-// which meet an occluder snow does not hide and those occluders' grey albedos.
-struct SkyTally {
-    glm::dvec3 sum{0.0}, towards{0.0};
-    std::uint64_t hidden = 0, met = 0;
-    double albedo = 0.0;
-    void add(int k, const glm::dvec3 &w, const SkyRaySample &s) {
-        if (s.hidden)
-            hidden |= std::uint64_t(1) << k;
-        else if (s.occluded)
-            met |= std::uint64_t(1) << k, albedo += s.albedo;
-        sum += s.arriving, towards += greyMoment(s.arriving, w);
-    }
-};
-
 // Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
 // occluders in the way send what they reflect once (when `bounce`). `occluderAlbedo`: adds the grey albedos of the
 // occluders met by the rays snow does not hide (what they can send the snow's light back with), `occluderRays`
@@ -148,18 +92,45 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
                           double *occluderAlbedo = nullptr, std::uint64_t *occluderRays = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
+    const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
     Rng rng(seed ^ 0xB0B0ull, stream);  // for the occluders' reflections
-    SkyTally tally;
+    glm::dvec3 sum(0.0), towards(0.0);
+    std::uint64_t hidden = 0, met = 0;
+    // Without the bounce a ray that meets an occluder brings nothing, and unless asked which rays snow hides, whether
+    // it meets one is all that counts: Embree's any-hit query, cheaper than the nearest hit.
     const bool anyHit = !bounce && !snowRays;
+    const RayCaster &caster = scene.occluders->caster();
     for (int k = 0; k < rays.count(); ++k) {
         const glm::dvec3 w = rays.direction(n, k, seed, stream);
-        tally.add(k, w, traceSkyRay(scene, p, w, anyHit, bounce, reduced, limit, rng, marcher));
+        std::optional<RayCaster::Hit> hit;
+        if (!anyHit)
+            hit = caster.intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
+        else if (caster.occluded(glm::vec3(p), glm::vec3(w), 1e-5f))
+            continue;
+        const double column =
+            marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
+        if (thinnest * column > 0.01)
+            hidden |= std::uint64_t(1) << k;  // snow glows along this ray
+        else if (hit && occluderAlbedo)
+            *occluderAlbedo += channelMean(scene.occluders->albedo(hit->triangle)), met |= std::uint64_t(1) << k;
+        if (column >= limit) continue;
+        glm::dvec3 radiance;
+        if (!hit) {
+            radiance = scene.sky.radianceFrom(w);
+        } else if (bounce) {
+            const glm::dvec3 normal(hit->normal);
+            radiance = reflectedByOccluder(scene, p + double(hit->distance) * w, glm::faceforward(normal, w, normal),
+                                           scene.occluders->albedo(hit->triangle), rng, marcher);
+        } else {
+            continue;
+        }
+        const glm::dvec3 arriving = kPi * radiance * transmittance(reduced, column);
+        sum += arriving, towards += greyMoment(arriving, w);
     }
-    if (snowRays) *snowRays = tally.hidden;
-    if (occluderRays) *occluderRays = tally.met;
-    if (occluderAlbedo) *occluderAlbedo += tally.albedo;
-    if (aim) *aim = glm::vec3(tally.towards / double(rays.count()));
-    return glm::vec3(tally.sum / double(rays.count()));
+    if (snowRays) *snowRays = hidden;
+    if (occluderRays) *occluderRays = met;
+    if (aim) *aim = glm::vec3(towards / double(rays.count()));
+    return glm::vec3(sum / double(rays.count()));
 }
 
 // Unknowns in the order beam b's light reaches them, in buckets half a voxel deep (nearest the light
@@ -366,180 +337,6 @@ glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std
     return surface + height / std::max(glm::dot(n, w), 1.0 / 3.0) * w;
 }
 
-namespace {
-
-// The albedos met, summed over the surface patches' rays in fixed point (2^-32): integer sums do not depend on how the
-// threads split the patches, so the gate on the share (bake.cpp) is the same every run.
-constexpr double kFixedPoint = 4294967296.0;
-
-struct SkyCount {
-    std::uint64_t albedo = 0;  // the grey albedos met, in fixed point (kFixedPoint)
-    std::uint64_t traced = 0;  // rays traced
-};
-
-void storeSky(IncidentLight &light, std::size_t i, const SkyTally &tally, int rays) {
-    light.skyOnSurface.surface(i) = glm::vec3(tally.sum / double(rays));
-    light.skyAim.surface(i) = glm::vec3(tally.towards / double(rays));
-    light.snowRays.surface(i) = tally.hidden;
-    light.occluderRays.surface(i) = tally.met;
-}
-
-// The surface patches' sky, every ray of every patch traced (IncidentLight::skyOnSurface, skyAim, snowRays,
-// occluderRays).
-SkyCount traceSkyOnSurfaces(const Scene &scene, const SnowTopology &topo, const SkyRays &rays, std::uint64_t seed,
-                            IncidentLight &light, const SubProgress &progress) {
-    const Medium &medium = *scene.medium;
-    const bool bounce = !scene.occluders->empty();
-    std::atomic<std::uint64_t> albedoSum{0};
-    parallelChunks(topo.size(), progress, [&](const auto &range) {
-        Medium::ColumnMarcher marcher(medium);
-        Medium::Accessor density = medium.accessor();
-        std::uint64_t albedos = 0;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!topo.patches[i].isSurface()) continue;
-            double met = 0.0;
-            light.skyOnSurface.surface(i) = skyIrradianceAt(
-                scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
-                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i), &met,
-                &light.occluderRays.surface(i));
-            albedos += std::uint64_t(std::llround(met * kFixedPoint));
-        }
-        albedoSum += albedos;
-    });
-    return {albedoSum, std::uint64_t(topo.surfaceVoxels()) * std::uint64_t(rays.count())};
-}
-
-// The surface patches' sky with its visibility shared between neighbours (IncidentLightSettings::skyVisibilityShared;
-// docs/bake.md, Performance). A patch's rays are strata x strata (SkyRays); first each patch traces one ray per row of
-// them, in the column its phase (x + y + z modulo strata) picks, so a flat 3 x 3 of neighbours traces each of 9 rays 3
-// times. Then each ray a patch did not trace takes its neighbours' verdict where at least kMinAgreeing like neighbours
-// (normals within ~25 degrees, neither sharp, rays leaving at a similar height along its normal) traced it and all
-// found the same: open (no occluder, no snow hiding it: the sky along the patch's own direction through their mean
-// snow column, so an open sky keeps its own rays' noise) or meeting an occluder snow does not hide (their mean
-// reflected light and albedo). Both verdicts are borrowed, so that a patch whose own ray an occluder's edge cuts
-// among open neighbours (too bright) is balanced by one whose ray passes among blocked neighbours (too dark). Anywhere
-// else it traces the ray itself: where the neighbours disagree (a shadow's edge, snow beside), where snow hides the
-// ray, and where too few like neighbours traced it (an edge, a small piece, a sharp voxel).
-SkyCount shareSkyOnSurfaces(const Scene &scene, const SnowTopology &topo, const SkyRays &rays, std::uint64_t seed,
-                            IncidentLight &light, const SubProgress &progress) {
-    constexpr int kMinAgreeing = 2;
-    constexpr double kMinCosine = 0.9;  // as averageOverNeighbours
-    constexpr double kMaxHeight = 1.5;  // voxels between two rays' starts along the normal
-    enum Verdict : std::uint8_t { kOpen, kOccluder, kOther };
-    const Medium &medium = *scene.medium;
-    const glm::dvec3 reduced = extinction(medium.optics(), Crossing::Uncollided);
-    const double limit = columnLimit(reduced), h = medium.voxelSize();
-    const bool bounce = !scene.occluders->empty();
-    const int n = rays.strata();
-    const std::vector<std::int32_t> &slot = *topo.surfaceSlot;
-    auto phase = [n](const openvdb::Coord &c) { return ((c.x() + c.y() + c.z()) % n + n) % n; };
-    auto ownColumn = [n](int row, int phase) { return (row + phase) % n; };
-    // Per surface voxel: where its rays leave; per traced row: the verdict, the snow column (kg/m^2), what arrives
-    // (W/m^2, as SkyRaySample) and the occluder's albedo.
-    std::vector<glm::vec3> origin(topo.surfaceVoxels());
-    const std::size_t rowCount = topo.surfaceVoxels() * std::size_t(n);
-    std::vector<std::uint8_t> verdict(rowCount, kOther);
-    std::vector<float> column(rowCount), albedo(rowCount);
-    std::vector<glm::vec3> arriving(rowCount);
-    std::atomic<std::uint64_t> albedoSum{0}, traced{0};
-    parallelChunks(topo.size(), progress, [&](const auto &range) {
-        Medium::ColumnMarcher marcher(medium);
-        Medium::Accessor density = medium.accessor();
-        std::uint64_t albedos = 0, tracedHere = 0;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!topo.patches[i].isSurface()) continue;
-            const std::size_t s = std::size_t(slot[i]);
-            const glm::dvec3 p = patchOutside(medium, topo, i, density);
-            origin[s] = glm::vec3(p);
-            Rng rng(seed ^ 0xB0B0ull, i);
-            SkyTally tally;
-            for (int row = 0; row < n; ++row) {
-                const int k = row * n + ownColumn(row, phase(topo.coord[i]));
-                const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
-                const SkyRaySample sample = traceSkyRay(scene, p, w, false, bounce, reduced, limit, rng, marcher);
-                tally.add(k, w, sample);
-                const std::size_t r = s * n + std::size_t(row);
-                verdict[r] = sample.open() ? kOpen : sample.hidden ? kOther : kOccluder;
-                column[r] = float(sample.column), albedo[r] = float(sample.albedo);
-                arriving[r] = glm::vec3(sample.arriving);
-            }
-            tracedHere += std::uint64_t(n);
-            storeSky(light, i, tally, 1);  // sums for now
-            albedos += std::uint64_t(std::llround(tally.albedo * kFixedPoint));
-        }
-        albedoSum += albedos, traced += tracedHere;
-    });
-    // Ray k of patch i (unit direction w) as the mean of its like neighbours' rays k, where at least kMinAgreeing
-    // traced it and every other ray traced about the patch (its own, its like neighbours' other rays) is open; nothing
-    // otherwise. The gate reads no ray k: what it lets through is a plain mean of the neighbours' samples of the
-    // stratum, unbiased but for the neighbours' offset (gating on the rays k themselves, e.g. borrowing only where they
-    // all agree, favours the unanimous answer: +3 % along a plate's shadow edge, the test's).
-    auto fromNeighbours = [&](std::size_t i, int k, const glm::dvec3 &w) -> std::optional<SkyRaySample> {
-        const int row = k / n;
-        const SurfacePatch &patch = topo.patches[i];
-        const std::size_t own = std::size_t(slot[i]);
-        const glm::dvec3 from(origin[own]);
-        auto allOpen = [&](std::size_t t, int skipped) {
-            for (int r = 0; r < n; ++r)
-                if (r != skipped && verdict[t * n + std::size_t(r)] != kOpen) return false;
-            return true;
-        };
-        if (!allOpen(own, -1)) return std::nullopt;
-        SkyRaySample mean;
-        glm::dvec3 sky(0.0);
-        int count = 0, occluded = 0;
-        for (std::size_t m = topo.neighbourhoodStart[i]; m < topo.neighbourhoodStart[i + 1]; ++m) {
-            const std::uint32_t j = topo.neighbourhood[m];
-            const SurfacePatch &other = topo.patches[j];
-            if (j == i || other.sharp || glm::dot(patch.normal, other.normal) < kMinCosine) continue;
-            const std::size_t t = std::size_t(slot[j]);
-            if (std::abs(glm::dot(glm::dvec3(origin[t]) - from, patch.normal)) > kMaxHeight * h) continue;
-            const bool tracedK = ownColumn(row, phase(topo.coord[j])) == k % n;
-            if (!allOpen(t, tracedK ? row : -1)) return std::nullopt;
-            if (!tracedK) continue;
-            const std::size_t r = t * n + std::size_t(row);
-            if (verdict[r] == kOther) return std::nullopt;  // snow hides it: the gathering needs the patch's own
-            ++count, mean.column += double(column[r]), mean.albedo += double(albedo[r]);
-            if (verdict[r] == kOccluder)
-                ++occluded, mean.arriving += glm::dvec3(arriving[r]);
-            else
-                sky += transmittance(reduced, double(column[r]));
-        }
-        if (count < kMinAgreeing) return std::nullopt;
-        mean.arriving = (mean.arriving + kPi * scene.sky.radianceFrom(w) * sky) / double(count);
-        mean.column /= count, mean.albedo /= count, mean.occluded = 2 * occluded > count;
-        return mean;
-    };
-    parallelChunks(topo.size(), progress, [&](const auto &range) {
-        Medium::ColumnMarcher marcher(medium);
-        Medium::Accessor density = medium.accessor();
-        std::uint64_t albedos = 0, tracedHere = 0;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            const SurfacePatch &patch = topo.patches[i];
-            if (!patch.isSurface()) continue;
-            const glm::dvec3 p = patchOutside(medium, topo, i, density);
-            Rng rng(seed ^ 0xB0B1ull, i);
-            SkyTally tally;
-            tally.sum = glm::dvec3(light.skyOnSurface.surface(i)), tally.towards = glm::dvec3(light.skyAim.surface(i));
-            tally.hidden = light.snowRays.surface(i), tally.met = light.occluderRays.surface(i);
-            const int own = phase(topo.coord[i]);
-            for (int k = 0; k < rays.count(); ++k) {
-                if (ownColumn(k / n, own) == k % n) continue;  // traced above
-                const glm::dvec3 w = rays.direction(patch.normal, k, seed, i);
-                std::optional<SkyRaySample> sample = patch.sharp ? std::nullopt : fromNeighbours(i, k, w);
-                if (!sample) sample = traceSkyRay(scene, p, w, false, bounce, reduced, limit, rng, marcher), ++tracedHere;
-                tally.add(k, w, *sample);
-            }
-            storeSky(light, i, tally, rays.count());
-            albedos += std::uint64_t(std::llround(tally.albedo * kFixedPoint));
-        }
-        albedoSum += albedos, traced += tracedHere;
-    });
-    return {albedoSum, traced};
-}
-
-}  // namespace
-
 // A patch facing away from a beam takes the beam in the ramp above it where the light meets the patch's normal at
 // cosine above this: grazing rays skim a ball's one-voxel ramp to acos(R / (R + h/2)) past the terminator (20-25
 // degrees on the suite's balls of 5-8 voxels), and behind that the ramp lies in the body's shadow. The bound,
@@ -625,13 +422,29 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     light.skyAim = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     const SkyRays rays(settings.skySamples);
     light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
+    const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
     const std::uint64_t seed = settings.seed ^ 0x5C1Eull;
-    const SkyCount count = settings.skyVisibilityShared ? shareSkyOnSurfaces(scene, topo, rays, seed, light, progress)
-                                                        : traceSkyOnSurfaces(scene, topo, rays, seed, light, progress);
-    light.surfaceSkyRays = count.traced;
+    // The albedos met, summed over the surface patches' rays in fixed point (2^-32): integer sums do not depend on
+    // how the threads split the patches, so the gate on the share (bake.cpp) is the same every run.
+    std::atomic<std::uint64_t> albedoSum{0};
+    parallelChunks(topo.size(), progress, [&](const auto &range) {
+        Medium::ColumnMarcher marcher(medium);
+        Medium::Accessor density = medium.accessor();
+        std::uint64_t albedos = 0;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface()) continue;
+            double met = 0.0;
+            light.skyOnSurface.surface(i) = skyIrradianceAt(
+                scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
+                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i), &met,
+                &light.occluderRays.surface(i));
+            albedos += std::uint64_t(std::llround(met * 4294967296.0));
+        }
+        albedoSum += albedos;
+    });
     if (topo.surfaceVoxels() > 0)
-        light.occluderShare = double(count.albedo) / kFixedPoint / (double(topo.surfaceVoxels()) * double(rays.count()));
+        light.occluderShare = double(albedoSum) / 4294967296.0 / (double(topo.surfaceVoxels()) * double(rays.count()));
     if (settings.skyOverNeighbours)
         averageOverNeighbours(topo, light.skyOnSurface), averageOverNeighbours(topo, light.skyAim);
     if (scene.sky.isBlack()) return light;

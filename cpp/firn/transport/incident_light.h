@@ -46,7 +46,6 @@ struct IncidentLight {
     // occluder's grey albedo: occluders send the snow's light back along them (gathered after a first solve,
     // bake_snow_irradiance.cpp; worth passes of its own only where large, bake.cpp).
     double occluderShare = 0.0;
-    std::uint64_t surfaceSkyRays = 0;  // sky rays traced from the surface patches (fewer where visibility is shared)
     // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
     std::vector<glm::vec3> skyUnderSnow;
 };
@@ -60,7 +59,6 @@ class SkyRays {
     static_assert(kMaxRays <= 64, "a patch's sky rays are bits of a std::uint64_t");
     explicit SkyRays(int samples);
     int count() const { return strata_ * strata_; }
-    int strata() const { return strata_; }  // per axis
     glm::dvec3 direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const;
 
   private:
@@ -78,9 +76,6 @@ struct IncidentLightSettings {
     int sunSamples = 4;   // points on each sun's disc or lamp per shadow test
     std::uint64_t seed = 0;
     bool skyOverNeighbours = false;  // skyOnSurface averaged over like-facing neighbours (averageOverNeighbours)
-    // A patch traces a sky ray only where its neighbours do not agree that it is open (incident_light.cpp,
-    // shareSkyOnSurfaces): on a flat open surface one ray in strata (per axis).
-    bool skyVisibilityShared = false;
 };
 
 IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topology,

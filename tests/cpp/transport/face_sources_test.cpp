@@ -235,7 +235,7 @@ TEST(FaceSources, TheAirBesideALumpsSunlitEdgeCarriesItsLitFaces) {
         EXPECT_EQ(faces.lit, faces.open & 0b100010u) << "voxel " << voxels[v];  // +x and +z
     }
 
-    const bake::Preset preset{1, 1, 1e-3, 1, 0, 256, 256, false, false, 0.25};
+    const bake::Preset preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25};
     const bake::GridValues values = bake::gridValues(scene, topo, source, traced, preset, BakeSettings{}, true);
     bake::BakedValuesSampler sampler(topo, source, traced, values);
     const glm::dvec3 w = glm::normalize(glm::dvec3(0.5, 0.0, 0.866));  // towards a camera 60 degrees up
