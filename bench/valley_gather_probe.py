@@ -1,10 +1,10 @@
 """The light arriving at bumpy_plate's surface points from each direction of their hemisphere: the bake's render
 (`firncore.render_baked`, what a gather from that point reads) against the core's Monte Carlo (all orders), sun
-alone (docs/benchmarks.md, "plate-near 2"). Points 1.5 voxels out along the surface's normal over a valley's
+alone (docs/benchmarks.md, "plate-near 2"). Points --height voxels (1.5) out along the surface's normal over a valley's
 centre, a slope facing the sun and one facing away, away from the plate and the cut sides. Per point and per band
 of mu (the cosine to the normal): the irradiance share and the bake's error; and the whole irradiance.
 
-    PYTHONPATH=build/python:bench python3 bench/valley_gather_probe.py [--samples 512] [--azimuths 12]
+    PYTHONPATH=build/python:bench python3 bench/valley_gather_probe.py [--samples 512] [--azimuths 12] [--height 1.5]
 """
 
 import argparse
@@ -51,6 +51,7 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--samples", type=int, default=512)
     parser.add_argument("--azimuths", type=int, default=12)
+    parser.add_argument("--height", type=float, default=1.5, help="the points' distance out along the normal, voxels")
     parser.add_argument("--out", default=os.path.join(tempfile.gettempdir(), "valley_gather_probe"))
     args = parser.parse_args()
     case = copy.copy(bs.case("bumpy_plate"))
@@ -62,11 +63,11 @@ def main():
     origins, directions = [], []
     for _, x, y in POINTS:
         top, n = surface(x, y)
-        p = (np.array([x, y, top]) + 1.5 * n) * h
+        p = (np.array([x, y, top]) + args.height * n) * h
         for w in hemisphere(n, args.azimuths):
             origins.append(p), directions.append(w)
     origins, directions = np.array(origins), np.array(directions)
-    file = os.path.join(args.out, f"mc_{args.samples}_{args.azimuths}.npz")
+    file = os.path.join(args.out, f"mc_{args.samples}_{args.azimuths}_{args.height:g}.npz")
     if not os.path.exists(file):
         mean, error = firncore.monte_carlo_radiance(path, case.optics, origins, directions, suns=case.suns(),
                                                     occluders=case.occluders, samples=args.samples, seed=11)
