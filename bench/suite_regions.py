@@ -5,7 +5,8 @@ Bakes the case with seeds 0..N-1 against the suite's cached reference (bench/bak
 its three channels averaged as the suite's mean is) and reports, per region, the mean |relative error| of one
 seed's render, of the seeds' mean render (its noise shrunk by sqrt(N): what is left is bias, the reference's noise
 and the mean's own), the baked render's spread across the seeds (relative standard deviation per block) and the
-bias of the sum. Regions by where each pixel's camera ray reaches optical depth 1 of snow: sun-lit or shadowed
+bias of the sum, and one seed's squared error per block split into the seeds' variance and the bias squared (each
+as rms over the blocks: the noise more paths remove, the error they do not). Regions by where each pixel's camera ray reaches optical depth 1 of snow: sun-lit or shadowed
 there (the sun's optical depth from that point, under or over 2), and the ray's whole optical depth through the
 snow (a rim or a thin lump: under 20; a lump's core: 20 or more); and per view.
 
@@ -49,8 +50,13 @@ def row(label, relative, spread, mean_render, reference):
     per_seed = np.mean([np.abs(r).mean() for r in relative])
     of_mean = np.abs(mean_render / reference - 1.0).mean()
     bias = mean_render.sum() / reference.sum() - 1.0
+    # Per block, one seed's squared error = its bias squared + the seeds' variance: both as rms over the blocks, the
+    # bias squared less what the seeds' mean keeps of the variance (unbiased; the reference's noise stays in it).
+    variance = relative.var(0, ddof=1)
+    bias_squared = relative.mean(0) ** 2 - variance / len(relative)
     return (f"  {label:<28} {relative.shape[1]:4d} pixels  one seed {100 * per_seed:5.1f} %  seeds' mean "
-            f"{100 * of_mean:5.1f} %  spread {100 * spread.mean():5.1f} %  bias {100 * bias:+5.1f} %")
+            f"{100 * of_mean:5.1f} %  spread {100 * spread.mean():5.1f} %  bias {100 * bias:+5.1f} %  per block rms: "
+            f"noise {100 * math.sqrt(variance.mean()):5.1f} %, bias {100 * math.sqrt(max(bias_squared.mean(), 0.0)):5.1f} %")
 
 
 def main():
