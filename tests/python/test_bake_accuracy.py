@@ -255,7 +255,8 @@ def test_large_area_lamp_near_a_ball_lights_the_patches_that_see_part_of_it(fold
     # (main 8ad7c9a) the four views' render read -31 % against the core's Monte Carlo (the suite's views; 16384 paths),
     # the blocks past that terminator (cosine to the centre -0.5-0) -44 to -68 %; in pieces at most twice as wide as
     # their distance to the snow (lamps.h, lampPieces) -6 %, those blocks -6 to -21 % (docs/benchmarks.md, ramp-lamps,
-    # review-mends49). These 1024 paths: main -30.0 %, past -43 to -67 %; in pieces -5.7 %, past -5 to -20 %.
+    # review-mends49). These 1024 paths: main -30.0 %, past -43 to -67 %; in pieces -5.7 %, past -5 to -20 %; with the
+    # patches' way to the lamp from their surface (lamp-near) -9.7 %, past -9 to -27 %.
     result = lamp_terminator.measure(case("ball_grey"), "area", folder, cache=None, samples=1024)
     past = [cells[2] for cells in result["bands"]]  # (baked / Monte Carlo - 1, blocks) per view
     assert all(blocks > 0 for _, blocks in past), past
