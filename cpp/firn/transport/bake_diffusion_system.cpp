@@ -170,12 +170,14 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 if (Bv <= 0.0 && Bs <= 0.0) continue;
                 const glm::dvec3 w = towardsBeam(scene, s, centre);
                 // Through the surface patch (facing the light: in, else out; at a sharp edge face by face) and
-                // through the voxel's other faces. Per air face: W entering, and the cosine it enters at.
+                // through the voxel's other faces. Per air face: W entering, and the cosine it enters at, to the
+                // light seen from the patch's surface (as the incident light's facing test: a lamp's way varies).
                 std::array<double, 6> entering{}, muIn{};
                 double in = 0.0, out = 0.0;
+                const glm::dvec3 wPatch = patch.isSurface() ? towardsBeam(scene, s, patchSurface(medium, topo, i)) : w;
                 for (int f = 0; f < 6 && patch.isSurface(); ++f) {
                     if (patch.share[f] <= 0.0f) continue;
-                    const double mu = glm::dot(patch.sharp ? faceNormal(f) : patch.normal, w);
+                    const double mu = glm::dot(patch.sharp ? faceNormal(f) : patch.normal, wPatch);
                     const double flow = mu * patch.area * patch.share[f] * (mu > 0.0 ? Bs : Bv);
                     (flow > 0.0 ? in : out) += std::abs(flow);
                     if (flow > 0.0) entering[f] = flow, muIn[f] = mu;

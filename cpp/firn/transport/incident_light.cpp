@@ -329,10 +329,14 @@ glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::siz
     return p;
 }
 
+glm::dvec3 patchSurface(const Medium &medium, const SnowTopology &topo, std::size_t i) {
+    return medium.voxelCentre(topo.coord[i]) + 0.5 * medium.voxelSize() * topo.patches[i].normal;
+}
+
 glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
                              Medium::Accessor &density) {
     const glm::dvec3 n = topo.patches[i].normal;
-    const glm::dvec3 surface = medium.voxelCentre(topo.coord[i]) + 0.5 * medium.voxelSize() * n;
+    const glm::dvec3 surface = patchSurface(medium, topo, i);
     const double height = glm::length(patchOutside(medium, topo, i, density) - surface);
     return surface + height / std::max(glm::dot(n, w), 1.0 / 3.0) * w;
 }
@@ -392,12 +396,12 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 const SurfacePatch &patch = topo.patches[i];
                 if (!patch.isSurface()) continue;
-                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), w = towardsBeam(scene, b, centre);
+                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), surface = patchSurface(medium, topo, i);
+                const glm::dvec3 w = towardsBeam(scene, b, surface);
                 if (patch.facesTowards(w)) {
                     // Snow in the way from the line through the patch along the light, past the density ramp
                     // (patchOutsideAlong); occluders' shadow on the surface itself (half a voxel out), so shadow
                     // edges fall where they do on the snow.
-                    const glm::dvec3 surface = centre + 0.5 * medium.voxelSize() * patch.normal;
                     const glm::dvec3 from = patchOutsideAlong(medium, topo, i, w, density);
                     beam.atSurface.surface(i) = beamAt(scene, b, from, settings.sunSamples, seed, 2 * i + 1, marcher,
                                                        &surface, Crossing::Spreading, &blocks).irradiance;

@@ -86,6 +86,11 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topol
 // rays each (SkyRays, each voxel's own jitter) pool into a less noisy estimate. Sharp edges keep their own.
 void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3> &values);
 
+// Surface voxel i's patch: half a voxel out from its centre along its normal, where a light's beam enters it (its
+// direction to a lamp and its occluders' shadow are taken there). A lamp 10 voxels from a ball seen from the voxel
+// centre instead, a voxel centre under the surface saw it higher and its patch took light past the terminator.
+glm::dvec3 patchSurface(const Medium &medium, const SnowTopology &topology, std::size_t i);
+
 // Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe. `density`:
 // the caller's (one per thread; an accessor made per call started each lookup from the tree's root).
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i, Medium::Accessor &density);
