@@ -269,8 +269,8 @@ def test_point_lamp_near_a_ball_lights_its_patches_from_their_surface(folder):
     # voxel under the patches, the lamp stood higher over every patch and the patches past its terminator took its
     # light: the blocks past it seen against the lamp read +56 % against the core's Monte Carlo (16384 paths; the sun
     # at the lamp's direction from each block's terminator +37 % there); from the patches' surface (incident_light.h,
-    # patchSurface) +22 % (docs/benchmarks.md, lamp-near). These 1024 paths: main +59 %, per view bias -2.2 %; the
-    # patches' surface +24 %, -8.2 %.
+    # patchSurface) +22 % (docs/benchmarks.md, lamp-near). These 1024 paths: main +59 %, the bias over the views
+    # -2.2 %; the patches' surface +24 %, -8.2 %.
     result = lamp_terminator.measure(case("ball_grey"), "point", folder, cache=None, samples=1024)
     past = [cells[2] for cells in result["bands"]]  # (baked / Monte Carlo - 1, blocks) per view
     assert all(blocks > 0 for _, blocks in past), past

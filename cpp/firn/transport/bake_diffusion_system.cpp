@@ -161,7 +161,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             for (int f = 0; f < 6; ++f)
                 if (boundary[f] && albedo[f] > 0.0)
                     groundLight[f] = albedo[f] * light.skyUnderSnow[SnowTopology::faceIndex(topo.link[i][f])][c];
-            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), surface = patchSurface(medium, topo, i);
             for (std::size_t s = 0; s < light.beams.size(); ++s) {
                 const IncidentLight::Beam &beam = light.beams[s];
                 // W/m^2. Bs: facing the light, the beam outside the patch; facing away, the beam in the ramp
@@ -174,7 +174,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 // light seen from the patch's surface (as the incident light's facing test: a lamp's way varies).
                 std::array<double, 6> entering{}, muIn{};
                 double in = 0.0, out = 0.0;
-                const glm::dvec3 wPatch = patch.isSurface() ? towardsBeam(scene, s, patchSurface(medium, topo, i)) : w;
+                const glm::dvec3 wPatch = towardsBeam(scene, s, surface);
                 for (int f = 0; f < 6 && patch.isSurface(); ++f) {
                     if (patch.share[f] <= 0.0f) continue;
                     const double mu = glm::dot(patch.sharp ? faceNormal(f) : patch.normal, wPatch);

@@ -42,6 +42,8 @@ void downstreamKernel(const Scene &scene, const IncidentLight &light, const Surf
     for (std::size_t s = 0; s < light.beams.size(); ++s) {
         const double P = sys.sunIn[s][i];
         if (P <= 0.0) continue;
+        // A lamp's way at the voxel centre, not the patch's surface (sunIn's cosine): from the surface the lobe and
+        // this kernel read ball_grey's limb 1.22 -> 1.35 of the Monte Carlo (docs/benchmarks.md, lamp-near).
         const glm::dvec3 d = -towardsBeam(scene, s, centre);
         const Displacement k = halfSpaceDisplacement(std::clamp(-glm::dot(d, n), 0.05, 1.0));
         downstream += P * k.mean * travelAlong(d, n);

@@ -191,7 +191,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         for (std::size_t s = 0; s < light.beams.size(); ++s) {
             const double P = terms[c].sunIn[s][i] * beamShare(s);
             if (P <= 0.0) continue;
-            const glm::dvec3 d = -towardsBeam(scene, s, centre);  // where the light travels
+            // Where the light travels: a lamp's way at the voxel centre, not the patch's surface (sunIn's cosine):
+            // from the surface the lobe and kernel read ball_grey's limb 1.22 -> 1.35 (docs/benchmarks.md, lamp-near).
+            const glm::dvec3 d = -towardsBeam(scene, s, centre);
             const double mu0 = std::clamp(-glm::dot(d, n), 0.05, 1.0);
             const SunLobe lobe = sunLobe(ch.g, mu0, y);
             const glm::dvec3 t = travelAlong(d, n);
@@ -298,7 +300,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const SurfacePatch &patch = topo.patches[i];
             if (!patch.sharp) continue;
-            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+            const glm::dvec3 surface = patchSurface(medium, topo, i);
             std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
             for (int f = 0; f < 6; ++f)
                 if (patch.share[f] > 0.0f)
@@ -310,7 +312,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     if (patch.share[f] <= 0.0f) continue;
                     const glm::dvec3 n = faceNormal(f);
                     const ReturnedLight r = returnedThrough(c, i, n, patch.share[f], SkyBeam{}, [&](std::size_t s) {
-                        const glm::dvec3 w = towardsBeam(scene, s, centre);  // the beam entered each face by its cosine
+                        // The beam entered each face by its cosine to the light seen from the patch's surface, as
+                        // the diffusion let it in (bake_diffusion_system.cpp).
+                        const glm::dvec3 w = towardsBeam(scene, s, surface);
                         double total = 0.0;
                         for (int g = 0; g < 6; ++g)
                             if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));

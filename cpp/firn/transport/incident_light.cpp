@@ -396,8 +396,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 const SurfacePatch &patch = topo.patches[i];
                 if (!patch.isSurface()) continue;
-                const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), surface = patchSurface(medium, topo, i);
-                const glm::dvec3 w = towardsBeam(scene, b, surface);
+                const glm::dvec3 surface = patchSurface(medium, topo, i), w = towardsBeam(scene, b, surface);
                 if (patch.facesTowards(w)) {
                     // Snow in the way from the line through the patch along the light, past the density ramp
                     // (patchOutsideAlong); occluders' shadow on the surface itself (half a voxel out), so shadow
@@ -410,7 +409,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                     // attenuated by sigma_tr as at the voxels: the grazing path runs through this body's own ramp.
                     // Other snow in front (a lump before the ball) passes its forward-scattered light on as beam
                     // here, which the patches' Crossing::Spreading would not: over-credited, untested.
-                    const glm::dvec3 ramp = centre + medium.voxelSize() * patch.normal;
+                    const glm::dvec3 ramp = medium.voxelCentre(topo.coord[i]) + medium.voxelSize() * patch.normal;
                     beam.atSurface.surface(i) =
                         beamAt(scene, b, ramp, settings.sunSamples, seed, 2 * i + 1, marcher).irradiance;
                 }

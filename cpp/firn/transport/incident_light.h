@@ -25,7 +25,8 @@ struct IncidentLight {
         std::vector<glm::vec3> atVoxel;      // at each unknown's centre
         // Two things by the patch's side: facing the light, just outside the patch; facing away (cos > -0.5 to the
         // light, kRampBeamCosine in incident_light.cpp), the beam in the density ramp a voxel out along the normal
-        // (rampInflow). 0 elsewhere. A reader must tell the two apart by the patch's facing.
+        // (rampInflow). 0 elsewhere. A reader must tell the two apart by the patch's facing to the light seen from
+        // patchSurface (a lamp's way varies across a voxel): facesTowards(towardsBeam(b, patchSurface(i))).
         SurfaceValues<glm::vec3> atSurface;
     };
     std::vector<Beam> beams;
@@ -86,9 +87,10 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topol
 // rays each (SkyRays, each voxel's own jitter) pool into a less noisy estimate. Sharp edges keep their own.
 void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3> &values);
 
-// Surface voxel i's patch: half a voxel out from its centre along its normal, where a light's beam enters it (its
-// direction to a lamp and its occluders' shadow are taken there). A lamp 10 voxels from a ball seen from the voxel
-// centre instead, a voxel centre under the surface saw it higher and its patch took light past the terminator.
+// Surface voxel i's patch itself, on the snow's surface (patchOutside: past its ramp): half a voxel out from its
+// centre along its normal (m, world), where a light's beam enters it; its way to a lamp and its occluders' shadow are
+// taken there. Taken from the voxel centre, half a voxel under the surface, a lamp 10 voxels from a ball stood higher
+// over every patch and the patches past its terminator took its light (docs/benchmarks.md, lamp-near).
 glm::dvec3 patchSurface(const Medium &medium, const SnowTopology &topology, std::size_t i);
 
 // Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe. `density`:
