@@ -342,7 +342,7 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     }
     const auto cost = [&](int paths) { return how.stepsPerPath * paths * double(jobs.size()); };
     int samples = how.paths;
-    while (samples > how.fewestPaths && cost(samples) > how.budget) samples = std::max(how.fewestPaths, samples / 2);
+    if (cost(samples) > how.budget) samples = std::max(how.fewestPaths, int(how.budget / cost(1)));
     if (cost(samples) > how.budget) {
         traced.facesAt.clear(), traced.faces.clear();
         return;
