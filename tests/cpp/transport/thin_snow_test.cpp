@@ -13,6 +13,17 @@
 
 namespace firn {
 
+namespace {
+
+// The voxels `box` of `scene`'s snow filled with `density` too.
+void addBox(Scene &scene, const openvdb::CoordBBox &box, float density) {
+    auto grid = scene.medium->density().deepCopy();
+    grid->fill(box, density);
+    scene.medium = std::make_shared<Medium>(grid, scene.medium->optics());
+}
+
+}  // namespace
+
 // The suite's slab_thin (24 x 24 x 3 voxels of sigma_t h 2, omega 0.99, g 0.6: a traced layer, its sigma_tr h 0.81
 // summed cubed 925, over kMaxTracedPieceReducedVolume) and, apart from it, a lump of 2 x 2 x 2 voxels of sigma_t h 1
 // (a small piece: thin).
@@ -21,9 +32,7 @@ TEST(ThinSnow, ATracedLayersFlagsLineUpWithThinThenWholePieces) {
     const float perTau = float(1.0 / (optics.extinctionPerDensity * test::kBoxVoxel));  // density of sigma_t h 1
     Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(23, 23, 2)), 2.0f * perTau,
                                  optics, glm::dvec3(0.866, 0.0, 0.5));
-    auto grid = scene.medium->density().deepCopy();
-    grid->fill(openvdb::CoordBBox(openvdb::Coord(40, 40, 10), openvdb::Coord(41, 41, 11)), perTau);
-    scene.medium = std::make_shared<Medium>(grid, optics);
+    addBox(scene, openvdb::CoordBBox(openvdb::Coord(40, 40, 10), openvdb::Coord(41, 41, 11)), perTau);
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
     const bake::TracedSnow snow = bake::thinVoxels(*scene.medium, topo);
     ASSERT_EQ(snow.thin.size(), 8u);
@@ -43,10 +52,8 @@ TEST(ThinSnow, ALumpIsTracedWhereADustingIsADenseLayer) {
     const float perTau = float(1.0 / (optics.extinctionPerDensity * test::kBoxVoxel));  // density of sigma_t h 1
     Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(5, 5, 0)), 15.0f * perTau,
                                  optics, glm::dvec3(0.866, 0.0, 0.5));
-    auto grid = scene.medium->density().deepCopy();
     const openvdb::CoordBBox lump(openvdb::Coord(20, 20, 0), openvdb::Coord(21, 21, 1));
-    grid->fill(lump, 15.0f * perTau);
-    scene.medium = std::make_shared<Medium>(grid, optics);
+    addBox(scene, lump, 15.0f * perTau);
     const float z = float(-0.25 * test::kBoxVoxel);  // a quarter voxel under the lowest voxels' centres
     const float v[] = {-1, -1, z, 1, -1, z, 1, 1, z, -1, 1, z};
     const unsigned t[] = {0, 1, 2, 0, 2, 3};
@@ -55,7 +62,8 @@ TEST(ThinSnow, ALumpIsTracedWhereADustingIsADenseLayer) {
     const bake::TracedSnow snow = bake::thinVoxels(*scene.medium, topo);
     EXPECT_TRUE(snow.wholePieces.empty());
     ASSERT_EQ(snow.thin.size(), 8u);
-    EXPECT_TRUE(std::all_of(snow.thin.begin(), snow.thin.end(), [&](const openvdb::Coord &c) { return lump.isInside(c); }));
+    EXPECT_TRUE(
+        std::all_of(snow.thin.begin(), snow.thin.end(), [&](const openvdb::Coord &c) { return lump.isInside(c); }));
 }
 
 }  // namespace firn
