@@ -95,6 +95,31 @@ double axisDepth(Medium::Accessor &density, const openvdb::Coord &c, double redu
     }
 }
 
+// Whether `piece` is shaped as a layer: wide along two directions against its thickness (its second widest extent
+// over kLayerAspect times its thinnest), the extents along the principal axes of its voxels' centres weighted by
+// density (a box n voxels long has variance (n^2 - 1) / 12 along it, so n = sqrt(12 var + 1), tilted or not). A
+// dusting 16 x 16 x 1 or 10 x 10 x 3 is one; spray_dense's lumps of 2 x 2 x 2 and 1 x 2 x 2 voxels are not.
+constexpr double kLayerAspect = 2.0;
+bool layerShaped(Medium::Accessor &density, const std::vector<openvdb::Coord> &piece) {
+    double weight = 0.0;
+    openvdb::Vec3d first(0.0);
+    openvdb::Mat3d second = openvdb::Mat3d::zero();
+    for (const openvdb::Coord &c : piece) {
+        const double w = density.getValue(c);
+        const openvdb::Vec3d x = c.asVec3d();
+        weight += w, first += w * x, second += w * openvdb::math::outerProduct(x, x);
+    }
+    const openvdb::Vec3d mean = first / weight;
+    const openvdb::Mat3d covariance = second * (1.0 / weight) - openvdb::math::outerProduct(mean, mean);
+    openvdb::Mat3d axes;
+    openvdb::Vec3d variance;
+    openvdb::math::diagonalizeSymmetricMatrix(covariance, axes, variance);
+    std::array<double, 3> extent;
+    for (int a = 0; a < 3; ++a) extent[a] = std::sqrt(12.0 * std::max(0.0, variance[a]) + 1.0);
+    std::sort(extent.begin(), extent.end());
+    return extent[1] > kLayerAspect * extent[0];
+}
+
 // Whether the unknown at `c` has air (no snow, no occluder) on both faces along some axis; `index`: the caller's,
 // of topo.index.
 bool twoSided(const SnowTopology &topo, openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
@@ -141,17 +166,19 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
             }
         }
     }
-    // A small piece with no inside (or wide in transport mean free paths) whose voxels are not all thin enough for
-    // a traced layer is a layer of dense snow (a dusting): a camera sees its voxels' first optical depth, not their
-    // mean, and the diffusion's surface patches hold it, unless a voxel is open to air on two opposite faces (its
-    // density gradient cancels there: no side for its patch to face).
+    // A small piece shaped as a layer with no inside (or wide in transport mean free paths) whose voxels are not all
+    // thin enough for a traced layer is a layer of dense snow (a dusting): a camera sees its voxels' first optical
+    // depth, not their mean, and the diffusion's surface patches hold it, unless a voxel is open to air on two
+    // opposite faces (its density gradient cancels there: no side for its patch to face). A lump as thick as it is
+    // wide is no layer: spray_dense's of 2 x 2 x 2 voxels (sigma_t h 6-17) diffused read +103 % seen from the sun's
+    // side, -66 % against it (docs/benchmarks.md, spray-budget).
     const auto oneSided = [&] {
         return std::none_of(piece.begin(), piece.end(),
                             [&](const openvdb::Coord &c) { return twoSided(topo, index, c); });
     };
     const bool small = !large && int(piece.size()) <= kSmallPieceVoxels;
     const bool wide = reduced > kMaxTracedSmallPieceReducedVolume;
-    const bool denseLayer = small && notLayer && (wide || !hasInside()) && oneSided();
+    const bool denseLayer = small && notLayer && (wide || (!hasInside() && layerShaped(density, piece))) && oneSided();
     const bool layer = reduced > kMaxTracedPieceReducedVolume;
     const PieceKind kind = large || denseLayer ? kLargePiece
                            : small             ? kSmallPiece

@@ -311,13 +311,14 @@ FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::ve
 // its mean) -> 8.8 %, from below 52.4 -> 19.2 -> 10.7 %: seen from below the mean is 46 % brighter than what the voxel
 // shows there (the sun-lit top's light, forward), from above 32 % darker (docs/benchmarks.md, float-under; at sigma_t h
 // 3 from above 6.5 -> 8.0 %). A face's paths are half the voxel's own where they fit `how.budget` (what the gathering
-// leaves of kMaxTracedSteps), else a quarter (64 at least: spray_dense's 471 faces at 128 paths; at 64 18.7 %, their
-// noise ate most of what they mend); none where even those would cost more. A traced layer light traced whole
-// (how.inLayer) is seen so too, from one side: its voxels of sigma_t h > kMinLayerFaceTau gather each face open to air,
-// at the gathering's paths per voxel (the light tracing gave them none; a quarter of them, 128, left a 5.9 % spread per
-// block), within what the light tracing leaves of kMaxTracedSteps (its pilot's estimate for slab_thin's 1440 faces is
-// 3.5e7 steps at seeds 0-1 and 6.6e7 at seed 2): slab_thin 6.2 -> 3.9 % per block, from below (0, -60) +8 -> +3 %
-// (docs/benchmarks.md, slab-thin).
+// leaves of kMaxTracedSteps), else as many as fit down to a quarter (64 at least: spray_dense's 471 faces at 128 paths;
+// at 64 18.7 %, their noise ate most of what they mend; halved at once, its 507 faces with its lumps traced fell to 64
+// for a cost 3 % over: 21.1 % against 17.5 % at 124); none where even those would cost more. A traced layer light
+// traced whole (how.inLayer) is seen so too, from one side: its voxels of sigma_t h > kMinLayerFaceTau gather each
+// face open to air, at the gathering's paths per voxel (the light tracing gave them none; a quarter of them, 128, left
+// a 5.9 % spread per block), within what the light tracing leaves of kMaxTracedSteps (its pilot's estimate for
+// slab_thin's 1440 faces is 3.5e7 steps at seeds 0-1 and 6.6e7 at seed 2): slab_thin 6.2 -> 3.9 % per block, from
+// below (0, -60) +8 -> +3 % (docs/benchmarks.md, slab-thin).
 void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
                     const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
                     MonteCarloVoxels &traced) {
@@ -342,7 +343,7 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     }
     const auto cost = [&](int paths) { return how.stepsPerPath * paths * double(jobs.size()); };
     int samples = how.paths;
-    while (samples > how.fewestPaths && cost(samples) > how.budget) samples = std::max(how.fewestPaths, samples / 2);
+    if (cost(samples) > how.budget) samples = std::max(how.fewestPaths, int(how.budget / cost(1)));
     if (cost(samples) > how.budget) {
         traced.facesAt.clear(), traced.faces.clear();
         return;

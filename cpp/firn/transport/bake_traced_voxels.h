@@ -72,15 +72,15 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 // Which traced voxels' faces gather their own source (addFaceSources), and at what cost.
 struct FaceGathering {
     int paths = 0;              // per face, where the budget holds them
-    int fewestPaths = 0;        // else halved down to these; none where even these pass the budget
+    int fewestPaths = 0;        // else as many as fit, these at the least; none where even these pass the budget
     double stepsPerPath = 0.0;  // the gathering's pilot's
     double budget = 0.0;        // tracking steps all the faces may take
     // Per voxel: it lies in a traced layer (light traced whole), whose faces open to air on one side gather too.
     // Empty: the gathered voxels, of which the thick ones.
     std::vector<bool> inLayer;
 };
-// The gathered voxels' faces: half the voxel's paths, else a quarter, within what the gathering leaves of
-// kMaxTracedSteps.
+// The gathered voxels' faces: half the voxel's paths, else as many as fit down to a quarter, within what the
+// gathering leaves of kMaxTracedSteps.
 FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels);
 // A traced layer's faces (`inLayer` per voxel of `voxels`, light traced whole): as many paths as gathering a voxel
 // would take, within what the light tracing leaves of kMaxTracedSteps.

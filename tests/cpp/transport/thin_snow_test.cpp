@@ -7,10 +7,22 @@
 #include <gtest/gtest.h>
 
 #include "box_scene.h"
+#include "firn/geometry/mesh.h"
 #include "firn/transport/bake_thin_snow.h"
 #include "firn/transport/snow_topology.h"
 
 namespace firn {
+
+namespace {
+
+// The voxels `box` of `scene`'s snow filled with `density` too.
+void addBox(Scene &scene, const openvdb::CoordBBox &box, float density) {
+    auto grid = scene.medium->density().deepCopy();
+    grid->fill(box, density);
+    scene.medium = std::make_shared<Medium>(grid, scene.medium->optics());
+}
+
+}  // namespace
 
 // The suite's slab_thin (24 x 24 x 3 voxels of sigma_t h 2, omega 0.99, g 0.6: a traced layer, its sigma_tr h 0.81
 // summed cubed 925, over kMaxTracedPieceReducedVolume) and, apart from it, a lump of 2 x 2 x 2 voxels of sigma_t h 1
@@ -20,9 +32,7 @@ TEST(ThinSnow, ATracedLayersFlagsLineUpWithThinThenWholePieces) {
     const float perTau = float(1.0 / (optics.extinctionPerDensity * test::kBoxVoxel));  // density of sigma_t h 1
     Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(23, 23, 2)), 2.0f * perTau,
                                  optics, glm::dvec3(0.866, 0.0, 0.5));
-    auto grid = scene.medium->density().deepCopy();
-    grid->fill(openvdb::CoordBBox(openvdb::Coord(40, 40, 10), openvdb::Coord(41, 41, 11)), perTau);
-    scene.medium = std::make_shared<Medium>(grid, optics);
+    addBox(scene, openvdb::CoordBBox(openvdb::Coord(40, 40, 10), openvdb::Coord(41, 41, 11)), perTau);
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
     const bake::TracedSnow snow = bake::thinVoxels(*scene.medium, topo);
     ASSERT_EQ(snow.thin.size(), 8u);
@@ -30,6 +40,30 @@ TEST(ThinSnow, ATracedLayersFlagsLineUpWithThinThenWholePieces) {
     ASSERT_EQ(snow.inLayer.size(), snow.thin.size() + snow.wholePieces.size());
     EXPECT_TRUE(std::none_of(snow.inLayer.begin(), snow.inLayer.begin() + 8, [](bool b) { return b; }));
     EXPECT_TRUE(std::all_of(snow.inLayer.begin() + 8, snow.inLayer.end(), [](bool b) { return b; }));
+}
+
+// A small piece is a dense layer, left to the diffusion, only where it is shaped as one: on a grey ground, a dusting of
+// 6 x 6 x 1 voxels and, apart from it, a lump of 2 x 2 x 2 (both sigma_t h 15, omega 0.999, g 0.7: bumpy_plate's snow,
+// sigma_tr h 4.5, no voxel deeper than 2.25 in it, each with snow or the ground on one side of each axis). The dusting
+// stays a layer (diffused, neither traced nor thin: snow_on_ground_bench.py --one-voxel); the lump is traced (it was a
+// "layer" before: spray_dense's lumps read +103 % diffused, docs/benchmarks.md spray-budget).
+TEST(ThinSnow, ALumpIsTracedWhereADustingIsADenseLayer) {
+    const VolumeOptics optics{10.0, Rgb(0.999), 0.7};
+    const float perTau = float(1.0 / (optics.extinctionPerDensity * test::kBoxVoxel));  // density of sigma_t h 1
+    Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(5, 5, 0)), 15.0f * perTau,
+                                 optics, glm::dvec3(0.866, 0.0, 0.5));
+    const openvdb::CoordBBox lump(openvdb::Coord(20, 20, 0), openvdb::Coord(21, 21, 1));
+    addBox(scene, lump, 15.0f * perTau);
+    const float z = float(-0.25 * test::kBoxVoxel);  // a quarter voxel under the lowest voxels' centres
+    const float v[] = {-1, -1, z, 1, -1, z, 1, 1, z, -1, 1, z};
+    const unsigned t[] = {0, 1, 2, 0, 2, 3};
+    scene.occluders = std::make_shared<Occluders>(makeTriangleMesh(v, 4, t, 2), std::vector<Rgb>(2, Rgb(0.5)));
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    const bake::TracedSnow snow = bake::thinVoxels(*scene.medium, topo);
+    EXPECT_TRUE(snow.wholePieces.empty());
+    ASSERT_EQ(snow.thin.size(), 8u);
+    EXPECT_TRUE(
+        std::all_of(snow.thin.begin(), snow.thin.end(), [&](const openvdb::Coord &c) { return lump.isInside(c); }));
 }
 
 }  // namespace firn
