@@ -343,7 +343,8 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     }
     const auto cost = [&](int paths) { return how.stepsPerPath * paths * double(jobs.size()); };
     int samples = how.paths;
-    if (cost(samples) > how.budget) samples = std::max(how.fewestPaths, int(how.budget / cost(1)));
+    if (cost(samples) > how.budget)  // as many as fit (no voxel or step: the budget's sign decides below)
+        samples = std::max(how.fewestPaths, int(std::clamp(how.budget / cost(1), 0.0, double(samples))));
     if (cost(samples) > how.budget) {
         traced.facesAt.clear(), traced.faces.clear();
         return;
