@@ -111,9 +111,17 @@ def slab_top(fill, layers, h, pad=2):
     return np.array([(fill.shape[0] - 1) / 2 * h, (fill.shape[1] - 1) / 2 * h, (pad + layers - 0.5) * h])
 
 
+BUMPS = (14.0, 11.0)  # voxels: the bumpy layer's wavelengths along x and y
+
+
+def bumpy_top(x, y, depth, amplitude):
+    """The bumpy layer's top (voxels) over (x, y) (voxels)."""
+    return depth + amplitude * np.sin(2 * np.pi * x / BUMPS[0]) * np.cos(2 * np.pi * y / BUMPS[1])
+
+
 def bumpy(side, depth, amplitude):
     X, Y, Z = grid((side, side, depth + amplitude + 3))
-    top = depth + amplitude * np.sin(2 * np.pi * X / 14.0) * np.cos(2 * np.pi * Y / 11.0)
+    top = bumpy_top(X, Y, depth, amplitude)
     fill = np.clip(top - Z + 0.5, 0.0, 1.0)
     fill[:, :, 0] = 0.0  # the ground lies under the lowest layer
     return fill

@@ -8,10 +8,10 @@ fill 0.5 - distance / h, the larger of the two fills), 48 x 48 x 32 voxels; the 
 (azimuth 90) at --elevation; sky alone with --sky. --plane: the wall rising to +x alone; --along-z: both
 antialiased along z alone, as bake_suite.bumpy is (a staircase). Per probe (u voxels from the floor's line across,
 up the wall) 4 rays from above along --ray (towards the camera), spread along the groove; channel G, the mean of
-the 4. About 25 s at 1024 paths on one core.
+the 4. About 25 s at 1024 paths on one core (50 s at the default 2048).
 
     PYTHONPATH=build/python /usr/bin/python3 bench/groove_probe.py [--angle 45] [--elevation 60] [--sky] [--plane]
-        [--along-z] [--samples 1024]
+        [--along-z] [--samples 2048]
 """
 import argparse
 import math

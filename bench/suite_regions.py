@@ -6,9 +6,10 @@ its three channels averaged as the suite's mean is) and reports, per region, the
 seed's render, of the seeds' mean render (its noise shrunk by sqrt(N): what is left is bias, the reference's noise
 and the mean's own), the baked render's spread across the seeds (relative standard deviation per block) and the
 bias of the sum, and one seed's squared error per block split into the seeds' variance and the bias squared (each
-as rms over the blocks: the noise more paths remove, the error they do not). Regions by where each pixel's camera ray reaches optical depth 1 of snow: sun-lit or shadowed
-there (the sun's optical depth from that point, under or over 2), and the ray's whole optical depth through the
-snow (a rim or a thin lump: under 20; a lump's core: 20 or more); and per view.
+as rms over the blocks: the noise more paths remove, the error they do not). Regions by where each pixel's camera
+ray reaches optical depth 1 of snow: sun-lit or shadowed there (the sun's optical depth from that point, under or
+over 2), and the ray's whole optical depth through the snow (a rim or a thin lump: under 20; a lump's core: 20 or
+more); and per view.
 
     PYTHONPATH=build/python python3 bench/suite_regions.py [--case spray_dense] [--seeds 4]
 """
@@ -54,9 +55,10 @@ def row(label, relative, spread, mean_render, reference):
     # bias squared less what the seeds' mean keeps of the variance (unbiased; the reference's noise stays in it).
     variance = relative.var(0, ddof=1)
     bias_squared = relative.mean(0) ** 2 - variance / len(relative)
+    noise_rms, bias_rms = math.sqrt(variance.mean()), math.sqrt(max(bias_squared.mean(), 0.0))
     return (f"  {label:<28} {relative.shape[1]:4d} pixels  one seed {100 * per_seed:5.1f} %  seeds' mean "
             f"{100 * of_mean:5.1f} %  spread {100 * spread.mean():5.1f} %  bias {100 * bias:+5.1f} %  per block rms: "
-            f"noise {100 * math.sqrt(variance.mean()):5.1f} %, bias {100 * math.sqrt(max(bias_squared.mean(), 0.0)):5.1f} %")
+            f"noise {100 * noise_rms:5.1f} %, bias {100 * bias_rms:5.1f} %")
 
 
 def main():

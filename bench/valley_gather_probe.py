@@ -17,6 +17,7 @@ import numpy as np
 
 import bake_suite as bs
 import firncore
+from limb_circle import frame
 
 # (name, x, y) in voxels: s = sin(2 pi x / 14) cos(2 pi y / 11) is -1 at the valleys' centres
 POINTS = [("valley a", 3.5, 16.5), ("valley b", 24.5, 11.0), ("valley c", 24.5, 22.0),
@@ -26,8 +27,8 @@ MU = np.array([0.1, 0.3, 0.5, 0.7, 0.9])  # band centres, width 0.2
 
 def surface(x, y, depth=6.0, amplitude=3.0):
     """The top's height (voxels) and unit normal at (x, y) (bake_suite.bumpy's sine)."""
-    a, b = 2 * np.pi / 14.0, 2 * np.pi / 11.0
-    top = depth + amplitude * math.sin(a * x) * math.cos(b * y)
+    a, b = 2 * np.pi / bs.BUMPS[0], 2 * np.pi / bs.BUMPS[1]
+    top = bs.bumpy_top(x, y, depth, amplitude)
     gx = amplitude * a * math.cos(a * x) * math.cos(b * y)
     gy = -amplitude * b * math.sin(a * x) * math.sin(b * y)
     n = np.array([-gx, -gy, 1.0])
@@ -35,9 +36,7 @@ def surface(x, y, depth=6.0, amplitude=3.0):
 
 
 def hemisphere(n, azimuths):
-    t = np.cross(n, [0.0, 1.0, 0.0] if abs(n[1]) < 0.9 else [1.0, 0.0, 0.0])
-    t /= np.linalg.norm(t)
-    b = np.cross(n, t)
+    t, b, _ = frame(n)
     out = []
     for mu in MU:
         s = math.sqrt(1 - mu * mu)
