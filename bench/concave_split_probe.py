@@ -29,6 +29,7 @@ import firncore
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bake_suite as bs  # noqa: E402
+import probe_hooks  # noqa: E402
 import valley_gather_probe as vg  # noqa: E402
 
 def corrugation_top(x, period, scale):
@@ -75,6 +76,7 @@ def main():
     parser.add_argument("--gathers", default="1,2")
     parser.add_argument("--samples", type=int, default=1024)
     args = parser.parse_args()
+    probe_hooks.require_hooks("valley_answer_hooks.diff")
     case = copy.copy(bs.case("bumpy_plate"))
     scale = args.scale if args.corrugation else 1
     h = case.voxel / scale

@@ -28,6 +28,7 @@ import firncore
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bake_suite  # noqa: E402
+import probe_hooks  # noqa: E402
 import groove_probe  # noqa: E402
 import valley_gather_probe as vg  # noqa: E402
 
@@ -84,6 +85,7 @@ def main():
     parser.add_argument("--samples", type=int, default=1024)
     parser.add_argument("--hemisphere-samples", type=int, default=256)
     args = parser.parse_args()
+    probe_hooks.require_hooks("valley_answer_hooks.diff")
     case = bake_suite.case(args.case)
     h = case.voxel
     angle = math.radians(args.angle)
