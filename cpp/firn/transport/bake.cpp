@@ -49,14 +49,11 @@ constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
 // (0.10) gains 3-4 % on its sides, nothing on top; a pile of lumps on a white ground (0.38) 10 points
 // (docs/benchmarks.md "send-back2").
 constexpr double kSendBackWorthPasses = 0.15;
-// An open surface patch's sky rays past its probes are traced one time in four (SkyRays, patchSkyAt): the car's
-// patches trace 3.88 M of 4.51 M rays, its noise between seeds 6.44 -> 6.73 % (docs/benchmarks.md, car-sky 2).
-constexpr double kSkyRestShare = 0.25;
 
 Preset resolve(const BakeSettings &s) {
-    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true, 0.25, kSkyRestShare}
-               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true, 1.0, kSkyRestShare}
-                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false, 1.0, 1.0};
+    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true, 0.25}
+               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true, 1.0}
+                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false, 1.0};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
     // Conjugate gradients in double precision stall near 1e-15: asked for less, it iterated on a residual of
@@ -189,9 +186,8 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             {
                 const GridValues values = gridValues(scene, topo, source, traced, preset, settings, true);
                 if (bounceTail) older = std::move(before), before = std::move(fromSnow.irradiance);
-                fromSnow = snowIrradiance(scene, topo, light, source, traced, values,
-                                          SkyRays(preset.skySamples, preset.skyRestShare), settings.seed ^ 0x5C1Eull,
-                                          SubProgress(&p, begin, gathered));
+                fromSnow = snowIrradiance(scene, topo, light, source, traced, values, SkyRays(preset.skySamples),
+                                          settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, gathered));
                 if (preset.skyOverNeighbours)
                     averageOverNeighbours(topo, fromSnow.irradiance), averageOverNeighbours(topo, fromSnow.aim);
                 if (bounceTail && pass + 1 == passes && pass > 1) {
@@ -348,10 +344,9 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     ThreadSeconds tracing;
     runBeside(
         [&] {
-            light = computeIncidentLight(lit, topo,
-                                         {preset.skySamples, preset.sunSamples, settings.seed,
-                                          preset.skyOverNeighbours, preset.skyRestShare},
-                                         beside.step(0));
+            light = computeIncidentLight(
+                lit, topo, {preset.skySamples, preset.sunSamples, settings.seed, preset.skyOverNeighbours},
+                beside.step(0));
         },
         [&] {
             tracing = isolatedOnThisThread([&] {

@@ -22,8 +22,6 @@ struct Preset {
     // (seeds 1-3 12.6, 12.1, 11.3 %), the snow with them from above 10.2 -> 13.1 %; half: 8.2 + 5.3 s, 8.3 %, 12.7 %.
     // Without the least photons scaled too the joint bake's lumps fell to the diffusion: from above 29.8 %.
     double lightTracingShare;
-    // An open surface patch's sky rays past its probes traced with this probability (SkyRays, patchSkyAt).
-    double skyRestShare;
 };
 
 }  // namespace firn::bake

@@ -46,14 +46,13 @@ int nthRay(std::uint64_t bits, int rank) {
 }
 
 // The snow's light that occluders send back along patch i's sky rays that met them, snow not hiding them (`met`;
-// W/m^2/sr summed over those rays, each by its weight among the patch's rays `marked` (SkyRays::weight); `towards`
-// gets its grey first moment from their mean direction): the ground under thrown snow, lit by the snow above it. The
-// first solve's light holds the occluders' reflection of sun and sky only (reflectedByOccluder). kDraws of the rays,
-// stratified over them, stand for all of them, intersected alone: the car's patches meet the body and the ground
-// by the million.
+// W/m^2/sr summed over those rays; `towards` gets its grey first moment from their mean direction): the ground
+// under thrown snow, lit by the snow above it. The first solve's light holds the occluders' reflection of sun and
+// sky only (reflectedByOccluder). kDraws of the rays, stratified over them, stand for all of them, intersected
+// alone: the car's patches meet the body and the ground by the million.
 glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher, BakedValuesSampler &baked,
-                             const SnowTopology &topo, const SkyRays &rays, std::uint64_t met, std::uint64_t marked,
-                             const glm::dvec3 &p, std::uint64_t seed, std::size_t i, glm::dvec3 &towards) {
+                             const SnowTopology &topo, const SkyRays &rays, std::uint64_t met, const glm::dvec3 &p,
+                             std::uint64_t seed, std::size_t i, glm::dvec3 &towards) {
     constexpr int kDraws = 2;
     const int count = __builtin_popcountll(met);
     if (count == 0) return glm::dvec3(0.0);
@@ -64,9 +63,8 @@ glm::dvec3 occludersSendBack(const Scene &scene, Medium::ColumnMarcher &marcher,
     const int draws = std::min(kDraws, count);
     glm::dvec3 sum(0.0), mean(0.0);
     for (int d = 0; d < draws; ++d) {
-        const int k = nthRay(met, std::min(int((d + rng.uniform()) / draws * count), count - 1));
-        const glm::dvec3 w = rays.direction(normal, k, seed, i);
-        sum += rays.weight(k, marked) * sentBackAlong(scene, marcher, baked, p, w, rng);
+        const int rank = std::min(int((d + rng.uniform()) / draws * count), count - 1);
+        sum += sentBackAlong(scene, marcher, baked, p, rays.direction(normal, nthRay(met, rank), seed, i), rng);
     }
     for (std::uint64_t bits = met; bits; bits &= bits - 1)
         mean += rays.direction(normal, __builtin_ctzll(bits), seed, i) / double(count);
@@ -93,19 +91,16 @@ SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, cons
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!light.snowRays[i] && !light.occluderRays[i]) continue;
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
-            const std::uint64_t marked = light.snowRays[i] | light.occluderRays[i];
             glm::dvec3 sum(0.0), towards(0.0);
             for (int k = 0; k < rays.count(); ++k) {
                 if (!((light.snowRays[i] >> k) & 1)) continue;
                 const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
-                const glm::dvec3 radiance =
-                    rays.weight(k, marked) * bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
+                const glm::dvec3 radiance = bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
                 sum += radiance, towards += greyMoment(radiance, w);
             }
-            sum += occludersSendBack(scene, marcher, baked, topo, rays, light.occluderRays[i], marked, p, seed, i,
-                                     towards);
+            sum += occludersSendBack(scene, marcher, baked, topo, rays, light.occluderRays[i], p, seed, i, towards);
             out.irradiance.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
             out.aim.surface(i) = glm::vec3(kPi * towards / double(rays.count()));
         }

@@ -82,46 +82,38 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
     return largest(through) >= kMinTransmittance ? through : glm::dvec3(0.0);
 }
 
-
-// One sky ray from p along w (unit): the light arriving along it (pi L, W/m^2 per unit solid angle's cosine weight),
-// whether snow glows along it (`hidden`: its column above 0.01 of the thinnest channel's optical depth) and, where
-// snow does not hide it, the occluder it meets (`met`, with that occluder's grey albedo).
-struct SkyRay {
-    glm::dvec3 arriving{0.0};
-    bool hidden = false, met = false;
-    double albedo = 0.0;
-};
-
-// What every sky ray of a point shares: the snow's extinction for its crossing and the occluders' reflections.
-struct SkyTracer {
-    const Scene &scene;
-    glm::dvec3 reduced;
-    double limit, thinnest;
-    bool bounce;   // occluders in the way send what they reflect once
-    bool anyHit;   // only whether a ray meets an occluder counts: Embree's any-hit query, cheaper than the nearest hit
-    Rng rng;       // for the occluders' reflections
-    Medium::ColumnMarcher &marcher;
-
-    SkyTracer(const Scene &scene, Crossing crossing, bool bounce, bool anyHit, std::uint64_t seed,
-              std::uint64_t stream, Medium::ColumnMarcher &marcher)
-        : scene(scene), reduced(extinction(scene.medium->optics(), crossing)), limit(columnLimit(reduced)),
-          thinnest(std::min({reduced.x, reduced.y, reduced.z})), bounce(bounce), anyHit(anyHit),
-          rng(seed ^ 0xB0B0ull, stream), marcher(marcher) {}
-
-    SkyRay trace(const glm::dvec3 &p, const glm::dvec3 &w) {
-        SkyRay ray;
-        const RayCaster &caster = scene.occluders->caster();
+// Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders;
+// occluders in the way send what they reflect once (when `bounce`). `occluderAlbedo`: adds the grey albedos of the
+// occluders met by the rays snow does not hide (what they can send the snow's light back with), `occluderRays`
+// marks those rays.
+glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
+                          bool bounce, Crossing crossing, std::uint64_t seed, std::uint64_t stream,
+                          Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr,
+                          double *occluderAlbedo = nullptr, std::uint64_t *occluderRays = nullptr) {
+    const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
+    const double limit = columnLimit(reduced);
+    const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
+    Rng rng(seed ^ 0xB0B0ull, stream);  // for the occluders' reflections
+    glm::dvec3 sum(0.0), towards(0.0);
+    std::uint64_t hidden = 0, met = 0;
+    // Without the bounce a ray that meets an occluder brings nothing, and unless asked which rays snow hides, whether
+    // it meets one is all that counts: Embree's any-hit query, cheaper than the nearest hit.
+    const bool anyHit = !bounce && !snowRays;
+    const RayCaster &caster = scene.occluders->caster();
+    for (int k = 0; k < rays.count(); ++k) {
+        const glm::dvec3 w = rays.direction(n, k, seed, stream);
         std::optional<RayCaster::Hit> hit;
         if (!anyHit)
             hit = caster.intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
         else if (caster.occluded(glm::vec3(p), glm::vec3(w), 1e-5f))
-            return ray;
+            continue;
         const double column =
             marcher.column(p, w, hit ? double(hit->distance) : std::numeric_limits<double>::infinity(), limit);
-        ray.hidden = thinnest * column > 0.01;
-        ray.met = hit && !ray.hidden;
-        if (ray.met) ray.albedo = channelMean(scene.occluders->albedo(hit->triangle));
-        if (column >= limit) return ray;
+        if (thinnest * column > 0.01)
+            hidden |= std::uint64_t(1) << k;  // snow glows along this ray
+        else if (hit && occluderAlbedo)
+            *occluderAlbedo += channelMean(scene.occluders->albedo(hit->triangle)), met |= std::uint64_t(1) << k;
+        if (column >= limit) continue;
         glm::dvec3 radiance;
         if (!hit) {
             radiance = scene.sky.radianceFrom(w);
@@ -130,71 +122,15 @@ struct SkyTracer {
             radiance = reflectedByOccluder(scene, p + double(hit->distance) * w, glm::faceforward(normal, w, normal),
                                            scene.occluders->albedo(hit->triangle), rng, marcher);
         } else {
-            return ray;
+            continue;
         }
-        ray.arriving = kPi * radiance * transmittance(reduced, column);
-        return ray;
-    }
-};
-
-// Irradiance (W/m^2) onto a surface with normal n at p from the sky, through snow and past occluders, every ray
-// traced (the sky under thin snow: no occluder reflects, any hit is all that counts).
-glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
-                          Crossing crossing, std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher) {
-    SkyTracer tracer(scene, crossing, false, true, seed, stream, marcher);
-    glm::dvec3 sum(0.0);
-    for (int k = 0; k < rays.count(); ++k) sum += tracer.trace(p, rays.direction(n, k, seed, stream)).arriving;
-    return glm::vec3(sum / double(rays.count()));
-}
-
-// A surface patch's sky (IncidentLight::skyOnSurface, skyAim, snowRays, occluderRays, and the grey albedos met).
-struct PatchSky {
-    glm::vec3 irradiance{0.0f}, aim{0.0f};
-    std::uint64_t hidden = 0, met = 0;
-    double albedos = 0.0;  // weighted as the rays are (SkyRays::weight)
-};
-
-// The sky onto surface patch `stream` with normal n at p (patchOutside), through snow and past occluders, which
-// send what they reflect once (when `bounce`). The probe half of its rays first (SkyRays::isProbe); where none of them
-// meets snow or an occluder the rest is the open sky along their own directions, pi L(w_k), traced only with
-// probability SkyRays::restShare, which then adds each traced ray's difference from that over the share: unbiased,
-// since the gate and the coin read nothing of the rays they spare (each ray's jitter its own). Most of an open
-// patch's rest is open too: its noise grows only where a spared ray would have met something.
-PatchSky patchSkyAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays, bool bounce,
-                    std::uint64_t seed, std::uint64_t stream, Medium::ColumnMarcher &marcher) {
-    SkyTracer tracer(scene, Crossing::Uncollided, bounce, false, seed, stream, marcher);
-    PatchSky out;
-    glm::dvec3 sum(0.0), towards(0.0);
-    const auto add = [&](int k, const SkyRay &ray, double weight) {
-        if (ray.hidden) out.hidden |= std::uint64_t(1) << k;
-        if (ray.met) out.met |= std::uint64_t(1) << k, out.albedos += weight * ray.albedo;
-    };
-    for (int k = 0; k < rays.count(); ++k) {
-        if (!rays.isProbe(k)) continue;
-        const glm::dvec3 w = rays.direction(n, k, seed, stream);
-        const SkyRay ray = tracer.trace(p, w);
-        add(k, ray, 1.0);
-        sum += ray.arriving, towards += greyMoment(ray.arriving, w);
-    }
-    const bool open = !((out.hidden | out.met) & rays.probes());
-    Rng coin(seed ^ 0x0BE5ull, stream);
-    const bool traceRest = !open || coin.uniform() < rays.restShare();
-    for (int k = 0; k < rays.count(); ++k) {
-        if (rays.isProbe(k)) continue;
-        const glm::dvec3 w = rays.direction(n, k, seed, stream);
-        const glm::dvec3 sky = open ? kPi * glm::dvec3(scene.sky.radianceFrom(w)) : glm::dvec3(0.0);
-        glm::dvec3 arriving = sky;
-        if (traceRest) {
-            const SkyRay ray = tracer.trace(p, w);
-            const double weight = open ? 1.0 / rays.restShare() : 1.0;
-            add(k, ray, weight);
-            arriving += weight * (ray.arriving - sky);
-        }
+        const glm::dvec3 arriving = kPi * radiance * transmittance(reduced, column);
         sum += arriving, towards += greyMoment(arriving, w);
     }
-    out.irradiance = glm::vec3(sum / double(rays.count()));
-    out.aim = glm::vec3(towards / double(rays.count()));
-    return out;
+    if (snowRays) *snowRays = hidden;
+    if (occluderRays) *occluderRays = met;
+    if (aim) *aim = glm::vec3(towards / double(rays.count()));
+    return glm::vec3(sum / double(rays.count()));
 }
 
 // Unknowns in the order beam b's light reaches them, in buckets half a voxel deep (nearest the light
@@ -357,13 +293,7 @@ BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, in
     return out;
 }
 
-SkyRays::SkyRays(int samples, double restShare)
-    : strata_(std::clamp(int(std::lround(std::sqrt(double(samples)))), 1, kMaxStrata)), restShare_(restShare) {
-    if (!(restShare > 0.0 && restShare <= 1.0))
-        throw std::invalid_argument("SkyRays: the share of the rest traced must lie in (0, 1]");
-    for (int k = 0; k < count(); ++k)
-        if (isProbe(k)) probes_ |= std::uint64_t(1) << k;
-}
+SkyRays::SkyRays(int samples) : strata_(std::clamp(int(std::lround(std::sqrt(double(samples)))), 1, kMaxStrata)) {}
 
 glm::dvec3 SkyRays::direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const {
     Rng rng(seed, stream * 64 + std::uint64_t(k));
@@ -493,7 +423,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     light.snowRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
     light.occluderRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
     light.skyAim = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
-    const SkyRays rays(settings.skySamples, settings.skyRestShare);
+    const SkyRays rays(settings.skySamples);
     light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
     const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
@@ -507,11 +437,12 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         std::uint64_t albedos = 0;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
-            const PatchSky sky = patchSkyAt(scene, patchOutside(medium, topo, i, density), topo.patches[i].normal,
-                                            rays, bounce, seed, i, marcher);
-            light.skyOnSurface.surface(i) = sky.irradiance, light.skyAim.surface(i) = sky.aim;
-            light.snowRays.surface(i) = sky.hidden, light.occluderRays.surface(i) = sky.met;
-            albedos += std::uint64_t(std::llround(sky.albedos * 4294967296.0));
+            double met = 0.0;
+            light.skyOnSurface.surface(i) = skyIrradianceAt(
+                scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
+                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i), &met,
+                &light.occluderRays.surface(i));
+            albedos += std::uint64_t(std::llround(met * 4294967296.0));
         }
         albedoSum += albedos;
     });
@@ -531,8 +462,8 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             const glm::dvec3 up = glm::dot(normal, n) > 0.0 ? -normal : normal;  // towards the snow
             const glm::dvec3 ground = medium.voxelCentre(topo.coord[face.voxel]) + double(face.distance) * n;
             if (marcher.column(ground, up, std::numeric_limits<double>::infinity(), limit) >= limit) continue;
-            light.skyUnderSnow[f] = skyIrradianceAt(scene, ground, up, rays, Crossing::Beam, seed, topo.size() + f,
-                                                    marcher);
+            light.skyUnderSnow[f] = skyIrradianceAt(scene, ground, up, rays, false, Crossing::Beam, seed,
+                                                    topo.size() + f, marcher);
         }
     });
     return light;

@@ -54,28 +54,16 @@ struct IncidentLight {
 // The rays a surface patch gathers its sky along: stratified, cosine-weighted around its normal, the k-th
 // depending only on (seed, stream, k), so a later pass can trace the same ones. At most kMaxRays: a patch's rays
 // are one bit each of a 64-bit mask (IncidentLight::snowRays, occluderRays).
-// A patch traces its probes first (a checkerboard of the strata: 3 x 3, the corners and the centre); where none of
-// them meets snow or an occluder (an open patch), it traces the rest only with probability restShare, each of their
-// lights then counting 1 / restShare (weight): what the spared rays would have met (incident_light.cpp, patchSkyAt).
 class SkyRays {
   public:
     static constexpr int kMaxStrata = 8, kMaxRays = kMaxStrata * kMaxStrata;
     static_assert(kMaxRays <= 64, "a patch's sky rays are bits of a std::uint64_t");
-    explicit SkyRays(int samples, double restShare = 1.0);
+    explicit SkyRays(int samples);
     int count() const { return strata_ * strata_; }
     glm::dvec3 direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const;
-    bool isProbe(int k) const { return (k / strata_ + k % strata_) % 2 == 0; }
-    std::uint64_t probes() const { return probes_; }
-    double restShare() const { return restShare_; }
-    // What ray k's light counts for of a patch whose rays in `marked` met snow or an occluder.
-    double weight(int k, std::uint64_t marked) const {
-        return isProbe(k) || (marked & probes_) ? 1.0 : 1.0 / restShare_;
-    }
 
   private:
     int strata_;
-    double restShare_;
-    std::uint64_t probes_ = 0;
 };
 
 // Light arriving along unit direction w (per channel) as its part of the grey first moment (IncidentLight::skyAim):
@@ -89,7 +77,6 @@ struct IncidentLightSettings {
     int sunSamples = 4;   // points on each sun's disc or lamp per shadow test
     std::uint64_t seed = 0;
     bool skyOverNeighbours = false;  // skyOnSurface averaged over like-facing neighbours (averageOverNeighbours)
-    double skyRestShare = 1.0;       // an open patch's rays past its probes traced with this probability (SkyRays)
 };
 
 IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topology,
