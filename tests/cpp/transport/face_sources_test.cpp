@@ -92,6 +92,19 @@ bake::MonteCarloVoxels tracedWithFaces(const Scene &scene, const std::vector<ope
     return traced;
 }
 
+// The unknowns' source values where every unknown is traced: its traced source.
+bake::SourceValues tracedUnknowns(const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
+                                  const bake::MonteCarloVoxels &traced) {
+    bake::SourceValues source;
+    source.broad.resize(topo.size());
+    for (std::size_t v = 0; v < voxels.size(); ++v)
+        if (const std::int32_t i = topo.index->getValue(voxels[v]); i >= 0) {
+            source.broad[std::size_t(i)] = traced.source[v];
+            source.peaked.add(std::size_t(i), traced.source[v]);
+        }
+    return source;
+}
+
 }  // namespace
 
 // Every voxel holds a source for each of its air faces (the rim's sides too); cancelled, the faces' paths stop
@@ -223,13 +236,7 @@ TEST(FaceSources, TheAirBesideALumpsSunlitEdgeCarriesItsLitFaces) {
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
     const std::vector<openvdb::Coord> voxels = lumpVoxels();
     const bake::MonteCarloVoxels traced = tracedWithFaces(scene, voxels, 256);
-    bake::SourceValues source;  // every unknown traced: its traced source
-    source.broad.resize(topo.size());
-    for (std::size_t v = 0; v < voxels.size(); ++v)
-        if (const std::int32_t i = topo.index->getValue(voxels[v]); i >= 0) {
-            source.broad[std::size_t(i)] = traced.source[v];
-            source.peaked.add(std::size_t(i), traced.source[v]);
-        }
+    const bake::SourceValues source = tracedUnknowns(topo, voxels, traced);
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         if (traced.facesAt[v] < 0) continue;
         const bake::FaceSources &faces = traced.faces[std::size_t(traced.facesAt[v])];
@@ -280,13 +287,7 @@ TEST(FaceSources, ALumpsFringeGathersItsFacesOpenToAir) {
         for (int z = 0; z < 4; ++z) voxels.emplace_back(4, y, z);
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
     const bake::MonteCarloVoxels traced = tracedWithFaces(scene, voxels, 256);
-    bake::SourceValues source;  // every unknown traced: its traced source
-    source.broad.resize(topo.size());
-    for (std::size_t v = 0; v < voxels.size(); ++v)
-        if (const std::int32_t i = topo.index->getValue(voxels[v]); i >= 0) {
-            source.broad[std::size_t(i)] = traced.source[v];
-            source.peaked.add(std::size_t(i), traced.source[v]);
-        }
+    const bake::SourceValues source = tracedUnknowns(topo, voxels, traced);
     const bake::Preset preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25};
     const bake::GridValues values = bake::gridValues(scene, topo, source, traced, preset, BakeSettings{}, true);
     bake::BakedValuesSampler sampler(topo, source, traced, values);
