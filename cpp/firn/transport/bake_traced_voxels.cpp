@@ -277,6 +277,19 @@ bool showsItsFaces(unsigned open, const std::vector<FaceJob> &jobs, const std::v
 
 namespace {
 
+// The faces of traced voxel `voxel` open to air (bit f for face f: -x, +x, -y, +y, -z, +z): an unknown's (`i`, its
+// index in `topo`) from the topology; a fringe voxel's (under 5 optical depths on a thicker one, kFringeOpticalDepth:
+// part of the density ramp, not an unknown, yet gathered where seen from 2 up) where its neighbour holds no snow.
+unsigned airFaces(const SnowTopology &topo, Medium::Accessor &density, const openvdb::Coord &voxel, std::int32_t i) {
+    unsigned open = 0;
+    for (int f = 0; f < 6; ++f) {
+        openvdb::Coord n = voxel;
+        n[f / 2] += f % 2 ? 1 : -1;
+        open |= unsigned(i >= 0 ? topo.isAirFace(std::size_t(i), f) : !(density.getValue(n) > 0.0f)) << f;
+    }
+    return open;
+}
+
 // Tracking steps a path of the plan's pilot takes on average over its `voxels`.
 double stepsPerPath(const GatheringPlan &plan, std::size_t voxels) {
     return plan.steps / (double(plan.paths) * double(voxels));
@@ -330,11 +343,11 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     std::vector<FaceJob> jobs;  // by voxel
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         const std::int32_t i = index.getValue(voxels[v]);
-        if (i < 0) continue;
+        if (i < 0 && !how.inLayer.empty()) continue;  // a traced layer's faces are its unknowns'
         const double tau = voxelOpticalDepth(medium, density, voxels[v]);
         FaceSources faces;
         if (how.inLayer.empty() ? tau > kMaxDirectionFitTau : how.inLayer[v] && tau > kMinLayerFaceTau)
-            for (int f = 0; f < 6; ++f) faces.open |= unsigned(topo.isAirFace(std::size_t(i), f)) << f;
+            faces.open = airFaces(topo, density, voxels[v], i);
         if (!faces.open) continue;
         traced.facesAt[v] = std::int32_t(traced.faces.size());
         traced.faces.push_back(faces);
