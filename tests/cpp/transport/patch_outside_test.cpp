@@ -60,7 +60,7 @@ Medium vGroove() {
 
 // Each wall's patches within 4 voxels of the floor's line, away from the grid's ends: the start lies outside the
 // opposite wall's snow, its fill there under 2 % (an optical depth across a voxel under 0.3 of its 15). On main the
-// patch next to the floor's line on the wall rising to -x started 2.5 voxels out, in 8 %.
+// patch next to the floor's line on the wall rising to -x started 4 voxels out, in 8 %.
 TEST(PatchOutside, VGrooveWallPatchStartsOutsideTheOppositeWall) {
     const Medium medium = vGroove();
     const SnowTopology topo = buildSnowTopology(medium, Occluders{}, SubProgress(nullptr, 0.0, 1.0));
