@@ -324,8 +324,16 @@ void averageOverNeighbours(const SnowTopology &topo, SurfaceValues<glm::vec3> &v
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::size_t i, Medium::Accessor &density) {
     const double h = medium.voxelSize();
     const double thin = kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h);
+    const glm::dvec3 step = 0.5 * h * topo.patches[i].normal;
     glm::dvec3 p = medium.voxelCentre(topo.coord[i]) + h * topo.patches[i].normal;
-    for (int k = 0; k < 6 && medium.densityAt(p, density) >= thin; ++k) p += 0.5 * h * topo.patches[i].normal;
+    double rho = medium.densityAt(p, density);
+    // Out of the patch's own ramp: where the density rises again the walk has entered other snow's (a narrow
+    // groove's opposite wall), so it stops at the least dense point, never inside other snow.
+    for (int k = 0; k < 6 && rho >= thin; ++k) {
+        const double next = medium.densityAt(p + step, density);
+        if (next > rho) break;
+        p += step, rho = next;
+    }
     return p;
 }
 

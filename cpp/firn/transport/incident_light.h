@@ -93,7 +93,8 @@ void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3
 // over every patch and the patches past its terminator took its light (docs/benchmarks.md, lamp-near).
 glm::dvec3 patchSurface(const Medium &medium, const SnowTopology &topology, std::size_t i);
 
-// Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe. `density`:
+// Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe, or where the
+// density is least between the patch's ramp and other snow's (a narrow groove's opposite wall). `density`:
 // the caller's (one per thread; an accessor made per call started each lookup from the tree's root).
 glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std::size_t i, Medium::Accessor &density);
 

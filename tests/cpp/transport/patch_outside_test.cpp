@@ -1,0 +1,84 @@
+// Where a surface patch's gather and sky rays start (patchOutside, incident_light.h): out of its own snow, never
+// inside other snow. A narrow V-groove (bench/groove_probe.py's): a wall's patch near the floor's line looks along
+// its normal across the groove at the opposite wall, whose density ramp it meets a few voxels out
+// (docs/benchmarks.md, valley-answer 1 and gather-start).
+#include <algorithm>
+#include <cmath>
+
+#include <glm/common.hpp>
+#include <gtest/gtest.h>
+
+#include "firn/transport/incident_light.h"
+#include "firn/transport/scene.h"
+#include "firn/transport/snow_topology.h"
+#include "firn/util/openvdb_library.h"
+
+namespace firn {
+
+namespace {
+
+constexpr int kWidth = 24, kLength = 12, kHeight = 20;  // voxels of 1 cm
+constexpr double kFloor = 4.0;                          // voxels: the floor's line above the grid's z = 0
+const double kMiddle = (kWidth - 1) / 2.0 + 0.23;       // the floor line's x (voxels), off the grid's nodes
+const double kAngle = 55.0 * M_PI / 180.0;              // the walls' slope
+
+// Signed distances (voxels) above the wall rising towards -x and the one rising towards +x, at index point q.
+double aboveLeft(const glm::dvec3 &q) { return (q.z - kFloor) * std::cos(kAngle) + (q.x - kMiddle) * std::sin(kAngle); }
+double aboveRight(const glm::dvec3 &q) { return (q.z - kFloor) * std::cos(kAngle) - (q.x - kMiddle) * std::sin(kAngle); }
+
+// A wall's fill (0-1) at index point q, antialiased along its normal over a voxel, as the grid's voxels hold it and
+// read trilinearly between them (Medium::densityAt); `above` is the wall's signed distance.
+double wallFill(double (*above)(const glm::dvec3 &), const glm::dvec3 &q) {
+    const glm::dvec3 base = glm::floor(q), t = q - base;
+    double fill = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 bit((corner >> 0) & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        const glm::dvec3 weight = glm::mix(1.0 - t, t, bit);
+        fill += weight.x * weight.y * weight.z * std::clamp(0.5 - above(base + bit), 0.0, 1.0);
+    }
+    return fill;
+}
+
+// The snow under both walls, each antialiased along its own normal over a voxel, sigma_t h 15.
+Medium vGroove() {
+    initializeOpenVdb();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    auto acc = grid->getAccessor();
+    for (int x = 0; x < kWidth; ++x)
+        for (int y = 0; y < kLength; ++y)
+            for (int z = 1; z < kHeight; ++z) {
+                const glm::dvec3 q(x, y, z);
+                const double fill = std::clamp(0.5 - std::min(aboveLeft(q), aboveRight(q)), 0.0, 1.0);
+                if (fill > 0.0) acc.setValue(openvdb::Coord(x, y, z), float(100.0 * fill));
+            }
+    return Medium(grid, VolumeOptics{15.0, Rgb(0.999), 0.7});
+}
+
+}  // namespace
+
+// Each wall's patches within 4 voxels of the floor's line, away from the grid's ends: the start lies outside the
+// opposite wall's snow, its fill there under 2 % (an optical depth across a voxel under 0.3 of its 15). On main the
+// patch next to the floor's line on the wall rising to -x started 4 voxels out, in 8 %.
+TEST(PatchOutside, VGrooveWallPatchStartsOutsideTheOppositeWall) {
+    const Medium medium = vGroove();
+    const SnowTopology topo = buildSnowTopology(medium, Occluders{}, SubProgress(nullptr, 0.0, 1.0));
+    Medium::Accessor density = medium.accessor();
+    int patches = 0;
+    double deepest = 0.0;  // the opposite wall's largest fill at a start
+    for (std::size_t i = 0; i < topo.size(); ++i) {
+        const openvdb::Coord &c = topo.coord[i];
+        const double u = c.x() - kMiddle;
+        const SurfacePatch &patch = topo.patches[i];
+        if (!patch.isSurface() || patch.normal.z <= 0.0 || std::abs(u) > 4.0 || c.y() < 3 || c.y() > kLength - 4)
+            continue;  // the grid's floor and ends
+        const glm::dvec3 q = medium.worldToIndex(patchOutside(medium, topo, i, density));
+        deepest = std::max(deepest, wallFill(u < 0.0 ? aboveRight : aboveLeft, q));
+        ++patches;
+    }
+    EXPECT_GT(patches, 20);
+    EXPECT_LT(deepest, 0.02);
+}
+
+}  // namespace firn
