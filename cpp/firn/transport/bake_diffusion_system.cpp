@@ -161,7 +161,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
             for (int f = 0; f < 6; ++f)
                 if (boundary[f] && albedo[f] > 0.0)
                     groundLight[f] = albedo[f] * light.skyUnderSnow[SnowTopology::faceIndex(topo.link[i][f])][c];
-            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
+            const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), surface = patchSurface(medium, topo, i);
             for (std::size_t s = 0; s < light.beams.size(); ++s) {
                 const IncidentLight::Beam &beam = light.beams[s];
                 // W/m^2. Bs: facing the light, the beam outside the patch; facing away, the beam in the ramp
@@ -169,21 +169,18 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 const double Bv = beam.atVoxel[i][c], Bs = beam.atSurface[i][c];
                 if (Bv <= 0.0 && Bs <= 0.0) continue;
                 const glm::dvec3 w = towardsBeam(scene, s, centre);
-                const PatchWays ways = patchWays(scene, s, topo, i);
-                // Through the surface patch (where it faces the light in, else out; at a sharp edge face by face)
-                // and through the voxel's other faces. Per air face: W entering, and the cosine it enters at, over
-                // the patch's extent (LitSpan, as the incident light's facing test: a lamp's way varies).
+                // Through the surface patch (facing the light: in, else out; at a sharp edge face by face) and
+                // through the voxel's other faces. Per air face: W entering, and the cosine it enters at, to the
+                // light seen from the patch's surface (as the incident light's facing test: a lamp's way varies).
                 std::array<double, 6> entering{}, muIn{};
                 double in = 0.0, out = 0.0;
+                const glm::dvec3 wPatch = towardsBeam(scene, s, surface);
                 for (int f = 0; f < 6 && patch.isSurface(); ++f) {
                     if (patch.share[f] <= 0.0f) continue;
-                    const glm::dvec3 n = patch.sharp ? faceNormal(f) : patch.normal;
-                    const double muInner = glm::dot(n, ways.inner), muOuter = glm::dot(n, ways.outer);
-                    const LitSpan lit = litSpan(muInner, muOuter);
-                    const double flowIn = lit.entering() * patch.area * patch.share[f] * Bs;
-                    out += (lit.entering() - 0.5 * (muInner + muOuter)) * patch.area * patch.share[f] * Bv;
-                    in += flowIn;
-                    if (flowIn > 0.0) entering[f] = flowIn, muIn[f] = lit.cosine;
+                    const double mu = glm::dot(patch.sharp ? faceNormal(f) : patch.normal, wPatch);
+                    const double flow = mu * patch.area * patch.share[f] * (mu > 0.0 ? Bs : Bv);
+                    (flow > 0.0 ? in : out) += std::abs(flow);
+                    if (flow > 0.0) entering[f] = flow, muIn[f] = mu;
                 }
                 const double patchIn = in;
                 if (patchIn <= 0.0 && Bs > 0.0) source += rampInflow(aPrime, Bs, rampScatter);

@@ -300,6 +300,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const SurfacePatch &patch = topo.patches[i];
             if (!patch.sharp) continue;
+            const glm::dvec3 surface = patchSurface(medium, topo, i);
             std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
             for (int f = 0; f < 6; ++f)
                 if (patch.share[f] > 0.0f)
@@ -311,16 +312,13 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     if (patch.share[f] <= 0.0f) continue;
                     const glm::dvec3 n = faceNormal(f);
                     const ReturnedLight r = returnedThrough(c, i, n, patch.share[f], SkyBeam{}, [&](std::size_t s) {
-                        // The beam entered each face by its cosine to the light over the patch's extent, as the
-                        // diffusion let it in (bake_diffusion_system.cpp).
-                        const PatchWays ways = patchWays(scene, s, topo, i);
-                        const auto entering = [&](const glm::dvec3 &normal) {
-                            return litSpan(glm::dot(normal, ways.inner), glm::dot(normal, ways.outer)).entering();
-                        };
+                        // The beam entered each face by its cosine to the light seen from the patch's surface, as
+                        // the diffusion let it in (bake_diffusion_system.cpp).
+                        const glm::dvec3 w = towardsBeam(scene, s, surface);
                         double total = 0.0;
                         for (int g = 0; g < 6; ++g)
-                            if (patch.share[g] > 0.0f) total += entering(faceNormal(g));
-                        return total > 0.0 ? entering(n) / total : 0.0;
+                            if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
+                        return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
                     }, &out.surface(i));
                     const double leaving = outflow[f].first[c], area = outflow[f].second;
                     const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;

@@ -333,19 +333,6 @@ glm::dvec3 patchSurface(const Medium &medium, const SnowTopology &topo, std::siz
     return medium.voxelCentre(topo.coord[i]) + 0.5 * medium.voxelSize() * topo.patches[i].normal;
 }
 
-PatchWays patchWays(const Scene &scene, std::size_t b, const SnowTopology &topo, std::size_t i) {
-    const Medium &medium = *scene.medium;
-    const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
-    return {towardsBeam(scene, b, centre), towardsBeam(scene, b, centre + medium.voxelSize() * topo.patches[i].normal)};
-}
-
-LitSpan litSpan(double muInner, double muOuter) {
-    const double high = std::max(muInner, muOuter), low = std::min(muInner, muOuter);
-    if (low >= 0.0) return {1.0, 0.5 * (muInner + muOuter)};
-    if (high <= 0.0) return {};
-    return {high / (high - low), 0.5 * high};
-}
-
 glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
                              Medium::Accessor &density) {
     const glm::dvec3 n = topo.patches[i].normal;
@@ -410,7 +397,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                 const SurfacePatch &patch = topo.patches[i];
                 if (!patch.isSurface()) continue;
                 const glm::dvec3 surface = patchSurface(medium, topo, i), w = towardsBeam(scene, b, surface);
-                if (patchWays(scene, b, topo, i).lit(patch)) {
+                if (patch.facesTowards(w)) {
                     // Snow in the way from the line through the patch along the light, past the density ramp
                     // (patchOutsideAlong); occluders' shadow on the surface itself (half a voxel out), so shadow
                     // edges fall where they do on the snow.

@@ -25,8 +25,8 @@ struct IncidentLight {
         std::vector<glm::vec3> atVoxel;      // at each unknown's centre
         // Two things by the patch's side: facing the light, just outside the patch; facing away (cos > -0.5 to the
         // light, kRampBeamCosine in incident_light.cpp), the beam in the density ramp a voxel out along the normal
-        // (rampInflow). 0 elsewhere. A reader must tell the two apart by the patch's facing to the light over its
-        // extent (a lamp's way varies across a voxel): PatchWays::lit.
+        // (rampInflow). 0 elsewhere. A reader must tell the two apart by the patch's facing to the light seen from
+        // patchSurface (a lamp's way varies across a voxel): facesTowards(towardsBeam(b, patchSurface(i))).
         SurfaceValues<glm::vec3> atSurface;
     };
     std::vector<Beam> beams;
@@ -92,28 +92,6 @@ void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3
 // taken there. Taken from the voxel centre, half a voxel under the surface, a lamp 10 voxels from a ball stood higher
 // over every patch and the patches past its terminator took its light (docs/benchmarks.md, lamp-near).
 glm::dvec3 patchSurface(const Medium &medium, const SnowTopology &topology, std::size_t i);
-
-// The ways (unit) to beam b from the two ends of surface voxel i's patch along its normal: the voxel centre and a
-// voxel out, half a voxel either side of patchSurface. Where the snow's surface lies along the normal is known to
-// about a voxel (a ball's density half-crossing lies from 0.36 voxel under the centre to 1.45 out), and the cosine to
-// a lamp d away changes by (1 - cos^2) h / d over a voxel: at a near lamp's terminator the patch's facing hung on
-// that placement (docs/benchmarks.md, lamp-surface). A sun's two ways are one: its patches are as at one point.
-struct PatchWays {
-    glm::dvec3 inner, outer;
-    // Whether any of the patch's extent faces the light (SurfacePatch::facesTowards at either end).
-    bool lit(const SurfacePatch &patch) const { return patch.facesTowards(inner) || patch.facesTowards(outer); }
-};
-PatchWays patchWays(const Scene &scene, std::size_t b, const SnowTopology &topology, std::size_t i);
-
-// The light entering a patch's face over its extent, its cosine mu to the light taken linear between the patch's
-// two ends (PatchWays; mu at the inner and outer end): the share of the extent where mu > 0 and mu's mean there.
-// Over the extent the face lets in fraction * cosine = mean(max(0, mu)) of the beam per unit area, and lets out
-// mean(mu) - that of the voxel's own beam where mu < 0. Equal ends: all lit at mu, or none.
-struct LitSpan {
-    double fraction = 0.0, cosine = 0.0;
-    double entering() const { return fraction * cosine; }
-};
-LitSpan litSpan(double muInner, double muOuter);
 
 // Where light meets surface voxel i's patch: out along its normal, past the density ramp and any fringe. `density`:
 // the caller's (one per thread; an accessor made per call started each lookup from the tree's root).
