@@ -168,7 +168,6 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 // (rampInflow; incident_light.h, atSurface).
                 const double Bv = beam.atVoxel[i][c], Bs = beam.atSurface[i][c];
                 if (Bv <= 0.0 && Bs <= 0.0) continue;
-                const glm::dvec3 w = towardsBeam(scene, s, centre);
                 // Through the surface patch (facing the light: in, else out; at a sharp edge face by face) and
                 // through the voxel's other faces. Per air face: W entering, and the cosine it enters at, to the
                 // light seen from the patch's surface (as the incident light's facing test: a lamp's way varies).
@@ -186,7 +185,10 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 if (patchIn <= 0.0 && Bs > 0.0) source += rampInflow(aPrime, Bs, rampScatter);
                 std::array<double, 6> flow{};  // W through each link and occluder face, positive inwards
                 for (int f = 0; f < 6; ++f) {
-                    const double mu = glm::dot(faceNormal(f), w);
+                    // The way to the light from the face's own centre: a near lamp's beam spreads, and what it
+                    // loses sideways leaves through the side faces rather than counting as scattered.
+                    const glm::dvec3 n = faceNormal(f);
+                    const double mu = glm::dot(n, towardsBeam(scene, s, centre + 0.5 * h * n));
                     const std::int32_t link = topo.link[i][f];
                     if (!SnowTopology::isFace(link)) {
                         flow[f] = h2 * mu * std::sqrt(Bv * double(beam.atVoxel[link][c]));
