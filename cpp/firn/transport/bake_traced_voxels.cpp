@@ -279,14 +279,18 @@ namespace {
 
 // The faces of traced voxel `voxel` open to air (bit f for face f: -x, +x, -y, +y, -z, +z): an unknown's (`i`, its
 // index in `topo`) from the topology; a fringe voxel's (under 5 optical depths on a thicker one, kFringeOpticalDepth:
-// part of the density ramp, not an unknown, yet gathered where seen from 2 up) where its neighbour holds no snow.
-unsigned airFaces(const SnowTopology &topo, Medium::Accessor &density, const openvdb::Coord &voxel, std::int32_t i) {
+// part of the density ramp, not an unknown, yet traced, and thicker than kMaxDirectionFitTau) where its neighbour
+// holds no snow and no occluder lies between the two centres, as the topology's isAirFace.
+unsigned airFaces(const Medium &medium, const Occluders &occluders, const SnowTopology &topo,
+                  Medium::Accessor &density, const openvdb::Coord &voxel, std::int32_t i) {
     unsigned open = 0;
-    for (int f = 0; f < 6; ++f) {
-        openvdb::Coord n = voxel;
-        n[f / 2] += f % 2 ? 1 : -1;
-        open |= unsigned(i >= 0 ? topo.isAirFace(std::size_t(i), f) : !(density.getValue(n) > 0.0f)) << f;
+    if (i >= 0) {
+        for (int f = 0; f < 6; ++f) open |= unsigned(topo.isAirFace(std::size_t(i), f)) << f;
+        return open;
     }
+    for (int f = 0; f < 6; ++f)
+        open |= unsigned(!(density.getValue(voxel + faceStep(f)) > 0.0f) && !occluderAcross(medium, occluders, voxel, f))
+                << f;
     return open;
 }
 
@@ -347,7 +351,7 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
         const double tau = voxelOpticalDepth(medium, density, voxels[v]);
         FaceSources faces;
         if (how.inLayer.empty() ? tau > kMaxDirectionFitTau : how.inLayer[v] && tau > kMinLayerFaceTau)
-            faces.open = airFaces(topo, density, voxels[v], i);
+            faces.open = airFaces(medium, *scene.occluders, topo, density, voxels[v], i);
         if (!faces.open) continue;
         traced.facesAt[v] = std::int32_t(traced.faces.size());
         traced.faces.push_back(faces);
