@@ -1,6 +1,7 @@
 // The face sources of a floating layer's traced voxels (bake_traced_voxels.h, addFaceSources): up to
 // kMaxTracedSteps of paths, so Esc must stop them; how a face's collisions split by the trilinear hat
 // (MonteCarloReference::faceSourceIn); which faces are lit, and what the air beside them carries (gridValues).
+#include <bitset>
 #include <cmath>
 #include <utility>
 
@@ -349,6 +350,28 @@ TEST(FaceSources, AFringeOnTheGroundOpensNoFaceIntoIt) {
         ASSERT_GE(traced.facesAt[f], 0) << "fringe " << c;
         EXPECT_EQ(traced.faces[std::size_t(traced.facesAt[f])].open, fringeFacesOpen(c, 1u << 4)) << "fringe " << c;
     }
+}
+
+// Where the budget holds the unknowns' faces at their fewest paths but not the fringe's too, the fringe's drop and the
+// unknowns' keep theirs. Before, the fringe's faces made every face drop.
+TEST(FaceSources, AFringesFacesDropFirstAtTheBudgetsEdge) {
+    const Scene scene = lumpWithFringe();
+    const std::vector<openvdb::Coord> voxels = lumpAndFringeVoxels();
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, 64, 3, SubProgress(nullptr, 0.0, 1.0));
+    constexpr int kLumpFaces = 6 * 16, kFringeFaces = 15 + 16;  // the fringe's +x (one toward snow) and its rim's
+    const bake::FaceGathering how{64, 64, 1.0, 64.0 * (kLumpFaces + kFringeFaces / 2), {}};
+    bake::addFaceSources(scene, topo, voxels, how, 5, SubProgress(nullptr, 0.0, 1.0), traced);
+    ASSERT_EQ(traced.facesAt.size(), voxels.size());
+    int lumpFaces = 0;
+    for (std::size_t v = 0; v < voxels.size(); ++v) {
+        if (v >= 64) {
+            EXPECT_LT(traced.facesAt[v], 0) << "fringe " << voxels[v];
+        } else if (traced.facesAt[v] >= 0) {
+            lumpFaces += int(std::bitset<6>(traced.faces[std::size_t(traced.facesAt[v])].open).count());
+        }
+    }
+    EXPECT_EQ(lumpFaces, kLumpFaces);
 }
 
 // A face's collisions split by the trilinear hat as the quadrature splits them: at sigma_t h 2, where 17 % of them
