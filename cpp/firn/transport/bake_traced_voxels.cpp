@@ -279,14 +279,21 @@ namespace {
 
 // The faces of traced voxel `voxel` open to air (bit f for face f: -x, +x, -y, +y, -z, +z): an unknown's (`i`, its
 // index in `topo`) from the topology; a fringe voxel's (under 5 optical depths on a thicker one, kFringeOpticalDepth:
-// part of the density ramp, not an unknown, yet gathered where seen from 2 up) where its neighbour holds no snow.
-unsigned airFaces(const SnowTopology &topo, Medium::Accessor &density, const openvdb::Coord &voxel, std::int32_t i) {
+// part of the density ramp, not an unknown, yet traced, and thicker than kMaxDirectionFitTau) where its neighbour
+// holds no snow and no occluder lies between the two centres, as the topology's isAirFace. Its outer face (away from
+// the thick voxel) feeds only its shown value: the air across it lies two voxels from the surface unknowns, past
+// faceCarried's reach (air within one voxel of one), and takes the average of its neighbours' own values; a rim face's
+// source is carried where its air lies within that reach. No fringe's lit bits are read (litFacesToward: unknowns).
+unsigned airFaces(const Medium &medium, const Occluders &occluders, const SnowTopology &topo,
+                  Medium::Accessor &density, const openvdb::Coord &voxel, std::int32_t i) {
     unsigned open = 0;
-    for (int f = 0; f < 6; ++f) {
-        openvdb::Coord n = voxel;
-        n[f / 2] += f % 2 ? 1 : -1;
-        open |= unsigned(i >= 0 ? topo.isAirFace(std::size_t(i), f) : !(density.getValue(n) > 0.0f)) << f;
+    if (i >= 0) {
+        for (int f = 0; f < 6; ++f) open |= unsigned(topo.isAirFace(std::size_t(i), f)) << f;
+        return open;
     }
+    for (int f = 0; f < 6; ++f)
+        open |= unsigned(!(density.getValue(voxel + faceStep(f)) > 0.0f) && !occluderAcross(medium, occluders, voxel, f))
+                << f;
     return open;
 }
 
@@ -340,21 +347,32 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     Medium::Accessor density = medium.accessor();
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
     traced.facesAt.assign(voxels.size(), -1);
-    std::vector<FaceJob> jobs;  // by voxel
-    for (std::size_t v = 0; v < voxels.size(); ++v) {
-        const std::int32_t i = index.getValue(voxels[v]);
-        if (i < 0 && !how.inLayer.empty()) continue;  // a traced layer's faces are its unknowns'
-        const double tau = voxelOpticalDepth(medium, density, voxels[v]);
-        FaceSources faces;
-        if (how.inLayer.empty() ? tau > kMaxDirectionFitTau : how.inLayer[v] && tau > kMinLayerFaceTau)
-            faces.open = airFaces(topo, density, voxels[v], i);
-        if (!faces.open) continue;
-        traced.facesAt[v] = std::int32_t(traced.faces.size());
-        traced.faces.push_back(faces);
-        for (int f = 0; f < 6; ++f)
-            if (faces.open >> f & 1u) jobs.emplace_back(v, f);
-    }
+    std::vector<FaceJob> jobs;  // by voxel, the unknowns' first
+    const auto addFaces = [&](bool unknowns) {
+        for (std::size_t v = 0; v < voxels.size(); ++v) {
+            // A traced layer's voxels are all unknowns: under kTracedLayerOpticalDepth, it has no fringe.
+            const std::int32_t i = index.getValue(voxels[v]);
+            if ((i >= 0) != unknowns) continue;
+            const double tau = voxelOpticalDepth(medium, density, voxels[v]);
+            FaceSources faces;
+            if (how.inLayer.empty() ? tau > kMaxDirectionFitTau : how.inLayer[v] && tau > kMinLayerFaceTau)
+                faces.open = airFaces(medium, *scene.occluders, topo, density, voxels[v], i);
+            if (!faces.open) continue;
+            traced.facesAt[v] = std::int32_t(traced.faces.size());
+            traced.faces.push_back(faces);
+            for (int f = 0; f < 6; ++f)
+                if (faces.open >> f & 1u) jobs.emplace_back(v, f);
+        }
+    };
+    addFaces(true);
+    const std::size_t unknownsJobs = jobs.size(), unknownsFaces = traced.faces.size();
+    addFaces(false);
     const auto cost = [&](int paths) { return how.stepsPerPath * paths * double(jobs.size()); };
+    if (cost(how.fewestPaths) > how.budget) {  // the fringes' faces only where all fit: they never cost the unknowns'
+        jobs.resize(unknownsJobs), traced.faces.resize(unknownsFaces);
+        for (std::int32_t &at : traced.facesAt)
+            if (at >= std::int32_t(unknownsFaces)) at = -1;
+    }
     int samples = how.paths;
     if (cost(samples) > how.budget)  // as many as fit (no voxel or step: the budget's sign decides below)
         samples = std::max(how.fewestPaths, int(std::clamp(how.budget / cost(1), 0.0, double(samples))));

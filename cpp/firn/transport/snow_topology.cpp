@@ -268,6 +268,15 @@ void computeShell(const Medium &medium, SnowTopology &topo, int shellVoxels) {
 
 }  // namespace
 
+std::optional<RayCaster::Hit> occluderOnLink(const Medium &medium, const Occluders &occluders,
+                                             const openvdb::Coord &lower, int axis) {
+    const double h = medium.voxelSize();
+    glm::dvec3 up(0.0);
+    up[axis] = 1.0;
+    return occluders.caster().intersect(glm::vec3(medium.voxelCentre(lower) + kLinkRayNudge * h * up), glm::vec3(up),
+                                        0.0f, float(h));
+}
+
 SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress,
                                int shellVoxels) {
     const double h = medium.voxelSize();
@@ -327,20 +336,16 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
                 for (int f = 0; f < 6; ++f) {
                     BoundaryFace face{i, std::uint8_t(f), false, 0.0f, 0};
                     if (near[l]) {
-                        // Both voxels of a link test the same segment, from the lower centre (nudged along
-                        // the axis so that a surface through voxel centres cuts the link below them).
                         // Voxels come in offset order: the one below in the same leaf has tested its link up.
                         const bool up = f & 1;
                         const openvdb::Coord lower = up ? c : c + faceStep(f);
-                        const glm::dvec3 axis = faceNormal(f | 1);
-                        const double nudge = 1e-4 * h;
+                        const double nudge = kLinkRayNudge * h;
                         const openvdb::Index lowerOffset = IndexLeaf::coordToOffset(lower);
                         std::optional<RayCaster::Hit> hit;
                         if (!up && (c[f / 2] & 7) != 0 && leaf.isValueOn(lowerOffset))
                             hit = upHits[3 * lowerOffset + f / 2];
                         else
-                            hit = occluders.caster().intersect(glm::vec3(medium.voxelCentre(lower) + nudge * axis),
-                                                               glm::vec3(axis), 0.0f, float(h));
+                            hit = occluderOnLink(medium, occluders, lower, f / 2);
                         if (up) upHits[3 * lowerOffset + f / 2] = hit;
                         if (hit) {
                             face.occluder = true, face.triangle = hit->triangle;

@@ -3,6 +3,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -110,6 +111,20 @@ struct SnowTopology {
         return isFace(link[voxel][face]) && !faces[faceIndex(link[voxel][face])].occluder;
     }
 };
+
+// How far (voxels) a link's occluder ray starts past the lower voxel's centre, up the axis: a surface through voxel
+// centres then cuts the link below them.
+constexpr double kLinkRayNudge = 1e-4;
+
+// The occluder hit on the link from voxel `lower`'s centre to its neighbour's up axis `axis` (0..2), the ray starting
+// kLinkRayNudge voxels up it (distance m from there): both voxels of a link test this one segment.
+std::optional<RayCaster::Hit> occluderOnLink(const Medium &medium, const Occluders &occluders,
+                                             const openvdb::Coord &lower, int axis);
+
+// Whether an occluder lies between voxel c's centre and its neighbour's across face f (the topology's occluder face).
+inline bool occluderAcross(const Medium &medium, const Occluders &occluders, const openvdb::Coord &c, int face) {
+    return !occluders.empty() && occluderOnLink(medium, occluders, face & 1 ? c : c + faceStep(face), face / 2);
+}
 
 // Voxels with sigma_t h below this are too thin for diffusion: light crosses them (single scattering).
 constexpr double kMinVoxelOpticalDepth = 0.1;

@@ -1,6 +1,7 @@
 // The face sources of a floating layer's traced voxels (bake_traced_voxels.h, addFaceSources): up to
 // kMaxTracedSteps of paths, so Esc must stop them; how a face's collisions split by the trilinear hat
 // (MonteCarloReference::faceSourceIn); which faces are lit, and what the air beside them carries (gridValues).
+#include <bitset>
 #include <cmath>
 #include <utility>
 
@@ -266,12 +267,11 @@ TEST(FaceSources, TheAirBesideALumpsSunlitEdgeCarriesItsLitFaces) {
     }
 }
 
-// A lump's fringe (here a layer of sigma_t h 3 on the sunlit +x side of the 4 x 4 x 4 lump of sigma_t h 8) belongs to
-// the density ramp, not to the unknowns, but is gathered where seen as the lump's voxels are: it gathers its faces
-// open to air too (not the one against the lump), and its grid value is what those faces show (spray_dense over 16
-// seeds 17.26 -> 16.85 % per block; docs/benchmarks.md, spray-lit-cores). Before, a voxel that was no unknown
-// gathered none.
-TEST(FaceSources, ALumpsFringeGathersItsFacesOpenToAir) {
+namespace {
+
+// The sunlitLump with a fringe on its sunlit +x side: a layer of sigma_t h 3 at x = 4 (part of the density ramp, not
+// an unknown, yet traced and thicker than kMaxDirectionFitTau).
+Scene lumpWithFringe() {
     initializeOpenVdb();
     auto grid = openvdb::FloatGrid::create(0.0f);
     grid->setName("density");
@@ -279,31 +279,99 @@ TEST(FaceSources, ALumpsFringeGathersItsFacesOpenToAir) {
     const float perTau = float(1.0 / (10.0 * test::kBoxVoxel));  // kg/m^3 for sigma_t h 1 at 10 m^2/kg
     grid->fill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 3)), 8.0f * perTau);
     grid->fill(openvdb::CoordBBox(openvdb::Coord(4, 0, 0), openvdb::Coord(4, 3, 3)), 3.0f * perTau);
+    grid->tree().setValue(openvdb::Coord(5, 0, 1), 0.05f * perTau);  // holds snow, yet too thin for an unknown
     Scene scene;
     scene.medium = std::make_shared<Medium>(grid, VolumeOptics{10.0, Rgb(0.999), 0.85});
     scene.suns = {SunLight{glm::normalize(glm::dvec3(0.866, 0.0, 0.5)), Rgb(1.0), 0.0093}};
+    return scene;
+}
+
+// lumpWithFringe's traced voxels: the lump's (lumpVoxels), then its fringe's, y major, then the thin voxel.
+std::vector<openvdb::Coord> lumpAndFringeVoxels() {
     std::vector<openvdb::Coord> voxels = lumpVoxels();
     for (int y = 0; y < 4; ++y)
         for (int z = 0; z < 4; ++z) voxels.emplace_back(4, y, z);
+    voxels.emplace_back(5, 0, 1);
+    return voxels;
+}
+
+// The fringe voxel's faces open to air: +x and the rim's, not -x against the lump; nor +x where the thin voxel holds
+// snow (a traced voxel carries its own value), nor `closed`.
+unsigned fringeFacesOpen(const openvdb::Coord &c, unsigned closed = 0) {
+    const unsigned rim = unsigned(c.y() == 0) << 2 | unsigned(c.y() == 3) << 3 | unsigned(c.z() == 0) << 4 |
+                         unsigned(c.z() == 3) << 5;
+    const unsigned plusX = c == openvdb::Coord(4, 0, 1) ? 0u : 0b10u;
+    return (plusX | rim) & ~closed;
+}
+
+}  // namespace
+
+// A lump's fringe belongs to the density ramp, not to the unknowns, but is traced as the lump's voxels are: it gathers
+// its faces open to air too (not the one against the lump, nor one toward traced snow), and a voxel inside its layer
+// shows what those faces show (spray_dense over 16 seeds 17.26 -> 16.85 % per block; docs/benchmarks.md,
+// spray-lit-cores). A corner has too few neighbours in the layer (kMinLayerNeighbours) and keeps its mean. Before, a
+// voxel that was no unknown gathered none. (Brighter toward the sun than the mean does not hold at 256 paths: the
+// interior voxels' ratios 0.16-1.49.)
+TEST(FaceSources, ALumpsFringeGathersItsFacesOpenToAir) {
+    const Scene scene = lumpWithFringe();
+    const std::vector<openvdb::Coord> voxels = lumpAndFringeVoxels();
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
     const bake::MonteCarloVoxels traced = tracedWithFaces(scene, voxels, 256);
-    const bake::SourceValues source = tracedUnknowns(topo, voxels, traced);
-    const bake::Preset preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25};
-    const bake::GridValues values = bake::gridValues(scene, topo, source, traced, preset, BakeSettings{}, true);
-    bake::BakedValuesSampler sampler(topo, source, traced, values);
     const glm::dvec3 w = glm::normalize(glm::dvec3(0.866, 0.0, 0.5));  // towards a camera by the sun
-    for (std::size_t v = 64; v < voxels.size(); ++v) {
+    for (std::size_t v = 64; v < voxels.size() - 1; ++v) {
         const openvdb::Coord &c = voxels[v];
         ASSERT_LT(topo.index->getValue(c), 0) << "fringe " << c;  // not an unknown
         ASSERT_GE(traced.facesAt[v], 0) << "fringe " << c;
         const bake::FaceSources &faces = traced.faces[std::size_t(traced.facesAt[v])];
-        const unsigned rim = unsigned(c.y() == 0) << 2 | unsigned(c.y() == 3) << 3 | unsigned(c.z() == 0) << 4 |
-                             unsigned(c.z() == 3) << 5;
-        EXPECT_EQ(faces.open, 0b10u | rim) << "fringe " << c;  // +x and the rim's, not -x against the lump
-        EXPECT_GT(redToward(faces.source[1], w), 0.0);
-        const double shown = redToward(faces.shown, w);
-        EXPECT_NEAR(redToward(sampler.at(c), w), shown, 1e-5 * shown) << "fringe " << c;  // what its faces show
+        EXPECT_EQ(faces.open, fringeFacesOpen(c)) << "fringe " << c;
+        const double shown = redToward(faces.shown, w), mean = redToward(traced.source[v], w);
+        const bool corner = (c.y() == 0 || c.y() == 3) && (c.z() == 0 || c.z() == 3);
+        const bool interior = c.y() % 3 != 0 && c.z() % 3 != 0;
+        if (corner) {
+            EXPECT_EQ(shown, mean) << "fringe " << c;  // 3 neighbours in the layer: its mean
+        } else if (interior) {
+            EXPECT_NE(shown, mean) << "fringe " << c;  // 7 or 8: what its faces show
+        }
     }
+}
+
+// A fringe on the ground opens no face into it: an occluder between its centre and the one under it closes that face,
+// as the topology's (occluderAcross). Before, its face into the ground gathered from under it.
+TEST(FaceSources, AFringeOnTheGroundOpensNoFaceIntoIt) {
+    Scene scene = lumpWithFringe();
+    const float z = float(-0.5 * test::kBoxVoxel);  // between the lowest voxels' centres and those under them
+    const float v[] = {-1, -1, z, 1, -1, z, 1, 1, z, -1, 1, z};
+    const unsigned t[] = {0, 1, 2, 0, 2, 3};
+    scene.occluders = std::make_shared<Occluders>(makeTriangleMesh(v, 4, t, 2), std::vector<Rgb>(2, Rgb(0.5)));
+    const std::vector<openvdb::Coord> voxels = lumpAndFringeVoxels();
+    const bake::MonteCarloVoxels traced = tracedWithFaces(scene, voxels, 64);
+    for (std::size_t f = 64; f < voxels.size() - 1; ++f) {
+        const openvdb::Coord &c = voxels[f];
+        ASSERT_GE(traced.facesAt[f], 0) << "fringe " << c;
+        EXPECT_EQ(traced.faces[std::size_t(traced.facesAt[f])].open, fringeFacesOpen(c, 1u << 4)) << "fringe " << c;
+    }
+}
+
+// Where the budget holds the unknowns' faces at their fewest paths but not the fringe's too, the fringe's drop and the
+// unknowns' keep theirs. Before, the fringe's faces made every face drop.
+TEST(FaceSources, AFringesFacesDropFirstAtTheBudgetsEdge) {
+    const Scene scene = lumpWithFringe();
+    const std::vector<openvdb::Coord> voxels = lumpAndFringeVoxels();
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, 64, 3, SubProgress(nullptr, 0.0, 1.0));
+    constexpr int kLumpFaces = 6 * 16, kFringeFaces = 15 + 16;  // the fringe's +x (one toward snow) and its rim's
+    const bake::FaceGathering how{64, 64, 1.0, 64.0 * (kLumpFaces + kFringeFaces / 2), {}};
+    bake::addFaceSources(scene, topo, voxels, how, 5, SubProgress(nullptr, 0.0, 1.0), traced);
+    ASSERT_EQ(traced.facesAt.size(), voxels.size());
+    int lumpFaces = 0;
+    for (std::size_t v = 0; v < voxels.size(); ++v) {
+        if (v >= 64) {
+            EXPECT_LT(traced.facesAt[v], 0) << "fringe " << voxels[v];
+        } else if (traced.facesAt[v] >= 0) {
+            lumpFaces += int(std::bitset<6>(traced.faces[std::size_t(traced.facesAt[v])].open).count());
+        }
+    }
+    EXPECT_EQ(lumpFaces, kLumpFaces);
 }
 
 // A face's collisions split by the trilinear hat as the quadrature splits them: at sigma_t h 2, where 17 % of them
