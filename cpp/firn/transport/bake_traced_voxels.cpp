@@ -278,17 +278,22 @@ bool showsItsFaces(unsigned open, const std::vector<FaceJob> &jobs, const std::v
 namespace {
 
 // The faces of traced voxel `voxel` open to air (bit f for face f: -x, +x, -y, +y, -z, +z): an unknown's (`i`, its
-// index in `topo`) from the topology; a fringe voxel's (under 5 optical depths on a thicker one, kFringeOpticalDepth:
-// part of the density ramp, not an unknown, yet traced, and thicker than kMaxDirectionFitTau) where its neighbour
-// holds no snow and no occluder lies between the two centres, as the topology's isAirFace. Its outer face (away from
-// the thick voxel) feeds only its shown value: the air across it lies two voxels from the surface unknowns, past
-// faceCarried's reach (air within one voxel of one), and takes the average of its neighbours' own values; a rim face's
-// source is carried where its air lies within that reach. No fringe's lit bits are read (litFacesToward: unknowns).
+// index in `topo`) from the topology, but not one toward a traced voxel (a lump's fringe: that neighbour takes its own
+// value, so no air carries the face; spray_dense spent 278 of its unknowns' 507 faces so); a fringe voxel's (under 5
+// optical depths on a thicker one, kFringeOpticalDepth: part of the density ramp, not an unknown, yet traced, and
+// thicker than kMaxDirectionFitTau) where its neighbour holds no snow and no occluder lies between the two centres, as
+// the topology's isAirFace. Its outer face (away from the thick voxel) feeds only its shown value: the air across it
+// lies two voxels from the surface unknowns, past faceCarried's reach (air within one voxel of one), and takes the
+// average of its neighbours' own values; a rim face's source is carried where its air lies within that reach. No
+// fringe's lit bits are read (litFacesToward: unknowns).
 unsigned airFaces(const Medium &medium, const Occluders &occluders, const SnowTopology &topo,
-                  Medium::Accessor &density, const openvdb::Coord &voxel, std::int32_t i) {
+                  Medium::Accessor &density, TracedIndex &tracedIndex, const openvdb::Coord &voxel, std::int32_t i) {
     unsigned open = 0;
     if (i >= 0) {
-        for (int f = 0; f < 6; ++f) open |= unsigned(topo.isAirFace(std::size_t(i), f)) << f;
+        for (int f = 0; f < 6; ++f) {
+            const bool towardTraced = tracedIndex.getValue(voxel + faceStep(f)) >= 0;
+            open |= unsigned(topo.isAirFace(std::size_t(i), f) && !towardTraced) << f;
+        }
         return open;
     }
     for (int f = 0; f < 6; ++f)
@@ -346,6 +351,7 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     const Medium &medium = *scene.medium;
     Medium::Accessor density = medium.accessor();
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+    TracedIndex tracedIndex(traced);
     traced.facesAt.assign(voxels.size(), -1);
     std::vector<FaceJob> jobs;  // by voxel, the unknowns' first
     const auto addFaces = [&](bool unknowns) {
@@ -356,7 +362,7 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
             const double tau = voxelOpticalDepth(medium, density, voxels[v]);
             FaceSources faces;
             if (how.inLayer.empty() ? tau > kMaxDirectionFitTau : how.inLayer[v] && tau > kMinLayerFaceTau)
-                faces.open = airFaces(medium, *scene.occluders, topo, density, voxels[v], i);
+                faces.open = airFaces(medium, *scene.occluders, topo, density, tracedIndex, voxels[v], i);
             if (!faces.open) continue;
             traced.facesAt[v] = std::int32_t(traced.faces.size());
             traced.faces.push_back(faces);
