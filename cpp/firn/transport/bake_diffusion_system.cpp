@@ -10,8 +10,6 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/transport/diffusion_links.h"
-#include "firn/transport/lamps.h"
-#include "firn/util/sampling.h"
 
 namespace firn::bake {
 
@@ -52,22 +50,6 @@ struct BoundaryLink {
 // one at -0.02 about a' B A (1 - e^-tau') / 2, some ten times more on ball_issue (tau' 0.8 estimated); the lit
 // patches' ramp is not counted, a jump at mu0 0 (max of the two below a grazing cosine would close it; not tried).
 double rampInflow(double aPrime, double B, double rampScatter) { return 0.5 * aPrime * B * rampScatter; }
-
-// The way to beam b's light from a voxel face's centre (`face`, m, world), the voxel's centre `centre`: a near lamp's
-// beam spreads, and what it loses sideways leaves through the side faces rather than counting as scattered. A point
-// lamp's light spreads radially (its way from the face itself); an area lamp's piece of half-width a at distance d
-// spreads less: on its axis its light vector's divergence per unit irradiance is 2 d / (d^2 + a^2), not 2 / d, so the
-// way's change from the centre's is scaled by d^2 / (d^2 + a^2) (a^2 = area / pi; review s51: the way from the face
-// alone took ball_issue's bias under the 40 cm lamp from -4.7 to -8.3 %).
-glm::dvec3 faceWayToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &centre, const glm::dvec3 &face) {
-    const glm::dvec3 atFace = towardsBeam(scene, b, face);
-    if (b < scene.suns.size() || !scene.lamps[b - scene.suns.size()].isArea()) return atFace;
-    const Lamp &lamp = scene.lamps[b - scene.suns.size()];
-    const double area = lamp.sizeX * lamp.sizeY * (lamp.shape == Lamp::Shape::Ellipse ? 0.25 * kPi : 1.0);  // m^2
-    const double d2 = glm::dot(lamp.position - centre, lamp.position - centre), a2 = area / kPi;
-    const glm::dvec3 atCentre = towardsBeam(scene, b, centre);
-    return glm::normalize(atCentre + d2 / (d2 + a2) * (atFace - atCentre));
-}
 
 // One air face's term of rampScatter (m^2): its share of the patch, its ramp cell's reduced optical depth over a voxel.
 double rampScattering(double share, double tau) { return share * -std::expm1(-tau); }

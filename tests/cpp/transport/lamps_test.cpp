@@ -6,6 +6,8 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "firn/transport/incident_light.h"
+#include "firn/transport/scene.h"
 #include "firn/util/error.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
@@ -128,6 +130,26 @@ TEST(Lamp, RejectsBadSettings) {
     lamp.emission = Rgb(1.0);
     lamp.axis = {0, 0, 2};
     EXPECT_THROW(validate(lamp), InvalidArgument);
+}
+
+// A voxel face's way to a lamp (faceWayToBeam): a point lamp's from the face itself (its light spreads radially); an
+// area lamp's, of half-width a at distance d, turned from the centre's way by d^2 / (d^2 + a^2) of that (on its axis
+// a disc's light vector diverges at 2 d / (d^2 + a^2) per unit irradiance, a point's at 2 / d).
+TEST(Lamps, AnAreaLampsWayFromAVoxelFaceTurnsLessThanAPointLamps) {
+    const glm::dvec3 centre(0.0), face(0.005, 0.0, 0.0);  // m: the +x face of a 1 cm voxel
+    Lamp point;
+    point.position = glm::dvec3(0.0, 0.0, 0.1);
+    Lamp area = point;
+    area.shape = Lamp::Shape::Rectangle;
+    area.sizeX = area.sizeY = 0.1 * std::sqrt(kPi);  // a^2 = area / pi = d^2: half the point's turn
+    Scene scene;
+    scene.lamps = {point, area};
+    const glm::dvec3 atCentre = towardsBeam(scene, 0, centre), atFace = towardsBeam(scene, 0, face);
+    const glm::dvec3 pointWay = faceWayToBeam(scene, 0, centre, face);
+    EXPECT_NEAR(glm::length(pointWay - atFace), 0.0, 1e-12);
+    const glm::dvec3 areaWay = faceWayToBeam(scene, 1, centre, face);
+    EXPECT_NEAR(glm::length(areaWay - glm::normalize(atCentre + 0.5 * (atFace - atCentre))), 0.0, 1e-12);
+    EXPECT_GT(glm::length(areaWay - atFace), 0.4 * glm::length(atFace - atCentre));  // not the point's way
 }
 
 }  // namespace firn
