@@ -245,8 +245,7 @@ glm::dvec3 faceWayToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &ce
     const glm::dvec3 atFace = towardsBeam(scene, b, face);
     if (b < scene.suns.size() || !scene.lamps[b - scene.suns.size()].isArea()) return atFace;
     const Lamp &lamp = scene.lamps[b - scene.suns.size()];
-    const double area = lamp.sizeX * lamp.sizeY * (lamp.shape == Lamp::Shape::Ellipse ? 0.25 * kPi : 1.0);  // m^2
-    const double d2 = glm::dot(lamp.position - centre, lamp.position - centre), a2 = area / kPi;
+    const double d2 = glm::dot(lamp.position - centre, lamp.position - centre), a2 = lamp.area() / kPi;
     const glm::dvec3 atCentre = towardsBeam(scene, b, centre);
     return glm::normalize(atCentre + d2 / (d2 + a2) * (atFace - atCentre));
 }

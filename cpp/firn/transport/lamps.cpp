@@ -32,13 +32,9 @@ glm::dvec3 rectanglePoint(const Lamp &lamp, double u1, double u2) {
     return (u1 - 0.5) * lamp.sizeX * lamp.tangent + (u2 - 0.5) * lamp.sizeY * bitangentOf(lamp);
 }
 
-// A point uniform over the area lamp, relative to its centre, and the lamp's area (m^2).
-glm::dvec3 areaPoint(const Lamp &lamp, double u1, double u2, double &area) {
-    if (lamp.shape == Lamp::Shape::Rectangle) {
-        area = lamp.sizeX * lamp.sizeY;
-        return rectanglePoint(lamp, u1, u2);
-    }
-    area = 0.25 * kPi * lamp.sizeX * lamp.sizeY;
+// A point uniform over the area lamp, relative to its centre.
+glm::dvec3 areaPoint(const Lamp &lamp, double u1, double u2) {
+    if (lamp.shape == Lamp::Shape::Rectangle) return rectanglePoint(lamp, u1, u2);
     const glm::dvec3 bitangent = bitangentOf(lamp);
     const double r = std::sqrt(u1), phi = 2.0 * kPi * u2;
     return 0.5 * r * (std::cos(phi) * lamp.sizeX * lamp.tangent + std::sin(phi) * lamp.sizeY * bitangent);
@@ -48,19 +44,22 @@ bool isUnit(const glm::dvec3 &v) { return std::abs(glm::length(v) - 1.0) < 1e-6;
 
 }  // namespace
 
+double Lamp::area() const {
+    return shape == Shape::Ellipse ? 0.25 * kPi * sizeX * sizeY : sizeX * sizeY;
+}
+
 LampSample sampleLamp(const Lamp &lamp, const glm::dvec3 &x, double u1, double u2) {
     LampSample s;
     if (!(glm::length(x - lamp.position) > 1e-9)) return s;  // at the lamp's centre: no direction, no light
     glm::dvec3 q = lamp.position;
     double gain = 1.0;  // irradiance per unit emission, times the dimming by the lamp's own geometry
     if (lamp.isArea()) {
-        double area = 0.0;
-        q += areaPoint(lamp, u1, u2, area);
+        q += areaPoint(lamp, u1, u2);
         s.direction = q - x;
         s.distance = glm::length(s.direction);
         if (!(s.distance > 0.0)) return LampSample{};
         s.direction /= s.distance;
-        gain = area * std::max(0.0, -glm::dot(lamp.axis, s.direction)) / (s.distance * s.distance);
+        gain = lamp.area() * std::max(0.0, -glm::dot(lamp.axis, s.direction)) / (s.distance * s.distance);
     } else {
         const glm::dvec3 outward = glm::normalize(x - lamp.position);
         if (lamp.radius > 0.0)  // the sphere seen from x: a disc of its radius facing x

@@ -29,6 +29,7 @@ struct Lamp {
     double sizeX = 0.0, sizeY = 0.0;    // m, area lamps
 
     bool isArea() const { return shape == Shape::Rectangle || shape == Shape::Ellipse; }
+    double area() const;  // m^2, an area lamp's
 };
 
 // Light from one point of a lamp reaching x: an unbiased one-sample estimate of the lamp's irradiance.
