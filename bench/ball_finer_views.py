@@ -43,12 +43,11 @@ def main():
         e = np.full(len(seen), np.nan)
         e[seen] = baked[:, 1] / mc[:, 1] - 1.0
         per, n = case.pixels ** 2, case.pixels
+        of_view = np.nonzero(seen)[0] // per  # each seen block's view
         for v, view in enumerate(views):
-            k = slice(v * per, (v + 1) * per)
-            kk = seen[k]
+            bias = baked[of_view == v, 1].sum() / mc[of_view == v, 1].sum() - 1.0
             print(f"{case.name} on {100 * voxel:g} cm voxels, sun alone, view {view}: baked / Monte Carlo - 1 "
-                  f"(sum {baked[:, 1][np.nonzero(seen)[0] // per == v].sum() / mc[:, 1][np.nonzero(seen)[0] // per == v].sum() - 1:+.1%}; "
-                  f"its noise median {np.median(err[:, 1] / mc[:, 1]):.1%})")
+                  f"(sum {bias:+.1%}; its noise median {np.median(err[:, 1] / mc[:, 1]):.1%})")
             for r in reversed(range(n)):
                 cells = e[v * per + r * n:v * per + (r + 1) * n]
                 print("   " + " ".join("   .  " if np.isnan(x) else f"{100 * x:+5.0f} " for x in cells))

@@ -9,9 +9,11 @@ Monte Carlo sun) / reference, e_sky likewise (their sum differs from e by the re
 baked sun is split into its peaked lobes' part (grids firn_source_peak*: the ramp's single scattering, sunInRamp, and
 the surface's forward return) and its broad part (the diffusion's own light); the Monte Carlo sun into its exact single
 scattering (backlit_probe.single_scattering) and the rest. Per region: blocks, sum e^2 (and its share), sum e_sun^2,
-sum e_sky^2, the sum of the two runs' variance over the reference squared (what their noise adds to those two), mean e, and the four sums of radiance.
+sum e_sky^2, the two runs' variance over the reference squared, summed (what their noise adds to those two), mean e,
+and the four sums of radiance. With --voxel the same ball and snow on other voxels, against the two runs summed.
 
-    PYTHONPATH=build/python python3 bench/ball_light_budget.py [--case ball_issue] [--samples 4096] [--seed 0] [--maps] [--voxel 0.005]
+    PYTHONPATH=build/python python3 bench/ball_light_budget.py [--case ball_issue] [--samples 4096] [--seed 0]
+        [--maps] [--voxel 0.005]
 """
 
 import argparse
@@ -87,7 +89,8 @@ def main():
     parser.add_argument("--seed", type=int, default=0, help="the bakes'")
     parser.add_argument("--voxel", type=float, default=0.0,
                         help="the case's ball on voxels of this size (m), the same snow; its reference the lights' sum")
-    parser.add_argument("--maps", action="store_true", help="per view, the pixel maps of e, e_sun, e_sky and the sun's parts")
+    parser.add_argument("--maps", action="store_true",
+                        help="per view, the pixel maps of e, e_sun, e_sky and the sun's parts")
     parser.add_argument("--parts-cache", default=os.path.join(tempfile.gettempdir(), "firn_light_budget"))
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args()
@@ -127,8 +130,8 @@ def main():
           f"{(((sun + sky) / baked - 1) ** 2).sum():.3f}, worst {np.abs((sun + sky) / baked - 1).max():.1%}; per view "
           + ", ".join(
               f"{v} {baked[view == v].sum() / reference[view == v].sum() - 1:+.1%}" for v in dict.fromkeys(view)))
-    print("  view          region          blocks  sum e^2 (share)  e_sun^2  e_sky^2  noise  mean e  mean e_sun  mean e_sky   "
-          "sun: MC (once, more)         baked (peak, broad)          sky: MC  baked")
+    print("  view          region          blocks  sum e^2 (share)  e_sun^2  e_sky^2  noise  mean e  mean e_sun  "
+          "mean e_sky   sun: MC (once, more)         baked (peak, broad)          sky: MC  baked")
     rows = []
     for v in dict.fromkeys(view):
         for r in ("lit face", "lit limb", "terminator", "shadowed face", "shadowed limb"):
@@ -137,7 +140,8 @@ def main():
                 rows.append(((e[k] ** 2).sum(), v, r, k))
     for share, v, r, k in sorted(rows, key=lambda x: -x[0]):
         print(f"  {v:<13} {r:<15} {k.sum():4d}   {share:6.3f} ({share / total:4.0%})  {(e_sun[k] ** 2).sum():6.3f}  "
-              f"{(e_sky[k] ** 2).sum():6.3f}  {noise[k].sum():5.3f}  {e[k].mean():+5.1%}  {e_sun[k].mean():+6.1%}     {e_sky[k].mean():+6.1%}    "
+              f"{(e_sky[k] ** 2).sum():6.3f}  {noise[k].sum():5.3f}  {e[k].mean():+5.1%}  {e_sun[k].mean():+6.1%}     "
+              f"{e_sky[k].mean():+6.1%}    "
               f"{mc_sun[k].sum():.4f} ({once[k].sum():.4f}, {mc_sun[k].sum() - once[k].sum():.4f})  "
               f"{sun[k].sum():.4f} ({sun_peak[k].sum():.4f}, {sun[k].sum() - sun_peak[k].sum():.4f})  "
               f"{mc_sky[k].sum():.4f}  {sky[k].sum():.4f}")
