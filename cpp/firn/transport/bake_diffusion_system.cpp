@@ -68,7 +68,11 @@ double beamScatteringDepth(double mu, double L) { return 3.0 * mu * (1.0 - std::
 // at its mean depth (toNode, toBoundary), that through the sides at its node; voxel j below it, at L + j d,
 // scatters B0 q^(j - 1/2) (1 - q) of it, a geometric series. On flat slabs of omega 0.98, g 0.85 and omega 0.9,
 // g 0.6 overhead it gives 0.387 and 0.266 where the solve returned 0.387 and 0.267 (1D diffusion 0.393, 0.281).
-double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, double across) {
+// A near lamp's beam spreads: `spreadOut` (in `across`'s units) is the cosines its faces' own ways (faceWayToBeam) let
+// out of the top voxel's snow faces over the centre's way; the top voxel scatters that much less, and the neighbours
+// take it in at their nodes, where it scatters as from a top node (no share escaping at once): in grey snow 3 cm
+// under a point lamp, left out, the render read 8 % dark (docs/benchmarks.md, grey-lamps). 0 for a sun.
+double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, double across, double spreadOut) {
     const double beta = std::max(ch.beta(), 1e-9);
     const BoundaryLink top(beta, 2.0, L);
     const auto escaping = [&](double R) { return std::exp(-beta * R) / (1.0 + 2.0 * beta); };
@@ -79,7 +83,10 @@ double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, doubl
         (mu0 * (top.toBoundary(R) + top.toNode(R) * escaping(L)) + side * escaping(L)) / (mu0 + side);
     // (1 - q) / (1 - q exp(-beta d)), q = exp(-d / (3 mu0)), exact where the snow is thin
     const double series = std::expm1(-d / (3.0 * mu0)) / std::expm1(-d / (3.0 * mu0) - beta * d);
-    return ch.reducedAlbedo() * ((1.0 - B0 * halfPass) * topReturn + B0 * halfPass * series * escaping(L + d));
+    const double passedDown = B0 * halfPass * series * escaping(L + d);  // the voxels below's return, per W entering
+    const double sideways = std::clamp(spreadOut * B0 / mu0, 0.0, 1.0 - B0 * halfPass);  // W per W entering
+    return ch.reducedAlbedo() * ((1.0 - B0 * halfPass - sideways) * topReturn + passedDown +
+                                 sideways * ((1.0 - B0 * halfPass) * escaping(L) + passedDown));
 }
 
 ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, int c,

@@ -84,7 +84,7 @@ struct ChannelSystem {
 };
 
 // What the voxel scheme returns of a beam entering a half-space of uniform snow (bake_diffusion_system.cpp).
-double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, double across);
+double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, double across, double spreadOut);
 
 // Channel c's diffusion system, in `storage`'s vectors.
 ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, int c,

@@ -78,6 +78,21 @@ double acrossSnowFaces(const SnowTopology &topo, std::size_t i, const glm::dvec3
     return across * h * h / topo.patches[i].area;
 }
 
+// What beam b's way at each of surface voxel i's faces shared with snow (faceWayToBeam, the assembly's) lets out over
+// its way `w` at the centre, per m^2 of the patch as acrossSnowFaces (schemeBeamAlbedo's `spreadOut`): a near lamp's
+// beam spreads through the side faces; a sun's way is one everywhere (0 to the bit).
+double spreadingThroughSnowFaces(const Scene &scene, const SnowTopology &topo, std::size_t i, std::size_t b,
+                                 const glm::dvec3 &w, double h) {
+    const glm::dvec3 centre = scene.medium->voxelCentre(topo.coord[i]);
+    double spread = 0.0;
+    for (int f = 0; f < 6; ++f) {
+        if (SnowTopology::isFace(topo.link[i][f])) continue;
+        const glm::dvec3 n = faceNormal(f);
+        spread += glm::dot(n, w) - glm::dot(n, faceWayToBeam(scene, b, centre, centre + 0.5 * h * n));
+    }
+    return spread * h * h / topo.patches[i].area;
+}
+
 // Light returned through a patch (W and the first moments of its linear radiance), over and above the escape
 // function's share: of the sky (and light from other snow) and of the beams.
 struct ReturnedLight {
@@ -199,7 +214,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const glm::dvec3 t = travelAlong(d, n);
             const double returned = P * lobe.albedo;
             sunReturned += returned;
-            sunMissed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, acrossSnowFaces(topo, i, -d, h)));
+            sunMissed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, acrossSnowFaces(topo, i, -d, h),
+                                                             spreadingThroughSnowFaces(scene, topo, i, s, -d, h)));
             if (!peak) {
                 sun0 += returned * (lobe.a - 3.0 / 7.0);
                 sun1 += returned * (lobe.b * n + lobe.c * t - escape1);
