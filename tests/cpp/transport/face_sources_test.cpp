@@ -372,6 +372,29 @@ TEST(FaceSources, ALumpsFaceTowardItsTracedFringeGathersNothing) {
     }
 }
 
+// The air across a lump's fringe's outer face carries that face's source (faceCarried): the Monte Carlo of where the
+// face's cameras collide, though that air lies two voxels from the lump's surface unknowns. Before, it took the
+// average of its neighbours' values, the fringe's mean among them (docs/benchmarks.md, lump-contrast).
+TEST(FaceSources, TheAirPastALumpsFringeCarriesTheFringesOuterFace) {
+    const Scene scene = lumpWithFringe();
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    const std::vector<openvdb::Coord> voxels = lumpAndFringeVoxels();
+    const bake::MonteCarloVoxels traced = tracedWithFaces(scene, voxels, 256);
+    const bake::SourceValues source = tracedUnknowns(topo, voxels, traced);
+    const bake::Preset preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25};
+    const bake::GridValues values = bake::gridValues(scene, topo, source, traced, preset, BakeSettings{}, true);
+    bake::BakedValuesSampler sampler(topo, source, traced, values);
+    const glm::dvec3 w = glm::normalize(glm::dvec3(0.866, 0.0, 0.5));  // towards a camera by the sun
+    for (int y = 1; y <= 2; ++y)
+        for (int z = 1; z <= 2; ++z) {
+            const std::size_t v = std::size_t(64 + 4 * y + z);  // the fringe voxel (4, y, z)
+            ASSERT_GE(traced.facesAt[v], 0) << voxels[v];
+            const double face = redToward(traced.faces[std::size_t(traced.facesAt[v])].source[1], w);  // its +x
+            const openvdb::Coord air(5, y, z);
+            EXPECT_NEAR(redToward(sampler.at(air), w), face, 1e-5 * face) << "air " << air;
+        }
+}
+
 // Where the budget holds the unknowns' faces at their fewest paths but not the fringe's too, the fringe's drop and the
 // unknowns' keep theirs. Before, the fringe's faces made every face drop.
 TEST(FaceSources, AFringesFacesDropFirstAtTheBudgetsEdge) {
