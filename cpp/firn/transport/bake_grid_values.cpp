@@ -507,8 +507,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                                            openvdb::tools::IGNORE_TILES);
     }
     // Where facingAverage can find a surface voxel (within one voxel of one) and, beyond that, where a voxel can
-    // have a carried neighbour (within one of those or of a traced voxel): elsewhere neither looks at 26
-    // neighbours (the car's 3 M voxels of margin and fringe took 78 M lookups for 0.8 M values).
+    // have a carried neighbour or carry a traced voxel's face (within one of those or of a traced voxel): elsewhere
+    // none looks at its neighbours (the car's 3 M voxels of margin and fringe took 78 M lookups for 0.8 M values).
     openvdb::BoolTree nearSurface(*topo.index, false, openvdb::TopologyCopy());
     openvdb::tree::LeafManager<openvdb::BoolTree>(nearSurface).foreach(
         [&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
@@ -522,13 +522,15 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     nearCarried.topologyUnion(*traced.index);
     openvdb::tools::dilateActiveValues(nearCarried, 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                        openvdb::tools::IGNORE_TILES);
-    // First: traced voxels, and the voxels next to surface voxels (unknowns hold their own source).
+    // First: traced voxels, the air across a traced voxel's face (faceCarried: a lump's fringe's outer face too, two
+    // voxels from the surface unknowns: spray_dense over 16 seeds 16.27 -> 16.20 % per block, 15 lower; docs/
+    // benchmarks.md, lump-contrast), and the voxels next to surface voxels (unknowns hold their own source).
     Pairs perLeaf(leaves.leafCount());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         TracedIndex tracedIndex(traced);
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearPeakAt(nearPeak), peaksAt(peaks),
-            nearSurfaceAt(nearSurface);
+            nearSurfaceAt(nearSurface), nearCarriedAt(nearCarried);
         Medium::ColumnMarcher marcher(medium);
         Medium::Accessor density = medium.accessor();
         QuarterPointSun sunAt(medium, scene.suns.size());
@@ -541,8 +543,9 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 glm::dvec3 facing(0.0);  // the carrying surfaces' normal
                 openvdb::Coord carrier;  // and the surface voxel facing c most
                 if (t >= 0) S = ownValue(traced, t);
-                else if (!nearSurfaceAt.isValueOn(c) || index.getValue(c) >= 0) continue;
+                else if (!nearCarriedAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
+                else if (!nearSurfaceAt.isValueOn(c)) continue;
                 else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, facing, carrier)) continue;
                 else if (nearPeakAt.isValueOn(c)) {
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);

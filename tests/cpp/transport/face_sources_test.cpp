@@ -106,6 +106,22 @@ bake::SourceValues tracedUnknowns(const SnowTopology &topo, const std::vector<op
     return source;
 }
 
+// Every voxel traced (tracedWithFaces at 256 paths) and the grids' values around them as the bake sets them.
+struct TracedGrids {
+    SnowTopology topo;
+    bake::MonteCarloVoxels traced;
+    bake::SourceValues source;
+    bake::GridValues values;
+
+    TracedGrids(const Scene &scene, const std::vector<openvdb::Coord> &voxels)
+        : topo(buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0))),
+          traced(tracedWithFaces(scene, voxels, 256)), source(tracedUnknowns(topo, voxels, traced)),
+          values(bake::gridValues(scene, topo, source, traced, bake::Preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25},
+                                  BakeSettings{}, true)) {}
+    // The grids' value at voxel c.
+    Source at(const openvdb::Coord &c) const { return bake::BakedValuesSampler(topo, source, traced, values).at(c); }
+};
+
 }  // namespace
 
 // Every voxel holds a source for each of its air faces (the rim's sides too); cancelled, the faces' paths stop
@@ -233,20 +249,16 @@ TEST(FaceSources, AFloatingLayersRimVoxelShowsWhatItsFacesShow) {
 // voxels around it face it (facingAverage), not the edge voxels' means, which their moments fit reads 0.96 of the
 // converged ones towards the sun-lit views at 256 paths (docs/benchmarks.md, spray-air, spray-lit-faces).
 TEST(FaceSources, TheAirBesideALumpsSunlitEdgeCarriesItsLitFaces) {
-    const Scene scene = sunlitLump();
-    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
     const std::vector<openvdb::Coord> voxels = lumpVoxels();
-    const bake::MonteCarloVoxels traced = tracedWithFaces(scene, voxels, 256);
-    const bake::SourceValues source = tracedUnknowns(topo, voxels, traced);
+    const TracedGrids grids(sunlitLump(), voxels);
+    const SnowTopology &topo = grids.topo;
+    const bake::MonteCarloVoxels &traced = grids.traced;
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         if (traced.facesAt[v] < 0) continue;
         const bake::FaceSources &faces = traced.faces[std::size_t(traced.facesAt[v])];
         EXPECT_EQ(faces.lit, faces.open & 0b100010u) << "voxel " << voxels[v];  // +x and +z
     }
 
-    const bake::Preset preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25};
-    const bake::GridValues values = bake::gridValues(scene, topo, source, traced, preset, BakeSettings{}, true);
-    bake::BakedValuesSampler sampler(topo, source, traced, values);
     const glm::dvec3 w = glm::normalize(glm::dvec3(0.5, 0.0, 0.866));  // towards a camera 60 degrees up
     for (int y = 1; y <= 2; ++y) {
         const openvdb::Coord air(4, y, 4);
@@ -263,7 +275,7 @@ TEST(FaceSources, TheAirBesideALumpsSunlitEdgeCarriesItsLitFaces) {
         }
         expected.divideBy(total);
         const double carried = redToward(expected, w);
-        EXPECT_NEAR(redToward(sampler.at(air), w), carried, 1e-5 * carried) << "air " << air;
+        EXPECT_NEAR(redToward(grids.at(air), w), carried, 1e-5 * carried) << "air " << air;
     }
 }
 
@@ -370,6 +382,24 @@ TEST(FaceSources, ALumpsFaceTowardItsTracedFringeGathersNothing) {
             EXPECT_EQ(open, !fringeTraced) << lump[v];
         }
     }
+}
+
+// The air across a lump's fringe's outer face carries that face's source (faceCarried): the Monte Carlo of where the
+// face's cameras collide, though that air lies two voxels from the lump's surface unknowns. Before, it took the
+// average of its neighbours' values, the fringe's mean among them (docs/benchmarks.md, lump-contrast).
+TEST(FaceSources, TheAirPastALumpsFringeCarriesTheFringesOuterFace) {
+    const std::vector<openvdb::Coord> voxels = lumpAndFringeVoxels();
+    const TracedGrids grids(lumpWithFringe(), voxels);
+    const bake::MonteCarloVoxels &traced = grids.traced;
+    const glm::dvec3 w = glm::normalize(glm::dvec3(0.866, 0.0, 0.5));  // towards a camera by the sun
+    for (int y = 1; y <= 2; ++y)
+        for (int z = 1; z <= 2; ++z) {
+            const std::size_t v = std::size_t(64 + 4 * y + z);  // the fringe voxel (4, y, z)
+            ASSERT_GE(traced.facesAt[v], 0) << voxels[v];
+            const double face = redToward(traced.faces[std::size_t(traced.facesAt[v])].source[1], w);  // its +x
+            const openvdb::Coord air(5, y, z);
+            EXPECT_NEAR(redToward(grids.at(air), w), face, 1e-5 * face) << "air " << air;
+        }
 }
 
 // Where the budget holds the unknowns' faces at their fewest paths but not the fringe's too, the fringe's drop and the
