@@ -155,8 +155,10 @@ def test_ramp_in_front_of_a_lit_rim_carries_the_returned_grazing_sun(folder):
     # branch ball-rims: docs/benchmarks.md). Not a double count of the surface model's sun: with sunInRamp gated at
     # mu0 < 0 (voxels whose surfaces take no sun at all) the block reads +55.4 % too; the ramp there scatters the sun
     # the surfaces lack (the terminator test below bounds it from below), on a rim over-bright already (its baked
-    # radiance 1.5-2.7x the Monte Carlo's along the ray on main). Hence 0.56, not 0.55.
-    assert grey["worst"] < 0.56, grey["worst_signed"]
+    # radiance 1.5-2.7x the Monte Carlo's along the ray on main). Hence 0.56, not 0.55. Since the ramp's own sun is
+    # added to the carried peaks beside thick convex snow (branch rim-forward: the top rim's light) that block reads
+    # +57.9 %, hence 0.585.
+    assert grey["worst"] < 0.585, grey["worst_signed"]
     clean = baked_against_reference(folder, "ball_clean", 1024, [(180, 0)])
     assert clean["worst"] < 0.55, clean["worst_signed"]
 
@@ -944,3 +946,25 @@ def test_ramp_single_scattering_keeps_a_second_suns_forward_peak(folder):
     assert lit.sum() >= 15, lit.sum()
     kept = moment["both"][lit].sum() / moment["high"][lit].sum()
     assert kept > 0.62, kept
+
+
+def test_ramp_of_a_small_thick_ball_scatters_the_sun_crossing_its_rim(folder):
+    # Seen against the sun, a small thick ball's top rim and side rims (ball_issue's and ball_grey's outermost blocks
+    # of view (180, 0): 58-61, 40, 47) show the sun that entered the density ramp's outer part on a long chord and
+    # scattered a few times there (the core's Monte Carlo: 75 % of ball_issue's entered outside r + 0.3 voxels,
+    # orders 2-8 most; docs/benchmarks.md, rim-forward), not the surface's half-space return the ramp carries. With
+    # the ramp's own sun scattering added to the carried peaks where the ramp lies beside thick convex snow
+    # (sunInRamp) the sun alone reads, against these 4096 paths (the sum's noise 1.4 %, 0.5 %): ball_issue
+    # -31.1 % -> -25.1 %, ball_grey -31.6 % -> -24.8 %; the bound lies midway.
+    blocks = [58, 59, 60, 61, 40, 47]
+    for name in ("ball_issue", "ball_grey"):
+        c = case(name)
+        origins, directions, _ = bake_suite.views(c)
+        pick = [c.views.index((180, 0)) * c.pixels ** 2 + b for b in blocks]
+        path = os.path.join(folder, f"{name}_rim_sun.vdb")
+        bake_suite.write_density(path, c.density, c.voxel)
+        firncore.bake(path, c.optics, suns=c.suns(), quality="FINAL", seed=0)
+        baked = firncore.render_baked(path, c.optics, origins[pick], directions[pick])[:, 1].sum()
+        truth, _ = firncore.monte_carlo_radiance(path, c.optics, origins[pick], directions[pick], suns=c.suns(),
+                                                 samples=4096, seed=31)
+        assert baked / truth[:, 1].sum() - 1 > -0.28, (name, baked / truth[:, 1].sum() - 1)

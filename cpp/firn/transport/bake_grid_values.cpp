@@ -271,8 +271,9 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
 }
 
 // Surfaces that take a sun at most this grazingly (mu0 = cos of its angle to the normal) leave the sun in their
-// density ramp to the ramp itself (sunInRamp).
-constexpr double kGrazingSunCosine = 0.2;
+// density ramp to the ramp itself (sunInRamp; 0.2 before branch rim-forward: half of a ball's rim light seen against
+// the sun entered where mu0 >= 0.3, and 0.4 took ball_issue's view there -14 -> -13 %, docs/benchmarks.md).
+constexpr double kGrazingSunCosine = 0.4;
 
 // The suns' uncollided transmittance through the snow at the points of a quarter-voxel lattice (index space: odd
 // multiples of 1/4), each point marched once: the 4^3 points sunInRamp averages over a voxel's hat are shared with
@@ -325,9 +326,14 @@ class QuarterPointSun {
 // sun (bench/bake_suite.py; docs/bake.md, Method 7). The average, not T at c's centre: an air voxel just outside a limb
 // has T = 1 at its centre and shadowed snow in its hat (T at the centre read ball_grey's equator rims seen against the
 // sun +200 to +270 %); 3^3 points (the hat's trapezoid rule) lost slab_thick's and box_sharp's gains.
+// In the ramp of thick snow curving away faster than kSkyRampRadius (`curvedRamp`) it is added to the carried peak: the
+// carried peaks are the surface's half-space return, while there the sun crosses the ramp's outer part on a long chord
+// and scatters in it before reaching the snow (ball_issue's top rim seen against the sun: 75 % of its light entered
+// outside r + 0.3 voxels, orders 2-8 most; docs/benchmarks.md, rim-forward). Added on thin snow or flat walls it
+// lost: ball_thin, spray_lumps, slab_thin_forward, slab_thick.
 // normal: the carrying surfaces' (facingAverage), zero where none faces c.
 void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
-               QuarterPointSun &sunAt, Source &S) {
+               QuarterPointSun &sunAt, bool curvedRamp, Source &S) {
     if (glm::length(normal) == 0.0) return;
     // The occluders' shadow rays below only matter where some sun meets the surfaces grazingly or not at all: where
     // none does, each sun either returns or adds nothing (and peaks are never negative). The car's ramp, mostly lit.
@@ -361,7 +367,8 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
             single.addPeak(transmitted / weights * glm::dvec3(sun.irradiance) * glm::dvec3(optics.albedo) * kInvFourPi,
                            crossingAnisotropy(optics.g), -sun.direction);
     }
-    if (single.peak0.x + single.peak0.y + single.peak0.z > S.peak0.x + S.peak0.y + S.peak0.z)
+    if (curvedRamp) S.add(single);
+    else if (single.peak0.x + single.peak0.y + single.peak0.z > S.peak0.x + S.peak0.y + S.peak0.z)
         S.peak0 = single.peak0, S.peak1 = single.peak1;
 }
 
@@ -388,20 +395,25 @@ bool onConvexSurface(const SnowTopology &topo, const openvdb::Coord &carrier,
     return surfaceCurvature(topo, carrier, index) * kSkyRampRadius > 1.0;
 }
 
+// Whether ramp voxel c lies beside optically thick snow: some voxel of its 3^3 block at least a fringe's density
+// (kFringeOpticalDepth, buildSnowTopology's float threshold). Thinner, the light crossing it is the surface's own.
+bool besideThickSnow(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &c) {
+    const float fringeDensity =
+        float(kFringeOpticalDepth / (medium.optics().extinctionPerDensity * medium.voxelSize()));  // kg/m^3
+    for (int k = 0; k < 27; ++k)
+        if (density.getValue(c + blockOffset(k)) >= fringeDensity) return true;
+    return false;
+}
+
 void skyInRamp(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c, const glm::dvec3 &normal,
                const openvdb::Coord &carrier, openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
                Medium::Accessor &density, Medium::ColumnMarcher &marcher, Source &S) {
     if (glm::length(normal) == 0.0 || scene.sky.isBlack() || !onConvexSurface(topo, carrier, index)) return;
     const Medium &medium = *scene.medium;
     const double perColumn = medium.optics().extinctionPerDensity;  // m^2/kg: uncollided
-    // Only the ramp of optically thick snow: where the snow beside c is thinner than a fringe (kFringeOpticalDepth,
-    // buildSnowTopology's float threshold), the light crossing it is the surface's own (ball_thin, slab_thin,
-    // spray_lumps read +0.3, +0.3 and +1.1 points of bias).
-    const float fringeDensity = float(kFringeOpticalDepth / (perColumn * medium.voxelSize()));  // kg/m^3
-    bool thick = false;
-    for (int k = 0; k < 27 && !thick; ++k)
-        thick = density.getValue(c + blockOffset(k)) >= fringeDensity;
-    if (!thick) return;
+    // Only the ramp of optically thick snow (ball_thin, slab_thin, spray_lumps read +0.3, +0.3 and +1.1 points of
+    // bias with thinner).
+    if (!besideThickSnow(medium, density, c)) return;
     // c's trilinear hat by the midpoint rule on 2^3 points (half voxels from c's centre; 4^3 cost 8 times more for
     // the suite's figures within 0.1 points).
     std::array<std::pair<glm::dvec3, double>, 8> hat;  // the points (m) and weights holding snow
@@ -549,7 +561,9 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, facing, carrier)) continue;
                 else if (nearPeakAt.isValueOn(c)) {
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
-                    sunInRamp(scene, c, facing, marcher, sunAt, S);
+                    const bool curvedRamp =
+                        besideThickSnow(medium, density, c) && onConvexSurface(topo, carrier, index);
+                    sunInRamp(scene, c, facing, marcher, sunAt, curvedRamp, S);
                 }
                 if (!gathering) skyInRamp(scene, topo, c, facing, carrier, index, density, marcher, S);
                 perLeaf[l].add(it.pos(), S);
