@@ -77,17 +77,20 @@ bool visitTriangleInBox(RTCPointQueryFunctionArguments *args) {
 
 }  // namespace
 
-RayCaster::RayCaster(TriangleMesh mesh) : RayCaster(nullptr, std::move(mesh)) {}
+RayCaster::RayCaster(TriangleMesh mesh, Rays rays) : RayCaster(nullptr, std::move(mesh), rays) {}
 
-std::unique_ptr<const RayCaster> RayCaster::over(const TriangleMesh &mesh) {
-    return std::unique_ptr<const RayCaster>(new RayCaster(&mesh, TriangleMesh()));
+std::unique_ptr<const RayCaster> RayCaster::over(const TriangleMesh &mesh, Rays rays) {
+    return std::unique_ptr<const RayCaster>(new RayCaster(&mesh, TriangleMesh(), rays));
 }
 
-RayCaster::RayCaster(const TriangleMesh *borrowed, TriangleMesh owned)
+RayCaster::RayCaster(const TriangleMesh *borrowed, TriangleMesh owned, Rays rays)
     : impl_(std::make_unique<Impl>()), empty_(borrowed ? borrowed->empty() : owned.empty()) {
     RTCDevice device = impl_->embree.device;
-    // Few rays per triangle here: a fast build (Morton) beats a better tree.
-    rtcSetSceneBuildQuality(impl_->embree.scene, RTC_BUILD_QUALITY_LOW);
+    // Few rays per triangle: a fast build (Morton) beats a better tree. Many: the car's 10,644 occluder triangles
+    // build in milliseconds either way and their queries take half the time on the SAH tree (docs/benchmarks.md,
+    // car-profile).
+    const RTCBuildQuality quality = rays == Rays::Few ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_MEDIUM;
+    rtcSetSceneBuildQuality(impl_->embree.scene, quality);
     if (!empty_) {
         impl_->owned = std::move(owned);  // kept: its triangles are Embree's index buffer
         impl_->mesh = borrowed ? borrowed : &impl_->owned;
@@ -115,7 +118,7 @@ RayCaster::RayCaster(const TriangleMesh *borrowed, TriangleMesh owned)
         throwOnEmbreeError(device, "allocate the scene (out of memory?)");
         // The scene's quality alone leaves its one geometry's BVH at MEDIUM (SAH): 4x slower to build on 1M
         // triangles (0.33 s against 0.09 s, bench/snow_layer_bench.py's scene).
-        rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_LOW);
+        rtcSetGeometryBuildQuality(geometry, quality);
         impl_->embree.attach(geometry);
     }
     impl_->embree.commit("build the scene");

@@ -21,10 +21,15 @@ class RayCaster {
         glm::vec3 normal;     // unit geometric normal, counter-clockwise winding
     };
 
-    explicit RayCaster(TriangleMesh mesh);  // kept (moved in: pass a temporary to spare a copy)
+    // How many rays the caster will answer, which picks its BVH: `Few` (about as many as it has triangles: a
+    // snow layer's shelter) a Morton build, the fastest to make; `Many` (millions over a small mesh: the bake's
+    // occluders) a SAH build, slower to make and about twice as fast to query.
+    enum class Rays { Few, Many };
+
+    explicit RayCaster(TriangleMesh mesh, Rays rays = Rays::Few);  // kept (moved in: pass a temporary to spare a copy)
     // Built on `mesh` in place, not copied (a million triangles: 18 MB): `mesh` must outlive the caster, unchanged
     // and at its address.
-    static std::unique_ptr<const RayCaster> over(const TriangleMesh &mesh);
+    static std::unique_ptr<const RayCaster> over(const TriangleMesh &mesh, Rays rays = Rays::Few);
     ~RayCaster();
     RayCaster(const RayCaster &) = delete;
     RayCaster &operator=(const RayCaster &) = delete;
@@ -47,7 +52,7 @@ class RayCaster {
     bool empty() const { return empty_; }
 
   private:
-    RayCaster(const TriangleMesh *borrowed, TriangleMesh owned);  // on `borrowed`, or on `owned` when null
+    RayCaster(const TriangleMesh *borrowed, TriangleMesh owned, Rays rays);  // on `borrowed`, or `owned` when null
 
     struct Impl;
     std::unique_ptr<Impl> impl_;

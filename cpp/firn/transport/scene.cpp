@@ -29,7 +29,7 @@ Occluders::Occluders(TriangleMesh mesh, std::vector<Rgb> albedo)
             closedMax_ = glm::max(closedMax_, glm::dvec3(mesh_.vertex(t, k)));
         }
     }
-    caster_ = std::make_shared<RayCaster>(mesh_);
+    caster_ = std::make_shared<RayCaster>(mesh_, RayCaster::Rays::Many);  // every patch casts its sky rays at them
 }
 
 bool Occluders::mayEnclose(const glm::vec3 &p) const {
