@@ -6,7 +6,11 @@ at its first flight between two snow collisions through density at or under --cu
 Needs the temporary hooks of bench/curve_own_hooks.diff (valley-answer's hooks, and FIRN_CUT_DENSITY,
 FIRN_ORDER_MIN / FIRN_ORDER_MAX: the Monte Carlo's scattering orders kept; the bake's switches FIRN_SUN_DEEP,
 FIRN_NO_AVG, FIRN_NO_DRIFT, FIRN_SHAPE_U, FIRN_EXIT_WHOLE, FIRN_EXIT_PATCH, FIRN_AREA_FOOTPRINT, FIRN_RB,
-FIRN_RAMP_SCALE, FIRN_LAT_SCALE, set in the environment). --profile: every column's centre across a period from the
+FIRN_RAMP_SCALE, FIRN_LAT_SCALE, set in the environment; and fringe-node's: FIRN_FILL_DEPTH k, a surface voxel of
+fill f (its density over its 3^3 block's largest) under FIRN_FILL_MAX (default 1) has its air faces' ramp k (1 - f) of a
+full voxel's resistance longer; FIRN_FILL_SIDE c, its air faces at a cosine to the patch's normal under c extrapolate
+at full density (ramp / f); FIRN_FRINGE_RAMP s, the fringe's part of an air face's ramp (past the voxel's own half)
+times s, -1 the face's cosine to the normal). --profile: every column's centre across a period from the
 normal instead of valley, crest and the two views.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/curve_own_probe.py [--period 14] [--lift 0] [--scale 1]
