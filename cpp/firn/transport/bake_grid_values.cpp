@@ -561,8 +561,9 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, facing, carrier)) continue;
                 else if (nearPeakAt.isValueOn(c)) {
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
-                    const bool curvedRamp =
-                        besideThickSnow(medium, density, c) && onConvexSurface(topo, carrier, index);
+                    // carrier is a surface voxel only where some surface faces c (facing not zero)
+                    const bool curvedRamp = glm::length(facing) > 0.0 && besideThickSnow(medium, density, c) &&
+                                            onConvexSurface(topo, carrier, index);
                     sunInRamp(scene, c, facing, marcher, sunAt, curvedRamp, S);
                 }
                 if (!gathering) skyInRamp(scene, topo, c, facing, carrier, index, density, marcher, S);
