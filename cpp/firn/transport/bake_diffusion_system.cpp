@@ -68,10 +68,14 @@ double beamScatteringDepth(double mu, double L) { return 3.0 * mu * (1.0 - std::
 // at its mean depth (toNode, toBoundary), that through the sides at its node; voxel j below it, at L + j d,
 // scatters B0 q^(j - 1/2) (1 - q) of it, a geometric series. On flat slabs of omega 0.98, g 0.85 and omega 0.9,
 // g 0.6 overhead it gives 0.387 and 0.266 where the solve returned 0.387 and 0.267 (1D diffusion 0.393, 0.281).
-// A near lamp's beam spreads: `spreadOut` (in `across`'s units) is the cosines its faces' own ways (faceWayToBeam) let
-// out of the top voxel's snow faces over the centre's way; the top voxel scatters that much less, and the neighbours
-// take it in at their nodes, where it scatters as from a top node (no share escaping at once): in grey snow 3 cm
-// under a point lamp, left out, the render read 8 % dark (docs/benchmarks.md, grey-lamps). 0 for a sun.
+// A near lamp's beam spreads: `spreadOut` (in `across`'s units) is the cosines its faces' own ways (faceCosineToBeam)
+// let out of the top voxel's faces shared with snow (the side faces and the one below) over the centre's way; the
+// top voxel scatters that much less, and the neighbours take it in at their nodes, where it scatters as from a top
+// node (no share escaping at once): in grey snow 3 cm under a point lamp, left out, the render read 8 % dark
+// (docs/benchmarks.md, grey-lamps). 0 for a sun. On the flat slab of omega 0.9, g 0.6 under a point lamp 3 and 10 cm
+// up the solve returned 0.240 and 0.255 per W entering within 1.5 cm of the point under it, this 0.244 and 0.258
+// (spreadOut 0: 0.262, 0.264, the sun's); of omega 0.98, g 0.85 10 cm up, within 3.5 cm, 0.363 against 0.376 (0.385;
+// docs/benchmarks.md, mends-lamps52).
 double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, double across, double spreadOut) {
     const double beta = std::max(ch.beta(), 1e-9);
     const BoundaryLink top(beta, 2.0, L);
@@ -192,8 +196,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 if (patchIn <= 0.0 && Bs > 0.0) source += rampInflow(aPrime, Bs, rampScatter);
                 std::array<double, 6> flow{};  // W through each link and occluder face, positive inwards
                 for (int f = 0; f < 6; ++f) {
-                    const glm::dvec3 n = faceNormal(f);
-                    const double mu = glm::dot(n, faceWayToBeam(scene, s, centre, centre + 0.5 * h * n));
+                    const double mu = faceCosineToBeam(scene, s, centre, f, h);
                     const std::int32_t link = topo.link[i][f];
                     if (!SnowTopology::isFace(link)) {
                         flow[f] = h2 * mu * std::sqrt(Bv * double(beam.atVoxel[link][c]));

@@ -68,29 +68,25 @@ double densityBeneath(const SnowTopology &topo, std::size_t i, const glm::dvec3 
 
 namespace {
 
-// The beam towards w entering surface voxel i through its faces shared with snow, per W/m^2 at its node and m^2 of
-// its patch (schemeBeamAlbedo's `across`: on a flat grid face the cosines to the other axes; a staircase's steps
-// let less in so, the voxel's other air faces none).
-double acrossSnowFaces(const SnowTopology &topo, std::size_t i, const glm::dvec3 &w, double h) {
-    double across = 0.0;
-    for (int f = 0; f < 6; ++f)
-        if (!SnowTopology::isFace(topo.link[i][f])) across += std::max(0.0, glm::dot(faceNormal(f), w));
-    return across * h * h / topo.patches[i].area;
-}
-
-// What beam b's way at each of surface voxel i's faces shared with snow (faceWayToBeam, the assembly's) lets out over
-// its way `w` at the centre, per m^2 of the patch as acrossSnowFaces (schemeBeamAlbedo's `spreadOut`): a near lamp's
-// beam spreads through the side faces; a sun's way is one everywhere (0 to the bit).
-double spreadingThroughSnowFaces(const Scene &scene, const SnowTopology &topo, std::size_t i, std::size_t b,
-                                 const glm::dvec3 &w, double h) {
+// Beam b, towards w at surface voxel i's centre, through the voxel's faces shared with snow (the side faces and the
+// one below alike), per W/m^2 at its node and m^2 of its patch: schemeBeamAlbedo's `across`, what the faces let in
+// at w (on a flat grid face the cosines to the other axes; a staircase's steps let less in so, the voxel's other air
+// faces none), and its `spreadOut`, what each face's own way (faceCosineToBeam, the assembly's) lets out over w's. A
+// near lamp's beam spreads; a sun's way is one everywhere (spreadOut 0 to the bit).
+struct ThroughSnowFaces {
+    double across, spreadOut;
+};
+ThroughSnowFaces throughSnowFaces(const Scene &scene, const SnowTopology &topo, std::size_t i, std::size_t b,
+                                  const glm::dvec3 &w, double h) {
     const glm::dvec3 centre = scene.medium->voxelCentre(topo.coord[i]);
-    double spread = 0.0;
+    double across = 0.0, spreadOut = 0.0;
     for (int f = 0; f < 6; ++f) {
         if (SnowTopology::isFace(topo.link[i][f])) continue;
-        const glm::dvec3 n = faceNormal(f);
-        spread += glm::dot(n, w) - glm::dot(n, faceWayToBeam(scene, b, centre, centre + 0.5 * h * n));
+        const double mu = glm::dot(faceNormal(f), w);
+        across += std::max(0.0, mu);
+        spreadOut += mu - faceCosineToBeam(scene, b, centre, f, h);
     }
-    return spread * h * h / topo.patches[i].area;
+    return {across * h * h / topo.patches[i].area, spreadOut * h * h / topo.patches[i].area};
 }
 
 // Light returned through a patch (W and the first moments of its linear radiance), over and above the escape
@@ -214,8 +210,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const glm::dvec3 t = travelAlong(d, n);
             const double returned = P * lobe.albedo;
             sunReturned += returned;
-            sunMissed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, acrossSnowFaces(topo, i, -d, h),
-                                                             spreadingThroughSnowFaces(scene, topo, i, s, -d, h)));
+            const ThroughSnowFaces faces = throughSnowFaces(scene, topo, i, s, -d, h);
+            sunMissed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, faces.across, faces.spreadOut));
             if (!peak) {
                 sun0 += returned * (lobe.a - 3.0 / 7.0);
                 sun1 += returned * (lobe.b * n + lobe.c * t - escape1);

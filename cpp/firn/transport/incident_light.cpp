@@ -250,6 +250,11 @@ glm::dvec3 faceWayToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &ce
     return glm::normalize(atCentre + d2 / (d2 + a2) * (atFace - atCentre));
 }
 
+double faceCosineToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &centre, int f, double h) {
+    const glm::dvec3 n = faceNormal(f);
+    return glm::dot(n, faceWayToBeam(scene, b, centre, centre + 0.5 * h * n));
+}
+
 BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, int samples, std::uint64_t seed,
                   std::uint64_t stream, Medium::ColumnMarcher &marcher, const glm::dvec3 *shadowPoint,
                   Crossing crossing, const BlockMasses *blocks) {

@@ -135,6 +135,9 @@ glm::dvec3 towardsBeam(const Scene &scene, std::size_t b, const glm::dvec3 &poin
 // way's change from the centre's is scaled by d^2 / (d^2 + a^2) (a^2 = area / pi; review s51: the way from the face
 // alone took ball_issue's bias under the 40 cm lamp from -4.7 to -8.3 %).
 glm::dvec3 faceWayToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &centre, const glm::dvec3 &face);
+// The cosine between face f's outward normal and that way at its centre, for the voxel of width h (m) centred at
+// `centre`: positive where beam b enters through the face.
+double faceCosineToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &centre, int f, double h);
 
 struct BeamSample {
     glm::vec3 irradiance{0.0f};  // W/m^2 on a plane facing the light
