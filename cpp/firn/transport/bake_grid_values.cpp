@@ -375,7 +375,10 @@ class RampOfThickConvexSnow {
 // peak: the carried peaks are the surface's half-space return, while there the sun crosses the ramp's outer part on a
 // long chord and scatters in it before reaching the snow (ball_issue's top rim seen against the sun: 75 % of its light
 // entered outside r + 0.3 voxels, orders 2-8 most; docs/benchmarks.md, rim-forward). Added on thin snow or flat walls
-// it lost: ball_thin, spray_lumps, slab_thin_forward, slab_thick.
+// it lost: ball_thin, spray_lumps, slab_thin_forward, slab_thick. Added whole also where the carriers take the sun a
+// little (0 < mu0 < kGrazingSunCosine), whose ramp mass the half-space model holds too (patchRampMass), with a step
+// at kGrazingSunCosine: tapered by 1 - mu0 / kGrazingSunCosine (continuous), or added only where mu0 <= 0, it lost
+// (ball_issue's worst block +36 -> -40, -48 %, ball_grey 8.0 -> 8.3, 8.4 %; docs/benchmarks.md, mends-rim52).
 // normal: the carrying surfaces' (facingAverage), zero where none faces c.
 void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
                QuarterPointSun &sunAt, RampOfThickConvexSnow &rampOfThickConvexSnow, Source &S) {
