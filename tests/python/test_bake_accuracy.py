@@ -155,9 +155,11 @@ def test_ramp_in_front_of_a_lit_rim_carries_the_returned_grazing_sun(folder):
     # branch ball-rims: docs/benchmarks.md). Not a double count of the surface model's sun: with sunInRamp gated at
     # mu0 < 0 (voxels whose surfaces take no sun at all) the block reads +55.4 % too; the ramp there scatters the sun
     # the surfaces lack (the terminator test below bounds it from below), on a rim over-bright already (its baked
-    # radiance 1.5-2.7x the Monte Carlo's along the ray on main). Hence 0.56, not 0.55. Since the ramp's own sun is
-    # added to the carried peaks beside thick convex snow (branch rim-forward: the top rim's light) that block reads
-    # +57.9 %, hence 0.585.
+    # radiance 1.5-2.7x the Monte Carlo's along the ray on main). Hence 0.56, not 0.55. This block is over-bright, a
+    # known error: +55.4 % before and +57.9 % since the ramp's own sun is added to the carried peaks beside thick
+    # convex snow (branch rim-forward: the top rim's light, whose gains elsewhere outweigh it; tapering that addition
+    # with the carriers' mu0 did not recover the block, docs/benchmarks.md, mends-rim52). The bound 0.585 tolerates
+    # that regression of 2.5 points; it is not a measure of accuracy there.
     assert grey["worst"] < 0.585, grey["worst_signed"]
     clean = baked_against_reference(folder, "ball_clean", 1024, [(180, 0)])
     assert clean["worst"] < 0.55, clean["worst_signed"]
@@ -955,7 +957,11 @@ def test_ramp_of_a_small_thick_ball_scatters_the_sun_crossing_its_rim(folder):
     # orders 2-8 most; docs/benchmarks.md, rim-forward), not the surface's half-space return the ramp carries. With
     # the ramp's own sun scattering added to the carried peaks where the ramp lies beside thick convex snow
     # (sunInRamp) the sun alone reads, against these 4096 paths (the sum's noise 1.4 %, 0.5 %): ball_issue
-    # -31.1 % -> -25.1 %, ball_grey -31.6 % -> -24.8 %; the bound lies midway.
+    # -31.1 % -> -25.1 %, ball_grey -31.6 % -> -24.8 %; the lower bound lies midway. The upper bound catches a double
+    # count: the ramp's added sun is single scattering (p(30 deg) 0.176 at g 0.85) where the orders 2-8 that bring
+    # most of this light reach the camera through a broader lobe (p 0.27), so the bake stays below the Monte Carlo;
+    # counting ball_issue's carried peaks twice (0.96 of its blocks' 1.38 baked on main) would read about +30 %.
+    # -0.10 lies 15 points above the measured figures (10 times ball_issue's sum noise) and that far below 0.
     blocks = [58, 59, 60, 61, 40, 47]
     for name in ("ball_issue", "ball_grey"):
         c = case(name)
@@ -967,4 +973,5 @@ def test_ramp_of_a_small_thick_ball_scatters_the_sun_crossing_its_rim(folder):
         baked = firncore.render_baked(path, c.optics, origins[pick], directions[pick])[:, 1].sum()
         truth, _ = firncore.monte_carlo_radiance(path, c.optics, origins[pick], directions[pick], suns=c.suns(),
                                                  samples=4096, seed=31)
-        assert baked / truth[:, 1].sum() - 1 > -0.28, (name, baked / truth[:, 1].sum() - 1)
+        bias = baked / truth[:, 1].sum() - 1
+        assert -0.28 < bias < -0.10, (name, bias)

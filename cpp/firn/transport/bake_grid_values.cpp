@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -316,6 +317,51 @@ class QuarterPointSun {
     std::uint64_t leaf_ = 0;            // leaves started
 };
 
+// Whether the surface carrying a ramp voxel (`carrier`, the surface voxel facing it most: facingAverage) curves away
+// faster than a sphere of kSkyRampRadius voxels: only there is the sky the ramp sees below its plane past the snow's
+// limb worth its marches (a ball of 10 voxels misses 1 % of its sky, of 5 voxels 7 %: docs/benchmarks.md,
+// backlit-balls 2; the 5-voxel balls read kappa 0.20-0.25). Of the car's 710 k ramp voxels 39 k pass beside thick
+// snow (73 k at 8 voxels).
+constexpr double kSkyRampRadius = 5.5;  // voxels
+
+bool onConvexSurface(const SnowTopology &topo, const openvdb::Coord &carrier,
+                     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
+    return surfaceCurvature(topo, carrier, index) * kSkyRampRadius > 1.0;
+}
+
+// Whether ramp voxel c lies beside optically thick snow: some voxel of its 3^3 block at least a fringe's density
+// (kFringeOpticalDepth, buildSnowTopology's float threshold). Thinner, the light crossing it is the surface's own.
+bool besideThickSnow(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &c) {
+    const float fringeDensity =
+        float(kFringeOpticalDepth / (medium.optics().extinctionPerDensity * medium.voxelSize()));  // kg/m^3
+    for (int k = 0; k < 27; ++k)
+        if (density.getValue(c + blockOffset(k)) >= fringeDensity) return true;
+    return false;
+}
+
+// Whether ramp voxel c is the ramp of optically thick convex snow (besideThickSnow, its carrier onConvexSurface),
+// the test sunInRamp and skyInRamp share: asked only past their cheap early exits, found at most once per voxel.
+// Ask it only where the carrying surfaces' normal is not zero: elsewhere no surface faces c and carrier is none.
+class RampOfThickConvexSnow {
+  public:
+    RampOfThickConvexSnow(const SnowTopology &topo, const openvdb::Coord &c, const openvdb::Coord &carrier,
+                          openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::Accessor &density,
+                          const Medium &medium)
+        : topo_(topo), c_(c), carrier_(carrier), index_(index), density_(density), medium_(medium) {}
+    bool operator()() {
+        if (!known_) known_ = besideThickSnow(medium_, density_, c_) && onConvexSurface(topo_, carrier_, index_);
+        return *known_;
+    }
+
+  private:
+    const SnowTopology &topo_;
+    const openvdb::Coord &c_, &carrier_;
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index_;
+    Medium::Accessor &density_;
+    const Medium &medium_;
+    std::optional<bool> known_;
+};
+
 // The suns' light scattered once in ramp voxel c (outside the unknowns, carrying its surface's radiance) in front of
 // surfaces that take them at grazing incidence or not at all (kGrazingSunCosine): the peaked lobe of k = g about each
 // sun's travel, of mean omega E T / 4 pi, T the snow's uncollided transmittance averaged over c's trilinear hat
@@ -326,14 +372,17 @@ class QuarterPointSun {
 // sun (bench/bake_suite.py; docs/bake.md, Method 7). The average, not T at c's centre: an air voxel just outside a limb
 // has T = 1 at its centre and shadowed snow in its hat (T at the centre read ball_grey's equator rims seen against the
 // sun +200 to +270 %); 3^3 points (the hat's trapezoid rule) lost slab_thick's and box_sharp's gains.
-// In the ramp of thick snow curving away faster than kSkyRampRadius (`curvedRamp`) it is added to the carried peak: the
-// carried peaks are the surface's half-space return, while there the sun crosses the ramp's outer part on a long chord
-// and scatters in it before reaching the snow (ball_issue's top rim seen against the sun: 75 % of its light entered
-// outside r + 0.3 voxels, orders 2-8 most; docs/benchmarks.md, rim-forward). Added on thin snow or flat walls it
-// lost: ball_thin, spray_lumps, slab_thin_forward, slab_thick.
+// In the ramp of thick snow curving away faster than kSkyRampRadius (RampOfThickConvexSnow) it is added to the carried
+// peak: the carried peaks are the surface's half-space return, while there the sun crosses the ramp's outer part on a
+// long chord and scatters in it before reaching the snow (ball_issue's top rim seen against the sun: 75 % of its light
+// entered outside r + 0.3 voxels, orders 2-8 most; docs/benchmarks.md, rim-forward). Added on thin snow or flat walls
+// it lost: ball_thin, spray_lumps, slab_thin_forward, slab_thick. Added whole also where the carriers take the sun a
+// little (0 < mu0 < kGrazingSunCosine), whose ramp mass the half-space model holds too (patchRampMass), with a step
+// at kGrazingSunCosine: tapered by 1 - mu0 / kGrazingSunCosine (continuous), or added only where mu0 <= 0, it lost
+// (ball_issue's worst block +36 -> -40, -48 %, ball_grey 8.0 -> 8.3, 8.4 %; docs/benchmarks.md, mends-rim52).
 // normal: the carrying surfaces' (facingAverage), zero where none faces c.
 void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
-               QuarterPointSun &sunAt, bool curvedRamp, Source &S) {
+               QuarterPointSun &sunAt, RampOfThickConvexSnow &rampOfThickConvexSnow, Source &S) {
     if (glm::length(normal) == 0.0) return;
     // The occluders' shadow rays below only matter where some sun meets the surfaces grazingly or not at all: where
     // none does, each sun either returns or adds nothing (and peaks are never negative). The car's ramp, mostly lit.
@@ -367,7 +416,7 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
             single.addPeak(transmitted / weights * glm::dvec3(sun.irradiance) * glm::dvec3(optics.albedo) * kInvFourPi,
                            crossingAnisotropy(optics.g), -sun.direction);
     }
-    if (curvedRamp) S.add(single);
+    if (rampOfThickConvexSnow()) S.add(single);
     else if (single.peak0.x + single.peak0.y + single.peak0.z > S.peak0.x + S.peak0.y + S.peak0.z)
         S.peak0 = single.peak0, S.peak1 = single.peak1;
 }
@@ -383,37 +432,14 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
 // at c's centre.
 constexpr int kSkyBands = 3, kSkyAzimuths = 6;
 
-// Whether the surface carrying a ramp voxel (`carrier`, the surface voxel facing it most: facingAverage) curves away
-// faster than a sphere of kSkyRampRadius voxels: only there is the sky the ramp sees below its plane past the snow's
-// limb worth its marches (a ball of 10 voxels misses 1 % of its sky, of 5 voxels 7 %: docs/benchmarks.md,
-// backlit-balls 2; the 5-voxel balls read kappa 0.20-0.25). Of the car's 710 k ramp voxels 39 k pass beside thick
-// snow (73 k at 8 voxels).
-constexpr double kSkyRampRadius = 5.5;  // voxels
-
-bool onConvexSurface(const SnowTopology &topo, const openvdb::Coord &carrier,
-                     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
-    return surfaceCurvature(topo, carrier, index) * kSkyRampRadius > 1.0;
-}
-
-// Whether ramp voxel c lies beside optically thick snow: some voxel of its 3^3 block at least a fringe's density
-// (kFringeOpticalDepth, buildSnowTopology's float threshold). Thinner, the light crossing it is the surface's own.
-bool besideThickSnow(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &c) {
-    const float fringeDensity =
-        float(kFringeOpticalDepth / (medium.optics().extinctionPerDensity * medium.voxelSize()));  // kg/m^3
-    for (int k = 0; k < 27; ++k)
-        if (density.getValue(c + blockOffset(k)) >= fringeDensity) return true;
-    return false;
-}
-
-void skyInRamp(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c, const glm::dvec3 &normal,
-               const openvdb::Coord &carrier, openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
-               Medium::Accessor &density, Medium::ColumnMarcher &marcher, Source &S) {
-    if (glm::length(normal) == 0.0 || scene.sky.isBlack() || !onConvexSurface(topo, carrier, index)) return;
+void skyInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal,
+               openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
+               RampOfThickConvexSnow &rampOfThickConvexSnow, Medium::ColumnMarcher &marcher, Source &S) {
+    // Only the ramp of optically thick convex snow (ball_thin, slab_thin, spray_lumps read +0.3, +0.3 and +1.1 points
+    // of bias with thinner).
+    if (glm::length(normal) == 0.0 || scene.sky.isBlack() || !rampOfThickConvexSnow()) return;
     const Medium &medium = *scene.medium;
     const double perColumn = medium.optics().extinctionPerDensity;  // m^2/kg: uncollided
-    // Only the ramp of optically thick snow (ball_thin, slab_thin, spray_lumps read +0.3, +0.3 and +1.1 points of
-    // bias with thinner).
-    if (!besideThickSnow(medium, density, c)) return;
     // c's trilinear hat by the midpoint rule on 2^3 points (half voxels from c's centre; 4^3 cost 8 times more for
     // the suite's figures within 0.1 points).
     std::array<std::pair<glm::dvec3, double>, 8> hat;  // the points (m) and weights holding snow
@@ -554,6 +580,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 Source S;
                 glm::dvec3 facing(0.0);  // the carrying surfaces' normal
                 openvdb::Coord carrier;  // and the surface voxel facing c most
+                RampOfThickConvexSnow rampOfThickConvexSnow(topo, c, carrier, index, density, medium);
                 if (t >= 0) S = ownValue(traced, t);
                 else if (!nearCarriedAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
@@ -561,12 +588,9 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, facing, carrier)) continue;
                 else if (nearPeakAt.isValueOn(c)) {
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
-                    // carrier is a surface voxel only where some surface faces c (facing not zero)
-                    const bool curvedRamp = glm::length(facing) > 0.0 && besideThickSnow(medium, density, c) &&
-                                            onConvexSurface(topo, carrier, index);
-                    sunInRamp(scene, c, facing, marcher, sunAt, curvedRamp, S);
+                    sunInRamp(scene, c, facing, marcher, sunAt, rampOfThickConvexSnow, S);
                 }
-                if (!gathering) skyInRamp(scene, topo, c, facing, carrier, index, density, marcher, S);
+                if (!gathering) skyInRamp(scene, c, facing, index, rampOfThickConvexSnow, marcher, S);
                 perLeaf[l].add(it.pos(), S);
             }
         }
