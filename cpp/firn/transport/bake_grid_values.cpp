@@ -341,7 +341,7 @@ bool besideThickSnow(const Medium &medium, Medium::Accessor &density, const open
 
 // Whether ramp voxel c is the ramp of optically thick convex snow (besideThickSnow, its carrier onConvexSurface),
 // the test sunInRamp and skyInRamp share: asked only past their cheap early exits, found at most once per voxel.
-// Ask it only where the carrying surfaces' normal is not zero: elsewhere no surface faces c and carrier is none.
+// Asked past a zero normal's exit: there no surface faces c and carrier is none (surfaceCurvature reads 0).
 class RampOfThickConvexSnow {
   public:
     RampOfThickConvexSnow(const SnowTopology &topo, const openvdb::Coord &c, const openvdb::Coord &carrier,

@@ -383,7 +383,9 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
 
 double surfaceCurvature(const SnowTopology &topo, const openvdb::Coord &cj,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
-    const glm::dvec3 n = topo.patches[std::size_t(index.getValue(cj))].normal;
+    const std::int32_t j = index.getValue(cj);
+    if (j < 0 || !topo.patches[std::size_t(j)].isSurface()) return 0.0;  // no surface at cj: nothing curves
+    const glm::dvec3 n = topo.patches[std::size_t(j)].normal;
     std::array<std::pair<glm::dvec3, glm::dvec3>, 27> near;  // offsets (voxels) and normals
     std::array<double, 27> weight{};
     int count = 0;

@@ -198,4 +198,20 @@ TEST(SnowTopology, SurfaceCurvatureIsOneOverTheRadiusOnABallAndZeroOnAFlatTop) {
     EXPECT_EQ(tops, 14 * 14);
 }
 
+// A voxel that is no surface voxel has no surface to curve: the ball's inner voxels (whose patches hold the default
+// normal +z: under the ball's top one read the top's curvature) and the air beside it read 0 (the grids' ramp asked it
+// of a voxel no surface faced and read the patch at index -1).
+TEST(SnowTopology, SurfaceCurvatureIsZeroAwayFromTheSurface) {
+    const SnowTopology topo = buildSnowTopology(ball(5, 100.0f, 10.0), Occluders{}, SubProgress(nullptr, 0.0, 1.0));
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+    int inner = 0;
+    for (std::size_t i = 0; i < topo.size(); ++i)
+        if (!topo.patches[i].isSurface()) {
+            EXPECT_EQ(surfaceCurvature(topo, topo.coord[i], index), 0.0) << topo.coord[i];
+            ++inner;
+        }
+    ASSERT_GT(inner, 100);
+    EXPECT_EQ(surfaceCurvature(topo, openvdb::Coord(0, 0, 0), index), 0.0);  // air, no index
+}
+
 }  // namespace firn
