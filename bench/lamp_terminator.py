@@ -17,6 +17,9 @@ dark). The references are cached under --cache by case, light and samples.
 block (their own cached references): a near lamp's light varying across a voxel is a question of the voxel's size
 (docs/benchmarks.md, grey-lamps2).
 
+--round 24 takes 24 views spread over the sphere instead of the suite's four: its bias is the light leaving the
+ball in all directions, the bake's against the truth's.
+
 --sweep: the terminator crossing patches (the ramp's jump at mu0 = 0): the sun alone rotated in 0.5 degree steps
 about the y axis (elevation 18-42), the baked source (broad l0 + peaked, green, W/m^2/sr) of the outer voxels
 (centres beyond R - h) in the sun's plane whose normals lie 80-100 degrees from the sun at elevation 30, printed
@@ -51,6 +54,16 @@ def centre_of(case):
 def on_voxels(case, voxel):
     """`case`'s ball (radius 5 cm, the same snow per metre) on voxels of `voxel` m."""
     return dataclasses.replace(case, density=ball(0.05, voxel) * case.rho, voxel=voxel)
+
+
+def round_views(n):
+    """n view directions (azimuth, elevation; degrees) spread evenly over the sphere (a Fibonacci lattice): the sum of
+    the blocks over them is the light leaving the ball, in every direction at once."""
+    views = []
+    for k in range(n):
+        z = 1.0 - (k + 0.5) / n * 2.0
+        views.append((round(k * 137.50776 % 360.0, 2), round(math.degrees(math.asin(z)), 2)))
+    return views
 
 
 def lamp(kind, case):
@@ -185,6 +198,7 @@ def main():
     parser.add_argument("--lights", default="sun,point,spot,area")
     parser.add_argument("--voxel", type=float, help="m: the ball on these voxels instead of the case's")
     parser.add_argument("--samples", type=int, help="the reference's paths per block instead of SAMPLES'")
+    parser.add_argument("--round", type=int, help="this many views spread over the sphere instead of the case's")
     parser.add_argument("--sweep", action="store_true", help="the terminator sweep instead (the first case)")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_lamp_terminator"))
     args = parser.parse_args()
@@ -196,6 +210,8 @@ def main():
             case = suite_case(name)
             if args.voxel:
                 case = on_voxels(case, args.voxel)
+            if args.round:
+                case = dataclasses.replace(case, views=round_views(args.round))
             what = case.what + (" at 1 cm" if args.voxel else "")
             print(f"{name}: {what}; voxel {case.voxel * 100:g} cm; no sky; views {case.views}")
             print(f"  {'light':<6} {'mean':>6} {'worst':>6} {'bias':>6} {'noise':>6}   per view bias")
