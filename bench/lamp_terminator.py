@@ -13,6 +13,13 @@ dark). The references are cached under --cache by case, light and samples.
 
     PYTHONPATH=build/python python3 bench/lamp_terminator.py [--cases ball_grey,ball_issue] [--lights sun,point,...]
 
+--voxel 0.005 bakes the same ball (the same snow per metre) on finer voxels, --samples sets the reference's paths per
+block (their own cached references): a near lamp's light varying across a voxel is a question of the voxel's size
+(docs/benchmarks.md, grey-lamps2).
+
+--round 24 takes 24 views spread over the sphere instead of the suite's four: its bias is the light leaving the
+ball in all directions, the bake's against the truth's.
+
 --sweep: the terminator crossing patches (the ramp's jump at mu0 = 0): the sun alone rotated in 0.5 degree steps
 about the y axis (elevation 18-42), the baked source (broad l0 + peaked, green, W/m^2/sr) of the outer voxels
 (centres beyond R - h) in the sun's plane whose normals lie 80-100 degrees from the sun at elevation 30, printed
@@ -20,6 +27,7 @@ against mu0 = cos(normal, sun).
 """
 
 import argparse
+import dataclasses
 import hashlib
 import math
 import os
@@ -29,7 +37,7 @@ import time
 import numpy as np
 
 import firncore
-from bake_suite import SUN_ELEVATION, case as suite_case, depth_one_points, views, write_density
+from bake_suite import SUN_ELEVATION, ball, case as suite_case, depth_one_points, views, write_density
 
 DISTANCE = 0.15  # m, lamp to the ball's centre
 SPOT_ANGLE_DEG, SPOT_BLEND = 50.0, 0.3  # the spot's cone (degrees) and blend
@@ -41,6 +49,21 @@ SAMPLES = {"ball_grey": 16384, "ball_issue": 4096}  # paths per pixel: ball_issu
 
 def centre_of(case):
     return (np.array(case.density.shape) - 1) / 2 * case.voxel
+
+
+def on_voxels(case, voxel):
+    """`case`'s ball (radius 5 cm, the same snow per metre) on voxels of `voxel` m."""
+    return dataclasses.replace(case, density=ball(0.05, voxel) * case.rho, voxel=voxel)
+
+
+def round_views(n):
+    """n view directions (azimuth, elevation; degrees) spread evenly over the sphere (a Fibonacci lattice): the sum of
+    the blocks over them is the light leaving the ball, in every direction at once."""
+    views = []
+    for k in range(n):
+        z = 1.0 - (k + 0.5) / n * 2.0
+        views.append((round(k * 137.50776 % 360.0, 2), round(math.degrees(math.asin(z)), 2)))
+    return views
 
 
 def lamp(kind, case):
@@ -173,6 +196,9 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--cases", default="ball_grey,ball_issue")
     parser.add_argument("--lights", default="sun,point,spot,area")
+    parser.add_argument("--voxel", type=float, help="m: the ball on these voxels instead of the case's")
+    parser.add_argument("--samples", type=int, help="the reference's paths per block instead of SAMPLES'")
+    parser.add_argument("--round", type=int, help="this many views spread over the sphere instead of the case's")
     parser.add_argument("--sweep", action="store_true", help="the terminator sweep instead (the first case)")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_lamp_terminator"))
     args = parser.parse_args()
@@ -182,11 +208,16 @@ def main():
             return sweep(args.cases.split(",")[0], folder)
         for name in args.cases.split(","):
             case = suite_case(name)
-            print(f"{name}: {case.what}; no sky; views {case.views}")
+            if args.voxel:
+                case = on_voxels(case, args.voxel)
+            if args.round:
+                case = dataclasses.replace(case, views=round_views(args.round))
+            what = case.what + (" at 1 cm" if args.voxel else "")
+            print(f"{name}: {what}; voxel {case.voxel * 100:g} cm; no sky; views {case.views}")
             print(f"  {'light':<6} {'mean':>6} {'worst':>6} {'bias':>6} {'noise':>6}   per view bias")
             rows = {}
             for kind in args.lights.split(","):
-                r = rows[kind] = measure(case, kind, folder, args.cache)
+                r = rows[kind] = measure(case, kind, folder, args.cache, args.samples)
                 print(f"  {kind:<6} {100 * r['mean']:5.1f}% {100 * r['worst']:+5.0f}% {100 * r['bias']:+5.1f}% "
                       f"{100 * r['noise']:5.1f}%   " + "  ".join(f"{100 * x:+4.0f}%" for x in r["views"]), flush=True)
             print("  by the local cosine to the light (baked / Monte Carlo - 1 of the sums, blocks): "
