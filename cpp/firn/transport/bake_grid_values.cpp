@@ -49,14 +49,6 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const SourceValues &source,
                    TracedIndex &tracedIndex, const MonteCarloVoxels &traced, Source &S, glm::dvec3 &facing,
                    openvdb::Coord &carrier) {
-    static const std::array<glm::dvec3, 27> towardsC = [] {  // unit, by blockOffset's k: (dx, dy, dz)
-        std::array<glm::dvec3, 27> out;
-        for (int k = 0; k < 27; ++k) {
-            const openvdb::Coord d = blockOffset(k);
-            out[k] = glm::normalize(glm::dvec3(d.x(), d.y(), d.z()));  // (0, 0, 0)'s NaN: w = max(0, NaN) = 0
-        }
-        return out;
-    }();
     double total = 0.0, most = 0.0;
     int count = 0, mostAt = 27;
     glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0), normal(0.0);
@@ -66,8 +58,9 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
             for (int dz = -1; dz <= 1; ++dz) {
                 const std::int32_t j = index.getValue(c.offsetBy(-dx, -dy, -dz));
                 if (j < 0 || !topo.patches[j].isSurface()) continue;
+                const double w =
+                    std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
                 const int k = (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);  // blockOffset(k): (dx, dy, dz)
-                const double w = std::max(0.0, glm::dot(topo.patches[j].normal, towardsC[k]));
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
                 const Source v =
@@ -246,10 +239,9 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
         const openvdb::Coord from = c + o.from;
         if (!peakAt.isOn(from)) continue;
         const std::int32_t j = index.getValue(from);
-        const double facing = glm::dot(topo.patches[j].normal, o.towards);
-        if (facing <= 0.0) continue;  // the cheap test before the edge's two lookups
         if (!o.beside && (sharpAt(from + o.lo) || sharpAt(from + o.hi))) continue;  // its light passes an edge
-        if (tracedIndex.getValue(from) >= 0) continue;
+        const double facing = glm::dot(topo.patches[j].normal, o.towards);
+        if (facing <= 0.0 || tracedIndex.getValue(from) >= 0) continue;
         const Source v = source[j];
         const double along = glm::dot(glm::normalize(glm::dvec3(v.peak1)), o.towards);
         if (along <= 0.0) continue;
@@ -370,34 +362,6 @@ class RampOfThickConvexSnow {
     std::optional<bool> known_;
 };
 
-// sunInRamp's hat: the 4^3 points at odd quarter voxels about voxel c's centre, point k at quarter offsets
-// (kHatQuarters[k % 4], kHatQuarters[k / 4 % 4], kHatQuarters[k / 16]), each weighted by its trilinear hat and its
-// density.
-constexpr int kHatQuarters[4] = {-3, -1, 1, 3};
-using DensityHat = std::array<double, 64>;
-
-// Point k of c's hat in quarter voxels of index space.
-openvdb::Coord hatPoint(const openvdb::Coord &c, int k) {
-    return {4 * c.x() + kHatQuarters[k % 4], 4 * c.y() + kHatQuarters[k / 4 % 4], 4 * c.z() + kHatQuarters[k / 16]};
-}
-
-// The hat's weights (kg/m^3), read cell by cell: each of the eight cells about c's centre holds 2^3 of the points,
-// and the marcher's density sampler reads a cell's corners once for them (in k's order the cell changes every
-// second point: 32 reads of eight corners). Each weight is the same number either way.
-DensityHat densityHat(const openvdb::Coord &c, Medium::ColumnMarcher &marcher) {
-    DensityHat hat;
-    for (int cell = 0; cell < 8; ++cell)
-        for (int point = 0; point < 8; ++point) {
-            const int x = 2 * (cell & 1) + (point & 1), y = 2 * (cell >> 1 & 1) + (point >> 1 & 1),
-                      z = 2 * (cell >> 2) + (point >> 2);
-            const int k = x + 4 * y + 16 * z;
-            const openvdb::Coord q = hatPoint(c, k);
-            hat[k] = (4 - std::abs(kHatQuarters[x])) * (4 - std::abs(kHatQuarters[y])) *
-                     (4 - std::abs(kHatQuarters[z])) * marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0);
-        }
-    return hat;
-}
-
 // The suns' light scattered once in ramp voxel c (outside the unknowns, carrying its surface's radiance) in front of
 // surfaces that take them at grazing incidence or not at all (kGrazingSunCosine): the peaked lobe of k = g about each
 // sun's travel, of mean omega E T / 4 pi, T the snow's uncollided transmittance averaged over c's trilinear hat
@@ -427,8 +391,8 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
         }))
         return;
     const VolumeOptics &optics = scene.medium->optics();
+    constexpr int kPoints[4] = {-3, -1, 1, 3};  // quarter voxels from c's centre, per axis
     const glm::dvec3 centre = scene.medium->voxelCentre(c);
-    std::optional<DensityHat> hat;  // the same for every sun: read at the first one past the exits
     Source single;
     for (std::size_t b = 0; b < scene.suns.size(); ++b) {
         const SunLight &sun = scene.suns[b];
@@ -438,12 +402,14 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
         // Such a sun's forward peak is in c's one carried peak: kept whole (replacing it dropped that peak and its
         // direction; test_ramp_single_scattering_keeps_a_second_suns_forward_peak).
         if (glm::dot(normal, sun.direction) >= kGrazingSunCosine) return;
-        if (!hat) hat = densityHat(c, marcher);
         double transmitted = 0.0, weights = 0.0;
         for (int k = 0; k < 64; ++k) {
-            const double w = (*hat)[k];
+            const openvdb::Coord offset(kPoints[k % 4], kPoints[k / 4 % 4], kPoints[k / 16]);
+            const openvdb::Coord q(4 * c.x() + offset.x(), 4 * c.y() + offset.y(), 4 * c.z() + offset.z());
+            const double w = (4 - std::abs(offset.x())) * (4 - std::abs(offset.y())) * (4 - std::abs(offset.z())) *
+                             marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0);
             if (w <= 0.0) continue;
-            transmitted += w * sunAt.at(b, sun.direction, hatPoint(c, k));
+            transmitted += w * sunAt.at(b, sun.direction, q);
             weights += w;
         }
         if (weights > 0.0)
