@@ -29,6 +29,15 @@ Displacement halfSpaceDisplacement(double mu0) {
     return {kMean[k - 1] + f * (kMean[k] - kMean[k - 1]), kSpread[k - 1] + f * (kSpread[k] - kSpread[k - 1])};
 }
 
+// The width (voxels) of the neighbourhood the sun each patch returns at once is averaged over before it moves
+// downstream (neighbourhoodOutflow's reach): a Gaussian giving the face neighbours 0.61 of the voxel's own weight,
+// the edge neighbours 0.37. That light follows the sun's cosine and shadow, which change within a voxel at a
+// terminator or a shadow's edge: averaged over the whole 3^3 block of a 1 cm staircase, ball_issue's plateau just
+// past its terminator took its lit neighbours' (seen from the side, the sun a voxel past +46 % where 0.5 cm voxels
+// read +5 %; now +38 %) and bumpy_plate's shadow edges blurred (10.0 -> 9.4 %). Per voxel alone the staircase lets
+// it out unevenly (ball_clean +0.4 points); at 0.8 ball_grey lost 0.1 point (docs/benchmarks.md, plateau-sun).
+constexpr double kAtOnceReach = 1.0;
+
 }  // namespace
 
 // Surface voxel i's downstream kernel (SunReturned::downstream, spread; m): the beams' displacements weighted
@@ -90,11 +99,11 @@ glm::dvec3 downstreamWeights(const SurfacePatch &a, const std::array<const SunRe
 }  // namespace
 
 // The three channels' sun light each smooth patch returns at once (`sun`; its atOnce averaged over the neighbourhood as
-// the outflow is, for a staircase lets it out unevenly), where it leaves: over the surface voxels of its 3^3 block by
-// downstreamWeights, the weights of each sender summing to one (the power is kept), the forms turned with the normal,
-// added to the receivers' returned light; what escaped at once is taken out of their `leaving`. A flat, evenly lit
-// surface receives what it sends (the flat slabs unchanged); past a terminator the patches downstream take what
-// entered before it (docs/bake.md, Method 5). The channels share each pair's reads (the loops are bound by them).
+// the outflow is, for a staircase lets it out unevenly, but within kAtOnceReach), where it leaves: over the surface
+// voxels of its 3^3 block by downstreamWeights, the weights of each sender summing to one (the power is kept), the
+// forms turned with the normal, added to the receivers' returned light; what escaped at once is taken out of their
+// `leaving`. A flat, evenly lit surface receives what it sends (the flat slabs unchanged); past a terminator the
+// patches downstream take what entered before it (docs/bake.md, Method 5). The channels share each pair's reads (the loops are bound by them).
 void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValues<SunReturned>, 3> &sun, double h,
                           SurfaceValues<SurfaceLight> &out) {
     // By surface slot: each neighbour's slot looked up once.
@@ -113,7 +122,8 @@ void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValu
             const auto atOnceOf = [&](std::size_t j) {
                 return glm::dvec3(sun[0][j].atOnce, sun[1][j].atOnce, sun[2][j].atOnce);
             };
-            const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(topo, i, patch[si].normal, atOnceOf);
+            const auto [leaving, area] =
+                neighbourhoodOutflow<glm::dvec3>(topo, i, patch[si].normal, atOnceOf, kAtOnceReach);
             atOnce[si] = glm::vec3(leaving / area * double(patch[si].area));
             const auto from = sent(si);
             glm::dvec3 sum(0.0);

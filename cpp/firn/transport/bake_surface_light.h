@@ -3,7 +3,9 @@
 // The light leaving the snow's surface voxels, from the three channels' solves.
 
 #include <array>
+#include <cmath>
 #include <cstddef>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -45,16 +47,22 @@ struct SnowLight {
 
 // The light leaving voxel i's neighbourhood towards n (leavingOf(j), W) and its area (m^2): the surface voxels
 // of its 3^3 block weighted by the cosine between n and their normals, voxels on a sharp edge other than i left
-// out (surfaceRadiance says why).
+// out (surfaceRadiance says why); with a finite `reach` (voxels) also by a Gaussian of that width in their distance
+// from i, so light that varies within a voxel is spread less.
 template <typename T, typename LeavingOf>
 std::pair<T, double> neighbourhoodOutflow(const SnowTopology &topo, std::size_t i, const glm::dvec3 &n,
-                                          const LeavingOf &leavingOf) {
+                                          const LeavingOf &leavingOf,
+                                          double reach = std::numeric_limits<double>::infinity()) {
     T leaving(0.0);
     double area = 0.0;
     for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
         const std::uint32_t j = topo.neighbourhood[k];
         const SurfacePatch &other = topo.patches[j];
-        const double w = other.sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, other.normal));
+        const openvdb::Coord d = topo.coord[j] - topo.coord[i];
+        const double squared = double(d.x() * d.x() + d.y() * d.y() + d.z() * d.z());  // voxels^2
+        const double w = other.sharp && j != i ? 0.0
+                                               : std::max(0.0, glm::dot(n, other.normal)) *
+                                                     std::exp(-squared / (2.0 * reach * reach));
         leaving += w * leavingOf(j);
         area += w * other.area;
     }
