@@ -103,7 +103,8 @@ glm::dvec3 downstreamWeights(const SurfacePatch &a, const std::array<const SunRe
 // voxels of its 3^3 block by downstreamWeights, the weights of each sender summing to one (the power is kept), the
 // forms turned with the normal, added to the receivers' returned light; what escaped at once is taken out of their
 // `leaving`. A flat, evenly lit surface receives what it sends (the flat slabs unchanged); past a terminator the
-// patches downstream take what entered before it (docs/bake.md, Method 5). The channels share each pair's reads (the loops are bound by them).
+// patches downstream take what entered before it (docs/bake.md, Method 5). The channels share each pair's reads
+// (the loops are bound by them).
 void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValues<SunReturned>, 3> &sun, double h,
                           SurfaceValues<SurfaceLight> &out) {
     // By surface slot: each neighbour's slot looked up once.

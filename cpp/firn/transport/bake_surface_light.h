@@ -2,6 +2,7 @@
 
 // The light leaving the snow's surface voxels, from the three channels' solves.
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -53,16 +54,18 @@ template <typename T, typename LeavingOf>
 std::pair<T, double> neighbourhoodOutflow(const SnowTopology &topo, std::size_t i, const glm::dvec3 &n,
                                           const LeavingOf &leavingOf,
                                           double reach = std::numeric_limits<double>::infinity()) {
+    // The Gaussian by a neighbour's squared distance from i (0 to 3 voxels^2 in the 3^3 block).
+    std::array<double, 4> falloff;
+    for (int squared = 0; squared < 4; ++squared) falloff[squared] = std::exp(-squared / (2.0 * reach * reach));
     T leaving(0.0);
     double area = 0.0;
     for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
         const std::uint32_t j = topo.neighbourhood[k];
         const SurfacePatch &other = topo.patches[j];
         const openvdb::Coord d = topo.coord[j] - topo.coord[i];
-        const double squared = double(d.x() * d.x() + d.y() * d.y() + d.z() * d.z());  // voxels^2
-        const double w = other.sharp && j != i ? 0.0
-                                               : std::max(0.0, glm::dot(n, other.normal)) *
-                                                     std::exp(-squared / (2.0 * reach * reach));
+        const int squared = d.x() * d.x() + d.y() * d.y() + d.z() * d.z();
+        const double w =
+            other.sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, other.normal)) * falloff[std::min(squared, 3)];
         leaving += w * leavingOf(j);
         area += w * other.area;
     }
