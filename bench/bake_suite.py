@@ -273,7 +273,7 @@ def depth_one_points(case, origins, directions, seen):
     for i in np.nonzero(seen)[0]:
         p = origins[i] + steps[:, None] * directions[i]
         tau = np.cumsum(trilinear(case.density, p / case.voxel)) * (steps[1] - steps[0]) * case.sigma_t / case.rho
-        hit[i] = p[np.searchsorted(tau, 1.0)]
+        hit[i] = p[min(np.searchsorted(tau, 1.0), len(p) - 1)]  # a grazing ray views() found at depth 1 on coarser steps
     return hit
 
 
