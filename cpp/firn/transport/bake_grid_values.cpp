@@ -213,7 +213,7 @@ class QuarterPointSun {
 // exponent scaled), averaged over voxel c's trilinear hat weighted by the density: what the renderer's emission at c
 // weighs (4^3 points). Zero where the hat holds no snow. Not T at c's centre: an air voxel just outside a limb has
 // T = 1 there and shadowed snow in its hat (ball_grey's equator rims seen against the sun read +200 to +270 % with
-// sunInRamp's T at the centre, +49 % with forwardPeakThrough's; docs/benchmarks.md, grey-rims).
+// sunInRamp's T at the centre, +49 % with forwardPeakThrough's; docs/benchmarks.md, ball-rims, grey-rims-53).
 double hatSunTransmittance(const openvdb::Coord &c, std::size_t b, const glm::dvec3 &direction, double power,
                            Medium::ColumnMarcher &marcher, QuarterPointSun &sunAt) {
     constexpr int kPoints[4] = {-3, -1, 1, 3};  // quarter voxels from c's centre, per axis
@@ -249,7 +249,7 @@ double rampCrossing(const Medium &medium, const glm::dvec3 &from, const glm::dve
 // against the sun +49 -> +25 %, mean 8.0 -> 7.4 %). Nearer the terminator the centre's T stands in for the multiply
 // forward-scattered sun the rims lack (docs/benchmarks.md, rim-forward): averaged from -0.2 up, ball_issue's view
 // against the sun -13 -> -14 %, at 0 ball_clean's and ball_snow's side rims -41 -> -49 %, -51 -> -56 %; from -0.3 down
-// ball_grey's rims keep +49 % (docs/benchmarks.md, grey-rims).
+// ball_grey's rims keep +49 % (docs/benchmarks.md, grey-rims-53).
 constexpr double kShadowedCarrierCosine = -0.25;
 
 // The returned grazing sun carried through the density ramp: voxel c (outside the unknowns, carrying its surface's
