@@ -47,6 +47,21 @@ def over_seeds_against_reference(folder, name, samples, seeds):
     return bake_suite.over_seeds([bake_suite.run_case(c, folder, cache, seed=seed) for seed in range(seeds)])
 
 
+def sun_alone_against_monte_carlo(folder, name, blocks, samples=4096):
+    """The suite's case `name` under its sun alone, seen against the sun (view (180, 0)): the baked render's sum
+    over `blocks` against the core's Monte Carlo's (`samples` paths per block, seed 31), relative (green)."""
+    c = case(name)
+    origins, directions, _ = bake_suite.views(c)
+    pick = [c.views.index((180, 0)) * c.pixels ** 2 + b for b in blocks]
+    path = os.path.join(folder, f"{name}_sun_alone.vdb")
+    bake_suite.write_density(path, c.density, c.voxel)
+    firncore.bake(path, c.optics, suns=c.suns(), quality="FINAL", seed=0)
+    baked = firncore.render_baked(path, c.optics, origins[pick], directions[pick])[:, 1].sum()
+    truth, _ = firncore.monte_carlo_radiance(path, c.optics, origins[pick], directions[pick], suns=c.suns(),
+                                             samples=samples, seed=31)
+    return baked / truth[:, 1].sum() - 1
+
+
 @pytest.fixture(scope="module")
 def folder():
     with tempfile.TemporaryDirectory() as path:
@@ -159,9 +174,11 @@ def test_ramp_in_front_of_a_lit_rim_carries_the_returned_grazing_sun(folder):
     # radiance 1.5-2.7x the Monte Carlo's along the ray on main). Hence 0.56, not 0.55. This block is over-bright, a
     # known error: +55.4 % before and +57.9 % since the ramp's own sun is added to the carried peaks beside thick
     # convex snow (branch rim-forward: the top rim's light, whose gains elsewhere outweigh it; tapering that addition
-    # with the carriers' mu0 did not recover the block, docs/benchmarks.md, mends-rim52). The bound 0.585 tolerates
-    # that regression of 2.5 points; it is not a measure of accuracy there.
-    assert grey["worst"] < 0.585, grey["worst_signed"]
+    # with the carriers' mu0 did not recover the block, docs/benchmarks.md, mends-rim52). Its cause was
+    # forwardPeakThrough's sun share taken at an air voxel's centre (T = 1) beside carriers well past the terminator:
+    # averaged over the voxel's hat (branch grey-rims) the block reads +33.1 % (the worst now the second row's outer
+    # blocks); the bound lies midway between that and +57.9 %.
+    assert grey["worst"] < 0.45, grey["worst_signed"]
     clean = baked_against_reference(folder, "ball_clean", 1024, [(180, 0)])
     assert clean["worst"] < 0.55, clean["worst_signed"]
 
@@ -974,6 +991,18 @@ def test_ramp_single_scattering_keeps_a_second_suns_forward_peak(folder):
     assert kept > 0.62, kept
 
 
+def test_peaks_carried_past_the_terminator_take_the_sun_where_the_ramp_voxel_holds_snow(folder):
+    # ball_grey (omega 0.9, g 0.6) seen against the sun: the equator's side rims past the terminator (view (180, 0)
+    # blocks 24, 31, 32, 39) cross ramp voxels whose carriers face away from the sun (mu0 -0.5 to -0.2). The lit
+    # surfaces' forward peaks carried there (forwardPeakThrough) are weighed by the share of the sun reaching the
+    # voxel; taken at its centre an air voxel beside the limb reads T = 1 while the snow in its hat, which is what the
+    # renderer weighs its value by, lies in the body's shadow. The sun alone against these 4096 Monte Carlo paths
+    # (the sum's noise about 7 %): +269 % with T at the centre, +144 % with T averaged over the hat (branch
+    # grey-rims; docs/benchmarks.md); the bound lies midway. What is left is the carried peak's own size.
+    bias = sun_alone_against_monte_carlo(folder, "ball_grey", [24, 31, 32, 39])
+    assert bias < 2.0, bias
+
+
 def test_ramp_of_a_small_thick_ball_scatters_the_sun_crossing_its_rim(folder):
     # Seen against the sun, a small thick ball's top rim and side rims (ball_issue's and ball_grey's outermost blocks
     # of view (180, 0): 58-61, 40, 47) show the sun that entered the density ramp's outer part on a long chord and
@@ -986,16 +1015,6 @@ def test_ramp_of_a_small_thick_ball_scatters_the_sun_crossing_its_rim(folder):
     # most of this light reach the camera through a broader lobe (p 0.27), so the bake stays below the Monte Carlo;
     # counting ball_issue's carried peaks twice (0.96 of its blocks' 1.38 baked on main) would read about +30 %.
     # -0.10 lies 15 points above the measured figures (10 times ball_issue's sum noise) and that far below 0.
-    blocks = [58, 59, 60, 61, 40, 47]
     for name in ("ball_issue", "ball_grey"):
-        c = case(name)
-        origins, directions, _ = bake_suite.views(c)
-        pick = [c.views.index((180, 0)) * c.pixels ** 2 + b for b in blocks]
-        path = os.path.join(folder, f"{name}_rim_sun.vdb")
-        bake_suite.write_density(path, c.density, c.voxel)
-        firncore.bake(path, c.optics, suns=c.suns(), quality="FINAL", seed=0)
-        baked = firncore.render_baked(path, c.optics, origins[pick], directions[pick])[:, 1].sum()
-        truth, _ = firncore.monte_carlo_radiance(path, c.optics, origins[pick], directions[pick], suns=c.suns(),
-                                                 samples=4096, seed=31)
-        bias = baked / truth[:, 1].sum() - 1
+        bias = sun_alone_against_monte_carlo(folder, name, [58, 59, 60, 61, 40, 47])
         assert -0.28 < bias < -0.10, (name, bias)

@@ -168,6 +168,69 @@ class BlockMask {
     const openvdb::BoolTree::LeafNodeType *leaves_[2][2][2];
 };
 
+// The suns' uncollided transmittance through the snow at the points of a quarter-voxel lattice (index space: odd
+// multiples of 1/4), each point marched once: the 4^3 points sunInRamp averages over a voxel's hat are shared with
+// its neighbours' (a point at c + 1/4 is also c + 1 - 3/4), so a band of ramp voxels marches a few times fewer
+// columns. One per thread, holding one leaf's points at a time in a dense array (18^3 a sun for the dilated
+// topology's 8^3 leaves) whose stamps say which hold this leaf's value: no hash map to fill and clear per leaf.
+class QuarterPointSun {
+  public:
+    QuarterPointSun(const Medium &medium, std::size_t suns)
+        : medium_(medium), marcher_(medium), known_(suns * kPerSun), stamp_(suns * kPerSun, 0) {}
+    // Starts the points of the 8^3 leaf at origin: none known.
+    void startLeaf(const openvdb::Coord &origin) {
+        first_ = openvdb::Coord(4 * origin.x() - 3, 4 * origin.y() - 3, 4 * origin.z() - 3);
+        ++leaf_;
+    }
+    // Sun b's transmittance at index-space point q / 4 (q odd per axis, about a voxel of the leaf).
+    double at(std::size_t b, const glm::dvec3 &direction, const openvdb::Coord &q) {
+        const int x = (q.x() - first_.x()) / 2, y = (q.y() - first_.y()) / 2, z = (q.z() - first_.z()) / 2;
+        const std::size_t i = b * kPerSun + std::size_t((x * kPerAxis + y) * kPerAxis + z);
+        if (stamp_[i] != leaf_) {
+            const double perColumn = medium_.optics().extinctionPerDensity;  // m^2/kg: uncollided
+            const double limit = std::log(1e5) / perColumn;  // kg/m^2: the transmittance below 1e-5
+            const double column = marcher_.column(medium_.indexToWorld(glm::dvec3(q.x(), q.y(), q.z()) / 4.0),
+                                                  direction, std::numeric_limits<double>::infinity(), limit);
+            known_[i] = column < limit ? std::exp(-perColumn * column) : 0.0;
+            stamp_[i] = leaf_;
+        }
+        return known_[i];
+    }
+
+  private:
+    // Odd quarters from -3/4 before a leaf's first voxel to 3/4 past its last.
+    static constexpr int kPerAxis = 2 * int(openvdb::BoolTree::LeafNodeType::DIM) + 2;
+    static constexpr std::size_t kPerSun = std::size_t(kPerAxis) * kPerAxis * kPerAxis;
+    const Medium &medium_;
+    Medium::ColumnMarcher marcher_;
+    std::vector<double> known_;         // per sun, then point
+    std::vector<std::uint64_t> stamp_;  // the leaf (leaf_) whose value known_ holds
+    openvdb::Coord first_;              // the leaf's lowest point, in quarters
+    std::uint64_t leaf_ = 0;            // leaves started
+};
+
+// Sun b's transmittance through the snow raised to `power` (1: uncollided; 1 - f: delta-scaled, Crossing::Uncollided's
+// exponent scaled), averaged over voxel c's trilinear hat weighted by the density: what the renderer's emission at c
+// weighs (4^3 points). Zero where the hat holds no snow. Not T at c's centre: an air voxel just outside a limb has
+// T = 1 there and shadowed snow in its hat (ball_grey's equator rims seen against the sun read +200 to +270 % with
+// sunInRamp's T at the centre, +49 % with forwardPeakThrough's; docs/benchmarks.md, ball-rims, grey-rims-53).
+double hatSunTransmittance(const openvdb::Coord &c, std::size_t b, const glm::dvec3 &direction, double power,
+                           Medium::ColumnMarcher &marcher, QuarterPointSun &sunAt) {
+    constexpr int kPoints[4] = {-3, -1, 1, 3};  // quarter voxels from c's centre, per axis
+    double transmitted = 0.0, weights = 0.0;
+    for (int k = 0; k < 64; ++k) {
+        const openvdb::Coord offset(kPoints[k % 4], kPoints[k / 4 % 4], kPoints[k / 16]);
+        const openvdb::Coord q(4 * c.x() + offset.x(), 4 * c.y() + offset.y(), 4 * c.z() + offset.z());
+        const double w = (4 - std::abs(offset.x())) * (4 - std::abs(offset.y())) * (4 - std::abs(offset.z())) *
+                         marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0);
+        if (w <= 0.0) continue;
+        const double T = sunAt.at(b, direction, q);
+        transmitted += w * (power == 1.0 ? T : std::pow(T, power));
+        weights += w;
+    }
+    return weights > 0.0 ? transmitted / weights : 0.0;
+}
+
 // The share of a peak leaving the voxel centred at `from` that crosses the ramp on to c's centre `to` in the
 // forward beam: the delta-scaled transmittance (1 - forwardKept of the extinction) from the boundary of the two
 // voxels, halfway (the peak is its voxel's surface radiance: its own snow is behind it).
@@ -179,6 +242,15 @@ double rampCrossing(const Medium &medium, const glm::dvec3 &from, const glm::dve
                                          std::numeric_limits<double>::infinity());  // kg/m^2
     return std::exp(-(1.0 - forwardKept) * medium.optics().extinctionPerDensity * column);
 }
+
+// Carriers facing a sun below this cosine (well past the terminator) weigh the peaks forwardPeakThrough carries by
+// the sun's delta-scaled transmittance averaged over c's hat (hatSunTransmittance), not at c's centre: there an air
+// voxel beside the limb has T = 1 at its centre and the body's shadow in its hat (ball_grey's equator rims seen
+// against the sun +49 -> +25 %, mean 8.0 -> 7.4 %). Nearer the terminator the centre's T stands in for the multiply
+// forward-scattered sun the rims lack (docs/benchmarks.md, rim-forward): averaged from -0.2 up, ball_issue's view
+// against the sun -13 -> -14 %, at 0 ball_clean's and ball_snow's side rims -41 -> -49 %, -51 -> -56 %; from -0.3 down
+// ball_grey's rims keep +49 % (docs/benchmarks.md, grey-rims-53).
+constexpr double kShadowedCarrierCosine = -0.25;
 
 // The returned grazing sun carried through the density ramp: voxel c (outside the unknowns, carrying its surface's
 // radiance) in front of smooth surface voxels within two voxels whose peaked lobe (the sun returned sharply
@@ -200,7 +272,7 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
                         TracedIndex &tracedIndex, const SourceValues &source,
                         openvdb::tree::ValueAccessor<const openvdb::BoolTree> &peaks, Medium::ColumnMarcher &marcher,
-                        Source &S) {
+                        QuarterPointSun &sunAt, const glm::dvec3 &facing, Source &S) {
     struct Offset {
         openvdb::Coord from;  // c minus the way to c
         glm::dvec3 towards;   // unit
@@ -254,10 +326,20 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     for (std::size_t k = 0; k < takenCount; ++k)
         crossing += taken[k].second * rampCrossing(medium, medium.voxelCentre(taken[k].first), centre, forwardKept,
                                                    marcher);
-    double arriving = 0.0, outside = 0.0;
+    double arriving = 0.0, outside = 0.0;  // W/m^2 (green), delta-scaled
     for (std::size_t b = 0; b < scene.suns.size(); ++b) {
-        arriving += beamAt(scene, b, centre, 1, 0, 0, marcher, nullptr, Crossing::Uncollided).irradiance.y;
-        outside += scene.suns[b].irradiance.y;
+        const SunLight &sun = scene.suns[b];
+        outside += sun.irradiance.y;
+        if (glm::dot(facing, sun.direction) < kShadowedCarrierCosine) {
+            if (scene.occluders->empty() ||
+                !scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(sun.direction), 1e-5f))
+                arriving +=
+                    sun.irradiance.y * hatSunTransmittance(c, b, sun.direction, 1.0 - forwardKept, marcher, sunAt);
+        } else if (sun.irradiance.y > 0.0f) {
+            const double centreLit = beamAt(scene, b, centre, 1, 0, 0, marcher, nullptr, Crossing::Uncollided)
+                                         .irradiance.y / sun.irradiance.y;
+            arriving += sun.irradiance.y * std::pow(centreLit, 1.0 - forwardKept);
+        }
     }
     // The lit top's forward return crosses the ramp on a rim's camera side though the sun reaches it only through
     // the top's own snow: the share carried is the delta-scaled sun's transmittance to c (ball_issue's view against
@@ -265,7 +347,8 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     // seen-sun) or, where more, the delta-scaled transmittance of the peaks' own way through the ramp from the
     // boundary of their voxels on to c (rampCrossing: -20 -> -17 %, its top row's middle blocks -26 -> -17 %;
     // that way alone, ball_grey's top row -31 -> -43 %, its sun crossing less snow than the way: branch lit-top).
-    const double sunLit = outside > 0.0 ? std::pow(arriving / outside, 1.0 - forwardKept) : 0.0;
+    // Beside carriers well past the terminator (kShadowedCarrierCosine) the sun's share is averaged over c's hat.
+    const double sunLit = outside > 0.0 ? arriving / outside : 0.0;
     const double lit = std::max(sunLit, crossing / total);
     S.peak0 = glm::vec3(lit * p0 / total + (1.0 - lit) * glm::dvec3(S.peak0));
     S.peak1 = glm::vec3(lit * p1 / total + (1.0 - lit) * glm::dvec3(S.peak1));
@@ -275,47 +358,6 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
 // density ramp to the ramp itself (sunInRamp; 0.2 before branch rim-forward: half of a ball's rim light seen against
 // the sun entered where mu0 >= 0.3, and 0.4 took ball_issue's view there -14 -> -13 %, docs/benchmarks.md).
 constexpr double kGrazingSunCosine = 0.4;
-
-// The suns' uncollided transmittance through the snow at the points of a quarter-voxel lattice (index space: odd
-// multiples of 1/4), each point marched once: the 4^3 points sunInRamp averages over a voxel's hat are shared with
-// its neighbours' (a point at c + 1/4 is also c + 1 - 3/4), so a band of ramp voxels marches a few times fewer
-// columns. One per thread, holding one leaf's points at a time in a dense array (18^3 a sun for the dilated
-// topology's 8^3 leaves) whose stamps say which hold this leaf's value: no hash map to fill and clear per leaf.
-class QuarterPointSun {
-  public:
-    QuarterPointSun(const Medium &medium, std::size_t suns)
-        : medium_(medium), marcher_(medium), known_(suns * kPerSun), stamp_(suns * kPerSun, 0) {}
-    // Starts the points of the 8^3 leaf at origin: none known.
-    void startLeaf(const openvdb::Coord &origin) {
-        first_ = openvdb::Coord(4 * origin.x() - 3, 4 * origin.y() - 3, 4 * origin.z() - 3);
-        ++leaf_;
-    }
-    // Sun b's transmittance at index-space point q / 4 (q odd per axis, about a voxel of the leaf).
-    double at(std::size_t b, const glm::dvec3 &direction, const openvdb::Coord &q) {
-        const int x = (q.x() - first_.x()) / 2, y = (q.y() - first_.y()) / 2, z = (q.z() - first_.z()) / 2;
-        const std::size_t i = b * kPerSun + std::size_t((x * kPerAxis + y) * kPerAxis + z);
-        if (stamp_[i] != leaf_) {
-            const double perColumn = medium_.optics().extinctionPerDensity;  // m^2/kg: uncollided
-            const double limit = std::log(1e5) / perColumn;  // kg/m^2: the transmittance below 1e-5
-            const double column = marcher_.column(medium_.indexToWorld(glm::dvec3(q.x(), q.y(), q.z()) / 4.0),
-                                                  direction, std::numeric_limits<double>::infinity(), limit);
-            known_[i] = column < limit ? std::exp(-perColumn * column) : 0.0;
-            stamp_[i] = leaf_;
-        }
-        return known_[i];
-    }
-
-  private:
-    // Odd quarters from -3/4 before a leaf's first voxel to 3/4 past its last.
-    static constexpr int kPerAxis = 2 * int(openvdb::BoolTree::LeafNodeType::DIM) + 2;
-    static constexpr std::size_t kPerSun = std::size_t(kPerAxis) * kPerAxis * kPerAxis;
-    const Medium &medium_;
-    Medium::ColumnMarcher marcher_;
-    std::vector<double> known_;         // per sun, then point
-    std::vector<std::uint64_t> stamp_;  // the leaf (leaf_) whose value known_ holds
-    openvdb::Coord first_;              // the leaf's lowest point, in quarters
-    std::uint64_t leaf_ = 0;            // leaves started
-};
 
 // Whether the surface carrying a ramp voxel (`carrier`, the surface voxel facing it most: facingAverage) curves away
 // faster than a sphere of kSkyRampRadius voxels: only there is the sky the ramp sees below its plane past the snow's
@@ -391,7 +433,6 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
         }))
         return;
     const VolumeOptics &optics = scene.medium->optics();
-    constexpr int kPoints[4] = {-3, -1, 1, 3};  // quarter voxels from c's centre, per axis
     const glm::dvec3 centre = scene.medium->voxelCentre(c);
     Source single;
     for (std::size_t b = 0; b < scene.suns.size(); ++b) {
@@ -402,19 +443,9 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
         // Such a sun's forward peak is in c's one carried peak: kept whole (replacing it dropped that peak and its
         // direction; test_ramp_single_scattering_keeps_a_second_suns_forward_peak).
         if (glm::dot(normal, sun.direction) >= kGrazingSunCosine) return;
-        double transmitted = 0.0, weights = 0.0;
-        for (int k = 0; k < 64; ++k) {
-            const openvdb::Coord offset(kPoints[k % 4], kPoints[k / 4 % 4], kPoints[k / 16]);
-            const openvdb::Coord q(4 * c.x() + offset.x(), 4 * c.y() + offset.y(), 4 * c.z() + offset.z());
-            const double w = (4 - std::abs(offset.x())) * (4 - std::abs(offset.y())) * (4 - std::abs(offset.z())) *
-                             marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0);
-            if (w <= 0.0) continue;
-            transmitted += w * sunAt.at(b, sun.direction, q);
-            weights += w;
-        }
-        if (weights > 0.0)
-            single.addPeak(transmitted / weights * glm::dvec3(sun.irradiance) * glm::dvec3(optics.albedo) * kInvFourPi,
-                           crossingAnisotropy(optics.g), -sun.direction);
+        single.addPeak(hatSunTransmittance(c, b, sun.direction, 1.0, marcher, sunAt) * glm::dvec3(sun.irradiance) *
+                           glm::dvec3(optics.albedo) * kInvFourPi,
+                       crossingAnisotropy(optics.g), -sun.direction);
     }
     if (rampOfThickConvexSnow()) S.add(single);
     else if (single.peak0.x + single.peak0.y + single.peak0.z > S.peak0.x + S.peak0.y + S.peak0.z)
@@ -587,7 +618,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!nearSurfaceAt.isValueOn(c)) continue;
                 else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, facing, carrier)) continue;
                 else if (nearPeakAt.isValueOn(c)) {
-                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, S);
+                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, sunAt, facing, S);
                     sunInRamp(scene, c, facing, marcher, sunAt, rampOfThickConvexSnow, S);
                 }
                 if (!gathering) skyInRamp(scene, c, facing, index, rampOfThickConvexSnow, marcher, S);
