@@ -263,9 +263,9 @@ def test_sun_returned_at_once_stays_on_the_lit_side_of_a_staircase_terminator(fo
     # the sun's cosine, which changes within a voxel there; averaged over the whole 3^3 block before it moved
     # downstream, the plateau's voxels past the terminator took their lit neighbours' (bake_sun_downstream.cpp,
     # kAtOnceReach). The sun alone at x -1 to -0.25 cm from the centre, 0.5 and 1.5 cm up
-    # (bench/plateau_sun_profile.py), summed, baked over the core's Monte Carlo (4096 paths, seed 37; its noise
-    # 3.7 %): main b8f757d 1.165, this 1.091 (seeds 11 and 5: 1.149, 1.154 -> 1.075, 1.080; docs/benchmarks.md,
-    # plateau-sun).
+    # (bench/plateau_sun_profile.py), summed, baked over the core's Monte Carlo (4096 paths, seed 37; the sum's standard
+    # error 3.7 %, though three seeds spread 1 %): main b8f757d 1.165, this 1.091 (seeds 11 and 5: 1.149, 1.154 ->
+    # 1.075, 1.080; docs/benchmarks.md, plateau-sun).
     c = case("ball_issue")
     path = os.path.join(folder, "plateau.vdb")
     bake_suite.write_density(path, c.density, c.voxel)

@@ -93,7 +93,7 @@ RayCaster::RayCaster(const TriangleMesh *borrowed, TriangleMesh owned, Rays rays
     rtcSetSceneBuildQuality(impl_->embree.scene, quality);
     // Robust: a ray aimed at an edge two triangles share hits one of them. Without it a closed body lets rays
     // through its edges (1.9 % of rays aimed at a sphere's edges; the car's surface voxels 501,600 -> 500,313) for
-    // 0.6 % of the bake's time (docs/benchmarks.md, car-speed).
+    // 0.6 % of the bake's time (docs/benchmarks.md, car-speed, lead-robust53).
     rtcSetSceneFlags(impl_->embree.scene, RTC_SCENE_FLAG_ROBUST);
     if (!empty_) {
         impl_->owned = std::move(owned);  // kept: its triangles are Embree's index buffer

@@ -100,11 +100,11 @@ glm::dvec3 downstreamWeights(const SurfacePatch &a, const std::array<const SunRe
 
 // The three channels' sun light each smooth patch returns at once (`sun`; its atOnce averaged over the neighbourhood as
 // the outflow is, for a staircase lets it out unevenly, but within kAtOnceReach), where it leaves: over the surface
-// voxels of its 3^3 block by downstreamWeights, the weights of each sender summing to one (the power is kept), the
-// forms turned with the normal, added to the receivers' returned light; what escaped at once is taken out of their
-// `leaving`. A flat, evenly lit surface receives what it sends (the flat slabs unchanged); past a terminator the
-// patches downstream take what entered before it (docs/bake.md, Method 5). The channels share each pair's reads
-// (the loops are bound by them).
+// voxels of its 3^3 block by downstreamWeights, the weights of each sender summing to one (downstreamWeights keeps the
+// power it spreads), the forms turned with the normal, added to the receivers' returned light; what escaped at once is
+// taken out of their `leaving`. A flat, evenly lit surface receives what it sends (the flat slabs unchanged); past a
+// terminator the patches downstream take what entered before it (docs/bake.md, Method 5). The channels share each
+// pair's reads (the loops are bound by them).
 void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValues<SunReturned>, 3> &sun, double h,
                           SurfaceValues<SurfaceLight> &out) {
     // By surface slot: each neighbour's slot looked up once.

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -54,18 +55,25 @@ template <typename T, typename LeavingOf>
 std::pair<T, double> neighbourhoodOutflow(const SnowTopology &topo, std::size_t i, const glm::dvec3 &n,
                                           const LeavingOf &leavingOf,
                                           double reach = std::numeric_limits<double>::infinity()) {
-    // The Gaussian by a neighbour's squared distance from i (0 to 3 voxels^2 in the 3^3 block).
-    std::array<double, 4> falloff;
-    for (int squared = 0; squared < 4; ++squared) falloff[squared] = std::exp(-squared / (2.0 * reach * reach));
+    assert(reach > 0.0);
+    const bool near = std::isfinite(reach);
+    // The Gaussian by a neighbour's squared distance from i (0 to 3 voxels^2: the block is i's +-1 voxels).
+    std::array<double, 4> falloff{1.0, 1.0, 1.0, 1.0};
+    if (near)
+        for (int squared = 1; squared < 4; ++squared) falloff[squared] = std::exp(-squared / (2.0 * reach * reach));
     T leaving(0.0);
     double area = 0.0;
     for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
         const std::uint32_t j = topo.neighbourhood[k];
         const SurfacePatch &other = topo.patches[j];
-        const openvdb::Coord d = topo.coord[j] - topo.coord[i];
-        const int squared = d.x() * d.x() + d.y() * d.y() + d.z() * d.z();
-        const double w =
-            other.sharp && j != i ? 0.0 : std::max(0.0, glm::dot(n, other.normal)) * falloff[std::min(squared, 3)];
+        if (other.sharp && j != i) continue;
+        int squared = 0;
+        if (near) {
+            const openvdb::Coord d = topo.coord[j] - topo.coord[i];
+            squared = d.x() * d.x() + d.y() * d.y() + d.z() * d.z();
+            assert(squared < 4);
+        }
+        const double w = std::max(0.0, glm::dot(n, other.normal)) * falloff[squared];
         leaving += w * leavingOf(j);
         area += w * other.area;
     }
