@@ -363,10 +363,10 @@ class RampOfThickConvexSnow {
 };
 
 // The mean of f over ramp voxel c's trilinear hat weighted by the density (what the renderer's emission weighs), on
-// 4^3 points at odd quarters from c's centre (index space, f given each point times 4); none where c's hat holds no
+// 4^3 points at odd quarters from c's centre (index space, f given each point times 4); zero where c's hat holds no
 // snow.
 template <typename T, typename F>
-std::optional<T> hatAverage(const openvdb::Coord &c, Medium::ColumnMarcher &marcher, const F &f) {
+T hatAverage(const openvdb::Coord &c, Medium::ColumnMarcher &marcher, const F &f) {
     constexpr int kPoints[4] = {-3, -1, 1, 3};  // quarter voxels from c's centre, per axis
     T sum(0.0);
     double weights = 0.0;
@@ -379,8 +379,7 @@ std::optional<T> hatAverage(const openvdb::Coord &c, Medium::ColumnMarcher &marc
         sum += w * f(q);
         weights += w;
     }
-    if (weights > 0.0) return sum / weights;
-    return std::nullopt;
+    return weights > 0.0 ? sum / weights : T(0.0);
 }
 
 // Whether beam b (a sun, lamp or area lamp's piece) meeting the carrying surfaces at mu0 (the cosine of its way at c to
@@ -443,20 +442,16 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
             if (sun) return;
             continue;
         }
-        std::optional<glm::dvec3> lit;  // W/m^2: the beam's mean over c's hat
-        if (sun) {
-            const SunLight &light = scene.suns[b];
-            if (const auto T = hatAverage<double>(c, marcher, [&](const openvdb::Coord &q) {
-                    return sunAt.at(b, light.direction, q); }))
-                lit = *T * glm::dvec3(light.irradiance);
-        } else
-            lit = hatAverage<glm::dvec3>(c, marcher, [&](const openvdb::Coord &q) {
-                const glm::dvec3 point = scene.medium->indexToWorld(glm::dvec3(q.x(), q.y(), q.z()) / 4.0);
-                return glm::dvec3(beamAt(scene, b, point, lampSamples, seed, stream, marcher, &centre,
-                                         Crossing::Uncollided).irradiance);
-            });
-        if (lit)
-            single.addPeak(*lit * glm::dvec3(optics.albedo) * kInvFourPi, crossingAnisotropy(optics.g), -towardsBeam(scene, b, centre));
+        const glm::dvec3 lit =  // W/m^2: the beam's mean over c's hat
+            sun ? hatAverage<double>(c, marcher, [&](const openvdb::Coord &q) {
+                      return sunAt.at(b, scene.suns[b].direction, q); }) * glm::dvec3(scene.suns[b].irradiance)
+                : hatAverage<glm::dvec3>(c, marcher, [&](const openvdb::Coord &q) {
+                      const glm::dvec3 point = scene.medium->indexToWorld(glm::dvec3(q.x(), q.y(), q.z()) / 4.0);
+                      return glm::dvec3(beamAt(scene, b, point, lampSamples, seed, stream, marcher, &centre,
+                                               Crossing::Uncollided).irradiance);
+                  });
+        single.addPeak(lit * glm::dvec3(optics.albedo) * kInvFourPi, crossingAnisotropy(optics.g),
+                       -towardsBeam(scene, b, centre));
     }
     if (rampOfThickConvexSnow()) S.add(single);
     else if (single.peak0.x + single.peak0.y + single.peak0.z > S.peak0.x + S.peak0.y + S.peak0.z)
