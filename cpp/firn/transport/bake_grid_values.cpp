@@ -209,6 +209,26 @@ class QuarterPointSun {
     std::uint64_t leaf_ = 0;            // leaves started
 };
 
+// The mean of f over ramp voxel c's trilinear hat weighted by the density (what the renderer's emission weighs), on
+// 4^3 points at odd quarters from c's centre (index space, f given each point times 4); zero where c's hat holds no
+// snow.
+template <typename T, typename F>
+T hatAverage(const openvdb::Coord &c, Medium::ColumnMarcher &marcher, const F &f) {
+    constexpr int kPoints[4] = {-3, -1, 1, 3};  // quarter voxels from c's centre, per axis
+    T sum(0.0);
+    double weights = 0.0;
+    for (int k = 0; k < 64; ++k) {
+        const openvdb::Coord offset(kPoints[k % 4], kPoints[k / 4 % 4], kPoints[k / 16]);
+        const openvdb::Coord q(4 * c.x() + offset.x(), 4 * c.y() + offset.y(), 4 * c.z() + offset.z());
+        const double w = (4 - std::abs(offset.x())) * (4 - std::abs(offset.y())) * (4 - std::abs(offset.z())) *
+                         marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0);
+        if (w <= 0.0) continue;
+        sum += w * f(q);
+        weights += w;
+    }
+    return weights > 0.0 ? sum / weights : T(0.0);
+}
+
 // Sun b's transmittance through the snow raised to `power` (1: uncollided; 1 - f: delta-scaled, Crossing::Uncollided's
 // exponent scaled), averaged over voxel c's trilinear hat weighted by the density: what the renderer's emission at c
 // weighs (4^3 points). Zero where the hat holds no snow. Not T at c's centre: an air voxel just outside a limb has
@@ -216,19 +236,10 @@ class QuarterPointSun {
 // sunInRamp's T at the centre, +49 % with forwardPeakThrough's; docs/benchmarks.md, ball-rims, grey-rims-53).
 double hatSunTransmittance(const openvdb::Coord &c, std::size_t b, const glm::dvec3 &direction, double power,
                            Medium::ColumnMarcher &marcher, QuarterPointSun &sunAt) {
-    constexpr int kPoints[4] = {-3, -1, 1, 3};  // quarter voxels from c's centre, per axis
-    double transmitted = 0.0, weights = 0.0;
-    for (int k = 0; k < 64; ++k) {
-        const openvdb::Coord offset(kPoints[k % 4], kPoints[k / 4 % 4], kPoints[k / 16]);
-        const openvdb::Coord q(4 * c.x() + offset.x(), 4 * c.y() + offset.y(), 4 * c.z() + offset.z());
-        const double w = (4 - std::abs(offset.x())) * (4 - std::abs(offset.y())) * (4 - std::abs(offset.z())) *
-                         marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0);
-        if (w <= 0.0) continue;
+    return hatAverage<double>(c, marcher, [&](const openvdb::Coord &q) {
         const double T = sunAt.at(b, direction, q);
-        transmitted += w * (power == 1.0 ? T : std::pow(T, power));
-        weights += w;
-    }
-    return weights > 0.0 ? transmitted / weights : 0.0;
+        return power == 1.0 ? T : std::pow(T, power);
+    });
 }
 
 // The share of a peak leaving the voxel centred at `from` that crosses the ramp on to c's centre `to` in the
@@ -404,8 +415,20 @@ class RampOfThickConvexSnow {
     std::optional<bool> known_;
 };
 
-// The suns' light scattered once in ramp voxel c (outside the unknowns, carrying its surface's radiance) in front of
-// surfaces that take them at grazing incidence or not at all (kGrazingSunCosine): the peaked lobe of k = g about each
+// Whether beam b (a sun, lamp or area lamp's piece) meeting the carrying surfaces at mu0 (the cosine of its way at c to
+// their normal) leaves its light in the ramp to the ramp (sunInRamp). Suns and area lamps' pieces: grazing or past the
+// terminator (mu0 < kGrazingSunCosine). Point and spot lamps only on the lit side (0 <= mu0): their ramp past the
+// terminator, where the lamp's ways fan out over the limb, doubled the view against the lamp (ball_grey +18 -> +82 %,
+// ball_issue +13 -> +101 %), while an area lamp's pieces' ways do not line up on one camera (docs/benchmarks.md,
+// lamp-shell, lamp-ramp).
+bool beamLightsRamp(const Scene &scene, std::size_t b, double mu0) {
+    if (mu0 >= kGrazingSunCosine) return false;
+    return b < scene.suns.size() || scene.lamps[b - scene.suns.size()].isArea() || mu0 >= 0.0;
+}
+
+// The beams' light (suns, lamps, area lamps' pieces: beamLightsRamp) scattered once in ramp voxel c (outside the
+// unknowns, carrying its surface's radiance) in front of surfaces that take them at grazing incidence or not at all
+// (kGrazingSunCosine): the peaked lobe of k = g about each
 // sun's travel, of mean omega E T / 4 pi, T the snow's uncollided transmittance averaged over c's trilinear hat
 // weighted by the density (what the renderer's emission weighs; 4^3 points), the occluders' shadow taken at c's centre,
 // where it holds more than c's own peak and no sun the surfaces take (mu0 >= kGrazingSunCosine) lights c. A convex
@@ -422,30 +445,46 @@ class RampOfThickConvexSnow {
 // little (0 < mu0 < kGrazingSunCosine), whose ramp mass the half-space model holds too (patchRampMass), with a step
 // at kGrazingSunCosine: tapered by 1 - mu0 / kGrazingSunCosine (continuous), or added only where mu0 <= 0, it lost
 // (ball_issue's worst block +36 -> -40, -48 %, ball_grey 8.0 -> 8.3, 8.4 %; docs/benchmarks.md, mends-rim52).
+// A lamp's light is marched from each of the hat's points (its way varies across the voxel), over lampSamples points of
+// the lamp (seed, stream: beamAt's), the occluders' shadow taken at c's centre; its 1 / r^2 in the irradiance.
 // normal: the carrying surfaces' (facingAverage), zero where none faces c.
 void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
-               QuarterPointSun &sunAt, RampOfThickConvexSnow &rampOfThickConvexSnow, Source &S) {
+               QuarterPointSun &sunAt, RampOfThickConvexSnow &rampOfThickConvexSnow, int lampSamples,
+               std::uint64_t seed, std::uint64_t stream, Source &S) {
     if (glm::length(normal) == 0.0) return;
-    // The occluders' shadow rays below only matter where some sun meets the surfaces grazingly or not at all: where
-    // none does, each sun either returns or adds nothing (and peaks are never negative). The car's ramp, mostly lit.
-    if (std::none_of(scene.suns.begin(), scene.suns.end(), [&](const SunLight &sun) {
-            return glm::dot(normal, sun.direction) < kGrazingSunCosine;
-        }))
-        return;
-    const VolumeOptics &optics = scene.medium->optics();
     const glm::dvec3 centre = scene.medium->voxelCentre(c);
+    const auto litInRamp = [&](std::size_t b) {
+        return beamLightsRamp(scene, b, glm::dot(normal, towardsBeam(scene, b, centre)));
+    };
+    // The occluders' shadow rays below only matter where some beam meets the surfaces grazingly or not at all: where
+    // none does, each either returns or adds nothing (and peaks are never negative). The car's ramp, mostly lit.
+    std::size_t beams = 0;
+    while (beams < beamCount(scene) && !litInRamp(beams)) ++beams;
+    if (beams == beamCount(scene)) return;
+    const VolumeOptics &optics = scene.medium->optics();
     Source single;
-    for (std::size_t b = 0; b < scene.suns.size(); ++b) {
-        const SunLight &sun = scene.suns[b];
-        if (!scene.occluders->empty() &&
-            scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(sun.direction), 1e-5f))
+    for (std::size_t b = 0; b < beamCount(scene); ++b) {
+        const bool sun = b < scene.suns.size();
+        if (sun && !scene.occluders->empty() &&
+            scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(scene.suns[b].direction), 1e-5f))
             continue;
-        // Such a sun's forward peak is in c's one carried peak: kept whole (replacing it dropped that peak and its
-        // direction; test_ramp_single_scattering_keeps_a_second_suns_forward_peak).
-        if (glm::dot(normal, sun.direction) >= kGrazingSunCosine) return;
-        single.addPeak(hatSunTransmittance(c, b, sun.direction, 1.0, marcher, sunAt) * glm::dvec3(sun.irradiance) *
-                           glm::dvec3(optics.albedo) * kInvFourPi,
-                       crossingAnisotropy(optics.g), -sun.direction);
+        // A sun the surface takes has its forward peak in c's one carried peak: kept whole (replacing it dropped that
+        // peak and its direction; test_ramp_single_scattering_keeps_a_second_suns_forward_peak). A lamp's pieces are
+        // tested each on its own: one the surface takes hid the others' ramp light (lamp-ramp, docs/benchmarks.md).
+        if (!litInRamp(b)) {
+            if (sun) return;
+            continue;
+        }
+        const glm::dvec3 lit =  // W/m^2: the beam's mean over c's hat
+            sun ? hatSunTransmittance(c, b, scene.suns[b].direction, 1.0, marcher, sunAt) *
+                      glm::dvec3(scene.suns[b].irradiance)
+                : hatAverage<glm::dvec3>(c, marcher, [&](const openvdb::Coord &q) {
+                      const glm::dvec3 point = scene.medium->indexToWorld(glm::dvec3(q.x(), q.y(), q.z()) / 4.0);
+                      return glm::dvec3(beamAt(scene, b, point, lampSamples, seed, stream, marcher, &centre,
+                                               Crossing::Uncollided).irradiance);
+                  });
+        single.addPeak(lit * glm::dvec3(optics.albedo) * kInvFourPi, crossingAnisotropy(optics.g),
+                       -towardsBeam(scene, b, centre));
     }
     if (rampOfThickConvexSnow()) S.add(single);
     else if (single.peak0.x + single.peak0.y + single.peak0.z > S.peak0.x + S.peak0.y + S.peak0.z)
@@ -619,7 +658,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, facing, carrier)) continue;
                 else if (nearPeakAt.isValueOn(c)) {
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, sunAt, facing, S);
-                    sunInRamp(scene, c, facing, marcher, sunAt, rampOfThickConvexSnow, S);
+                    sunInRamp(scene, c, facing, marcher, sunAt, rampOfThickConvexSnow, preset.sunSamples, settings.seed,
+                              std::uint64_t(l), S);
                 }
                 if (!gathering) skyInRamp(scene, c, facing, index, rampOfThickConvexSnow, marcher, S);
                 perLeaf[l].add(it.pos(), S);
