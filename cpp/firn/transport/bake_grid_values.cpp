@@ -428,10 +428,10 @@ bool beamLightsRamp(const Scene &scene, std::size_t b, double mu0) {
 
 // The beams' light (suns, lamps, area lamps' pieces: beamLightsRamp) scattered once in ramp voxel c (outside the
 // unknowns, carrying its surface's radiance) in front of surfaces that take them at grazing incidence or not at all
-// (kGrazingSunCosine): the peaked lobe of k = g about each
-// sun's travel, of mean omega E T / 4 pi, T the snow's uncollided transmittance averaged over c's trilinear hat
-// weighted by the density (what the renderer's emission weighs; 4^3 points), the occluders' shadow taken at c's centre,
-// where it holds more than c's own peak and no sun the surfaces take (mu0 >= kGrazingSunCosine) lights c. A convex
+// (kGrazingSunCosine): the peaked lobe of k = g about each beam's travel, of mean omega E T / 4 pi, T the snow's
+// uncollided transmittance averaged over c's trilinear hat weighted by the density (what the renderer's emission
+// weighs; 4^3 points), the occluders' shadow taken at c's centre, where it holds more than c's own peak and no sun the
+// surfaces take (mu0 >= kGrazingSunCosine) lights c. A convex
 // surface's ramp reaches into the sun past its terminator, where the surfaces' half-space model has no sun (mu0 <= 0)
 // or little (a lit patch returns E mu0 per area, the ramp beside it scatters E T): ball_grey's rims seen against the
 // sun (bench/bake_suite.py; docs/bake.md, Method 7). The average, not T at c's centre: an air voxel just outside a limb
