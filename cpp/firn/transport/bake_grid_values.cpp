@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -402,8 +401,11 @@ class RampOfThickConvexSnow {
                           const Medium &medium)
         : topo_(topo), c_(c), carrier_(carrier), index_(index), density_(density), medium_(medium) {}
     bool operator()() {
-        if (!known_) known_ = besideThickSnow(medium_, density_, c_) && onConvexSurface(topo_, carrier_, index_);
-        return *known_;
+        if (!asked_) {
+            thickConvex_ = besideThickSnow(medium_, density_, c_) && onConvexSurface(topo_, carrier_, index_);
+            asked_ = true;
+        }
+        return thickConvex_;
     }
 
   private:
@@ -412,7 +414,7 @@ class RampOfThickConvexSnow {
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index_;
     Medium::Accessor &density_;
     const Medium &medium_;
-    std::optional<bool> known_;
+    bool asked_ = false, thickConvex_ = false;  // two flags, not std::optional<bool>: GCC 12 warns it unset
 };
 
 // Whether beam b (a sun, lamp or area lamp's piece) meeting the carrying surfaces at mu0 (the cosine of its way at c to
