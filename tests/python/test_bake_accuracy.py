@@ -171,13 +171,13 @@ def test_ramp_in_front_of_a_lit_rim_carries_the_returned_grazing_sun(folder):
     # branch ball-rims: docs/benchmarks.md). Not a double count of the surface model's sun: with sunInRamp gated at
     # mu0 < 0 (voxels whose surfaces take no sun at all) the block reads +55.4 % too; the ramp there scatters the sun
     # the surfaces lack (the terminator test below bounds it from below), on a rim over-bright already (its baked
-    # radiance 1.5-2.7x the Monte Carlo's along the ray on main). Hence 0.56, not 0.55. This block is over-bright, a
+    # radiance 1.5-2.7x the Monte Carlo's along the ray on main). This block was over-bright, a
     # known error: +55.4 % before and +57.9 % since the ramp's own sun is added to the carried peaks beside thick
     # convex snow (branch rim-forward: the top rim's light, whose gains elsewhere outweigh it; tapering that addition
     # with the carriers' mu0 did not recover the block, docs/benchmarks.md, mends-rim52). Its cause was
     # forwardPeakThrough's sun share taken at an air voxel's centre (T = 1) beside carriers well past the terminator:
-    # averaged over the voxel's hat (branch grey-rims) the block reads +33.1 % (the worst now the second row's outer
-    # blocks); the bound lies midway between that and +57.9 %.
+    # averaged over the voxel's hat (branch grey-rims) the view's worst block reads +33.1 % (now the second row's
+    # outer blocks; the rim's about +25 %); the bound lies midway between that and +57.9 %.
     assert grey["worst"] < 0.45, grey["worst_signed"]
     clean = baked_against_reference(folder, "ball_clean", 1024, [(180, 0)])
     assert clean["worst"] < 0.55, clean["worst_signed"]
@@ -327,9 +327,9 @@ def test_lamps_scatter_their_light_in_the_ramp_beside_grazing_patches(folder):
     # patches a beam meets grazingly scatter it once (bake_grid_values.cpp, sunInRamp). Lamps once got none, and an
     # area lamp's 16 pieces none where one piece met the patch at mu0 >= 0.4: main 72c1a45 read the area lamp -11.7 %,
     # -27.8 % seen against it, the point lamp -10.6 %; each beam on its own, the area lamp's pieces grazing or past
-    # their terminator, the point lamp on its lit side only (0 <= mu0): -5.2 %, -6.9 %, -7.4 %. Given the ramp past its
-    # terminator the point lamp's view against it read +82 % (16384 paths; here +27.7 %, main +19.5 %: the upper
-    # bound) (docs/benchmarks.md, lamp-shell, lamp-ramp).
+    # their terminator, the point lamp on its lit side only (0 <= mu0): -5.2 %, -6.9 %, -7.4 %. The upper bound 0.4 on
+    # the point lamp's view against it catches the ramp given past its terminator too (+82 % against 16384-path
+    # references; this view reads +27.7 % here, main +19.5 %) (docs/benchmarks.md, lamp-shell, lamp-ramp).
     area = lamp_terminator.measure(case("ball_grey"), "area", folder, cache=None, samples=1024)
     point = lamp_terminator.measure(case("ball_grey"), "point", folder, cache=None, samples=1024)
     against = 2  # view (180, 0)
@@ -1011,8 +1011,8 @@ def test_peaks_carried_past_the_terminator_take_the_sun_where_the_ramp_voxel_hol
     # blocks 24, 31, 32, 39) cross ramp voxels whose carriers face away from the sun (mu0 -0.5 to -0.2). The lit
     # surfaces' forward peaks carried there (forwardPeakThrough) are weighed by the share of the sun reaching the
     # voxel; taken at its centre an air voxel beside the limb reads T = 1 while the snow in its hat, which is what the
-    # renderer weighs its value by, lies in the body's shadow. The sun alone against these 4096 Monte Carlo paths
-    # (the sum's noise about 7 %): +269 % with T at the centre, +144 % with T averaged over the hat (branch
+    # renderer weighs its value by, lies in the body's shadow. The sun alone against these 4096 Monte Carlo paths:
+    # +269 % with T at the centre, +144 % with T averaged over the hat (branch
     # grey-rims; docs/benchmarks.md); the bound lies midway. What is left is the carried peak's own size.
     bias = sun_alone_against_monte_carlo(folder, "ball_grey", [24, 31, 32, 39])
     assert bias < 2.0, bias

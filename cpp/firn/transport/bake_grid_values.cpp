@@ -258,7 +258,7 @@ double rampCrossing(const Medium &medium, const glm::dvec3 &from, const glm::dve
 // voxel beside the limb has T = 1 at its centre and the body's shadow in its hat (ball_grey's equator rims seen
 // against the sun +49 -> +25 %, mean 8.0 -> 7.4 %). Nearer the terminator the centre's T stands in for the multiply
 // forward-scattered sun the rims lack (docs/benchmarks.md, rim-forward): averaged from -0.2 up, ball_issue's view
-// against the sun -13 -> -14 %, at 0 ball_clean's and ball_snow's side rims -41 -> -49 %, -51 -> -56 %; from -0.3 down
+// against the sun -13 -> -14 %, at 0 ball_clean's and ball_snow's side rims -41 -> -48 %, -51 -> -57 %; from -0.3 down
 // ball_grey's rims keep +49 % (docs/benchmarks.md, grey-rims-53).
 constexpr double kShadowedCarrierCosine = -0.25;
 
@@ -277,12 +277,13 @@ constexpr double kShadowedCarrierCosine = -0.25;
 // traced voxels (their peak is their own beams' scattering). bench/bake_suite.py: docs/bake.md, Accuracy.
 //
 // peaks: the surface voxels holding a peaked lobe, read from the at most eight leaves around c (BlockMask): an
-// index lookup for each of the 124 voxels around c took most of this walk's time.
+// index lookup for each of the 124 voxels around c took most of this walk's time. normal: the carrying surfaces'
+// (facingAverage), against which kShadowedCarrierCosine is taken; sunAt: the quarter-voxel lattice's suns.
 void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
                         TracedIndex &tracedIndex, const SourceValues &source,
                         openvdb::tree::ValueAccessor<const openvdb::BoolTree> &peaks, Medium::ColumnMarcher &marcher,
-                        QuarterPointSun &sunAt, const glm::dvec3 &facing, Source &S) {
+                        QuarterPointSun &sunAt, const glm::dvec3 &normal, Source &S) {
     struct Offset {
         openvdb::Coord from;  // c minus the way to c
         glm::dvec3 towards;   // unit
@@ -336,11 +337,11 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     for (std::size_t k = 0; k < takenCount; ++k)
         crossing += taken[k].second * rampCrossing(medium, medium.voxelCentre(taken[k].first), centre, forwardKept,
                                                    marcher);
-    double arriving = 0.0, outside = 0.0;  // W/m^2 (green), delta-scaled
+    double arriving = 0.0, outside = 0.0;  // W/m^2 (green): delta-scaled through the snow, and outside it
     for (std::size_t b = 0; b < scene.suns.size(); ++b) {
         const SunLight &sun = scene.suns[b];
         outside += sun.irradiance.y;
-        if (glm::dot(facing, sun.direction) < kShadowedCarrierCosine) {
+        if (glm::dot(normal, sun.direction) < kShadowedCarrierCosine) {
             if (scene.occluders->empty() ||
                 !scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(sun.direction), 1e-5f))
                 arriving +=
@@ -418,7 +419,7 @@ class RampOfThickConvexSnow {
 };
 
 // Whether beam b (a sun, lamp or area lamp's piece) meeting the carrying surfaces at mu0 (the cosine of its way at c to
-// their normal) leaves its light in the ramp to the ramp (sunInRamp). Suns and area lamps' pieces: grazing or past the
+// their normal) scatters its light in the ramp (sunInRamp). Suns and area lamps' pieces: grazing or past the
 // terminator (mu0 < kGrazingSunCosine). Point and spot lamps only on the lit side (0 <= mu0): their ramp past the
 // terminator, where the lamp's ways fan out over the limb, doubled the view against the lamp (ball_grey +18 -> +82 %,
 // ball_issue +13 -> +101 %), while an area lamp's pieces' ways do not line up on one camera (docs/benchmarks.md,
