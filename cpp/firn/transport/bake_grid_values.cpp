@@ -228,6 +228,12 @@ T hatAverage(const openvdb::Coord &c, Medium::ColumnMarcher &marcher, const F &f
     return weights > 0.0 ? sum / weights : T(0.0);
 }
 
+// Whether the occluders hide the way `towards` (unit) from p: the one shadow ray a ramp voxel's centre casts for a sun
+// or a sky direction before its hat's marches.
+bool occludersHide(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &towards) {
+    return !scene.occluders->empty() && scene.occluders->caster().occluded(glm::vec3(p), glm::vec3(towards), 1e-5f);
+}
+
 // Sun b's transmittance through the snow raised to `power` (1: uncollided; 1 - f: delta-scaled, Crossing::Uncollided's
 // exponent scaled), averaged over voxel c's trilinear hat weighted by the density: what the renderer's emission at c
 // weighs (4^3 points). Zero where the hat holds no snow. Not T at c's centre: an air voxel just outside a limb has
@@ -342,8 +348,7 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
         const SunLight &sun = scene.suns[b];
         outside += sun.irradiance.y;
         if (glm::dot(normal, sun.direction) < kShadowedCarrierCosine) {
-            if (scene.occluders->empty() ||
-                !scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(sun.direction), 1e-5f))
+            if (!occludersHide(scene, centre, sun.direction))
                 arriving +=
                     sun.irradiance.y * hatSunTransmittance(c, b, sun.direction, 1.0 - forwardKept, marcher, sunAt);
         } else if (sun.irradiance.y > 0.0f) {
@@ -468,9 +473,7 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
     Source single;
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
         const bool sun = b < scene.suns.size();
-        if (sun && !scene.occluders->empty() &&
-            scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(scene.suns[b].direction), 1e-5f))
-            continue;
+        if (sun && occludersHide(scene, centre, scene.suns[b].direction)) continue;
         // A sun the surface takes has its forward peak in c's one carried peak: kept whole (replacing it dropped that
         // peak and its direction; test_ramp_single_scattering_keeps_a_second_suns_forward_peak). A lamp's pieces are
         // tested each on its own: one the surface takes hid the others' ramp light (lamp-ramp, docs/benchmarks.md).
@@ -555,8 +558,7 @@ void skyInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
         for (int j = 0; j < kSkyAzimuths; ++j) {
             const glm::dvec3 d = direction(i, j);
             // The occluders' one shadow ray before the hat's marches: a direction an occluder hides needs none.
-            if (!scene.occluders->empty() && scene.occluders->caster().occluded(glm::vec3(centre), glm::vec3(d), 1e-5f))
-                continue;
+            if (occludersHide(scene, centre, d)) continue;
             double transmitted = 0.0;
             for (int k = 0; k < points; ++k)
                 if (const double column = columnTo(hat[k].first, d); column < limit)
