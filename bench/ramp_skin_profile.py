@@ -12,10 +12,12 @@ its normal): what the camera gets (x 1000, the sun 1 W/m^2), the Monte Carlo's e
 (snow_block_split.py's), the bake's and its peaked lobes' part (grids firn_source_peak*), the mean source functions.
 --orders: the Monte Carlo's mean source split by scattering order instead (needs the core built with the Monte Carlo
 part of bench/rim_forward_hooks.diff: FIRN_MC_GATE counts a camera path's sun at collision orders lo..hi only).
+--shares: instead, what share of the rays' baked render each class of voxels' values gives (each class's values scaled
+by 1.5 in turn: the first air shell, the air beyond, the fringe voxels 0 < rho < full, the full voxels).
 --plane: the same on a flat antialiased half-space (the ball's ramp, clip(0.5 - d / h)) whose normal is the band's
 middle (x 1.5, z 0.5: mu0 0.31), rays along -y through points of its level set: the ball's curvature removed.
 
-    PYTHONPATH=build/python python3 bench/ramp_skin_profile.py [--plane] [--orders] [--samples 16384]
+    PYTHONPATH=build/python python3 bench/ramp_skin_profile.py [--plane] [--orders] [--shares] [--samples 16384]
 """
 
 import argparse
@@ -25,6 +27,8 @@ import re
 import tempfile
 
 import numpy as np
+
+import pyopenvdb
 
 import bake_suite
 import firncore
@@ -76,11 +80,36 @@ def transmittance(case, origin, a, b, step=0.0001):
     return float(np.exp(-case.sigma_t / case.rho * rho.sum() * step))
 
 
+def render_shares(case, path, origins, directions):
+    """The share of the render along the rays that each class of voxels' baked values gives."""
+    rho, full = case.density, case.density.max()
+    centre = (np.array(rho.shape) - 1) / 2
+    radius = np.linalg.norm(np.stack(np.meshgrid(*map(np.arange, rho.shape), indexing="ij"), -1) - centre, axis=-1)
+    classes = {"air, first shell (rho 0, r < 6 voxels)": (rho == 0) & (radius < 6.0),
+               "air beyond": (rho == 0) & (radius >= 6.0), "fringe (0 < rho < full)": (rho > 0) & (rho < full),
+               "full": rho == full}
+    whole = firncore.render_baked(path, case.optics, origins, directions)[:, 1].sum()
+    with tempfile.TemporaryDirectory() as folder:
+        scaled = os.path.join(folder, "scaled.vdb")
+        for name, mask in classes.items():
+            grids, metadata = pyopenvdb.readAll(path)
+            for grid in (g for g in grids if g.name.startswith("firn_source")):
+                accessor = grid.getAccessor()
+                for voxel in zip(*(v.tolist() for v in np.nonzero(mask))):
+                    value, on = accessor.probeValue(voxel)
+                    if on:
+                        accessor.setValueOn(voxel, tuple(1.5 * v for v in value))
+            pyopenvdb.write(scaled, grids=list(grids), metadata=metadata)
+            more = firncore.render_baked(scaled, case.optics, origins, directions)[:, 1].sum()
+            print(f"  {name:40s} {100 * (more / whole - 1) / 0.5:5.1f} % of the render")
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--case", default="ball_issue")
     parser.add_argument("--plane", action="store_true")
     parser.add_argument("--orders", action="store_true")
+    parser.add_argument("--shares", action="store_true")
     parser.add_argument("--samples", type=int, default=16384)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_ramp_skin"))
     args = parser.parse_args()
@@ -100,6 +129,10 @@ def main():
     bake_suite.write_density(path, case.density, case.voxel)
     firncore.bake(path, case.optics, suns=case.suns(), quality="FINAL", seed=0)
     write_without_peaks(path, flat)
+    if args.shares:
+        origins = np.array([starts[0] for _, (starts, _) in rays])
+        print(f"{case.name}: the baked render of the {len(rays)} rays along -y by the voxels whose values it reads")
+        return render_shares(case, path, origins, np.repeat(DOWN[None], len(origins), 0))
     stretches = len(STARTS) - 1
     sent = {k: np.zeros(stretches) for k in ("mc", "once", "baked", "peak")}
     weight, depth = np.zeros(stretches), np.zeros(stretches)
