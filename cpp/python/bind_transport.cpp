@@ -476,6 +476,35 @@ What Cycles draws for the baked snow of `vdb_path` along camera rays (N, 3 origi
 the emission-absorption integral of the contract's material, up to the first occluder. (N, 3) W/m^2/sr.)doc");
 
     m.def(
+        "render_scattering_where_thin",
+        [](const std::string &path, const firn::VolumeOptics &optics, const DoubleArray &origins,
+           const DoubleArray &directions, const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,
+           const py::list &occluders, int samples, std::uint64_t seed, double thinDepth, int bounces,
+           bool tracedOnly) {
+            if (samples < 1 || samples > 1000000) throw firn::InvalidArgument("samples must be between 1 and 1e6");
+            OccluderArrays blockers = occludersFrom(occluders);
+            const std::vector<firn::Ray> rays = raysFrom(origins, directions);
+            const std::vector<firn::RadianceEstimate> estimates = longCall([&] {
+                const openvdb::GridPtrVec grids = firn::readGrids(path);
+                const firn::MonteCarloReference reference(sceneFrom(grids, path, optics, suns, {}, sky, std::move(blockers)));
+                return firn::renderScatteringWhereThin(reference, firn::BakedGrids::find(grids), rays, samples, seed,
+                                                       thinDepth, bounces, tracedOnly);
+            });
+            std::vector<firn::Rgb> mean, error;
+            for (const auto &e : estimates) mean.push_back(e.mean), error.push_back(e.standardError);
+            return py::make_tuple(rgbRows(mean), rgbRows(error));
+        },
+        py::arg("vdb_path"), py::arg("optics"), py::arg("origins"), py::arg("directions"),
+        py::arg("suns") = std::vector<firn::SunLight>{}, py::arg("sky") = py::none(), py::arg("occluders") = py::list(),
+        py::arg("samples") = 64, py::arg("seed") = 0, py::arg("thin_depth") = 2.0,
+        py::arg("bounces") = 1 << 30, py::arg("traced_only") = false, R"doc(
+A baked file rendered as a renderer that scatters in the thin snow would (benchmarks.md, thin-ring): path traced
+in the voxels of optical depth sigma_t h under `thin_depth` (and the air beside them), the baked emission
+elsewhere; `bounces`: the renderer's volume bounces (0: the lights' single scattering only); `traced_only`: only in
+the voxels the bake traces (not the fringes of diffused snow). Returns (mean,
+standard error), each (N, 3) W/m^2/sr, as monte_carlo_radiance.)doc");
+
+    m.def(
         "monte_carlo_radiance",
         [](const std::string &path, const firn::VolumeOptics &optics, const DoubleArray &origins,
            const DoubleArray &directions, const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,

@@ -1033,3 +1033,36 @@ def test_ramp_of_a_small_thick_ball_scatters_the_sun_crossing_its_rim(folder):
     for name in ("ball_issue", "ball_grey"):
         bias = sun_alone_against_monte_carlo(folder, name, [58, 59, 60, 61, 40, 47])
         assert -0.28 < bias < -0.10, (name, bias)
+
+
+def thin_slab_baked(folder):
+    """slab_thin_forward (sigma_t h 1: every voxel thin) baked, with its camera rays (seen ones)."""
+    c = case("slab_thin_forward")
+    path = os.path.join(folder, "thin_slab_scattered.vdb")
+    bake_suite.write_density(path, c.density, c.voxel)
+    firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), quality="FINAL", seed=0)
+    origins, directions, tau = bake_suite.views(c)
+    seen = np.nonzero(tau >= 1.0)[0][::12]
+    return c, path, origins[seen], directions[seen]
+
+
+def test_render_scattering_nowhere_is_the_baked_render(folder):
+    # Under a threshold no voxel passes, the render is the baked emission alone, as render_baked draws it.
+    c, path, origins, directions = thin_slab_baked(folder)
+    mixed, _ = firncore.render_scattering_where_thin(path, c.optics, origins, directions, suns=c.suns(), sky=c.skies(),
+                                                     samples=4, thin_depth=0.0)
+    assert mixed == pytest.approx(firncore.render_baked(path, c.optics, origins, directions), rel=1e-9)
+
+
+def test_render_scattering_where_all_snow_is_thin_is_the_monte_carlo(folder):
+    # Every voxel thin (and the air beside it): the render scatters everywhere and draws no baked emission, so it
+    # is the brute-force path tracing of the same scene; its estimate and the reference's agree within their noise.
+    c, path, origins, directions = thin_slab_baked(folder)
+    mixed, mixed_error = firncore.render_scattering_where_thin(path, c.optics, origins, directions, suns=c.suns(),
+                                                               sky=c.skies(), samples=16384, seed=5, thin_depth=2.0)
+    truth, truth_error = firncore.monte_carlo_radiance(path, c.optics, origins, directions, suns=c.suns(),
+                                                       sky=c.skies(), samples=16384, seed=7)
+    difference = mixed[:, 1].sum() - truth[:, 1].sum()
+    sigma = math.sqrt((mixed_error[:, 1] ** 2).sum() + (truth_error[:, 1] ** 2).sum())
+    assert sigma < 0.012 * truth[:, 1].sum()  # low enough to tell the baked render (+5 % here) apart
+    assert abs(difference) < 4.0 * sigma

@@ -9,6 +9,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/bake_thin_snow.h"
+#include "firn/transport/snow_topology.h"
 #include "firn/util/error.h"
 
 namespace firn {
@@ -105,12 +107,101 @@ BakedGrids::Values SourceGridsSampler::operator()(const openvdb::Vec3d &ijk) {
 BakedRadiance::BakedRadiance(const Scene &scene, const BakedGrids &baked)
     : scene_(scene), marcher_(*scene.medium), source_(*scene.medium, baked) {}
 
+Rgb bakedSourceToward(const BakedGrids::Values &source, const glm::dvec3 &w) {
+    // source: l0, l1 per axis, p0 (RGB), then p1
+    const glm::dvec3 peak = peakRadiance(glm::dvec3(source[4][0], source[4][1], source[4][2]),
+                                         glm::dvec3(source[5][0], source[5][1], source[5][2]), w);
+    Rgb S;
+    for (int c = 0; c < 3; ++c)
+        S[c] = lobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]), w) + peak[c];
+    return S;
+}
+
 Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray) {
     double tMax = std::numeric_limits<double>::infinity();
     if (const auto hit = scene.occluders->caster().intersect(glm::vec3(ray.origin), glm::vec3(ray.direction)))
         tMax = hit->distance;
     // Steps of 1/32 voxel resolve the steepest density ramp (one voxel) to well under 1 %.
     return BakedRadiance(scene, baked).along(ray, tMax, 1.0 / 32.0);
+}
+
+namespace {
+
+// The voxels the renderer may scatter in: all the snow's, or only those the bake traces (thinVoxels: not the
+// fringes of diffused snow, whose light the surface model's ramp holds).
+std::vector<openvdb::Coord> scatterCandidates(const Scene &scene, bool tracedOnly) {
+    const openvdb::FloatTree &density = scene.medium->density().tree();
+    std::vector<openvdb::Coord> out;
+    if (!tracedOnly) {
+        for (auto it = density.cbeginValueOn(); it; ++it) out.push_back(it.getCoord());
+        return out;
+    }
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    bake::TracedSnow snow = bake::thinVoxels(*scene.medium, topo);
+    out = std::move(snow.thin);
+    out.insert(out.end(), snow.wholePieces.begin(), snow.wholePieces.end());
+    return out;
+}
+
+// 1 in the candidates of optical depth sigma_t h under thinDepth and in the air voxels touching them, else 0.
+openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool tracedOnly) {
+    const Medium &medium = *scene.medium;
+    const openvdb::FloatTree &density = medium.density().tree();
+    const double depthPerDensity = medium.optics().extinctionPerDensity * medium.voxelSize();
+    auto shares = std::make_shared<openvdb::FloatTree>(0.0f);
+    openvdb::tree::ValueAccessor<openvdb::FloatTree> share(*shares);
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(density);
+    for (const openvdb::Coord &c : scatterCandidates(scene, tracedOnly)) {
+        const float value = rho.getValue(c);
+        if (!(value > 0.0f && depthPerDensity * value < thinDepth)) continue;
+        share.setValue(c, 1.0f);
+        for (int i = -1; i <= 1; ++i)
+            for (int j = -1; j <= 1; ++j)
+                for (int k = -1; k <= 1; ++k) {
+                    const openvdb::Coord n = c.offsetBy(i, j, k);
+                    if (!(rho.getValue(n) > 0.0f)) share.setValue(n, 1.0f);
+                }
+    }
+    return shares;
+}
+
+}  // namespace
+
+std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReference &reference, const BakedGrids &baked,
+                                                        const std::vector<Ray> &rays, int samples, std::uint64_t seed,
+                                                        double thinDepth, int bounces, bool tracedOnly) {
+    const Scene &scene = reference.scene();
+    const Medium &medium = *scene.medium;
+    const openvdb::FloatTree::Ptr shares = scatterShares(scene, thinDepth, tracedOnly);
+    return estimateMixed(reference, rays, samples, seed, [&] {
+        auto share = std::make_shared<openvdb::tree::ValueAccessor<const openvdb::FloatTree>>(*shares);
+        auto sampler = std::make_shared<SourceGridsSampler>(medium, baked);
+        auto marcher = std::make_shared<Medium::ColumnMarcher>(medium);
+        auto shareAt = [share](const openvdb::Vec3d &ijk) {
+            return double(openvdb::tools::BoxSampler::sample(*share, ijk));
+        };
+        MixedRender mixed;
+        mixed.bounces = bounces;
+        mixed.scatterShare = [&medium, shareAt](const glm::dvec3 &p) {
+            const glm::dvec3 ijk = medium.worldToIndex(p);
+            return shareAt(openvdb::Vec3d(ijk.x, ijk.y, ijk.z));
+        };
+        mixed.emittedAt = [&medium, sampler, shareAt](const glm::dvec3 &p, const glm::dvec3 &w) {
+            const glm::dvec3 g = medium.worldToIndex(p);
+            const openvdb::Vec3d ijk(g.x, g.y, g.z);
+            return (1.0 - shareAt(ijk)) * bakedSourceToward((*sampler)(ijk), w);
+        };
+        mixed.emittedAlong = [&scene, sampler, marcher, shareAt](const Ray &camera, double tMax) {
+            auto unshared = [&](const openvdb::Vec3d &ijk) {
+                BakedGrids::Values v = (*sampler)(ijk);
+                const float keep = float(1.0 - shareAt(ijk));
+                for (auto &value : v) value *= keep;  // the lobes are linear in their values
+                return v;
+            };
+            return bakedRadianceAlong(scene, *marcher, unshared, camera, tMax, 1.0 / 32.0);
+        };
+        return mixed;
+    });
 }
 
 }  // namespace firn

@@ -49,6 +49,10 @@ std::array<openvdb::Vec3fTree::Ptr, BakedGrids::kCount> coarsenedSources(const o
                                                                          const FineValuesReaders &newReader,
                                                                          const openvdb::FloatTree &density, int factor);
 
+// The baked source towards w (unit, towards the viewer) from the grids' values at a point: per channel the broad
+// lobe plus the peaked one, W/m^2/sr per unit extinction.
+Rgb bakedSourceToward(const BakedGrids::Values &source, const glm::dvec3 &w);
+
 // Integrates the baked emission along a ray as the renderer does: the radiance the baked snow sends back along
 // it (towards its origin) from t = 0 to tMax (m), in steps of at most `step` voxels with the exact exponential of
 // each step. sourceAt(ijk) gives the grids' values (BakedGrids::Values) at a point of the density's index
@@ -64,12 +68,7 @@ Rgb bakedRadianceAlong(const Scene &scene, Medium::ColumnMarcher &marcher, Sourc
     marcher.march(ray.origin, ray.direction, tMax, step, [&](const openvdb::Vec3d &ijk, double dt) {
         const double sigmaT = k * marcher.densityAt(ijk);
         if (sigmaT <= 0.0) return true;
-        const BakedGrids::Values source = sourceAt(ijk);  // l0, l1 per axis, p0 (RGB), then p1
-        const glm::dvec3 peak = peakRadiance(glm::dvec3(source[4][0], source[4][1], source[4][2]),
-                                             glm::dvec3(source[5][0], source[5][1], source[5][2]), w);
-        Rgb S;
-        for (int c = 0; c < 3; ++c)
-            S[c] = lobeRadiance(source[0][c], glm::dvec3(source[1][c], source[2][c], source[3][c]), w) + peak[c];
+        const Rgb S = bakedSourceToward(sourceAt(ijk), w);
         const double opacity = 1.0 - std::exp(-sigmaT * dt);
         radiance += transmittance * opacity * S;
         transmittance *= 1.0 - opacity;
@@ -110,5 +109,12 @@ class BakedRadiance {
 // the first occluder (the sky and surfaces behind the snow are not included: the renderer adds them,
 // attenuated by exp(-tau)).
 Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray);
+
+// The render of MixedRender (monte_carlo.h): the renderer scatters, all orders, in the snow of optical depth per
+// voxel sigma_t h under `thinDepth` and in the air voxels beside it, and draws the baked emission elsewhere (the
+// voxels between trilinear). `samples` paths per ray; (mean, standard error) per ray as MonteCarloReference's.
+std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReference &reference, const BakedGrids &baked,
+                                                        const std::vector<Ray> &rays, int samples, std::uint64_t seed,
+                                                        double thinDepth, int bounces, bool tracedOnly);
 
 }  // namespace firn

@@ -82,7 +82,8 @@ class PathTracer {
 
     // Radiance scattered by the medium towards the camera along one camera ray, one sample. With
     // `unscattered`, also the sky and surfaces seen straight along the ray: all the light arriving at its origin.
-    Rgb sample(const Ray &camera, Rng &rng, bool unscattered = false) {
+    // With `mixed`, the render of MixedRender less the camera segment's emission (the caller's, once per ray).
+    Rgb sample(const Ray &camera, Rng &rng, bool unscattered = false, MixedRender *mixed = nullptr) {
         glm::dvec3 p = camera.origin, d = camera.direction;
         Rgb throughput(1.0), radiance(0.0);
         bool first = true;
@@ -100,11 +101,18 @@ class PathTracer {
             const double tSurface = hit ? double(hit->distance) : kInfinity;
             if (tCollision < kInfinity) {
                 p += tCollision * d;
+                if (mixed) {
+                    if (!first) radiance += throughput * mixed->emittedAt(p, -d);
+                    const double share = mixed->scatterShare(p);
+                    if (share <= 0.0) return radiance;
+                    throughput *= share;
+                }
                 throughput *= medium_.optics().albedo;
                 radiance += throughput * lightScattered(p, d, rng);
+                if (mixed && event >= mixed->bounces) return radiance;
                 d = sampleHenyeyGreenstein(d, medium_.optics().g, rng.uniform(), rng.uniform());
             } else if (hit) {
-                if (first && !unscattered) return Rgb(0.0);  // a surface in front of the snow: the renderer draws it
+                if (first && !unscattered) return radiance;  // a surface in front of the snow: the renderer draws it
                 p += tSurface * d;
                 const glm::dvec3 n = glm::dot(glm::dvec3(hit->normal), d) < 0.0 ? glm::dvec3(hit->normal)
                                                                                   : -glm::dvec3(hit->normal);
@@ -319,6 +327,18 @@ class PathTracer {
     const SourceDirections &directions_;  // where the source is gathered besides its moments (sourceIn)
 };
 
+namespace {
+// The mean of `samples` radiance samples and its standard error, from their sum and sum of squares.
+RadianceEstimate meanOf(const Rgb &sum, const Rgb &sumSquares, int samples) {
+    RadianceEstimate out;
+    const double n = std::max(samples, 1);
+    out.mean = sum / n;
+    const Rgb variance = glm::max(sumSquares / n - out.mean * out.mean, Rgb(0.0));
+    out.standardError = glm::sqrt(variance / std::max(n - 1.0, 1.0));
+    return out;
+}
+}  // namespace
+
 MonteCarloReference::MonteCarloReference(Scene scene)
     : scene_(std::move(scene)), directions_(sourceDirections(brightestBeam(scene_))) {
     validate(scene_);
@@ -334,12 +354,7 @@ RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std:
         sum += L;
         sumSquares += L * L;
     }
-    RadianceEstimate out;
-    const double n = std::max(samples, 1);
-    out.mean = sum / n;
-    const Rgb variance = glm::max(sumSquares / n - out.mean * out.mean, Rgb(0.0));
-    out.standardError = glm::sqrt(variance / std::max(n - 1.0, 1.0));
-    return out;
+    return meanOf(sum, sumSquares, samples);
 }
 
 PhotonTracer::PhotonTracer(const MonteCarloReference &reference)
@@ -559,6 +574,29 @@ std::vector<RadianceEstimate> MonteCarloReference::estimate(const std::vector<Ra
             if (progress) progress->throwIfCancelled();
             out[i] = estimate(rays[i], samplesPerRay, seed, i);
             if (progress) progress->report(double(++done) / rays.size());
+        }
+    });
+    return out;
+}
+
+std::vector<RadianceEstimate> estimateMixed(const MonteCarloReference &reference, const std::vector<Ray> &rays,
+                                            int samplesPerRay, std::uint64_t seed,
+                                            const std::function<MixedRender()> &perThread) {
+    std::vector<RadianceEstimate> out(rays.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1), [&](const auto &range) {
+        PathTracer tracer(reference);
+        MixedRender mixed = perThread();
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            Rng rng(seed, i);
+            Rgb sum(0.0), sumSquares(0.0);
+            for (int s = 0; s < samplesPerRay; ++s) {
+                const Rgb L = tracer.sample(rays[i], rng, false, &mixed);
+                sum += L, sumSquares += L * L;
+            }
+            out[i] = meanOf(sum, sumSquares, samplesPerRay);
+            const auto hit = reference.scene().occluders->caster().intersect(glm::vec3(rays[i].origin),
+                                                                            glm::vec3(rays[i].direction));
+            out[i].mean += mixed.emittedAlong(rays[i], hit ? double(hit->distance) : kInfinity);
         }
     });
     return out;

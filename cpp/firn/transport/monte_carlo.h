@@ -165,6 +165,24 @@ class MonteCarloReference {
     SourceDirections directions_;
 };
 
+// A render in which the renderer scatters in the optically thin snow and draws the baked emission elsewhere
+// (benchmarks.md, thin-ring): per thread, the baked emission seen along a camera ray up to tMax (m), already
+// weighted by 1 - scatterShare; the baked source at a point towards w (W/m^2/sr, per unit extinction, weighted
+// likewise); and the share of the snow at a point that scatters (1 in thin snow, 0 in baked snow, trilinear between).
+struct MixedRender {
+    std::function<Rgb(const Ray &camera, double tMax)> emittedAlong;
+    std::function<Rgb(const glm::dvec3 &p, const glm::dvec3 &w)> emittedAt;
+    std::function<double(const glm::dvec3 &p)> scatterShare;
+    int bounces = 1 << 30;  // the renderer's volume bounces: scatterings a path continues after (each lit by the lights)
+};
+
+// MonteCarloReference::estimate's rays rendered so: the camera segment's emission integrated, the paths' own
+// collisions scattering their share (the lights' single scattering at each, as the reference) and collecting
+// the emission of the rest (a collision estimate: the mean of sigma_t S exp(-tau) over collisions is S's).
+std::vector<RadianceEstimate> estimateMixed(const MonteCarloReference &reference, const std::vector<Ray> &rays,
+                                            int samplesPerRay, std::uint64_t seed,
+                                            const std::function<MixedRender()> &perThread);
+
 class PathTracer;
 
 // Light tracing (light_tracing.h) with the reference's tracking, on one thread: its density accessors are built
