@@ -342,10 +342,12 @@ def test_area_lamp_pieces_the_surface_takes_keep_their_return_beside_the_others_
     # A flat slab of ball_grey's snow under a 60 x 60 cm square lamp 5 cm over its top (bench/lamp_slab_pieces.py,
     # 1024 paths, five views): of its 36 pieces the top takes some (mu0 >= 0.4) and meets others grazingly, whose
     # light the ramp scatters (bake_grid_values.cpp, beamsInRamp). That light once replaced the ramp voxel's carried
-    # peak where larger, dropping the taken pieces' return it held: -7.1 % against 4096 paths, -5.6 % seen from the
-    # side away from the lamp; added, -3.1 %, +0.5 % (docs/benchmarks.md, area-pieces).
+    # peak where larger, dropping the taken pieces' return it held: -6.2 % against these paths, -4.2 % seen from the
+    # side away from the lamp; added, -2.1 %, +1.9 % (4096 paths: -7.1, -5.6 -> -3.1, +0.5 %; docs/benchmarks.md,
+    # area-pieces).
     bias, views, _ = lamp_slab_pieces.measure(folder, "grey", "square", samples=1024)
-    assert -0.05 < bias < 0.04, (bias, views)
+    away = 2  # view (180, 30)
+    assert -0.045 < bias < 0.04 and -0.02 < views[away] < 0.06, (bias, views)
 
 
 def point_lamp_over_a_flat_slab(folder, omega, g, tau, height):
