@@ -6,7 +6,7 @@ the ball's normal at the block ray's optical depth 1 point: mu0 (to the sun) and
 limb. Each block's relative error e = baked / reference - 1 is split by light: the sun alone and the sky alone, each
 baked (FINAL, --seed) and traced by the core's Monte Carlo (--samples paths, seeds 21 and 22), e_sun = (baked sun -
 Monte Carlo sun) / reference, e_sky likewise (their sum differs from e by the reference's and these runs' noise). The
-baked sun is split into its peaked lobes' part (grids firn_source_peak*: the ramp's single scattering, sunInRamp, and
+baked sun is split into its peaked lobes' part (grids firn_source_peak*: the ramp's single scattering, beamsInRamp, and
 the surface's forward return) and its broad part (the diffusion's own light); the Monte Carlo sun into its exact single
 scattering (backlit_probe.single_scattering) and the rest. Per region: blocks, sum e^2 (and its share), sum e_sun^2,
 sum e_sky^2, the two runs' variance over the reference squared, summed (what their noise adds to those two), mean e,

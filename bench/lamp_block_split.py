@@ -10,7 +10,7 @@ irradiance facing it (Lamp.irradiance: its own falloff and cone) times the snow'
 towards the lamp's centre (or the sun) on 0.5 mm steps, Henyey-Greenstein at the angle between the light's travel and
 the way to the camera; `rest` is the Monte Carlo's less it (light that entered the snow and came back out). `interp`
 is `once` with E T at each point the trilinear interpolation of every voxel's exact density-weighted hat mean of E T
-(8^3 points): the form the bake's ramp single scattering takes (sunInRamp's hatAverage) with its values exact. Per
+(8^3 points): the form the bake's ramp single scattering takes (beamsInRamp's hatAverage) with its values exact. Per
 cell also the voxel's density and mu0 (the ball's outward normal at the voxel to the way to the light). An area lamp's
 single scattering is not one way's: not offered.
 
@@ -75,7 +75,7 @@ def irradiance_through_snow(case, light, points):
 
 class HatAverages:
     """Per voxel, the exact density-weighted mean over its trilinear hat of the light's E T (8^3 points): what the
-    bake's ramp single scattering holds per voxel (sunInRamp's hatAverage on 4^3 points)."""
+    bake's ramp single scattering holds per voxel (beamsInRamp's hatAverage on 4^3 points)."""
 
     def __init__(self, case, light):
         self.case, self.light, self.known = case, light, {}

@@ -3,7 +3,7 @@
 1. The sun the trilinear density intercepts, 1 - exp(-tau) over the sun's cross-section (rays on a 0.1-voxel grid,
    tau marched on 0.1-voxel steps), by impact radius b in voxels: the ramp's rim outside the half-density sphere (the
    bake's patches take E mu0 per patch area, about pi R^2 in all) against its inside.
-2. The uncollided sun averaged over a ramp cell's trilinear hat, weighted by the density (what sunInRamp weighs), on
+2. The uncollided sun averaged over a ramp cell's trilinear hat, weighted by the density (what beamsInRamp weighs), on
    the ball and on a flat snow whose top voxel has the cell's fill, the sun at the cell's mu0 (the ball's normal at the
    cell's centre): how much more sun a convex limb's ramp gets than the half-space model's ramp at the same angle.
 

@@ -1,7 +1,7 @@
 """The sun leaving a ball's rim towards a camera against the sun, split by scattering order and by where the sun
 entered the path (docs/benchmarks.md, rim-forward). Needs the core built with bench/rim_forward_hooks.diff applied
 (made on main 009960c; its Monte Carlo part applies on later trees)
-(the Monte Carlo's FIRN_MC_GATE; the diff also holds the bake's switches of sunInRamp that rim-forward tried:
+(the Monte Carlo's FIRN_MC_GATE; the diff also holds the bake's switches of beamsInRamp that rim-forward tried:
 FIRN_RIM_ORDERS, FIRN_RIM_KEEP, FIRN_RIM_ADD, FIRN_RIM_MU, FIRN_RIM_CONVEX): the camera paths' next-event sun is
 counted only at collision orders lo..hi whose point (where the sun entered) lies in a radius band about the ball's
 centre and a band of its radial cosine to the sun (mu0). Per block: the Monte Carlo's sun alone by order, the "more" (orders >= 2) by entry radius and mu0; the bake's

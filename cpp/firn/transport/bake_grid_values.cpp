@@ -168,7 +168,7 @@ class BlockMask {
 };
 
 // The suns' uncollided transmittance through the snow at the points of a quarter-voxel lattice (index space: odd
-// multiples of 1/4), each point marched once: the 4^3 points sunInRamp averages over a voxel's hat are shared with
+// multiples of 1/4), each point marched once: the 4^3 points beamsInRamp averages over a voxel's hat are shared with
 // its neighbours' (a point at c + 1/4 is also c + 1 - 3/4), so a band of ramp voxels marches a few times fewer
 // columns. One per thread, holding one leaf's points at a time in a dense array (18^3 a sun for the dilated
 // topology's 8^3 leaves) whose stamps say which hold this leaf's value: no hash map to fill and clear per leaf.
@@ -238,7 +238,7 @@ bool occludersHide(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &to
 // exponent scaled), averaged over voxel c's trilinear hat weighted by the density: what the renderer's emission at c
 // weighs (4^3 points). Zero where the hat holds no snow. Not T at c's centre: an air voxel just outside a limb has
 // T = 1 there and shadowed snow in its hat (ball_grey's equator rims seen against the sun read +200 to +270 % with
-// sunInRamp's T at the centre, +49 % with forwardPeakThrough's; docs/benchmarks.md, ball-rims, grey-rims-53).
+// beamsInRamp's T at the centre, +49 % with forwardPeakThrough's; docs/benchmarks.md, ball-rims, grey-rims-53).
 double hatSunTransmittance(const openvdb::Coord &c, std::size_t b, const glm::dvec3 &direction, double power,
                            Medium::ColumnMarcher &marcher, QuarterPointSun &sunAt) {
     return hatAverage<double>(c, marcher, [&](const openvdb::Coord &q) {
@@ -371,7 +371,7 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
 }
 
 // Surfaces that take a sun at most this grazingly (mu0 = cos of its angle to the normal) leave the sun in their
-// density ramp to the ramp itself (sunInRamp; 0.2 before branch rim-forward: half of a ball's rim light seen against
+// density ramp to the ramp itself (beamsInRamp; 0.2 before branch rim-forward: half of a ball's rim light seen against
 // the sun entered where mu0 >= 0.3, and 0.4 took ball_issue's view there -14 -> -13 %, docs/benchmarks.md).
 constexpr double kGrazingSunCosine = 0.4;
 
@@ -398,7 +398,7 @@ bool besideThickSnow(const Medium &medium, Medium::Accessor &density, const open
 }
 
 // Whether ramp voxel c is the ramp of optically thick convex snow (besideThickSnow, its carrier onConvexSurface),
-// the test sunInRamp and skyInRamp share: asked only past their cheap early exits, found at most once per voxel.
+// the test beamsInRamp and skyInRamp share: asked only past their cheap early exits, found at most once per voxel.
 // Asked past a zero normal's exit: there no surface faces c and carrier is none (surfaceCurvature reads 0).
 class RampOfThickConvexSnow {
   public:
@@ -424,7 +424,7 @@ class RampOfThickConvexSnow {
 };
 
 // Whether beam b (a sun, lamp or area lamp's piece) meeting the carrying surfaces at mu0 (the cosine of its way at c to
-// their normal) scatters its light in the ramp (sunInRamp). Suns and area lamps' pieces: grazing or past the
+// their normal) scatters its light in the ramp (beamsInRamp). Suns and area lamps' pieces: grazing or past the
 // terminator (mu0 < kGrazingSunCosine). Point and spot lamps only on the lit side (0 <= mu0): their ramp past the
 // terminator, where the lamp's ways fan out over the limb, doubled the view against the lamp (ball_grey +18 -> +82 %,
 // ball_issue +13 -> +101 %), while an area lamp's pieces' ways do not line up on one camera (docs/benchmarks.md,
@@ -439,7 +439,10 @@ bool beamLightsRamp(const Scene &scene, std::size_t b, double mu0) {
 // (kGrazingSunCosine): the peaked lobe of k = g about each beam's travel, of mean omega E T / 4 pi, T the snow's
 // uncollided transmittance averaged over c's trilinear hat weighted by the density (what the renderer's emission
 // weighs; 4^3 points), the occluders' shadow taken at c's centre, where it holds more than c's own peak and no sun the
-// surfaces take (mu0 >= kGrazingSunCosine) lights c. A convex
+// surfaces take (mu0 >= kGrazingSunCosine) lights c. Where the surfaces take a lamp or an area lamp's piece, c's
+// carried peak holds that beam's return too, which the others' ramp light does not stand for: it is added then
+// (replacing it lost the taken pieces' return: a flat slab under a low 60 cm square lamp -7.1 -> -3.1 %, its disc
+// -3.5 -> +0.1 %; ball_grey's area lamp -5.7 -> -4.7 %; docs/benchmarks.md, area-pieces). A convex
 // surface's ramp reaches into the sun past its terminator, where the surfaces' half-space model has no sun (mu0 <= 0)
 // or little (a lit patch returns E mu0 per area, the ramp beside it scatters E T): ball_grey's rims seen against the
 // sun (bench/bake_suite.py; docs/bake.md, Method 7). The average, not T at c's centre: an air voxel just outside a limb
@@ -456,9 +459,9 @@ bool beamLightsRamp(const Scene &scene, std::size_t b, double mu0) {
 // A lamp's light is marched from each of the hat's points (its way varies across the voxel), over lampSamples points of
 // the lamp (seed, stream: beamAt's), the occluders' shadow taken at c's centre; its 1 / r^2 in the irradiance.
 // normal: the carrying surfaces' (facingAverage), zero where none faces c.
-void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
-               QuarterPointSun &sunAt, RampOfThickConvexSnow &rampOfThickConvexSnow, int lampSamples,
-               std::uint64_t seed, std::uint64_t stream, Source &S) {
+void beamsInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
+                 QuarterPointSun &sunAt, RampOfThickConvexSnow &rampOfThickConvexSnow, int lampSamples,
+                 std::uint64_t seed, std::uint64_t stream, Source &S) {
     if (glm::length(normal) == 0.0) return;
     const glm::dvec3 centre = scene.medium->voxelCentre(c);
     const auto litInRamp = [&](std::size_t b) {
@@ -471,14 +474,17 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
     if (beams == beamCount(scene)) return;
     const VolumeOptics &optics = scene.medium->optics();
     Source single;
+    bool lampTaken = false;  // a lamp or piece the surfaces take: its return is in c's carried peak
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
         const bool sun = b < scene.suns.size();
         if (sun && occludersHide(scene, centre, scene.suns[b].direction)) continue;
         // A sun the surface takes has its forward peak in c's one carried peak: kept whole (replacing it dropped that
         // peak and its direction; test_ramp_single_scattering_keeps_a_second_suns_forward_peak). A lamp's pieces are
-        // tested each on its own: one the surface takes hid the others' ramp light (lamp-ramp, docs/benchmarks.md).
+        // tested each on its own: one the surface takes hid the others' ramp light (lamp-ramp), and its return stays in
+        // the carried peak, the others' added to it (area-pieces, docs/benchmarks.md).
         if (!litInRamp(b)) {
             if (sun) return;
+            lampTaken = true;
             continue;
         }
         const glm::dvec3 lit =  // W/m^2: the beam's mean over c's hat
@@ -492,14 +498,14 @@ void sunInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
         single.addPeak(lit * glm::dvec3(optics.albedo) * kInvFourPi, crossingAnisotropy(optics.g),
                        -towardsBeam(scene, b, centre));
     }
-    if (rampOfThickConvexSnow()) S.add(single);
+    if (lampTaken || rampOfThickConvexSnow()) S.add(single);
     else if (single.peak0.x + single.peak0.y + single.peak0.z > S.peak0.x + S.peak0.y + S.peak0.z)
         S.peak0 = single.peak0, S.peak1 = single.peak1;
 }
 
 // The sky's light from below ramp voxel c's plane (directions d . normal < 0) scattered once in it: omega / 4 pi
 // times the integral of L_sky(d) T(d), T the snow's uncollided transmittance averaged over c's trilinear hat
-// weighted by the density (as sunInRamp's), a way crossing an unknown's voxel blocked (the diffusion holds what
+// weighted by the density (as beamsInRamp's), a way crossing an unknown's voxel blocked (the diffusion holds what
 // enters the unknowns), added to c's broad lobe as isotropic. The carried surface radiance holds the half-space's
 // sky, which reaches the surface from above its plane only; a convex surface's ramp also sees sky from below it
 // through the thin snow past the limb (zero on flat snow: the snow below blocks it; ball_issue under the sky alone
@@ -574,7 +580,7 @@ void skyInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
 // gathering: the values the gathering reads alone (those beside snow, besideSnow: the grids carry the surface's
 // radiance two voxels out, the gathering needs one), without the ramp's own light: the returned grazing sun carried
 // through it (forwardPeakThrough; it cost the car 0.8 processor seconds there), the suns and the sky from below its
-// plane scattered once in it (sunInRamp: no peaks are marked when gathering; skyInRamp). What cameras see of a lit
+// plane scattered once in it (beamsInRamp: no peaks are marked when gathering; skyInRamp). What cameras see of a lit
 // rim; the sky rays between snow surfaces hardly meet it.
 GridValues gridValues(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
                       const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
@@ -663,8 +669,8 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, facing, carrier)) continue;
                 else if (nearPeakAt.isValueOn(c)) {
                     forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, sunAt, facing, S);
-                    sunInRamp(scene, c, facing, marcher, sunAt, rampOfThickConvexSnow, preset.sunSamples, settings.seed,
-                              std::uint64_t(l), S);
+                    beamsInRamp(scene, c, facing, marcher, sunAt, rampOfThickConvexSnow, preset.sunSamples,
+                                settings.seed, std::uint64_t(l), S);
                 }
                 if (!gathering) skyInRamp(scene, c, facing, index, rampOfThickConvexSnow, marcher, S);
                 perLeaf[l].add(it.pos(), S);
