@@ -81,12 +81,31 @@ class Medium {
         double in(const openvdb::Coord &cell, const openvdb::Vec3d &ijk) {
             if (cell != cell_) {
                 cell_ = cell;
-                openvdb::tools::BoxSampler::getValues(corners_, accessor_, cell);
+                readCorners(cell);
             }
             return openvdb::tools::BoxSampler::trilinearInterpolation(corners_, ijk - cell.asVec3d());
         }
 
       private:
+        // The cell's eight voxel values, as BoxSampler::getValues reads them: from the one leaf that holds them all
+        // where there is one (7 cells in 8 per axis), else voxel by voxel through the accessor (eight tree walks).
+        void readCorners(const openvdb::Coord &cell) {
+            using Leaf = openvdb::FloatTree::LeafNodeType;
+            constexpr int kLast = Leaf::DIM - 1;
+            const Leaf *leaf = (cell.x() & kLast) < kLast && (cell.y() & kLast) < kLast && (cell.z() & kLast) < kLast
+                                   ? accessor_.probeConstLeaf(cell)
+                                   : nullptr;
+            if (!leaf) {
+                openvdb::tools::BoxSampler::getValues(corners_, accessor_, cell);
+                return;
+            }
+            const openvdb::Index first = Leaf::coordToOffset(cell);
+            for (int i = 0; i < 2; ++i)
+                for (int j = 0; j < 2; ++j)
+                    for (int k = 0; k < 2; ++k)
+                        corners_[i][j][k] = leaf->getValue(first + (i << (2 * Leaf::LOG2DIM)) + (j << Leaf::LOG2DIM) + k);
+        }
+
         Accessor accessor_;
         openvdb::Coord cell_;  // the cell whose eight density values corners_ holds
         float corners_[2][2][2];
