@@ -159,11 +159,21 @@ class Medium {
         // would add nothing: the walk's values do not change.
         int lastEmptySample(const openvdb::math::Ray<double> &ray, const openvdb::Vec3d &p, double t0, double dt, int i,
                             int steps);
+        // The support's leaf holding `cell` (null where none), the last one kept: a walk takes several steps in each
+        // leaf, and the accessor's own cache sits behind a call and three levels' checks.
+        using SupportLeaf = openvdb::BoolTree::LeafNodeType;
+        const SupportLeaf *supportLeaf(const openvdb::Coord &cell) {
+            const openvdb::Coord origin = cell & ~int(SupportLeaf::DIM - 1);
+            if (origin != leafOrigin_) leafOrigin_ = origin, leaf_ = support_.probeConstLeaf(cell);
+            return leaf_;
+        }
 
         const Medium &medium_;
         openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0> intersector_;
         DensitySampler density_;
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> support_;
+        openvdb::Coord leafOrigin_ = openvdb::Coord::max();  // supportLeaf's last leaf's origin (max: none yet)
+        const SupportLeaf *leaf_ = nullptr;
         long columnSteps_ = 0;
     };
 
