@@ -210,7 +210,7 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
         const double dt = std::min(kLongStep, tLast - t);
         const Vec3d p = ray(t + 0.5 * dt);
         const openvdb::Coord cell = floorCoord(p);
-        if (const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell)) {
+        if (const SupportLeaf *leaf = supportLeaf(cell)) {
             if (leaf->isValueOn(cell)) {
                 sum += density_.in(cell, p) * dt;
                 if (sum > sumLimit) break;
@@ -229,8 +229,8 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
 int Medium::ColumnMarcher::lastEmptySample(const openvdb::math::Ray<double> &ray, const Vec3d &p, double t0, double dt,
                                            int i, int steps) {
     const openvdb::Coord cell = floorCoord(p);
-    const openvdb::BoolTree::LeafNodeType *leaf = support_.probeConstLeaf(cell);
-    const int edge = leaf ? firn::emptyBlockEdge(leaf->getValueMask(), cell) : int(openvdb::BoolTree::LeafNodeType::DIM);
+    const SupportLeaf *leaf = supportLeaf(cell);
+    const int edge = leaf ? firn::emptyBlockEdge(leaf->getValueMask(), cell) : int(SupportLeaf::DIM);
     if (edge == 0) return i - 1;
     if (edge == 1) return i;
     // The samples before the ray leaves the block (a little early, never late: rounding).

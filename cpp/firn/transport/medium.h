@@ -81,12 +81,31 @@ class Medium {
         double in(const openvdb::Coord &cell, const openvdb::Vec3d &ijk) {
             if (cell != cell_) {
                 cell_ = cell;
-                openvdb::tools::BoxSampler::getValues(corners_, accessor_, cell);
+                readCorners(cell);
             }
             return openvdb::tools::BoxSampler::trilinearInterpolation(corners_, ijk - cell.asVec3d());
         }
 
       private:
+        // The cell's eight voxel values, as BoxSampler::getValues reads them: from the one leaf that holds them all
+        // where there is one (7 cells in 8 per axis), else voxel by voxel through the accessor (eight tree walks).
+        void readCorners(const openvdb::Coord &cell) {
+            using Leaf = openvdb::FloatTree::LeafNodeType;
+            constexpr int kLast = Leaf::DIM - 1;
+            const Leaf *leaf = (cell.x() & kLast) < kLast && (cell.y() & kLast) < kLast && (cell.z() & kLast) < kLast
+                                   ? accessor_.probeConstLeaf(cell)
+                                   : nullptr;
+            if (!leaf) {
+                openvdb::tools::BoxSampler::getValues(corners_, accessor_, cell);
+                return;
+            }
+            const openvdb::Index first = Leaf::coordToOffset(cell);
+            for (int i = 0; i < 2; ++i)
+                for (int j = 0; j < 2; ++j)
+                    for (int k = 0; k < 2; ++k)
+                        corners_[i][j][k] = leaf->getValue(first + (i << (2 * Leaf::LOG2DIM)) + (j << Leaf::LOG2DIM) + k);
+        }
+
         Accessor accessor_;
         openvdb::Coord cell_;  // the cell whose eight density values corners_ holds
         float corners_[2][2][2];
@@ -140,11 +159,21 @@ class Medium {
         // would add nothing: the walk's values do not change.
         int lastEmptySample(const openvdb::math::Ray<double> &ray, const openvdb::Vec3d &p, double t0, double dt, int i,
                             int steps);
+        // The support's leaf holding `cell` (null where none), the last one kept: a walk takes several steps in each
+        // leaf, and the accessor's own cache sits behind a call and three levels' checks.
+        using SupportLeaf = openvdb::BoolTree::LeafNodeType;
+        const SupportLeaf *supportLeaf(const openvdb::Coord &cell) {
+            const openvdb::Coord origin = cell & ~int(SupportLeaf::DIM - 1);
+            if (origin != leafOrigin_) leafOrigin_ = origin, leaf_ = support_.probeConstLeaf(cell);
+            return leaf_;
+        }
 
         const Medium &medium_;
         openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0> intersector_;
         DensitySampler density_;
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> support_;
+        openvdb::Coord leafOrigin_ = openvdb::Coord::max();  // supportLeaf's last leaf's origin (max: none yet)
+        const SupportLeaf *leaf_ = nullptr;
         long columnSteps_ = 0;
     };
 

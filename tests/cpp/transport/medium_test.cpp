@@ -50,7 +50,9 @@ TEST(Medium, MarchIntegratesEverySnowyCell) {
 
 // Tracking reads the density through DensitySampler, the last cell's eight values kept: it must read what
 // Medium::densityAt (OpenVDB's BoxSampler, the one definition of the density) reads, bit for bit, whether a point
-// lies in the last cell, a new one, or one read before. Oracle: Medium::densityAt itself.
+// lies in the last cell, a new one, or one read before, and whether its cell's corners lie in one leaf (read from
+// it) or straddle leaves (the 12^3 snow spans two leaves per axis, and air beyond them). Oracle: Medium::densityAt
+// itself.
 TEST(Medium, DensitySamplerReadsAsDensityAtBitForBit) {
     constexpr double kVoxel = 0.02;  // m
     auto density = openvdb::FloatGrid::create(0.0f);
