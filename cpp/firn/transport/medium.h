@@ -102,8 +102,10 @@ class Medium {
             const openvdb::Index first = Leaf::coordToOffset(cell);
             for (int i = 0; i < 2; ++i)
                 for (int j = 0; j < 2; ++j)
-                    for (int k = 0; k < 2; ++k)
-                        corners_[i][j][k] = leaf->getValue(first + (i << (2 * Leaf::LOG2DIM)) + (j << Leaf::LOG2DIM) + k);
+                    for (int k = 0; k < 2; ++k) {
+                        const openvdb::Index offset = (i << (2 * Leaf::LOG2DIM)) + (j << Leaf::LOG2DIM) + k;
+                        corners_[i][j][k] = leaf->getValue(first + offset);
+                    }
         }
 
         Accessor accessor_;
