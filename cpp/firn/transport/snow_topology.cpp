@@ -277,6 +277,22 @@ std::optional<RayCaster::Hit> occluderOnLink(const Medium &medium, const Occlude
                                         0.0f, float(h));
 }
 
+namespace {
+
+// Whether the snow around voxel c is concave: its 3^3 block fuller than a flat surface leaving c at its density
+// rho_c would fill it, (rho_max + rho_c + 0) / 3 (rho_max under c, none above it, axis-aligned; a tilted plane
+// fills less). Snow curving towards c fills more, snow curving away (a ball's limb) less.
+bool inConcaveSnow(openvdb::tree::ValueAccessor<const openvdb::FloatTree> &density, const openvdb::Coord &c) {
+    float sum = 0.0f, densest = 0.0f;
+    for (int k = 0; k < 27; ++k) {
+        const float rho = density.getValue(c + blockOffset(k));
+        sum += rho, densest = std::max(densest, rho);
+    }
+    return sum / 27.0f > (densest + density.getValue(c)) / 3.0f;
+}
+
+}  // namespace
+
 SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress,
                                int shellVoxels) {
     const double h = medium.voxelSize();
@@ -289,15 +305,18 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
         for (auto it = leaf.beginValueOn(); it; ++it)
             if (!densityLeaf || densityLeaf->getValue(it.pos()) < minDensity) it.setValueOff();
     });
-    // Peel surface fringes: thin voxels with air on one side and a thick voxel on the other.
+    // Peel surface fringes: thin voxels with air on one side and a thick voxel on the other, but for the skin of
+    // flat or convex snow.
     const float fringeDensity = float(kFringeOpticalDepth / (medium.optics().extinctionPerDensity * h));
+    const float skinDensity = float(kSkinOpticalDepth / (medium.optics().extinctionPerDensity * h));
     openvdb::BoolTree mask(dense);
     openvdb::tree::LeafManager<openvdb::BoolTree>(mask).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> isDense(dense);
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> density(densityTree);
         for (auto it = leaf.beginValueOn(); it; ++it) {
             const openvdb::Coord c = it.getCoord();
-            if (density.getValue(c) >= fringeDensity) continue;
+            const float rho = density.getValue(c);
+            if (rho >= fringeDensity || (rho >= skinDensity && !inConcaveSnow(density, c))) continue;
             for (int f = 0; f < 6; ++f)
                 if (!isDense.isValueOn(c + faceStep(f)) && density.getValue(c - faceStep(f)) >= fringeDensity) {
                     it.setValueOff();
