@@ -277,28 +277,6 @@ std::optional<RayCaster::Hit> occluderOnLink(const Medium &medium, const Occlude
                                         0.0f, float(h));
 }
 
-namespace {
-
-// Whether the snow around voxel c curves gently away from it, as a ball's limb does: its 3^3 block emptier than a
-// flat surface leaving c at its density rho_c would fill it, (rho_max + rho_c + 0) / 3 (rho_max under c, none above
-// it), but not below 0.8 of that. Snow curving towards c (a valley) fills more; an axis-aligned flat surface fills it
-// exactly and does not count (the margin keeps float rounding from deciding); a tilted plane fills less and counts.
-// A sharp edge (a cube's: 2/3 of the flat fill) is no skin a voxel thick curving round a limb but a sliver: spray's
-// lumps of a voxel or two read main's figures so, and the lump fixtures' layers stay fringes (face_sources_test).
-bool onConvexSnow(openvdb::tree::ValueAccessor<const openvdb::FloatTree> &density, const openvdb::Coord &c) {
-    constexpr float kMargin = 1e-4f;         // of rho_max
-    constexpr float kSharpEdgeFill = 0.8f;   // of the flat fill
-    float sum = 0.0f, densest = 0.0f;
-    for (int k = 0; k < 27; ++k) {
-        const float rho = density.getValue(c + blockOffset(k));
-        sum += rho, densest = std::max(densest, rho);
-    }
-    const float flat = (densest + density.getValue(c)) / 3.0f, mean = sum / 27.0f;
-    return mean < flat - kMargin * densest && mean > kSharpEdgeFill * flat;
-}
-
-}  // namespace
-
 SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress,
                                int shellVoxels) {
     const double h = medium.voxelSize();
@@ -311,18 +289,15 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
         for (auto it = leaf.beginValueOn(); it; ++it)
             if (!densityLeaf || densityLeaf->getValue(it.pos()) < minDensity) it.setValueOff();
     });
-    // Peel surface fringes: thin voxels with air on one side and a thick voxel on the other, but for the skin of
-    // convex snow.
+    // Peel surface fringes: thin voxels with air on one side and a thick voxel on the other.
     const float fringeDensity = float(kFringeOpticalDepth / (medium.optics().extinctionPerDensity * h));
-    const float skinDensity = float(kSkinOpticalDepth / (medium.optics().extinctionPerDensity * h));
     openvdb::BoolTree mask(dense);
     openvdb::tree::LeafManager<openvdb::BoolTree>(mask).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> isDense(dense);
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> density(densityTree);
         for (auto it = leaf.beginValueOn(); it; ++it) {
             const openvdb::Coord c = it.getCoord();
-            const float rho = density.getValue(c);
-            if (rho >= fringeDensity || (rho >= skinDensity && onConvexSnow(density, c))) continue;
+            if (density.getValue(c) >= fringeDensity) continue;
             for (int f = 0; f < 6; ++f)
                 if (!isDense.isValueOn(c + faceStep(f)) && density.getValue(c - faceStep(f)) >= fringeDensity) {
                     it.setValueOff();

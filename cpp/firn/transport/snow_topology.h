@@ -132,10 +132,6 @@ constexpr double kMinVoxelOpticalDepth = 0.1;
 // filled voxel of an antialiased surface): it belongs to the density ramp in front of the thick voxel,
 // not to the unknowns, so the thick voxel carries the surface's radiance.
 constexpr double kFringeOpticalDepth = 5.0;
-// A fringe voxel at least this thick on a gently convex surface is an unknown all the same: a curved surface's antialiased
-// skin carries light along itself, round the limb (docs/benchmarks.md, clean-flow 2.). In a concave one (a valley)
-// that lateral light brightens the valley past the truth (skin-gate).
-constexpr double kSkinOpticalDepth = 2.0;
 
 // shellVoxels: how many voxels deep, at least, the surface's radiance is carried into the snow. Source grids
 // `shellVoxels` times coarser than the density average a surface voxel with those under it (baked_grids.h):
