@@ -95,10 +95,11 @@ def mixed_shader(materials, case):
                                     share.outputs["Fac"], (-100, -300))
         unscattered = materials._math(nodes, links, "Firn Unscattered", "MULTIPLY", extinction.outputs["Value"],
                                       kept, (-100, -500))
-        principled = materials._principled(nodes, links, _socket_as_node(scattered), "")  # sigma_t share, of it omega scattered
+        # sigma_t share, omega of it scattered: the add-on's Principled Volume (absorption colour black)
+        principled = materials._principled(nodes, links, _ExtinctionSocket(scattered), "")
         principled.node.inputs["Color"].default_value = (*case.omega, 1.0)
         principled.node.inputs["Anisotropy"].default_value = case.g
-        baked = materials._baked(nodes, links, _socket_as_node(unscattered), suffix, source)
+        baked = materials._baked(nodes, links, _ExtinctionSocket(unscattered), suffix, source)
         add = materials._new_node(nodes, "ShaderNodeAddShader", "Firn Mixed", "", (300, -300))
         links.new(baked, add.inputs[0])
         links.new(principled, add.inputs[1])
@@ -107,7 +108,7 @@ def mixed_shader(materials, case):
     return shade
 
 
-class _socket_as_node:
+class _ExtinctionSocket:
     """A Math output socket in the shape _baked expects of the extinction node (.outputs["Value"])."""
 
     def __init__(self, socket):
