@@ -476,6 +476,31 @@ What Cycles draws for the baked snow of `vdb_path` along camera rays (N, 3 origi
 the emission-absorption integral of the contract's material, up to the first occluder. (N, 3) W/m^2/sr.)doc");
 
     m.def(
+        "scatter_voxels",
+        [](const std::string &path, const firn::VolumeOptics &optics, const py::list &occluders, double thinDepth,
+           bool tracedOnly) {
+            OccluderArrays blockers = occludersFrom(occluders);
+            const std::vector<openvdb::Coord> voxels = longCall([&] {
+                const openvdb::GridPtrVec grids = firn::readGrids(path);
+                const firn::Scene scene = sceneFrom(grids, path, optics, {}, {}, std::nullopt, std::move(blockers));
+                std::vector<openvdb::Coord> on;
+                const openvdb::FloatTree::Ptr shares = firn::scatterShares(scene, thinDepth, tracedOnly);
+                for (auto it = shares->cbeginValueOn(); it; ++it)
+                    if (*it > 0.0f) on.push_back(it.getCoord());
+                return on;
+            });
+            py::array_t<std::int32_t> out({py::ssize_t(voxels.size()), py::ssize_t(3)});
+            auto rows = out.mutable_unchecked<2>();
+            for (std::size_t n = 0; n < voxels.size(); ++n)
+                for (int a = 0; a < 3; ++a) rows(n, a) = voxels[n][a];
+            return out;
+        },
+        py::arg("vdb_path"), py::arg("optics"), py::arg("occluders") = py::list(), py::arg("thin_depth") = 2.0,
+        py::arg("traced_only") = true, R"doc(
+The voxels (N, 3 index coordinates) where render_scattering_where_thin lets the renderer scatter (share 1; the
+proposed firn_scatter grid, benchmarks.md thin-ring); a bench helper.)doc");
+
+    m.def(
         "render_scattering_where_thin",
         [](const std::string &path, const firn::VolumeOptics &optics, const DoubleArray &origins,
            const DoubleArray &directions, const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,

@@ -1079,3 +1079,20 @@ def test_render_scattering_where_all_snow_is_thin_is_the_monte_carlo(folder):
     sigma = math.sqrt((mixed_error[:, 1] ** 2).sum() + (truth_error[:, 1] ** 2).sum())
     assert sigma < 0.012 * truth[:, 1].sum()  # low enough to tell the baked render (+5 % here) apart
     assert abs(difference) < 4.0 * sigma
+
+
+def test_scatter_voxels_are_the_thin_snow_and_the_air_touching_it(folder):
+    # slab_thin_forward's voxels are all sigma_t h 1, all traced: the renderer scatters in the slab and in the one
+    # voxel of air around it (the firn_scatter grid proposed in benchmarks.md, thin-ring); under 1 in none.
+    c = case("slab_thin_forward")
+    path = os.path.join(folder, "thin_slab_scatter_voxels.vdb")
+    bake_suite.write_density(path, c.density, c.voxel)
+    on = np.zeros(np.array(c.density.shape) + 2, dtype=bool)  # one voxel of margin each side
+    voxels = firncore.scatter_voxels(path, c.optics, thin_depth=2.0, traced_only=True)
+    on[tuple((voxels + 1).T)] = True
+    snow = np.pad(c.density > 0, 1)
+    shell = np.zeros_like(snow)
+    for offset in np.ndindex(3, 3, 3):
+        shell |= np.roll(snow, np.array(offset) - 1, axis=(0, 1, 2))
+    assert np.array_equal(on, shell)
+    assert len(firncore.scatter_voxels(path, c.optics, thin_depth=1.0, traced_only=True)) == 0

@@ -143,6 +143,8 @@ std::vector<openvdb::Coord> scatterCandidates(const Scene &scene, bool tracedOnl
     return out;
 }
 
+}  // namespace
+
 // 1 in the candidates of optical depth sigma_t h under thinDepth and in the air voxels touching them, else 0.
 openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool tracedOnly) {
     const Medium &medium = *scene.medium;
@@ -164,8 +166,6 @@ openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool
     }
     return shares;
 }
-
-}  // namespace
 
 std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReference &reference, const BakedGrids &baked,
                                                         const std::vector<Ray> &rays, int samples, std::uint64_t seed,

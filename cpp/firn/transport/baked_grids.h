@@ -110,6 +110,11 @@ class BakedRadiance {
 // attenuated by exp(-tau)).
 Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray);
 
+// The renderer's scatter share per voxel (benchmarks.md, thin-ring, the proposed firn_scatter grid): 1 in the snow
+// voxels of sigma_t h under `thinDepth` (only those the bake traces if `tracedOnly`) and the air voxels touching
+// them, 0 (the background) elsewhere.
+openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool tracedOnly);
+
 // The render of MixedRender (monte_carlo.h): the renderer scatters, all orders, in the snow of optical depth per
 // voxel sigma_t h under `thinDepth` and in the air voxels beside it, and draws the baked emission elsewhere (the
 // voxels between trilinear). `samples` paths per ray; (mean, standard error) per ray as MonteCarloReference's.

@@ -1,0 +1,267 @@
+"""Thin snow scattered by Cycles itself (docs/benchmarks.md, thin-ring and thin-cycles): the suite's cases baked by
+firncore, then rendered by Cycles with the add-on's baked material and with a mixed one that scatters where a
+`firn_scatter` grid is 1 (rule B of thin-ring: the voxels the bake traces of sigma_t h < 2 and the air touching
+them, `firncore.scatter_voxels`): Volume Scatter of k rho share (colour omega, anisotropy g), absorption
+k rho (1 - share) and the baked emission k rho S (1 - share). Cycles unclamped, `--bounces` volume bounces, a
+small step rate, the camera's background transparent (the suite's reference leaves the sky seen straight through
+the snow out). Each image is `--factor` (odd) times the suite's pixels with a pixel filter of 0.01 pixel, so
+the middle pixel of each factor x factor group is the suite's camera ray through that block's centre: the blocks
+compare one to one with the cached Monte Carlo reference (bench/bake_suite.py's figures: mean |error| over the
+blocks of optical depth >= 1, worst, bias, each view's bias). Noise: the mean |relative difference| of the
+blocks against the render at the most samples. Time: Cycles' wall seconds per render (its threads `--threads`).
+
+    bench/run.sh bench/thin_scatter_cycles.py -- [--cases slab_thin_forward,ball_forward] [--samples 64,256,1024]
+        [--baked-samples 64,1024] [--bounces 16] [--step-rate 0.1] [--factor 1] [--threads 2]
+"""
+
+import argparse
+import math
+import os
+import sys
+import tempfile
+import time
+
+import addon_utils
+import bpy
+import numpy as np
+from mathutils import Vector
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "tests", "blender"))
+from bake_helpers import uniform_world, volume_object  # noqa: E402
+
+SCATTER_GRID = "firn_scatter"  # the proposed contract grid (benchmarks.md, thin-ring)
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--cases", default="slab_thin_forward,ball_forward")
+    parser.add_argument("--samples", default="64,256,1024", help="Cycles samples of the mixed material")
+    parser.add_argument("--baked-samples", default="64,1024", help="Cycles samples of the baked material")
+    parser.add_argument("--bounces", type=int, default=16, help="volume bounces of the mixed material")
+    parser.add_argument("--step-rate", type=float, default=0.1)
+    parser.add_argument("--thin", type=float, default=2.0, help="sigma_t h under which the traced voxels scatter")
+    parser.add_argument("--factor", type=int, default=1, help="image pixels per suite block and axis (odd)")
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    args = parser.parse_args(argv)
+    if args.factor % 2 != 1:
+        parser.error("--factor must be odd (a pixel centred on each block's ray)")
+    return args
+
+
+def cycles_copy(core_path, path, voxel, scatter_voxels):
+    """The baked file voxel by voxel (Cycles draws tiles as nothing) in Cycles' convention (translation -voxel/2),
+    plus the firn_scatter grid: 1 on `scatter_voxels`, inactive (0) elsewhere."""
+    import pyopenvdb
+
+    def transform():
+        t = pyopenvdb.createLinearTransform(voxelSize=voxel)
+        t.translate((-voxel / 2,) * 3)
+        return t
+
+    grids = []
+    for source in pyopenvdb.readAll(core_path)[0]:
+        grid = type(source)()
+        grid.name, grid.transform = source.name, transform()
+        accessor = grid.getAccessor()
+        for item in source.citerOnValues():
+            lo, hi = item["min"], item["max"]
+            for i in range(lo[0], hi[0] + 1):
+                for j in range(lo[1], hi[1] + 1):
+                    for k in range(lo[2], hi[2] + 1):
+                        accessor.setValueOn((i, j, k), item["value"])
+        grids.append(grid)
+    share = pyopenvdb.FloatGrid()
+    share.name, share.transform = SCATTER_GRID, transform()
+    accessor = share.getAccessor()
+    for ijk in scatter_voxels:
+        accessor.setValueOn(tuple(int(c) for c in ijk), 1.0)
+    grids.append(share)
+    pyopenvdb.write(path, grids=grids)
+
+
+def mixed_shader(materials, case):
+    """shade(nodes, links, extinction, suffix, source) for nodes._build: the add-on's Principled Volume of sigma_t
+    share (albedo omega, anisotropy g) plus its baked absorption and emission of sigma_t (1 - share)."""
+
+    def shade(nodes, links, extinction, suffix, source):
+        share = materials._new_node(nodes, "ShaderNodeAttribute", "Firn Scatter", SCATTER_GRID, (-600, -300))
+        share.attribute_type, share.attribute_name = "GEOMETRY", SCATTER_GRID
+        kept = materials._math(nodes, links, "Firn Kept", "SUBTRACT", 1.0, share.outputs["Fac"], (-350, -300))
+        scattered = materials._math(nodes, links, "Firn Scattered", "MULTIPLY", extinction.outputs["Value"],
+                                    share.outputs["Fac"], (-100, -300))
+        unscattered = materials._math(nodes, links, "Firn Unscattered", "MULTIPLY", extinction.outputs["Value"],
+                                      kept, (-100, -500))
+        # sigma_t share, omega of it scattered: the add-on's Principled Volume (absorption colour black)
+        principled = materials._principled(nodes, links, _ExtinctionSocket(scattered), "")
+        principled.node.inputs["Color"].default_value = (*case.omega, 1.0)
+        principled.node.inputs["Anisotropy"].default_value = case.g
+        baked = materials._baked(nodes, links, _ExtinctionSocket(unscattered), suffix, source)
+        add = materials._new_node(nodes, "ShaderNodeAddShader", "Firn Mixed", "", (300, -300))
+        links.new(baked, add.inputs[0])
+        links.new(principled, add.inputs[1])
+        return add.outputs["Shader"]
+
+    return shade
+
+
+class _ExtinctionSocket:
+    """A Math output socket in the shape _baked expects of the extinction node (.outputs["Value"])."""
+
+    def __init__(self, socket):
+        self.outputs = {"Value": socket}
+
+
+def snow_material(obj, materials, case, mixed):
+    material = bpy.data.materials.new(("mixed " if mixed else "baked ") + case.name)
+    material.use_nodes = True
+    shade = mixed_shader(materials, case) if mixed else materials._baked
+    materials._build(material.node_tree, False, shade, materials._view_dependent_source, camera_only=True)
+    material.node_tree.nodes["Firn Extinction"].inputs[1].default_value = case.sigma_t / case.rho
+    obj.data.materials.clear()
+    obj.data.materials.append(material)
+
+
+def scene_for(case, path, args):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    uniform_world((case.sky,) * 3)
+    scene = bpy.context.scene
+    if case.sun > 0.0:
+        sun_data = bpy.data.lights.new("Sun", "SUN")
+        sun_data.energy = case.sun  # W/m^2 on a plane facing it
+        sun_data.angle = 0.0093
+        sun = bpy.data.objects.new("Sun", sun_data)
+        sun.rotation_euler = (-Vector(case.suns()[0].direction)).to_track_quat("-Z", "Y").to_euler()
+        scene.collection.objects.link(sun)
+    snow = volume_object(path, "Snow")
+    scene.render.engine = "CYCLES"
+    cycles = scene.cycles
+    cycles.device = "CPU"
+    cycles.use_denoising = False
+    cycles.use_adaptive_sampling = False
+    cycles.pixel_filter_type = "GAUSSIAN"  # Blender syncs a box filter at width 1 whatever filter_width says
+    cycles.filter_width = 0.01  # pixels: each sample through the pixel's centre, the suite's camera ray
+    scene.render.film_transparent = True  # the reference leaves the sky seen straight through the snow out
+    cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
+    cycles.volume_step_rate = args.step_rate
+    cycles.volume_bounces = args.bounces
+    cycles.max_bounces = cycles.transparent_max_bounces = max(args.bounces, 8)
+    scene.render.threads_mode = "FIXED"
+    scene.render.threads = args.threads
+    scene.render.resolution_x = scene.render.resolution_y = case.pixels * args.factor
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    return snow
+
+
+def render_views(case, directory, samples, seed, args):
+    """The case's views as (blocks of all views, 3) radiance at the block centres, (full images), seconds."""
+    n = np.array(case.density.shape)
+    centre = (n - 1) / 2 * case.voxel
+    nonzero = np.argwhere(case.density > 0)
+    radius = 0.55 * np.max((nonzero.max(0) - nonzero.min(0) + 1) * case.voxel)
+    scene = bpy.context.scene
+    scene.cycles.samples = samples
+    scene.cycles.seed = seed
+    blocks, images, seconds = [], [], 0.0
+    middle = args.factor // 2
+    for v, (azimuth, elevation) in enumerate(case.views):
+        a, e = math.radians(azimuth), math.radians(elevation)
+        back = Vector((math.cos(a) * math.cos(e), math.sin(a) * math.cos(e), math.sin(e)))
+        data = bpy.data.cameras.new("Camera")
+        data.type, data.ortho_scale, data.clip_start = "ORTHO", float(2.0 * radius), 0.001
+        camera = bpy.data.objects.new("Camera", data)
+        camera.location = Vector(tuple(map(float, centre))) + float(3.0 * radius) * back
+        up = "Y" if abs(back.z) < 0.99 else "X"  # bake_suite.views' up: world z, or x looking straight down
+        camera.rotation_euler = (-back).to_track_quat("-Z", up).to_euler()
+        scene.collection.objects.link(camera)
+        scene.camera = camera
+        path = os.path.join(directory, f"{case.name}_{v}_{samples}_{seed}.exr")
+        scene.render.filepath = path
+        start = time.perf_counter()
+        bpy.ops.render.render(write_still=True)
+        seconds += time.perf_counter() - start
+        image = bpy.data.images.load(path, check_existing=False)
+        width, height = image.size
+        pixels = np.empty(width * height * 4, np.float32)
+        image.pixels.foreach_get(pixels)
+        bpy.data.images.remove(image)
+        pixels = pixels.reshape(height, width, 4)[:, :, :3]  # rows bottom up, as views' v
+        images.append(pixels)
+        blocks.append(pixels[middle::args.factor, middle::args.factor].reshape(-1, 3))
+        bpy.data.objects.remove(camera)
+    return np.concatenate(blocks), images, seconds
+
+
+def scores(case, estimate, reference, seen):
+    per = case.pixels ** 2
+    relative = estimate[seen] / np.maximum(reference[seen], 1e-30) - 1.0
+    views = [estimate[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum() /
+             reference[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum() - 1.0 for v in range(len(case.views))]
+    worst = relative.flat[np.abs(relative).argmax()]
+    return (f"{100 * np.abs(relative).mean():5.1f} % {100 * worst:+5.0f} % "
+            f"{100 * (estimate[seen].sum() / reference[seen].sum() - 1.0):+5.1f} %  "
+            + " ".join(f"{100 * b:+4.0f}" for b in views))
+
+
+def main():
+    args = parse_args()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon_utils.enable("firn", default_set=True)
+    from firn.common.core import firncore
+
+    sys.modules.setdefault("firncore", firncore)  # bake_suite imports it by name, as outside Blender
+    import bake_suite
+    from firn.material import nodes as materials
+
+    directory = tempfile.mkdtemp(prefix="firn_thin_cycles_")
+    counts = [int(x) for x in args.samples.split(",")]
+    print(f"Cycles {bpy.app.version_string}, {args.threads} threads, volume bounces {args.bounces}, step rate "
+          f"{args.step_rate}, unclamped; images {args.factor}x the suite's blocks; figures: mean |error|, worst, "
+          "bias over the blocks of optical depth >= 1, each view's bias; s: Cycles' wall seconds for all views",
+          flush=True)
+    for name in args.cases.split(","):
+        case = bake_suite.case(name)
+        core_path = os.path.join(directory, name + "_core.vdb")
+        bake_suite.write_density(core_path, case.density, case.voxel)
+        origins, directions, tau = bake_suite.views(case)
+        reference, error, _ = bake_suite.reference(case, core_path, origins, directions, args.cache)
+        firncore.bake(core_path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
+                      quality="FINAL", seed=0)
+        seen = tau >= 1.0
+        core_baked = firncore.render_baked(core_path, case.optics, origins, directions, occluders=case.occluders)
+        share = firncore.scatter_voxels(core_path, case.optics, occluders=case.occluders, thin_depth=args.thin,
+                                        traced_only=True)
+        path = os.path.join(directory, name + ".vdb")
+        cycles_copy(core_path, path, case.voxel, share)
+        print(f"{name}: {case.what}; views {case.views}; {len(share)} firn_scatter voxels "
+              f"({int((case.density > 0).sum())} snow voxels); reference noise "
+              f"{100 * np.median(error[seen] / np.maximum(reference[seen], 1e-30)):.1f} %", flush=True)
+        print(f"  {'core render_baked':<34} {scores(case, core_baked, reference, seen)}", flush=True)
+
+        snow = scene_for(case, path, args)
+        snow_material(snow, materials, case, mixed=False)
+        for samples in [int(x) for x in args.baked_samples.split(",")]:
+            baked, _, seconds = render_views(case, directory, samples, 0, args)
+            print(f"  {'Cycles baked, %d spp' % samples:<34} {scores(case, baked, reference, seen)}"
+                  f"   {seconds:6.1f} s", flush=True)
+        print(f"    Cycles baked / core render_baked - 1: mean |per block| "
+              f"{100 * np.abs(baked[seen] / np.maximum(core_baked[seen], 1e-30) - 1).mean():.1f} %, sum "
+              f"{100 * (baked[seen].sum() / core_baked[seen].sum() - 1):+.1f} %", flush=True)
+        snow_material(snow, materials, case, mixed=True)
+        renders = {}
+        for samples in counts:
+            renders[samples], _, seconds = render_views(case, directory, samples, 0, args)
+            print(f"  {'Cycles mixed, %d spp' % samples:<34} {scores(case, renders[samples], reference, seen)}"
+                  f"   {seconds:6.1f} s", flush=True)
+        best = renders[max(counts)]
+        print("    noise (mean |block / the %d spp block - 1|): " % max(counts) +
+              ", ".join(f"{s} spp {100 * np.abs(renders[s][seen] / np.maximum(best[seen], 1e-30) - 1).mean():.1f} %"
+                        for s in counts if s != max(counts)), flush=True)
+
+
+main()
