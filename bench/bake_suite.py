@@ -293,15 +293,28 @@ def reference(case, path, origins, directions, cache):
     return mean, error, seconds
 
 
+class Baked:
+    """A case baked into `path`: its views' rays (origins, directions), their optical depth tau, the reference's mean,
+    error and seconds, the bake's stats and seconds."""
+
+
+def baked_case(case, path, cache, quality="FINAL", seed=0, sky_samples=0):
+    out = Baked()
+    write_density(path, case.density, case.voxel)
+    out.origins, out.directions, out.tau = views(case)
+    out.mean, out.error, out.reference_seconds = reference(case, path, out.origins, out.directions, cache)
+    start = time.perf_counter()
+    out.stats = firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
+                              quality=quality, seed=seed, sky_samples=sky_samples)
+    out.bake_seconds = time.perf_counter() - start
+    return out
+
+
 def run_case(case, folder, cache, quality="FINAL", seed=0, sky_samples=0):
     path = os.path.join(folder, case.name + ".vdb")
-    write_density(path, case.density, case.voxel)
-    origins, directions, tau = views(case)
-    mean, error, reference_seconds = reference(case, path, origins, directions, cache)
-    start = time.perf_counter()
-    stats = firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
-                          quality=quality, seed=seed, sky_samples=sky_samples)
-    bake_seconds = time.perf_counter() - start
+    run = baked_case(case, path, cache, quality, seed, sky_samples)
+    origins, directions, tau, mean, error = run.origins, run.directions, run.tau, run.mean, run.error
+    reference_seconds, stats, bake_seconds = run.reference_seconds, run.stats, run.bake_seconds
     baked = firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)
     seen = tau >= 1.0
     per = case.pixels ** 2

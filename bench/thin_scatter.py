@@ -51,11 +51,8 @@ def main():
         for name in args.cases.split(","):
             case = bake_suite.case(name)
             path = os.path.join(folder, name + ".vdb")
-            bake_suite.write_density(path, case.density, case.voxel)
-            origins, directions, tau = bake_suite.views(case)
-            reference, _, _ = bake_suite.reference(case, path, origins, directions, args.cache)
-            firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
-                          quality="FINAL", seed=0)
+            run = bake_suite.baked_case(case, path, args.cache)
+            origins, directions, tau, reference = run.origins, run.directions, run.tau, run.mean
             depth = case.sigma_t / case.rho * case.density.max() * case.voxel
             print(f"{name} (densest voxel's sigma_t h {depth:.2f}; views {case.views})")
             start = time.perf_counter()

@@ -227,11 +227,8 @@ def main():
     for name in args.cases.split(","):
         case = bake_suite.case(name)
         core_path = os.path.join(directory, name + "_core.vdb")
-        bake_suite.write_density(core_path, case.density, case.voxel)
-        origins, directions, tau = bake_suite.views(case)
-        reference, error, _ = bake_suite.reference(case, core_path, origins, directions, args.cache)
-        firncore.bake(core_path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
-                      quality="FINAL", seed=0)
+        run = bake_suite.baked_case(case, core_path, args.cache)
+        origins, directions, tau, reference, error = run.origins, run.directions, run.tau, run.mean, run.error
         seen = tau >= 1.0
         core_baked = firncore.render_baked(core_path, case.optics, origins, directions, occluders=case.occluders)
         share = firncore.scatter_voxels(core_path, case.optics, occluders=case.occluders, thin_depth=args.thin,
