@@ -157,12 +157,8 @@ openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool
         const float value = rho.getValue(c);
         if (!(value > 0.0f && depthPerDensity * value < thinDepth)) continue;
         share.setValue(c, 1.0f);
-        for (int i = -1; i <= 1; ++i)
-            for (int j = -1; j <= 1; ++j)
-                for (int k = -1; k <= 1; ++k) {
-                    const openvdb::Coord n = c.offsetBy(i, j, k);
-                    if (!(rho.getValue(n) > 0.0f)) share.setValue(n, 1.0f);
-                }
+        for (int k = 0; k < 27; ++k)
+            if (const openvdb::Coord n = c + blockOffset(k); !(rho.getValue(n) > 0.0f)) share.setValue(n, 1.0f);
     }
     return shares;
 }
