@@ -82,57 +82,12 @@ class PathTracer {
 
     // Radiance scattered by the medium towards the camera along one camera ray, one sample. With
     // `unscattered`, also the sky and surfaces seen straight along the ray: all the light arriving at its origin.
-    // With `mixed`, the render of MixedRender less the camera segment's emission (the caller's, once per ray).
-    Rgb sample(const Ray &camera, Rng &rng, bool unscattered = false, MixedRender *mixed = nullptr) {
-        glm::dvec3 p = camera.origin, d = camera.direction;
-        Rgb throughput(1.0), radiance(0.0);
-        bool first = true;
-        for (long event = 0; event < kMaxEvents; ++event) {
-            // The next collision ignoring surfaces, then the first surface before it: the same as tracking
-            // up to the surface (free flights are memoryless), and most flights in snow are short.
-            const float tNear = first ? 0.0f : float(kSurfaceEpsilon);
-            double tCollision = sampleCollision(p, d, kInfinity, rng);
-            std::optional<RayCaster::Hit> hit;
-            if (tCollision == kInfinity || scene_.occluders->caster().occluded(glm::vec3(p), glm::vec3(d), tNear, float(tCollision))) {
-                hit = scene_.occluders->caster().intersect(glm::vec3(p), glm::vec3(d), tNear,
-                                                           tCollision == kInfinity ? std::numeric_limits<float>::infinity() : float(tCollision));
-                if (hit) tCollision = kInfinity;
-            }
-            const double tSurface = hit ? double(hit->distance) : kInfinity;
-            if (tCollision < kInfinity) {
-                p += tCollision * d;
-                if (mixed) {
-                    if (!first) radiance += throughput * mixed->emittedAt(p, -d);
-                    const double share = mixed->scatterShare(p);
-                    if (share <= 0.0) return radiance;
-                    throughput *= share;
-                }
-                throughput *= medium_.optics().albedo;
-                radiance += throughput * lightScattered(p, d, rng);
-                if (mixed && event >= mixed->bounces) return radiance;
-                d = sampleHenyeyGreenstein(d, medium_.optics().g, rng.uniform(), rng.uniform());
-            } else if (hit) {
-                if (first && !unscattered) return radiance;  // a surface in front of the snow: the renderer draws it
-                p += tSurface * d;
-                const glm::dvec3 n = glm::dot(glm::dvec3(hit->normal), d) < 0.0 ? glm::dvec3(hit->normal)
-                                                                                  : -glm::dvec3(hit->normal);
-                throughput *= scene_.occluders->albedo(hit->triangle);
-                radiance += throughput * lightReflected(p, n, rng);
-                d = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
-            } else {
-                if (!first || unscattered) radiance += throughput * scene_.sky.radianceFrom(d);
-                return radiance;
-            }
-            first = false;
-            // Russian roulette once the path carries little: unbiased, and it ends absorbing paths.
-            const double q = maxComponent(throughput);
-            if (q < 0.25) {
-                if (rng.uniform() >= q) return radiance;
-                throughput /= q;
-            }
-        }
-        return radiance;
+    Rgb sample(const Ray &camera, Rng &rng, bool unscattered = false) {
+        return walk<false>(camera, rng, unscattered, nullptr);
     }
+
+    // The same path rendered as `mixed` renders it, less the camera segment's emission (the caller's, once per ray).
+    Rgb sample(const Ray &camera, Rng &rng, MixedRender &mixed) { return walk<true>(camera, rng, false, &mixed); }
 
     // All light arriving at p, one sample: radiance from one direction drawn uniformly over the sphere (all
     // orders, scattered light only) and each light's direct beam, added with weight w. (u1, u2) draw the
@@ -212,6 +167,62 @@ class PathTracer {
     long steps = 0;  // tracking steps so far (density lookups), all paths and shadow rays: what a path costs
 
   private:
+
+    // One camera path of sample(); kMixed: as `mixed` renders it (compiled apart, so that the reference's paths
+    // pay nothing for the option).
+    template <bool kMixed>
+    Rgb walk(const Ray &camera, Rng &rng, bool unscattered, MixedRender *mixed) {
+        glm::dvec3 p = camera.origin, d = camera.direction;
+        Rgb throughput(1.0), radiance(0.0);
+        bool first = true;
+        for (long event = 0; event < kMaxEvents; ++event) {
+            // The next collision ignoring surfaces, then the first surface before it: the same as tracking
+            // up to the surface (free flights are memoryless), and most flights in snow are short.
+            const float tNear = first ? 0.0f : float(kSurfaceEpsilon);
+            double tCollision = sampleCollision(p, d, kInfinity, rng);
+            std::optional<RayCaster::Hit> hit;
+            if (tCollision == kInfinity || scene_.occluders->caster().occluded(glm::vec3(p), glm::vec3(d), tNear, float(tCollision))) {
+                hit = scene_.occluders->caster().intersect(glm::vec3(p), glm::vec3(d), tNear,
+                                                           tCollision == kInfinity ? std::numeric_limits<float>::infinity() : float(tCollision));
+                if (hit) tCollision = kInfinity;
+            }
+            const double tSurface = hit ? double(hit->distance) : kInfinity;
+            if (tCollision < kInfinity) {
+                p += tCollision * d;
+                if constexpr (kMixed) {
+                    if (!first) radiance += throughput * mixed->emittedAt(p, -d);
+                    const double share = mixed->scatterShare(p);
+                    if (share <= 0.0) return radiance;
+                    throughput *= share;
+                }
+                throughput *= medium_.optics().albedo;
+                radiance += throughput * lightScattered(p, d, rng);
+                if constexpr (kMixed) {
+                    if (event >= mixed->bounces) return radiance;
+                }
+                d = sampleHenyeyGreenstein(d, medium_.optics().g, rng.uniform(), rng.uniform());
+            } else if (hit) {
+                if (first && !unscattered) return radiance;  // a surface in front of the snow: the renderer draws it
+                p += tSurface * d;
+                const glm::dvec3 n = glm::dot(glm::dvec3(hit->normal), d) < 0.0 ? glm::dvec3(hit->normal)
+                                                                                  : -glm::dvec3(hit->normal);
+                throughput *= scene_.occluders->albedo(hit->triangle);
+                radiance += throughput * lightReflected(p, n, rng);
+                d = sampleCosineHemisphere(n, rng.uniform(), rng.uniform());
+            } else {
+                if (!first || unscattered) radiance += throughput * scene_.sky.radianceFrom(d);
+                return radiance;
+            }
+            first = false;
+            // Russian roulette once the path carries little: unbiased, and it ends absorbing paths.
+            const double q = maxComponent(throughput);
+            if (q < 0.25) {
+                if (rng.uniform() >= q) return radiance;
+                throughput /= q;
+            }
+        }
+        return radiance;
+    }
 
     // Delta tracking: distance to the first real collision before tEnd, or infinity. With `skipEmpty`, a
     // tentative collision in a block without snow jumps to where the ray leaves the block (none of the block's
@@ -344,17 +355,57 @@ MonteCarloReference::MonteCarloReference(Scene scene)
     validate(scene_);
 }
 
+namespace {
+// The mean radiance of `samples` paths along `ray` drawn from rng; `mixed`: none (the reference's paths) or the
+// MixedRender they are rendered by.
+template <class... Mixed>
+RadianceEstimate meanRadiance(PathTracer &tracer, const Ray &ray, int samples, Rng &rng, Mixed &...mixed) {
+    Rgb sum(0.0), sumSquares(0.0);
+    for (int s = 0; s < samples; ++s) {
+        const Rgb L = tracer.sample(ray, rng, mixed...);
+        sum += L, sumSquares += L * L;
+    }
+    return meanOf(sum, sumSquares, samples);
+}
+
+// Distance (m) along a camera ray to the first occluder, infinity if none.
+double surfaceDistance(const Scene &scene, const Ray &ray) {
+    const auto hit = scene.occluders->caster().intersect(glm::vec3(ray.origin), glm::vec3(ray.direction));
+    return hit ? double(hit->distance) : kInfinity;
+}
+
+// Rays in parallel, ray i's paths drawn from stream i of `seed` (deterministic), one path tracer per thread: the
+// reference's estimates, or with `perThread` the mixed render's (each thread's MixedRender its own).
+std::vector<RadianceEstimate> estimateRays(const MonteCarloReference &reference, const std::vector<Ray> &rays,
+                                           int samplesPerRay, std::uint64_t seed, Progress *progress,
+                                           const std::function<MixedRender()> *perThread) {
+    std::vector<RadianceEstimate> out(rays.size());
+    std::atomic<std::size_t> done{0};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1), [&](const auto &range) {
+        PathTracer tracer(reference);
+        std::optional<MixedRender> mixed;
+        if (perThread) mixed = (*perThread)();
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (progress) progress->throwIfCancelled();
+            Rng rng(seed, i);
+            if (!mixed) {
+                out[i] = meanRadiance(tracer, rays[i], samplesPerRay, rng);
+            } else {
+                out[i] = meanRadiance(tracer, rays[i], samplesPerRay, rng, *mixed);
+                out[i].mean += mixed->emittedAlong(rays[i], surfaceDistance(reference.scene(), rays[i]));
+            }
+            if (progress) progress->report(double(++done) / rays.size());
+        }
+    });
+    return out;
+}
+}  // namespace
+
 RadianceEstimate MonteCarloReference::estimate(const Ray &ray, int samples, std::uint64_t seed,
                                                std::uint64_t stream) const {
     PathTracer tracer(*this);
     Rng rng(seed, stream);
-    Rgb sum(0.0), sumSquares(0.0);
-    for (int s = 0; s < samples; ++s) {
-        const Rgb L = tracer.sample(ray, rng);
-        sum += L;
-        sumSquares += L * L;
-    }
-    return meanOf(sum, sumSquares, samples);
+    return meanRadiance(tracer, ray, samples, rng);
 }
 
 PhotonTracer::PhotonTracer(const MonteCarloReference &reference)
@@ -566,40 +617,14 @@ SourceEstimate &operator+=(SourceEstimate &a, const SourceEstimate &b) {
 
 std::vector<RadianceEstimate> MonteCarloReference::estimate(const std::vector<Ray> &rays, int samplesPerRay,
                                                             std::uint64_t seed, Progress *progress) const {
-    std::vector<RadianceEstimate> out(rays.size());
-    std::atomic<std::size_t> done{0};
     if (progress) progress->report(0.0, "Monte Carlo reference");
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1), [&](const auto &range) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (progress) progress->throwIfCancelled();
-            out[i] = estimate(rays[i], samplesPerRay, seed, i);
-            if (progress) progress->report(double(++done) / rays.size());
-        }
-    });
-    return out;
+    return estimateRays(*this, rays, samplesPerRay, seed, progress, nullptr);
 }
 
 std::vector<RadianceEstimate> estimateMixed(const MonteCarloReference &reference, const std::vector<Ray> &rays,
                                             int samplesPerRay, std::uint64_t seed,
                                             const std::function<MixedRender()> &perThread) {
-    std::vector<RadianceEstimate> out(rays.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1), [&](const auto &range) {
-        PathTracer tracer(reference);
-        MixedRender mixed = perThread();
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            Rng rng(seed, i);
-            Rgb sum(0.0), sumSquares(0.0);
-            for (int s = 0; s < samplesPerRay; ++s) {
-                const Rgb L = tracer.sample(rays[i], rng, false, &mixed);
-                sum += L, sumSquares += L * L;
-            }
-            out[i] = meanOf(sum, sumSquares, samplesPerRay);
-            const auto hit = reference.scene().occluders->caster().intersect(glm::vec3(rays[i].origin),
-                                                                            glm::vec3(rays[i].direction));
-            out[i].mean += mixed.emittedAlong(rays[i], hit ? double(hit->distance) : kInfinity);
-        }
-    });
-    return out;
+    return estimateRays(reference, rays, samplesPerRay, seed, nullptr, &perThread);
 }
 
 }  // namespace firn
