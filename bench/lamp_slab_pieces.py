@@ -30,7 +30,12 @@ VIEWS = [(0, 30), (90, 30), (180, 30), (270, 30), (0, 90)]  # azimuth, elevation
 
 
 def light(kind, top):
-    """Lamp `kind` over the slab whose top's middle is `top` (m), 1 W/m^2 (green) there."""
+    """Lamp `kind` over the slab whose top's middle is `top` (m), 1 W/m^2 (green) there; "sunE": a sun E degrees up
+    from the lamps' side (+x), 1 W/m^2 on the top (the suns' rule, one beam compared like with like)."""
+    if kind.startswith("sun"):
+        e = math.radians(float(kind[3:]))
+        return firncore.SunLight((math.cos(e), 0.0, math.sin(e)), (1.0 / math.sin(e),) * 3, 0.0093)
+
     def made(e):
         if kind == "point":
             return firncore.Lamp("POINT", tuple(top + [0.25, 0.0, 0.05]), (e,) * 3)
@@ -39,6 +44,11 @@ def light(kind, top):
                              tangent=(1.0, 0.0, 0.0), size=(0.6, 0.6))
     unit = made(1.0).irradiance(tuple(top), (0.0, 0.0, 1.0), samples=20000, seed=1)[1]
     return made(1.0 / unit)
+
+
+def lights(light):
+    """The keyword arguments that light `light` (a sun or a lamp) the core's calls."""
+    return {"suns": [light]} if isinstance(light, firncore.SunLight) else {"lamps": [light]}
 
 
 def rays(top):
@@ -73,11 +83,11 @@ def measure(folder, snow, kind, samples, cache=None, lamp_samples=0):
     if file and os.path.exists(file):
         reference = np.load(file)
     else:
-        reference, _ = firncore.monte_carlo_radiance(path, optics, origins, directions, lamps=[lamp],
+        reference, _ = firncore.monte_carlo_radiance(path, optics, origins, directions, **lights(lamp),
                                                      samples=samples, seed=11)
         if file:
             np.save(file, reference)
-    firncore.bake(path, optics, lamps=[lamp], quality="FINAL", seed=0, sun_samples=lamp_samples)
+    firncore.bake(path, optics, **lights(lamp), quality="FINAL", seed=0, sun_samples=lamp_samples)
     baked = firncore.render_baked(path, optics, origins, directions)
     b, r = baked[:, 1].reshape(len(VIEWS), per_view), reference[:, 1].reshape(len(VIEWS), per_view)
     return b.sum() / r.sum() - 1.0, b.sum(axis=1) / r.sum(axis=1) - 1.0, np.mean(np.abs(b / r - 1.0))
