@@ -7,9 +7,9 @@ ball_issue's (0.98, 0.85, 10 per cm). Lights: a 60 x 60 cm square or a 60 cm dis
 its centre over the slab's +x edge (36 pieces: the top under it sees them at mu0 from 0.08 to 1), or a point lamp
 5 cm up 25 cm beside the middle (mu0 0.2 at the middle), or a sun ("sun20": 20 degrees up from the lamps' side, the
 suns' rule for one beam to compare with; docs/benchmarks.md, peak-split). Each gives 1 W/m^2 (green) on the top's
-middle. Rays aim
-at an 11 x 11 grid of points on the top (every 3 cm within 15 cm of the middle) from azimuths 0, 90, 180 and 270
-degrees (0: from +x, the lamp's side) at 30 degrees elevation and from straight above. Per view: baked / Monte Carlo.
+middle. Rays aim at an 11 x 11 grid of points on the top (every 3 cm within 15 cm of the middle) from azimuths 0, 90,
+180 and 270 degrees (0: from +x, the lamp's side) at 30 degrees elevation and from straight above. Per view: baked /
+Monte Carlo.
 
     PYTHONPATH=build/python python3 bench/lamp_slab_pieces.py [--snow grey|issue] [--lights square,disk,point,sun20]
         [--samples 1024] [--lamp-samples N]  (points of the lamp per beam, the bake's sun_samples; 0: the preset's)
