@@ -5,11 +5,13 @@ five views (docs/benchmarks.md, area-pieces).
 The slab is bake_suite.slab(40, 6) (1 cm voxels, 40 x 40 x 6 cm) of grey snow (omega 0.9, g 0.6, 5 per cm) or
 ball_issue's (0.98, 0.85, 10 per cm). Lights: a 60 x 60 cm square or a 60 cm disc facing down 5 cm over the top,
 its centre over the slab's +x edge (36 pieces: the top under it sees them at mu0 from 0.08 to 1), or a point lamp
-5 cm up 25 cm beside the middle (mu0 0.2 at the middle). Each gives 1 W/m^2 (green) on the top's middle. Rays aim
-at an 11 x 11 grid of points on the top (every 3 cm within 15 cm of the middle) from azimuths 0, 90, 180 and 270
-degrees (0: from +x, the lamp's side) at 30 degrees elevation and from straight above. Per view: baked / Monte Carlo.
+5 cm up 25 cm beside the middle (mu0 0.2 at the middle), or a sun ("sun20": 20 degrees up from the lamps' side, the
+suns' rule for one beam to compare with; docs/benchmarks.md, peak-split). Each gives 1 W/m^2 (green) on the top's
+middle. Rays aim at an 11 x 11 grid of points on the top (every 3 cm within 15 cm of the middle) from azimuths 0, 90,
+180 and 270 degrees (0: from +x, the lamp's side) at 30 degrees elevation and from straight above. Per view: baked /
+Monte Carlo.
 
-    PYTHONPATH=build/python python3 bench/lamp_slab_pieces.py [--snow grey|issue] [--lights square,disk,point]
+    PYTHONPATH=build/python python3 bench/lamp_slab_pieces.py [--snow grey|issue] [--lights square,disk,point,sun20]
         [--samples 1024] [--lamp-samples N]  (points of the lamp per beam, the bake's sun_samples; 0: the preset's)
         [--emission-seams]  (the baked emission's jumps across leaf (8-voxel) boundaries against those within)
 """
@@ -30,7 +32,12 @@ VIEWS = [(0, 30), (90, 30), (180, 30), (270, 30), (0, 90)]  # azimuth, elevation
 
 
 def light(kind, top):
-    """Lamp `kind` over the slab whose top's middle is `top` (m), 1 W/m^2 (green) there."""
+    """Lamp `kind` over the slab whose top's middle is `top` (m), 1 W/m^2 (green) there; "sunE": a sun E degrees up
+    from the lamps' side (+x), 1 W/m^2 on the top (the suns' rule, one beam compared like with like)."""
+    if kind.startswith("sun"):
+        e = math.radians(float(kind[3:]))
+        return firncore.SunLight((math.cos(e), 0.0, math.sin(e)), (1.0 / math.sin(e),) * 3, 0.0093)
+
     def made(e):
         if kind == "point":
             return firncore.Lamp("POINT", tuple(top + [0.25, 0.0, 0.05]), (e,) * 3)
@@ -39,6 +46,11 @@ def light(kind, top):
                              tangent=(1.0, 0.0, 0.0), size=(0.6, 0.6))
     unit = made(1.0).irradiance(tuple(top), (0.0, 0.0, 1.0), samples=20000, seed=1)[1]
     return made(1.0 / unit)
+
+
+def lights(light):
+    """The keyword arguments that light `light` (a sun or a lamp) the core's calls."""
+    return {"suns": [light]} if isinstance(light, firncore.SunLight) else {"lamps": [light]}
 
 
 def rays(top):
@@ -73,11 +85,11 @@ def measure(folder, snow, kind, samples, cache=None, lamp_samples=0):
     if file and os.path.exists(file):
         reference = np.load(file)
     else:
-        reference, _ = firncore.monte_carlo_radiance(path, optics, origins, directions, lamps=[lamp],
+        reference, _ = firncore.monte_carlo_radiance(path, optics, origins, directions, **lights(lamp),
                                                      samples=samples, seed=11)
         if file:
             np.save(file, reference)
-    firncore.bake(path, optics, lamps=[lamp], quality="FINAL", seed=0, sun_samples=lamp_samples)
+    firncore.bake(path, optics, **lights(lamp), quality="FINAL", seed=0, sun_samples=lamp_samples)
     baked = firncore.render_baked(path, optics, origins, directions)
     b, r = baked[:, 1].reshape(len(VIEWS), per_view), reference[:, 1].reshape(len(VIEWS), per_view)
     return b.sum() / r.sum() - 1.0, b.sum(axis=1) / r.sum(axis=1) - 1.0, np.mean(np.abs(b / r - 1.0))

@@ -33,12 +33,13 @@ namespace firn {
 
 // The bake's parts (transport/bake_*).
 using bake::ChannelStorage, bake::ChannelSystem, bake::GatheringPlan, bake::GridValues, bake::MonteCarloVoxels,
-    bake::Preset, bake::SnowIrradiance, bake::SnowLight, bake::SourceValues, bake::SurfaceLight, bake::SurfaceTerms,
-    bake::TracedSnow;
+    bake::PeakedLobes, bake::Preset, bake::SnowIrradiance, bake::SnowLight, bake::SourceValues, bake::SurfaceLight,
+    bake::SurfaceTerms, bake::TracedSnow;
 using bake::addFaceSources, bake::assemble, bake::gatheredVoxelFaces, bake::gridValues, bake::layerFaces,
     bake::lightTracedAtGatheringCost, bake::lightTraceSources,
-    bake::makeGrids, bake::planGathering, bake::referenceSurface, bake::snowIrradiance, bake::sourceFunction,
-    bake::sourceGrid, bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
+    bake::makeGrids, bake::planGathering, bake::rampPeaks, bake::referenceSurface, bake::snowIrradiance,
+    bake::sourceFunction, bake::sourceGrid, bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels,
+    bake::traceSources;
 using bake::kMaxTracedSteps, bake::kWholePieceTracedSteps;
 
 namespace {
@@ -235,12 +236,14 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             }
         }
         SurfaceValues<Source> surface;
+        PeakedLobes rampPeaked;
         {
             SurfaceValues<SurfaceLight> leaving(topo.surfaceSlot, topo.surfaceVoxels());
             const SnowLight snow = pass > 0 ? SnowLight{&fromSnow.irradiance, &fromSnow.aim} : SnowLight{};
             surfaceLight(scene, topo, light, snow, terms, phi, leaving);
             terms = {};
             surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
+            if (!reference) rampPeaked = rampPeaks(scene, topo, leaving);  // the reference's surface holds no peaks
         }  // the light leaving, freed before the source function
         releaseFreedMemory();  // the surface's arrays (without, the slab's grids peaked 3 bytes per voxel higher)
         if (reference && pass + 1 == passes) {
@@ -249,6 +252,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                              SubProgress(&p, solved, 0.95));
         }
         source = sourceFunction(scene, topo, light, phi, surface, traced);
+        source.rampPeaks = std::move(rampPeaked);
         clock.lap(&BakeStats::Phases::solve);
     }
     return source;

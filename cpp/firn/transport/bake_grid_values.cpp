@@ -44,14 +44,21 @@ Source litFacesToward(const openvdb::Coord &n, const openvdb::Coord &offset, Tra
 // weighted by how much their surface faces c (a voxel beside an edge takes the side's, one above it the
 // top's), and their normals so weighted (`facing`, unit; zero where none faces c). False if no surface voxel is
 // near. `carrier`: the surface voxel facing c most (the first in blockOffset's order among equals), where one does.
+// rampPart: of S's peaked lobe, the part the beams the ramp scatters itself hold (SourceValues::rampPeaks), so
+// weighted.
 bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const SourceValues &source,
-                   TracedIndex &tracedIndex, const MonteCarloVoxels &traced, Source &S, glm::dvec3 &facing,
-                   openvdb::Coord &carrier) {
+                   TracedIndex &tracedIndex, const MonteCarloVoxels &traced, Source &S, Source &rampPart,
+                   glm::dvec3 &facing, openvdb::Coord &carrier) {
     double total = 0.0, most = 0.0;
     int count = 0, mostAt = 27;
-    glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0), normal(0.0);
+    glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0), ramp0(0.0), ramp1(0.0), normal(0.0);
     glm::dmat3 l1(0.0);
+    const auto addRampPart = [&](const openvdb::Coord &n, std::int32_t j, double w) {  // not a traced voxel's
+        if (tracedIndex.getValue(n) >= 0) return;
+        const Source r = source.rampPeaks.with(BroadLobe{}, std::size_t(j));
+        ramp0 += w * glm::dvec3(r.peak0), ramp1 += w * glm::dvec3(r.peak1);
+    };
     for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
             for (int dz = -1; dz <= 1; ++dz) {
@@ -66,6 +73,7 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                     litFacesToward(c.offsetBy(-dx, -dy, -dz), {dx, dy, dz}, tracedIndex, traced, source[j]);
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
+                addRampPart(c.offsetBy(-dx, -dy, -dz), j, w);
                 normal += w * topo.patches[j].normal;
                 total += w, ++count;
             }
@@ -80,11 +88,13 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                     const Source v = source[j];
                     l0 += glm::dvec3(v.l0), l1 += glm::dmat3(v.l1), total += 1.0;
                     peak0 += glm::dvec3(v.peak0), peak1 += glm::dvec3(v.peak1);
+                    addRampPart(c.offsetBy(dx, dy, dz), j, 1.0);
                 }
     }
     S.l0 = glm::vec3(l0 / total);
     S.l1 = glm::mat3(l1 / total);
     S.peak0 = glm::vec3(peak0 / total), S.peak1 = glm::vec3(peak1 / total);
+    rampPart.peak0 = glm::vec3(ramp0 / total), rampPart.peak1 = glm::vec3(ramp1 / total);
     return true;
 }
 
@@ -284,12 +294,13 @@ constexpr double kShadowedCarrierCosine = -0.25;
 //
 // peaks: the surface voxels holding a peaked lobe, read from the at most eight leaves around c (BlockMask): an
 // index lookup for each of the 124 voxels around c took most of this walk's time. normal: the carrying surfaces'
-// (facingAverage), against which kShadowedCarrierCosine is taken; sunAt: the quarter-voxel lattice's suns.
+// (facingAverage), against which kShadowedCarrierCosine is taken; sunAt: the quarter-voxel lattice's suns. rampPart
+// (facingAverage's) takes the peaks' parts alike.
 void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index,
                         TracedIndex &tracedIndex, const SourceValues &source,
                         openvdb::tree::ValueAccessor<const openvdb::BoolTree> &peaks, Medium::ColumnMarcher &marcher,
-                        QuarterPointSun &sunAt, const glm::dvec3 &normal, Source &S) {
+                        QuarterPointSun &sunAt, const glm::dvec3 &normal, Source &S, Source &rampPart) {
     struct Offset {
         openvdb::Coord from;  // c minus the way to c
         glm::dvec3 towards;   // unit
@@ -320,7 +331,7 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     // sigma_t (1 - f)).
     const double forwardKept = optics.albedo.y * optics.g * optics.g;
     const glm::dvec3 centre = medium.voxelCentre(c);
-    glm::dvec3 p0(0.0), p1(0.0);
+    glm::dvec3 p0(0.0), p1(0.0), ramp0(0.0), ramp1(0.0);
     double total = 0.0;
     std::array<std::pair<openvdb::Coord, double>, 124> taken;  // the peaks taken (of the 124 offsets) and weights
     std::size_t takenCount = 0;
@@ -336,6 +347,8 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
         if (along <= 0.0) continue;
         const double w = along * along * facing;
         p0 += w * glm::dvec3(v.peak0), p1 += w * glm::dvec3(v.peak1), total += w;
+        const Source r = source.rampPeaks.with(BroadLobe{}, std::size_t(j));
+        ramp0 += w * glm::dvec3(r.peak0), ramp1 += w * glm::dvec3(r.peak1);
         taken[takenCount++] = {from, w};
     }
     if (!(total > 0.0) || (p0.x + p0.y + p0.z) / total <= 2.0 * double(S.peak0.x + S.peak0.y + S.peak0.z)) return;
@@ -368,12 +381,9 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     const double lit = std::max(sunLit, crossing / total);
     S.peak0 = glm::vec3(lit * p0 / total + (1.0 - lit) * glm::dvec3(S.peak0));
     S.peak1 = glm::vec3(lit * p1 / total + (1.0 - lit) * glm::dvec3(S.peak1));
+    rampPart.peak0 = glm::vec3(lit * ramp0 / total + (1.0 - lit) * glm::dvec3(rampPart.peak0));
+    rampPart.peak1 = glm::vec3(lit * ramp1 / total + (1.0 - lit) * glm::dvec3(rampPart.peak1));
 }
-
-// Surfaces that take a sun at most this grazingly (mu0 = cos of its angle to the normal) leave the sun in their
-// density ramp to the ramp itself (beamsInRamp; 0.2 before branch rim-forward: half of a ball's rim light seen against
-// the sun entered where mu0 >= 0.3, and 0.4 took ball_issue's view there -14 -> -13 %, docs/benchmarks.md).
-constexpr double kGrazingSunCosine = 0.4;
 
 // Whether the surface carrying a ramp voxel (`carrier`, the surface voxel facing it most: facingAverage) curves away
 // faster than a sphere of kSkyRampRadius voxels: only there is the sky the ramp sees below its plane past the snow's
@@ -423,26 +433,19 @@ class RampOfThickConvexSnow {
     bool asked_ = false, thickConvex_ = false;  // two flags, not std::optional<bool>: GCC 12 warns it unset
 };
 
-// Whether beam b (a sun, lamp or area lamp's piece) meeting the carrying surfaces at mu0 (the cosine of its way at c to
-// their normal) scatters its light in the ramp (beamsInRamp). Suns and area lamps' pieces: grazing or past the
-// terminator (mu0 < kGrazingSunCosine). Point and spot lamps only on the lit side (0 <= mu0): their ramp past the
-// terminator, where the lamp's ways fan out over the limb, doubled the view against the lamp (ball_grey +18 -> +82 %,
-// ball_issue +13 -> +101 %), while an area lamp's pieces' ways do not line up on one camera (docs/benchmarks.md,
-// lamp-shell, lamp-ramp).
-bool beamLightsRamp(const Scene &scene, std::size_t b, double mu0) {
-    if (mu0 >= kGrazingSunCosine) return false;
-    return b < scene.suns.size() || scene.lamps[b - scene.suns.size()].isArea() || mu0 >= 0.0;
-}
-
 // The beams' light (suns, lamps, area lamps' pieces: beamLightsRamp) scattered once in ramp voxel c (outside the
 // unknowns, carrying its surface's radiance) in front of surfaces that take them at grazing incidence or not at all
 // (kGrazingSunCosine): the peaked lobe of k = g about each beam's travel, of mean omega E T / 4 pi, T the snow's
 // uncollided transmittance averaged over c's trilinear hat weighted by the density (what the renderer's emission
 // weighs; 4^3 points), the occluders' shadow taken at c's centre, where it holds more than c's own peak and no sun the
 // surfaces take (mu0 >= kGrazingSunCosine) lights c. Where the surfaces take a lamp or an area lamp's piece, c's
-// carried peak holds that beam's return too, which the others' ramp light does not stand for: it is added then
-// (replacing it lost the taken pieces' return: a flat slab under a low 60 cm square lamp -7.1 -> -3.1 %, its disc
-// -3.5 -> +0.1 %; ball_grey's area lamp -5.7 -> -4.7 %; docs/benchmarks.md, area-pieces). A convex
+// carried peak holds that beam's return too, which the others' ramp light does not stand for: only the others'
+// return (rampPart: the carriers' SurfaceLight::rampPeak0, weighted as the carried peak) is set against their ramp
+// light, the taken beams' kept. Replacing the whole peak lost the taken pieces' return (area-pieces); adding the
+// ramp light to it counted the others' return twice (the 84 % of the carried peak under a low 60 cm square lamp
+// over a flat slab; a sun at 20 degrees so read +14.7 % where compared -0.8 %; seen from above the lamp +4.5 -> +1.0
+// %, its side views -5.8 to -6.9 % -> -8.3 to -10.1 %, those of its pieces below mu0 0.2, as the sun at 10 degrees,
+// -28 %; docs/benchmarks.md, peak-split). A convex
 // surface's ramp reaches into the sun past its terminator, where the surfaces' half-space model has no sun (mu0 <= 0)
 // or little (a lit patch returns E mu0 per area, the ramp beside it scatters E T): ball_grey's rims seen against the
 // sun (bench/bake_suite.py; docs/bake.md, Method 7). The average, not T at c's centre: an air voxel just outside a limb
@@ -458,10 +461,10 @@ bool beamLightsRamp(const Scene &scene, std::size_t b, double mu0) {
 // (ball_issue's worst block +36 -> -40, -48 %, ball_grey 8.0 -> 8.3, 8.4 %; docs/benchmarks.md, mends-rim52).
 // A lamp's light is marched from each of the hat's points (its way varies across the voxel), over lampSamples points of
 // the lamp (seed, stream: beamAt's), the occluders' shadow taken at c's centre; its 1 / r^2 in the irradiance.
-// normal: the carrying surfaces' (facingAverage), zero where none faces c.
+// normal: the carrying surfaces' (facingAverage), zero where none faces c; rampPart: facingAverage's.
 void beamsInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &normal, Medium::ColumnMarcher &marcher,
                  QuarterPointSun &sunAt, RampOfThickConvexSnow &rampOfThickConvexSnow, int lampSamples,
-                 std::uint64_t seed, std::uint64_t stream, Source &S) {
+                 std::uint64_t seed, std::uint64_t stream, const Source &rampPart, Source &S) {
     if (glm::length(normal) == 0.0) return;
     const glm::dvec3 centre = scene.medium->voxelCentre(c);
     const auto litInRamp = [&](std::size_t b) {
@@ -481,7 +484,7 @@ void beamsInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &
         // A sun the surface takes has its forward peak in c's one carried peak: kept whole (replacing it dropped that
         // peak and its direction; test_ramp_single_scattering_keeps_a_second_suns_forward_peak). A lamp's pieces are
         // tested each on its own: one the surface takes hid the others' ramp light (lamp-ramp), and its return stays in
-        // the carried peak, the others' added to it (area-pieces, docs/benchmarks.md).
+        // the carried peak beside the others' (area-pieces, peak-split; docs/benchmarks.md).
         if (!litInRamp(b)) {
             if (sun) return;
             lampTaken = true;
@@ -498,9 +501,17 @@ void beamsInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &
         single.addPeak(lit * glm::dvec3(optics.albedo) * kInvFourPi, crossingAnisotropy(optics.g),
                        -towardsBeam(scene, b, centre));
     }
-    if (lampTaken || rampOfThickConvexSnow()) S.add(single);
-    else if (single.peak0.x + single.peak0.y + single.peak0.z > S.peak0.x + S.peak0.y + S.peak0.z)
+    const auto sum = [](const glm::vec3 &v) { return v.x + v.y + v.z; };
+    if (rampOfThickConvexSnow()) {
+        S.add(single);
+    } else if (lampTaken) {
+        // The taken beams' return stays; the others' return (rampPart) is set against their ramp light alone.
+        const Source &others = sum(single.peak0) > sum(rampPart.peak0) ? single : rampPart;
+        S.peak0 = glm::max(S.peak0 - rampPart.peak0, glm::vec3(0.0f)) + others.peak0;
+        S.peak1 = S.peak1 - rampPart.peak1 + others.peak1;
+    } else if (sum(single.peak0) > sum(S.peak0)) {
         S.peak0 = single.peak0, S.peak1 = single.peak1;
+    }
 }
 
 // The sky's light from below ramp voxel c's plane (directions d . normal < 0) scattered once in it: omega / 4 pi
@@ -658,7 +669,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
                 const std::int32_t t = tracedIndex.getValue(c);
-                Source S;
+                Source S, rampPart;
                 glm::dvec3 facing(0.0);  // the carrying surfaces' normal
                 openvdb::Coord carrier;  // and the surface voxel facing c most
                 RampOfThickConvexSnow rampOfThickConvexSnow(topo, c, carrier, index, density, medium);
@@ -666,11 +677,13 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!nearCarriedAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
                 else if (!nearSurfaceAt.isValueOn(c)) continue;
-                else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, facing, carrier)) continue;
+                else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, rampPart, facing, carrier))
+                    continue;
                 else if (nearPeakAt.isValueOn(c)) {
-                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, sunAt, facing, S);
+                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, sunAt, facing, S,
+                                       rampPart);
                     beamsInRamp(scene, c, facing, marcher, sunAt, rampOfThickConvexSnow, preset.sunSamples,
-                                settings.seed, std::uint64_t(l), S);
+                                settings.seed, std::uint64_t(l), rampPart, S);
                 }
                 if (!gathering) skyInRamp(scene, c, facing, index, rampOfThickConvexSnow, marcher, S);
                 perLeaf[l].add(it.pos(), S);

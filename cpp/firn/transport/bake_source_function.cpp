@@ -95,6 +95,16 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
     return out;
 }
 
+PeakedLobes rampPeaks(const Scene &scene, const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved) {
+    PeakedLobes out;
+    if (scene.lamps.empty()) return out;
+    for (std::size_t i = 0; i < topo.size(); ++i)
+        if (topo.patches[i].isSurface())
+            if (const SurfaceLight &s = solved[i]; s.rampPeak0 != glm::vec3(0.0f) || s.rampPeak1 != glm::vec3(0.0f))
+                out.push({std::uint32_t(i), s.rampPeak0, s.rampPeak1});
+    return out;
+}
+
 namespace {
 
 // Inside the snow, within a few mean free paths of the surface, a camera ray still sees its surface

@@ -69,6 +69,8 @@ class PeakedLobes {
 struct SourceValues {
     std::vector<BroadLobe> broad;  // per unknown
     PeakedLobes peaked;            // by unknown
+    // By surface voxel, with lamps alone: the part of its peaked lobe its ramp scatters itself (SurfaceLight).
+    PeakedLobes rampPeaks;
 
     Source operator[](std::size_t i) const { return peaked.with(broad[i], i); }
 };
@@ -76,6 +78,10 @@ struct SourceValues {
 // Radiance leaving each surface voxel (its fitted lobe) from the solves' surface light.
 SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
                                       const SurfaceValues<SurfaceLight> &solved);
+
+// The surface voxels' rampPeak0 and rampPeak1 (SourceValues::rampPeaks), where the scene has lamps: with suns alone
+// beamsInRamp never reads them.
+PeakedLobes rampPeaks(const Scene &scene, const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved);
 
 // The source function of every unknown from the channels' fluence phi, the surface's radiance and the traced voxels.
 SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,

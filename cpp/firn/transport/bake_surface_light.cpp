@@ -120,6 +120,11 @@ SkyBeam skyBeamPart(const glm::dvec3 &m, const glm::dvec3 &n) {
 
 }  // namespace
 
+bool beamLightsRamp(const Scene &scene, std::size_t b, double mu0) {
+    if (mu0 >= kGrazingSunCosine) return false;
+    return b < scene.suns.size() || scene.lamps[b - scene.suns.size()].isArea() || mu0 >= 0.0;
+}
+
 // The unit direction along a surface of normal n in which light travelling along d moves (0 along the normal).
 glm::dvec3 travelAlong(const glm::dvec3 &d, const glm::dvec3 &n) {
     const glm::dvec3 t = d - glm::dot(d, n) * n;
@@ -222,8 +227,11 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             sun1 += returned * ((1.0 - split.share) * (split.b * n + split.c * t) - escape1);
             const double p0 = split.mean * returned / (kPi * topo.patches[i].area);
             const glm::dvec3 m = std::cos(split.elevation) * t + std::sin(split.elevation) * n;
+            const glm::vec3 peak1 = glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part
             peak->peak0[c] += float(p0);
-            peak->peak1 += glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part
+            peak->peak1 += peak1;
+            if (beamLightsRamp(scene, s, glm::dot(n, towardsBeam(scene, s, centre + h * n))))
+                peak->rampPeak0[c] += float(p0), peak->rampPeak1 += peak1;
         }
         return ReturnedLight{r0 + missed * 3.0 / 7.0, r1 + missed * escape1, sun0 + sunMissed * 3.0 / 7.0,
                              sun1 + sunMissed * escape1, sun0, sun1, sunMissed, sunReturned};

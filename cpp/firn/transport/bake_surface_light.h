@@ -35,6 +35,9 @@ struct SurfaceLight {
     // ... the suns' light returned sharply forwards (smooth patches and sharp edges' faces; SunPeak), the peaked
     // lobe's p0 per channel and grey first moment p1 (radiance, source_lobe.h) ...
     glm::vec3 peak0{0.0f}, peak1{0.0f};
+    // ... of which the beams the density ramp a voxel out along the normal scatters itself (beamLightsRamp there:
+    // beamsInRamp sets their ramp light against this part alone) ...
+    glm::vec3 rampPeak0{0.0f}, rampPeak1{0.0f};
     // ... and all light leaving (W per channel), which leaves in the escape function's shape (smooth,
     // but spread unevenly over a voxel staircase; the suns' light that escaped at once left out: it leaves
     // downstream, SunReturned).
@@ -85,6 +88,19 @@ double densityBeneath(const SnowTopology &topo, std::size_t i, const glm::dvec3 
 
 // The unit direction along a surface of normal n in which light travelling along d moves.
 glm::dvec3 travelAlong(const glm::dvec3 &d, const glm::dvec3 &n);
+
+// Surfaces that take a sun at most this grazingly (mu0 = cos of its angle to the normal) leave the sun in their
+// density ramp to the ramp itself (beamsInRamp; 0.2 before branch rim-forward: half of a ball's rim light seen against
+// the sun entered where mu0 >= 0.3, and 0.4 took ball_issue's view there -14 -> -13 %, docs/benchmarks.md).
+constexpr double kGrazingSunCosine = 0.4;
+
+// Whether beam b (a sun, lamp or area lamp's piece) meeting the carrying surfaces at mu0 (the cosine of its way at c to
+// their normal) scatters its light in the ramp (beamsInRamp). Suns and area lamps' pieces: grazing or past the
+// terminator (mu0 < kGrazingSunCosine). Point and spot lamps only on the lit side (0 <= mu0): their ramp past the
+// terminator, where the lamp's ways fan out over the limb, doubled the view against the lamp (ball_grey +18 -> +82 %,
+// ball_issue +13 -> +101 %), while an area lamp's pieces' ways do not line up on one camera (docs/benchmarks.md,
+// lamp-shell, lamp-ramp).
+bool beamLightsRamp(const Scene &scene, std::size_t b, double mu0);
 
 // The three channels' light leaving each surface voxel (`out`), from their systems' surface terms and fluences phi.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
