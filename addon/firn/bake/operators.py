@@ -189,7 +189,7 @@ def _remove_baked_grids(obj):
     if obj.library or volume.library or volume.packed_file is not None or cache.file_problem(volume):
         return
     try:
-        removed = firncore.remove_grids(path, list(materials.BAKED_GRIDS))
+        removed = firncore.remove_grids(path, [*materials.BAKED_GRIDS, firncore.SCATTER_GRID_NAME])
     except (OSError, ValueError) as error:
         raise UserError(f"Cannot clear the bake of '{obj.name}' ({error}); it stays baked. "
                         f"{cache.WRITE_ADVICE}") from error
