@@ -7,7 +7,6 @@
 
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/Morphology.h>
-#include <openvdb/tools/Prune.h>
 
 #include "firn/util/error.h"
 #include "firn/util/openvdb_library.h"
@@ -47,40 +46,20 @@ double blockExit(const openvdb::math::Ray<double> &ray, const openvdb::Coord &ce
     return exit;
 }
 
-// Whether the aligned block of Edge^3 children of a node (an 8^3 leaf's cells, a 16^3 node's leaves) that holds
-// `child` (local coordinates) has none on in `mask`. The mask holds child (x, y, z) at bit x Dim^2 + y Dim + z: a
-// word holds 64 / Dim rows of z, and the block's cells in each of its words one pattern.
-template <int Edge, openvdb::Index Log2Dim>
-bool blockClear(const openvdb::util::NodeMask<Log2Dim> &mask, const openvdb::Coord &child) {
+// Edge (cells) of the largest aligned block holding `cell` in which no cell of the 8^3 `leaf`'s mask is on:
+// 4 or 2; 1 if only the cell itself is off, 0 if it is on. The mask's word x holds the 8x8 cells of slice x,
+// bit 8 y + z (OpenVDB's leaf offset 64 x + 8 y + z).
+int emptyBlockEdge(const openvdb::util::NodeMask<3> &mask, const openvdb::Coord &cell) {
     using Word = openvdb::Index64;
-    constexpr int kDim = 1 << Log2Dim, kRowsPerWord = 64 / kDim, kRows = Edge < kRowsPerWord ? Edge : kRowsPerWord;
-    constexpr Word kPattern = [] {  // the block's cells in a word, at its low corner
-        Word rows = 0;
-        for (int r = 0; r < kRows; ++r) rows |= ((Word(1) << Edge) - 1) << (r * kDim);
-        return rows;
-    }();
-    const openvdb::Coord low = child & ~(Edge - 1);
-    Word on = 0;
-    for (int x = low.x(); x < low.x() + Edge; ++x)
-        for (int y = low.y(); y < low.y() + Edge; y += kRowsPerWord)
-            on |= mask.template getWord<Word>((x * kDim + y) * kDim / 64);
-    return !(on & kPattern << (low.y() % kRowsPerWord * kDim + low.z()));
-}
-
-// Edge (in children) of the largest aligned block, Edge^3 down to 2^3, that holds `child` and none that is on; 1
-// if none does.
-template <int Edge, openvdb::Index Log2Dim>
-int largestClearBlock(const openvdb::util::NodeMask<Log2Dim> &mask, const openvdb::Coord &child) {
-    if constexpr (Edge < 2) return 1;
-    else return blockClear<Edge>(mask, child) ? Edge : largestClearBlock<Edge / 2>(mask, child);
-}
-
-// Edge (in children) of the largest aligned block of a node's children that holds `child` (local coordinates) and
-// none that is on in `mask`: Dim / 2 down to 2; 1 if only the child itself is off; 0 if it is on.
-template <openvdb::Index Log2Dim>
-int emptyBlockEdge(const openvdb::util::NodeMask<Log2Dim> &mask, const openvdb::Coord &child) {
-    if (mask.isOn(openvdb::Index((child.x() << 2 * Log2Dim) + (child.y() << Log2Dim) + child.z()))) return 0;
-    return largestClearBlock<(1 << Log2Dim) / 2>(mask, child);
+    const int x = cell.x() & 7, y = cell.y() & 7, z = cell.z() & 7;
+    if (mask.getWord<Word>(x) >> (8 * y + z) & 1) return 0;
+    const int x4 = x & 4, shift4 = 8 * (y & 4) + (z & 4);
+    const Word slices4 = mask.getWord<Word>(x4) | mask.getWord<Word>(x4 + 1) | mask.getWord<Word>(x4 + 2) |
+                         mask.getWord<Word>(x4 + 3);
+    if (!(slices4 & (Word(0x0F0F0F0F) << shift4))) return 4;
+    const int x2 = x & 6, shift2 = 8 * (y & 6) + (z & 6);
+    if (!((mask.getWord<Word>(x2) | mask.getWord<Word>(x2 + 1)) & (Word(0x0303) << shift2))) return 2;
+    return 1;
 }
 
 }  // namespace
@@ -129,15 +108,40 @@ Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
     intersector_ = std::make_unique<openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0>>(*density_, 3);
     support_ = std::make_shared<openvdb::BoolTree>(density_->tree(), false, openvdb::TopologyCopy());
     openvdb::tools::dilateActiveValues(*support_, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
-    openvdb::tools::pruneInactive(*support_);  // a leaf or node without snow is none: the child masks map the snow
+    markOccupiedBlocks();
 }
 
-int Medium::emptyBlockEdge(const SupportNode *node, const openvdb::Coord &cell) {
-    if (!node) return int(SupportNode::DIM / 2);
-    if (const SupportLeaf *leaf = node->probeConstLeaf(cell))
-        return firn::emptyBlockEdge(leaf->getValueMask(), cell & int(SupportLeaf::DIM - 1));
-    const openvdb::Coord child = (cell & int(SupportNode::DIM - 1)) >> int(SupportLeaf::LOG2DIM);
-    return int(SupportLeaf::DIM) * firn::emptyBlockEdge(node->getChildMask(), child);
+void Medium::markOccupiedBlocks() {
+    openvdb::CoordBBox box;
+    support_->evalLeafBoundingBox(box);
+    blocksOrigin_ = box.min() & ~(kBlockEdges[2] - 1);
+    for (int level = 0; level < 3; ++level) {
+        const openvdb::Coord &n = blockCounts_[level] =
+            ((box.max() - blocksOrigin_) >> kBlockLog2[level]) + openvdb::Coord(1);
+        blockOccupied_[level].assign(std::size_t(n.x()) * n.y() * n.z(), 0);
+        for (auto leaf = support_->cbeginLeaf(); leaf; ++leaf) {
+            if (leaf->isEmpty()) continue;
+            const openvdb::Coord b = (leaf->origin() - blocksOrigin_) >> kBlockLog2[level];  // holds the whole leaf
+            blockOccupied_[level][(std::size_t(b.x()) * n.y() + b.y()) * n.z() + b.z()] = 1;
+        }
+    }
+}
+
+int Medium::clearBlockEdge(const openvdb::Coord &cell) const {
+    for (int level = 2; level >= 0; --level) {
+        const openvdb::Coord b = (cell - blocksOrigin_) >> kBlockLog2[level];
+        const openvdb::Coord &n = blockCounts_[level];
+        if (b.x() < 0 || b.y() < 0 || b.z() < 0 || b.x() >= n.x() || b.y() >= n.y() || b.z() >= n.z())
+            return kBlockEdges[level];  // beyond the support's box
+        if (!blockOccupied_[level][(std::size_t(b.x()) * n.y() + b.y()) * n.z() + b.z()]) return kBlockEdges[level];
+    }
+    return 0;
+}
+
+int Medium::emptyBlockEdge(const openvdb::Coord &cell, SupportAccessor &support) const {
+    if (const int edge = clearBlockEdge(cell)) return edge;
+    const openvdb::BoolTree::LeafNodeType *leaf = support.probeConstLeaf(cell);
+    return leaf ? firn::emptyBlockEdge(leaf->getValueMask(), cell) : int(openvdb::BoolTree::LeafNodeType::DIM);
 }
 
 Medium::~Medium() = default;
@@ -194,9 +198,8 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
         if (sum > sumLimit) return sum * h;
     }
     // Beyond the first voxels a ray mostly crosses air near the surface: whole-voxel steps up to where it leaves
-    // the bounds, reading the density only in cells that may hold snow, past the cells of a leaf's empty 2^3 or 4^3
-    // block in one go, and from a cell in an 8^3 block without any on to where it leaves that block, or the 16^3,
-    // 32^3 or 64^3 block around it that has none (the step lattice starts anew there).
+    // the bounds, reading the density only in cells that may hold snow, and from a cell in an 8^3 block without
+    // any on to where it leaves that block, or the 16^3, 32^3 or 64^3 block around it that has none.
     const openvdb::math::Ray<double> ray(eye, dir);
     constexpr double kLongStep = 1.0;  // voxels
     double tBoundsIn = 0.0, tBoundsOut = 0.0;
@@ -207,24 +210,18 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
         const double dt = std::min(kLongStep, tLast - t);
         const Vec3d p = ray(t + 0.5 * dt);
         const openvdb::Coord cell = floorCoord(p);
-        const int edge = emptyBlockEdge(cell);
-        if (edge == 0) {
-            sum += density_.in(cell, p) * dt;
-            if (sum > sumLimit) break;
-            t += dt;
-        } else if (edge < int(SupportLeaf::DIM)) {
-            // In a leaf, one step a cell: on past the steps whose midpoints lie in the empty block (a little early,
-            // never late: rounding), each counted, t as their own sums reach it.
-            const double tOut = blockExit(ray, cell, edge) - 1e-6;
-            for (t += dt; t < tLast && t + 0.5 * std::min(kLongStep, tLast - t) < tOut;) {
-                ++columnSteps_;
-                t += std::min(kLongStep, tLast - t);
+        if (const SupportLeaf *leaf = supportLeaf(cell)) {
+            if (leaf->isValueOn(cell)) {
+                sum += density_.in(cell, p) * dt;
+                if (sum > sumLimit) break;
             }
-        } else {
-            const double next = std::max(t + 0.5 * dt, blockExit(ray, cell, edge));
-            if (!(next > t)) break;  // a last step too short to move t
-            t = next;
+            t += dt;
+            continue;
         }
+        const int edge = std::max(medium_.clearBlockEdge(cell), int(openvdb::BoolTree::LeafNodeType::DIM));
+        const double next = std::max(t + 0.5 * dt, blockExit(ray, cell, edge));
+        if (!(next > t)) break;  // a last step too short to move t
+        t = next;
     }
     return sum * h;
 }
@@ -232,7 +229,8 @@ double Medium::ColumnMarcher::column(const glm::dvec3 &origin, const glm::dvec3 
 int Medium::ColumnMarcher::lastEmptySample(const openvdb::math::Ray<double> &ray, const Vec3d &p, double t0, double dt,
                                            int i, int steps) {
     const openvdb::Coord cell = floorCoord(p);
-    const int edge = emptyBlockEdge(cell);
+    const SupportLeaf *leaf = supportLeaf(cell);
+    const int edge = leaf ? firn::emptyBlockEdge(leaf->getValueMask(), cell) : int(SupportLeaf::DIM);
     if (edge == 0) return i - 1;
     if (edge == 1) return i;
     // The samples before the ray leaves the block (a little early, never late: rounding).

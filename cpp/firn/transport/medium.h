@@ -1,9 +1,11 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include <glm/vec3.hpp>
 #include <openvdb/openvdb.h>
@@ -57,16 +59,14 @@ class Medium {
     Accessor accessor() const { return density_->getConstAccessor(); }
     double densityAt(const glm::dvec3 &world, Accessor &accessor) const;  // kg/m^3, trilinear
 
-    // The support (below): its leaves of 8^3 cells, and the nodes of 16^3 leaves (128^3 cells) that hold them.
-    using SupportLeaf = openvdb::BoolTree::LeafNodeType;
-    using SupportNode = openvdb::BoolTree::RootNodeType::ChildNodeType::ChildNodeType;
-    using SupportAccessor = openvdb::tree::ValueAccessor<const openvdb::BoolTree>;
-    SupportAccessor supportAccessor() const { return SupportAccessor(*support_); }
+    // Edge (cells) of the largest aligned block of 64^3, 32^3 or 16^3 cells that holds `cell` and no cell that may
+    // hold snow; 0 if the 16^3 block holds one.
+    int clearBlockEdge(const openvdb::Coord &cell) const;
     // Edge (cells) of the largest aligned block (64^3 down to the cell itself) that holds `cell` and no cell that
     // may hold snow; 0 if `cell` may hold snow.
-    int emptyBlockEdge(const openvdb::Coord &cell, SupportAccessor &support) const {
-        return emptyBlockEdge(support.probeConstNode<SupportNode>(cell), cell);
-    }
+    using SupportAccessor = openvdb::tree::ValueAccessor<const openvdb::BoolTree>;
+    SupportAccessor supportAccessor() const { return SupportAccessor(*support_); }
+    int emptyBlockEdge(const openvdb::Coord &cell, SupportAccessor &support) const;
 
     // The density (kg/m^3) at points of index space, trilinear as BoxSampler::sample reads it (densityAt: the same
     // value bit for bit), from the last cell's eight values when a point lies in the same cell: walks in half-voxel
@@ -130,7 +130,7 @@ class Medium {
 
         // Walks the ray from t = 0 to tMax (m) in steps of at most `step` voxels, calling visit(midpoint in index
         // space, step length in m) where the density may be non-zero (the midpoints in cells without snow are
-        // skipped, whole empty blocks of 2^3 to 64^3 cells at a time); stops when visit returns false.
+        // skipped, whole empty 2^3, 4^3 and 8^3 blocks at a time); stops when visit returns false.
         template <typename Visit>
         void march(const glm::dvec3 &origin, const glm::dvec3 &direction, double tMax, double step, Visit &&visit) {
             const glm::dvec3 start = medium_.worldToIndex(origin);
@@ -156,25 +156,26 @@ class Medium {
 
       private:
         // Samples ray(t0 + (j + 0.5) dt) of a walk (index space): if sample i, at p, lies in a cell without
-        // snow, the last sample j >= i (below `steps`) still inside the largest empty aligned block (64^3 down to
-        // the cell) that holds p, so that the walk goes on after it; else i - 1. The samples skipped
+        // snow, the last sample j >= i (below `steps`) still inside the largest empty aligned block (8^3, 4^3,
+        // 2^3 or the cell) that holds p, so that the walk goes on after it; else i - 1. The samples skipped
         // would add nothing: the walk's values do not change.
         int lastEmptySample(const openvdb::math::Ray<double> &ray, const openvdb::Vec3d &p, double t0, double dt, int i,
                             int steps);
-        // emptyBlockEdge of `cell`, through the support's node holding it, the last one kept: a walk meets dozens of
-        // cells and blocks in each node, and the accessor's own cache sits behind a call and three levels' checks.
-        int emptyBlockEdge(const openvdb::Coord &cell) {
-            const openvdb::Coord origin = cell & ~int(SupportNode::DIM - 1);
-            if (origin != nodeOrigin_) nodeOrigin_ = origin, node_ = support_.probeConstNode<SupportNode>(cell);
-            return Medium::emptyBlockEdge(node_, cell);
+        // The support's leaf holding `cell` (null where none), the last one kept: a walk takes several steps in each
+        // leaf, and the accessor's own cache sits behind a call and three levels' checks.
+        using SupportLeaf = openvdb::BoolTree::LeafNodeType;
+        const SupportLeaf *supportLeaf(const openvdb::Coord &cell) {
+            const openvdb::Coord origin = cell & ~int(SupportLeaf::DIM - 1);
+            if (origin != leafOrigin_) leafOrigin_ = origin, leaf_ = support_.probeConstLeaf(cell);
+            return leaf_;
         }
 
         const Medium &medium_;
         openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0> intersector_;
         DensitySampler density_;
-        SupportAccessor support_;
-        openvdb::Coord nodeOrigin_ = openvdb::Coord::max();  // emptyBlockEdge's last node's origin (max: none yet)
-        const SupportNode *node_ = nullptr;
+        openvdb::tree::ValueAccessor<const openvdb::BoolTree> support_;
+        openvdb::Coord leafOrigin_ = openvdb::Coord::max();  // supportLeaf's last leaf's origin (max: none yet)
+        const SupportLeaf *leaf_ = nullptr;
         long columnSteps_ = 0;
     };
 
@@ -187,12 +188,15 @@ class Medium {
     glm::dvec3 boundsMin_{0.0}, boundsMax_{0.0};
     std::unique_ptr<openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid, 0>> intersector_;
     // Voxels c whose trilinear cell (corners c + {0, 1}^3) may hold snow: elsewhere the density is 0 without
-    // reading eight voxels. Rays from the surface to the sky cross mostly such empty cells, and blocks without any:
-    // the tree's own nodes map those (its empty leaves pruned), a node's child mask its leaves.
+    // reading eight voxels. Rays from the surface to the sky cross mostly such empty cells of occupied blocks.
     openvdb::BoolTree::Ptr support_;
-    // emptyBlockEdge of `cell` in the support's `node` that holds it (null: none, a block of 128^3 cells without
-    // snow; 64 then, as a node's largest block, for the walks' jumps to land where they did).
-    static int emptyBlockEdge(const SupportNode *node, const openvdb::Coord &cell);
+    // Per level (blocks of 16^3, 32^3, 64^3 cells from blocksOrigin_): 1 where a block holds a leaf of support_,
+    // a byte per block over the support's bounding box: rays leave the snow's neighbourhood in a few jumps.
+    void markOccupiedBlocks();
+    static constexpr std::array<int, 3> kBlockEdges{16, 32, 64}, kBlockLog2{4, 5, 6};
+    openvdb::Coord blocksOrigin_;
+    std::array<openvdb::Coord, 3> blockCounts_;
+    std::array<std::vector<std::uint8_t>, 3> blockOccupied_;
 };
 
 }  // namespace firn

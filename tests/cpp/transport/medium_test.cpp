@@ -136,33 +136,4 @@ TEST(Medium, ColumnCountsItsSteps) {
     EXPECT_EQ(marcher.columnSteps(), 6 + 5);
 }
 
-// A leaf without active voxels holds nothing but zeros: it is air, and a column must read the same there as where
-// the grid has no leaf at all, bit for bit, in the same counted steps. A 64^3 block of such leaves lies between two
-// lumps of snow. Oracle: the same columns through the same density without those leaves.
-TEST(Medium, ColumnReadsEmptyLeavesAsAir) {
-    constexpr double kVoxel = 0.02;  // m
-    constexpr float kRho = 300.0f;   // kg/m^3
-    auto snow = openvdb::FloatGrid::create(0.0f);
-    snow->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
-    const openvdb::Coord lumps[2] = {openvdb::Coord(0, 0, 0), openvdb::Coord(150, 40, 90)};
-    for (const openvdb::Coord &lump : lumps) snow->fill(openvdb::CoordBBox(lump, lump.offsetBy(3)), kRho);
-    auto withEmptyLeaves = snow->deepCopy();
-    for (int x = 64; x < 128; x += 8)
-        for (int y = 0; y < 64; y += 8)
-            for (int z = 0; z < 64; z += 8) withEmptyLeaves->tree().touchLeaf(openvdb::Coord(x, y, z));
-    ASSERT_EQ(withEmptyLeaves->tree().leafCount(), snow->tree().leafCount() + 512);
-    const VolumeOptics optics{10.0, Rgb(0.99), 0.8};
-    const Medium plain(snow, optics), padded(withEmptyLeaves, optics);
-    Medium::ColumnMarcher plainMarcher(plain), paddedMarcher(padded);
-    Rng rng(5, 0);
-    for (int r = 0; r < 100; ++r) {
-        const glm::dvec3 from = plain.indexToWorld(glm::dvec3(0.5) + 3.0 * glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()));
-        const glm::dvec3 to = plain.indexToWorld(glm::dvec3(150.5, 40.5, 90.5) + 3.0 * glm::dvec3(rng.uniform(), rng.uniform(), rng.uniform()));
-        const glm::dvec3 w = glm::normalize(to - from);
-        const double tMax = glm::length(to - from) + 10.0 * kVoxel;
-        EXPECT_EQ(paddedMarcher.column(from, w, tMax, 1e30), plainMarcher.column(from, w, tMax, 1e30)) << "ray " << r;
-    }
-    EXPECT_EQ(paddedMarcher.columnSteps(), plainMarcher.columnSteps());
-}
-
 }  // namespace firn
