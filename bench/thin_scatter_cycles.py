@@ -99,6 +99,7 @@ def snow_material(obj, case, scatter):
 
 def scene_for(case, path, args):
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon_utils.enable("firn", default_set=True)  # factory settings leave it off
     uniform_world((case.sky,) * 3)
     scene = bpy.context.scene
     if case.sun > 0.0:

@@ -1,0 +1,128 @@
+"""What Scatter Thin Snow costs in Cycles on the demo's scenes: the car sample (blend_samples/car_under_snow.py, its
+snow baked FINAL) and one spray frame (blend_samples/skier.py, its lumps and tracked snow lit DRAFT), each rendered
+with the option on (material form BAKED_SCATTER where the bake wrote firn_scatter) and off (BAKED): Cycles' wall
+seconds and peak memory (MB, its status line's "Peak"), and the firn_scatter voxels. The same render settings
+both ways (the bake's: volume bounces 16); `--samples` per pixel at `--width` × 9/16 pixels.
+
+bench/run.sh bench/scatter_cost.py -- [--width 500] [--samples 32] [--spray-frames 12] [--scenes car,spray]
+"""
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+
+import bpy
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "blend_samples"))
+import sample_common as common  # noqa: E402
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--width", type=int, default=500)
+    parser.add_argument("--samples", type=int, default=32)
+    parser.add_argument("--spray-frames", type=int, default=12, help="the skier's run; its last frame is lit")
+    parser.add_argument("--scenes", default="car,spray")
+    return parser.parse_args(argv)
+
+
+def scatter_voxels(obj):
+    """The firn_scatter grid's voxels with share > 0 in the Volume's file (its frame's, for a sequence)."""
+    from firn.common import cache
+    from firn.common.core import firncore
+    from firn.material import nodes as materials
+
+    path = cache.volume_path(obj.data)
+    if obj.data.is_sequence:
+        path = obj.data.grids.frame_filepath
+    if materials.SCATTER_GRID not in firncore.grid_names(path):
+        return 0
+    return firncore.grid_statistics(path, materials.SCATTER_GRID)["active_voxels"]
+
+
+def add_scatter_grid(obj, scene):
+    """A core that does not write firn_scatter yet (before branch thin-grid): rule B's voxels
+    (firncore.scatter_voxels, sigma_t h < 2, traced) written into the Volume's file as the bake would."""
+    import pyopenvdb
+    from firn.bake import operators as bake
+    from firn.common import cache
+    from firn.common.core import firncore
+    from firn.material import nodes as materials
+
+    path = obj.data.grids.frame_filepath if obj.data.is_sequence else cache.volume_path(obj.data)
+    if materials.SCATTER_GRID in firncore.grid_names(path):
+        return
+    voxels = firncore.scatter_voxels(path, bake.volume_optics_of(obj), occluders=[], thin_depth=2.0,
+                                     traced_only=True)
+    if not len(voxels):
+        return
+    grids, metadata = pyopenvdb.readAll(path)
+    share = pyopenvdb.FloatGrid()
+    share.name = materials.SCATTER_GRID
+    share.transform = next(grid for grid in grids if grid.name == "density").transform
+    accessor = share.getAccessor()
+    for ijk in voxels:
+        accessor.setValueOn(tuple(int(c) for c in ijk), 1.0)
+    pyopenvdb.write(path, grids=list(grids) + [share], metadata=metadata)
+    cache.reload_grids(obj.data)
+    materials.ensure_snow_material(obj)
+
+
+def render_both_ways(name, scene, snows, args, folder):
+    from firn.bake import operators as bake
+    from firn.material import nodes as materials
+
+    for snow in snows:
+        add_scatter_grid(snow, scene)
+    bake.scatter_render_settings(scene)  # both ways alike
+    voxels = sum(scatter_voxels(snow) for snow in snows)
+    forms = {snow.name: materials.material_form(snow) for snow in snows}
+    print(f"{name}: firn_scatter active voxels {voxels}; forms {forms}; volume bounces "
+          f"{scene.cycles.volume_bounces}, {args.width} px wide, {args.samples} samples", flush=True)
+    for scatter in (False, True):
+        for snow in snows:
+            snow.firn.scatter_thin = scatter
+        started = time.perf_counter()
+        peak = common.render_peak_mb(scene, os.path.join(folder, f"{name}_{scatter}.png"), args.width, args.samples)
+        seconds = time.perf_counter() - started
+        print(f"  Scatter Thin Snow {'on ' if scatter else 'off'}: {seconds:6.1f} s, Cycles peak {peak:6.0f} MB",
+              flush=True)
+
+
+def car_scene(args, folder):
+    import car_under_snow as car
+
+    scene, targets = car.build_scene()
+    snow = car.add_car_snow(targets)
+    common.bake([snow])
+    render_both_ways("car", scene, [snow], args, folder)
+
+
+def spray_scene(args, folder):
+    import skier
+
+    frames = args.spray_frames
+    scene, ground, skis = skier.build_scene(frames)
+    snow = common.add_snow([ground], depth=skier.SNOW_DEPTH, spacing=0.05, voxel_size=0.02, seed=2)
+    spray = skier.add_spray(snow, skis, frames)
+    if bpy.ops.firn.bake_sequence(frame_start=frames, frame_end=frames, quality="DRAFT") != {"FINISHED"}:
+        raise RuntimeError("Bake Sequence failed")
+    scene.frame_set(frames)
+    lit = [obj for obj in scene.objects if obj.type == "VOLUME" and obj.firn.bake_fingerprint]
+    print(f"spray frame {frames} of the skier: {spray.firn.spray.summary}", flush=True)
+    render_both_ways(f"spray frame {frames}", scene, lit, args, folder)
+
+
+def main():
+    args = parse_args()
+    folder = tempfile.mkdtemp(prefix="firn_scatter_cost_")
+    scenes = {"car": car_scene, "spray": spray_scene}
+    for name in args.scenes.split(","):
+        scenes[name](args, folder)
+
+
+main()
