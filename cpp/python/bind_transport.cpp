@@ -285,14 +285,13 @@ firn::BakeSettings bakeSettings(const std::string &quality, std::uint64_t seed, 
 }
 
 // Writes `output`: the grids of `path` with `density` in its density's place and `baked` in place of any earlier
-// bake's grids (the car's surface grid is read only now: 14 bytes per voxel).
+// bake's grids, its scatter grid too (the car's surface grid is read only now: 14 bytes per voxel).
 void writeBaked(const std::string &path, const openvdb::GridBase::Ptr &density, const firn::BakedGrids &baked,
                 const std::string &output) {
     openvdb::GridPtrVec grids;
     for (const std::string &name : firn::gridNames(path))
         if (name == "density") grids.push_back(density);
-        else if (std::find(firn::BakedGrids::kNames.begin(), firn::BakedGrids::kNames.end(), name) ==
-                 firn::BakedGrids::kNames.end())
+        else if (!firn::BakedGrids::isBaked(name))
             grids.push_back(firn::readGrid(path, name));
     for (const auto &grid : baked.grids()) grids.push_back(grid);
     firn::writeGrids(output, grids);
@@ -316,6 +315,7 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["unknowns"] = stats.unknowns;
     d["surface_voxels"] = stats.surfaceVoxels;
     d["traced_voxels"] = stats.tracedVoxels;
+    d["scatter_voxels"] = stats.scatterVoxels;
     d["traced_paths"] = stats.tracedPaths;
     d["light_traced_voxels"] = stats.lightTracedVoxels;
     d["photons"] = stats.photons;
@@ -340,6 +340,7 @@ void bindTransport(py::module_ &m) {
         py::tuple names(firn::BakedGrids::kCount);
         for (std::size_t k = 0; k < firn::BakedGrids::kCount; ++k) names[k] = firn::BakedGrids::kNames[k];
         m.attr("BAKED_GRID_NAMES") = names;
+        m.attr("SCATTER_GRID_NAME") = firn::BakedGrids::kScatterName;  // written only where the renderer scatters
     }
     m.attr("LOBE_MAX_ANISOTROPY") = firn::kMaxLobeAnisotropy;  // the baked lobe's largest k (source_lobe.h)
 
@@ -373,7 +374,8 @@ void bindTransport(py::module_ &m) {
         R"doc(
 Bakes the light scattered inside the snow of `vdb_path` (its 'density' grid, kg/m^3), lit by `suns`, `lamps`
 (firncore.Lamp) and `sky`, and writes the file
-back, atomically, with the baked grids BAKED_GRID_NAMES added (docs/vdb-contract.md), or, given `output_path`,
+back, atomically, with the baked grids BAKED_GRID_NAMES added, and SCATTER_GRID_NAME where the renderer scatters
+in traced thin snow (docs/vdb-contract.md; an earlier bake's are replaced or removed), or, given `output_path`,
 writes that file instead and leaves `vdb_path` as it was. occluders: list of
 (vertices (N, 3) float32 m, triangles (M, 3) uint32, albedo (r, g, b)). quality: 'DRAFT', 'FINAL' or
 'REFERENCE' (Monte Carlo surface, slow). sky_samples (rays per surface voxel, at most 64), sun_samples
@@ -497,8 +499,8 @@ the emission-absorption integral of the contract's material, up to the first occ
         },
         py::arg("vdb_path"), py::arg("optics"), py::arg("occluders") = py::list(), py::arg("thin_depth") = 2.0,
         py::arg("traced_only") = true, R"doc(
-The voxels (N, 3 index coordinates) where render_scattering_where_thin lets the renderer scatter (share 1; the
-proposed firn_scatter grid, benchmarks.md thin-ring); a bench helper.)doc");
+The voxels (N, 3 index coordinates) where render_scattering_where_thin lets the renderer scatter (share 1): with
+the defaults, the voxels of the SCATTER_GRID_NAME grid that `bake` writes (docs/vdb-contract.md); a bench helper.)doc");
 
     m.def(
         "render_scattering_where_thin",

@@ -1096,3 +1096,68 @@ def test_scatter_voxels_are_the_thin_snow_and_the_air_touching_it(folder):
         shell |= np.roll(snow, np.array(offset) - 1, axis=(0, 1, 2))
     assert np.array_equal(on, shell)
     assert len(firncore.scatter_voxels(path, c.optics, thin_depth=1.0, traced_only=True)) == 0
+
+
+def scatter_grid(path):
+    """The firn_scatter grid of a baked file (pyopenvdb), or None where the bake wrote none."""
+    import pyopenvdb
+
+    names = firncore.grid_names(path)
+    assert names.count(firncore.SCATTER_GRID_NAME) <= 1
+    return pyopenvdb.read(path, firncore.SCATTER_GRID_NAME) if firncore.SCATTER_GRID_NAME in names else None
+
+
+def scatter_on(grid):
+    """The voxels of share > 0 and the set of the grid's active values."""
+    values = [(tuple(v.min), v.value) for v in grid.citerOnValues()]
+    assert all(v.count == 1 for v in grid.citerOnValues())  # voxels, no tiles (Cycles renders tiles as empty)
+    return sorted(ijk for ijk, value in values if value > 0.0), {value for _, value in values}
+
+
+def test_a_bake_writes_the_scatter_grid_where_the_renderer_scatters(folder):
+    # slab_thin_forward's voxels are all traced and of sigma_t h 1: the bake's own firn_scatter holds 1 on the voxels
+    # scatter_voxels finds (thin-ring's rule B, from the scene alone), 0 nowhere, on the density's voxels.
+    c, path, _, _ = thin_slab_baked(folder)
+    grid = scatter_grid(path)
+    assert grid is not None
+    on, values = scatter_on(grid)
+    assert on == sorted(map(tuple, firncore.scatter_voxels(path, c.optics, thin_depth=2.0, traced_only=True)))
+    assert len(on) > (c.density > 0).sum() and values == {1.0}
+    assert grid["firn_scatter_optical_depth"] == 2.0 and grid["firn_units"].startswith("1 ")
+    import pyopenvdb
+
+    density = pyopenvdb.read(path, "density")
+    assert grid.transform.indexToWorld((3, 5, 7)) == density.transform.indexToWorld((3, 5, 7))
+    assert grid.transform.voxelSize() == density.transform.voxelSize()
+
+
+def test_the_scatter_grid_goes_with_its_bake(folder):
+    # A bake of snow nowhere thin (slab_thick, sigma_t h 30) writes none; baked again over a file holding an
+    # earlier bake's scatter grid, the new bake removes it (thin snow again: replaces it, one grid, the same
+    # voxels); Clear Bake's remove_grids leaves the snow's grids alone.
+    c, path, _, _ = thin_slab_baked(folder)
+    before = scatter_on(scatter_grid(path))
+    firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), quality="FINAL", seed=1)
+    assert scatter_on(scatter_grid(path)) == before
+
+    thick = case("slab_thick")
+    thick_path = os.path.join(folder, "thick_slab_scatter.vdb")
+    bake_suite.write_density(thick_path, thick.density, thick.voxel)
+    import pyopenvdb
+
+    pyopenvdb.write(thick_path, [pyopenvdb.read(thick_path, "density"), scatter_grid(path)])  # an earlier bake's
+    stats = firncore.bake(thick_path, thick.optics, suns=thick.suns(), sky=thick.skies(), quality="DRAFT")
+    assert stats["scatter_voxels"] == 0 and scatter_grid(thick_path) is None
+
+    removed = firncore.remove_grids(path, [*firncore.BAKED_GRID_NAMES, firncore.SCATTER_GRID_NAME])
+    assert sorted(removed) == sorted([*firncore.BAKED_GRID_NAMES, firncore.SCATTER_GRID_NAME])
+    assert firncore.grid_names(path) == ["density"]
+
+
+def test_a_joint_bake_gives_each_output_its_scatter_grid(folder):
+    # bake_joint of one file is its bake: the output holds the same scatter grid as `bake` writes.
+    c, path, _, _ = thin_slab_baked(folder)
+    alone = scatter_on(scatter_grid(path))
+    output = os.path.join(folder, "thin_slab_joint.vdb")
+    firncore.bake_joint([path], [output], c.optics, suns=c.suns(), sky=c.skies(), quality="FINAL", seed=0)
+    assert scatter_on(scatter_grid(output)) == alone

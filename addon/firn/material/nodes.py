@@ -49,7 +49,7 @@ _BAKED_SCATTER_NODES = _BAKED_NODES + ("Firn Scatter", "Firn Volume", "Firn Mixe
 _BRANCHES = ("", " Grains")  # the node names' suffixes: without and with sub-balls
 _SINGLE_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Absorption", "Firn Single", "Firn Output")
 BAKED_GRIDS = firncore.BAKED_GRID_NAMES  # the core's names (docs/vdb-contract.md), not a copy of them
-SCATTER_GRID = "firn_scatter"  # the share Cycles scatters, written by a bake only where some voxel scatters
+SCATTER_GRID = firncore.SCATTER_GRID_NAME  # the share Cycles scatters, in a baked file where some voxel scatters
 # Cycles' step through scattering snow, in voxels: its stepping is biased by the optical depth of a step (+7.7 % at
 # 2, +2.4 % at 0.5: shared notes cycles-volumes.md), and the voxels it scatters in have sigma_t h up to 2.
 _SCATTER_STEP_RATE = 0.25

@@ -746,6 +746,16 @@ openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology 
     return tree;
 }
 
+// What every grid of a bake carries: the extinction per density the bake used (m^2/kg), its settings, the version.
+void insertBakeMetadata(openvdb::GridBase &grid, double extinctionPerDensity, const BakeSettings &settings) {
+    grid.insertMeta("firn_extinction_per_density", openvdb::DoubleMetadata(extinctionPerDensity));
+    grid.insertMeta("firn_bake_quality", openvdb::StringMetadata(settings.quality == BakeQuality::Draft   ? "DRAFT"
+                                                                 : settings.quality == BakeQuality::Final ? "FINAL"
+                                                                                                          : "REFERENCE"));
+    grid.insertMeta("firn_bake_seed", openvdb::Int64Metadata(openvdb::Int64(settings.seed)));
+    grid.insertMeta("firn_version", openvdb::StringMetadata(kVersion));
+}
+
 }  // namespace
 
 // Grid k of BakedGrids from its tree, `scale` times the voxel size of `density`, for optics of extinction
@@ -758,13 +768,19 @@ openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scal
     grid->setName(BakedGrids::kNames[k]);
     grid->setVectorType(openvdb::VEC_INVARIANT);
     grid->insertMeta("firn_units", openvdb::StringMetadata("W/m^2/sr (source function: emission / extinction)"));
-    grid->insertMeta("firn_extinction_per_density", openvdb::DoubleMetadata(extinctionPerDensity));
-    grid->insertMeta("firn_bake_quality",
-                     openvdb::StringMetadata(settings.quality == BakeQuality::Draft   ? "DRAFT"
-                                             : settings.quality == BakeQuality::Final ? "FINAL"
-                                                                                      : "REFERENCE"));
-    grid->insertMeta("firn_bake_seed", openvdb::Int64Metadata(openvdb::Int64(settings.seed)));
-    grid->insertMeta("firn_version", openvdb::StringMetadata(kVersion));
+    insertBakeMetadata(*grid, extinctionPerDensity, settings);
+    return grid;
+}
+
+// No ring of zeros: Cycles reads a float grid's edge exactly (cycles-volumes.md), tapering to the zero beyond.
+openvdb::FloatGrid::Ptr scatterGrid(openvdb::FloatTree::Ptr shares, const openvdb::FloatGrid &density,
+                                    double extinctionPerDensity, const BakeSettings &settings) {
+    auto grid = openvdb::FloatGrid::create(std::move(shares));
+    grid->setTransform(density.transform().copy());
+    grid->setName(BakedGrids::kScatterName);
+    grid->insertMeta("firn_units", openvdb::StringMetadata("1 (share of the extinction the renderer scatters)"));
+    grid->insertMeta("firn_scatter_optical_depth", openvdb::DoubleMetadata(BakedGrids::kScatterOpticalDepth));
+    insertBakeMetadata(*grid, extinctionPerDensity, settings);
     return grid;
 }
 

@@ -119,6 +119,10 @@ inline openvdb::Vec3f sourceComponent(const Source &S, int k) {
 openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scale, const openvdb::FloatGrid &density,
                                    double extinctionPerDensity, const BakeSettings &settings);
 
+// BakedGrids::scatter from its tree of shares (scatterShares), on the density's voxels, with the bake's metadata.
+openvdb::FloatGrid::Ptr scatterGrid(openvdb::FloatTree::Ptr shares, const openvdb::FloatGrid &density,
+                                    double extinctionPerDensity, const BakeSettings &settings);
+
 // BakedGrids' values at a point of the density's index space before the grids are written: read from the
 // unknowns' source and the values beyond them, trilinear as BoxSampler reads a grid (the same values, bit for
 // bit). The last cell's corners are kept: the gathering's half-voxel steps read each cell about twice. One per

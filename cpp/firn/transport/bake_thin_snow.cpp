@@ -191,6 +191,12 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
 
 }  // namespace
 
+std::vector<openvdb::Coord> TracedSnow::voxels() const {
+    std::vector<openvdb::Coord> out = thin;
+    out.insert(out.end(), wholePieces.begin(), wholePieces.end());
+    return out;
+}
+
 TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
     const VolumeOptics &optics = medium.optics();
     const double h = medium.voxelSize(), k = optics.extinctionPerDensity;

@@ -18,6 +18,8 @@ namespace firn::bake {
 struct TracedSnow {
     std::vector<openvdb::Coord> thin, wholePieces;
     std::vector<bool> inLayer;
+
+    std::vector<openvdb::Coord> voxels() const;  // thin, then wholePieces
 };
 
 // The thin voxels and transport-thin pieces of the medium's snow (bake_thin_snow.cpp: what each is, measured).

@@ -15,7 +15,15 @@
 
 namespace firn {
 
-openvdb::GridPtrVec BakedGrids::grids() const { return openvdb::GridPtrVec(source.begin(), source.end()); }
+openvdb::GridPtrVec BakedGrids::grids() const {
+    openvdb::GridPtrVec out(source.begin(), source.end());
+    if (scatter) out.push_back(scatter);
+    return out;
+}
+
+bool BakedGrids::isBaked(const std::string &name) {
+    return name == kScatterName || std::find(kNames.begin(), kNames.end(), name) != kNames.end();
+}
 
 BakedGrids BakedGrids::find(const openvdb::GridPtrVec &grids) {
     BakedGrids out;
@@ -24,6 +32,8 @@ BakedGrids BakedGrids::find(const openvdb::GridPtrVec &grids) {
             if (grid->getName() == kNames[i]) out.source[i] = openvdb::gridPtrCast<openvdb::Vec3fGrid>(grid);
         if (!out.source[i]) throw InvalidArgument(std::string("no Vec3f grid named ") + kNames[i]);
     }
+    for (const auto &grid : grids)
+        if (grid->getName() == kScatterName) out.scatter = openvdb::gridPtrCast<openvdb::FloatGrid>(grid);
     return out;
 }
 
@@ -125,35 +135,13 @@ Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray) {
     return BakedRadiance(scene, baked).along(ray, tMax, 1.0 / 32.0);
 }
 
-namespace {
-
-// The voxels the renderer may scatter in: all the snow's, or only those the bake traces (thinVoxels: not the
-// fringes of diffused snow, whose light the surface model's ramp holds).
-std::vector<openvdb::Coord> scatterCandidates(const Scene &scene, bool tracedOnly) {
-    const openvdb::FloatTree &density = scene.medium->density().tree();
-    std::vector<openvdb::Coord> out;
-    if (!tracedOnly) {
-        for (auto it = density.cbeginValueOn(); it; ++it) out.push_back(it.getCoord());
-        return out;
-    }
-    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    bake::TracedSnow snow = bake::thinVoxels(*scene.medium, topo);
-    out = std::move(snow.thin);
-    out.insert(out.end(), snow.wholePieces.begin(), snow.wholePieces.end());
-    return out;
-}
-
-}  // namespace
-
-// 1 in the candidates of optical depth sigma_t h under thinDepth and in the air voxels touching them, else 0.
-openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool tracedOnly) {
-    const Medium &medium = *scene.medium;
-    const openvdb::FloatTree &density = medium.density().tree();
+openvdb::FloatTree::Ptr scatterShares(const Medium &medium, const std::vector<openvdb::Coord> &candidates,
+                                      double thinDepth) {
     const double depthPerDensity = medium.optics().extinctionPerDensity * medium.voxelSize();
     auto shares = std::make_shared<openvdb::FloatTree>(0.0f);
     openvdb::tree::ValueAccessor<openvdb::FloatTree> share(*shares);
-    openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(density);
-    for (const openvdb::Coord &c : scatterCandidates(scene, tracedOnly)) {
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(medium.density().tree());
+    for (const openvdb::Coord &c : candidates) {
         const float value = rho.getValue(c);
         if (!(value > 0.0f && depthPerDensity * value < thinDepth)) continue;
         share.setValue(c, 1.0f);
@@ -161,6 +149,17 @@ openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool
             if (const openvdb::Coord n = c + blockOffset(k); !(rho.getValue(n) > 0.0f)) share.setValue(n, 1.0f);
     }
     return shares;
+}
+
+openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool tracedOnly) {
+    const Medium &medium = *scene.medium;
+    if (!tracedOnly) {
+        std::vector<openvdb::Coord> snow;
+        for (auto it = medium.density().cbeginValueOn(); it; ++it) snow.push_back(it.getCoord());
+        return scatterShares(medium, snow, thinDepth);
+    }
+    const SnowTopology topo = buildSnowTopology(medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    return scatterShares(medium, bake::thinVoxels(medium, topo).voxels(), thinDepth);
 }
 
 std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReference &reference, const BakedGrids &baked,

@@ -29,9 +29,17 @@ struct BakedGrids {
     static constexpr std::size_t kCount = kNames.size();
     using Values = std::array<openvdb::Vec3f, kCount>;  // the grids' values at a point, in kNames' order
     std::array<openvdb::Vec3fGrid::Ptr, kCount> source;  // in kNames' order
+    // The share of the snow's extinction the renderer scatters itself rather than drawing S (scatterShares), on
+    // the density's voxels; null where it scatters nowhere (no grid is written: Cycles' memory holds it densely).
+    static constexpr const char *kScatterName = "firn_scatter";
+    static constexpr double kScatterOpticalDepth = 2.0;  // sigma_t h under which traced snow scatters (thin-ring)
+    openvdb::FloatGrid::Ptr scatter;
 
-    openvdb::GridPtrVec grids() const;
-    // Picks the six grids out of a file's grids by name. Throws InvalidArgument if one is missing.
+    openvdb::GridPtrVec grids() const;  // the six, then the scatter grid where there is one
+    // Whether a file's grid of this name is a bake's (replaced by a new bake, removed by Clear Bake).
+    static bool isBaked(const std::string &name);
+    // Picks the six grids, and the scatter grid if there is one, out of a file's grids by name. Throws
+    // InvalidArgument if one of the six is missing.
     static BakedGrids find(const openvdb::GridPtrVec &grids);
 };
 
@@ -110,9 +118,15 @@ class BakedRadiance {
 // attenuated by exp(-tau)).
 Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray);
 
-// The renderer's scatter share per voxel (benchmarks.md, thin-ring, the proposed firn_scatter grid): 1 in the snow
-// voxels of sigma_t h under `thinDepth` (only those the bake traces if `tracedOnly`) and the air voxels touching
-// them, 0 (the background) elsewhere.
+// The renderer's scatter share per voxel (benchmarks.md, thin-ring's rule B; the firn_scatter grid): 1 in the snow
+// voxels of `candidates` of sigma_t h under `thinDepth` and in the air voxels touching them, 0 (the background,
+// inactive) elsewhere. The bake's candidates are the voxels it traces (bake::TracedSnow::voxels): there the
+// renderer's own scattering beats the baked lobes, while a diffused surface's fringe would scatter again the light
+// the surface model already put behind it.
+openvdb::FloatTree::Ptr scatterShares(const Medium &medium, const std::vector<openvdb::Coord> &candidates,
+                                      double thinDepth);
+// The same for a scene not baked here (the benches): the candidates are the voxels its bake would trace, or every
+// snow voxel unless `tracedOnly`.
 openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool tracedOnly);
 
 // The render of MixedRender (monte_carlo.h): the renderer scatters, all orders, in the snow of optical depth per

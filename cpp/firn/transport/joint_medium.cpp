@@ -34,10 +34,11 @@ openvdb::BoolTree::Ptr reachedVoxels(const openvdb::FloatGrid &density, double r
     return mask;
 }
 
-// The source voxels (of `source`'s index space) whose centre falls in one of the reached voxels. Leaves wholly
-// outside the reached voxels' box are skipped: a spray's lumps keep a few of the snow's leaves.
-openvdb::BoolTree::Ptr keptSourceVoxels(const openvdb::Vec3fGrid &source, const openvdb::FloatGrid &density,
-                                        const openvdb::BoolTree &reached) {
+// The voxels of a union's grid (in its own index space) whose centre falls in one of the reached voxels. Leaves
+// wholly outside the reached voxels' box are skipped: a spray's lumps keep a few of the snow's leaves.
+template <typename GridT>
+openvdb::BoolTree::Ptr keptVoxels(const GridT &source, const openvdb::FloatGrid &density,
+                                  const openvdb::BoolTree &reached) {
     auto kept = openvdb::BoolTree::Ptr(new openvdb::BoolTree(false));
     openvdb::CoordBBox reachedBox;
     if (!reached.evalActiveVoxelBoundingBox(reachedBox)) return kept;
@@ -54,13 +55,12 @@ openvdb::BoolTree::Ptr keptSourceVoxels(const openvdb::Vec3fGrid &source, const 
     return kept;
 }
 
-openvdb::Vec3fGrid::Ptr keptPart(const openvdb::Vec3fGrid &joint, const openvdb::BoolTree &kept) {
-    openvdb::Vec3fGrid::Ptr out = joint.copyWithNewTree();
+template <typename GridT>
+typename GridT::Ptr keptPart(const GridT &joint, const openvdb::BoolTree &kept) {
+    typename GridT::Ptr out = joint.copyWithNewTree();
     auto from = joint.getConstAccessor();
     auto to = out->getAccessor();
     for (auto it = kept.cbeginValueOn(); it; ++it) to.setValue(it.getCoord(), from.getValue(it.getCoord()));
-    openvdb::tools::dilateActiveValues(out->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                       openvdb::tools::EXPAND_TILES);  // the ring: its new voxels hold zeros
     return out;
 }
 
@@ -70,8 +70,16 @@ BakedGrids bakedGridsOf(const BakedGrids &joint, const openvdb::FloatGrid &densi
     const double reach = density.voxelSize()[0] + joint.source[0]->voxelSize()[0];
     const openvdb::BoolTree::Ptr reached = reachedVoxels(density, reach);
     BakedGrids out;
-    const openvdb::BoolTree::Ptr kept = keptSourceVoxels(*joint.source[0], density, *reached);
-    for (std::size_t k = 0; k < BakedGrids::kCount; ++k) out.source[k] = keptPart(*joint.source[k], *kept);
+    const openvdb::BoolTree::Ptr kept = keptVoxels(*joint.source[0], density, *reached);
+    for (std::size_t k = 0; k < BakedGrids::kCount; ++k) {
+        out.source[k] = keptPart(*joint.source[k], *kept);
+        openvdb::tools::dilateActiveValues(out.source[k]->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                           openvdb::tools::EXPAND_TILES);  // the ring: its new voxels hold zeros
+    }
+    if (joint.scatter) {  // kept where the object has its own snow or air beside it; none where that is nowhere
+        out.scatter = keptPart(*joint.scatter, *keptVoxels(*joint.scatter, density, *reached));
+        if (out.scatter->activeVoxelCount() == 0) out.scatter = nullptr;
+    }
     return out;
 }
 

@@ -21,7 +21,9 @@ openvdb::FloatGrid::Ptr unionDensity(const std::vector<openvdb::FloatGrid::Const
 // The union's baked grids where one of its objects reads them: the source voxels whose centre lies within one
 // density voxel plus one source voxel of the object's active density voxels (every voxel its trilinear density
 // and source reach), with the values the union's bake gave them, and a ring of zeros around them (Cycles reads a
-// grid's edge values half a voxel further). Transform and metadata as the union's. No density, empty grids.
+// grid's edge values half a voxel further). Transform and metadata as the union's. No density, empty grids. The
+// union's scatter grid the same way, without the ring (a float grid's edge reads exactly), and none where the kept
+// part has no voxel: where objects overlap each scatters its own extinction's share, and they add up to the union's.
 BakedGrids bakedGridsOf(const BakedGrids &joint, const openvdb::FloatGrid &density);
 
 }  // namespace firn
