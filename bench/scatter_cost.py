@@ -8,6 +8,7 @@ bench/run.sh bench/scatter_cost.py -- [--width 500] [--samples 32] [--spray-fram
 """
 
 import argparse
+import math
 import os
 import sys
 import tempfile
@@ -31,7 +32,8 @@ def parse_args():
 
 
 def scatter_voxels(obj):
-    """The firn_scatter grid's voxels with share > 0 in the Volume's file (its frame's, for a sequence)."""
+    """The firn_scatter grid's active voxels and their bounding box's (what Cycles holds dense) in the Volume's
+    file (its frame's, for a sequence)."""
     from firn.common import cache
     from firn.common.core import firncore
     from firn.material import nodes as materials
@@ -40,48 +42,19 @@ def scatter_voxels(obj):
     if obj.data.is_sequence:
         path = obj.data.grids.frame_filepath
     if materials.SCATTER_GRID not in firncore.grid_names(path):
-        return 0
-    return firncore.grid_statistics(path, materials.SCATTER_GRID)["active_voxels"]
-
-
-def add_scatter_grid(obj, scene):
-    """A core that does not write firn_scatter yet (before branch thin-grid): rule B's voxels
-    (firncore.scatter_voxels, sigma_t h < 2, traced) written into the Volume's file as the bake would."""
-    import pyopenvdb
-    from firn.bake import operators as bake
-    from firn.common import cache
-    from firn.common.core import firncore
-    from firn.material import nodes as materials
-
-    path = obj.data.grids.frame_filepath if obj.data.is_sequence else cache.volume_path(obj.data)
-    if materials.SCATTER_GRID in firncore.grid_names(path):
-        return
-    voxels = firncore.scatter_voxels(path, bake.volume_optics_of(obj), occluders=[], thin_depth=2.0,
-                                     traced_only=True)
-    if not len(voxels):
-        return
-    grids, metadata = pyopenvdb.readAll(path)
-    share = pyopenvdb.FloatGrid()
-    share.name = materials.SCATTER_GRID
-    share.transform = next(grid for grid in grids if grid.name == "density").transform
-    accessor = share.getAccessor()
-    for ijk in voxels:
-        accessor.setValueOn(tuple(int(c) for c in ijk), 1.0)
-    pyopenvdb.write(path, grids=list(grids) + [share], metadata=metadata)
-    cache.reload_grids(obj.data)
-    materials.ensure_snow_material(obj)
+        return 0, 0
+    statistics = firncore.grid_statistics(path, materials.SCATTER_GRID)
+    return statistics["active_voxels"], math.prod(statistics["box_voxels"])
 
 
 def render_both_ways(name, scene, snows, args, folder):
     from firn.bake import operators as bake
     from firn.material import nodes as materials
 
-    for snow in snows:
-        add_scatter_grid(snow, scene)
     bake.scatter_render_settings(scene)  # both ways alike
-    voxels = sum(scatter_voxels(snow) for snow in snows)
+    voxels, box = map(sum, zip(*(scatter_voxels(snow) for snow in snows)))
     forms = {snow.name: materials.material_form(snow) for snow in snows}
-    print(f"{name}: firn_scatter active voxels {voxels}; forms {forms}; volume bounces "
+    print(f"{name}: firn_scatter active voxels {voxels} (box {box}); forms {forms}; volume bounces "
           f"{scene.cycles.volume_bounces}, {args.width} px wide, {args.samples} samples", flush=True)
     for scatter in (False, True):
         for snow in snows:

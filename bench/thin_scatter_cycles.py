@@ -1,7 +1,7 @@
 """Thin snow scattered by Cycles itself (docs/benchmarks.md, thin-ring and thin-cycles): the suite's cases baked by
 firncore, then rendered by Cycles with the add-on's own material in its two forms: BAKED, and BAKED_SCATTER
-(Scatter Thin Snow), which scatters where a `firn_scatter` grid is 1 (rule B of thin-ring: the voxels the bake
-traces of sigma_t h < 2 and the air touching them, `firncore.scatter_voxels`): Principled Volume of k rho share
+(Scatter Thin Snow), which scatters where the bake's `firn_scatter` grid is 1 (rule B of thin-ring: the voxels the
+bake traces of sigma_t h < 2 and the air touching them): Principled Volume of k rho share
 (colour omega, anisotropy g), absorption k rho (1 - share) and the baked emission k rho S (1 - share); its own
 step rate (nodes._SCATTER_STEP_RATE) times the scene's `--step-rate`. Cycles unclamped, `--bounces` volume bounces,
 the camera's background transparent (the suite's reference leaves the sky seen straight through
@@ -42,7 +42,6 @@ def parse_args():
     parser.add_argument("--baked-samples", default="64,1024", help="Cycles samples of the baked material")
     parser.add_argument("--bounces", type=int, default=16, help="volume bounces of the mixed material")
     parser.add_argument("--step-rate", type=float, default=1.0, help="the scene's, times the material's")
-    parser.add_argument("--thin", type=float, default=2.0, help="sigma_t h under which the traced voxels scatter")
     parser.add_argument("--factor", type=int, default=1, help="image pixels per suite block and axis (odd)")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
@@ -52,9 +51,9 @@ def parse_args():
     return args
 
 
-def cycles_copy(core_path, path, voxel, scatter_voxels):
-    """The baked file voxel by voxel (Cycles draws tiles as nothing) in Cycles' convention (translation -voxel/2),
-    plus the firn_scatter grid: 1 on `scatter_voxels`, inactive (0) elsewhere."""
+def cycles_copy(core_path, path, voxel):
+    """The baked file (the bake's firn_scatter among its grids) voxel by voxel (Cycles draws tiles as nothing) in
+    Cycles' convention (translation -voxel/2)."""
     import pyopenvdb
 
     def transform():
@@ -74,12 +73,6 @@ def cycles_copy(core_path, path, voxel, scatter_voxels):
                     for k in range(lo[2], hi[2] + 1):
                         accessor.setValueOn((i, j, k), item["value"])
         grids.append(grid)
-    share = pyopenvdb.FloatGrid()
-    share.name, share.transform = "firn_scatter", transform()  # docs/vdb-contract.md
-    accessor = share.getAccessor()
-    for ijk in scatter_voxels:
-        accessor.setValueOn(tuple(int(c) for c in ijk), 1.0)
-    grids.append(share)
     pyopenvdb.write(path, grids=grids)
 
 
@@ -203,11 +196,11 @@ def main():
         origins, directions, tau, reference, error = run.origins, run.directions, run.tau, run.mean, run.error
         seen = tau >= 1.0
         core_baked = firncore.render_baked(core_path, case.optics, origins, directions, occluders=case.occluders)
-        share = firncore.scatter_voxels(core_path, case.optics, occluders=case.occluders, thin_depth=args.thin,
-                                        traced_only=True)
+        scatter = (firncore.grid_statistics(core_path, firncore.SCATTER_GRID_NAME)["active_voxels"]
+                   if firncore.SCATTER_GRID_NAME in firncore.grid_names(core_path) else 0)
         path = os.path.join(directory, name + ".vdb")
-        cycles_copy(core_path, path, case.voxel, share)
-        print(f"{name}: {case.what}; views {case.views}; {len(share)} firn_scatter voxels "
+        cycles_copy(core_path, path, case.voxel)
+        print(f"{name}: {case.what}; views {case.views}; {scatter} firn_scatter voxels (the bake's) "
               f"({int((case.density > 0).sum())} snow voxels); reference noise "
               f"{100 * np.median(error[seen] / np.maximum(reference[seen], 1e-30)):.1f} %", flush=True)
         print(f"  {'core render_baked':<34} {scores(case, core_baked, reference, seen)}", flush=True)
