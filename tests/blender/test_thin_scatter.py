@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from mathutils import Vector
 
-from bake_helpers import (K, RHO, S, black_world, optics_with, ortho_camera, render, uniform_source, uniform_world,
-                          volume_object, write_volume)
+from bake_helpers import (K, RHO, S, black_world, needs_core_bake, optics_with, ortho_camera, render, uniform_source,
+                          uniform_world, volume_object, write_volume)
 from firn.bake import inputs as bake_inputs, operators as bake, state as bake_state
 from firn.common.core import firncore
 from firn.material import nodes as materials
@@ -111,3 +111,24 @@ def test_scattering_snow_is_the_monte_carlo_of_the_same_snow(clean_scene, tmp_pa
                               np.sqrt((error ** 2).sum(axis=0)) / len(error))
     assert reference.min() > 0.05  # W/m²/sr: light scattered in the slab, not the baked S (5)
     assert np.all(np.abs(cycles_mean - reference) < 4.0 * standard_error), (cycles_mean, reference, standard_error)
+
+
+@needs_core_bake
+def test_a_bake_of_thin_snow_scatters_it_and_sets_the_bounces(clean_scene, tmp_path):
+    """The core's bake marks a thin slab (sigma_t h = 1) for Cycles to scatter; the operator raises the scene's
+    bounces; Clear Bake takes firn_scatter out with the other baked grids."""
+    uniform_world((SKY,) * 3)
+    path = write_volume(f"{tmp_path}/slab.vdb", VOXEL, (-8, -8, -2), (7, 7, 0), THIN_RHO)
+    obj = volume_object(path, "Slab")
+    obj.firn.optics_mode, obj.firn.extinction_per_density = "CUSTOM", THIN_K
+    obj.firn.albedo, obj.firn.anisotropy = ALBEDO, G
+    obj.select_set(True)
+    scene = bpy.context.scene
+    assert scene.cycles.volume_bounces < 16
+    assert bpy.ops.firn.bake_scattering(quality="DRAFT") == {"FINISHED"}
+    assert materials.SCATTER_GRID in firncore.grid_names(path)
+    assert materials.material_form(obj) == "BAKED_SCATTER"
+    assert (scene.cycles.volume_bounces, scene.cycles.max_bounces) == (16, 16)
+    assert tuple(obj.firn.bake_albedo) == pytest.approx(ALBEDO) and obj.firn.bake_anisotropy == pytest.approx(G)
+    assert bpy.ops.firn.clear_bake() == {"FINISHED"}
+    assert materials.SCATTER_GRID not in firncore.grid_names(path)
