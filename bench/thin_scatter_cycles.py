@@ -2,8 +2,8 @@
 firncore, then rendered by Cycles with the add-on's own material in its two forms: BAKED, and BAKED_SCATTER
 (Scatter Thin Snow), which scatters where the bake's `firn_scatter` grid is 1 (rule B of thin-ring: the voxels the
 bake traces of sigma_t h < 2 and the air touching them): Principled Volume of k rho share
-(colour omega, anisotropy g), absorption k rho (1 - share) and the baked emission k rho S (1 - share); its own
-step rate (nodes._SCATTER_STEP_RATE) times the scene's `--step-rate`. Cycles unclamped, `--bounces` volume bounces,
+(colour omega, anisotropy g), absorption k rho (1 - share) and the baked emission k rho S (1 - share); a voxel per
+step times the scene's `--step-rate`. Cycles unclamped, `--bounces` volume bounces,
 the camera's background transparent (the suite's reference leaves the sky seen straight through
 the snow out). Each image is `--factor` (odd) times the suite's pixels with a pixel filter of 0.01 pixel, so
 the middle pixel of each factor x factor group is the suite's camera ray through that block's centre: the blocks

@@ -50,9 +50,6 @@ _BRANCHES = ("", " Grains")  # the node names' suffixes: without and with sub-ba
 _SINGLE_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Absorption", "Firn Single", "Firn Output")
 BAKED_GRIDS = firncore.BAKED_GRID_NAMES  # the core's names (docs/vdb-contract.md), not a copy of them
 SCATTER_GRID = firncore.SCATTER_GRID_NAME  # the share Cycles scatters, in a baked file where some voxel scatters
-# Cycles' step through scattering snow, in voxels: its stepping is biased by the optical depth of a step (+7.7 % at
-# 2, +2.4 % at 0.5: shared notes cycles-volumes.md), and the voxels it scatters in have sigma_t h up to 2.
-_SCATTER_STEP_RATE = 0.25
 
 
 def is_snow_material(material):
@@ -156,8 +153,9 @@ def ensure_snow_material(obj):
     if hasattr(material, "cycles"):
         resolve = obj.firn.sub_balls and obj.firn.sub_ball_resolve and obj.firn.voxel_size > 0.0
         step = obj.firn.sub_ball_radius / obj.firn.voxel_size if resolve else 1.0
-        rate = _SCATTER_STEP_RATE if form == "BAKED_SCATTER" else 1.0
-        material.cycles.volume_step_rate = min(rate, step)  # Cycles steps voxel size x this through the volume
+        # Cycles steps voxel size x this through the volume. A voxel per step in BAKED_SCATTER too: a quarter would
+        # quadruple the steps through all the snow for its few thin voxels (docs/benchmarks.md, thin-material).
+        material.cycles.volume_step_rate = min(1.0, step)
     _write_values(obj, material, form)
     return material
 
