@@ -4,7 +4,7 @@ with the option on (material form BAKED_SCATTER where the bake wrote firn_scatte
 seconds and peak memory (MB, its status line's "Peak"), and the firn_scatter voxels. The same render settings
 both ways (the bake's: volume bounces 16); `--samples` per pixel at `--width` × 9/16 pixels.
 
-bench/run.sh bench/scatter_cost.py -- [--width 500] [--samples 32] [--spray-frames 12] [--scenes car,spray]
+bench/run.sh bench/scatter_cost.py -- [--width 500] [--samples 32] [--spray-frames 6] [--scenes car,spray]
 """
 
 import argparse
@@ -26,7 +26,7 @@ def parse_args():
     parser = argparse.ArgumentParser()
     parser.add_argument("--width", type=int, default=500)
     parser.add_argument("--samples", type=int, default=32)
-    parser.add_argument("--spray-frames", type=int, default=12, help="the skier's run; its last frame is lit")
+    parser.add_argument("--spray-frames", type=int, default=6, help="the skier's run, every frame lit")
     parser.add_argument("--scenes", default="car,spray")
     return parser.parse_args(argv)
 
@@ -39,8 +39,10 @@ def scatter_voxels(obj):
     from firn.material import nodes as materials
 
     path = cache.volume_path(obj.data)
-    if obj.data.is_sequence:
-        path = obj.data.grids.frame_filepath
+    if obj.data.is_sequence:  # the frame's file: the first one's name with the frame's number
+        stem = os.path.splitext(path)[0]
+        digits = len(stem) - len(stem.rstrip("0123456789"))
+        path = f"{stem[:-digits]}{bpy.context.scene.frame_current:0{digits}d}.vdb"
     if materials.SCATTER_GRID not in firncore.grid_names(path):
         return 0, 0
     statistics = firncore.grid_statistics(path, materials.SCATTER_GRID)
@@ -77,15 +79,16 @@ def car_scene(args, folder):
 
 def spray_scene(args, folder):
     import skier
+    from firn.material import nodes as materials
 
     frames = args.spray_frames
     scene, ground, skis = skier.build_scene(frames)
     snow = common.add_snow([ground], depth=skier.SNOW_DEPTH, spacing=0.05, voxel_size=0.02, seed=2)
     spray = skier.add_spray(snow, skis, frames)
-    if bpy.ops.firn.bake_sequence(frame_start=frames, frame_end=frames, quality="DRAFT") != {"FINISHED"}:
-        raise RuntimeError("Bake Sequence failed")
+    skier.bake_light(frames)  # every frame: Blender plays a sequence only whole
     scene.frame_set(frames)
     lit = [obj for obj in scene.objects if obj.type == "VOLUME" and obj.firn.bake_fingerprint]
+    assert all(materials.material_form(obj).startswith("BAKED") for obj in lit)
     print(f"spray frame {frames} of the skier: {spray.firn.spray.summary}", flush=True)
     render_both_ways(f"spray frame {frames}", scene, lit, args, folder)
 
