@@ -399,7 +399,7 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
         if materials.material_form(obj) == "BAKED_SCATTER":
             changed = bake_operators.scatter_render_settings(scene)
             if changed:
-                self.report({"WARNING"}, f"Changed for '{obj.name}''s thin snow: " + "; ".join(changed))
+                self.report({"WARNING"}, f"Changed for the thin snow of '{obj.name}': " + "; ".join(changed))
 
 
 class FIRN_OT_clear_snow_spray(bpy.types.Operator):
