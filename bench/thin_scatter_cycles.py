@@ -1,9 +1,10 @@
 """Thin snow scattered by Cycles itself (docs/benchmarks.md, thin-ring and thin-cycles): the suite's cases baked by
-firncore, then rendered by Cycles with the add-on's baked material and with a mixed one that scatters where a
-`firn_scatter` grid is 1 (rule B of thin-ring: the voxels the bake traces of sigma_t h < 2 and the air touching
-them, `firncore.scatter_voxels`): Volume Scatter of k rho share (colour omega, anisotropy g), absorption
-k rho (1 - share) and the baked emission k rho S (1 - share). Cycles unclamped, `--bounces` volume bounces, a
-small step rate, the camera's background transparent (the suite's reference leaves the sky seen straight through
+firncore, then rendered by Cycles with the add-on's own material in its two forms: BAKED, and BAKED_SCATTER
+(Scatter Thin Snow), which scatters where the bake's `firn_scatter` grid is 1 (rule B of thin-ring: the voxels the
+bake traces of sigma_t h < 2 and the air touching them): Principled Volume of k rho share
+(colour omega, anisotropy g), absorption k rho (1 - share) and the baked emission k rho S (1 - share); a voxel per
+step times the scene's `--step-rate`. Cycles unclamped, `--bounces` volume bounces,
+the camera's background transparent (the suite's reference leaves the sky seen straight through
 the snow out). Each image is `--factor` (odd) times the suite's pixels with a pixel filter of 0.01 pixel, so
 the middle pixel of each factor x factor group is the suite's camera ray through that block's centre: the blocks
 compare one to one with the cached Monte Carlo reference (bench/bake_suite.py's figures: mean |error| over the
@@ -11,7 +12,7 @@ blocks of optical depth >= 1, worst, bias, each view's bias). Noise: the mean |r
 blocks against the render at the most samples. Time: Cycles' wall seconds per render (its threads `--threads`).
 
     bench/run.sh bench/thin_scatter_cycles.py -- [--cases slab_thin_forward,ball_forward] [--samples 64,256,1024]
-        [--baked-samples 64,1024] [--bounces 16] [--step-rate 0.1] [--factor 1] [--threads 2]
+        [--baked-samples 64,1024] [--bounces 16] [--step-rate 1] [--factor 1] [--threads 2]
 """
 
 import argparse
@@ -31,7 +32,6 @@ sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "..", "tests", "blender"))
 from bake_helpers import uniform_world, volume_object  # noqa: E402
 
-SCATTER_GRID = "firn_scatter"  # the proposed contract grid (benchmarks.md, thin-ring)
 
 
 def parse_args():
@@ -41,8 +41,7 @@ def parse_args():
     parser.add_argument("--samples", default="64,256,1024", help="Cycles samples of the mixed material")
     parser.add_argument("--baked-samples", default="64,1024", help="Cycles samples of the baked material")
     parser.add_argument("--bounces", type=int, default=16, help="volume bounces of the mixed material")
-    parser.add_argument("--step-rate", type=float, default=0.1)
-    parser.add_argument("--thin", type=float, default=2.0, help="sigma_t h under which the traced voxels scatter")
+    parser.add_argument("--step-rate", type=float, default=1.0, help="the scene's, times the material's")
     parser.add_argument("--factor", type=int, default=1, help="image pixels per suite block and axis (odd)")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
@@ -52,9 +51,9 @@ def parse_args():
     return args
 
 
-def cycles_copy(core_path, path, voxel, scatter_voxels):
-    """The baked file voxel by voxel (Cycles draws tiles as nothing) in Cycles' convention (translation -voxel/2),
-    plus the firn_scatter grid: 1 on `scatter_voxels`, inactive (0) elsewhere."""
+def cycles_copy(core_path, path, voxel):
+    """The baked file (the bake's firn_scatter among its grids) voxel by voxel (Cycles draws tiles as nothing) in
+    Cycles' convention (translation -voxel/2)."""
     import pyopenvdb
 
     def transform():
@@ -74,59 +73,26 @@ def cycles_copy(core_path, path, voxel, scatter_voxels):
                     for k in range(lo[2], hi[2] + 1):
                         accessor.setValueOn((i, j, k), item["value"])
         grids.append(grid)
-    share = pyopenvdb.FloatGrid()
-    share.name, share.transform = SCATTER_GRID, transform()
-    accessor = share.getAccessor()
-    for ijk in scatter_voxels:
-        accessor.setValueOn(tuple(int(c) for c in ijk), 1.0)
-    grids.append(share)
     pyopenvdb.write(path, grids=grids)
 
 
-def mixed_shader(materials, case):
-    """shade(nodes, links, extinction, suffix, source) for nodes._build: the add-on's Principled Volume of sigma_t
-    share (albedo omega, anisotropy g) plus its baked absorption and emission of sigma_t (1 - share)."""
+def snow_material(obj, case, scatter):
+    """The add-on's own material for the baked file, as after Bake Scattering: its form BAKED_SCATTER (the file
+    has firn_scatter) with Scatter Thin Snow on, BAKED with it off."""
+    from firn.bake import operators as bake, state as bake_state
+    from firn.material import nodes as materials
 
-    def shade(nodes, links, extinction, suffix, source):
-        share = materials._new_node(nodes, "ShaderNodeAttribute", "Firn Scatter", SCATTER_GRID, (-600, -300))
-        share.attribute_type, share.attribute_name = "GEOMETRY", SCATTER_GRID
-        kept = materials._math(nodes, links, "Firn Kept", "SUBTRACT", 1.0, share.outputs["Fac"], (-350, -300))
-        scattered = materials._math(nodes, links, "Firn Scattered", "MULTIPLY", extinction.outputs["Value"],
-                                    share.outputs["Fac"], (-100, -300))
-        unscattered = materials._math(nodes, links, "Firn Unscattered", "MULTIPLY", extinction.outputs["Value"],
-                                      kept, (-100, -500))
-        # sigma_t share, omega of it scattered: the add-on's Principled Volume (absorption colour black)
-        principled = materials._principled(nodes, links, _ExtinctionSocket(scattered), "")
-        principled.node.inputs["Color"].default_value = (*case.omega, 1.0)
-        principled.node.inputs["Anisotropy"].default_value = case.g
-        baked = materials._baked(nodes, links, _ExtinctionSocket(unscattered), suffix, source)
-        add = materials._new_node(nodes, "ShaderNodeAddShader", "Firn Mixed", "", (300, -300))
-        links.new(baked, add.inputs[0])
-        links.new(principled, add.inputs[1])
-        return add.outputs["Shader"]
-
-    return shade
-
-
-class _ExtinctionSocket:
-    """A Math output socket in the shape _baked expects of the extinction node (.outputs["Value"])."""
-
-    def __init__(self, socket):
-        self.outputs = {"Value": socket}
-
-
-def snow_material(obj, materials, case, mixed):
-    material = bpy.data.materials.new(("mixed " if mixed else "baked ") + case.name)
-    material.use_nodes = True
-    shade = mixed_shader(materials, case) if mixed else materials._baked
-    materials._build(material.node_tree, False, shade, materials._view_dependent_source, camera_only=True)
-    material.node_tree.nodes["Firn Extinction"].inputs[1].default_value = case.sigma_t / case.rho
-    obj.data.materials.clear()
-    obj.data.materials.append(material)
+    obj.firn.is_snow = True
+    bake_state.store(obj, {"bench": case.name})  # a bake's fingerprint: the material asks only whether there is one
+    bake.keep_baked_optics(obj.firn, case.optics)
+    obj.firn.scatter_thin = scatter
+    materials.ensure_snow_material(obj)
+    assert materials.material_form(obj) == ("BAKED_SCATTER" if scatter else "BAKED")
 
 
 def scene_for(case, path, args):
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon_utils.enable("firn", default_set=True)  # factory settings leave it off
     uniform_world((case.sky,) * 3)
     scene = bpy.context.scene
     if case.sun > 0.0:
@@ -216,7 +182,6 @@ def main():
 
     sys.modules.setdefault("firncore", firncore)  # bake_suite imports it by name, as outside Blender
     import bake_suite
-    from firn.material import nodes as materials
 
     directory = tempfile.mkdtemp(prefix="firn_thin_cycles_")
     counts = [int(x) for x in args.samples.split(",")]
@@ -231,17 +196,17 @@ def main():
         origins, directions, tau, reference, error = run.origins, run.directions, run.tau, run.mean, run.error
         seen = tau >= 1.0
         core_baked = firncore.render_baked(core_path, case.optics, origins, directions, occluders=case.occluders)
-        share = firncore.scatter_voxels(core_path, case.optics, occluders=case.occluders, thin_depth=args.thin,
-                                        traced_only=True)
+        scatter = (firncore.grid_statistics(core_path, firncore.SCATTER_GRID_NAME)["active_voxels"]
+                   if firncore.SCATTER_GRID_NAME in firncore.grid_names(core_path) else 0)
         path = os.path.join(directory, name + ".vdb")
-        cycles_copy(core_path, path, case.voxel, share)
-        print(f"{name}: {case.what}; views {case.views}; {len(share)} firn_scatter voxels "
+        cycles_copy(core_path, path, case.voxel)
+        print(f"{name}: {case.what}; views {case.views}; {scatter} firn_scatter voxels (the bake's) "
               f"({int((case.density > 0).sum())} snow voxels); reference noise "
               f"{100 * np.median(error[seen] / np.maximum(reference[seen], 1e-30)):.1f} %", flush=True)
         print(f"  {'core render_baked':<34} {scores(case, core_baked, reference, seen)}", flush=True)
 
         snow = scene_for(case, path, args)
-        snow_material(snow, materials, case, mixed=False)
+        snow_material(snow, case, scatter=False)
         for samples in [int(x) for x in args.baked_samples.split(",")]:
             baked, _, seconds = render_views(case, directory, samples, 0, args)
             print(f"  {'Cycles baked, %d spp' % samples:<34} {scores(case, baked, reference, seen)}"
@@ -249,7 +214,7 @@ def main():
         print(f"    Cycles baked / core render_baked - 1: mean |per block| "
               f"{100 * np.abs(baked[seen] / np.maximum(core_baked[seen], 1e-30) - 1).mean():.1f} %, sum "
               f"{100 * (baked[seen].sum() / core_baked[seen].sum() - 1):+.1f} %", flush=True)
-        snow_material(snow, materials, case, mixed=True)
+        snow_material(snow, case, scatter=True)
         renders = {}
         for samples in counts:
             renders[samples], _, seconds = render_views(case, directory, samples, 0, args)

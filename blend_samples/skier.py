@@ -138,4 +138,5 @@ def main():
     print(f"firn sample: total {stages.total():.1f} s")
 
 
-main()
+if __name__ == "__main__":
+    main()

@@ -31,8 +31,13 @@ def baked_slab(directory, source, voxel=0.01, half=20, depth=5, z_top=0, name="S
     obj.firn.optics_mode = "CUSTOM"
     obj.firn.extinction_per_density = K
     signature = dict(bake_inputs.signature(bpy.context, obj), optics=bake_state.optics_digest(obj))
-    bake.adopt_bake(obj, K, signature, "test grids")
+    bake.adopt_bake(obj, optics_with(K), signature, "test grids")
     return obj
+
+
+def optics_with(extinction_per_density, albedo=(0.999, 0.998, 0.99), g=0.85):
+    """The optics a test's grids are baked with (firncore.VolumeOptics)."""
+    return firncore.VolumeOptics(extinction_per_density, albedo, g)
 
 
 def write_volume(path, voxel, lo, hi, density, source=None):

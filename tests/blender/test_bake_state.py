@@ -7,7 +7,8 @@ import os
 import bpy
 import pytest
 
-from bake_helpers import S, add_contract_grids, baked_slab, uniform_source, uniform_world, write_volume
+from bake_helpers import (S, add_contract_grids, baked_slab, optics_with, uniform_source, uniform_world,
+                          write_volume)
 from firn.bake import inputs as bake_inputs, operators as bake, state as bake_state, ui as bake_ui
 from firn.material import nodes as materials
 from firn.common.core import firncore
@@ -163,7 +164,7 @@ def test_regenerated_snow_is_outdated_and_renders_from_its_optics(clean_scene, t
     snow = bpy.context.object
     add_contract_grids(bake_state.snow_path(snow), uniform_source(S))
     signature = dict(bake.bake_inputs.signature(bpy.context, snow), optics=bake_state.optics_digest(snow))
-    bake.adopt_bake(snow, 12.0, signature, "test grids")
+    bake.adopt_bake(snow, optics_with(12.0), signature, "test grids")
     assert state(snow) == ("BAKED", []) and materials.is_baked_material(materials.snow_material(snow))
     assert materials.snow_material(snow).node_tree.nodes["Firn Extinction"].inputs[1].default_value == 12.0
 
@@ -279,7 +280,7 @@ def test_a_bake_is_still_baked_after_saving_and_reopening(clean_scene, tmp_path)
     bpy.ops.firn.add_snow_layer(depth=0.05, spacing=0.05)  # into the session's cache folder
     snow = bpy.context.object
     add_contract_grids(bake_state.snow_path(snow), uniform_source(S))
-    bake.adopt_bake(snow, 12.0, dict(bake.bake_inputs.signature(bpy.context, snow),
+    bake.adopt_bake(snow, optics_with(12.0), dict(bake.bake_inputs.signature(bpy.context, snow),
                                      optics=bake_state.optics_digest(snow)), "test grids")
     assert state(snow) == ("BAKED", [])
     blend = str(tmp_path / "scene.blend")

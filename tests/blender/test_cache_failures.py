@@ -15,7 +15,7 @@ import subprocess
 import bpy
 import pytest
 
-from bake_helpers import S, add_contract_grids, needs_core_bake, uniform_source
+from bake_helpers import S, add_contract_grids, needs_core_bake, optics_with, uniform_source
 from firn.bake import operators as bake, state as bake_state, ui as bake_ui
 from firn.common import cache, preferences
 from firn.material import nodes as materials
@@ -81,7 +81,7 @@ def fake_bake(snow):
     """The baked grids in the snow's file and the add-on's post-bake step, as if Bake Scattering had run."""
     add_contract_grids(bake_state.snow_path(snow), uniform_source(S))
     bake.firncore.verify_file(bake_state.snow_path(snow))  # a full read: pyopenvdb says nothing when its write fails
-    bake.adopt_bake(snow, 12.0, dict(bake.bake_inputs.signature(bpy.context, snow),
+    bake.adopt_bake(snow, optics_with(12.0), dict(bake.bake_inputs.signature(bpy.context, snow),
                                      optics=bake_state.optics_digest(snow)), "test grids")
     assert bake_state.changes(snow) == ("BAKED", [])
 

@@ -27,6 +27,7 @@ BAKE_LABEL = "Bake Scattering"
 REBUILD_ADVICE = ("Regenerate the snow (Firn Snow Layer panel) to write it again, or put the .blend's firn_cache "
                   "folder back beside it and reopen")
 _STAGED_SUFFIX = ".firn-bake.vdb"
+_SCATTER_BOUNCES = 16  # Cycles' volume bounces for snow it scatters (scatter_render_settings)
 
 
 def bake_targets(context):
@@ -135,12 +136,32 @@ def _render_settings(obj):
     return [f"'{obj.name}' volume {change}" for change in changed]
 
 
-def _clamp_warning(scene, jobs):
+def scatter_render_settings(scene):
+    """Sets what Cycles needs to scatter thin snow (material form BAKED_SCATTER) and returns what changed, to be
+    reported: volume bounces >= 16 (forward snow turns the light by a few scatterings: -27 % at 4, -0.7 % at 16;
+    docs/benchmarks.md, thin-ring) and total bounces as many, which cap them."""
+    cycles = getattr(scene, "cycles", None)
+    changed = []
+    if cycles is None:
+        return changed
+    for name, label in (("volume_bounces", "volume bounces"), ("max_bounces", "total bounces")):
+        if getattr(cycles, name) < _SCATTER_BOUNCES:
+            changed.append(f"{label} {getattr(cycles, name)} → {_SCATTER_BOUNCES}")
+            setattr(cycles, name, _SCATTER_BOUNCES)
+    return [f"scene '{scene.name}' {change}" for change in changed]
+
+
+def _clamp_warning(scene, jobs, scattering=False):
     """Baked snow lights its neighbours through their indirect rays, which Cycles' Clamp Indirect limits: say so
-    when the snow may be brighter than the clamp (white snow sends back at most (E_sun + pi L_sky) / pi)."""
+    when the snow may be brighter than the clamp (white snow sends back at most (E_sun + pi L_sky) / pi), or when
+    Cycles scatters thin snow (`scattering`): the forward phase function's sun samples pass any usual clamp, so
+    it darkens that snow too (cycles-volumes.md: g 0.87 peaks at 8.8 /sr)."""
     clamp = getattr(getattr(scene, "cycles", None), "sample_clamp_indirect", 0.0)
     if clamp <= 0.0:
         return None
+    if scattering:
+        return (f"Clamp Indirect ({clamp:g}) darkens the thin snow Cycles scatters (Scatter Thin Snow) and cuts the "
+                "light the snow throws on nearby objects: set 0 (Render Properties > Light Paths > Clamping)")
     brightest = 0.0
     for job in jobs:
         inputs = job["inputs"]
@@ -152,13 +173,14 @@ def _clamp_warning(scene, jobs):
             "light it throws on nearby objects: raise it or set 0 (Render Properties > Light Paths > Clamping)")
 
 
-def _light_warnings(scene, jobs):
-    """What the user should know about the light once it is known (the world rendered)."""
+def _light_warnings(scene, jobs, scattering):
+    """What the user should know about the light once it is known (the world rendered); `scattering`: some
+    baked snow is scattered by Cycles."""
     warnings = []
     if all(not job["inputs"].suns and not job["inputs"].lamps and max(job["inputs"].sky.radiance) <= 0.0
            for job in jobs):
         warnings.append("Nothing lights the snow (no lamp, black world): the bake is black")
-    clamp = _clamp_warning(scene, jobs)
+    clamp = _clamp_warning(scene, jobs, scattering)
     if clamp:
         warnings.append(clamp)
     return warnings
@@ -189,7 +211,7 @@ def _remove_baked_grids(obj):
     if obj.library or volume.library or volume.packed_file is not None or cache.file_problem(volume):
         return
     try:
-        removed = firncore.remove_grids(path, [*materials.BAKED_GRIDS, firncore.SCATTER_GRID_NAME])
+        removed = firncore.remove_grids(path, [*materials.BAKED_GRIDS, materials.SCATTER_GRID])
     except (OSError, ValueError) as error:
         raise UserError(f"Cannot clear the bake of '{obj.name}' ({error}); it stays baked. "
                         f"{cache.WRITE_ADVICE}") from error
@@ -197,15 +219,22 @@ def _remove_baked_grids(obj):
         cache.reload_grids(volume)
 
 
-def adopt_bake(obj, extinction_per_density, signature, summary, proxy_colours=None):
+def keep_baked_optics(settings, baked_optics):
+    """The optics a bake was made with (firncore.VolumeOptics): its material renders with them until the next."""
+    settings.bake_extinction_per_density = baked_optics.extinction_per_density
+    settings.bake_albedo = baked_optics.albedo
+    settings.bake_anisotropy = baked_optics.g
+
+
+def adopt_bake(obj, baked_optics, signature, summary, proxy_colours=None):
     """After the baked grids arrived in obj's file: reload them, remember what the bake was made from (the scene
-    `signature` taken before baking, the file as it is now) and render the snow from the bake; its viewport proxy
-    shows `proxy_colours` (sampled by the worker) or the file's."""
+    `signature` taken before baking, the optics, the file as it is now) and render the snow from the bake; its
+    viewport proxy shows `proxy_colours` (sampled by the worker) or the file's."""
     volume = obj.data
     cache.reload_grids(volume)
     settings = obj.firn
     settings.is_snow = True  # any baked Volume is Firn snow from now on: its optics are in Snow Material
-    settings.bake_extinction_per_density = extinction_per_density
+    keep_baked_optics(settings, baked_optics)
     settings.bake_summary = summary
     bake_state.store(obj, dict(signature, snow=bake_state.snow_digest(obj)))
     materials.ensure_snow_material(obj)
@@ -285,7 +314,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
         return seconds
 
     def apply(self, context, inputs, seconds):
-        baked, changed_settings = [], []
+        baked, changed_settings, scattering = [], [], False
         try:
             for job, duration in zip(inputs["jobs"], seconds):
                 obj = bpy.data.objects.get(job["name"])
@@ -294,14 +323,17 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
                     self.report({"WARNING"}, f"'{job['name']}' or its volume changed during the bake: bake it again")
                     continue
                 os.replace(job["staged"], job["path"])
-                adopt_bake(obj, job["optics"].extinction_per_density, job["signature"],
-                           _summary(inputs["quality"], job["inputs"], duration), job["proxy_colours"])
+                adopt_bake(obj, job["optics"], job["signature"], _summary(inputs["quality"], job["inputs"], duration),
+                           job["proxy_colours"])
                 changed_settings.extend(_render_settings(obj))
+                scattering = scattering or materials.material_form(obj) == "BAKED_SCATTER"
                 baked.append(obj.name)
         finally:
             for job in inputs["jobs"]:
                 _remove(job["staged"])
-        for warning in inputs["warnings"] + _light_warnings(context.scene, inputs["jobs"]):
+        if scattering:
+            changed_settings.extend(scatter_render_settings(context.scene))
+        for warning in inputs["warnings"] + _light_warnings(context.scene, inputs["jobs"], scattering):
             self.report({"WARNING"}, warning)
         if changed_settings:
             self.report({"WARNING"}, "Changed for baked snow: " + "; ".join(changed_settings))

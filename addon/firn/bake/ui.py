@@ -38,6 +38,7 @@ def draw_bake(layout, obj):
     col = layout.column()
     col.row().prop(settings, "bake_quality", expand=True)
     col.prop(settings, "bake_seed")
+    col.prop(settings, "scatter_thin")
     jobs = [job for job in running_jobs() if job.label == BAKE_LABEL]
     row = col.row(align=True)
     if jobs:

@@ -1,4 +1,4 @@
-"""The snow's material, in two forms that share one Firn material per snow object.
+"""The snow's material, in the forms below; one Firn material per snow object.
 
 Optics (before baking): Cycles' Principled Volume driven by the density grid and the object's optics:
 sigma_t = density grid × extinction per density into Density, the single-scattering albedo into Color and g
@@ -15,6 +15,12 @@ object's frame (the grids' space; identity for Firn snow). An absorbing, emittin
 volume renders its emission exactly in Cycles at any step size, and every ray sees it: camera rays (the snow's
 look) and the indirect rays of nearby surfaces (bounce light from the snow). The bake fixes the optics it was
 made with: k is the baked one (obj.firn.bake_extinction_per_density) until the next bake.
+
+Baked with thin snow scattered (BAKED_SCATTER, when the bake wrote a `firn_scatter` grid and Scatter Thin Snow is
+on; docs/vdb-contract.md "Thin snow"): the baked form fed sigma_t (1 - share) plus the Principled Volume of sigma_t
+share with the bake's omega and g, share the grid's value. Cycles path-traces the light where the bake finds the
+snow optically thin (docs/benchmarks.md, thin-ring and thin-cycles): more accurate there, noisier, and it needs
+volume bounces (bake/operators.py scatter_render_settings).
 
 Single scattering (render mode SINGLE, Nishita et al. 1997 Fig. 6 b): camera rays meet the Principled Volume
 (they scatter once and see the lamps and the world directly), every other ray (shadow rays, the ray after the
@@ -34,14 +40,16 @@ from . import optics, structure
 
 _TAG = "firn_snow"  # ID property marking the materials Firn manages
 _BAKED_TAG = "firn_baked"  # ... and those showing a bake
-_FORM_TAG = "firn_form"  # the form a material was built in: OPTICS, SINGLE, BAKED or OPAQUE, "+grains" with sub-balls
+_FORM_TAG = "firn_form"  # the form a material was built in (a key of _FORMS), "+grains" with sub-balls
 _OPTICS_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Output")
 _BAKED_NODES = ("Firn Density", "Firn Extinction", "Firn Absorption", "Firn Emission", "Firn Source",
                 "Firn Source X", "Firn Source Y", "Firn Source Z", "Firn Incoming", "Firn Lobe", "Firn Source Peak",
                 "Firn Source Peak L1", "Firn Peak", "Firn Lobes", "Firn Output")
+_BAKED_SCATTER_NODES = _BAKED_NODES + ("Firn Scatter", "Firn Volume", "Firn Mixed")
 _BRANCHES = ("", " Grains")  # the node names' suffixes: without and with sub-balls
 _SINGLE_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Absorption", "Firn Single", "Firn Output")
 BAKED_GRIDS = firncore.BAKED_GRID_NAMES  # the core's names (docs/vdb-contract.md), not a copy of them
+SCATTER_GRID = firncore.SCATTER_GRID_NAME  # the share Cycles scatters, in a baked file where some voxel scatters
 
 
 def is_snow_material(material):
@@ -72,25 +80,49 @@ def has_baked_grids(volume):
     return set(BAKED_GRIDS) <= {grid.name for grid in volume.grids}
 
 
+def has_scatter_grid(volume):
+    """Whether the Volume's file (a sequence: any of its frames' files) holds the firn_scatter grid."""
+    if volume.is_sequence:
+        try:
+            return any(SCATTER_GRID in _file_grid_names(path) for path in _sequence_paths(cache.volume_path(volume)))
+        except (OSError, ValueError):
+            return False
+    if not volume.grids.is_loaded:
+        volume.grids.load()
+    return SCATTER_GRID in {grid.name for grid in volume.grids}
+
+
+def _sequence_paths(first):
+    """The files of the sequence whose first frame is `first`: the same name but the frame number (Blender's
+    numbering: the last digits of the name)."""
+    folder, name = os.path.split(first)
+    stem, _ = os.path.splitext(name)
+    prefix = stem.rstrip("0123456789")
+    return [os.path.join(folder, other) for other in sorted(os.listdir(folder))
+            if other.startswith(prefix) and other.endswith(".vdb") and other[len(prefix):-4].isdigit()]
+
+
 def _file_grid_names(path):
     """The grid names in a file, read again only when the file changes (panels ask on every redraw)."""
     stat = os.stat(path)
     return _grid_names(path, stat.st_mtime_ns, stat.st_size)
 
 
-@functools.lru_cache(maxsize=64)
+@functools.lru_cache(maxsize=1024)  # a spray's frames
 def _grid_names(path, _mtime_ns, _size):
     return frozenset(firncore.grid_names(path))
 
 
 def material_form(obj):
-    """How the snow renders now: its render mode, with BAKED meaning the bake while its grids are in the file and
+    """How the snow renders now: its render mode, with BAKED meaning the bake while its grids are in the file
+    (BAKED_SCATTER where the bake found thin snow for Cycles to scatter and Scatter Thin Snow is on) and
     brute-force path tracing of the optics (OPTICS) until then."""
     mode = obj.firn.render_mode
     if mode != "BAKED":
         return mode
-    baked = obj.firn.bake_fingerprint and obj.type == "VOLUME" and has_baked_grids(obj.data)
-    return "BAKED" if baked else "OPTICS"
+    if not (obj.firn.bake_fingerprint and obj.type == "VOLUME" and has_baked_grids(obj.data)):
+        return "OPTICS"
+    return "BAKED_SCATTER" if obj.firn.scatter_thin and has_scatter_grid(obj.data) else "BAKED"
 
 
 def ensure_snow_material(obj):
@@ -114,14 +146,16 @@ def ensure_snow_material(obj):
         material.use_nodes = True
         build(material.node_tree, obj.firn.sub_balls)
         material[_FORM_TAG] = key
-        if form == "BAKED":
+        if form in _BAKED_FORMS:
             material[_BAKED_TAG] = 1
         elif _BAKED_TAG in material:
             del material[_BAKED_TAG]
     if hasattr(material, "cycles"):
         resolve = obj.firn.sub_balls and obj.firn.sub_ball_resolve and obj.firn.voxel_size > 0.0
         step = obj.firn.sub_ball_radius / obj.firn.voxel_size if resolve else 1.0
-        material.cycles.volume_step_rate = min(1.0, step)  # Cycles steps voxel size x this through the volume
+        # Cycles steps voxel size x this through the volume. A voxel per step in BAKED_SCATTER too: a quarter would
+        # quadruple the steps through all the snow for its few thin voxels (docs/benchmarks.md, thin-material).
+        material.cycles.volume_step_rate = min(1.0, step)
     _write_values(obj, material, form)
     return material
 
@@ -142,18 +176,16 @@ def refresh_snow_material(obj):
 
 def _write_values(obj, material, form):
     nodes = material.node_tree.nodes
-    if form == "BAKED":
+    if form in _BAKED_FORMS:
         extinction_per_density = obj.firn.bake_extinction_per_density
+        _write_volume_optics(nodes, obj.firn.bake_albedo, obj.firn.bake_anisotropy)  # BAKED_SCATTER's
     elif form in ("OPTICS", "SINGLE"):
         try:
             volume = optics.volume_optics(obj.firn)
         except ValueError:
             return  # the Snow Material panel shows why
         extinction_per_density = volume.extinction_per_density
-        for suffix in _BRANCHES:
-            if f"Firn Volume{suffix}" in nodes:
-                nodes[f"Firn Volume{suffix}"].inputs["Color"].default_value = (*volume.albedo, 1.0)
-                nodes[f"Firn Volume{suffix}"].inputs["Anisotropy"].default_value = volume.g
+        _write_volume_optics(nodes, volume.albedo, volume.g)
     else:
         return
     for suffix in _BRANCHES:
@@ -167,6 +199,14 @@ def _write_values(obj, material, form):
             return  # the Snow Structure panel shows why
         structure.set_inputs(grains, values)
         nodes["Firn Shallow Depth"].inputs[1].default_value = values["Fade End"]
+
+
+def _write_volume_optics(nodes, albedo, g):
+    """omega and g into the Principled Volumes (Color is omega: Absorption Color black)."""
+    for suffix in _BRANCHES:
+        if f"Firn Volume{suffix}" in nodes:
+            nodes[f"Firn Volume{suffix}"].inputs["Color"].default_value = (*albedo, 1.0)
+            nodes[f"Firn Volume{suffix}"].inputs["Anisotropy"].default_value = g
 
 
 def _snow_slot(obj):
@@ -193,12 +233,12 @@ def _new_node(nodes, kind, name, label, location):
 
 
 def _extinction(nodes, links, density, suffix, y):
-    """density (kg/m³) × k (m²/kg) = sigma_t (1/m): the 'Firn Extinction' node (k set by _write_values)."""
+    """density (kg/m³) × k (m²/kg) = sigma_t (1/m): the 'Firn Extinction' node's output (k set by _write_values)."""
     extinction = _new_node(nodes, "ShaderNodeMath", f"Firn Extinction{suffix}", "σt (1/m) = density × m²/kg",
                            (-350, y))
     extinction.operation = "MULTIPLY"
     links.new(density, extinction.inputs[0])
-    return extinction
+    return extinction.outputs["Value"]
 
 
 def _sub_balls(nodes, links, density, y):
@@ -233,7 +273,7 @@ def _sub_balls(nodes, links, density, y):
 
 
 def _build(tree, sub_balls, shade, shared=None, camera_only=False):
-    """A volume material: shade(nodes, links, extinction node, name suffix, shared) -> shader socket, fed sigma_t
+    """A volume material: shade(nodes, links, sigma_t socket, name suffix, shared) -> shader socket, fed sigma_t
     from the density. With sub-balls it is built twice, the second from the grains' density, and a Mix Shader
     chooses by 'Firn Shallow': Cycles skips a mix's unused side, so the grains' texture costs only where they are.
     `camera_only`: only camera rays see the grains (baked light: they keep its mean, so other rays need not)."""
@@ -262,30 +302,30 @@ def _build(tree, sub_balls, shade, shared=None, camera_only=False):
     links.new(shader, output.inputs["Volume"])
 
 
-def _principled(nodes, links, extinction, suffix, _context=None):
+def _principled(nodes, links, sigma_t, suffix, _context=None):
     volume = _new_node(nodes, "ShaderNodeVolumePrincipled", f"Firn Volume{suffix}", "Snow", (-100, 0))
     volume.inputs["Density Attribute"].default_value = ""  # the density arrives through the link only
     volume.inputs["Absorption Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # Color = single-scattering albedo
-    links.new(extinction.outputs["Value"], volume.inputs["Density"])
+    links.new(sigma_t, volume.inputs["Density"])
     return volume.outputs["Volume"]
 
 
-def _absorption(nodes, links, extinction, suffix):
+def _absorption(nodes, links, sigma_t, suffix):
     absorption = _new_node(nodes, "ShaderNodeVolumeAbsorption", f"Firn Absorption{suffix}", "Absorption σt",
                            (-100, 300))
     absorption.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)  # absorbs (1 - Color) × Density = σt
-    links.new(extinction.outputs["Value"], absorption.inputs["Density"])
+    links.new(sigma_t, absorption.inputs["Density"])
     return absorption.outputs["Volume"]
 
 
-def _single(nodes, links, extinction, suffix, _context=None):
+def _single(nodes, links, sigma_t, suffix, _context=None):
     """Camera rays scatter (Principled Volume); every other ray only attenuates (Absorption of all of sigma_t)."""
     path = _new_node(nodes, "ShaderNodeLightPath", f"Firn Light Path{suffix}", "", (-100, 500))
     single = _new_node(nodes, "ShaderNodeMixShader", f"Firn Single{suffix}",
                        "camera rays scatter, others only attenuate", (200, 0))
     links.new(path.outputs["Is Camera Ray"], single.inputs["Fac"])
-    links.new(_absorption(nodes, links, extinction, suffix), single.inputs[1])
-    links.new(_principled(nodes, links, extinction, suffix), single.inputs[2])
+    links.new(_absorption(nodes, links, sigma_t, suffix), single.inputs[1])
+    links.new(_principled(nodes, links, sigma_t, suffix), single.inputs[2])
     return single.outputs["Shader"]
 
 
@@ -430,15 +470,33 @@ def _view_dependent_source(nodes, links):
                         (1400, -600))
 
 
-def _baked(nodes, links, extinction, suffix, source):
+def _baked(nodes, links, sigma_t, suffix, source):
     """Absorption sigma_t + Emission sigma_t S(w): the baked light."""
     emission = _new_node(nodes, "ShaderNodeEmission", f"Firn Emission{suffix}", "Emission σt S(w)", (-100, 0))
     links.new(source, emission.inputs["Color"])
-    links.new(extinction.outputs["Value"], emission.inputs["Strength"])
+    links.new(sigma_t, emission.inputs["Strength"])
     shader = _new_node(nodes, "ShaderNodeAddShader", f"Firn Shader{suffix}", "", (100, 150))
-    links.new(_absorption(nodes, links, extinction, suffix), shader.inputs[0])
+    links.new(_absorption(nodes, links, sigma_t, suffix), shader.inputs[0])
     links.new(emission.outputs["Emission"], shader.inputs[1])
     return shader.outputs["Shader"]
+
+
+def _baked_scatter(nodes, links, sigma_t, suffix, source):
+    """The thin snow scattered by Cycles itself (docs/vdb-contract.md, "Thin snow"): share = the firn_scatter grid,
+    the Principled Volume of sigma_t share (Color omega, Anisotropy g: the bake's, set by _write_values) plus the
+    baked light of sigma_t (1 - share). Where share is 0 (the grid absent too) it is the baked material."""
+    y = -2400 if suffix else -300
+    share = _new_node(nodes, "ShaderNodeAttribute", f"Firn Scatter{suffix}", SCATTER_GRID, (-600, y))
+    share.attribute_type, share.attribute_name = "GEOMETRY", SCATTER_GRID
+    scattered = _math(nodes, links, f"Firn Scattered{suffix}", "MULTIPLY", sigma_t, share.outputs["Fac"],
+                      (-350, y))
+    kept = _math(nodes, links, f"Firn Kept{suffix}", "MULTIPLY", sigma_t,
+                 _math(nodes, links, f"Firn Not Scattered{suffix}", "SUBTRACT", 1.0, share.outputs["Fac"],
+                       (-600, y - 200)), (-350, y - 200))
+    mixed = _new_node(nodes, "ShaderNodeAddShader", f"Firn Mixed{suffix}", "scattered + baked", (300, y))
+    links.new(_principled(nodes, links, scattered, suffix), mixed.inputs[0])
+    links.new(_baked(nodes, links, kept, suffix, source), mixed.inputs[1])
+    return mixed.outputs["Shader"]
 
 
 def _build_optics(tree, sub_balls):
@@ -453,6 +511,10 @@ def _build_baked(tree, sub_balls):
     _build(tree, sub_balls, _baked, _view_dependent_source, camera_only=True)
 
 
+def _build_baked_scatter(tree, sub_balls):
+    _build(tree, sub_balls, _baked_scatter, _view_dependent_source, camera_only=True)
+
+
 def _build_opaque(tree, _sub_balls):
     """No volume: the snow's surface renders it (snow_layer/proxy.py apply_render_surface)."""
     tree.nodes.clear()
@@ -463,5 +525,7 @@ _FORMS = {  # form: (the nodes it must have, its builder)
     "OPTICS": (_OPTICS_NODES, _build_optics),
     "SINGLE": (_SINGLE_NODES, _build_single),
     "BAKED": (_BAKED_NODES, _build_baked),
+    "BAKED_SCATTER": (_BAKED_SCATTER_NODES, _build_baked_scatter),
     "OPAQUE": (("Firn Output",), _build_opaque),
 }
+_BAKED_FORMS = ("BAKED", "BAKED_SCATTER")  # the forms that render a bake

@@ -367,7 +367,7 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
                 kind = lit if self._plays_light(obj, job, lit) else unlit
                 play_sequence(obj, os.path.dirname(obj.data.filepath), kind, job["first"], job["last"])
                 if kind == lit:
-                    self._adopt_light(obj, job)
+                    self._adopt_light(context.scene, obj, job)
                 elif not self.light:  # Bake Light off: the lumps and the tracked snow render unlit
                     obj.firn.bake_fingerprint = obj.firn.bake_summary = ""
                     materials.ensure_snow_material(obj)
@@ -387,16 +387,19 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
             return True
         return False
 
-    def _adopt_light(self, obj, job):
+    def _adopt_light(self, scene, obj, job):
         frames, seconds = job["baked"], job["processor_seconds"]
-        optics = bake_operators.volume_optics_of(obj)
-        obj.firn.bake_extinction_per_density = optics.extinction_per_density
+        bake_operators.keep_baked_optics(obj.firn, bake_operators.volume_optics_of(obj))
         # What a frame cost (docs/user-guide.md: some 28 processor s with occluders at Final, 7 at Draft)
         cost = f"; {sum(seconds) / len(seconds):.1f} processor s a frame" if seconds else ""
         obj.firn.bake_summary = (f"{self.quality.title()} light, frames {job['lit'][0]}-{job['lit'][1]} "
                                  f"({len(frames)} baked now, the others already were{cost})")
         bake_state.store(obj, {"sequence": light.sequence_digest(job["directory"], job["first"], job["last"])})
         materials.ensure_snow_material(obj)
+        if materials.material_form(obj) == "BAKED_SCATTER":
+            changed = bake_operators.scatter_render_settings(scene)
+            if changed:
+                self.report({"WARNING"}, f"Changed for the thin snow of '{obj.name}': " + "; ".join(changed))
 
 
 class FIRN_OT_clear_snow_spray(bpy.types.Operator):
