@@ -360,7 +360,10 @@ glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std
     const glm::dvec3 n = topo.patches[i].normal;
     const glm::dvec3 surface = patchSurface(medium, topo, i);
     const double height = glm::length(patchOutside(medium, topo, i, density) - surface);
-    return surface + height / std::max(glm::dot(n, w), 1.0 / 3.0) * w;
+    // Out of the own ramp down to the sun lobe's least cosine (0.05, 3 degrees): capped at mu 1/3, a flat top's ray
+    // under a sun below 20 degrees started inside its trilinear ramp and crossed it on a long chord (a sun 10 degrees
+    // up -27.8 %, 3 degrees -87.5 % against the core's Monte Carlo; docs/benchmarks.md, grazing-sun).
+    return surface + height / std::max(glm::dot(n, w), 0.05) * w;
 }
 
 // A patch facing away from a beam takes the beam in the ramp above it where the light meets the patch's normal at
