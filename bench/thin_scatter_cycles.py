@@ -33,7 +33,6 @@ sys.path.insert(0, os.path.join(HERE, "..", "tests", "blender"))
 from bake_helpers import uniform_world, volume_object  # noqa: E402
 
 
-
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser()

@@ -120,9 +120,15 @@ def material_form(obj):
     mode = obj.firn.render_mode
     if mode != "BAKED":
         return mode
-    if not (obj.firn.bake_fingerprint and obj.type == "VOLUME" and has_baked_grids(obj.data)):
+    if not shows_bake(obj):
         return "OPTICS"
     return "BAKED_SCATTER" if obj.firn.scatter_thin and has_scatter_grid(obj.data) else "BAKED"
+
+
+def shows_bake(obj):
+    """Whether the snow's bake is in its file (BAKED or BAKED_SCATTER in render mode BAKED). Cheap enough for a
+    panel's redraw, which material_form's scatter check (a spray's every frame file) is not."""
+    return bool(obj.firn.bake_fingerprint) and obj.type == "VOLUME" and has_baked_grids(obj.data)
 
 
 def ensure_snow_material(obj):

@@ -99,7 +99,7 @@ def draw_snow_structure(layout, obj):
     """Render mode, sub-balls and glints of one snow object."""
     settings = obj.firn
     layout.prop(settings, "render_mode")
-    if settings.render_mode == "BAKED" and materials.material_form(obj) == "OPTICS":
+    if settings.render_mode == "BAKED" and not materials.shows_bake(obj):
         layout.label(text="Not baked: path tracing the volume (slow)", icon="INFO")
     layout.prop(settings, "sub_balls")
     col = layout.column(align=True)

@@ -230,7 +230,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const glm::vec3 peak1 = glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part
             peak->peak0[c] += float(p0);
             peak->peak1 += peak1;
-            if (beamLightsRamp(scene, s, glm::dot(n, towardsBeam(scene, s, centre + h * n))))
+            // Read with lamps alone (rampPeaks), so a scene of suns skips the test.
+            if (!scene.lamps.empty() && beamLightsRamp(scene, s, glm::dot(n, towardsBeam(scene, s, centre + h * n))))
                 peak->rampPeak0[c] += float(p0), peak->rampPeak1 += peak1;
         }
         return ReturnedLight{r0 + missed * 3.0 / 7.0, r1 + missed * escape1, sun0 + sunMissed * 3.0 / 7.0,
