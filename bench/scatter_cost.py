@@ -37,12 +37,13 @@ def scatter_voxels(obj):
     from firn.common import cache
     from firn.common.core import firncore
     from firn.material import nodes as materials
+    from firn.spray import files as spray_files
 
-    path = cache.volume_path(obj.data)
-    if obj.data.is_sequence:  # the frame's file: the first one's name with the frame's number
-        stem = os.path.splitext(path)[0]
-        digits = len(stem) - len(stem.rstrip("0123456789"))
-        path = f"{stem[:-digits]}{bpy.context.scene.frame_current:0{digits}d}.vdb"
+    volume = obj.data
+    path = cache.volume_path(volume)
+    if volume.is_sequence:  # the frame's file
+        paths = spray_files.sequence_paths(path, volume.frame_start, volume.frame_duration)
+        path = paths[bpy.context.scene.frame_current - volume.frame_start]
     if materials.SCATTER_GRID not in firncore.grid_names(path):
         return 0, 0
     statistics = firncore.grid_statistics(path, materials.SCATTER_GRID)

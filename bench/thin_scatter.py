@@ -4,9 +4,13 @@ the baked emission elsewhere (`firncore.render_scattering_where_thin`), against 
 references; beside the baked render (`render_baked`), with each render's processor seconds per camera ray.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/thin_scatter.py [--cases a,b] [--thin 1,2,4] [--samples 64,256]
+        [--scales 1,2]
+
+`--scales`: the shares read from voxels that many times the density's (the bake's firn_scatter: SCATTER_SCALE).
 """
 
 import argparse
+import itertools
 import os
 import sys
 import tempfile
@@ -43,6 +47,8 @@ def main():
     parser.add_argument("--samples", default="256", help="paths per camera ray of the scattering render")
     parser.add_argument("--bounces", default="", help="the renderer's volume bounces to try (default: unlimited)")
     parser.add_argument("--traced-only", action="store_true", help="scatter only in voxels the bake traces")
+    parser.add_argument("--scales", default=str(firncore.SCATTER_SCALE),
+                        help="the shares' voxels in density voxels (1: the density's own)")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args()
     print(f"firncore {firncore.__version__}, {firncore.hardware_threads()} threads; per case: mean, worst, bias, "
@@ -59,17 +65,18 @@ def main():
             baked = firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)
             print(row("baked (render_baked)", case, baked, reference, tau, time.perf_counter() - start, len(origins)))
             bounces = [int(x) for x in args.bounces.split(",")] if args.bounces else [1 << 30]
-            for thin in [float(x) for x in args.thin.split(",")]:
-                for samples in [int(x) for x in args.samples.split(",")]:
-                    for bounce in bounces:
-                        start = time.perf_counter()
-                        mixed, _ = firncore.render_scattering_where_thin(
-                            path, case.optics, origins, directions, suns=case.suns(), sky=case.skies(),
-                            occluders=case.occluders, samples=samples, seed=5, thin_depth=thin, bounces=bounce,
-                            traced_only=args.traced_only)
-                        label = f"scatter below {thin:g}, {samples} spp" + (f", {bounce} b" if bounce < 1 << 30 else "")
-                        print(row(label, case, mixed, reference, tau, time.perf_counter() - start, len(origins)),
-                              flush=True)
+            for thin, samples, bounce, scale in itertools.product(
+                    [float(x) for x in args.thin.split(",")], [int(x) for x in args.samples.split(",")], bounces,
+                    [int(x) for x in args.scales.split(",")]):
+                start = time.perf_counter()
+                mixed, _ = firncore.render_scattering_where_thin(
+                    path, case.optics, origins, directions, suns=case.suns(), sky=case.skies(),
+                    occluders=case.occluders, samples=samples, seed=5, thin_depth=thin, bounces=bounce,
+                    traced_only=args.traced_only, scatter_scale=scale)
+                label = (f"scatter below {thin:g}, {samples} spp" + (f", {bounce} b" if bounce < 1 << 30 else "")
+                         + f", x{scale}")
+                print(row(label, case, mixed, reference, tau, time.perf_counter() - start, len(origins)),
+                      flush=True)
 
 
 if __name__ == "__main__":

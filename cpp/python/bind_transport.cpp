@@ -341,6 +341,7 @@ void bindTransport(py::module_ &m) {
         for (std::size_t k = 0; k < firn::BakedGrids::kCount; ++k) names[k] = firn::BakedGrids::kNames[k];
         m.attr("BAKED_GRID_NAMES") = names;
         m.attr("SCATTER_GRID_NAME") = firn::BakedGrids::kScatterName;  // written only where the renderer scatters
+        m.attr("SCATTER_SCALE") = firn::BakedGrids::kScatterScale;      // its voxels per axis, in density voxels
     }
     m.attr("LOBE_MAX_ANISOTROPY") = firn::kMaxLobeAnisotropy;  // the baked lobe's largest k (source_lobe.h)
 
@@ -499,15 +500,16 @@ the emission-absorption integral of the contract's material, up to the first occ
         },
         py::arg("vdb_path"), py::arg("optics"), py::arg("occluders") = py::list(), py::arg("thin_depth") = 2.0,
         py::arg("traced_only") = true, R"doc(
-The voxels (N, 3 index coordinates) where render_scattering_where_thin lets the renderer scatter (share 1): with
-the defaults, the voxels of the SCATTER_GRID_NAME grid that `bake` writes (docs/vdb-contract.md); a bench helper.)doc");
+The density's voxels (N, 3 index coordinates) where render_scattering_where_thin lets the renderer scatter (share
+1): with the defaults, those of the bake's SCATTER_GRID_NAME grid, which holds them coarsened to SCATTER_SCALE
+times the voxel (docs/vdb-contract.md); a bench helper.)doc");
 
     m.def(
         "render_scattering_where_thin",
         [](const std::string &path, const firn::VolumeOptics &optics, const DoubleArray &origins,
            const DoubleArray &directions, const std::vector<firn::SunLight> &suns, const std::optional<firn::Sky> &sky,
            const py::list &occluders, int samples, std::uint64_t seed, double thinDepth, int bounces,
-           bool tracedOnly) {
+           bool tracedOnly, int scatterScale) {
             if (samples < 1 || samples > 1000000) throw firn::InvalidArgument("samples must be between 1 and 1e6");
             OccluderArrays blockers = occludersFrom(occluders);
             const std::vector<firn::Ray> rays = raysFrom(origins, directions);
@@ -515,7 +517,7 @@ the defaults, the voxels of the SCATTER_GRID_NAME grid that `bake` writes (docs/
                 const openvdb::GridPtrVec grids = firn::readGrids(path);
                 const firn::MonteCarloReference reference(sceneFrom(grids, path, optics, suns, {}, sky, std::move(blockers)));
                 return firn::renderScatteringWhereThin(reference, firn::BakedGrids::find(grids), rays, samples, seed,
-                                                       thinDepth, bounces, tracedOnly);
+                                                       thinDepth, bounces, tracedOnly, scatterScale);
             });
             std::vector<firn::Rgb> mean, error;
             for (const auto &e : estimates) mean.push_back(e.mean), error.push_back(e.standardError);
@@ -524,12 +526,14 @@ the defaults, the voxels of the SCATTER_GRID_NAME grid that `bake` writes (docs/
         py::arg("vdb_path"), py::arg("optics"), py::arg("origins"), py::arg("directions"),
         py::arg("suns") = std::vector<firn::SunLight>{}, py::arg("sky") = py::none(), py::arg("occluders") = py::list(),
         py::arg("samples") = 64, py::arg("seed") = 0, py::arg("thin_depth") = 2.0,
-        py::arg("bounces") = 1 << 30, py::arg("traced_only") = false, R"doc(
+        py::arg("bounces") = 1 << 30, py::arg("traced_only") = false,
+        py::arg("scatter_scale") = firn::BakedGrids::kScatterScale, R"doc(
 A baked file rendered as a renderer that scatters in the thin snow would (benchmarks.md, thin-ring): path traced
 in the voxels of optical depth sigma_t h under `thin_depth` (and the air beside them), the baked emission
 elsewhere; `bounces`: the renderer's volume bounces (0: the lights' single scattering only); `traced_only`: only in
-the voxels the bake traces (not the fringes of diffused snow). Returns (mean,
-standard error), each (N, 3) W/m^2/sr, as monte_carlo_radiance.)doc");
+the voxels the bake traces (not the fringes of diffused snow); `scatter_scale`: the shares read trilinearly from
+voxels that many times the density's, as the bake writes SCATTER_GRID_NAME (SCATTER_SCALE; 1: the density's own).
+Returns (mean, standard error), each (N, 3) W/m^2/sr, as monte_carlo_radiance.)doc");
 
     m.def(
         "monte_carlo_radiance",

@@ -3,6 +3,8 @@
 agree with the core's independent Monte Carlo (firncore.monte_carlo_radiance) of the same snow and light. The grids
 are written here, so these tests need no core bake."""
 
+import itertools
+
 import bpy
 import numpy as np
 import pytest
@@ -22,20 +24,24 @@ LO, HI = (-12, -12, -1), (11, 11, 0)  # the slab's voxels (24 x 24 x 2)
 
 
 def thin_slab(directory, share, k, rho, optics, source=S):
-    """A slab with constant baked grids and a firn_scatter grid of `share` over the slab and the air voxels
-    touching it (a bake's rule: docs/vdb-contract.md), taken up by the add-on's post-bake step. The file says it
-    is in Cycles' convention (firn_half_voxel_shift), so the core reads the same snow as Cycles draws."""
+    """A slab with constant baked grids and a firn_scatter grid of `share` as a bake writes it over the slab and
+    the air voxels touching it (docs/vdb-contract.md): on voxels SCATTER_SCALE times the density's, those whose
+    hat touches one of them, each shifted by half its own voxel; taken up by the add-on's post-bake step. The file
+    says it is in Cycles' convention (firn_half_voxel_shift), so the core reads the same snow as Cycles draws."""
     import pyopenvdb
 
     path = write_volume(f"{directory}/thin.vdb", VOXEL, LO, HI, rho, uniform_source(source))
     grids = list(pyopenvdb.readAll(path)[0])
+    scale = firncore.SCATTER_SCALE
+    coarse = pyopenvdb.createLinearTransform(voxelSize=scale * VOXEL)
+    coarse.translate((-scale * VOXEL / 2,) * 3)  # coarse voxel J where density voxel scale J is
     scatter = pyopenvdb.FloatGrid()
-    scatter.name, scatter.transform = materials.SCATTER_GRID, grids[0].transform
+    scatter.name, scatter.transform = materials.SCATTER_GRID, coarse
     accessor = scatter.getAccessor()
-    for i in range(LO[0] - 1, HI[0] + 2):
-        for j in range(LO[1] - 1, HI[1] + 2):
-            for z in range(LO[2] - 1, HI[2] + 2):
-                accessor.setValueOn((i, j, z), share)
+    # The coarse J with |v - scale J| < scale for one of the voxels v = lo - 1 … hi + 1 along each axis.
+    hats = [range(-((scale - lo) // scale), (hi + scale) // scale + 1) for lo, hi in zip(LO, HI)]
+    for J in itertools.product(*hats):
+        accessor.setValueOn(J, share)
     pyopenvdb.write(path, grids=grids + [scatter], metadata={"firn_half_voxel_shift": True})
     obj = volume_object(path, "Snow")
     bpy.context.view_layer.update()

@@ -5,6 +5,7 @@ Oracles: `firncore.monte_carlo_radiance` (all orders, exact Henyey-Greenstein ph
 approximations; seeded, so its noise is fixed), and for a non-absorbing medium under a uniform sky the exact
 isotropic field (every point sees the sky's radiance L from every direction, so the source function is L)."""
 
+import itertools
 import math
 import os
 import sys
@@ -1128,21 +1129,50 @@ def scatter_on(grid):
     return sorted(ijk for ijk, value in values if value > 0.0), {value for _, value in values}
 
 
+def coarse_voxels(voxels, scale):
+    """The voxels of a grid `scale` times coarser (voxel J where fine voxel scale J is) whose trilinear hat touches
+    one of `voxels` (|v - scale J| < scale along every axis)."""
+    out = set()
+    for v in voxels:
+        out.update(itertools.product(*[range(-((scale - 1 - x) // scale), (x + scale - 1) // scale + 1) for x in v]))
+    return sorted(out)
+
+
 def test_a_bake_writes_the_scatter_grid_where_the_renderer_scatters(folder):
-    # slab_thin_forward's voxels are all traced and of sigma_t h 1: the bake's own firn_scatter holds 1 on the voxels
-    # scatter_voxels finds (thin-ring's rule B, from the scene alone), 0 nowhere, on the density's voxels.
+    # slab_thin_forward's voxels are all traced and of sigma_t h 1: the bake's own firn_scatter holds 1 on the coarse
+    # voxels (SCATTER_SCALE times the density's) whose hat touches one scatter_voxels finds (thin-ring's rule B, from
+    # the scene alone; all its snow scatters, so every coarse voxel on snow or air takes 1), 0 nowhere; read as
+    # Cycles reads it (trilinear, through its own transform) it is 1 at each such voxel's centre, 0 three density
+    # voxels away from all of them.
     c, path, _, _ = thin_slab_baked(folder)
     grid = scatter_grid(path)
     assert grid is not None
     on, values = scatter_on(grid)
-    assert on == sorted(map(tuple, firncore.scatter_voxels(path, c.optics, thin_depth=2.0, traced_only=True)))
-    assert len(on) > (c.density > 0).sum() and values == {1.0}
+    scale = firncore.SCATTER_SCALE
+    assert scale == 2
+    fine = sorted(map(tuple, firncore.scatter_voxels(path, c.optics, thin_depth=2.0, traced_only=True)))
+    assert len(fine) > (c.density > 0).sum()
+    assert on == coarse_voxels(fine, scale) and values == {1.0}
     assert grid["firn_scatter_optical_depth"] == 2.0 and grid["firn_units"].startswith("1 ")
     import pyopenvdb
 
     density = pyopenvdb.read(path, "density")
-    assert grid.transform.indexToWorld((3, 5, 7)) == density.transform.indexToWorld((3, 5, 7))
-    assert grid.transform.voxelSize() == density.transform.voxelSize()
+    h, h_s = density.transform.voxelSize()[0], grid.transform.voxelSize()[0]
+    assert h_s == pytest.approx(scale * h)
+    centre = lambda transform, ijk, voxel: np.array(transform.indexToWorld(ijk)) + voxel / 2  # the file's -voxel/2
+    for J in [(3, 5, 7), (-2, 0, 4)]:
+        fine_centre = centre(density.transform, tuple(scale * j for j in J), h)
+        assert centre(grid.transform, J, h_s) == pytest.approx(fine_centre)
+    points = np.array([centre(density.transform, v, h) for v in fine])
+    assert np.all(firncore.sample_grid(path, firncore.SCATTER_GRID_NAME, points) == 1.0)
+    low = np.min(fine, axis=0) - 4
+    near = np.zeros(np.ptp(fine, axis=0) + 9, dtype=bool)
+    near[tuple((np.array(fine) - low).T)] = True
+    for axis in range(3):  # grown by 2 voxels along each axis in turn: within 2 of a scattering voxel on every axis
+        near = np.logical_or.reduce([np.roll(near, d, axis) for d in range(-2, 3)])
+    far = np.argwhere(~near) + low
+    points = np.array([centre(density.transform, tuple(v), h) for v in far])
+    assert len(far) > 0 and np.all(firncore.sample_grid(path, firncore.SCATTER_GRID_NAME, points) == 0.0)
 
 
 def test_the_scatter_grid_goes_with_its_bake(folder):

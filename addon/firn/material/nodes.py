@@ -36,6 +36,7 @@ import bpy
 
 from ..common import cache
 from ..common.core import firncore
+from ..spray import files as spray_files
 from . import optics, structure
 
 _TAG = "firn_snow"  # ID property marking the materials Firn manages
@@ -84,22 +85,13 @@ def has_scatter_grid(volume):
     """Whether the Volume's file (a sequence: any of its frames' files) holds the firn_scatter grid."""
     if volume.is_sequence:
         try:
-            return any(SCATTER_GRID in _file_grid_names(path) for path in _sequence_paths(cache.volume_path(volume)))
+            paths = spray_files.sequence_paths(cache.volume_path(volume), volume.frame_start, volume.frame_duration)
+            return any(SCATTER_GRID in _file_grid_names(path) for path in paths)
         except (OSError, ValueError):
             return False
     if not volume.grids.is_loaded:
         volume.grids.load()
     return SCATTER_GRID in {grid.name for grid in volume.grids}
-
-
-def _sequence_paths(first):
-    """The files of the sequence whose first frame is `first`: the same name but the frame number (Blender's
-    numbering: the last digits of the name)."""
-    folder, name = os.path.split(first)
-    stem, _ = os.path.splitext(name)
-    prefix = stem.rstrip("0123456789")
-    return [os.path.join(folder, other) for other in sorted(os.listdir(folder))
-            if other.startswith(prefix) and other.endswith(".vdb") and other[len(prefix):-4].isdigit()]
 
 
 def _file_grid_names(path):

@@ -26,6 +26,16 @@ def frame_path(directory, frame, kind):
     return spray if kind == "spray" else snow
 
 
+def sequence_paths(first_path, first, count):
+    """The files a Volume sequence plays (operators.play_sequence: scene frame f plays frame f's file), frames
+    first…first + count - 1, of the kind whose frame `first` file is `first_path`; ValueError where no kind's is."""
+    directory, name = os.path.split(first_path)
+    for kind in ("spray", "snow", *LIT_NAMES):
+        if os.path.basename(frame_path(directory, first, kind)) == name:
+            return [frame_path(directory, frame, kind) for frame in range(first, first + count)]
+    raise ValueError(f"{first_path} is not the frame {first} file of a spray")
+
+
 def medium_paths(directory, frame, snow_layer_path, tracked):
     """(snow, lumps) files a frame's light is baked from: its tracked snow where the spray has tracks (`tracked`;
     the file may be simulated only later), else the snow layer's own file (Cut Tracks off), and its lumps."""

@@ -790,6 +790,7 @@ openvdb::FloatGrid::Ptr scatterGrid(openvdb::FloatTree::Ptr shares, const openvd
                                     double extinctionPerDensity, const BakeSettings &settings) {
     auto grid = openvdb::FloatGrid::create(std::move(shares));
     grid->setTransform(density.transform().copy());
+    grid->transform().preScale(double(BakedGrids::kScatterScale));
     grid->setName(BakedGrids::kScatterName);
     grid->insertMeta("firn_units", openvdb::StringMetadata("1 (share of the extinction the renderer scatters)"));
     grid->insertMeta("firn_scatter_optical_depth", openvdb::DoubleMetadata(BakedGrids::kScatterOpticalDepth));

@@ -119,7 +119,8 @@ inline openvdb::Vec3f sourceComponent(const Source &S, int k) {
 openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scale, const openvdb::FloatGrid &density,
                                    double extinctionPerDensity, const BakeSettings &settings);
 
-// BakedGrids::scatter from its tree of shares (scatterShares), on the density's voxels, with the bake's metadata.
+// BakedGrids::scatter from its tree of shares (coarsenedShares), on voxels BakedGrids::kScatterScale times the
+// density's, with the bake's metadata.
 openvdb::FloatGrid::Ptr scatterGrid(openvdb::FloatTree::Ptr shares, const openvdb::FloatGrid &density,
                                     double extinctionPerDensity, const BakeSettings &settings);
 

@@ -162,18 +162,45 @@ openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool
     return scatterShares(medium, bake::thinVoxels(medium, topo).voxels(), thinDepth);
 }
 
+openvdb::FloatTree::Ptr coarsenedShares(const openvdb::FloatTree &shares, const openvdb::FloatTree &density,
+                                        int factor) {
+    if (factor < 1) throw InvalidArgument("scatter shares: coarsening factor must be at least 1");
+    auto coarse = std::make_shared<openvdb::FloatTree>(0.0f);
+    openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*coarse);
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> share(shares), rho(density);
+    for (auto it = shares.cbeginValueOn(); it; ++it) {
+        if (!it.isVoxelValue()) throw InvalidArgument("scatter shares: tiles are not supported");
+        if (!(*it > 0.0f)) continue;
+        const openvdb::Coord c = it.getCoord();
+        // The coarse voxels whose hat touches c: J = c / factor on an axis where it divides, else both neighbours.
+        const openvdb::Coord lo(floorDiv(c.x(), factor), floorDiv(c.y(), factor), floorDiv(c.z(), factor));
+        const openvdb::Coord hi(lo.x() + (c.x() != lo.x() * factor), lo.y() + (c.y() != lo.y() * factor),
+                                lo.z() + (c.z() != lo.z() * factor));
+        for (int x = lo.x(); x <= hi.x(); ++x)
+            for (int y = lo.y(); y <= hi.y(); ++y)
+                for (int z = lo.z(); z <= hi.z(); ++z) {
+                    const openvdb::Coord J(x, y, z), at(factor * x, factor * y, factor * z);
+                    const float value = rho.getValue(at) > 0.0f ? share.getValue(at) : *it;
+                    if (value > 0.0f && !(out.getValue(J) >= value)) out.setValue(J, value);
+                }
+    }
+    return coarse;
+}
+
 std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReference &reference, const BakedGrids &baked,
                                                         const std::vector<Ray> &rays, int samples, std::uint64_t seed,
-                                                        double thinDepth, int bounces, bool tracedOnly) {
+                                                        double thinDepth, int bounces, bool tracedOnly,
+                                                        int shareScale) {
     const Scene &scene = reference.scene();
     const Medium &medium = *scene.medium;
-    const openvdb::FloatTree::Ptr shares = scatterShares(scene, thinDepth, tracedOnly);
+    const openvdb::FloatTree::Ptr shares =
+        coarsenedShares(*scatterShares(scene, thinDepth, tracedOnly), medium.density().tree(), shareScale);
     return estimateMixed(reference, rays, samples, seed, [&] {
         auto share = std::make_shared<openvdb::tree::ValueAccessor<const openvdb::FloatTree>>(*shares);
         auto sampler = std::make_shared<SourceGridsSampler>(medium, baked);
         auto marcher = std::make_shared<Medium::ColumnMarcher>(medium);
-        auto shareAt = [share](const openvdb::Vec3d &ijk) {
-            return double(openvdb::tools::BoxSampler::sample(*share, ijk));
+        auto shareAt = [share, shareScale](const openvdb::Vec3d &ijk) {
+            return double(openvdb::tools::BoxSampler::sample(*share, ijk / double(shareScale)));
         };
         MixedRender mixed;
         mixed.bounces = bounces;

@@ -30,9 +30,11 @@ struct BakedGrids {
     using Values = std::array<openvdb::Vec3f, kCount>;  // the grids' values at a point, in kNames' order
     std::array<openvdb::Vec3fGrid::Ptr, kCount> source;  // in kNames' order
     // The share of the snow's extinction the renderer scatters itself rather than drawing S (scatterShares), on
-    // the density's voxels; null where it scatters nowhere (no grid is written: Cycles' memory holds it densely).
+    // kScatterScale times the density's voxels (coarsenedShares); null where it scatters nowhere (no grid is
+    // written: Cycles' memory holds it densely over its box, an eighth of it at the density's voxels' box).
     static constexpr const char *kScatterName = "firn_scatter";
     static constexpr double kScatterOpticalDepth = 2.0;  // sigma_t h under which traced snow scatters (thin-ring)
+    static constexpr int kScatterScale = 2;              // density voxels per firn_scatter voxel along an axis
     openvdb::FloatGrid::Ptr scatter;
 
     openvdb::GridPtrVec grids() const;  // the six, then the scatter grid where there is one
@@ -128,12 +130,24 @@ openvdb::FloatTree::Ptr scatterShares(const Medium &medium, const std::vector<op
 // The same for a scene not baked here (the benches): the candidates are the voxels its bake would trace, or every
 // snow voxel unless `tracedOnly`.
 openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool tracedOnly);
+// The shares on voxels `factor` times the density's (the firn_scatter grid's, BakedGrids::kScatterScale): coarse
+// voxel J lies where density voxel factor J does; where that voxel holds snow, J takes its share, so snow beside
+// thin snow that does not scatter (a diffused surface's fringe) reads at most 1/2, and only within a voxel; where
+// it is air, J takes the largest share of the density voxels its trilinear hat touches (|c - factor J| < factor
+// along each axis), so the share covers the air ring and the thin voxels' density ramps into it. Measured against the
+// shares on the density's own voxels (docs/benchmarks.md, scatter-coarse): the largest share throughout moved
+// ball_forward's views by -3.6 to +6.1 %, this rule by -1.5 to -0.1 % (the noise: 1 %).
+openvdb::FloatTree::Ptr coarsenedShares(const openvdb::FloatTree &shares, const openvdb::FloatTree &density,
+                                        int factor);
 
 // The render of MixedRender (monte_carlo.h): the renderer scatters, all orders, in the snow of optical depth per
 // voxel sigma_t h under `thinDepth` and in the air voxels beside it, and draws the baked emission elsewhere (the
-// voxels between trilinear). `samples` paths per ray; (mean, standard error) per ray as MonteCarloReference's.
+// voxels between trilinear), the shares read trilinearly from voxels `shareScale` times the density's
+// (coarsenedShares; the bake's firn_scatter: BakedGrids::kScatterScale). `samples` paths per ray; (mean, standard
+// error) per ray as MonteCarloReference's.
 std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReference &reference, const BakedGrids &baked,
                                                         const std::vector<Ray> &rays, int samples, std::uint64_t seed,
-                                                        double thinDepth, int bounces, bool tracedOnly);
+                                                        double thinDepth, int bounces, bool tracedOnly,
+                                                        int shareScale = BakedGrids::kScatterScale);
 
 }  // namespace firn
