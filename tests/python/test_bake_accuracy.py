@@ -1159,12 +1159,13 @@ def test_a_bake_writes_the_scatter_grid_where_the_renderer_scatters(folder):
     density = pyopenvdb.read(path, "density")
     h, h_s = density.transform.voxelSize()[0], grid.transform.voxelSize()[0]
     assert h_s == pytest.approx(scale * h)
-    centre = lambda transform, ijk, voxel: np.array(transform.indexToWorld(ijk)) + voxel / 2  # the file's -voxel/2
+    def centre(transform, ijk, voxel):  # a voxel's centre: the file's grids are shifted by -voxel/2
+        return np.array(transform.indexToWorld(tuple(float(i) for i in ijk))) + voxel / 2
     for J in [(3, 5, 7), (-2, 0, 4)]:
         fine_centre = centre(density.transform, tuple(scale * j for j in J), h)
         assert centre(grid.transform, J, h_s) == pytest.approx(fine_centre)
     points = np.array([centre(density.transform, v, h) for v in fine])
-    assert np.all(firncore.sample_grid(path, firncore.SCATTER_GRID_NAME, points) == 1.0)
+    assert firncore.sample_grid(path, firncore.SCATTER_GRID_NAME, points) == pytest.approx(1.0, abs=1e-6)
     low = np.min(fine, axis=0) - 4
     near = np.zeros(np.ptp(fine, axis=0) + 9, dtype=bool)
     near[tuple((np.array(fine) - low).T)] = True
@@ -1172,7 +1173,8 @@ def test_a_bake_writes_the_scatter_grid_where_the_renderer_scatters(folder):
         near = np.logical_or.reduce([np.roll(near, d, axis) for d in range(-2, 3)])
     far = np.argwhere(~near) + low
     points = np.array([centre(density.transform, tuple(v), h) for v in far])
-    assert len(far) > 0 and np.all(firncore.sample_grid(path, firncore.SCATTER_GRID_NAME, points) == 0.0)
+    # (the world points' rounding leaves weights of order 1e-8 on the neighbours of a coarse voxel's edge)
+    assert len(far) > 0 and np.abs(firncore.sample_grid(path, firncore.SCATTER_GRID_NAME, points)).max() < 1e-6
 
 
 def test_the_scatter_grid_goes_with_its_bake(folder):
