@@ -13,19 +13,18 @@ namespace firn {
 
 namespace {
 
+const openvdb::CoordBBox kLump(openvdb::Coord(0), openvdb::Coord(1));
+
 // A 2 x 2 x 2 lump of sigma_t h 8 of forward scattering snow (as spray_dense's small lumps) under a sun 30 degrees
 // high.
 Scene smallLump() {
-    return test::boxScene(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(1)),
-                          float(8.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.999), 0.85},
+    return test::boxScene(kLump, float(8.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.999), 0.85},
                           glm::dvec3(0.866, 0.0, 0.5));
 }
 
 std::vector<openvdb::Coord> lumpVoxels() {
     std::vector<openvdb::Coord> voxels;
-    for (int x = 0; x < 2; ++x)
-        for (int y = 0; y < 2; ++y)
-            for (int z = 0; z < 2; ++z) voxels.emplace_back(x, y, z);
+    for (const openvdb::Coord &c : kLump) voxels.push_back(c);
     return voxels;
 }
 
