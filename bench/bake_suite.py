@@ -413,7 +413,7 @@ def main():
                              "mean error moves by up to 2 points)")
     parser.add_argument("--mixed", type=int, default=0,
                         help="also the mixed render, as Cycles renders firn_scatter (this many paths per block; "
-                             "1024: the render's own noise about 2.8 %% per block on spray_dense)")
+                             "1024: the render's own noise about 1.8 %% per block on spray_dense)")
     args = parser.parse_args()
     chosen = [c for c in cases() if not args.cases or c.name in args.cases.split(",")]
     cache = None if args.fresh else args.cache
