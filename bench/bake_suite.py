@@ -310,28 +310,42 @@ def baked_case(case, path, cache, quality="FINAL", seed=0, sky_samples=0):
     return out
 
 
-def run_case(case, folder, cache, quality="FINAL", seed=0, sky_samples=0):
+def scored(case, render, mean, seen):
+    """The suite's figures of one render of a case against its reference `mean` over the seen blocks."""
+    per = case.pixels ** 2
+    view_bias = [render[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum() /
+                 max(mean[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum(), 1e-30) - 1.0 for v in range(len(case.views))]
+    m, b = mean[seen], render[seen]
+    relative = b / np.maximum(m, 1e-30) - 1.0
+    return {"mean": float(np.abs(relative).mean()), "worst": float(np.abs(relative).max()),
+            "worst_signed": float(relative.flat[np.abs(relative).argmax()]), "bias": float(b.sum() / m.sum() - 1.0),
+            "relative": relative, "view_bias": view_bias}
+
+
+def run_case(case, folder, cache, quality="FINAL", seed=0, sky_samples=0, mixed=0):
+    """One bake's row; with `mixed` paths per block also its "mixed" row: the bake rendered as Cycles renders the
+    baked material that scatters the bake's thin traced snow itself (firn_scatter; render_scattering_where_thin,
+    rule B, unlimited bounces, the render seeded by the bake's seed), the form users get (docs/benchmarks.md,
+    thin-cycles)."""
     path = os.path.join(folder, case.name + ".vdb")
     run = baked_case(case, path, cache, quality, seed, sky_samples)
     origins, directions, tau, mean, error = run.origins, run.directions, run.tau, run.mean, run.error
     reference_seconds, stats, bake_seconds = run.reference_seconds, run.stats, run.bake_seconds
     baked = firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)
     seen = tau >= 1.0
-    per = case.pixels ** 2
-    view_bias = [baked[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum() /
-                 max(mean[v * per:(v + 1) * per][seen[v * per:(v + 1) * per]].sum(), 1e-30) - 1.0 for v in range(len(case.views))]
-    m, e, b = mean[seen], error[seen], baked[seen]
-    relative = b / np.maximum(m, 1e-30) - 1.0
-    return {
+    out = {
         "case": case.name, "what": case.what, "blocks": int(seen.sum()) * 3,
-        "mean": float(np.abs(relative).mean()), "worst": float(np.abs(relative).max()),
-        "worst_signed": float(relative.flat[np.abs(relative).argmax()]),
-        "bias": float(b.sum() / m.sum() - 1.0), "noise": float(np.median(e / np.maximum(m, 1e-30))),
+        "noise": float(np.median(error[seen] / np.maximum(mean[seen], 1e-30))),
         "bake_s": bake_seconds, "reference_s": reference_seconds, "traced": stats["traced_voxels"], "traced_paths": stats["traced_paths"],
         "light_traced": stats["light_traced_voxels"], "photons": stats["photons"],
-        "trace_cpu_s": stats["cpu_seconds"]["trace"],
-        "relative": relative, "view_bias": view_bias, "views": case.views,
+        "trace_cpu_s": stats["cpu_seconds"]["trace"], "views": case.views, **scored(case, baked, mean, seen),
     }
+    if mixed:
+        render, _ = firncore.render_scattering_where_thin(path, case.optics, origins, directions, suns=case.suns(),
+                                                          sky=case.skies(), occluders=case.occluders, samples=mixed,
+                                                          seed=1000 + seed, traced_only=True)
+        out["mixed"] = {**out, "case": case.name + " (mixed)", **scored(case, render, mean, seen)}
+    return out
 
 
 def over_seeds(runs):
@@ -397,6 +411,9 @@ def main():
     parser.add_argument("--seeds", type=int, default=1,
                         help="bake each case with seeds 0..N-1 and report the means (traced voxels' noise: one seed's "
                              "mean error moves by up to 2 points)")
+    parser.add_argument("--mixed", type=int, default=0,
+                        help="also the mixed render, as Cycles renders firn_scatter (this many paths per block; "
+                             "1024: the render's own noise about 1.8 %% per block on spray_dense)")
     args = parser.parse_args()
     chosen = [c for c in cases() if not args.cases or c.name in args.cases.split(",")]
     cache = None if args.fresh else args.cache
@@ -404,11 +421,19 @@ def main():
         os.makedirs(cache, exist_ok=True)
     print(f"firncore {firncore.__version__}, {firncore.hardware_threads()} threads, {args.quality} quality" +
           (f", {args.sky_samples} sky rays" if args.sky_samples else ""), flush=True)
-    rows = []
+    rows, mixed_rows = [], []
     with tempfile.TemporaryDirectory() as folder:
         for case in chosen:
-            runs = [run_case(case, folder, cache, args.quality, seed, args.sky_samples) for seed in range(args.seeds)]
+            runs = [run_case(case, folder, cache, args.quality, seed, args.sky_samples, args.mixed)
+                    for seed in range(args.seeds)]
             rows.append(over_seeds(runs))
+            if args.mixed:
+                mixed_rows.append(over_seeds([x["mixed"] for x in runs]))
+                m = mixed_rows[-1]
+                print(f"  {m['case']}: mean {100 * m['mean']:.1f} %, worst {100 * m['worst_signed']:+.0f} %, bias "
+                      f"{100 * m['bias']:+.1f} %" + (f", spread {100 * m['spread']:.1f} %" if args.seeds > 1 else "") +
+                      "; per view: " + ", ".join(f"{v} {100 * b:+.0f} %" for v, b in zip(case.views, m["view_bias"])),
+                      flush=True)
             r = rows[-1]
             seeds = ", ".join(f"{100 * x['mean']:.1f}" for x in runs)
             print(f"  {r['case']}: {r['what']}: mean {100 * r['mean']:.1f} %, worst {100 * r['worst_signed']:+.0f} %, "
@@ -429,6 +454,10 @@ def main():
     print()
     print(table(rows, args.markdown))
     print()
+    if mixed_rows:
+        print(f"mixed render ({args.mixed} paths per block; bake s and ref s as above):")
+        print(table(mixed_rows, args.markdown))
+        print()
     worst = max(r["mean"] for r in rows)
     print(f"all cases: largest mean {100 * worst:.1f} %, worst block {100 * max(r['worst'] for r in rows):.0f} %")
 

@@ -9,9 +9,11 @@ bias of the sum, and one seed's squared error per block split into the seeds' va
 as rms over the blocks: the noise more paths remove, the error they do not). Regions by where each pixel's camera
 ray reaches optical depth 1 of snow: sun-lit or shadowed there (the sun's optical depth from that point, under or
 over 2), and the ray's whole optical depth through the snow (a rim or a thin lump: under 20; a lump's core: 20 or
-more); and per view.
+more); and per view. With --mixed N the same for the mixed render (bake_suite.run_case: Cycles scattering the
+bake's thin traced snow, N paths per block), the regions split further by whether the ray reaches depth 1 in a
+voxel the renderer scatters (firncore.scatter_voxels: the bake's firn_scatter).
 
-    PYTHONPATH=build/python python3 bench/suite_regions.py [--case spray_dense] [--seeds 4]
+    PYTHONPATH=build/python python3 bench/suite_regions.py [--case spray_dense] [--seeds 4] [--mixed 1024]
 """
 
 import argparse
@@ -22,6 +24,7 @@ import tempfile
 import numpy as np
 
 import bake_suite
+import firncore
 
 
 def sun_depth(case, points):
@@ -66,6 +69,7 @@ def main():
     parser.add_argument("--case", default="spray_dense")
     parser.add_argument("--seeds", type=int, default=4)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--mixed", type=int, default=0, help="paths per block of the mixed render (0: baked only)")
     args = parser.parse_args()
     if args.seeds < 2:
         parser.error("--seeds must be 2 or more (the spread across seeds)")
@@ -73,25 +77,35 @@ def main():
     origins, directions, tau = bake_suite.views(case)
     seen, lit, core = regions(case, origins, directions, tau)
     with tempfile.TemporaryDirectory() as folder:
-        runs = [bake_suite.run_case(case, folder, args.cache, seed=seed) for seed in range(args.seeds)]
+        runs = [bake_suite.run_case(case, folder, args.cache, seed=seed, mixed=args.mixed) for seed in range(args.seeds)]
         path = os.path.join(folder, case.name + ".vdb")
+        scattered = set(map(tuple, firncore.scatter_voxels(path, case.optics, occluders=case.occluders)))
         bake_suite.write_density(path, case.density, case.voxel)
         reference, _, _ = bake_suite.reference(case, path, origins, directions, args.cache)
+    hits = bake_suite.depth_one_points(case, origins, directions, seen)[seen]
+    thin = np.array([tuple(np.rint(p / case.voxel).astype(int)) in scattered for p in hits])
     reference = reference[seen]
-    relative = np.array([r["relative"] for r in runs])  # seeds x blocks x channels
-    renders = (relative + 1.0) * reference
-    mean_render = renders.mean(0)
-    spread = renders.std(0, ddof=1) / np.maximum(mean_render, 1e-30)
     lit, core = lit[seen], core[seen]
     view = np.repeat(np.arange(len(case.views)), case.pixels ** 2)[seen]
-    print(f"{case.name}, {args.seeds} seeds: one seed's means " + ", ".join(f"{100 * r['mean']:.1f}" for r in runs) + " %")
-    groups = [("all", np.ones(len(reference), bool)),
-              ("lit, core (tau >= 20)", lit & core), ("lit, rim or thin (tau < 20)", lit & ~core),
-              ("shadowed, core", ~lit & core), ("shadowed, rim or thin", ~lit & ~core)]
-    groups += [(f"view {v}", view == i) for i, v in enumerate(case.views)]
-    for label, where in groups:
-        if where.any():
-            print(row(label, relative[:, where], spread[where], mean_render[where], reference[where]), flush=True)
+    forms = [("baked", runs)] + ([(f"mixed, {args.mixed} paths", [r["mixed"] for r in runs])] if args.mixed else [])
+    for form, chosen in forms:
+        relative = np.array([r["relative"] for r in chosen])  # seeds x blocks x channels
+        renders = (relative + 1.0) * reference
+        mean_render = renders.mean(0)
+        spread = renders.std(0, ddof=1) / np.maximum(mean_render, 1e-30)
+        print(f"{case.name} {form}, {args.seeds} seeds: one seed's means " +
+              ", ".join(f"{100 * r['mean']:.1f}" for r in chosen) + " %")
+        groups = [("all", np.ones(len(reference), bool)),
+                  ("lit, core (tau >= 20)", lit & core), ("lit, rim or thin (tau < 20)", lit & ~core),
+                  ("shadowed, core", ~lit & core), ("shadowed, rim or thin", ~lit & ~core)]
+        if args.mixed:
+            groups += [("depth 1 in scattered voxels", thin), ("  of them lit", thin & lit),
+                       ("depth 1 in baked, core", ~thin & core), ("depth 1 in baked, rim", ~thin & ~core),
+                       ("  baked, lit", ~thin & lit), ("  baked, shadowed", ~thin & ~lit)]
+        groups += [(f"view {v}", view == i) for i, v in enumerate(case.views)]
+        for label, where in groups:
+            if where.any():
+                print(row(label, relative[:, where], spread[where], mean_render[where], reference[where]), flush=True)
 
 
 if __name__ == "__main__":

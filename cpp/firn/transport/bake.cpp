@@ -389,7 +389,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                     if (traced.source.empty()) {
                         local.tracedPaths = plan.paths;
                         if (plan.paths > 0 || thin.empty())
-                            traced = traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress);
+                            traced = traceSources(scene, thin, plan.paths, settings.seed ^ 0x7EACEull, progress,
+                                                  plan.drawnPaths);
                         else if (settings.lightTracing)
                             traced = lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local,
                                                        kMaxTracedSteps, preset.lightTracingShare);

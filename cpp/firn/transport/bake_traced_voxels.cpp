@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/transport/bake_thin_snow.h"
+#include "firn/transport/baked_grids.h"
 #include "firn/transport/incident_light.h"
 #include "firn/transport/light_tracing.h"
 #include "firn/transport/monte_carlo.h"
@@ -58,6 +59,22 @@ constexpr double kShortPathSteps = 1000.0, kShortTracedSteps = 8e7;  // about 5 
 // being gathered where seen (visible-source: 10.1 -> 10.0 %).
 constexpr double kMinLightTracedG = 0.8, kLightTracedShare = 0.75, kMaxLightTracedTau = 10.0;
 
+// Where the plan holds the preset's paths, the voxels the renderer draws (drawnByRenderer) take twice as many, up to
+// the preset's cheapTracedSamples, while those extra paths cost at most kDrawnExtraSteps (priced apart from the
+// budget, which the faces then share as before). With Cycles scattering the thin traced snow itself (firn_scatter)
+// the lumps' thicker voxels are what it draws, and their 256-path estimates read the lit side dark (the lobe-pair fit
+// on noisy moments, docs/benchmarks.md dense-lumps): spray_dense over seeds 0-3, mixed render 11.28 -> 10.31 %, baked
+// 16.58 -> 15.75 %, the lit cores -15.6 -> -12.9 %, the trace 3.2 -> 5.1 processor s (its 237 drawn voxels' extra
+// 8.1e7 pilot steps); the scattered voxels' paths buy nothing there (docs/benchmarks.md, spray-light).
+constexpr int kDrawnPathShare = 2;
+constexpr double kDrawnExtraSteps = 1e8;  // about 2.4 processor seconds on spray_dense's long paths
+
+// Whether the renderer draws the voxel's baked emission rather than scattering in it where the bake traces it
+// (scatterShares: sigma_t h under BakedGrids::kScatterOpticalDepth scatters).
+bool drawnByRenderer(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &voxel) {
+    return !(voxelOpticalDepth(medium, density, voxel) < BakedGrids::kScatterOpticalDepth);
+}
+
 }  // namespace
 
 namespace {
@@ -97,7 +114,15 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
     const double cheap = perPath <= kShortPathSteps ? kShortTracedSteps : kCheapTracedSteps;
     while (2 * samples <= preset.cheapTracedSamples && perPath * 2.0 * samples * double(voxels.size()) <= cheap)
         samples *= 2;
-    return {samples, perPath * samples * double(voxels.size())};
+    int drawnPaths = samples;
+    if (samples >= preset.tracedSamples && kDrawnPathShare * samples <= preset.cheapTracedSamples) {
+        const auto drawn = std::count_if(voxels.begin(), voxels.end(), [&](const openvdb::Coord &c) {
+            return drawnByRenderer(*scene.medium, density, c);
+        });
+        if (perPath * (kDrawnPathShare - 1) * samples * double(drawn) <= kDrawnExtraSteps)
+            drawnPaths = kDrawnPathShare * samples;
+    }
+    return {samples, perPath * samples * double(voxels.size()), drawnPaths};
 }
 
 namespace {
@@ -135,12 +160,13 @@ MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::v
 
 // The source function of the given voxels by brute force (MonteCarloReference::sourceIn), `samples` each.
 MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
-                              std::uint64_t seed, const SubProgress &progress) {
+                              std::uint64_t seed, const SubProgress &progress, int drawnSamples) {
     const MonteCarloReference reference(scene);
     const Medium &medium = *scene.medium;
     return tracedVoxels(reference, voxels, [&](std::size_t v) {
             Medium::Accessor density = medium.accessor();
-            return reference.sourceIn(voxels[v], samples, seed, v, gathering(medium, density, voxels[v]));
+            const int paths = drawnSamples > 0 && drawnByRenderer(medium, density, voxels[v]) ? drawnSamples : samples;
+            return reference.sourceIn(voxels[v], paths, seed, v, gathering(medium, density, voxels[v]));
         }, progress);
 }
 

@@ -59,15 +59,19 @@ constexpr double kWholePieceTracedSteps = kMaxTracedSteps / 4.0;
 // How the traced voxels are gathered: paths per voxel within the budget (0: over it) and what they cost.
 struct GatheringPlan {
     int paths = 0;       // per voxel; 0: none (over the budget)
-    double steps = 0.0;  // what they all cost, in tracking steps (the pilot's)
+    double steps = 0.0;  // what they all cost at `paths`, in tracking steps (the pilot's)
+    // Per voxel the renderer draws rather than scatters (drawnByRenderer); 0: `paths`. Its paths beyond `paths` are
+    // priced apart (kDrawnExtraSteps), not in `steps`.
+    int drawnPaths = 0;
 };
 // The paths per voxel to gather `voxels` with, their cost per path measured on a few of them first.
 GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                             std::uint64_t seed);
 
-// The voxels' sources gathered by brute force, `samples` paths each.
+// The voxels' sources gathered by brute force, `samples` paths each, `drawnSamples` (0: `samples`) those the renderer
+// draws rather than scatters (drawnByRenderer).
 MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int samples,
-                              std::uint64_t seed, const SubProgress &progress);
+                              std::uint64_t seed, const SubProgress &progress, int drawnSamples = 0);
 
 // Which traced voxels' faces gather their own source (addFaceSources), and at what cost.
 struct FaceGathering {

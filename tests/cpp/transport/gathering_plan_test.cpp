@@ -1,0 +1,56 @@
+// The traced voxels' paths (bake_traced_voxels.h, planGathering): where the plan holds the preset's paths, the voxels
+// the renderer draws rather than scatters (sigma_t h at least BakedGrids::kScatterOpticalDepth) take twice as many, up
+// to the preset's cheap paths; none more where the budget already cuts the paths.
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "box_scene.h"
+#include "firn/transport/bake_preset.h"
+#include "firn/transport/bake_traced_voxels.h"
+
+namespace firn {
+
+namespace {
+
+const openvdb::CoordBBox kLump(openvdb::Coord(0), openvdb::Coord(1));
+
+// A 2 x 2 x 2 lump of sigma_t h 8 of forward scattering snow (as spray_dense's small lumps) under a sun 30 degrees
+// high.
+Scene smallLump() {
+    return test::boxScene(kLump, float(8.0 / (10.0 * test::kBoxVoxel)), VolumeOptics{10.0, Rgb(0.999), 0.85},
+                          glm::dvec3(0.866, 0.0, 0.5));
+}
+
+std::vector<openvdb::Coord> lumpVoxels() {
+    std::vector<openvdb::Coord> voxels;
+    for (const openvdb::Coord &c : kLump) voxels.push_back(c);
+    return voxels;
+}
+
+// FINAL's preset but for its traced paths and the cheap paths' cap.
+bake::Preset preset(int traced, int cheap) { return {9, 4, 1e-5, 0, 1, traced, cheap, true, 1.0}; }
+
+}  // namespace
+
+TEST(GatheringPlan, TheVoxelsTheRendererDrawsTakeTwiceThePaths) {
+    const bake::GatheringPlan plan = bake::planGathering(smallLump(), preset(64, 1 << 20), lumpVoxels(), 1);
+    ASSERT_GE(plan.paths, 64);
+    EXPECT_EQ(plan.drawnPaths, 2 * plan.paths);
+}
+
+TEST(GatheringPlan, TheDrawnVoxelsStayWithinTheCheapPathsCap) {
+    const bake::GatheringPlan plan = bake::planGathering(smallLump(), preset(64, 64), lumpVoxels(), 1);
+    ASSERT_EQ(plan.paths, 64);
+    EXPECT_EQ(plan.drawnPaths, 64);
+}
+
+// A preset asking more paths than the budget affords: the plan is cut, and the drawn voxels take no more.
+TEST(GatheringPlan, NoMorePathsWhereTheBudgetCutsThem) {
+    const bake::GatheringPlan plan = bake::planGathering(smallLump(), preset(1 << 30, 1 << 30), lumpVoxels(), 1);
+    ASSERT_GT(plan.paths, 0);
+    ASSERT_LT(plan.paths, 1 << 30);
+    EXPECT_EQ(plan.drawnPaths, plan.paths);
+}
+
+}  // namespace firn
