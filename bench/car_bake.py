@@ -4,13 +4,20 @@ on all the cores firncore sees, each bake in a fresh process (bench/bake_measure
 
     bench/run.sh bench/car_scene.py -- FOLDER          # once: writes the car's bake inputs (Blender)
     PYTHONPATH=build/python /usr/bin/python3 bench/car_bake.py FOLDER [repeats [seed]]
+
+Each bake reads a fresh copy of FOLDER's density (the core rewrites the file it bakes), and is followed by the slab
+of bench/bake_scaling.py at 1 M voxels: the car's processor µs per active voxel over the slab's, measured side by
+side so that the shared machine's load cancels (issue 10 item 4's ratio).
 """
 
 import os
+import shutil
 import sys
+import tempfile
 import time
 
 import bake_measure
+import bake_scaling
 
 
 def bake_car(folder, seed=0):
@@ -27,7 +34,14 @@ def bake_car(folder, seed=0):
     sky = firncore.Sky(tuple(inputs["sky_radiance"]), inputs["sky_map"] if "sky_map" in inputs else None)
     occluders = [(inputs[f"occluder_{k}_vertices"], inputs[f"occluder_{k}_triangles"],
                   tuple(inputs[f"occluder_{k}_albedo"])) for k in range(int(inputs["occluders"]))]
-    path = os.path.join(folder, "car_density.vdb")
+    with tempfile.TemporaryDirectory() as scratch:
+        path = shutil.copy(os.path.join(folder, "car_density.vdb"), scratch)
+        return bake_copy(path, optics, suns, sky, occluders, seed)
+
+
+def bake_copy(path, optics, suns, sky, occluders, seed):
+    import firncore
+
     started = time.perf_counter()
     stats = firncore.bake(path, optics, suns=suns, sky=sky, occluders=occluders, quality="FINAL", seed=seed)
     stats["bake_call_seconds"] = time.perf_counter() - started  # the file read, baked and written, as Blender's call
@@ -57,6 +71,13 @@ def main():
                                      ("cpu", r["cpu_seconds_total"], r.get("cpu_seconds", {}))):
             print(f"{label:>5} {total:>8.2f} {1e6 * total / voxels:>8.2f}  " +
                   " ".join(f"{value:>8.2f}" for value in phases.values()), flush=True)
+        with tempfile.TemporaryDirectory() as scratch:
+            path = os.path.join(scratch, "slab.vdb")
+            slab_voxels = bake_scaling.bumpy_layer(path, 1_000_000)
+            slab = bake_measure.measure_fresh(bake_scaling.bake_layer, path)
+        car_us, slab_us = 1e6 * r["cpu_seconds_total"] / voxels, 1e6 * slab["cpu_seconds_total"] / slab_voxels
+        print(f"slab {slab_voxels} active voxels: cpu {slab['cpu_seconds_total']:.2f} s, {slab_us:.2f} us/voxel; "
+              f"car / slab {car_us / slab_us:.2f}x", flush=True)
 
 
 if __name__ == "__main__":
