@@ -47,7 +47,6 @@ struct Reflection {
     struct Bin {
         double R, measure;  // R / A; projected solid angle / pi (both signs of the azimuth)
         double mu, forward;  // bin centre: cos(zenith) and t . w
-        double weight;       // the fit's: measure, less where cameras do not look (fitSunPeak)
     };
     double albedo = 0.0;
     std::vector<Bin> bins;
@@ -86,7 +85,7 @@ Reflection halfSpaceReflection(double g, double mu0, double y, long photons, std
         const double measure = 2.0 * dPhi * 0.5 * (muHi * muHi - muLo * muLo) / kPi;  // both signs of phi
         for (int p = 0; p < kPhiBins; ++p) {
             const double R = counts[m * kPhiBins + p] / photons / measure + deepReturn / photons * escapeFunction(mu);
-            out.bins.push_back({R / out.albedo, measure, mu, std::sqrt(1.0 - mu * mu) * std::cos((p + 0.5) * dPhi), measure});
+            out.bins.push_back({R / out.albedo, measure, mu, std::sqrt(1.0 - mu * mu) * std::cos((p + 0.5) * dPhi)});
         }
     }
     return out;
@@ -95,8 +94,8 @@ Reflection halfSpaceReflection(double g, double mu0, double y, long photons, std
 // The linear form's basis functions beside the constant: mu - 2/3 and t . w (no flux of their own).
 std::array<double, 2> linearBasis(const Reflection::Bin &bin) { return {bin.mu - 2.0 / 3.0, bin.forward}; }
 
-// Least squares in relative error of R / A - 1 - sum_j x_j f_j(bin) over the bins, weighted by their weight (projected
-// solid angle) and reweighted by the current fit rather than by the noisy bins (weighting by 1 / R_bin^2 would favour
+// Least squares in relative error of R / A - 1 - sum_j x_j f_j(bin) over the bins, weighted by projected solid
+// angle and reweighted by the current fit rather than by the noisy bins (weighting by 1 / R_bin^2 would favour
 // bins that happen to have few photons). Returns the relative error's weighted sum of squares.
 template <int N, typename Basis>
 double fitRelative(const Reflection &r, const Basis &basis, std::array<double, N> &x) {
@@ -111,8 +110,8 @@ double fitRelative(const Reflection &r, const Basis &basis, std::array<double, N
             double fit = 1.0;
             for (int j = 0; j < N; ++j) fit += x[j] * f[j];
             fit = std::max(0.05, fit);
-            const double w = iteration == 0 ? bin.weight : bin.weight / (fit * fit), res = bin.R - 1.0;
-            error += bin.weight * (bin.R - fit) * (bin.R - fit) / (fit * fit);
+            const double w = iteration == 0 ? bin.measure : bin.measure / (fit * fit), res = bin.R - 1.0;
+            error += bin.measure * (bin.R - fit) * (bin.R - fit) / (fit * fit);
             for (int j = 0; j < N; ++j) {
                 for (int l = 0; l < N; ++l) m[j][l] += w * f[j] * f[l];
                 m[j][N] += w * f[j] * res;
@@ -136,14 +135,11 @@ std::pair<std::array<double, 2>, double> fitLinear(const Reflection &r) {
     return {x, error};
 }
 
-// The peaks the fit chooses from: k and elevation on a grid (the horizon, then from kMinPeakElevationDegrees up).
+// The peaks the fit chooses from: k and elevation on a grid (the horizon, at grazing sun only, then from
+// kMinPeakElevationDegrees up).
 constexpr int kPeakKs = 14, kPeakElevations = 14;
 double peakK(int i) { return 0.3 + 0.05 * i; }
 double peakElevation(int j) { return j == 0 ? 0.0 : (kMinPeakElevationDegrees + 5.0 * (j - 1)) * kPi / 180.0; }
-
-// At grazing sun (sun_lobe.h, kGrazingSunMu0) the fit weighs the exits under 10 degrees (sin 10 deg = 0.174) by
-// 0.1: a camera sees them only through the surface's density ramp, whose own single scattering holds them (Method 7).
-constexpr double kSeenExitMu = 0.174, kUnseenExitWeight = 0.1;
 
 // A peak's shape over the bins, scaled to exitance 1 (over pi): bin b's mean radiance (over projected solid
 // angle) of lobeRadiance(mean, 3 k m, w), m at `elevation` above the horizon towards the sun's travel. Bin means
@@ -199,12 +195,9 @@ SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t s
 }
 
 SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t seed) {
-    Reflection r = halfSpaceReflection(g, mu0, y, photons, seed);
+    const Reflection r = halfSpaceReflection(g, mu0, y, photons, seed);
     SunPeak best;
     if (r.albedo <= 0.0) return best;
-    if (mu0 < kGrazingSunMu0)
-        for (Reflection::Bin &bin : r.bins)
-            if (bin.mu < kSeenExitMu) bin.weight *= kUnseenExitWeight;
     // R / A = share peak + (1 - share) (a + b (mu - 2/3) + c t . w), with a = 1: linear in share, (1 - share) b
     // and (1 - share) c for each peak (k, elevation), which a search over both chooses.
     auto [linear, least] = fitLinear(r);

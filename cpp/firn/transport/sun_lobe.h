@@ -38,7 +38,7 @@ constexpr double kMinPeakElevationDegrees = 5.0;  // the axis above the horizon:
 // Below this sun cosine (a sun under 11.5 deg) the half-space's first order peaks at grazing exit, narrower than a
 // lobe about an axis 5 deg up follows: fitted so, the lobe lowered its k and its flank carried the peak up to where
 // cameras look (towards the sun +30 to +80 % over flat snow; docs/benchmarks.md, grazing-peak). There the axis may lie
-// on the horizon and the fit weighs the exits under 10 deg, which cameras see only through the surface's ramp, less.
+// on the horizon (docs/benchmarks.md, grazing-refit).
 constexpr double kGrazingSunMu0 = 0.2;
 constexpr double kMaxPeakShare = 0.9;
 // sunPeak fades the split into the sun lobe alone (share 0, SunLobe's b and c) between these sun cosines.

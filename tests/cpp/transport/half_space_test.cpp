@@ -145,9 +145,9 @@ TEST(SunPeak, KeepsTheFluxAndHoldsTheGrazingForwardReturn) {
 // lobe about an axis above the horizon; the split must not carry that peak up to where cameras look. R / A over
 // 30 deg exits (mu 0.4-0.6) towards the sun's travel, across it and back, and from above (mu > 0.9), for the issue's
 // snow (omega 0.98, g 0.85), against a fresh Monte Carlo of the half-space (walkPhoton, all orders). Measured
-// forwards: +50 % with the axis held 5 deg up (k 0.79, its flank; docs/benchmarks.md, grazing-peak), +37 % with it on
-// the horizon and the exits under 10 deg weighed less (a fit at this snow itself +25 %: the rest is the table's
-// interpolation between its nodes); across, back and from above within 5 %.
+// forwards: +50 % with the axis held 5 deg up (k 0.79, its flank; docs/benchmarks.md, grazing-peak), +37 % with it
+// allowed on the horizon (a fit at this snow itself +25 to +37 %: the table interpolates between its nodes); across
+// -5 %, back +10 %, from above +1 %.
 TEST(SunPeak, AtGrazingSunKeepsTheGrazingPeakFromTheExitsCamerasSee) {
     const double g = 0.85, mu0 = 0.1, omega = 0.98, y = absorptionParameter(omega, g);
     const SunPeak peak = sunPeak(g, mu0, y, sunLobe(g, mu0, y));
