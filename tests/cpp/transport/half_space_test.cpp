@@ -145,9 +145,9 @@ TEST(SunPeak, KeepsTheFluxAndHoldsTheGrazingForwardReturn) {
 // lobe about an axis above the horizon; the split must not carry that peak up to where cameras look. R / A over
 // 30 deg exits (mu 0.4-0.6) towards the sun's travel, across it and back, and from above (mu > 0.9), for the issue's
 // snow (omega 0.98, g 0.85), against a fresh Monte Carlo of the half-space (walkPhoton, all orders). Measured
-// forwards: +50 % with the axis held 5 deg up (k 0.79, its flank; docs/benchmarks.md, grazing-peak), +37 % with it
-// allowed on the horizon (a fit at this snow itself +25 to +37 %: the table interpolates between its nodes); across
-// -5 %, back +10 %, from above +1 %.
+// forwards: +53 % with the axis held 5 deg up (k 0.79, its flank; docs/benchmarks.md, grazing-peak), +45 % with it
+// allowed down to 2.5 deg (+37 % on the horizon, which a ball's limb paid for; grazing-refit); back +11 %, from
+// above +1 %, across under.
 TEST(SunPeak, AtGrazingSunKeepsTheGrazingPeakFromTheExitsCamerasSee) {
     const double g = 0.85, mu0 = 0.1, omega = 0.98, y = absorptionParameter(omega, g);
     const SunPeak peak = sunPeak(g, mu0, y, sunLobe(g, mu0, y));
@@ -189,7 +189,7 @@ TEST(SunPeak, AtGrazingSunKeepsTheGrazingPeakFromTheExitsCamerasSee) {
         const double measure = 0.5 * (region.muHi * region.muHi - region.muLo * region.muLo) *
                                2.0 * (region.phiHi - region.phiLo) / kPi;  // projected solid angle over pi
         const double exact = double(counts[r]) / returned / measure, held = split(region);
-        EXPECT_LT(held, (r == 0 ? 1.45 : 1.15) * exact) << "region " << r << " exact " << exact;
+        EXPECT_LT(held, (r == 0 ? 1.5 : 1.15) * exact) << "region " << r << " exact " << exact;
         EXPECT_GT(held, 0.85 * exact) << "region " << r << " exact " << exact;
     }
 }
