@@ -135,10 +135,13 @@ std::pair<std::array<double, 2>, double> fitLinear(const Reflection &r) {
     return {x, error};
 }
 
-// The peaks the fit chooses from: k and elevation on a grid.
-constexpr int kPeakKs = 14, kPeakElevations = 13;
+// The peaks the fit chooses from: k and elevation on a grid (kGrazingPeakElevationDegrees, at grazing sun only, then
+// from kMinPeakElevationDegrees up).
+constexpr int kPeakKs = 14, kPeakElevations = 14;
 double peakK(int i) { return 0.3 + 0.05 * i; }
-double peakElevation(int j) { return (kMinPeakElevationDegrees + 5.0 * j) * kPi / 180.0; }
+double peakElevation(int j) {
+    return (j == 0 ? kGrazingPeakElevationDegrees : kMinPeakElevationDegrees + 5.0 * (j - 1)) * kPi / 180.0;
+}
 
 // A peak's shape over the bins, scaled to exitance 1 (over pi): bin b's mean radiance (over projected solid
 // angle) of lobeRadiance(mean, 3 k m, w), m at `elevation` above the horizon towards the sun's travel. Bin means
@@ -202,6 +205,7 @@ SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t s
     auto [linear, least] = fitLinear(r);
     best.b = linear[0], best.c = linear[1];
     for (const PeakShape &peak : peakShapes()) {
+        if (mu0 >= kGrazingSunMu0 && peak.elevation < kMinPeakElevationDegrees * kPi / 180.0) continue;
         std::array<double, 3> x{};
         const double error = fitRelative<3>(r, [&](std::size_t b) {
             const std::array<double, 2> linear = linearBasis(r.bins[b]);

@@ -35,6 +35,12 @@ struct SunPeak {
 };
 constexpr double kMinPeakElevationDegrees = 5.0;  // the axis above the horizon: a lobe pointing into the snow
                                                   // hides its mean where no camera looks
+// Below this sun cosine (a sun under 11.5 deg) the half-space's first order peaks at grazing exit, narrower than a
+// lobe about an axis 5 deg up follows: fitted so, the lobe lowered its k and its flank carried the peak up to where
+// cameras look (towards the sun +30 to +80 % over flat snow; docs/benchmarks.md, grazing-peak). There the axis may
+// come down to 2.5 deg: on the horizon the flat snow gained more, but a ball's limb, seen at grazing exit, took the
+// half-space's grazing peak where its curved rim returns less (docs/benchmarks.md, grazing-refit).
+constexpr double kGrazingSunMu0 = 0.2, kGrazingPeakElevationDegrees = 2.5;
 constexpr double kMaxPeakShare = 0.9;
 // sunPeak fades the split into the sun lobe alone (share 0, SunLobe's b and c) between these sun cosines.
 constexpr double kPeakFadeStart = 0.3, kPeakFadeEnd = 0.6;
