@@ -223,8 +223,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 continue;
             }
             const SunPeak split = sunPeak(ch.g, mu0, y, lobe);
-            sun0 += returned * ((1.0 - split.share) * split.a() - 3.0 / 7.0);
-            sun1 += returned * ((1.0 - split.share) * (split.b * n + split.c * t) - escape1);
+            const double rest = (1.0 - split.share) * split.rest;  // under a low sun less than what returns
+            sun0 += returned * (rest * split.a() - 3.0 / 7.0);
+            sun1 += returned * (rest * (split.b * n + split.c * t) - escape1);
             const double p0 = split.mean * returned / (kPi * topo.patches[i].area);
             const glm::dvec3 m = std::cos(split.elevation) * t + std::sin(split.elevation) * n;
             const glm::vec3 peak1 = glm::vec3(split.k * p0 * glm::normalize(m));  // 3 k m mean(p0), channel c's part

@@ -183,6 +183,133 @@ const std::vector<PeakShape> &peakShapes() {
     }();
     return shapes;
 }
+
+// The linear rests the fit under a low sun chooses from, each as the grids render it: the broad lobe exitLobe fits
+// to 1 + b (mu - 2/3) + c t . w (source_lobe.h), as bin means like the peaks'. Only rests never negative over the
+// bins (the lobe is fitted to the form cut at zero, and the cut light lost); b and c cover the linear fits' range.
+struct RestShape {
+    double b = 0.0, c = 0.0;
+    std::vector<double> bins;
+};
+constexpr int kRestBs = 73, kRestCs = 61;
+double restB(int i) { return -3.2 + 0.05 * i; }
+double restC(int j) { return -0.5 + 0.05 * j; }
+
+// The rest 1 + b (mu - 2/3) + c t . w as its broad lobe renders it, over the bins; empty where it is negative over
+// them (the lobe is fitted to the form cut at zero, and the cut light lost).
+RestShape restShape(double b, double c) {
+    constexpr int kSub = 4;
+    const double dPhi = kPi / kPhiBins;
+    RestShape shape{b, c, {}};
+    const SourceLobe lobe = exitLobe(1.0 - 2.0 * b / 3.0, glm::dvec3(c, 0.0, b), glm::dvec3(0.0, 0.0, 1.0));
+    for (int m = 0; m < kMuBins; ++m)
+        for (int p = 0; p < kPhiBins; ++p) {
+            const double muC = (m + 0.5) / kMuBins;
+            if (1.0 + b * (muC - 2.0 / 3.0) + c * std::sqrt(1.0 - muC * muC) * std::cos((p + 0.5) * dPhi) < 0.0) return {};
+            double sum = 0.0, weight = 0.0;
+            for (int a = 0; a < kSub; ++a)
+                for (int q = 0; q < kSub; ++q) {
+                    const double mu = (m + (a + 0.5) / kSub) / kMuBins, phi = (p + (q + 0.5) / kSub) * dPhi;
+                    const double s = std::sqrt(1.0 - mu * mu);
+                    sum += mu * lobeRadiance(lobe.l0, lobe.l1, glm::dvec3(s * std::cos(phi), s * std::sin(phi), mu));
+                    weight += mu;
+                }
+            shape.bins.push_back(sum / weight);
+        }
+    return shape;
+}
+
+const std::vector<RestShape> &restShapes() {
+    static const std::vector<RestShape> shapes = [] {
+        std::vector<RestShape> out;
+        for (int i = 0; i < kRestBs; ++i)
+            for (int j = 0; j < kRestCs; ++j)
+                if (RestShape shape = restShape(restB(i), restC(j)); !shape.bins.empty()) out.push_back(std::move(shape));
+        return out;
+    }();
+    return shapes;
+}
+
+// The split as the grids render it (kRenderedRestMu0): share P + x Q, Q the rest's broad lobe (restShapes) and x its
+// exitance (at most 1 - share), by weighted least squares in the relative error of the model `model` (the bins'
+// weights; then of the split found, once more), share and x in closed form for each peak and rest. At grazing exit
+// (the first kGrazingExitBins, mu < 0.3) the split stays under `ceiling`: a ball's limb is seen there, whose curved
+// rim returns less than a half-space and overshot already; with the exitance kept and no ceiling, the fit paid for
+// the light from above with up to twice the half-space's forward grazing return (ball_grey 7.4 -> 7.9 %).
+constexpr std::size_t kGrazingExitBins = 6 * kPhiBins;
+SunPeak renderedSplit(const Reflection &r, const SunPeak &linear, std::vector<double> model,
+                      const std::vector<double> &ceiling, double mu0) {
+    const std::vector<PeakShape> &peaks = peakShapes();
+    const std::vector<RestShape> &rests = restShapes();
+    const std::size_t n = r.bins.size();
+    SunPeak best = linear;
+    for (int pass = 0; pass < 2; ++pass) {
+        std::vector<double> w(n);
+        double wRR = 0.0;
+        for (std::size_t b = 0; b < n; ++b) {
+            w[b] = r.bins[b].measure / std::max(0.05 * 0.05, model[b] * model[b]);
+            wRR += w[b] * r.bins[b].R * r.bins[b].R;
+        }
+        std::vector<double> wRQ(rests.size(), 0.0), wQQ(rests.size(), 0.0);
+        for (std::size_t q = 0; q < rests.size(); ++q)
+            for (std::size_t b = 0; b < n; ++b)
+                wRQ[q] += w[b] * r.bins[b].R * rests[q].bins[b], wQQ[q] += w[b] * rests[q].bins[b] * rests[q].bins[b];
+        double least = std::numeric_limits<double>::infinity();
+        const PeakShape *bestPeak = nullptr;
+        const RestShape *bestRest = nullptr;
+        double bestShare = 0.0, bestRestExitance = 0.0;
+        auto under = [&](const PeakShape *peak, double share, double restExitance, const RestShape &rest) {
+            for (std::size_t b = 0; b < kGrazingExitBins; ++b)
+                if ((peak ? share * peak->bins[b] : 0.0) + restExitance * rest.bins[b] > ceiling[b]) return false;
+            return true;
+        };
+        // |R - s P - x Q|^2 in the weights, from the sums (x the rest's exitance, at most 1 - s).
+        auto error = [&](std::size_t q, double s, double x, double wRP, double wPP, double wPQ) {
+            return wRR + s * s * wPP + x * x * wQQ[q] - 2.0 * s * wRP - 2.0 * x * wRQ[q] + 2.0 * s * x * wPQ;
+        };
+        auto consider = [&](const PeakShape *peak, std::size_t q, double s, double x, double e) {
+            if (e < least && under(peak, s, x, rests[q]))
+                least = e, bestPeak = peak, bestRest = &rests[q], bestShare = s, bestRestExitance = x;
+        };
+        for (std::size_t q = 0; q < rests.size(); ++q) {  // the rest alone
+            const double x = std::clamp(wRQ[q] / wQQ[q], 0.0, 1.0);
+            consider(nullptr, q, 0.0, x, error(q, 0.0, x, 0.0, 0.0, 0.0));
+        }
+        std::vector<double> wP(n);
+        for (const PeakShape &peak : peaks) {
+            if (mu0 >= kGrazingSunMu0 && peak.elevation < kMinPeakElevationDegrees * kPi / 180.0) continue;
+            double wRP = 0.0, wPP = 0.0;
+            for (std::size_t b = 0; b < n; ++b)
+                wP[b] = w[b] * peak.bins[b], wRP += wP[b] * r.bins[b].R, wPP += wP[b] * peak.bins[b];
+            for (std::size_t q = 0; q < rests.size(); ++q) {
+                double wPQ = 0.0;
+                for (std::size_t b = 0; b < n; ++b) wPQ += wP[b] * rests[q].bins[b];
+                // The normal equations in (s, x); where x passes 1 - s, the least on x = 1 - s.
+                const double det = wPP * wQQ[q] - wPQ * wPQ;
+                if (!(det > 0.0)) continue;
+                double s = (wRP * wQQ[q] - wRQ[q] * wPQ) / det, x = (wRQ[q] * wPP - wRP * wPQ) / det;
+                if (x > 1.0 - s) {
+                    const double ee = wPP - 2.0 * wPQ + wQQ[q];  // along P - Q from Q
+                    s = (wRP - wRQ[q] - wPQ + wQQ[q]) / ee, x = 1.0 - s;
+                }
+                if (!(s > 0.0) || x < 0.0) continue;
+                s = std::min(s, kMaxPeakShare), x = std::min(x, 1.0 - s);
+                consider(&peak, q, s, x, error(q, s, x, wRP, wPP, wPQ));
+            }
+        }
+        if (!bestRest) break;  // none under the ceiling: the linear split's (first pass) or the first pass's
+        best = SunPeak{};
+        best.b = bestRest->b, best.c = bestRest->c;
+        if (bestPeak) {
+            best.share = bestShare, best.mean = bestShare * bestPeak->mean;
+            best.k = bestPeak->k, best.elevation = bestPeak->elevation;
+        }
+        best.rest = bestRestExitance / (1.0 - bestShare);
+        for (std::size_t b = 0; b < n; ++b)
+            model[b] = (bestPeak ? bestShare * bestPeak->bins[b] : 0.0) + bestRestExitance * bestRest->bins[b];
+    }
+    return best;
+}
 }  // namespace
 
 SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t seed) {
@@ -204,6 +331,7 @@ SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t s
     // and (1 - share) c for each peak (k, elevation), which a search over both chooses.
     auto [linear, least] = fitLinear(r);
     best.b = linear[0], best.c = linear[1];
+    const PeakShape *bestPeak = nullptr;
     for (const PeakShape &peak : peakShapes()) {
         if (mu0 >= kGrazingSunMu0 && peak.elevation < kMinPeakElevationDegrees * kPi / 180.0) continue;
         std::array<double, 3> x{};
@@ -221,8 +349,20 @@ SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t s
         best.share = x[0], best.k = peak.k, best.elevation = peak.elevation;
         best.mean = x[0] * peak.mean;
         best.b = x[1] / (1.0 - x[0]), best.c = x[2] / (1.0 - x[0]);
+        bestPeak = &peak;
     }
-    return best;
+    if (mu0 >= kRenderedRestMu0) return best;
+    // The linear split's model weighs the bins; the grazing exits stay under the half-space's return and a tenth (its
+    // bins' noise) or the linear split's as rendered, whichever is more.
+    const RestShape rest = restShape(best.b, best.c);
+    std::vector<double> model(r.bins.size()), ceiling(r.bins.size());
+    for (std::size_t b = 0; b < r.bins.size(); ++b) {
+        const std::array<double, 2> f = linearBasis(r.bins[b]);
+        const double peak = bestPeak ? best.share * bestPeak->bins[b] : 0.0;
+        model[b] = peak + (1.0 - best.share) * (1.0 + best.b * f[0] + best.c * f[1]);
+        ceiling[b] = std::max(1.1 * r.bins[b].R, rest.bins.empty() ? 0.0 : peak + (1.0 - best.share) * rest.bins[b]);
+    }
+    return renderedSplit(r, best, std::move(model), ceiling, mu0);
 }
 
 namespace {
@@ -264,15 +404,17 @@ double sphericalAlbedo(double g, double y) {
 }
 
 SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe) {
-    const std::array<double, 6> v = interpolate<6>(kSunPeakTable, g, mu0, y);
+    const std::array<double, 7> v = interpolate<7>(kSunPeakTable, g, mu0, y);
     SunPeak peak;
     peak.share = v[0], peak.mean = v[1], peak.k = v[2], peak.elevation = v[3], peak.b = v[4], peak.c = v[5];
+    peak.rest = v[6];
     // Towards high sun the split gives way to the sun lobe alone (what the peak holds there is small and noisy).
     const double s = std::clamp((kPeakFadeEnd - mu0) / (kPeakFadeEnd - kPeakFadeStart), 0.0, 1.0);
-    const double rest = 1.0 - s * peak.share;
-    peak.b = (s * (1.0 - peak.share) * peak.b + (1.0 - s) * lobe.b) / rest;
-    peak.c = (s * (1.0 - peak.share) * peak.c + (1.0 - s) * lobe.c) / rest;
+    const double split = s * (1.0 - peak.share) * peak.rest, rest = split + 1.0 - s;  // the rests' exitances
+    peak.b = (split * peak.b + (1.0 - s) * lobe.b) / rest;
+    peak.c = (split * peak.c + (1.0 - s) * lobe.c) / rest;
     peak.share *= s, peak.mean *= s;
+    peak.rest = rest / (1.0 - peak.share);
     return peak;
 }
 

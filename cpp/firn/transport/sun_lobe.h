@@ -20,7 +20,7 @@ struct SunLobe {
 };
 
 // The returned sun split in two (the half-space's reflection function R over its albedo A, exitance 1):
-//   R(w) / A = share P(w) + (1 - share) (a + b (n . w) + c (t . w)),   a + 2b/3 = 1,
+//   R(w) / A = share P(w) + (1 - share) rest (a + b (n . w) + c (t . w)),   a + 2b/3 = 1,
 // P a peaked Henyey-Greenstein lobe of anisotropy k about the axis `elevation` above the horizon towards t,
 // scaled to exitance 1: share P(w) = lobeRadiance(mean, 3 k m, w) (source_lobe.h, m unit), so that a surface
 // returning exitance M stores the peaked lobe of l0 = mean M / pi. At grazing sun a half-space returns light
@@ -28,9 +28,11 @@ struct SunLobe {
 // at g 0.85, omega 0.98), which neither the linear form nor a broad lobe holds; the grids' second, peaked lobe
 // holds it, the broad lobe the rest. Fitted like the sun lobe (relative error, projected solid angle; 40,000
 // photons per entry), k and elevation by search; share 0 where no peak fits better than the linear form alone.
+// rest is 1 (the exitance kept) but under a low sun (kRenderedRestMu0).
 struct SunPeak {
     double share = 0.0, mean = 0.0, k = 0.0, elevation = 0.0;  // elevation in radians
     double b = 0.0, c = 0.0;
+    double rest = 1.0;
     double a() const { return 1.0 - 2.0 * b / 3.0; }
 };
 constexpr double kMinPeakElevationDegrees = 5.0;  // the axis above the horizon: a lobe pointing into the snow
@@ -42,6 +44,14 @@ constexpr double kMinPeakElevationDegrees = 5.0;  // the axis above the horizon:
 // half-space's grazing peak where its curved rim returns less (docs/benchmarks.md, grazing-refit).
 constexpr double kGrazingSunMu0 = 0.2, kGrazingPeakElevationDegrees = 2.5;
 constexpr double kMaxPeakShare = 0.9;
+// Below this sun cosine (a sun under 17.5 deg, where the split stands alone: kPeakFadeStart) the split is fitted as
+// the grids render it, the rest as its broad lobe (exitLobe), and the rest's exitance free up to 1 - share. A low
+// sun's half-space returns most at grazing exits of every azimuth (single scattering goes as 1 / (mu0 + mu)), which
+// one Henyey-Greenstein lobe cannot lean to: the linear rest (b -2) so rendered sent 2.5 times its light straight
+// up, the exitance kept; the fit gives up part of the rest's light at grazing exit (to 0.7 of it at the issue's
+// snow, 3 deg) for the views above it, and keeps the split's grazing exits under what the half-space returns
+// (a ball's limb is seen there) (docs/benchmarks.md, grazing-rim).
+constexpr double kRenderedRestMu0 = 0.3;
 // sunPeak fades the split into the sun lobe alone (share 0, SunLobe's b and c) between these sun cosines.
 constexpr double kPeakFadeStart = 0.3, kPeakFadeEnd = 0.6;
 

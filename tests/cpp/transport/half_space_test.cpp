@@ -142,16 +142,20 @@ TEST(SunPeak, KeepsTheFluxAndHoldsTheGrazingForwardReturn) {
 }
 
 // At a grazing sun (mu0 0.1, 5.7 deg up) a half-space's first order peaks at grazing forward exit, narrower than any
-// lobe about an axis above the horizon; the split must not carry that peak up to where cameras look. R / A over
-// 30 deg exits (mu 0.4-0.6) towards the sun's travel, across it and back, and from above (mu > 0.9), for the issue's
-// snow (omega 0.98, g 0.85), against a fresh Monte Carlo of the half-space (walkPhoton, all orders). Measured
-// forwards: +53 % with the axis held 5 deg up (k 0.79, its flank; docs/benchmarks.md, grazing-peak), +45 % with it
-// allowed down to 2.5 deg (+37 % on the horizon, which a ball's limb paid for; grazing-refit); back +11 %, from
-// above +1 %, across under.
+// lobe about an axis above the horizon; the split must not carry that peak up to where cameras look, nor its rest,
+// as the grids render it (its broad lobe), send the grazing exits' light straight up. R / A over 30 deg exits
+// (mu 0.4-0.6) towards the sun's travel, across it and back, and from above (mu > 0.9), for the snow
+// (omega 0.98, g 0.85), against a fresh Monte Carlo of the half-space (walkPhoton, all orders). Rendered so, the
+// split with the exitance kept read forwards +39 %, above +22 %, back +8 %, across -12 %; fitted as rendered, the
+// rest's exitance free (docs/benchmarks.md, grazing-rim), +14, +17, 0, -10 %.
 TEST(SunPeak, AtGrazingSunKeepsTheGrazingPeakFromTheExitsCamerasSee) {
     const double g = 0.85, mu0 = 0.1, omega = 0.98, y = absorptionParameter(omega, g);
     const SunPeak peak = sunPeak(g, mu0, y, sunLobe(g, mu0, y));
     const glm::dvec3 axis(std::cos(peak.elevation), 0.0, std::sin(peak.elevation));
+    // The rest as the grids render it: its broad lobe (exitLobe), a flat top's whole broad light under a sun alone.
+    const double restExitance = (1.0 - peak.share) * peak.rest;
+    const SourceLobe rest =
+        exitLobe(restExitance * peak.a(), restExitance * glm::dvec3(peak.c, 0.0, peak.b), glm::dvec3(0.0, 0.0, 1.0));
     struct Region { double muLo, muHi, phiLo, phiHi; };  // phi: |azimuth| from the sun's travel, rad
     const Region regions[] = {{0.4, 0.6, 0.0, kPi / 9.0}, {0.4, 0.6, 4.0 * kPi / 9.0, 5.0 * kPi / 9.0},
                               {0.4, 0.6, 8.0 * kPi / 9.0, kPi}, {0.9, 1.0, 0.0, kPi}};
@@ -163,8 +167,7 @@ TEST(SunPeak, AtGrazingSunKeepsTheGrazingPeakFromTheExitsCamerasSee) {
                 const double mu = r.muLo + (i + 0.5) / kN * (r.muHi - r.muLo), s = std::sqrt(1.0 - mu * mu);
                 const double phi = r.phiLo + (j + 0.5) / kN * (r.phiHi - r.phiLo);
                 const glm::dvec3 w(s * std::cos(phi), s * std::sin(phi), mu);
-                sum += mu * (lobeRadiance(peak.mean, 3.0 * peak.k * peak.mean * axis, w) +
-                             (1.0 - peak.share) * (peak.a() + peak.b * mu + peak.c * w.x));
+                sum += mu * (lobeRadiance(peak.mean, 3.0 * peak.k * peak.mean * axis, w) + lobeRadiance(rest.l0, rest.l1, w));
                 weight += mu;
             }
         return sum / weight;
@@ -189,9 +192,23 @@ TEST(SunPeak, AtGrazingSunKeepsTheGrazingPeakFromTheExitsCamerasSee) {
         const double measure = 0.5 * (region.muHi * region.muHi - region.muLo * region.muLo) *
                                2.0 * (region.phiHi - region.phiLo) / kPi;  // projected solid angle over pi
         const double exact = double(counts[r]) / returned / measure, held = split(region);
-        EXPECT_LT(held, (r == 0 ? 1.5 : 1.15) * exact) << "region " << r << " exact " << exact;
+        EXPECT_LT(held, (r == 0 ? 1.25 : r == 3 ? 1.2 : 1.15) * exact) << "region " << r << " exact " << exact;
         EXPECT_GT(held, 0.85 * exact) << "region " << r << " exact " << exact;
     }
+}
+
+// The table's low-sun entries, fitted as rendered (sun_peak_table.inc, spliced in), are the generator's
+// (tools/sun_lobe_table.cpp: entry k seeded 1000 + k, 40,000 photons): y 0.75, g 0.9, mu0 0.05 is entry 1500.
+TEST(SunPeak, LowSunEntryMatchesItsGenerator) {
+    const double g = 0.9, mu0 = 0.05, y = 0.75;
+    const SunPeak table = sunPeak(g, mu0, y, sunLobe(g, mu0, y)), fresh = fitSunPeak(g, mu0, y, 40000, 1000 + 1500);
+    EXPECT_NEAR(table.share, fresh.share, 1e-4);
+    EXPECT_NEAR(table.k, fresh.k, 1e-2);
+    EXPECT_NEAR(table.elevation, fresh.elevation, 1e-4);
+    EXPECT_NEAR(table.b, fresh.b, 1e-4);
+    EXPECT_NEAR(table.c, fresh.c, 1e-4);
+    EXPECT_NEAR(table.rest, fresh.rest, 1e-4);
+    EXPECT_LT(fresh.rest, 0.95);  // under a low sun the rest gives up light at grazing exit
 }
 
 }  // namespace firn
