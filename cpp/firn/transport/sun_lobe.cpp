@@ -184,9 +184,9 @@ const std::vector<PeakShape> &peakShapes() {
     return shapes;
 }
 
-// The linear rests the fit under a low sun chooses from, each as the grids render it: the broad lobe exitLobe fits
-// to 1 + b (mu - 2/3) + c t . w (source_lobe.h), as bin means like the peaks'. Only rests never negative over the
-// bins (the lobe is fitted to the form cut at zero, and the cut light lost); b and c cover the linear fits' range.
+// The linear rests the fit under a low sun chooses from (restShapes), each as the grids render it: the broad lobe
+// exitLobe fits to 1 + b (mu - 2/3) + c t . w (source_lobe.h), as bin means like the peaks'; b and c on a grid over
+// the linear fits' range.
 struct RestShape {
     double b = 0.0, c = 0.0;
     std::vector<double> bins;
