@@ -52,7 +52,7 @@ constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
 constexpr double kSendBackWorthPasses = 0.15;
 
 Preset resolve(const BakeSettings &s) {
-    Preset p = s.quality == BakeQuality::Draft ? Preset{8, 1, 1e-4, 0, 1, 64, 64, true, 0.25}
+    Preset p = s.quality == BakeQuality::Draft ? Preset{9, 1, 1e-4, 0, 1, 64, 64, true, 0.25}
                : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true, 1.0}
                                                  : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false, 1.0};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)

@@ -307,12 +307,17 @@ BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, in
     return out;
 }
 
-SkyRays::SkyRays(int samples) : strata_(std::clamp(int(std::lround(std::sqrt(double(samples)))), 1, kMaxStrata)) {}
+SkyRays::SkyRays(int samples) {
+    const int count = std::clamp(samples, 1, kMaxRays);
+    rows_ = int(std::sqrt(double(count)));
+    while (count % rows_) --rows_;
+    columns_ = count / rows_;
+}
 
 glm::dvec3 SkyRays::direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const {
     Rng rng(seed, stream * 64 + std::uint64_t(k));
-    return sampleCosineHemisphere(normal, (k / strata_ + rng.uniform()) / strata_,
-                                  (k % strata_ + rng.uniform()) / strata_);
+    return sampleCosineHemisphere(normal, (k / columns_ + rng.uniform()) / rows_,
+                                  (k % columns_ + rng.uniform()) / columns_);
 }
 
 void averageOverNeighbours(const SnowTopology &topo, SurfaceValues<glm::vec3> &values) {

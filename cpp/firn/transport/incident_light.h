@@ -51,19 +51,20 @@ struct IncidentLight {
     std::vector<glm::vec3> skyUnderSnow;
 };
 
-// The rays a surface patch gathers its sky along: stratified, cosine-weighted around its normal, the k-th
-// depending only on (seed, stream, k), so a later pass can trace the same ones. At most kMaxRays: a patch's rays
-// are one bit each of a 64-bit mask (IncidentLight::snowRays, occluderRays).
+// The rays a surface patch gathers its sky along: cosine-weighted around its normal, one jittered in each cell of a
+// rows x columns grid over (1 - cos^2 of the angle from the normal, azimuth), the k-th depending only on (seed,
+// stream, k), so a later pass can trace the same ones. Any count from 1 to kMaxRays (a patch's rays are one bit each
+// of a 64-bit mask: IncidentLight::snowRays, occluderRays): rows the largest divisor of the count not above its square
+// root (9 = 3 x 3, 6 = 2 x 3, 5 = 1 x 5), the longer side around the normal, where occluders differ most.
 class SkyRays {
   public:
-    static constexpr int kMaxStrata = 8, kMaxRays = kMaxStrata * kMaxStrata;
-    static_assert(kMaxRays <= 64, "a patch's sky rays are bits of a std::uint64_t");
+    static constexpr int kMaxRays = 64;
     explicit SkyRays(int samples);
-    int count() const { return strata_ * strata_; }
+    int count() const { return rows_ * columns_; }
     glm::dvec3 direction(const glm::dvec3 &normal, int k, std::uint64_t seed, std::uint64_t stream) const;
 
   private:
-    int strata_;
+    int rows_, columns_;
 };
 
 // Light arriving along unit direction w (per channel) as its part of the grey first moment (IncidentLight::skyAim):
