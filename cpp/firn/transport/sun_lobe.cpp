@@ -151,6 +151,20 @@ struct PeakShape {
     std::vector<double> bins;
 };
 
+// A lobe's radiance (source_lobe.h) averaged over bin (m, p) in projected solid angle, on sub x sub points.
+double binMean(double l0, const glm::dvec3 &l1, int m, int p, int sub) {
+    const double dPhi = kPi / kPhiBins;
+    double sum = 0.0, weight = 0.0;
+    for (int a = 0; a < sub; ++a)
+        for (int q = 0; q < sub; ++q) {
+            const double mu = (m + (a + 0.5) / sub) / kMuBins, phi = (p + (q + 0.5) / sub) * dPhi;
+            const double s = std::sqrt(1.0 - mu * mu);
+            sum += mu * lobeRadiance(l0, l1, glm::dvec3(s * std::cos(phi), s * std::sin(phi), mu));
+            weight += mu;
+        }
+    return sum / weight;
+}
+
 const std::vector<PeakShape> &peakShapes() {
     static const std::vector<PeakShape> shapes = [] {
         constexpr int kSub = 8;
@@ -163,17 +177,10 @@ const std::vector<PeakShape> &peakShapes() {
                 double exitance = 0.0;  // over pi, of the lobe of l0 = 1
                 for (int m = 0; m < kMuBins; ++m)
                     for (int p = 0; p < kPhiBins; ++p) {
-                        double sum = 0.0, weight = 0.0;
-                        for (int a = 0; a < kSub; ++a)
-                            for (int b = 0; b < kSub; ++b) {
-                                const double mu = (m + (a + 0.5) / kSub) / kMuBins, phi = (p + (b + 0.5) / kSub) * dPhi;
-                                const double s = std::sqrt(1.0 - mu * mu);
-                                sum += mu * lobeRadiance(1.0, l1, glm::dvec3(s * std::cos(phi), s * std::sin(phi), mu));
-                                weight += mu;
-                            }
+                        const double mean = binMean(1.0, l1, m, p, kSub);
                         const double muLo = double(m) / kMuBins, muHi = double(m + 1) / kMuBins;
-                        shape.bins.push_back(sum / weight);
-                        exitance += 2.0 * dPhi * 0.5 * (muHi * muHi - muLo * muLo) / kPi * sum / weight;
+                        shape.bins.push_back(mean);
+                        exitance += 2.0 * dPhi * 0.5 * (muHi * muHi - muLo * muLo) / kPi * mean;
                     }
                 for (double &v : shape.bins) v /= exitance;
                 shape.mean = 1.0 / exitance;
@@ -206,15 +213,7 @@ RestShape restShape(double b, double c) {
         for (int p = 0; p < kPhiBins; ++p) {
             const double muC = (m + 0.5) / kMuBins;
             if (1.0 + b * (muC - 2.0 / 3.0) + c * std::sqrt(1.0 - muC * muC) * std::cos((p + 0.5) * dPhi) < 0.0) return {};
-            double sum = 0.0, weight = 0.0;
-            for (int a = 0; a < kSub; ++a)
-                for (int q = 0; q < kSub; ++q) {
-                    const double mu = (m + (a + 0.5) / kSub) / kMuBins, phi = (p + (q + 0.5) / kSub) * dPhi;
-                    const double s = std::sqrt(1.0 - mu * mu);
-                    sum += mu * lobeRadiance(lobe.l0, lobe.l1, glm::dvec3(s * std::cos(phi), s * std::sin(phi), mu));
-                    weight += mu;
-                }
-            shape.bins.push_back(sum / weight);
+            shape.bins.push_back(binMean(lobe.l0, lobe.l1, m, p, kSub));
         }
     return shape;
 }
