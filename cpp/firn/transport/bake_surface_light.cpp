@@ -178,8 +178,10 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // `peak` (a smooth patch, or each air face of a sharp edge), the suns' light returned sharply forwards leaves as
     // the peaked lobe instead (SunPeak: at grazing sun the lit rim seen against the sun, bench/bake_halfspace.py),
     // added to `peak` (radiance), the rest linear:
+    // `index` finds the patch's neighbours for its curvature (restKept).
     auto returnedThrough = [&](int c, std::size_t i, const glm::dvec3 &n, double skyShare, const SkyBeam &beam,
-                               const auto &beamShare, SurfaceLight *peak) {
+                               const auto &beamShare, SurfaceLight *peak,
+                               openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
         const Channel &ch = channels[c].ch;
         const double y = channels[c].y;
         const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
@@ -197,6 +199,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             r1 += returned * (lobe.b * n + lobe.c * travelAlong(-beam.towards, n));
         }
         double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0;  // the beams' part
+        double curvature = -1.0;  // per voxel (surfaceCurvature), found when a low sun asks for it
         glm::dvec3 sun1(0.0);
         // The half-space of the snow beneath the patch: a voxel's resistance and the node's below the surface
         // (schemeBeamAlbedo's d, L). A smooth surface's fringe voxel holds less snow where the surface crosses it
@@ -223,7 +226,10 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 continue;
             }
             const SunPeak split = sunPeak(ch.g, mu0, y, lobe);
-            const double rest = (1.0 - split.share) * split.rest;  // under a low sun less than what returns
+            // Under a low sun less than what returns, but where the surface curves (its limb shows grazing exits).
+            if (split.rest < 1.0 && curvature < 0.0)
+                curvature = std::max(0.0, surfaceCurvature(topo, topo.coord[i], index));
+            const double rest = (1.0 - split.share) * restKept(split, curvature);
             sun0 += returned * (rest * split.a() - 3.0 / 7.0);
             sun1 += returned * (rest * (split.b * n + split.c * t) - escape1);
             const double p0 = split.mean * returned / (kPi * topo.patches[i].area);
@@ -239,6 +245,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                              sun1 + sunMissed * escape1, sun0, sun1, sunMissed, sunReturned};
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
@@ -258,7 +265,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 const double leaving = terms[c].escaped[i] + terms[c].outConductance[i] * phi[c][i];
                 const auto whole = [](std::size_t) { return 1.0; };
                 const ReturnedLight r =
-                    returnedThrough(c, i, patch.normal, 1.0, skyBeam, whole, patch.sharp ? nullptr : &surface);
+                    returnedThrough(c, i, patch.normal, 1.0, skyBeam, whole, patch.sharp ? nullptr : &surface, index);
                 // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
                 // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
                 // through the smooth surface or, at a sharp edge, through each air face.
@@ -318,6 +325,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // are its rim against the sun, docs/bake.md Method 5: lump_angles_bench's view 27 degrees off the sun's travel
     // -39.5 -> -16.0 %).
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         std::vector<FaceExit> faces;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const SurfacePatch &patch = topo.patches[i];
@@ -341,7 +349,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                         for (int g = 0; g < 6; ++g)
                             if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
                         return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
-                    }, &out.surface(i));
+                    }, &out.surface(i), index);
                     const double leaving = outflow[f].first[c], area = outflow[f].second;
                     const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
                     faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),

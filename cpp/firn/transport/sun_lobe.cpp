@@ -417,4 +417,8 @@ SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe) {
     return peak;
 }
 
+double restKept(const SunPeak &split, double curvaturePerVoxel) {
+    return split.rest + (1.0 - split.rest) * std::clamp(curvaturePerVoxel * kRestKeptRadius, 0.0, 1.0);
+}
+
 }  // namespace firn

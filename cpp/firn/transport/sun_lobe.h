@@ -52,6 +52,13 @@ constexpr double kMaxPeakShare = 0.9;
 // snow, 3 deg) for the views above it, and keeps the split's grazing exits under what the half-space returns
 // (a ball's limb is seen there) (docs/benchmarks.md, grazing-rim).
 constexpr double kRenderedRestMu0 = 0.3;
+// Where the surface curves, cameras see a patch's grazing exits at the limb: the light the low sun's split gives up
+// there (1 - SunPeak::rest of its rest, which a flat top shows only through its ramp) is light a ball's limb and rim
+// lack (docs/benchmarks.md, against-sun). A surface curving as a sphere of kRestKeptRadius voxels or faster keeps the
+// rest's exitance (1 - share); flatter ones keep what the flat fit gives up in proportion to the curvature.
+constexpr double kRestKeptRadius = 10.0;  // voxels
+// The rest's exitance over 1 - share on a surface of this curvature (per voxel, positive convex: surfaceCurvature).
+double restKept(const SunPeak &split, double curvaturePerVoxel);
 // sunPeak fades the split into the sun lobe alone (share 0, SunLobe's b and c) between these sun cosines.
 constexpr double kPeakFadeStart = 0.3, kPeakFadeEnd = 0.6;
 
