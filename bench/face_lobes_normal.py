@@ -22,6 +22,7 @@ import numpy as np
 
 import bake_suite
 import firncore
+from lobe_noise_fits import prony  # lobePair's nodes
 
 G = 0.85  # spray_dense's g
 MAX_K = 0.95  # kMaxLobeAnisotropy
@@ -84,20 +85,6 @@ def moments(S):
     t2 = m @ S["second"] @ m
     t3 = sum(m[i] * (m @ S["third"][i] @ m) for i in range(3))
     return a0, a1, G * G * 0.5 * (3.0 * t2 - a0), G ** 3 * 0.5 * (5.0 * t3 - 3.0 * a1 / G), m
-
-
-def prony(a0, a1, a2, a3):
-    det = a1 * a1 - a0 * a2
-    if not abs(det) > 1e-9 * a0 * a0:
-        return None
-    c1, c0 = (a0 * a3 - a1 * a2) / det, (a2 * a2 - a1 * a3) / det
-    disc = c1 * c1 - 4.0 * c0
-    if not disc >= 0.0:
-        return None
-    x1, x2 = 0.5 * (-c1 + np.sqrt(disc)), 0.5 * (-c1 - np.sqrt(disc))
-    if not (x1 > x2 and x1 <= 1.0 and x2 >= -MAX_K):
-        return None
-    return (x1, x2) if 0.0 <= (a1 - x2 * a0) / (x1 - x2) <= a0 else None
 
 
 def pair(S, m, k_peak, k_broad):
