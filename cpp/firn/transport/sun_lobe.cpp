@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -230,82 +231,109 @@ const std::vector<RestShape> &restShapes() {
 }
 
 // The split as the grids render it (kRenderedRestMu0): share P + x Q, Q the rest's broad lobe (restShapes) and x its
-// exitance (at most 1 - share), by weighted least squares in the relative error of the model `model` (the bins'
+// exitance (at most 1 - share), by weighted least squares in the relative error of a model of R / A (the bins'
 // weights; then of the split found, once more), share and x in closed form for each peak and rest. At grazing exit
 // (the first kGrazingExitBins, mu < 0.3) the split stays under `ceiling`: a ball's limb is seen there, whose curved
 // rim returns less than a half-space and overshot already; with the exitance kept and no ceiling, the fit paid for
 // the light from above with up to twice the half-space's forward grazing return (ball_grey 7.4 -> 7.9 %).
 constexpr std::size_t kGrazingExitBins = 6 * kPhiBins;
-SunPeak renderedSplit(const Reflection &r, const SunPeak &linear, std::vector<double> model,
-                      const std::vector<double> &ceiling, double mu0) {
+
+// The peaks a sun of cosine mu0 may take: the axis under kMinPeakElevationDegrees only at grazing sun.
+bool peakAllowed(const PeakShape &peak, double mu0) {
+    return mu0 < kGrazingSunMu0 || peak.elevation >= kMinPeakElevationDegrees * kPi / 180.0;
+}
+
+// The bins' weights in the relative error of `model`: projected solid angle over its square (at least 0.05's).
+std::vector<double> relativeWeights(const Reflection &r, const std::vector<double> &model) {
+    std::vector<double> w(r.bins.size());
+    for (std::size_t b = 0; b < w.size(); ++b) w[b] = r.bins[b].measure / std::max(0.05 * 0.05, model[b] * model[b]);
+    return w;
+}
+
+// Share s of a peak P and exitance x of a rest Q closest to R in the weights, |R - s P - x Q|^2 from its sums
+// (wRP = sum w R P, ...): the normal equations in (s, x); where x passes 1 - s, the least on x = 1 - s. None where
+// the peak takes no light or the rest would be negative.
+std::optional<std::pair<double, double>> shareAndRest(double wRP, double wPP, double wPQ, double wRQ, double wQQ) {
+    const double det = wPP * wQQ - wPQ * wPQ;
+    if (!(det > 0.0)) return std::nullopt;
+    double s = (wRP * wQQ - wRQ * wPQ) / det, x = (wRQ * wPP - wRP * wPQ) / det;
+    if (x > 1.0 - s) {
+        const double ee = wPP - 2.0 * wPQ + wQQ;  // along P - Q from Q
+        s = (wRP - wRQ - wPQ + wQQ) / ee, x = 1.0 - s;
+    }
+    if (!(s > 0.0) || x < 0.0) return std::nullopt;
+    s = std::min(s, kMaxPeakShare);
+    return std::make_pair(s, std::min(x, 1.0 - s));
+}
+
+// A rendered split: share of a peak (none: the rest alone) and the rest's exitance x.
+struct RenderedSplit {
+    const PeakShape *peak = nullptr;
+    const RestShape *rest = nullptr;
+    double share = 0.0, restExitance = 0.0;
+
+    double bin(std::size_t b) const { return (peak ? share * peak->bins[b] : 0.0) + restExitance * rest->bins[b]; }
+    SunPeak split() const {
+        SunPeak out;
+        out.b = rest->b, out.c = rest->c;
+        if (peak) out.share = share, out.mean = share * peak->mean, out.k = peak->k, out.elevation = peak->elevation;
+        out.rest = restExitance / (1.0 - share);
+        return out;
+    }
+};
+
+// The rendered split closest to R in the weights w among the peaks and rests, its grazing exits under `ceiling`;
+// none if no split stays under it.
+std::optional<RenderedSplit> closestRenderedSplit(const Reflection &r, const std::vector<double> &w,
+                                                  const std::vector<double> &ceiling, double mu0) {
     const std::vector<PeakShape> &peaks = peakShapes();
     const std::vector<RestShape> &rests = restShapes();
     const std::size_t n = r.bins.size();
+    double wRR = 0.0;
+    for (std::size_t b = 0; b < n; ++b) wRR += w[b] * r.bins[b].R * r.bins[b].R;
+    std::vector<double> wRQ(rests.size(), 0.0), wQQ(rests.size(), 0.0);
+    for (std::size_t q = 0; q < rests.size(); ++q)
+        for (std::size_t b = 0; b < n; ++b)
+            wRQ[q] += w[b] * r.bins[b].R * rests[q].bins[b], wQQ[q] += w[b] * rests[q].bins[b] * rests[q].bins[b];
+    double least = std::numeric_limits<double>::infinity();
+    std::optional<RenderedSplit> best;
+    // |R - s P - x Q|^2 in the weights, from the sums.
+    auto consider = [&](const RenderedSplit &split, std::size_t q, double wRP, double wPP, double wPQ) {
+        const double s = split.share, x = split.restExitance;
+        const double e = wRR + s * s * wPP + x * x * wQQ[q] - 2.0 * s * wRP - 2.0 * x * wRQ[q] + 2.0 * s * x * wPQ;
+        if (!(e < least)) return;
+        for (std::size_t b = 0; b < kGrazingExitBins; ++b)
+            if (split.bin(b) > ceiling[b]) return;
+        least = e, best = split;
+    };
+    for (std::size_t q = 0; q < rests.size(); ++q)  // the rest alone
+        consider({nullptr, &rests[q], 0.0, std::clamp(wRQ[q] / wQQ[q], 0.0, 1.0)}, q, 0.0, 0.0, 0.0);
+    std::vector<double> wP(n);
+    for (const PeakShape &peak : peaks) {
+        if (!peakAllowed(peak, mu0)) continue;
+        double wRP = 0.0, wPP = 0.0;
+        for (std::size_t b = 0; b < n; ++b)
+            wP[b] = w[b] * peak.bins[b], wRP += wP[b] * r.bins[b].R, wPP += wP[b] * peak.bins[b];
+        for (std::size_t q = 0; q < rests.size(); ++q) {
+            double wPQ = 0.0;
+            for (std::size_t b = 0; b < n; ++b) wPQ += wP[b] * rests[q].bins[b];
+            if (const auto sx = shareAndRest(wRP, wPP, wPQ, wRQ[q], wQQ[q]))
+                consider({&peak, &rests[q], sx->first, sx->second}, q, wRP, wPP, wPQ);
+        }
+    }
+    return best;
+}
+
+// Two passes: the weights from `model` (the linear split's), then from the split the first found. Where no split
+// stays under the ceiling, the linear split's (first pass) or the first pass's.
+SunPeak renderedSplit(const Reflection &r, const SunPeak &linear, std::vector<double> model,
+                      const std::vector<double> &ceiling, double mu0) {
     SunPeak best = linear;
     for (int pass = 0; pass < 2; ++pass) {
-        std::vector<double> w(n);
-        double wRR = 0.0;
-        for (std::size_t b = 0; b < n; ++b) {
-            w[b] = r.bins[b].measure / std::max(0.05 * 0.05, model[b] * model[b]);
-            wRR += w[b] * r.bins[b].R * r.bins[b].R;
-        }
-        std::vector<double> wRQ(rests.size(), 0.0), wQQ(rests.size(), 0.0);
-        for (std::size_t q = 0; q < rests.size(); ++q)
-            for (std::size_t b = 0; b < n; ++b)
-                wRQ[q] += w[b] * r.bins[b].R * rests[q].bins[b], wQQ[q] += w[b] * rests[q].bins[b] * rests[q].bins[b];
-        double least = std::numeric_limits<double>::infinity();
-        const PeakShape *bestPeak = nullptr;
-        const RestShape *bestRest = nullptr;
-        double bestShare = 0.0, bestRestExitance = 0.0;
-        auto under = [&](const PeakShape *peak, double share, double restExitance, const RestShape &rest) {
-            for (std::size_t b = 0; b < kGrazingExitBins; ++b)
-                if ((peak ? share * peak->bins[b] : 0.0) + restExitance * rest.bins[b] > ceiling[b]) return false;
-            return true;
-        };
-        // |R - s P - x Q|^2 in the weights, from the sums (x the rest's exitance, at most 1 - s).
-        auto error = [&](std::size_t q, double s, double x, double wRP, double wPP, double wPQ) {
-            return wRR + s * s * wPP + x * x * wQQ[q] - 2.0 * s * wRP - 2.0 * x * wRQ[q] + 2.0 * s * x * wPQ;
-        };
-        auto consider = [&](const PeakShape *peak, std::size_t q, double s, double x, double e) {
-            if (e < least && under(peak, s, x, rests[q]))
-                least = e, bestPeak = peak, bestRest = &rests[q], bestShare = s, bestRestExitance = x;
-        };
-        for (std::size_t q = 0; q < rests.size(); ++q) {  // the rest alone
-            const double x = std::clamp(wRQ[q] / wQQ[q], 0.0, 1.0);
-            consider(nullptr, q, 0.0, x, error(q, 0.0, x, 0.0, 0.0, 0.0));
-        }
-        std::vector<double> wP(n);
-        for (const PeakShape &peak : peaks) {
-            if (mu0 >= kGrazingSunMu0 && peak.elevation < kMinPeakElevationDegrees * kPi / 180.0) continue;
-            double wRP = 0.0, wPP = 0.0;
-            for (std::size_t b = 0; b < n; ++b)
-                wP[b] = w[b] * peak.bins[b], wRP += wP[b] * r.bins[b].R, wPP += wP[b] * peak.bins[b];
-            for (std::size_t q = 0; q < rests.size(); ++q) {
-                double wPQ = 0.0;
-                for (std::size_t b = 0; b < n; ++b) wPQ += wP[b] * rests[q].bins[b];
-                // The normal equations in (s, x); where x passes 1 - s, the least on x = 1 - s.
-                const double det = wPP * wQQ[q] - wPQ * wPQ;
-                if (!(det > 0.0)) continue;
-                double s = (wRP * wQQ[q] - wRQ[q] * wPQ) / det, x = (wRQ[q] * wPP - wRP * wPQ) / det;
-                if (x > 1.0 - s) {
-                    const double ee = wPP - 2.0 * wPQ + wQQ[q];  // along P - Q from Q
-                    s = (wRP - wRQ[q] - wPQ + wQQ[q]) / ee, x = 1.0 - s;
-                }
-                if (!(s > 0.0) || x < 0.0) continue;
-                s = std::min(s, kMaxPeakShare), x = std::min(x, 1.0 - s);
-                consider(&peak, q, s, x, error(q, s, x, wRP, wPP, wPQ));
-            }
-        }
-        if (!bestRest) break;  // none under the ceiling: the linear split's (first pass) or the first pass's
-        best = SunPeak{};
-        best.b = bestRest->b, best.c = bestRest->c;
-        if (bestPeak) {
-            best.share = bestShare, best.mean = bestShare * bestPeak->mean;
-            best.k = bestPeak->k, best.elevation = bestPeak->elevation;
-        }
-        best.rest = bestRestExitance / (1.0 - bestShare);
-        for (std::size_t b = 0; b < n; ++b)
-            model[b] = (bestPeak ? bestShare * bestPeak->bins[b] : 0.0) + bestRestExitance * bestRest->bins[b];
+        const std::optional<RenderedSplit> found = closestRenderedSplit(r, relativeWeights(r, model), ceiling, mu0);
+        if (!found) break;
+        best = found->split();
+        for (std::size_t b = 0; b < r.bins.size(); ++b) model[b] = found->bin(b);
     }
     return best;
 }
@@ -332,7 +360,7 @@ SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t s
     best.b = linear[0], best.c = linear[1];
     const PeakShape *bestPeak = nullptr;
     for (const PeakShape &peak : peakShapes()) {
-        if (mu0 >= kGrazingSunMu0 && peak.elevation < kMinPeakElevationDegrees * kPi / 180.0) continue;
+        if (!peakAllowed(peak, mu0)) continue;
         std::array<double, 3> x{};
         const double error = fitRelative<3>(r, [&](std::size_t b) {
             const std::array<double, 2> linear = linearBasis(r.bins[b]);
