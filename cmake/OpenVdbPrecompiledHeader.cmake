@@ -1,0 +1,75 @@
+# A precompiled header for the translation units that include OpenVDB. Parsing <openvdb/openvdb.h> costs about 3
+# processor s in each of them (docs/benchmarks.md, ci-time and ci-build); a TU that includes no OpenVDB header would
+# pay about 2 s more with it (the inline code the headers emit in every TU), so those skip it.
+#
+# FIRN_PRECOMPILE_HEADERS: on by default without a compiler launcher (CI, a clean clone); off by default with one,
+# because ccache caches a TU built with a precompiled header only when its sloppiness allows it:
+#   CCACHE_SLOPPINESS=pch_defines,time_macros,include_file_mtime,include_file_ctime  cmake -DFIRN_PRECOMPILE_HEADERS=ON
+# The build without it (every ccache build) keeps each file's own includes honest.
+if(CMAKE_CXX_COMPILER_LAUNCHER)
+  set(firn_pch_default OFF)
+else()
+  set(firn_pch_default ON)
+endif()
+option(FIRN_PRECOMPILE_HEADERS "Precompile OpenVDB's (and pybind11's) headers" ${firn_pch_default})
+
+# Sets `result` to TRUE when `file` includes an OpenVDB header, itself or through the project's quoted includes
+# (looked up beside the file, then in `search_dirs`); each file is read once per configure.
+function(firn_includes_openvdb file search_dirs result)
+  get_property(known GLOBAL PROPERTY "firn_openvdb:${file}" SET)
+  if(NOT known)
+    set_property(GLOBAL PROPERTY "firn_openvdb:${file}" FALSE)  # ends include cycles
+    get_filename_component(file_dir ${file} DIRECTORY)
+    file(STRINGS ${file} lines REGEX "^#include [<\"]")
+    foreach(line IN LISTS lines)
+      if(line MATCHES "^#include <openvdb/")
+        set_property(GLOBAL PROPERTY "firn_openvdb:${file}" TRUE)
+        break()
+      endif()
+      if(NOT line MATCHES "^#include \"([^\"]+)\"")
+        continue()
+      endif()
+      set(header ${CMAKE_MATCH_1})
+      foreach(dir IN LISTS file_dir search_dirs)
+        if(EXISTS ${dir}/${header})
+          firn_includes_openvdb(${dir}/${header} "${search_dirs}" header_includes)
+          if(header_includes)
+            set_property(GLOBAL PROPERTY "firn_openvdb:${file}" TRUE)
+          endif()
+          break()
+        endif()
+      endforeach()
+      get_property(found GLOBAL PROPERTY "firn_openvdb:${file}")
+      if(found)
+        break()
+      endif()
+    endforeach()
+  endif()
+  get_property(value GLOBAL PROPERTY "firn_openvdb:${file}")
+  set(${result} ${value} PARENT_SCOPE)
+endfunction()
+
+# Precompiles <openvdb/openvdb.h> and `extra_headers` for the TUs of `target` that include OpenVDB; the others skip.
+function(firn_precompile_openvdb target)
+  if(NOT FIRN_PRECOMPILE_HEADERS)
+    return()
+  endif()
+  get_target_property(sources ${target} SOURCES)
+  get_target_property(source_dir ${target} SOURCE_DIR)
+  get_target_property(include_dirs ${target} INCLUDE_DIRECTORIES)
+  set(search_dirs ${PROJECT_SOURCE_DIR}/cpp)
+  if(include_dirs)
+    list(APPEND search_dirs ${include_dirs})
+  endif()
+  foreach(source IN LISTS sources)
+    if(NOT source MATCHES "\\.cpp$")
+      continue()
+    endif()
+    get_filename_component(path ${source} ABSOLUTE BASE_DIR ${source_dir})
+    firn_includes_openvdb(${path} "${search_dirs}" includes)
+    if(NOT includes)
+      set_source_files_properties(${source} TARGET_DIRECTORY ${target} PROPERTIES SKIP_PRECOMPILE_HEADERS ON)
+    endif()
+  endforeach()
+  target_precompile_headers(${target} PRIVATE <openvdb/openvdb.h> ${ARGN})
+endfunction()
