@@ -12,13 +12,17 @@ import traceback
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, job_running, plane_alone, window_context, worker_alive  # noqa: E402
+from ui_test import (  # noqa: E402
+    HUNG, fail, gate_worker, job_running, plane_alone, ui_tick, window_context, worker_alive)
 
 state = {"ticks": 0, "phase": "start", "started": 0.0, "while_computing": 0}
 
 
 def setup():
+    from firn.snow_layer.operators import FIRN_OT_add_snow_layer
+
     ground = plane_alone(4.0)
+    gate_worker(FIRN_OT_add_snow_layer)  # its worker computes only once the UI has run beside it
     ground.select_set(True)
     bpy.context.view_layer.objects.active = ground
 
@@ -42,6 +46,7 @@ def tick():
     try:
         state["ticks"] += 1
         state["while_computing"] += worker_alive()
+        ui_tick()
         if state["phase"] == "start":
             setup()
             start_job()
@@ -49,9 +54,7 @@ def tick():
             state["ticks"] = 0
         elif state["phase"] == "running":
             if snow_objects():
-                # The UI (this timer) ran while the worker computed; how often depends on the machine's load.
-                if state["while_computing"] == 0:
-                    fail("UI froze: the timer never ran while the worker computed")
+                # The UI (this timer) ran while the worker computed (gate_worker); how often depends on the load.
                 print(f"modal job finished after {time.perf_counter() - state['started']:.2f} s with "
                       f"{state['while_computing']} UI ticks while it computed")
                 state["phase"] = "cancel"

@@ -19,6 +19,33 @@ def worker_alive():
     return any(thread.name == "firn-job" and thread.is_alive() for thread in threading.enumerate())
 
 
+_ui_ran = threading.Event()  # set by ui_tick while a worker is alive
+
+
+def gate_worker(operator):
+    """Holds the worker of `operator` (a FirnJobMixin class) before it computes until the UI's timer has run while
+    that worker is alive (the test's timer calls `ui_tick`). An operator that blocks the UI while its job computes
+    (the job on the main thread, or invoke waiting for its worker) never lets it pass; a busy machine only delays
+    it. So the test asserts that the UI runs during a job without depending on how fast the job is."""
+    compute = operator.compute
+
+    def gated(inputs, progress):
+        if threading.current_thread() is threading.main_thread():
+            fail(f"{operator.bl_idname}: the job computed on the main thread")
+        _ui_ran.clear()  # only a tick from now on, while this worker waits, lets it go on
+        if not _ui_ran.wait(HUNG):
+            fail(f"{operator.bl_idname}: UI froze: the timer never ran while the worker waited")
+        return compute(inputs, progress)
+
+    operator.compute = staticmethod(gated)
+
+
+def ui_tick():
+    """The test's timer ran: a worker waiting at the gate (gate_worker) goes on."""
+    if worker_alive():
+        _ui_ran.set()
+
+
 def job_running():
     """A Firn job's operator has not ended: its worker computes, or its result waits for the operator's next timer
     event to be applied (checking the result before that would race with the operator)."""
