@@ -63,6 +63,8 @@ struct GatheringPlan {
     // Per voxel the renderer draws rather than scatters (drawnByRenderer); 0: `paths`. Its paths beyond `paths` are
     // priced apart (kDrawnExtraSteps), not in `steps`.
     int drawnPaths = 0;
+    // Per lit face of the voxels' faces (gatheredVoxelFaces): kLitFacePaths up to the preset's cheapTracedSamples.
+    int litFacePaths = 0;
 };
 // The paths per voxel to gather `voxels` with, their cost per path measured on a few of them first.
 GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
@@ -82,10 +84,24 @@ struct FaceGathering {
     // Per voxel: it lies in a traced layer (light traced whole), whose faces open to air on one side gather too.
     // Empty: the gathered voxels, of which the thick ones.
     std::vector<bool> inLayer;
+    // Per lit face (FaceSources::lit) where more than `paths` (litFacePaths); 0: `paths` as the others.
+    int litPaths = 0;
 };
 // The gathered voxels' faces: half the voxel's paths, else as many as fit down to a quarter, within what the
-// gathering leaves of kMaxTracedSteps.
+// gathering leaves of kMaxTracedSteps; their lit faces the plan's litFacePaths (litFacePaths).
 FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels);
+
+// A gathered lump's lit face: its lobe pair's path-noise bias along its normal, c / N at N paths (c in paths:
+// bake_traced_voxels.cpp says why), the most of it kept (the suite reference's noise per block), so the paths it
+// takes, and the tracking steps those beyond the faces' own may take at most (about 1.3 processor seconds on
+// spray_dense's lit faces, whose 350 take 2e7).
+constexpr double kLitFaceFitNoise = 7.0, kLitFaceFitBias = 0.02;
+constexpr int kLitFacePaths = int(kLitFaceFitNoise / kLitFaceFitBias + 0.5);  // 350
+constexpr double kLitFaceExtraSteps = 5e7;
+// Paths per lit face where the faces take `paths` each and those paths cost the lit faces `litSteps` tracking steps in
+// all: `wanted`, else as many beyond `paths` as kLitFaceExtraSteps affords; never fewer than `paths`.
+int litFacePaths(int paths, int wanted, double litSteps);
+
 // A traced layer's faces (`inLayer` per voxel of `voxels`, light traced whole): as many paths as gathering a voxel
 // would take, within what the light tracing leaves of kMaxTracedSteps.
 FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,

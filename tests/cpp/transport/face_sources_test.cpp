@@ -425,6 +425,56 @@ TEST(FaceSources, AFringesFacesDropFirstAtTheBudgetsEdge) {
     EXPECT_EQ(lumpFaces, kLumpFaces);
 }
 
+// A gathered lump's lit faces (FaceSources::lit) take kLitFacePaths, its other faces the faces' own: against the same
+// faces all at the faces' paths, the lit faces' sources move (their extra paths pooled in) and the others' stay to the
+// bit. Before, every face took the faces' paths (docs/benchmarks.md, face-paths).
+TEST(FaceSources, ALumpsLitFacesTakeMorePaths) {
+    const Scene scene = sunlitLump();
+    const std::vector<openvdb::Coord> voxels = lumpVoxels();
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    const bake::GatheringPlan plan{128, 128 * 1000.0 * double(voxels.size()), 128, bake::kLitFacePaths};
+    bake::FaceGathering how = bake::gatheredVoxelFaces(plan, voxels.size());
+    ASSERT_EQ(how.litPaths, bake::kLitFacePaths);
+    ASSERT_LT(how.paths, how.litPaths);
+    const auto traced = [&](int litPaths) {
+        how.litPaths = litPaths;
+        bake::MonteCarloVoxels out = bake::traceSources(scene, voxels, plan.paths, 3, SubProgress(nullptr, 0.0, 1.0));
+        bake::addFaceSources(scene, topo, voxels, how, 5, SubProgress(nullptr, 0.0, 1.0), out);
+        return out;
+    };
+    const bake::MonteCarloVoxels more = traced(bake::kLitFacePaths), same = traced(0);
+    const glm::dvec3 sunward = glm::normalize(glm::dvec3(0.866, 0.0, 0.5));
+    int lit = 0, other = 0;
+    for (std::size_t v = 0; v < voxels.size(); ++v) {
+        ASSERT_EQ(more.facesAt[v], same.facesAt[v]) << voxels[v];
+        if (same.facesAt[v] < 0) continue;
+        const bake::FaceSources &a = more.faces[std::size_t(more.facesAt[v])];
+        const bake::FaceSources &b = same.faces[std::size_t(same.facesAt[v])];
+        for (int f = 0; f < 6; ++f) {
+            if (!(b.open >> f & 1u)) continue;
+            for (const glm::dvec3 &w : {faceNormal(f), sunward}) {
+                if (b.lit >> f & 1u) {
+                    EXPECT_NE(redToward(a.source[f], w), redToward(b.source[f], w)) << voxels[v] << " face " << f;
+                } else {
+                    EXPECT_EQ(redToward(a.source[f], w), redToward(b.source[f], w)) << voxels[v] << " face " << f;
+                }
+            }
+            ++(b.lit >> f & 1u ? lit : other);
+        }
+    }
+    EXPECT_GT(lit, 0);
+    EXPECT_GT(other, 0);
+}
+
+// A lit face's paths: kLitFacePaths where the faces take fewer, within kLitFaceExtraSteps beyond the faces' own.
+TEST(FaceSources, LitFacePathsWithinTheirExtraSteps) {
+    EXPECT_EQ(bake::litFacePaths(128, bake::kLitFacePaths, 128 * 1000.0), bake::kLitFacePaths);
+    EXPECT_EQ(bake::litFacePaths(512, bake::kLitFacePaths, 512 * 1000.0), 512);  // the faces' own are more
+    EXPECT_EQ(bake::litFacePaths(128, bake::kLitFacePaths, 0.0), bake::kLitFacePaths);  // no lit face
+    // Each path beyond the faces' own costs the lit faces kLitFaceExtraSteps / 100.5 steps: 100 more fit.
+    EXPECT_EQ(bake::litFacePaths(128, bake::kLitFacePaths, 128 * bake::kLitFaceExtraSteps / 100.5), 228);
+}
+
 // A face's collisions split by the trilinear hat as the quadrature splits them: at sigma_t h 2, where 17 % of them
 // lie past the voxel's centre (a middle voxel of a 5 x 5 layer, both faces; 4096 points read 0.5787 against
 // 0.5790). Giving the air neighbour only its own hat's share, max(0, 1 - t), would read 0.605 (tried, not kept:

@@ -1,6 +1,6 @@
 // The traced voxels' paths (bake_traced_voxels.h, planGathering): where the plan holds the preset's paths, the voxels
 // the renderer draws rather than scatters (sigma_t h at least BakedGrids::kScatterOpticalDepth) take twice as many, up
-// to the preset's cheap paths; none more where the budget already cuts the paths.
+// to the preset's cheap paths; none more where the budget already cuts the paths; the lit faces' paths (addFaceSources).
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -51,6 +51,13 @@ TEST(GatheringPlan, NoMorePathsWhereTheBudgetCutsThem) {
     ASSERT_GT(plan.paths, 0);
     ASSERT_LT(plan.paths, 1 << 30);
     EXPECT_EQ(plan.drawnPaths, plan.paths);
+}
+
+// A gathered lump's lit faces take kLitFacePaths (addFaceSources) up to the preset's cheap paths: FINAL's 350, DRAFT's
+// faces none more.
+TEST(GatheringPlan, LitFacesTakeTheirPathsUpToTheCheapPaths) {
+    EXPECT_EQ(bake::planGathering(smallLump(), preset(256, 1024), lumpVoxels(), 1).litFacePaths, bake::kLitFacePaths);
+    EXPECT_EQ(bake::planGathering(smallLump(), preset(64, 64), lumpVoxels(), 1).litFacePaths, 64);
 }
 
 }  // namespace firn
