@@ -91,6 +91,29 @@ bool onSharpEdge(const SnowTopology &topo, std::size_t i) {
     return false;
 }
 
+// Whether surface voxel i's one air face lies on a flat wall: the face goes on flat for kFlatWallVoxels both ways
+// along one axis of its plane and two voxels one way along the other (a layer's cut side below its top; not a
+// ball's cap, whose flat faces reach 2-3 voxels at most). There the 3^3 gradient reads the partly filled voxel over
+// the wall's top voxel and the air above it and tilted its normal 23-39 degrees up (bench/bake_suite.py's
+// bumpy_plate, its cut sides under a top half a voxel over the voxel), where the trilinear density's surface stands
+// within 14 degrees of the wall across that face: the tilted patch took the sky as a slope (more sky, less ground)
+// and showed views from above its exit's peak (the shadowed wall over a black ground +24 %, docs/benchmarks.md,
+// plate-valleys).
+constexpr int kFlatWallVoxels = 4;
+
+bool onFlatWall(const SnowTopology &topo, std::size_t i) {
+    int f = 0;
+    while (!topo.isAirFace(i, f)) ++f;
+    const auto both = [&](int axis, int voxels) {
+        return flatPast(topo, i, f, 2 * axis, voxels) && flatPast(topo, i, f, 2 * axis + 1, voxels);
+    };
+    const auto either = [&](int axis, int voxels) {
+        return flatPast(topo, i, f, 2 * axis, voxels) || flatPast(topo, i, f, 2 * axis + 1, voxels);
+    };
+    const int a = (f / 2 + 1) % 3, b = (f / 2 + 2) % 3;
+    return (both(a, kFlatWallVoxels) && either(b, 2)) || (both(b, kFlatWallVoxels) && either(a, 2));
+}
+
 // A fringe voxel in front of a surface voxel (no denser than it) weighs in its normal by (its density / the voxel's)^
 // this: a fringe nearly as dense as the voxel holds the surface (the voxel lies a voxel under it, where the density
 // hardly changes along the normal and the fringe's steps across it tilt the gradient), a thin one does not. Against
@@ -102,7 +125,8 @@ bool onSharpEdge(const SnowTopology &topo, std::size_t i) {
 constexpr double kFringeNormalExponent = 8.0;
 
 // Outward normal from the density gradient (a 3x3x3 Sobel stencil, plus each fringe voxel's in front by
-// kFringeNormalExponent), or from the air faces where the gradient is flat or points the wrong way.
+// kFringeNormalExponent), or from the air faces where the gradient is flat or points the wrong way or the voxel's one
+// air face lies on a flat wall (onFlatWall).
 void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
     auto slot = std::make_shared<std::vector<std::int32_t>>(topo.size(), -1);
     std::int32_t surfaceVoxels = 0;
@@ -153,6 +177,8 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             }
             glm::dvec3 n = -gradient;
             if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
+            // A wall's one air face takes its own normal (onFlatWall).
+            if (airFaces == 1 && onFlatWall(topo, i)) n = faces;
             SurfacePatch &patch = topo.patches.surface(i);
             patch.normal = glm::length(n) > 0.0 ? glm::normalize(n) : glm::dvec3(0.0, 0.0, 1.0);
             patch.sharp = onSharpEdge(topo, i);
