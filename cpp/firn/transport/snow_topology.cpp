@@ -91,6 +91,77 @@ bool onSharpEdge(const SnowTopology &topo, std::size_t i) {
     return false;
 }
 
+// The longest terrace onTerrace walks (voxels): a plane tilted less than atan(1 / 16) = 3.6 degrees to the grid has
+// longer ones, and its face's normal is as near the plane's.
+constexpr int kTerraceVoxels = 16;
+
+// Whether surface voxel i's air face f lies on a terrace of a voxel staircase: along one axis of its plane the face
+// runs flat to a one-voxel step at both ends, down (the face goes on a voxel lower past it) or up (the next voxel's
+// face is covered and the face goes on one voxel higher, or two where a thin voxel rides the step's edge). A plane
+// tilted 5-20 degrees to the grid is such a staircase, its terraces flat past a voxel for 3 or more voxels along the
+// slope and endlessly across it: onFlatWall took them for walls and gave their voxels the axis's normal, the full tilt
+// off the plane (bench/oblique_plane_probe.py, 15 degrees: bake / Monte Carlo 1.23 -> 1.28; docs/benchmarks.md,
+// wall-normal). A layer's cut side runs up to its convex top edge and down to the ground or its own foot, no step.
+bool onTerrace(const SnowTopology &topo, std::size_t i, int f) {
+    const auto snow = [&](std::int32_t link) { return !SnowTopology::isFace(link); };
+    // The last voxel of face f's flat run from i along face direction d, or nothing past kTerraceVoxels.
+    const auto runEnd = [&](int d) -> std::optional<std::size_t> {
+        std::size_t j = i;
+        for (int k = 0; k < kTerraceVoxels; ++k) {
+            const std::int32_t next = topo.link[j][d];
+            if (!snow(next) || !topo.isAirFace(std::size_t(next), f)) return j;
+            j = std::size_t(next);
+        }
+        return std::nullopt;
+    };
+    const auto stepDown = [&](std::size_t j, int d) {
+        if (!topo.isAirFace(j, d)) return false;
+        const std::int32_t under = topo.link[j][f ^ 1];
+        if (!snow(under)) return false;
+        const std::int32_t lower = topo.link[std::size_t(under)][d];
+        return snow(lower) && topo.isAirFace(std::size_t(lower), f);
+    };
+    const auto stepUp = [&](std::size_t j, int d) {
+        std::int32_t higher = topo.link[j][d];
+        for (int k = 0; k < 2 && snow(higher); ++k) {
+            higher = topo.link[std::size_t(higher)][f];
+            if (snow(higher) && topo.isAirFace(std::size_t(higher), f)) return true;
+        }
+        return false;
+    };
+    const auto step = [&](std::size_t j, int d) { return stepDown(j, d) || stepUp(j, d); };
+    for (int axis = 0; axis < 3; ++axis) {
+        if (axis == f / 2) continue;
+        const std::optional<std::size_t> lo = runEnd(2 * axis), hi = runEnd(2 * axis + 1);
+        if (lo && hi && step(*lo, 2 * axis) && step(*hi, 2 * axis + 1)) return true;
+    }
+    return false;
+}
+
+// Whether surface voxel i's one air face lies on a flat wall: the face goes on flat for kFlatWallVoxels both ways
+// along one axis of its plane and two voxels one way along the other (a layer's cut side below its top; not a
+// ball's cap, whose flat faces reach 2-3 voxels at most). There the 3^3 gradient reads the partly filled voxel over
+// the wall's top voxel and the air above it and tilted its normal 23-39 degrees up (bench/bake_suite.py's
+// bumpy_plate, its cut sides under a top half a voxel over the voxel), where the trilinear density's surface stands
+// within 14 degrees of the wall across that face: the tilted patch took the sky as a slope (more sky, less ground)
+// and showed views from above its exit's peak (the shadowed wall over a black ground +24 %, docs/benchmarks.md,
+// plate-valleys). Not a staircase's terrace (onTerrace), whose gradient follows its plane.
+constexpr int kFlatWallVoxels = 4;
+
+bool onFlatWall(const SnowTopology &topo, std::size_t i) {
+    int f = 0;
+    while (!topo.isAirFace(i, f)) ++f;
+    const auto both = [&](int axis, int voxels) {
+        return flatPast(topo, i, f, 2 * axis, voxels) && flatPast(topo, i, f, 2 * axis + 1, voxels);
+    };
+    const auto either = [&](int axis, int voxels) {
+        return flatPast(topo, i, f, 2 * axis, voxels) || flatPast(topo, i, f, 2 * axis + 1, voxels);
+    };
+    const int a = (f / 2 + 1) % 3, b = (f / 2 + 2) % 3;
+    return ((both(a, kFlatWallVoxels) && either(b, 2)) || (both(b, kFlatWallVoxels) && either(a, 2))) &&
+           !onTerrace(topo, i, f);
+}
+
 // A fringe voxel in front of a surface voxel (no denser than it) weighs in its normal by (its density / the voxel's)^
 // this: a fringe nearly as dense as the voxel holds the surface (the voxel lies a voxel under it, where the density
 // hardly changes along the normal and the fringe's steps across it tilt the gradient), a thin one does not. Against
@@ -102,7 +173,8 @@ bool onSharpEdge(const SnowTopology &topo, std::size_t i) {
 constexpr double kFringeNormalExponent = 8.0;
 
 // Outward normal from the density gradient (a 3x3x3 Sobel stencil, plus each fringe voxel's in front by
-// kFringeNormalExponent), or from the air faces where the gradient is flat or points the wrong way.
+// kFringeNormalExponent), or from the air faces where the gradient is flat or points the wrong way or the voxel's one
+// air face lies on a flat wall (onFlatWall).
 void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
     auto slot = std::make_shared<std::vector<std::int32_t>>(topo.size(), -1);
     std::int32_t surfaceVoxels = 0;
@@ -153,6 +225,8 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
             }
             glm::dvec3 n = -gradient;
             if (glm::length(n) <= 1e-6 * topo.density[i] || glm::dot(n, faces) < 0.0) n = faces;
+            // A wall's one air face takes its own normal (onFlatWall).
+            if (airFaces == 1 && onFlatWall(topo, i)) n = faces;
             SurfacePatch &patch = topo.patches.surface(i);
             patch.normal = glm::length(n) > 0.0 ? glm::normalize(n) : glm::dvec3(0.0, 0.0, 1.0);
             patch.sharp = onSharpEdge(topo, i);
