@@ -615,12 +615,7 @@ void limbCarriedInRamp(const Scene &scene, const SnowTopology &topo, const openv
     // the density: the topology keeps no links here.
     const glm::dvec3 n = topo.patches[j].normal;
     const double h = medium.voxelSize();
-    const int axis = std::abs(n.x) >= std::max(std::abs(n.y), std::abs(n.z)) ? 0
-                     : std::abs(n.y) >= std::abs(n.z)                        ? 1
-                                                                             : 2;
-    openvdb::Coord below = carrier;
-    below[axis] -= n[axis] > 0.0 ? 1 : -1;
-    const float under = density.getValue(below);
+    const float under = density.getValue(carrier + faceStep(faceBeneath(n)));
     const double beneath = under > 0.0f ? under : density.getValue(carrier);  // kg/m^3
     if (!(beneath > 0.0)) return;
     const double mass =  // kg/m^2

@@ -59,10 +59,7 @@ double patchRampMass(const SnowTopology &topo, std::size_t i) {
 // The density of the snow beneath surface voxel i's patch: its neighbour against the normal's largest component
 // (its own where that is no snow).
 double densityBeneath(const SnowTopology &topo, std::size_t i, const glm::dvec3 &n) {
-    const int axis = std::abs(n.x) >= std::max(std::abs(n.y), std::abs(n.z)) ? 0
-                     : std::abs(n.y) >= std::abs(n.z)                        ? 1
-                                                                             : 2;
-    const std::int32_t link = topo.link[i][2 * axis + (n[axis] > 0.0 ? 0 : 1)];
+    const std::int32_t link = topo.link[i][faceBeneath(n)];
     return SnowTopology::isFace(link) ? topo.density[i] : topo.density[std::size_t(link)];
 }
 

@@ -1,6 +1,8 @@
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -27,6 +29,14 @@ inline glm::dvec3 faceNormal(int face) {
     glm::dvec3 n(0.0);
     n[face / 2] = (face & 1) ? 1.0 : -1.0;
     return n;
+}
+// The face of a voxel against the largest component of a surface's outward normal n: its neighbour there is the snow
+// beneath the surface.
+inline int faceBeneath(const glm::dvec3 &n) {
+    const int axis = std::abs(n.x) >= std::max(std::abs(n.y), std::abs(n.z)) ? 0
+                     : std::abs(n.y) >= std::abs(n.z)                        ? 1
+                                                                             : 2;
+    return 2 * axis + (n[axis] > 0.0 ? 0 : 1);
 }
 
 // A face of a snow voxel where the snow ends: open air, or an occluder between the voxel's centre and
