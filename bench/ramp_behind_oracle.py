@@ -7,12 +7,13 @@ gradient over 3^3) the view's rays leave along (n . d > --leaving) is scaled by 
 bench/ramp_from_behind.py measures in the ramp's outer part (x 29.85: +48 %). Against the suite's cached reference.
 
 --edges (bumpy_plate): instead, for every view, the top snow voxel of each column on the layer's four cut sides (the
-layer's convex top edge), and with --edges-air their air neighbours across the cut sides too. --corners (bumpy_plate):
+layer's convex top edge), and with --edges-air their air neighbours across the cut sides too (--air-only: those air
+voxels alone, the render's blend of the edge with the air beside it). --corners (bumpy_plate):
 the four voxel columns where two cut sides meet (the layer's vertical corners, snow and the air above), with --edges
 added to them.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/ramp_behind_oracle.py [--case bumpy_plate] [--factor 0.676]
-        [--leaving 0] [--edges [--edges-air]] [--corners]
+        [--leaving 0] [--edges [--edges-air | --air-only]] [--corners]
 """
 
 import argparse
@@ -81,6 +82,7 @@ def main():
     parser.add_argument("--edges", action="store_true", help="scale bumpy_plate's cut top edge instead")
     parser.add_argument("--edges-air", action="store_true", help="with --edges: their air neighbours too")
     parser.add_argument("--corners", action="store_true", help="scale bumpy_plate's four vertical corner columns")
+    parser.add_argument("--air-only", action="store_true", help="with --edges: only the air neighbours across the sides")
     args = parser.parse_args()
     case = next(c for c in bs.cases() if c.name == args.case)
     origins, directions, tau = bs.views(case)
@@ -102,7 +104,9 @@ def main():
             rays = slice(v * per, (v + 1) * per)
             if args.edges or args.corners:
                 mask = corner_columns(snow) if args.corners else np.zeros(snow.shape, bool)
-                if args.edges:
+                if args.edges and args.air_only:
+                    mask |= cut_top_edges(snow, True) & ~cut_top_edges(snow, False)
+                elif args.edges:
                     mask |= cut_top_edges(snow, args.edges_air)
             else:
                 mask = air_beside & (normal @ directions[v * per] > args.leaving)
@@ -111,7 +115,8 @@ def main():
             pyopenvdb.write(view_path, grids=grids, metadata=metadata)
             oracle[rays] = firncore.render_baked(view_path, case.optics, origins[rays], directions[rays],
                                                  occluders=case.occluders)
-    edges = f"the cut top edge{' and its air neighbours' if args.edges_air else ''}"
+    edges = "the cut top edge's air neighbours across the sides" if args.air_only else \
+        f"the cut top edge{' and its air neighbours' if args.edges_air else ''}"
     if args.corners:
         scaled = "the four corner columns" + (f" and {edges}" if args.edges else "")
     else:
