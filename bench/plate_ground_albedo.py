@@ -31,6 +31,14 @@ def groups(case, origins, hit, seen):
     return [("edge columns", edge), ("shadowed wall", wall), ("the rest", seen & ~edge & ~wall)]
 
 
+def over_ground(case, light, albedo):
+    """The case under `light` alone (light_case) with its ground's albedo set to `albedo` (R, G, B)."""
+    c = light_case(case, light)
+    plate, ground = c.occluders
+    c.occluders = [plate, (ground[0], ground[1], albedo)]
+    return c
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--lights", default="sky,sun")
@@ -48,9 +56,7 @@ def main():
         path = os.path.join(folder, "bumpy.vdb")
         bs.write_density(path, case.density, case.voxel)
         for light in args.lights.split(","):
-            c = light_case(case, light)
-            plate, ground = c.occluders
-            c.occluders = [plate, (ground[0], ground[1], albedo)]
+            c = over_ground(case, light, albedo)
             file = os.path.join(args.cache, f"{light}_{args.albedo}_{args.samples}.npz")
             truth, error = cached_monte_carlo(file, path, c, origins, directions, args.samples)
             firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)

@@ -29,7 +29,7 @@ import pyopenvdb
 
 import bake_suite as bs
 import firncore
-from plate_err_regions import light_case
+from plate_ground_albedo import over_ground
 
 
 def slab(side, depth, extra):
@@ -142,9 +142,7 @@ def main():
         path = os.path.join(folder, "plate.vdb")
         bs.write_density(path, case.density, case.voxel)
         for light in args.lights.split(","):
-            c = light_case(case, light)
-            plate, ground = c.occluders
-            c.occluders = [plate, (ground[0], ground[1], albedo)]
+            c = over_ground(case, light, albedo)
             truth = firncore.monte_carlo_radiance(path, c.optics, origins, directions, suns=c.suns(), sky=c.skies(),
                                                   occluders=c.occluders, samples=args.samples, seed=5)[0]
             firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
