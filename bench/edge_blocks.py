@@ -124,14 +124,15 @@ def main():
     for i in np.nonzero(first > args.over)[0]:
         v, q = divmod(i, per)
         voxel = tuple(int(x) for x in np.rint(hits[i] / case.voxel))
-        print(f"  {str(case.views[v]):<10} row {q // case.pixels} col {q % case.pixels}  {kind[i]:<16} tau {tau[i]:6.1f}  "
-              f"peak fill {peak[i]:.2f}  depth 1 in {voxel}, sun depth {sun[i]:5.2f}  error {100 * relative[0, i]:+6.1f} %  "
-              f"seeds' mean {100 * (ratio[:, i].mean() - 1.0):+6.1f} %  spread {100 * spread[i]:.1f} %  "
-              f"ref noise {100 * error[i, 1] / mean[i, 1]:.1f} %")
+        print(f"  {str(case.views[v]):<10} row {q // case.pixels} col {q % case.pixels}  {kind[i]:<16} "
+              f"tau {tau[i]:6.1f}  peak fill {peak[i]:.2f}  depth 1 in {voxel}, sun depth {sun[i]:5.2f}  "
+              f"error {100 * relative[0, i]:+6.1f} %  seeds' mean {100 * (ratio[:, i].mean() - 1.0):+6.1f} %  "
+              f"spread {100 * spread[i]:.1f} %  ref noise {100 * error[i, 1] / mean[i, 1]:.1f} %")
     for k in sorted(set(kind[seen])):
         where = seen & (kind == k)
+        over = (first[where] > args.over).sum()
         print(f"  {k:<16} {where.sum():4d} pixels  mean |error| {100 * first[where].mean():5.1f} %  "
-              f"over {100 * args.over:.0f} %: {(first[where] > args.over).sum():3d}  worst {100 * first[where].max():5.1f} %")
+              f"over {100 * args.over:.0f} %: {over:3d}  worst {100 * first[where].max():5.1f} %")
 
 
 if __name__ == "__main__":
