@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -588,59 +589,89 @@ void skyInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
     S.l0 += glm::vec3(arriving * glm::dvec3(medium.optics().albedo) * kInvFourPi);
 }
 
+// The skin beneath a ramp voxel's carrier (the surface voxel facing it most): its curvature (per voxel,
+// surfaceCurvature), ramp thickness (voxels: 2 m / rho as its patch's, patchRampMass over densityBeneath, read from the
+// density, the topology keeping no links here) and the density beneath it. LimbSkins finds it once per carrier: the
+// ramp voxels around a carrier share it, and each walked the carrier's column and read its curvature again.
+struct LimbSkin {
+    double curvature = 0.0, thickness = 0.0, beneath = 0.0;  // per voxel, voxels, kg/m^3; thickness 0: none
+};
+
+class LimbSkins {
+  public:
+    // carrier: a smooth surface voxel, j its unknown.
+    const LimbSkin &at(const SnowTopology &topo, const openvdb::Coord &carrier, std::int32_t j,
+                       openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::Accessor &density,
+                       Medium::ColumnMarcher &marcher, const Medium &medium) {
+        const auto [it, inserted] = skins_.try_emplace(carrier);
+        LimbSkin &skin = it->second;
+        if (!inserted) return skin;
+        skin.curvature = surfaceCurvature(topo, carrier, index);
+        if (!(skin.curvature > 0.0)) return skin;
+        const glm::dvec3 n = topo.patches[std::size_t(j)].normal;
+        const float under = density.getValue(carrier + faceStep(faceBeneath(n)));
+        skin.beneath = under > 0.0f ? under : density.getValue(carrier);
+        if (!(skin.beneath > 0.0)) return skin;
+        const double h = medium.voxelSize();
+        const double mass =  // kg/m^2
+            marcher.column(medium.voxelCentre(carrier), n, 4.0 * h, std::numeric_limits<double>::infinity());
+        skin.thickness = 2.0 * mass / (skin.beneath * h);
+        return skin;
+    }
+    // The carriers of a leaf's voxels lie within a voxel of it: cleared per leaf, the map stays small.
+    void clear() { skins_.clear(); }
+
+  private:
+    std::map<openvdb::Coord, LimbSkin> skins_;
+};
+
 // The sun's light the skin of a convex surface carries past its limb (limb_carry.h), scattered once in ramp voxel c
 // (outside the unknowns, carrying its surface's radiance) beside optically thick snow (besideThickSnow) on its way:
 // a peaked lobe of k = g about the sun's travel, of mean omega F / 4 pi, the carried flux F = omega g^2 A E
 // limbCarriedFlux averaged over c's trilinear hat weighted by the density (what the renderer's emission weighs; 4^3
 // points), E the sun's irradiance, A the half-space's albedo of it at the carrier's sun cosine (0.05 at least), f the
 // density over the carrier's beneath it; past the terminator times the delta-scaled sun's transmittance there (the
-// lines' way through the skin from the terminator on; without it ball_grey's worst block read +67 %).
+// lines' way through the skin from the terminator on; without it ball_grey's worst block read +67 %), omega g^2 and
+// the exponent 1 - omega g^2 each channel's.
 // Placed by height: the outer skin, whose camera chords cross only the ramp, carries what the mass above it
 // scattered. Added to the patches' return, not taken from it: taken (omega g^2 (1 - z*/Delta)^2 of each smooth patch's
 // returned sun) it darkened the view against the sun, whose light the carried peaks are (ball_issue -13.5 -> -18 to
-// -28 %; docs/benchmarks.md, limb-ramp). The occluders' shadow taken at c's centre. normal: the carrying surfaces'
+// -28 %; docs/benchmarks.md, limb-ramp); placed by the sun's chord (E (T_delta - T)) and taken from the patches'
+// peaks as much as leaves on their lines, -12.6 -> -24 % (limb-conserve). The occluders' shadow taken at c's centre. normal: the carrying surfaces'
 // (facingAverage), zero where none faces c; carrier: the surface voxel facing c most; sunAt: the quarter-voxel
-// lattice's suns.
+// lattice's suns; skins: the carriers' skins (LimbSkins).
 void limbCarriedInRamp(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c,
                        const openvdb::Coord &carrier, const glm::dvec3 &normal,
                        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::Accessor &density,
-                       Medium::ColumnMarcher &marcher, QuarterPointSun &sunAt, Source &S) {
+                       Medium::ColumnMarcher &marcher, QuarterPointSun &sunAt, LimbSkins &skins, Source &S) {
     if (glm::length(normal) == 0.0 || scene.suns.empty()) return;
     const std::int32_t j = index.getValue(carrier);
     if (j < 0 || !topo.patches[j].isSurface() || topo.patches[j].sharp) return;
     const Medium &medium = *scene.medium;
-    const double curvature = surfaceCurvature(topo, carrier, index);  // per voxel
-    if (!(curvature > 0.0) || !besideThickSnow(medium, density, c)) return;
-    // The carrier's ramp thickness (voxels), 2 m / rho as its patch's (patchRampMass over densityBeneath), read from
-    // the density: the topology keeps no links here.
-    const glm::dvec3 n = topo.patches[j].normal;
-    const double h = medium.voxelSize();
-    const float under = density.getValue(carrier + faceStep(faceBeneath(n)));
-    const double beneath = under > 0.0f ? under : density.getValue(carrier);  // kg/m^3
-    if (!(beneath > 0.0)) return;
-    const double mass =  // kg/m^2
-        marcher.column(medium.voxelCentre(carrier), n, 4.0 * h, std::numeric_limits<double>::infinity());
-    const double skin = 2.0 * mass / (beneath * h);
-    if (!(skin > 0.0)) return;
+    const LimbSkin &skin = skins.at(topo, carrier, j, index, density, marcher, medium);
+    if (!(skin.thickness > 0.0) || !besideThickSnow(medium, density, c)) return;
     const VolumeOptics &optics = medium.optics();
-    const double forwardKept = optics.albedo.y * optics.g * optics.g;
+    glm::dvec3 kept;  // per channel: omega g^2, and 1 - it the delta-scaled transmittance's exponent
+    for (int ch = 0; ch < 3; ++ch) kept[ch] = limbForwardFraction(optics.albedo[ch], optics.g);
     const glm::dvec3 centre = medium.voxelCentre(c);
     for (std::size_t b = 0; b < scene.suns.size(); ++b) {
         const SunLight &sun = scene.suns[b];
         const double mu = glm::dot(normal, sun.direction);
-        if (mu * mu >= 2.0 * curvature * skin || occludersHide(scene, centre, sun.direction)) continue;
-        const double flux = hatAverage<double>(c, marcher, [&](const openvdb::Coord &q) {
-            const double f = marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0) / beneath;
-            const double carried = limbCarriedFlux(f, mu, curvature, skin);
-            return mu < 0.0 && carried > 0.0 ? carried * std::pow(sunAt.at(b, sun.direction, q), 1.0 - forwardKept)
-                                             : carried;
+        if (mu * mu >= 2.0 * skin.curvature * skin.thickness || occludersHide(scene, centre, sun.direction)) continue;
+        const glm::dvec3 flux = hatAverage<glm::dvec3>(c, marcher, [&](const openvdb::Coord &q) {
+            const double f = marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0) / skin.beneath;
+            const double carried = limbCarriedFlux(f, mu, skin.curvature, skin.thickness);
+            if (!(carried > 0.0) || mu >= 0.0) return glm::dvec3(carried);
+            const double T = sunAt.at(b, sun.direction, q);
+            return carried *
+                   glm::dvec3(std::pow(T, 1.0 - kept.x), std::pow(T, 1.0 - kept.y), std::pow(T, 1.0 - kept.z));
         });
-        if (!(flux > 0.0)) continue;
+        if (!(flux.x + flux.y + flux.z > 0.0)) continue;
         glm::dvec3 mean(0.0);
         for (int ch = 0; ch < 3; ++ch) {
             const double omega = optics.albedo[ch];
             const double A = sunLobe(optics.g, std::max(mu, 0.05), absorptionParameter(omega, optics.g)).albedo;
-            mean[ch] = limbForwardFraction(omega, optics.g) * A * flux * sun.irradiance[ch] * omega * kInvFourPi;
+            mean[ch] = kept[ch] * A * flux[ch] * sun.irradiance[ch] * omega * kInvFourPi;
         }
         S.addPeak(mean, crossingAnisotropy(optics.g), -sun.direction);
     }
@@ -724,8 +755,10 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
         Medium::ColumnMarcher marcher(medium);
         Medium::Accessor density = medium.accessor();
         QuarterPointSun sunAt(medium, scene.suns.size());
+        LimbSkins limbSkins;
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             sunAt.startLeaf(leaves.leaf(l).origin());
+            limbSkins.clear();
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
                 const std::int32_t t = tracedIndex.getValue(c);
@@ -747,7 +780,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 }
                 if (!gathering) {
                     skyInRamp(scene, c, facing, index, rampOfThickConvexSnow, marcher, S);
-                    limbCarriedInRamp(scene, topo, c, carrier, facing, index, density, marcher, sunAt, S);
+                    limbCarriedInRamp(scene, topo, c, carrier, facing, index, density, marcher, sunAt, limbSkins, S);
                 }
                 perLeaf[l].add(it.pos(), S);
             }
