@@ -637,9 +637,9 @@ class LimbSkins {
 // scattered. Added to the patches' return, not taken from it: taken (omega g^2 (1 - z*/Delta)^2 of each smooth patch's
 // returned sun) it darkened the view against the sun, whose light the carried peaks are (ball_issue -13.5 -> -18 to
 // -28 %; docs/benchmarks.md, limb-ramp); placed by the sun's chord (E (T_delta - T)) and taken from the patches'
-// peaks as much as leaves on their lines, -12.6 -> -24 % (limb-conserve). The occluders' shadow taken at c's centre. normal: the carrying surfaces'
-// (facingAverage), zero where none faces c; carrier: the surface voxel facing c most; sunAt: the quarter-voxel
-// lattice's suns; skins: the carriers' skins (LimbSkins).
+// peaks as much as leaves on their lines, -12.6 -> -24 % (limb-conserve). The occluders' shadow taken at c's centre.
+// normal: the carrying surfaces' (facingAverage), zero where none faces c; carrier: the surface voxel facing c most;
+// sunAt: the quarter-voxel lattice's suns; skins: the carriers' skins (LimbSkins).
 void limbCarriedInRamp(const Scene &scene, const SnowTopology &topo, const openvdb::Coord &c,
                        const openvdb::Coord &carrier, const glm::dvec3 &normal,
                        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::Accessor &density,
