@@ -314,6 +314,7 @@ py::dict statsDict(const firn::BakeStats &stats) {
     py::dict d;
     d["unknowns"] = stats.unknowns;
     d["surface_voxels"] = stats.surfaceVoxels;
+    d["sky_traced_voxels"] = stats.skyTracedVoxels;
     d["traced_voxels"] = stats.tracedVoxels;
     d["scatter_voxels"] = stats.scatterVoxels;
     d["traced_paths"] = stats.tracedPaths;

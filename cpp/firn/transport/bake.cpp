@@ -409,6 +409,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     local.unknowns = topo.size();
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
     local.surfaceVoxels = topo.surfaceVoxels();
+    local.skyTracedVoxels = light.skyTraced;
     const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
     // Snow hides some patch's sky, or occluders send back enough of the snow's light (bake_snow_irradiance.cpp):
     // gather.

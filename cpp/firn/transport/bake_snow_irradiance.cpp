@@ -90,21 +90,24 @@ SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, cons
         BakedValuesSampler baked(topo, source, traced, values);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!light.snowRays[i] && !light.occluderRays[i]) continue;
+            const SkyRays own = skyRaysAt(topo, i, rays.count(), light.skyLattice);
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
             glm::dvec3 sum(0.0), towards(0.0);
-            for (int k = 0; k < rays.count(); ++k) {
+            for (int k = 0; k < own.count(); ++k) {
                 if (!((light.snowRays[i] >> k) & 1)) continue;
-                const glm::dvec3 w = rays.direction(topo.patches[i].normal, k, seed, i);
+                const glm::dvec3 w = own.direction(topo.patches[i].normal, k, seed, i);
                 const auto hit = scene.occluders->caster().intersect(glm::vec3(p), glm::vec3(w), 1e-5f);
                 const double tMax = hit ? double(hit->distance) : std::numeric_limits<double>::infinity();
                 const glm::dvec3 radiance = bakedRadianceAlong(scene, marcher, baked, Ray{p, w}, tMax, 0.5);
                 sum += radiance, towards += greyMoment(radiance, w);
             }
-            sum += occludersSendBack(scene, marcher, baked, topo, rays, light.occluderRays[i], p, seed, i, towards);
-            out.irradiance.surface(i) = glm::vec3(kPi * sum / double(rays.count()));  // snowRays: a surface voxel
-            out.aim.surface(i) = glm::vec3(kPi * towards / double(rays.count()));
+            sum += occludersSendBack(scene, marcher, baked, topo, own, light.occluderRays[i], p, seed, i, towards);
+            out.irradiance.surface(i) = glm::vec3(kPi * sum / double(own.count()));  // snowRays: a surface voxel
+            out.aim.surface(i) = glm::vec3(kPi * towards / double(own.count()));
         }
     });
+    fillFromSkyDonors(topo, light.fromDonors, out.irradiance, false);
+    fillFromSkyDonors(topo, light.fromDonors, out.aim, true);
     return out;
 }
 

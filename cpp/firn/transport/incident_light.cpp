@@ -89,12 +89,14 @@ glm::dvec3 spreadingTransmittance(const Medium &medium, const BlockMasses &block
 glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dvec3 &n, const SkyRays &rays,
                           bool bounce, Crossing crossing, std::uint64_t seed, std::uint64_t stream,
                           Medium::ColumnMarcher &marcher, std::uint64_t *snowRays = nullptr, glm::vec3 *aim = nullptr,
-                          double *occluderAlbedo = nullptr, std::uint64_t *occluderRays = nullptr) {
+                          double *occluderAlbedo = nullptr, std::uint64_t *occluderRays = nullptr,
+                          double *greyError = nullptr) {
     const glm::dvec3 reduced = extinction(scene.medium->optics(), crossing);
     const double limit = columnLimit(reduced);
     const double thinnest = std::min({reduced.x, reduced.y, reduced.z});
     Rng rng(seed ^ 0xB0B0ull, stream);  // for the occluders' reflections
     glm::dvec3 sum(0.0), towards(0.0);
+    double greySquares = 0.0;  // W^2/m^4, the rays' grey irradiance squared
     std::uint64_t hidden = 0, met = 0;
     // Without the bounce a ray that meets an occluder brings nothing, and unless asked which rays snow hides, whether
     // it meets one is all that counts: Embree's any-hit query, cheaper than the nearest hit.
@@ -125,7 +127,11 @@ glm::vec3 skyIrradianceAt(const Scene &scene, const glm::dvec3 &p, const glm::dv
             continue;
         }
         const glm::dvec3 arriving = kPi * radiance * transmittance(reduced, column);
-        sum += arriving, towards += greyMoment(arriving, w);
+        sum += arriving, towards += greyMoment(arriving, w), greySquares += std::pow(channelMean(arriving), 2);
+    }
+    if (greyError) {
+        const double n = rays.count(), mean = channelMean(sum) / n;
+        *greyError = n > 1 ? std::sqrt(std::max(0.0, greySquares / n - mean * mean) / (n - 1)) : 0.0;
     }
     if (snowRays) *snowRays = hidden;
     if (occluderRays) *occluderRays = met;
@@ -180,6 +186,38 @@ Steps stepsTowards(const glm::dvec3 &w) {
             steps.offset[steps.count++] = o;
         }
     return steps;
+}
+
+// What a traced patch's sky rays say, for its neighbours' test of agreement (skyDonorsAgree).
+struct SkyEstimate {
+    float grey = 0.0f, greyError = 0.0f;  // W/m^2: the grey irradiance and its standard error over the rays
+    std::uint8_t rays = 0, hidden = 0, met = 0;  // rays; of them snow hides; snow does not hide that meet an occluder
+};
+
+// Whether two patches' rays (each its own count) may see the same sky: the grey irradiance within kAgreement standard
+// errors of the difference (1e-3 of it where both are exact: every ray open, or every ray hidden), and so the shares of
+// the rays snow hides and occluders meet, with their binomial errors (what the gathering later reads along them).
+bool skyAgrees(const SkyEstimate &a, const SkyEstimate &b) {
+    constexpr double kAgreement = 2.0;
+    const double error = std::hypot(double(a.greyError), double(b.greyError));
+    if (std::abs(a.grey - b.grey) > kAgreement * error + 1e-3 * std::max(a.grey, b.grey)) return false;
+    const auto shares = [&](int x, int y) {
+        const double p = double(x) / a.rays, q = double(y) / b.rays;
+        return std::abs(p - q) <= kAgreement * std::sqrt(p * (1.0 - p) / a.rays + q * (1.0 - q) / b.rays);
+    };
+    return shares(a.hidden, b.hidden) && shares(a.met, b.met);
+}
+
+// Whether surface voxel i's sky donors (forEachSkyDonor), at least two, agree pairwise.
+bool skyDonorsAgree(const SnowTopology &topo, const SurfaceValues<SkyEstimate> &estimates, std::size_t i) {
+    std::array<const SkyEstimate *, 26> donors;
+    std::size_t count = 0;
+    forEachSkyDonor(topo, i, [&](std::size_t j) { donors[count++] = &estimates[j]; });
+    if (count < 2) return false;
+    for (std::size_t a = 0; a < count; ++a)
+        for (std::size_t b = a + 1; b < count; ++b)
+            if (!skyAgrees(*donors[a], *donors[b])) return false;
+    return true;
 }
 
 template <typename Body>
@@ -318,6 +356,39 @@ glm::dvec3 SkyRays::direction(const glm::dvec3 &normal, int k, std::uint64_t see
     Rng rng(seed, stream * 64 + std::uint64_t(k));
     return sampleCosineHemisphere(normal, (k / columns_ + rng.uniform()) / rows_,
                                   (k % columns_ + rng.uniform()) / columns_);
+}
+
+SkyRays skyRaysAt(const SnowTopology &topo, std::size_t i, int samples, bool lattice) {
+    return SkyRays(lattice && (topo.patches[i].sharp || onSkyLattice(topo, i)) ? kLatticeRays * samples : samples);
+}
+
+bool onSkyLattice(const SnowTopology &topo, std::size_t i) {
+    const int axis = faceBeneath(topo.patches[i].normal) / 2;
+    const openvdb::Coord &c = topo.coord[i];
+    return ((c[(axis + 1) % 3] | c[(axis + 2) % 3]) & 1) == 0;
+}
+
+void fillFromSkyDonors(const SnowTopology &topo, const SurfaceValues<std::uint8_t> &fromDonors,
+                       SurfaceValues<glm::vec3> &values, bool leaning) {
+    // v turned by the least rotation taking unit a onto unit b (Rodrigues' formula with u = a x b, c = a . b > -1).
+    const auto turned = [](const glm::dvec3 &v, const glm::dvec3 &a, const glm::dvec3 &b) {
+        const glm::dvec3 u = glm::cross(a, b);
+        const double c = glm::dot(a, b);
+        return v * c + glm::cross(u, v) + u * (glm::dot(u, v) / (1.0 + c));
+    };
+    // Donors lie on the lattice and are never filled: each value is read from traced ones alone.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface() || !fromDonors[i]) continue;
+            glm::dvec3 sum(0.0);
+            int count = 0;
+            forEachSkyDonor(topo, i, [&](std::size_t j) {
+                const glm::dvec3 v(values[j]);
+                sum += leaning ? turned(v, topo.patches[j].normal, topo.patches[i].normal) : v, ++count;
+            });
+            values.surface(i) = glm::vec3(sum / double(count));  // count >= 2: skyDonorsAgree
+        }
+    });
 }
 
 void averageOverNeighbours(const SnowTopology &topo, SurfaceValues<glm::vec3> &values) {
@@ -461,23 +532,45 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     // The albedos met, summed over the surface patches' rays in fixed point (2^-32): integer sums do not depend on
     // how the threads split the patches, so the gate on the share (bake.cpp) is the same every run.
     std::atomic<std::uint64_t> albedoSum{0};
-    parallelChunks(topo.size(), progress, [&](const auto &range) {
-        Medium::ColumnMarcher marcher(medium);
-        Medium::Accessor density = medium.accessor();
-        std::uint64_t albedos = 0;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!topo.patches[i].isSurface()) continue;
-            double met = 0.0;
-            light.skyOnSurface.surface(i) = skyIrradianceAt(
-                scene, patchOutside(medium, topo, i, density), topo.patches[i].normal, rays, bounce,
-                Crossing::Uncollided, seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i), &met,
-                &light.occluderRays.surface(i));
-            albedos += std::uint64_t(std::llround(met * 4294967296.0));
-        }
-        albedoSum += albedos;
-    });
-    if (topo.surfaceVoxels() > 0)
-        light.occluderShare = double(albedoSum) / 4294967296.0 / (double(topo.surfaceVoxels()) * double(rays.count()));
+    std::atomic<std::size_t> skyTraced{0}, raysTraced{0};
+    // The lattice (and sharp voxels) first, then the voxels between, from their donors where those agree; without the
+    // lattice all in the first pass.
+    light.skyLattice = settings.skyOverNeighbours;
+    SurfaceValues<SkyEstimate> estimates(topo.surfaceSlot, topo.surfaceVoxels());
+    light.fromDonors = SurfaceValues<std::uint8_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
+    for (const bool first : {true, false}) {
+        parallelChunks(topo.size(), progress, [&](const auto &range) {
+            Medium::ColumnMarcher marcher(medium);
+            Medium::Accessor density = medium.accessor();
+            std::uint64_t albedos = 0;
+            std::size_t traced = 0, tracedRays = 0;
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                const SurfacePatch &patch = topo.patches[i];
+                if (!patch.isSurface()) continue;
+                if ((!light.skyLattice || patch.sharp || onSkyLattice(topo, i)) != first) continue;
+                if (!first && skyDonorsAgree(topo, estimates, i)) {
+                    light.fromDonors.surface(i) = 1;
+                    continue;
+                }
+                double met = 0.0, greyError = 0.0;
+                const SkyRays own = skyRaysAt(topo, i, settings.skySamples, light.skyLattice);
+                const glm::vec3 sky = light.skyOnSurface.surface(i) = skyIrradianceAt(
+                    scene, patchOutside(medium, topo, i, density), patch.normal, own, bounce, Crossing::Uncollided,
+                    seed, i, marcher, &light.snowRays.surface(i), &light.skyAim.surface(i), &met,
+                    &light.occluderRays.surface(i), &greyError);
+                estimates.surface(i) = {float(channelMean(sky)), float(greyError), std::uint8_t(own.count()),
+                                        std::uint8_t(__builtin_popcountll(light.snowRays[i])),
+                                        std::uint8_t(__builtin_popcountll(light.occluderRays[i]))};
+                albedos += std::uint64_t(std::llround(met * 4294967296.0)), ++traced, tracedRays += own.count();
+            }
+            albedoSum += albedos, skyTraced += traced, raysTraced += tracedRays;
+        });
+    }
+    fillFromSkyDonors(topo, light.fromDonors, light.skyOnSurface, false);
+    fillFromSkyDonors(topo, light.fromDonors, light.skyAim, true);
+    light.skyTraced = skyTraced;
+    if (light.skyTraced > 0)  // the share over the traced patches: the others' stand for them
+        light.occluderShare = double(albedoSum) / 4294967296.0 / double(raysTraced);
     if (settings.skyOverNeighbours)
         averageOverNeighbours(topo, light.skyOnSurface), averageOverNeighbours(topo, light.skyAim);
     if (scene.sky.isBlack()) return light;

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
 #include "firn/transport/block_masses.h"
@@ -49,6 +50,12 @@ struct IncidentLight {
     double occluderShare = 0.0;
     // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
     std::vector<glm::vec3> skyUnderSnow;
+    // Per surface voxel: 1 where its sky was not traced but is its sky donors' mean (skyDonors: the traced lattice
+    // patches about it, which agree within their noise); its snowRays and occluderRays are 0, and the light gathered
+    // from other snow onto it is its donors' mean too (fillFromSkyDonors).
+    SurfaceValues<std::uint8_t> fromDonors;
+    std::size_t skyTraced = 0;  // surface voxels whose sky rays were traced
+    bool skyLattice = false;    // traced on the lattice (skyRaysAt), where the sky is pooled over neighbours
 };
 
 // The rays a surface patch gathers its sky along: cosine-weighted around its normal, one jittered in each cell of a
@@ -87,6 +94,36 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topol
 // 3^3 block whose normals lie within about 25 degrees of its own: neighbours see nearly the same sky, so a few
 // rays each (SkyRays, each voxel's own jitter) pool into a less noisy estimate. Sharp edges keep their own.
 void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3> &values);
+
+// The sky varies slowly over most of a surface (an open roof, flat ground, a cavity's floor): it is traced on a
+// coarse lattice of surface voxels, those whose two coordinates across their normal's largest axis are even (a quarter
+// of a flat surface), and at sharp voxels. Another surface voxel's sky donors are the lattice voxels of its 3^3 block,
+// smooth and facing within about 25 degrees of it; where at least two agree within their noise (skyDonorsAgree) it
+// takes their mean, elsewhere (shadow edges, the ground at a wheel, too few donors) its own rays are traced.
+bool onSkyLattice(const SnowTopology &topology, std::size_t i);
+// The rays surface voxel i traces for `samples` asked: with the lattice (`lattice`), kLatticeRays times as many on it
+// and at sharp voxels, whose sky the voxels between take: FINAL pools each voxel's sky over its like-facing neighbours
+// (averageOverNeighbours), and at the samples asked the lattice's means left ~4 of its ~9 independent estimates (the
+// car's grid noise 1.52x, as 4 rays everywhere; docs/benchmarks.md, car-sky-sparse). Without it (REFERENCE: no
+// pooling) every surface voxel traces `samples`.
+constexpr int kLatticeRays = 2;
+SkyRays skyRaysAt(const SnowTopology &topology, std::size_t i, int samples, bool lattice);
+template <typename Visit>
+void forEachSkyDonor(const SnowTopology &topo, std::size_t i, const Visit &visit) {
+    constexpr double kMinCosine = 0.9;  // as averageOverNeighbours
+    for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
+        const std::uint32_t j = topo.neighbourhood[k];
+        const SurfacePatch &donor = topo.patches[j];
+        if (j != i && !donor.sharp && onSkyLattice(topo, j) &&
+            glm::dot(topo.patches[i].normal, donor.normal) >= kMinCosine)
+            visit(std::size_t(j));
+    }
+}
+// Each surface voxel marked in `fromDonors` given its sky donors' mean of `values`. `leaning`: the values are a first
+// moment over the directions light arrives from (IncidentLight::skyAim), each donor's turned with its normal onto the
+// voxel's first: untouched, a donor 25 degrees round a curve would make an even sky lean by a third (skyBeamPart).
+void fillFromSkyDonors(const SnowTopology &topology, const SurfaceValues<std::uint8_t> &fromDonors,
+                       SurfaceValues<glm::vec3> &values, bool leaning);
 
 // Surface voxel i's patch itself, on the snow's surface (patchOutside: past its ramp): half a voxel out from its
 // centre along its normal (m, world), where a light's beam enters it; its way to a lamp and its occluders' shadow are
