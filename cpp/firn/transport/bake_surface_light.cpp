@@ -16,10 +16,10 @@ namespace firn::bake {
 
 namespace {
 
-// How far (transport mean free paths) a sharp edge's face's exit relaxes towards its neighbour's (relaxTowardsNeighbours):
-// under the sky over a black ground the Monte Carlo's top face of a flat slab's edge voxel is 0.88 of the inside's
-// where the side's exit is 0.73 of it, kappa 0.44, a reach of 0.52 voxel at 4.5 transport mean free paths per voxel
-// (bench/plate_side_probe.py --shape slab, docs/benchmarks.md plate-side's rows).
+// How far (transport mean free paths) a sharp edge's face's exit relaxes towards its neighbour's
+// (relaxTowardsNeighbours): under the sky over a black ground the Monte Carlo's mean over the top face of a flat
+// slab's edge voxel is 0.88 of the inside's where the side's exit is 0.73 of it, kappa 0.44, a reach of 0.52 voxel at
+// 4.5 transport mean free paths per voxel (bench/plate_side_probe.py --shape slab, docs/benchmarks.md plate-side).
 constexpr double kEdgeReach = 2.3;
 
 // The three channels' fluence gradients along surface voxel i's patch (per m): least squares over the surface voxels
