@@ -87,6 +87,9 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
 }
 
 void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double reach) {
+    for (const FaceExit &a : faces)
+        for (const FaceExit &b : faces)
+            if (glm::dot(a.normal, b.normal) < -0.5) return;  // no snow beneath a face: a lump's tip, a thin plate
     const double kappa = reach * (1.0 - std::exp(-1.0 / reach));
     std::vector<double> mean(faces.size());  // W/m^2/sr: e0 + 2/3 e1 . n, the exitance over pi
     for (std::size_t f = 0; f < faces.size(); ++f)

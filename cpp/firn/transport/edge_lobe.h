@@ -31,7 +31,8 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces);
 // `reach` in voxels), and its mean moves by kappa (g - f), kappa = reach (1 - exp(-1 / reach)), towards each
 // neighbour g at right angles (f, g: the forms' mean radiance over their hemispheres). Where the faces carry the
 // same light nothing moves; over a dark ground a convex edge's top falls towards its side (docs/benchmarks.md,
-// edge-corner).
+// edge-corner). Only where snow lies beneath every face (no two air faces opposite: the edges and corners of snow
+// thicker than a voxel); relaxed, a cloud of small lumps read 0.93 of the Monte Carlo (test_bake_accuracy.py).
 void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double reach);
 
 }  // namespace firn
