@@ -16,6 +16,12 @@ namespace firn::bake {
 
 namespace {
 
+// How far (transport mean free paths) a sharp edge's face's exit relaxes towards its neighbour's
+// (relaxTowardsNeighbours): under the sky over a black ground the Monte Carlo's mean over the top face of a flat
+// slab's edge voxel is 0.88 of the inside's where the side's exit is 0.73 of it, kappa 0.44, a reach of 0.52 voxel at
+// 4.5 transport mean free paths per voxel (bench/plate_side_probe.py --shape slab, docs/benchmarks.md plate-side).
+constexpr double kEdgeReach = 2.3;
+
 // The three channels' fluence gradients along surface voxel i's patch (per m): least squares over the surface voxels
 // of its 3^3 block (weighted by the cosine between their normals and its own), in its tangent plane.
 std::array<glm::dvec3, 3> surfaceGradients(const SnowTopology &topo, const std::array<std::vector<double>, 3> &phi,
@@ -352,6 +358,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
                                      (r.sky1 + r.sun1) / own + exitance * 6.0 / 7.0 / kPi * n});
                 }
+                const double reach = kEdgeReach / (h * channels[c].ch.sigmaTr(densityBeneath(topo, i, patch.normal)));
+                relaxTowardsNeighbours(faces, reach);  // voxels
                 const SourceLobe lobe = edgeLobe(faces);
                 out.surface(i).returned.l0[c] = float(lobe.l0);
                 out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);

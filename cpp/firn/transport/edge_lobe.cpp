@@ -86,4 +86,22 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
     return {l0, 3.0 * bestK * l0 * axis};
 }
 
+void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double reach) {
+    for (const FaceExit &a : faces)
+        for (const FaceExit &b : faces)
+            if (glm::dot(a.normal, b.normal) < -0.5) return;  // no snow beneath a face: a lump's tip, a thin plate
+    const double kappa = reach * (1.0 - std::exp(-1.0 / reach));
+    std::vector<double> mean(faces.size());  // W/m^2/sr: e0 + 2/3 e1 . n, the exitance over pi
+    for (std::size_t f = 0; f < faces.size(); ++f)
+        mean[f] = faces[f].e0 + 2.0 / 3.0 * glm::dot(faces[f].e1, faces[f].normal);
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+        if (!(mean[f] > 0.0)) continue;
+        double relaxed = mean[f];
+        for (std::size_t g = 0; g < faces.size(); ++g)
+            if (std::abs(glm::dot(faces[f].normal, faces[g].normal)) < 0.5) relaxed += kappa * (mean[g] - mean[f]);
+        const double scale = std::max(0.0, relaxed / mean[f]);
+        faces[f].e0 *= scale, faces[f].e1 *= scale;
+    }
+}
+
 }  // namespace firn
