@@ -354,4 +354,8 @@ def test_instanced_occluder_casts_a_shadow_in_the_bake(clean_scene):
     accessor = grid.getConstAccessor()
     shade, sunlit = (max(accessor.getValue(grid.transform.worldToIndexCellCentered(p))) for p in
                      ((0.5, 0.0, 0.03), (-0.5, 0.0, 0.03)))
-    assert sunlit > 0.0 and shade < 0.2 * sunlit  # the sun straight down: the roof's footprint is dark
+    # The sun straight down: the roof's footprint is dark but for the light the lit snow round it sends back off the
+    # roof's underside (albedo 0.8, 0.3 m up, 0.6 m wide): the footprint's centre sees the underside with a view
+    # factor ~0.55 and the underside the lit snow with ~0.45, so ~0.8 x 0.45 x 0.55 = 0.2 of the lit snow's light
+    # (main read 0.198, then 0.211 with the sky traced on a lattice); without the shadow it would read 1.
+    assert sunlit > 0.0 and shade < 0.35 * sunlit

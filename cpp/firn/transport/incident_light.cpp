@@ -192,6 +192,7 @@ Steps stepsTowards(const glm::dvec3 &w) {
 struct SkyEstimate {
     float grey = 0.0f, greyError = 0.0f;  // W/m^2: the grey irradiance and its standard error over the rays
     std::uint8_t rays = 0, hidden = 0, met = 0;  // rays; of them snow hides; snow does not hide that meet an occluder
+    float albedoShare = 0.0f;                    // the occluders' albedo met, per ray (IncidentLight::occluderShare)
 };
 
 // Whether two patches' rays (each its own count) may see the same sky: the grey irradiance within kAgreement standard
@@ -529,10 +530,11 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
     const std::uint64_t seed = settings.seed ^ 0x5C1Eull;
-    // The albedos met, summed over the surface patches' rays in fixed point (2^-32): integer sums do not depend on
+    // The albedos met per ray, summed over the surface patches in fixed point (2^-32): integer sums do not depend on
     // how the threads split the patches, so the gate on the share (bake.cpp) is the same every run.
     std::atomic<std::uint64_t> albedoSum{0};
-    std::atomic<std::size_t> skyTraced{0}, raysTraced{0};
+    std::atomic<std::size_t> skyTraced{0};
+    const auto fixedPoint = [](double share) { return std::uint64_t(std::llround(share * 4294967296.0)); };
     // The lattice (and sharp voxels) first, then the voxels between, from their donors where those agree; without the
     // lattice all in the first pass.
     light.skyLattice = settings.skyOverNeighbours;
@@ -543,7 +545,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
             Medium::ColumnMarcher marcher(medium);
             Medium::Accessor density = medium.accessor();
             std::uint64_t albedos = 0;
-            std::size_t traced = 0, tracedRays = 0;
+            std::size_t traced = 0;
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 const SurfacePatch &patch = topo.patches[i];
                 if (!patch.isSurface()) continue;
@@ -560,17 +562,30 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
                     &light.occluderRays.surface(i), &greyError);
                 estimates.surface(i) = {float(channelMean(sky)), float(greyError), std::uint8_t(own.count()),
                                         std::uint8_t(__builtin_popcountll(light.snowRays[i])),
-                                        std::uint8_t(__builtin_popcountll(light.occluderRays[i]))};
-                albedos += std::uint64_t(std::llround(met * 4294967296.0)), ++traced, tracedRays += own.count();
+                                        std::uint8_t(__builtin_popcountll(light.occluderRays[i])),
+                                        float(met / own.count())};
+                albedos += fixedPoint(met / own.count()), ++traced;
             }
-            albedoSum += albedos, skyTraced += traced, raysTraced += tracedRays;
+            albedoSum += albedos, skyTraced += traced;
         });
     }
+    // A voxel filled from its donors counts their mean share: the traced voxels alone lie where the sky changes, by
+    // the occluders (their share alone turned the send-back's gate on under a roof in black sky: test_geometry_inputs).
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        std::uint64_t albedos = 0;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface() || !light.fromDonors[i]) continue;
+            double share = 0.0;
+            int count = 0;
+            forEachSkyDonor(topo, i, [&](std::size_t j) { share += estimates[j].albedoShare, ++count; });
+            albedos += fixedPoint(share / count);  // count >= 2: skyDonorsAgree
+        }
+        albedoSum += albedos;
+    });
     fillFromSkyDonors(topo, light.fromDonors, light.skyOnSurface, false);
     fillFromSkyDonors(topo, light.fromDonors, light.skyAim, true);
     light.skyTraced = skyTraced;
-    if (light.skyTraced > 0)  // the share over the traced patches: the others' stand for them
-        light.occluderShare = double(albedoSum) / 4294967296.0 / double(raysTraced);
+    if (topo.surfaceVoxels() > 0) light.occluderShare = double(albedoSum) / 4294967296.0 / double(topo.surfaceVoxels());
     if (settings.skyOverNeighbours)
         averageOverNeighbours(topo, light.skyOnSurface), averageOverNeighbours(topo, light.skyAim);
     if (scene.sky.isBlack()) return light;
