@@ -393,7 +393,6 @@ void fillFromSkyDonors(const SnowTopology &topo, const SurfaceValues<std::uint8_
 }
 
 void averageOverNeighbours(const SnowTopology &topo, SurfaceValues<glm::vec3> &values) {
-    constexpr double kMinCosine = 0.9;
     const std::vector<glm::vec3> own = values.values();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -404,7 +403,7 @@ void averageOverNeighbours(const SnowTopology &topo, SurfaceValues<glm::vec3> &v
             for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
                 const std::uint32_t j = topo.neighbourhood[k];
                 const SurfacePatch &other = topo.patches[j];
-                if (other.sharp || glm::dot(patch.normal, other.normal) < kMinCosine) continue;
+                if (other.sharp || glm::dot(patch.normal, other.normal) < kLikeFacingCosine) continue;
                 sum += glm::dvec3(own[std::size_t((*topo.surfaceSlot)[j])]), ++count;
             }
             values.surface(i) = glm::vec3(sum / double(count));  // count >= 1: i itself

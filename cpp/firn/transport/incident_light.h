@@ -94,6 +94,9 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topol
 // 3^3 block whose normals lie within about 25 degrees of its own: neighbours see nearly the same sky, so a few
 // rays each (SkyRays, each voxel's own jitter) pool into a less noisy estimate. Sharp edges keep their own.
 void averageOverNeighbours(const SnowTopology &topology, SurfaceValues<glm::vec3> &values);
+// Neighbours whose normals are within this cosine (about 25 degrees) of a voxel's share its sky (averageOverNeighbours,
+// forEachSkyDonor).
+constexpr double kLikeFacingCosine = 0.9;
 
 // The sky varies slowly over most of a surface (an open roof, flat ground, a cavity's floor): it is traced on a
 // coarse lattice of surface voxels, those whose two coordinates across their normal's largest axis are even (a quarter
@@ -110,12 +113,11 @@ constexpr int kLatticeRays = 2;
 SkyRays skyRaysAt(const SnowTopology &topology, std::size_t i, int samples, bool lattice);
 template <typename Visit>
 void forEachSkyDonor(const SnowTopology &topo, std::size_t i, const Visit &visit) {
-    constexpr double kMinCosine = 0.9;  // as averageOverNeighbours
     for (std::size_t k = topo.neighbourhoodStart[i]; k < topo.neighbourhoodStart[i + 1]; ++k) {
         const std::uint32_t j = topo.neighbourhood[k];
         const SurfacePatch &donor = topo.patches[j];
         if (j != i && !donor.sharp && onSkyLattice(topo, j) &&
-            glm::dot(topo.patches[i].normal, donor.normal) >= kMinCosine)
+            glm::dot(topo.patches[i].normal, donor.normal) >= kLikeFacingCosine)
             visit(std::size_t(j));
     }
 }
