@@ -59,16 +59,21 @@ def kinds(case, peak, hits, seen):
     return out
 
 
-def scan(case, block, axis, paths):
-    """The block's ray shifted by -1..1 voxel in quarter voxels along the image's axis: shifts, Monte Carlo (mean,
-    standard error) and the baked render (FINAL, seed 0), green channel."""
-    origins, directions, _ = bake_suite.views(case)
-    a, e = (math.radians(x) for x in case.views[block // case.pixels ** 2])
+def image_axis(case, view, axis):
+    """The unit image axis of the view as bake_suite.views builds it (u: along a row, v: along a column)."""
+    a, e = (math.radians(x) for x in case.views[view])
     back = np.array([math.cos(a) * math.cos(e), math.sin(a) * math.cos(e), math.sin(e)])
     up = np.array([0.0, 0.0, 1.0]) if abs(back[2]) < 0.99 else np.array([1.0, 0.0, 0.0])
     right = np.cross(up, back)
     right /= np.linalg.norm(right)
-    along = right if axis == "u" else np.cross(back, right)  # views()' image axes
+    return right if axis == "u" else np.cross(back, right)
+
+
+def scan(case, block, axis, paths):
+    """The block's ray shifted by -1..1 voxel in quarter voxels along the image's axis: shifts, Monte Carlo (mean,
+    standard error) and the baked render (FINAL, seed 0), green channel."""
+    origins, directions, _ = bake_suite.views(case)
+    along = image_axis(case, block // case.pixels ** 2, axis)
     shifts = np.arange(-4, 5) / 4.0
     o = origins[block] + shifts[:, None] * case.voxel * along
     d = np.tile(directions[block], (len(shifts), 1))

@@ -59,6 +59,12 @@ def edge_air_copied(path, density, which, out):
             if which in ("across", "all"):
                 for dx, dy in outward:
                     targets += [((x, y, z), (x + dx, y + dy, z)), ((x, y, z), (x + dx, y + dy, z + 1))]
+    copy_source_values(grids, metadata, targets, out)
+
+
+def copy_source_values(grids, metadata, targets, out):
+    """The baked grids (pyopenvdb.readAll's) written to out with each target voxel of targets ((source, target) index
+    pairs) holding the source voxel's values in every firn_source grid."""
     for g in grids:
         if not g.name.startswith("firn_source"):
             continue
