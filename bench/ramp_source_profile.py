@@ -20,12 +20,15 @@ With --exits E1,E2,... (a slab or box case) the flat top's exit instead: one ray
 --azimuth) aimed at the middle of the top's half-density plane, the truth against the baked render: whether the
 voxels' lobes hold the flat surface's exit at grazing, where the camera ray becomes opaque in the ramp's outer part;
 --side: horizontal rays onto the middle of the -x side instead, at angles E from its plane. With --by-exit CASES the
-cases' blocks (FINAL, seed 0, the suite's cached references) by the exit cosine where their rays reach depth 1. With
+cases' blocks (FINAL, seed 0, the suite's cached references) by the exit cosine where their rays reach depth 1.
+--omega, --g, --sun replace the case's optics and sun for the profiles and exits (the Milne fall of an absorbing
+surface under the sky alone). With
 --side-air CASE (a box or slab) the oracle side_air_copied (--corners: the corners' air too) on the suite's figures,
 the blocks it moves by over 3 points, and on --block's scans (";" apart).
 """
 
 import argparse
+import dataclasses
 import math
 import os
 import tempfile
@@ -184,6 +187,9 @@ def main():
     parser.add_argument("--azimuth", type=float, default=90.0)
     parser.add_argument("--side-air", default="", help="a box or slab case: side_air_oracle with --block's scans")
     parser.add_argument("--corners", action="store_true", help="--side-air: the corners' air too")
+    parser.add_argument("--omega", type=float, help="the case's albedo replaced (all channels)")
+    parser.add_argument("--g", type=float, help="the case's anisotropy replaced")
+    parser.add_argument("--sun", type=float, help="the case's sun irradiance replaced (0: the sky alone)")
     parser.add_argument("--by-exit", default="", help="cases: their blocks' errors by exit cosine")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     parser.add_argument("--side", action="store_true", help="--exits onto the -x side (angles from its plane)")
@@ -195,6 +201,8 @@ def main():
         by_exit_cosine(args.by_exit.split(","), args.cache)
         return
     case = bake_suite.case(args.case)
+    case = dataclasses.replace(case, **{k: v for k, v in (("omega", args.omega and (args.omega,) * 3), ("g", args.g),
+                                                          ("sun", args.sun)) if v is not None})
     if args.exits:
         flat_exits(case, [float(x) for x in args.exits.split(",")], args.azimuth, args.paths, args.side)
         return
