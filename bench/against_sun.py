@@ -66,7 +66,8 @@ def main():
             r = S.run_case(case, folder, args.cache, "FINAL", args.seed)
             total += 100 * r["mean"]
             print(f"  {case.name:<18} mean {100 * r['mean']:5.2f} %  worst {100 * r['worst_signed']:+4.0f} %  bias "
-                  f"{100 * r['bias']:+5.2f} %  views " + " ".join(f"{100 * x:+5.1f}" for x in r["view_bias"]),
+                  f"{100 * r['bias']:+5.2f} %  views " + " ".join(f"{100 * x:+5.1f}" for x in r["view_bias"]) +
+                  f"  traced {r['traced']} x {r['traced_paths']} ({r['light_traced']} light traced, {r['trace_cpu_s']:.2f} processor s)",
                   flush=True)
             path = os.path.join(folder, case.name + ".vdb")
             origins, directions, tau = S.views(case)
