@@ -38,11 +38,11 @@ def bumpy_layer(path, voxels):
     return grid.activeVoxelCount()
 
 
-def bake_layer(path):
+def bake_layer(path, progress=None):
     optics = firncore.VolumeOptics(2000.0 / DENSITY, (0.99997, 0.99999, 0.999999), 0.85)
     sun = firncore.SunLight((0.5, 0.3, 0.8), (3.0, 3.0, 3.0), 0.0093)
     sky = firncore.Sky((0.3, 0.35, 0.45))
-    return firncore.bake(path, optics, suns=[sun], sky=sky, quality="FINAL")
+    return firncore.bake(path, optics, suns=[sun], sky=sky, quality="FINAL", progress=progress)
 
 
 def main():

@@ -20,9 +20,8 @@ import bake_measure
 import bake_scaling
 
 
-def bake_car(folder, seed=0):
-    """One FINAL bake of the car's inputs (bench/car_scene.py); firncore's stats plus the active voxels. The core
-    rewrites the density's file with the baked grids, as Bake Scattering does."""
+def car_inputs(folder):
+    """The car's optics, suns, sky and occluders as bench/car_scene.py wrote them."""
     import numpy as np
 
     import firncore
@@ -34,16 +33,23 @@ def bake_car(folder, seed=0):
     sky = firncore.Sky(tuple(inputs["sky_radiance"]), inputs["sky_map"] if "sky_map" in inputs else None)
     occluders = [(inputs[f"occluder_{k}_vertices"], inputs[f"occluder_{k}_triangles"],
                   tuple(inputs[f"occluder_{k}_albedo"])) for k in range(int(inputs["occluders"]))]
+    return optics, suns, sky, occluders
+
+
+def bake_car(folder, seed=0, progress=None):
+    """One FINAL bake of the car's inputs (bench/car_scene.py); firncore's stats plus the active voxels. The core
+    rewrites the density's file with the baked grids, as Bake Scattering does."""
     with tempfile.TemporaryDirectory() as scratch:
         path = shutil.copy(os.path.join(folder, "car_density.vdb"), scratch)
-        return bake_copy(path, optics, suns, sky, occluders, seed)
+        return bake_copy(path, *car_inputs(folder), seed, progress)
 
 
-def bake_copy(path, optics, suns, sky, occluders, seed):
+def bake_copy(path, optics, suns, sky, occluders, seed, progress=None):
     import firncore
 
     started = time.perf_counter()
-    stats = firncore.bake(path, optics, suns=suns, sky=sky, occluders=occluders, quality="FINAL", seed=seed)
+    stats = firncore.bake(path, optics, suns=suns, sky=sky, occluders=occluders, quality="FINAL", seed=seed,
+                          progress=progress)
     stats["bake_call_seconds"] = time.perf_counter() - started  # the file read, baked and written, as Blender's call
     stats["voxels"] = firncore.grid_statistics(path, "density")["active_voxels"]
     return stats
