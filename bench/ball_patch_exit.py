@@ -32,8 +32,6 @@ import firncore
 def patches(case, radius, shape):
     """The printed patches (columns: normal 3, sun in, returned, leaving, at once, phi, drift 3, area) of one bake,
     run in a child so its stderr can be read."""
-    if len(sys.argv) > 1 and sys.argv[1] == "--child":
-        return None
     run = subprocess.run([sys.executable, __file__, "--child", case, str(radius), shape],
                          env={**os.environ, "FIRN_T_PRINT": "1"}, capture_output=True, text=True, check=True)
     rows = [[float(x) for x in re.findall(r"[-+]?\d*\.?\d+(?:[eE][-+]?\d+)?", line)]
