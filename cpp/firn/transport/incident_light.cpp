@@ -209,6 +209,16 @@ bool skyAgrees(const SkyEstimate &a, const SkyEstimate &b) {
     return shares(a.hidden, b.hidden) && shares(a.met, b.met);
 }
 
+// The mean of value(j) over surface voxel i's sky donors j (forEachSkyDonor), summed as T (double, glm::dvec3): a
+// filled voxel's (fromDonors: at least two, skyDonorsAgree).
+template <typename T, typename Value>
+T skyDonorMean(const SnowTopology &topo, std::size_t i, const Value &value) {
+    T sum(0.0);
+    int count = 0;
+    forEachSkyDonor(topo, i, [&](std::size_t j) { sum += value(j), ++count; });
+    return sum / double(count);
+}
+
 // Whether surface voxel i's sky donors (forEachSkyDonor), at least two, agree pairwise.
 bool skyDonorsAgree(const SnowTopology &topo, const SurfaceValues<SkyEstimate> &estimates, std::size_t i) {
     std::array<const SkyEstimate *, 26> donors;
@@ -381,13 +391,10 @@ void fillFromSkyDonors(const SnowTopology &topo, const SurfaceValues<std::uint8_
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface() || !fromDonors[i]) continue;
-            glm::dvec3 sum(0.0);
-            int count = 0;
-            forEachSkyDonor(topo, i, [&](std::size_t j) {
+            values.surface(i) = glm::vec3(skyDonorMean<glm::dvec3>(topo, i, [&](std::size_t j) {
                 const glm::dvec3 v(values[j]);
-                sum += leaning ? turned(v, topo.patches[j].normal, topo.patches[i].normal) : v, ++count;
-            });
-            values.surface(i) = glm::vec3(sum / double(count));  // count >= 2: skyDonorsAgree
+                return leaning ? turned(v, topo.patches[j].normal, topo.patches[i].normal) : v;
+            }));
         }
     });
 }
@@ -574,10 +581,8 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
         std::uint64_t albedos = 0;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface() || !light.fromDonors[i]) continue;
-            double share = 0.0;
-            int count = 0;
-            forEachSkyDonor(topo, i, [&](std::size_t j) { share += estimates[j].albedoShare, ++count; });
-            albedos += fixedPoint(share / count);  // count >= 2: skyDonorsAgree
+            albedos += fixedPoint(
+                skyDonorMean<double>(topo, i, [&](std::size_t j) { return double(estimates[j].albedoShare); }));
         }
         albedoSum += albedos;
     });
