@@ -32,9 +32,9 @@
 namespace firn {
 
 // The bake's parts (transport/bake_*).
-using bake::ChannelStorage, bake::ChannelSystem, bake::GatheringPlan, bake::GridValues, bake::MonteCarloVoxels,
-    bake::PeakedLobes, bake::Preset, bake::SnowIrradiance, bake::SnowLight, bake::SourceValues, bake::SurfaceLight,
-    bake::SurfaceTerms, bake::TracedSnow;
+using bake::ChannelStorage, bake::ChannelSystem, bake::EdgeFaceLobes, bake::GatheringPlan, bake::GridValues,
+    bake::MonteCarloVoxels, bake::PeakedLobes, bake::Preset, bake::SnowIrradiance, bake::SnowLight, bake::SourceValues,
+    bake::SurfaceLight, bake::SurfaceTerms, bake::TracedSnow;
 using bake::addFaceSources, bake::assemble, bake::gatheredVoxelFaces, bake::gridValues, bake::layerFaces,
     bake::lightTracedAtGatheringCost, bake::lightTraceSources,
     bake::makeGrids, bake::planGathering, bake::rampPeaks, bake::referenceSurface, bake::scatterGrid,
@@ -237,10 +237,11 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
         }
         SurfaceValues<Source> surface;
         PeakedLobes rampPeaked;
+        EdgeFaceLobes edgeFaces;
         {
             SurfaceValues<SurfaceLight> leaving(topo.surfaceSlot, topo.surfaceVoxels());
             const SnowLight snow = pass > 0 ? SnowLight{&fromSnow.irradiance, &fromSnow.aim} : SnowLight{};
-            surfaceLight(scene, topo, light, snow, terms, phi, leaving);
+            surfaceLight(scene, topo, light, snow, terms, phi, leaving, edgeFaces);
             terms = {};
             surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
             if (!reference) rampPeaked = rampPeaks(scene, topo, leaving);  // the reference's surface holds no peaks
@@ -250,9 +251,11 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface,
                              SubProgress(&p, solved, 0.95));
+            edgeFaces = {};  // the traced surface stands for the faces too
         }
         source = sourceFunction(scene, topo, light, phi, surface, traced);
         source.rampPeaks = std::move(rampPeaked);
+        source.edgeFaces = std::move(edgeFaces);
         clock.lap(&BakeStats::Phases::solve);
     }
     return source;

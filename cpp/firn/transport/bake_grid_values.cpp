@@ -43,6 +43,24 @@ Source litFacesToward(const openvdb::Coord &n, const openvdb::Coord &offset, Tra
     return sum;
 }
 
+// What sharp edge voxel j (not traced) shows a neighbour at `offset`: the mean of its flat air faces' own lobes that
+// face it (EdgeFaceLobes), else `own`, its one lobe over all its faces.
+Source ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const openvdb::Coord &offset, const Source &own) {
+    const EdgeFaceLobes::Voxel *faces = edgeFaces.find(j);
+    if (!faces) return own;
+    Source sum;
+    int count = 0;
+    for (int a = 0; a < 3; ++a) {
+        if (offset[a] == 0) continue;
+        const int f = 2 * a + (offset[a] > 0);
+        if (faces->flat >> f & 1u) sum.l0 += faces->lobe[f].l0, sum.l1 += faces->lobe[f].l1, ++count;
+    }
+    if (!count) return own;
+    Source S = own;
+    S.l0 = sum.l0 / float(count), S.l1 = sum.l1 / float(count);  // the voxel's peaked lobe kept
+    return S;
+}
+
 // The radiance the surface voxels around voxel c (outside the snow) show towards it: their values
 // weighted by how much their surface faces c (a voxel beside an edge takes the side's, one above it the
 // top's), and their normals so weighted (`facing`, unit; zero where none faces c). False if no surface voxel is
@@ -72,8 +90,10 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 const int k = (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);  // blockOffset(k): (dx, dy, dz)
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
-                const Source v =
-                    litFacesToward(c.offsetBy(-dx, -dy, -dz), {dx, dy, dz}, tracedIndex, traced, source[j]);
+                const openvdb::Coord n = c.offsetBy(-dx, -dy, -dz);
+                const Source v = topo.patches[j].sharp && tracedIndex.getValue(n) < 0
+                                     ? ownFacesToward(source.edgeFaces, std::size_t(j), {dx, dy, dz}, source[j])
+                                     : litFacesToward(n, {dx, dy, dz}, tracedIndex, traced, source[j]);
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
                 addRampPart(c.offsetBy(-dx, -dy, -dz), j, w);

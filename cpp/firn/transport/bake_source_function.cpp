@@ -81,13 +81,9 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
                         ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
                         : exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
                                    glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
-                // The crossing beams, added by their moments: light scattered forwards many times is broader
-                // than one scattering's peak (in the peaked lobe, k = g: ball_forward 17.6 % against 17.1 %, seen
-                // against the sun -29 % against -21 %; spray_lumps 20.1 % against 19.7 %; docs/bake.md).
-                const double crossing = solved[i].crossing[c] / topo.patches[i].area;  // its lobe's l0 (radiance)
-                out.surface(i).l0[c] = float(lobe.l0 + crossing);
-                out.surface(i).l1[c] = glm::vec3(lobe.l1 + 3.0 * crossingAnisotropy(optics.g) * crossing *
-                                                 glm::dvec3(solved[i].crossingAxis));
+                const SourceLobe shown = withCrossing(lobe, solved[i], topo.patches[i].area, c, optics.g);
+                out.surface(i).l0[c] = float(shown.l0);
+                out.surface(i).l1[c] = glm::vec3(shown.l1);
             }
             out.surface(i).peak0 = solved[i].peak0, out.surface(i).peak1 = solved[i].peak1;
         }

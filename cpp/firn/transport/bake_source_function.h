@@ -71,6 +71,8 @@ struct SourceValues {
     PeakedLobes peaked;            // by unknown
     // By surface voxel, with lamps alone: the part of its peaked lobe its ramp scatters itself (SurfaceLight).
     PeakedLobes rampPeaks;
+    // The sharp edge voxels' flat faces' own lobes, carried by the air across each (SurfaceLight's; none at REFERENCE).
+    EdgeFaceLobes edgeFaces;
 
     Source operator[](std::size_t i) const { return peaked.with(broad[i], i); }
 };

@@ -22,6 +22,10 @@ namespace {
 // 4.5 transport mean free paths per voxel (bench/plate_side_probe.py --shape slab, docs/benchmarks.md plate-side).
 constexpr double kEdgeReach = 2.3;
 
+// A neighbour's normal this near a face's (cosine) is the face going on: a flat wall's voxels take the face's normal
+// itself (onFlatWall); a ball of 5 voxels' radius turns 11 degrees (0.98) a voxel.
+constexpr double kFlatCosine = 0.999;
+
 // The three channels' fluence gradients along surface voxel i's patch (per m): least squares over the surface voxels
 // of its 3^3 block (weighted by the cosine between their normals and its own), in its tangent plane.
 std::array<glm::dvec3, 3> surfaceGradients(const SnowTopology &topo, const std::array<std::vector<double>, 3> &phi,
@@ -49,6 +53,26 @@ std::array<glm::dvec3, 3> surfaceGradients(const SnowTopology &topo, const std::
     if (det <= 1e-12 * h * h * h * h) return gradient;
     for (int ch = 0; ch < 3; ++ch) gradient[ch] = ((c * ru[ch] - b * rv[ch]) * u + (a * rv[ch] - b * ru[ch]) * v) / det;
     return gradient;
+}
+
+// Whether sharp voxel i's air face f goes on as a flat wall away from each of its other air faces: the voxel a step
+// away from that face is a surface voxel with f's normal (a box's or a layer's side, onFlatWall), not a step of a
+// staircase (a ball's flat caps, whose faces meet the curved surface past them).
+bool goesOnFlat(const SnowTopology &topo, std::size_t i, int f) {
+    for (int g = 0; g < 6; ++g) {
+        if (g / 2 == f / 2 || topo.patches[i].share[g] <= 0.0f) continue;
+        const std::int32_t next = topo.link[i][g ^ 1];
+        if (SnowTopology::isFace(next) || !topo.patches[std::size_t(next)].isSurface() ||
+            glm::dot(topo.patches[std::size_t(next)].normal, faceNormal(f)) < kFlatCosine)
+            return false;
+    }
+    return true;
+}
+
+// The air face of unit normal n.
+int faceOf(const glm::dvec3 &n) {
+    const int axis = std::abs(n.x) > 0.5 ? 0 : std::abs(n.y) > 0.5 ? 1 : 2;
+    return 2 * axis + (n[axis] > 0.0);
 }
 
 // kg/m^2 of snow from surface voxel i's centre out through its patch: its air faces' ramps by their shares.
@@ -138,7 +162,7 @@ glm::dvec3 travelAlong(const glm::dvec3 &d, const glm::dvec3 &n) {
 // geometry and the neighbours read once for the three.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
                   const std::array<SurfaceTerms, 3> &terms, const std::array<std::vector<double>, 3> &phi,
-                  SurfaceValues<SurfaceLight> &out) {
+                  SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const Channel kernelChannel{optics.extinctionPerDensity, optics.albedo[1], optics.g};  // one kernel for the three
@@ -322,17 +346,23 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         }
     });
     // Sharp edges: each air face's own exit radiance (the light returned through it, the exitance of the
-    // surface voxels facing its way, other edge voxels left out as in surfaceRadiance), and the one lobe
-    // fitted to what cameras see of them (edgeLobe). A face the sun enters at grazing incidence returns it
-    // sharply forwards as a smooth surface does: its SunPeak joins the voxel's peaked lobe (a small lump's edges
-    // are its rim against the sun, docs/bake.md Method 5: lump_angles_bench's view 27 degrees off the sun's travel
-    // -39.5 -> -16.0 %).
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+    // surface voxels facing its way, other edge voxels left out as in surfaceRadiance), the one lobe
+    // fitted to what cameras see of them (edgeLobe), and each flat face's own lobe for the air across it
+    // (EdgeFaceLobes). A face the sun enters at grazing incidence returns it sharply forwards as a smooth surface
+    // does: its SunPeak joins the voxel's peaked lobe (a small lump's edges are its rim against the sun, docs/bake.md
+    // Method 5: lump_angles_bench's view 27 degrees off the sun's travel -39.5 -> -16.0 %).
+    edgeFaces.voxels.clear();
+    for (std::size_t i = 0; i < topo.size(); ++i)
+        if (topo.patches[i].sharp) edgeFaces.voxels.push_back({std::uint32_t(i)});
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edgeFaces.voxels.size(), 64), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         std::vector<FaceExit> faces;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+            EdgeFaceLobes::Voxel &own = edgeFaces.voxels[k];
+            const std::size_t i = own.key;
             const SurfacePatch &patch = topo.patches[i];
-            if (!patch.sharp) continue;
+            for (int f = 0; f < 6; ++f)
+                if (patch.share[f] > 0.0f && goesOnFlat(topo, i, f)) own.flat |= std::uint8_t(1u << f);
             const glm::dvec3 surface = patchSurface(medium, topo, i);
             std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
             for (int f = 0; f < 6; ++f)
@@ -363,9 +393,20 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 const SourceLobe lobe = edgeLobe(faces);
                 out.surface(i).returned.l0[c] = float(lobe.l0);
                 out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);
+                for (const FaceExit &face : faces) {
+                    const int f = faceOf(face.normal);
+                    if (!(own.flat >> f & 1u)) continue;
+                    const SourceLobe shown =
+                        withCrossing(exitLobe(face.e0, face.e1, face.normal), out[i], patch.area, c, channels[c].ch.g);
+                    own.lobe[f].l0[c] = float(shown.l0);
+                    own.lobe[f].l1[c] = glm::vec3(shown.l1);
+                }
             }
         }
     });
+    edgeFaces.voxels.erase(std::remove_if(edgeFaces.voxels.begin(), edgeFaces.voxels.end(),
+                                          [](const EdgeFaceLobes::Voxel &v) { return v.flat == 0; }),
+                           edgeFaces.voxels.end());
     sunLeavingDownstream(topo, sun, h, out);
 }
 
