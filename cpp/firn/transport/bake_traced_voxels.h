@@ -96,8 +96,9 @@ FaceGathering gatheredVoxelFaces(const GatheringPlan &plan);
 // A gathered face's paths per path of its voxel's (planGathering), up to the preset's cheapTracedSamples (DRAFT's faces
 // keep their 64): the faces' noise is the cheapest of a dense spray's errors to buy (docs/benchmarks.md, dense-faces:
 // spray_dense's faces at four times half the voxel's paths, 14.7 -> 13.5 % over seeds 0-3 for 3.7 processor s of
-// tracing, every path four times 1.6 points for 17 s), and within kMaxTracedSteps priced at the faces' own steps per
-// path (addFaceSources; face-share, face-pilot).
+// tracing, every path four times 1.6 points for 17 s). Within kMaxTracedSteps, priced at the faces' own steps per path
+// (addFaceSources), spray_dense's 438 faces take 276-304 of the 512 and its lit faces 838-866: 14.7 -> 14.0 % over
+// seeds 0-7, no seed higher, the trace 5.8 -> 7.5 processor s (face-pilot; at the voxels' price 144, face-share).
 constexpr int kFacePathsPerVoxelPath = 2;
 
 // A gathered lump's lit face: its lobe pair's path-noise bias along its normal, c / N at N paths (c in paths:
@@ -127,8 +128,8 @@ struct FacesTraced {
 // The face sources (FaceSources) of the traced `voxels` that are gathered and thick or lie in a traced layer
 // (`how`), added to `traced`; none where they would cost more than its budget.
 FacesTraced addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
-                    const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
-                    MonteCarloVoxels &traced);
+                           const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
+                           MonteCarloVoxels &traced);
 
 // The voxels' sources light traced within `share` of `budget` tracking steps (planLightTracing); none (empty) where
 // that is not affordable.
