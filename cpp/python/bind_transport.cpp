@@ -318,6 +318,8 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["traced_voxels"] = stats.tracedVoxels;
     d["scatter_voxels"] = stats.scatterVoxels;
     d["traced_paths"] = stats.tracedPaths;
+    d["traced_faces"] = stats.tracedFaces;
+    d["face_paths"] = stats.facePaths;
     d["light_traced_voxels"] = stats.lightTracedVoxels;
     d["photons"] = stats.photons;
     d["light_tracing_bytes"] = stats.lightTracingBytes;

@@ -380,7 +380,9 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                         if (std::find(snow.inLayer.begin(), snow.inLayer.end(), true) != snow.inLayer.end()) {
                             const bake::FaceGathering faces =
                                 layerFaces(scene, preset, thin, std::move(snow.inLayer), settings.seed ^ 0x7EACEull);
-                            addFaceSources(scene, topo, thin, faces, settings.seed ^ 0xFACEull, progress, traced);
+                            const bake::FacesTraced taken =
+                                addFaceSources(scene, topo, thin, faces, settings.seed ^ 0xFACEull, progress, traced);
+                            local.tracedFaces = taken.faces, local.facePaths = taken.paths;
                         }
                     }
                 }
@@ -397,9 +399,11 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                         else if (settings.lightTracing)
                             traced = lightTraceSources(scene, thin, settings.seed ^ 0x7EACEull, progress, local,
                                                        kMaxTracedSteps, preset.lightTracingShare);
-                        if (plan.paths > 0)
-                            addFaceSources(scene, topo, thin, gatheredVoxelFaces(plan, thin.size()),
-                                           settings.seed ^ 0xFACEull, progress, traced);
+                        if (plan.paths > 0) {
+                            const bake::FacesTraced taken = addFaceSources(scene, topo, thin, gatheredVoxelFaces(plan),
+                                                                           settings.seed ^ 0xFACEull, progress, traced);
+                            local.tracedFaces = taken.faces, local.facePaths = taken.paths;
+                        }
                     }
                 }
                 progress.report(1.0);  // none traced, or light traced (its fit does not report)

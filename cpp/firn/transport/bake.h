@@ -42,6 +42,8 @@ struct BakeStats {
     std::size_t tracedVoxels = 0;              // optically thin voxels lit by Monte Carlo instead of the solve
     std::size_t scatterVoxels = 0;             // density voxels where the renderer scatters (scatterShares 1)
     int tracedPaths = 0;                       // paths per voxel where traced from them (planGathering)
+    std::size_t tracedFaces = 0;               // their faces gathered apart (addFaceSources), with
+    int facePaths = 0;                         // these paths each (their lit faces' may take more)
     std::size_t lightTracedVoxels = 0;         // of which by light tracing (paths from the lights), with
     long photons = 0;                          // these photons
     std::size_t lightTracingBytes = 0;         // the sums they add to (LightTracingPlan::sumsBytes)

@@ -122,8 +122,11 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
         if (perPath * (kDrawnPathShare - 1) * samples * double(drawn) <= kDrawnExtraSteps)
             drawnPaths = kDrawnPathShare * samples;
     }
+    // The lit faces' ratio to the faces as when these took half the voxel's paths and the lit faces kLitFacePaths.
+    constexpr int kLitFaceMultiple = 2 * kFacePathsPerVoxelPath;
     return {samples, perPath * samples * double(voxels.size()), drawnPaths,
-            std::min(kLitFacePaths, preset.cheapTracedSamples)};
+            std::min(kFacePathsPerVoxelPath * samples, preset.cheapTracedSamples),
+            std::min(kLitFaceMultiple * kLitFacePaths, preset.cheapTracedSamples)};
 }
 
 namespace {
@@ -172,9 +175,6 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 }
 
 namespace {
-
-// A face's paths: half the voxel's own where the budget holds them, else a quarter, 64 at least (addFaceSources).
-constexpr int kFacePathShare = 2;
 
 // A traced layer's voxels thicker than this gather their faces open to air on one side (addFaceSources); thinner
 // ones a camera sees through, as kTracedOpticalDepth has it. Kept equal to kTracedOpticalDepth: the layer's voxels
@@ -368,16 +368,36 @@ unsigned airFaces(const Medium &medium, const Occluders &occluders, const SnowTo
     return open;
 }
 
-// Tracking steps a path of the plan's pilot takes on average over its `voxels`.
-double stepsPerPath(const GatheringPlan &plan, std::size_t voxels) {
-    return plan.steps / (double(plan.paths) * double(voxels));
+// Tracking steps a face's path takes, measured on a few of the faces first (kPilotFaces spread over `jobs`, as
+// planGathering's pilot on the voxels; its own stream, so the faces' estimates stay as without it). A lump's face
+// gathers where its cameras collide, in its first optical depths, and those paths leave sooner than the voxel's,
+// which start throughout it: spray_dense's faces take 662-665 steps per path (this pilot reads 668-729, seeds 0-3)
+// against its voxels' pilot's 1336; priced at the voxels' the budget left held 144 of their 512 paths, at their own
+// 276-304 (docs/benchmarks.md, face-share, face-pilot).
+double faceStepsPerPath(const MonteCarloReference &reference, const std::vector<openvdb::Coord> &voxels,
+                        const std::vector<FaceJob> &jobs, std::uint64_t seed) {
+    constexpr std::size_t kPilotFaces = 64;
+    constexpr int kPilotSamples = 4;
+    const std::size_t pilots = std::min(kPilotFaces, jobs.size());
+    if (pilots == 0) return 0.0;
+    std::vector<double> steps(pilots);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pilots, 4), [&](const auto &range) {
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+            const auto [v, f] = jobs[jobs.size() * k / pilots];
+            const FaceEstimate pilot =
+                reference.faceSourceIn(voxels[v], f, kPilotSamples, seed, voxels.size() * (13 + f) + v);
+            steps[k] = double(pilot.carried.steps + pilot.shown.steps) + kStepsPerPath * kPilotSamples;
+        }
+    });
+    double sum = 0.0;
+    for (double s : steps) sum += s;  // in order: the same price every run
+    return sum / (double(pilots) * kPilotSamples);
 }
 
 }  // namespace
 
-FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels) {
-    return {std::max(64, plan.paths / kFacePathShare), std::max(64, plan.paths / (2 * kFacePathShare)),
-            stepsPerPath(plan, voxels), kMaxTracedSteps - plan.steps, {}, plan.litFacePaths};
+FaceGathering gatheredVoxelFaces(const GatheringPlan &plan) {
+    return {plan.facePaths, std::max(64, plan.paths / 4), kMaxTracedSteps - plan.steps, {}, plan.litFacePaths};
 }
 
 // A lump's lit face (litFace) is what the air beside it carries towards the cameras that see the lump's sunlit side,
@@ -398,8 +418,7 @@ FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::ve
                          std::vector<bool> inLayer, std::uint64_t seed) {
     const GatheringPlan plan = planGathering(scene, preset, voxels, seed);
     if (plan.paths < kMinLayerFacePaths) return {};
-    return {plan.paths, plan.paths, stepsPerPath(plan, voxels.size()), kMaxTracedSteps - kWholePieceTracedSteps,
-            std::move(inLayer)};
+    return {plan.paths, plan.paths, kMaxTracedSteps - kWholePieceTracedSteps, std::move(inLayer)};
 }
 
 // A floating layer one voxel thick is seen from each side in that side's first optical depth, which its voxels' mean
@@ -415,19 +434,20 @@ FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::ve
 // above 33.3 % per block (main before float-voxel) -> 9.1 % (faces carried their whole collisions' source, the voxel
 // its mean) -> 8.8 %, from below 52.4 -> 19.2 -> 10.7 %: seen from below the mean is 46 % brighter than what the voxel
 // shows there (the sun-lit top's light, forward), from above 32 % darker (docs/benchmarks.md, float-under; at sigma_t h
-// 3 from above 6.5 -> 8.0 %). A face's paths are half the voxel's own where they fit `how.budget` (what the gathering
-// leaves of kMaxTracedSteps), else as many as fit down to a quarter (64 at least: spray_dense's 471 faces at 128 paths;
-// at 64 18.7 %, their noise ate most of what they mend; halved at once, its 507 faces with its lumps traced fell to 64
-// for a cost 3 % over: 21.1 % against 17.5 % at 124); none where even those would cost more. A traced layer light
+// 3 from above 6.5 -> 8.0 %). A face takes `how.paths` where they fit `how.budget` (what the gathering leaves of
+// kMaxTracedSteps) at the faces' own steps per path (faceStepsPerPath), else as many as fit down to `how.fewestPaths`
+// (a quarter of the voxel's, 64 at least: spray_dense's 471 faces at 128 paths; at 64 18.7 %, their noise ate most of
+// what they mend; halved at once, its 507 faces with its lumps traced fell to 64 for a cost 3 % over: 21.1 % against
+// 17.5 % at 124); none where even those would cost more. A traced layer light
 // traced whole (how.inLayer) is seen so too, from one side: its voxels of sigma_t h > kMinLayerFaceTau gather each
 // face open to air, at the gathering's paths per voxel (the light tracing gave them none; a quarter of them, 128, left
 // a 5.9 % spread per block), within what the light tracing leaves of kMaxTracedSteps (its pilot's estimate for
 // slab_thin's 1440 faces is 3.5e7 steps at seeds 0-1 and 6.6e7 at seed 2): slab_thin 6.2 -> 3.9 % per block, from
 // below (0, -60) +8 -> +3 % (docs/benchmarks.md, slab-thin).
-void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
-                    const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
-                    MonteCarloVoxels &traced) {
-    if (how.paths == 0) return;  // not affordable
+FacesTraced addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
+                           const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
+                           MonteCarloVoxels &traced) {
+    if (how.paths == 0) return {};  // not affordable
     const Medium &medium = *scene.medium;
     Medium::Accessor density = medium.accessor();
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
@@ -453,7 +473,9 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
     addFaces(true);
     const std::size_t unknownsJobs = jobs.size(), unknownsFaces = traced.faces.size();
     addFaces(false);
-    const auto cost = [&](int paths) { return how.stepsPerPath * paths * double(jobs.size()); };
+    const MonteCarloReference reference(scene);
+    const double stepsPerPath = faceStepsPerPath(reference, voxels, jobs, seed);
+    const auto cost = [&](int paths) { return stepsPerPath * paths * double(jobs.size()); };
     if (cost(how.fewestPaths) > how.budget) {  // the fringes' faces only where all fit: they never cost the unknowns'
         jobs.resize(unknownsJobs), traced.faces.resize(unknownsFaces);
         for (std::int32_t &at : traced.facesAt)
@@ -464,9 +486,8 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
         samples = std::max(how.fewestPaths, int(std::clamp(how.budget / cost(1), 0.0, double(samples))));
     if (cost(samples) > how.budget) {
         traced.facesAt.clear(), traced.faces.clear();
-        return;
+        return {0, 0, stepsPerPath};
     }
-    const MonteCarloReference reference(scene);
     std::vector<FaceEstimate> estimates(jobs.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 4), [&](const auto &range) {
         progress.throwIfCancelled();  // up to kMaxTracedSteps of paths (Esc keeps the previous bake)
@@ -504,6 +525,7 @@ void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vec
                               : traced.source[v];
         }
     });
+    return {samples, jobs.size(), stepsPerPath};
 }
 
 // The voxels whose gathering costs more than the budget (planGathering: no paths), by light tracing within it

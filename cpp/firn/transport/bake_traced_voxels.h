@@ -63,7 +63,10 @@ struct GatheringPlan {
     // Per voxel the renderer draws rather than scatters (drawnByRenderer); 0: `paths`. Its paths beyond `paths` are
     // priced apart (kDrawnExtraSteps), not in `steps`.
     int drawnPaths = 0;
-    // Per lit face of the voxels' faces (gatheredVoxelFaces): kLitFacePaths up to the preset's cheapTracedSamples.
+    // Per face of the voxels' faces (gatheredVoxelFaces): kFacePathsPerVoxelPath times `paths`; per lit face
+    // kLitFacePaths times the faces' multiple of half the voxel's (their ratio to the faces kept); each up to the
+    // preset's cheapTracedSamples.
+    int facePaths = 0;
     int litFacePaths = 0;
 };
 // The paths per voxel to gather `voxels` with, their cost per path measured on a few of them first.
@@ -77,19 +80,26 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
 
 // Which traced voxels' faces gather their own source (addFaceSources), and at what cost.
 struct FaceGathering {
-    int paths = 0;              // per face, where the budget holds them
-    int fewestPaths = 0;        // else as many as fit, these at the least; none where even these pass the budget
-    double stepsPerPath = 0.0;  // the gathering's pilot's
-    double budget = 0.0;        // tracking steps all the faces may take
+    int paths = 0;        // per face, where the budget holds them
+    int fewestPaths = 0;  // else as many as fit, these at the least; none where even these pass the budget
+    double budget = 0.0;  // tracking steps all the faces may take, priced at the faces' own (addFaceSources' pilot)
     // Per voxel: it lies in a traced layer (light traced whole), whose faces open to air on one side gather too.
     // Empty: the gathered voxels, of which the thick ones.
     std::vector<bool> inLayer;
     // Per lit face (FaceSources::lit) where more than `paths` (litFacePaths); 0: `paths` as the others.
     int litPaths = 0;
 };
-// The gathered voxels' faces: half the voxel's paths, else as many as fit down to a quarter, within what the
-// gathering leaves of kMaxTracedSteps; their lit faces the plan's litFacePaths (litFacePaths).
-FaceGathering gatheredVoxelFaces(const GatheringPlan &plan, std::size_t voxels);
+// The gathered voxels' faces: the plan's facePaths, else as many as fit down to a quarter of the voxel's, within what
+// the gathering leaves of kMaxTracedSteps; their lit faces the plan's litFacePaths (litFacePaths).
+FaceGathering gatheredVoxelFaces(const GatheringPlan &plan);
+
+// A gathered face's paths per path of its voxel's (planGathering), up to the preset's cheapTracedSamples (DRAFT's faces
+// keep their 64): the faces' noise is the cheapest of a dense spray's errors to buy (docs/benchmarks.md, dense-faces:
+// spray_dense's faces at four times half the voxel's paths, 14.7 -> 13.5 % over seeds 0-3 for 3.7 processor s of
+// tracing, every path four times 1.6 points for 17 s). Within kMaxTracedSteps, priced at the faces' own steps per path
+// (addFaceSources), spray_dense's 438 faces take 276-304 of the 512 and its lit faces 838-866: 14.7 -> 14.0 % over
+// seeds 0-7, no seed higher, the trace 5.8 -> 7.5 processor s (face-pilot; at the voxels' price 144, face-share).
+constexpr int kFacePathsPerVoxelPath = 2;
 
 // A gathered lump's lit face: its lobe pair's path-noise bias along its normal, c / N at N paths (c in paths:
 // bake_traced_voxels.cpp says why), the most of it kept (the suite reference's noise per block), so the paths it
@@ -107,11 +117,19 @@ int litFacePaths(int paths, int wanted, double litSteps);
 FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                          std::vector<bool> inLayer, std::uint64_t seed);
 
+// What addFaceSources traced: the faces' paths each (0: none), their number, and the tracking steps a face's path
+// takes, measured by its pilot on a few of them (what the faces' budget is priced at).
+struct FacesTraced {
+    int paths = 0;
+    std::size_t faces = 0;
+    double stepsPerPath = 0.0;
+};
+
 // The face sources (FaceSources) of the traced `voxels` that are gathered and thick or lie in a traced layer
 // (`how`), added to `traced`; none where they would cost more than its budget.
-void addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
-                    const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
-                    MonteCarloVoxels &traced);
+FacesTraced addFaceSources(const Scene &scene, const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
+                           const FaceGathering &how, std::uint64_t seed, const SubProgress &progress,
+                           MonteCarloVoxels &traced);
 
 // The voxels' sources light traced within `share` of `budget` tracking steps (planLightTracing); none (empty) where
 // that is not affordable.

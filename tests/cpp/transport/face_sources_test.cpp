@@ -1,6 +1,7 @@
 // The face sources of a floating layer's traced voxels (bake_traced_voxels.h, addFaceSources): up to
 // kMaxTracedSteps of paths, so Esc must stop them; how a face's collisions split by the trilinear hat
 // (MonteCarloReference::faceSourceIn); which faces are lit, and what the air beside them carries (gridValues).
+#include <algorithm>
 #include <bitset>
 #include <cmath>
 #include <utility>
@@ -87,9 +88,9 @@ std::vector<openvdb::Coord> lumpVoxels() {
 bake::MonteCarloVoxels tracedWithFaces(const Scene &scene, const std::vector<openvdb::Coord> &voxels, int paths,
                                        const SubProgress &faceProgress = SubProgress(nullptr, 0.0, 1.0)) {
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    const bake::GatheringPlan plan{paths, paths * 1000.0 * double(voxels.size())};
+    const bake::GatheringPlan plan{paths, paths * 1000.0 * double(voxels.size()), paths, std::max(64, paths / 2)};
     bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, plan.paths, 3, SubProgress(nullptr, 0.0, 1.0));
-    bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan, voxels.size()), 5, faceProgress, traced);
+    bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan), 5, faceProgress, traced);
     return traced;
 }
 
@@ -158,10 +159,9 @@ TEST(FaceSources, ATracedLayersVoxelsHoldTheirOneSidedFaces) {
             for (int z = 0; z < 3; ++z) voxels.emplace_back(x, y, z);
     const SubProgress none(nullptr, 0.0, 1.0);
     bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, 64, 3, none);
-    bake::addFaceSources(scene, topo, voxels, {64, 64, 1000.0, 1e12, {}}, 5, none, traced);
+    bake::addFaceSources(scene, topo, voxels, {64, 64, 1e12, {}}, 5, none, traced);
     EXPECT_TRUE(traced.faces.empty());
-    bake::addFaceSources(scene, topo, voxels, {64, 64, 1000.0, 1e12, std::vector<bool>(voxels.size(), true)}, 5, none,
-                         traced);
+    bake::addFaceSources(scene, topo, voxels, {64, 64, 1e12, std::vector<bool>(voxels.size(), true)}, 5, none, traced);
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         const openvdb::Coord &c = voxels[v];
         unsigned open = 0;  // bit f for face f (-x, +x, -y, +y, -z, +z)
@@ -184,16 +184,17 @@ TEST(FaceSources, ATracedLayersVoxelsHoldTheirOneSidedFaces) {
 // A gathered lump's voxels thicker than 2 optical depths hold a source for each face open to air, one-sided too (a 4 x
 // 4 x 4 lump of sigma_t h 8: a camera sees its faces' first optical depth, not the voxels' mean over 8;
 // docs/benchmarks.md, spray-lump-faces). Before, only voxels open to air on both faces along an axis gathered their
-// faces. Where the faces at half the voxel's paths would pass the budget they take a quarter; where those would too,
-// none.
+// faces. Where the faces at their paths would pass the budget (at their own steps per path) they take the fewest;
+// where those would too, none.
 TEST(FaceSources, AGatheredLumpsThickVoxelsHoldTheirOneSidedFaces) {
     const Scene scene = sunlitLump();
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
     const std::vector<openvdb::Coord> voxels = lumpVoxels();
     const SubProgress none(nullptr, 0.0, 1.0);
-    const bake::GatheringPlan plan{256, 256.0 * 1000.0 * double(voxels.size())};
+    const bake::GatheringPlan plan{256, 256.0 * 1000.0 * double(voxels.size()), 256, 128};
     bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, plan.paths, 3, none);
-    bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan, voxels.size()), 5, none, traced);
+    const bake::FacesTraced taken =
+        bake::addFaceSources(scene, topo, voxels, bake::gatheredVoxelFaces(plan), 5, none, traced);
     for (std::size_t v = 0; v < voxels.size(); ++v) {
         const openvdb::Coord &c = voxels[v];
         unsigned open = 0;  // bit f for face f (-x, +x, -y, +y, -z, +z)
@@ -214,12 +215,13 @@ TEST(FaceSources, AGatheredLumpsThickVoxelsHoldTheirOneSidedFaces) {
 
     const auto facesWithin = [&](double budget) {
         bake::MonteCarloVoxels again = bake::traceSources(scene, voxels, 64, 3, none);
-        bake::addFaceSources(scene, topo, voxels, {128, 64, 1000.0, budget, {}}, 5, none, again);
+        bake::addFaceSources(scene, topo, voxels, {128, 64, budget, {}}, 5, none, again);
         return again.faces.size();
     };
-    const double faceCount = 4 * 4 * 6;  // the lump's faces open to air
-    EXPECT_EQ(facesWithin(1000.0 * 64 * faceCount * 1.5), 56u);  // a quarter's paths fit: all 56 surface voxels
-    EXPECT_EQ(facesWithin(1000.0 * 64 * faceCount * 0.5), 0u);
+    ASSERT_EQ(taken.faces, 4u * 4 * 6);  // the lump's faces open to air
+    const double perPath = taken.stepsPerPath * double(taken.faces);  // one path on every face
+    EXPECT_EQ(facesWithin(perPath * 64 * 1.5), 56u);  // the fewest paths fit: all 56 surface voxels
+    EXPECT_EQ(facesWithin(perPath * 64 * 0.5), 0u);
 }
 
 // A floating layer's rim voxel shows its cameras below what its top and bottom faces show them, as a middle voxel
@@ -411,7 +413,10 @@ TEST(FaceSources, AFringesFacesDropFirstAtTheBudgetsEdge) {
     bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, 64, 3, SubProgress(nullptr, 0.0, 1.0));
     // The lump's faces but its +x (toward the traced fringe); the fringe's +x (but one, toward snow) and its rim's.
     constexpr int kLumpFaces = 5 * 16, kFringeFaces = 15 + 16;
-    const bake::FaceGathering how{64, 64, 1.0, 64.0 * (kLumpFaces + kFringeFaces / 2), {}};
+    bake::MonteCarloVoxels all = traced;
+    const double perPath = bake::addFaceSources(scene, topo, voxels, {64, 64, 1e12, {}}, 5,
+                                                SubProgress(nullptr, 0.0, 1.0), all).stepsPerPath;  // a face's path
+    const bake::FaceGathering how{64, 64, perPath * 64.0 * (kLumpFaces + kFringeFaces / 2), {}};
     bake::addFaceSources(scene, topo, voxels, how, 5, SubProgress(nullptr, 0.0, 1.0), traced);
     ASSERT_EQ(traced.facesAt.size(), voxels.size());
     int lumpFaces = 0;
@@ -432,8 +437,8 @@ TEST(FaceSources, ALumpsLitFacesTakeMorePaths) {
     const Scene scene = sunlitLump();
     const std::vector<openvdb::Coord> voxels = lumpVoxels();
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    const bake::GatheringPlan plan{128, 128 * 1000.0 * double(voxels.size()), 128, bake::kLitFacePaths};
-    bake::FaceGathering how = bake::gatheredVoxelFaces(plan, voxels.size());
+    const bake::GatheringPlan plan{128, 128 * 1000.0 * double(voxels.size()), 128, 64, bake::kLitFacePaths};
+    bake::FaceGathering how = bake::gatheredVoxelFaces(plan);
     ASSERT_EQ(how.litPaths, bake::kLitFacePaths);
     ASSERT_LT(how.paths, how.litPaths);
     const auto traced = [&](int litPaths) {
@@ -473,6 +478,39 @@ TEST(FaceSources, LitFacePathsWithinTheirExtraSteps) {
     EXPECT_EQ(bake::litFacePaths(128, bake::kLitFacePaths, 0.0), bake::kLitFacePaths);  // no lit face
     // Each path beyond the faces' own costs the lit faces kLitFaceExtraSteps / 100.5 steps: 100 more fit.
     EXPECT_EQ(bake::litFacePaths(128, bake::kLitFacePaths, 128 * bake::kLitFaceExtraSteps / 100.5), 228);
+}
+
+// The faces' budget is priced at their own steps per path, measured by a pilot on a few of them (the same every run),
+// not at the voxels' pilot's: a lump's face gathers in its first optical depths, and its paths leave sooner than its
+// voxel's. With the voxels' paths priced far above the faces' and what they leave of kMaxTracedSteps holding the faces'
+// paths at the faces' own price with a tenth to spare, the faces take them all; with a budget for 128.5 paths, 128.
+// Before, the faces were priced at the voxels' pilot: spray_dense's at 1336 steps per path against their own 743, 144
+// of the 512 paths asked (docs/benchmarks.md, face-share); here none would fit.
+TEST(FaceSources, TheFacesArePricedAtTheirOwnStepsPerPath) {
+    const Scene scene = sunlitLump();
+    const std::vector<openvdb::Coord> voxels = lumpVoxels();
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    const SubProgress none(nullptr, 0.0, 1.0);
+    const auto faces = [&](const bake::FaceGathering &how) {
+        bake::MonteCarloVoxels traced = bake::traceSources(scene, voxels, 64, 3, none);
+        return bake::addFaceSources(scene, topo, voxels, how, 5, none, traced);
+    };
+    const bake::FacesTraced all = faces({256, 64, bake::kMaxTracedSteps, {}});
+    ASSERT_EQ(all.paths, 256);
+    ASSERT_EQ(all.faces, 4u * 4 * 6);
+    const double perPath = all.stepsPerPath * double(all.faces);  // one path on every face
+    // The voxels' own pilot: their paths longer than the faces'.
+    const bake::GatheringPlan voxelsPlan =
+        bake::planGathering(scene, bake::Preset{9, 4, 1e-5, 0, 1, 256, 256, true, 1.0}, voxels, 1);
+    ASSERT_EQ(voxelsPlan.paths, 256);
+    EXPECT_LT(all.stepsPerPath, voxelsPlan.steps / (256.0 * double(voxels.size())));
+
+    const bake::GatheringPlan plan{128, bake::kMaxTracedSteps - 1.1 * 256 * perPath, 128, 256};
+    ASSERT_GT(plan.steps / (128.0 * double(voxels.size())), 10.0 * all.stepsPerPath);  // the voxels' price
+    const bake::FacesTraced taken = faces(bake::gatheredVoxelFaces(plan));
+    EXPECT_EQ(taken.stepsPerPath, all.stepsPerPath);  // the same pilot
+    EXPECT_EQ(taken.paths, 256);
+    EXPECT_EQ(faces({256, 64, 128.5 * perPath, {}}).paths, 128);
 }
 
 // A face's collisions split by the trilinear hat as the quadrature splits them: at sigma_t h 2, where 17 % of them

@@ -1,6 +1,7 @@
 // The traced voxels' paths (bake_traced_voxels.h, planGathering): where the plan holds the preset's paths, the voxels
 // the renderer draws rather than scatters (sigma_t h at least BakedGrids::kScatterOpticalDepth) take twice as many, up
-// to the preset's cheap paths; none more where the budget already cuts the paths; the lit faces' paths (addFaceSources).
+// to the preset's cheap paths; none more where the budget already cuts the paths; the faces' and lit faces' paths
+// (addFaceSources).
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -53,11 +54,33 @@ TEST(GatheringPlan, NoMorePathsWhereTheBudgetCutsThem) {
     EXPECT_EQ(plan.drawnPaths, plan.paths);
 }
 
-// A gathered lump's lit faces take kLitFacePaths (addFaceSources) up to the preset's cheap paths: FINAL's 350, DRAFT's
-// faces none more.
-TEST(GatheringPlan, LitFacesTakeTheirPathsUpToTheCheapPaths) {
-    EXPECT_EQ(bake::planGathering(smallLump(), preset(256, 1024), lumpVoxels(), 1).litFacePaths, bake::kLitFacePaths);
-    EXPECT_EQ(bake::planGathering(smallLump(), preset(64, 64), lumpVoxels(), 1).litFacePaths, 64);
+// A gathered lump's faces take kFacePathsPerVoxelPath times the voxel's paths and its lit faces kLitFacePaths times
+// the faces' multiple of half the voxel's (addFaceSources), up to the preset's cheap paths: the faces of 256 paths per
+// voxel 512 and their lit faces 1400 where the cheap cap is wide, FINAL's 1024 each; DRAFT's 64 none more. Before, the
+// faces took half the voxel's paths and the lit faces kLitFacePaths (docs/benchmarks.md, face-pilot).
+TEST(GatheringPlan, FacesTakeAMultipleOfTheVoxelsPathsUpToTheCheapPaths) {
+    const bake::GatheringPlan wide = bake::planGathering(smallLump(), preset(256, 1 << 20), lumpVoxels(), 1);
+    ASSERT_GE(wide.paths, 256);
+    EXPECT_EQ(wide.facePaths, bake::kFacePathsPerVoxelPath * wide.paths);
+    EXPECT_EQ(wide.litFacePaths, 2 * bake::kFacePathsPerVoxelPath * bake::kLitFacePaths);
+    const bake::GatheringPlan final = bake::planGathering(smallLump(), preset(256, 1024), lumpVoxels(), 1);
+    ASSERT_GE(final.paths, 512);
+    EXPECT_EQ(final.facePaths, 1024);
+    EXPECT_EQ(final.litFacePaths, 1024);
+    const bake::GatheringPlan draft = bake::planGathering(smallLump(), preset(64, 64), lumpVoxels(), 1);
+    EXPECT_EQ(draft.facePaths, 64);
+    EXPECT_EQ(draft.litFacePaths, 64);
+}
+
+// The faces take the plan's paths within what the voxels' paths leave of kMaxTracedSteps, down to a quarter of the
+// voxel's (addFaceSources prices them at their own steps per path).
+TEST(GatheringPlan, TheFacesShareWhatTheVoxelsLeaveOfTheBudget) {
+    const bake::GatheringPlan plan{256, bake::kMaxTracedSteps - 1e6, 256, 512, 1024};
+    const bake::FaceGathering how = bake::gatheredVoxelFaces(plan);
+    EXPECT_EQ(how.paths, 512);
+    EXPECT_EQ(how.fewestPaths, 64);
+    EXPECT_DOUBLE_EQ(how.budget, 1e6);
+    EXPECT_EQ(how.litPaths, 1024);
 }
 
 }  // namespace firn
