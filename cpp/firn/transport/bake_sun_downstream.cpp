@@ -75,7 +75,8 @@ glm::dvec3 rotatedWith(const glm::dvec3 &v, const glm::dvec3 &from, const glm::d
 // The weights surface voxel i's downstream kernels (one per channel) give surface voxel j of its 3^3 block (before
 // normalizing): a Gaussian of the half-space's displacement (SunReturned::downstream, spread) in i's tangent plane,
 // times j's patch area and the cosine between the normals; smooth patches only. a, b: i's and j's patches; d: j's
-// voxel less i's.
+// voxel less i's. A channel whose kernel is the one before's to the bit (a white sun's: its power alike) takes that
+// weight, the same number without its exponential.
 glm::dvec3 downstreamWeights(const SurfacePatch &a, const std::array<const SunReturned *, 3> &from,
                              const SurfacePatch &b, const openvdb::Coord &d, double h) {
     const double facing = glm::dot(a.normal, b.normal);
@@ -86,6 +87,10 @@ glm::dvec3 downstreamWeights(const SurfacePatch &a, const std::array<const SunRe
     glm::dvec3 weight;
     for (int c = 0; c < 3; ++c) {
         const SunReturned &kernel = *from[c];
+        if (c > 0 && kernel.downstream == from[c - 1]->downstream && kernel.spread == from[c - 1]->spread) {
+            weight[c] = weight[c - 1];
+            continue;
+        }
         if (kernel.spread <= 0.0f) {
             weight[c] = d == openvdb::Coord(0) ? 1.0 : 0.0;
             continue;

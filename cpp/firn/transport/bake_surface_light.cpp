@@ -205,10 +205,11 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // `peak` (a smooth patch, or each air face of a sharp edge), the suns' light returned sharply forwards leaves as
     // the peaked lobe instead (SunPeak: at grazing sun the lit rim seen against the sun, bench/bake_halfspace.py),
     // added to `peak` (radiance), the rest linear:
-    // `index` finds the patch's neighbours for its curvature (restKept).
+    // `index` finds the patch's neighbours for its curvature (restKept); `curvature`: voxel i's (surfaceCurvature),
+    // -1 until a low sun asks for it, then kept for i's other channels and faces.
     auto returnedThrough = [&](int c, std::size_t i, const glm::dvec3 &n, double skyShare, const SkyBeam &beam,
                                const auto &beamShare, SurfaceLight *peak,
-                               openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
+                               openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, double &curvature) {
         const Channel &ch = channels[c].ch;
         const double y = channels[c].y;
         const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
@@ -226,7 +227,6 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             r1 += returned * (lobe.b * n + lobe.c * travelAlong(-beam.towards, n));
         }
         double sun0 = 0.0, sunMissed = 0.0, sunReturned = 0.0;  // the beams' part
-        double curvature = -1.0;  // per voxel (surfaceCurvature), found when a low sun asks for it
         glm::dvec3 sun1(0.0);
         // The half-space of the snow beneath the patch: a voxel's resistance and the node's below the surface
         // (schemeBeamAlbedo's d, L). A smooth surface's fringe voxel holds less snow where the surface crosses it
@@ -287,12 +287,14 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             // Accuracy: the terminator). At most 3/7, so the form stays positive at grazing exit.
             const std::array<glm::dvec3, 3> gradient =
                 patch.sharp ? std::array<glm::dvec3, 3>{} : surfaceGradients(topo, phi, i, h);
+            double curvature = -1.0;  // returnedThrough's, shared by the channels
             for (int c = 0; c < 3; ++c) {
                 const Channel &ch = channels[c].ch;
                 const double leaving = terms[c].escaped[i] + terms[c].outConductance[i] * phi[c][i];
                 const auto whole = [](std::size_t) { return 1.0; };
                 const ReturnedLight r =
-                    returnedThrough(c, i, patch.normal, 1.0, skyBeam, whole, patch.sharp ? nullptr : &surface, index);
+                    returnedThrough(c, i, patch.normal, 1.0, skyBeam, whole, patch.sharp ? nullptr : &surface, index,
+                                    curvature);
                 // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
                 // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
                 // through the smooth surface or, at a sharp edge, through each air face.
@@ -365,6 +367,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 if (patch.share[f] > 0.0f && goesOnFlat(topo, i, f)) own.flat |= std::uint8_t(1u << f);
             const glm::dvec3 surface = patchSurface(medium, topo, i);
             std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
+            double curvature = -1.0;  // returnedThrough's, shared by the channels and faces
             for (int f = 0; f < 6; ++f)
                 if (patch.share[f] > 0.0f)
                     outflow[f] = neighbourhoodOutflow<glm::dvec3>(
@@ -382,7 +385,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                         for (int g = 0; g < 6; ++g)
                             if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
                         return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
-                    }, &out.surface(i), index);
+                    }, &out.surface(i), index, curvature);
                     const double leaving = outflow[f].first[c], area = outflow[f].second;
                     const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
                     faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
