@@ -16,12 +16,6 @@ namespace firn::bake {
 
 namespace {
 
-// How far (transport mean free paths) a sharp edge's face's exit relaxes towards its neighbour's
-// (relaxTowardsNeighbours): under the sky over a black ground the Monte Carlo's mean over the top face of a flat
-// slab's edge voxel is 0.88 of the inside's where the side's exit is 0.73 of it, kappa 0.44, a reach of 0.52 voxel at
-// 4.5 transport mean free paths per voxel (bench/plate_side_probe.py --shape slab, docs/benchmarks.md plate-side).
-constexpr double kEdgeReach = 2.3;
-
 // A neighbour's normal this near a face's (cosine) is the face going on: a flat wall's voxels take the face's normal
 // itself (onFlatWall); a ball of 5 voxels' radius turns 11 degrees (0.98) a voxel.
 constexpr double kFlatCosine = 0.999;
@@ -391,8 +385,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
                                      (r.sky1 + r.sun1) / own + exitance * 6.0 / 7.0 / kPi * n});
                 }
-                const double reach = kEdgeReach / (h * channels[c].ch.sigmaTr(densityBeneath(topo, i, patch.normal)));
-                relaxTowardsNeighbours(faces, reach);  // voxels
+                // sigma_eff h = 3 kappa D sigma_tr h: the voxel in diffusion lengths of the snow beneath the patch.
+                const double sigmaTr = channels[c].ch.sigmaTr(densityBeneath(topo, i, patch.normal));
+                relaxTowardsNeighbours(faces, 3.0 * channels[c].ch.beta() * sigmaTr * h);
                 const SourceLobe lobe = edgeLobe(faces);
                 out.surface(i).returned.l0[c] = float(lobe.l0);
                 out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);

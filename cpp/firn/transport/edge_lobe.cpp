@@ -86,11 +86,12 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
     return {l0, 3.0 * bestK * l0 * axis};
 }
 
-void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double reach) {
+void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double voxelInDiffusionLengths) {
     for (const FaceExit &a : faces)
         for (const FaceExit &b : faces)
             if (glm::dot(a.normal, b.normal) < -0.5) return;  // no snow beneath a face: a lump's tip, a thin plate
-    const double kappa = reach * (1.0 - std::exp(-1.0 / reach));
+    const double s = voxelInDiffusionLengths;  // kappa: the mean of exp(-x s) / 2 over x in [0, 1]; 1/2 as s -> 0
+    const double kappa = s > 1e-6 ? 0.5 * -std::expm1(-s) / s : 0.5;
     std::vector<double> mean(faces.size());  // W/m^2/sr: e0 + 2/3 e1 . n, the exitance over pi
     for (std::size_t f = 0; f < faces.size(); ++f)
         mean[f] = faces[f].e0 + 2.0 / 3.0 * glm::dot(faces[f].e1, faces[f].normal);

@@ -26,13 +26,15 @@ struct FaceExit {
 SourceLobe edgeLobe(const std::vector<FaceExit> &faces);
 
 // Each face's form taken as its mean over the face where the light beneath it also leaves through the faces beside
-// it: within a few transport mean free paths of their shared edge diffuse light leaves through either, so a face's
-// exit relaxes across the voxel from its neighbour's at the edge to its own, f + (g - f) exp(-x / reach) (x and
-// `reach` in voxels), and its mean moves by kappa (g - f), kappa = reach (1 - exp(-1 / reach)), towards each
-// neighbour g at right angles (f, g: the forms' mean radiance over their hemispheres). Where the faces carry the
-// same light nothing moves; over a dark ground a convex edge's top falls towards its side (docs/benchmarks.md,
-// edge-corner). Only where snow lies beneath every face (no two air faces opposite: the edges and corners of snow
+// it. Near their shared edge the snow's fluence is one for both faces: by symmetry the two exits meet at the edge at
+// their mean, and the difference relaxes away from it over the fluence's lateral length, the diffusion length
+// 1 / sigma_eff (sigma_eff = sqrt(3 sigma_a sigma_tr)): f + (g - f) / 2 exp(-x sigma_eff h), x across the voxel in
+// voxels. The face's mean moves by kappa (g - f), kappa = (1 - exp(-s)) / (2 s), s = sigma_eff h, towards each
+// neighbour g at right angles (f, g: the forms' mean radiance over their hemispheres); kappa <= 1/2, the two faces'
+// mean at most, and what the brighter face loses the darker gains (equal areas). Where the faces carry the same light
+// nothing moves; over a dark ground a convex edge's top falls towards its side (docs/benchmarks.md, edge-corner,
+// edge-relax). Only where snow lies beneath every face (no two air faces opposite: the edges and corners of snow
 // thicker than a voxel); relaxed, a cloud of small lumps read 0.93 of the Monte Carlo (test_bake_accuracy.py).
-void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double reach);
+void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double voxelInDiffusionLengths);
 
 }  // namespace firn

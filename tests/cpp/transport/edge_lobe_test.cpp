@@ -57,4 +57,19 @@ TEST(EdgeLobe, NothingWhereNoLightLeaves) {
     EXPECT_EQ(glm::length(lobe.l1), 0.0);
 }
 
+// A lit top (mean radiance 0.3) beside a dark side (0.1): their exits meet at the shared edge at their mean and the
+// difference relaxes across the voxel over the diffusion length, so each face's mean moves by
+// kappa = (1 - exp(-s)) / (2 s) of the difference (s: the voxel in diffusion lengths), what the top loses the side
+// gains, and never past the two faces' mean: in snow that absorbs nothing (s -> 0) they meet at it.
+TEST(EdgeLobe, RelaxedFacesMeetAtMostAtTheirMean) {
+    for (const double s : {1e-9, 0.45, 4.5}) {
+        std::vector<FaceExit> faces{{{0.0, 0.0, 1.0}, 0.3, {0.0, 0.0, 0.0}}, {{-1.0, 0.0, 0.0}, 0.1, {0.0, 0.0, 0.0}}};
+        relaxTowardsNeighbours(faces, s);
+        const double kappa = s < 1e-6 ? 0.5 : (1.0 - std::exp(-s)) / (2.0 * s);
+        EXPECT_NEAR(faces[0].e0, 0.3 - 0.2 * kappa, 1e-9) << s;
+        EXPECT_NEAR(faces[1].e0, 0.1 + 0.2 * kappa, 1e-9) << s;
+        EXPECT_GE(faces[0].e0, faces[1].e0 - 1e-12) << s;
+    }
+}
+
 }  // namespace firn
