@@ -100,7 +100,7 @@ TEST(Bake, ConservativeSlabConservesEnergy) {
 }
 
 // A convex edge over a black ground (a slab in the air, the sun straight above): the light beneath its edge voxel's
-// top leaves within a few transport mean free paths through the unlit side too, so the top's exit falls across that
+// top leaves within a diffusion length through the unlit side too, so the top's exit falls across that
 // voxel towards the side (docs/benchmarks.md, plate-side and edge-corner). Rendered straight down across the edge
 // voxel, relative to the inside, against the Monte Carlo on the same rays: with the edge voxel's top taken as the
 // inside's own exit (before branch edge-corner) 0.79 where the truth is 0.69. Under a sky all round, which reaches
@@ -137,8 +137,8 @@ TEST(Bake, ConvexEdgeShowsItsTopFallingTowardsTheSide) {
 // across each of its flat faces carries that face's own exit (EdgeFaceLobes). Rendered head-on across each face of the
 // edge voxel against the Monte Carlo on the same rays (4096 paths), relative to the inside's top: the top 0.711 with
 // the voxel's one lobe in the air above it, 0.677 with the top's own, the truth 0.679. The side (printed, not held)
-// reads 0.689 -> 0.741 against 0.467: its own form is too bright, raised towards the lit top by
-// relaxTowardsNeighbours (docs/benchmarks.md, edge-faces).
+// reads 0.689 -> 0.741 against 0.467, 0.734 with the faces relaxed no further than their mean (kappa 0.44 -> 0.40,
+// branch edge-relax): its own form is too bright before any relaxation (docs/benchmarks.md, edge-faces, edge-relax).
 TEST(Bake, EdgeFacesBesideALitFaceShowTheirOwnExit) {
     const int width = 16, across = 8;
     Scene scene = slabScene(1500.0, 0.999, 0.7, width, 6);  // sigma_t h 15: 4.5 transport mean free paths a voxel
