@@ -63,12 +63,6 @@ bool goesOnFlat(const SnowTopology &topo, std::size_t i, int f) {
     return true;
 }
 
-// The air face of unit normal n.
-int faceOf(const glm::dvec3 &n) {
-    const int axis = std::abs(n.x) > 0.5 ? 0 : std::abs(n.y) > 0.5 ? 1 : 2;
-    return 2 * axis + (n[axis] > 0.0);
-}
-
 // kg/m^2 of snow from surface voxel i's centre out through its patch: its air faces' ramps by their shares.
 double patchRampMass(const SnowTopology &topo, std::size_t i) {
     double mass = 0.0;
@@ -392,7 +386,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 out.surface(i).returned.l0[c] = float(lobe.l0);
                 out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);
                 for (const FaceExit &face : faces) {
-                    const int f = faceOf(face.normal);
+                    const int f = faceBeneath(-face.normal);  // the air face of that normal
                     if (!(own.flat >> f & 1u)) continue;
                     const SourceLobe shown =
                         withCrossing(exitLobe(face.e0, face.e1, face.normal), out[i], patch.area, c, channels[c].ch.g);
