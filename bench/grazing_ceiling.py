@@ -20,16 +20,18 @@ density's gradient: bench/ramp_source_profile.py --by-exit). Two oracles on the 
   truth over its bake at az 90 (edge-fall: 0.73, 0.76, 0.88, 0.97 at mu 0.05, 0.10, 0.17, 0.34, the baked exit
   flat there).
 - --grid: limb(a) as a grid would render it (the design: a Vec3 grid a x lit share x the outward unit normal on the
-  surface's band, carried two voxels into the air; the renderer reads it trilinearly, its length the amplitude, its
-  direction the normal), D averaged along each ray over the light it shows; --grid-scale 2 that grid on voxels twice
-  the density's; --l1-axis the amplitude alone from it and the broad lobe's own axis l1 as the normal (no grid for
-  the direction).
+  surface's band, carried two voxels into the air (--carry); the renderer reads it trilinearly, its length the
+  amplitude, its direction the normal), D averaged along each ray over the light it shows; --grid-scale 2 that grid
+  on voxels twice the density's; --l1-axis the amplitude alone from it and the broad lobe's own axis l1 as the
+  normal (no grid for the direction); --forward the darkening times 1 - max(w . p1 / |p1|, 0), w towards the
+  viewer: none along the peaked lobe's axis (the sun's forward travel out of a lit surface, where its limb is too
+  dark already).
 
 Per case: the mean |error| (the suite's, all channels), each oracle's, the worst block and its mu; the sum of the
 means. --blocks lists each case's five worst blocks (view, row, col, mu, error).
 
     PYTHONPATH=build/python:bench python3 bench/grazing_ceiling.py [--cases a,b] [--amplitudes 0.15,0.3,0.45] \
-        [--lit 0.3] [--grid [--grid-scale 2] [--l1-axis]] [--blocks]
+        [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis]] [--blocks]
 """
 
 import argparse
@@ -77,10 +79,10 @@ def darkening(mu, amplitude):
     return 1.0 - amplitude * np.clip(1.0 - np.nan_to_num(mu, nan=1.0) / MU_FULL, 0.0, 1.0)
 
 
-def limb_grid(case, amplitude, lit):
+def limb_grid(case, amplitude, lit, carry=2):
     """The term as a grid would hold it, on the density's voxels: amplitude x lit share x the outward unit normal
     (minus the density's central-difference gradient) where that gradient is not 0 (the surface's band, a voxel
-    either side of its ramp), carried two voxels on into the air (each empty voxel the mean of its face neighbours
+    either side of its ramp), carried `carry` voxels on into the air (each empty voxel the mean of its face neighbours
     holding one), 0 elsewhere; the lit share min(mu0 / lit, 1) with mu0 as exit_cosines'."""
     gradient = np.stack(np.gradient(case.density.astype(float)), -1)
     length = np.linalg.norm(gradient, axis=-1)
@@ -93,7 +95,7 @@ def limb_grid(case, amplitude, lit):
         share = np.clip(mu0 / lit, 0.0, 1.0)
     grid = np.zeros(case.density.shape + (3,))
     grid[band] = (amplitude * share)[:, None] * normal
-    for _ in range(2):  # carried two voxels on into the air, as the source grids' values are (vdb-contract.md)
+    for _ in range(carry):  # carried on into the air, as the source grids' values are (vdb-contract.md: two voxels)
         empty = ~np.any(grid != 0.0, axis=-1) & (case.density == 0.0)
         total, count = np.zeros(grid.shape), np.zeros(case.density.shape)
         for a in range(3):
@@ -130,7 +132,14 @@ def broad_axis(path, shape):
     return out
 
 
-def grid_darkening(case, grid, origins, directions, seen, scale=1, axis=None, step=0.05):
+def peak_axis(path, shape):
+    """The peaked lobe's p1 (one vector for all channels) on the density's voxels, from the baked file."""
+    out = np.zeros(shape + (3,), np.float32)
+    pyopenvdb.read(path, "firn_source_peak_l1").copyToArray(out, ijk=(0, 0, 0))
+    return out.astype(float)
+
+
+def grid_darkening(case, grid, origins, directions, seen, scale=1, axis=None, forward=None, step=0.05):
     """Each seen ray's D averaged over the light it shows: sum of sigma_t e^-tau ds D(-direction, the trilinear
     grid) over sum of sigma_t e^-tau ds, to optical depth 12 (the source along the first optical depths taken as
     constant: a surface's exit radiance, as the contract holds it there)."""
@@ -147,6 +156,10 @@ def grid_darkening(case, grid, origins, directions, seen, scale=1, axis=None, st
             v = np.stack([S.trilinear(axis[..., c], p[k]) for c in range(3)], 1)
         mu = -(v @ directions[i]) / np.maximum(np.linalg.norm(v, axis=1), 1e-30)
         d = 1.0 - a * np.clip(1.0 - mu / MU_FULL, 0.0, 1.0)
+        if forward is not None:  # none along the peaked lobe's travel: there the lit limb is too dark already
+            f = np.stack([S.trilinear(forward[..., c], p[k]) for c in range(3)], 1)
+            along = (f @ -directions[i]) / np.maximum(np.linalg.norm(f, axis=1), 1e-30)
+            d = 1.0 - (1.0 - d) * (1.0 - np.maximum(along, 0.0))
         w = sigma[k] * np.exp(-tau[k])
         out[i] = (w * d).sum() / max(w.sum(), 1e-30)
     return out
@@ -169,6 +182,9 @@ def main():
                         help="limb(a) as a grid renders it: limb_grid's vectors read trilinearly along the ray")
     parser.add_argument("--l1-axis", action="store_true",
                         help="--grid's amplitude only, about the broad lobe's axis l1 in place of the normal")
+    parser.add_argument("--forward", action="store_true",
+                        help="--grid's darkening times 1 - max(w . p1 / |p1|, 0): none along the peaked lobe's axis")
+    parser.add_argument("--carry", type=int, default=2, help="--grid's vectors carried this many voxels into the air")
     parser.add_argument("--grid-scale", type=int, default=1, help="--grid's voxels this many density voxels wide")
     parser.add_argument("--blocks", action="store_true", help="each case's five worst blocks")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
@@ -205,8 +221,10 @@ def main():
                     d = 1.0
                 elif args.grid:
                     axis = broad_axis(path, case.density.shape) if args.l1_axis else None
-                    d = grid_darkening(case, coarsened(limb_grid(case, a, args.lit), args.grid_scale), run.origins,
-                                       run.directions, seen, args.grid_scale, axis)[:, None]
+                    forward = peak_axis(path, case.density.shape) if args.forward else None
+                    grid = coarsened(limb_grid(case, a, args.lit, args.carry), args.grid_scale)
+                    d = grid_darkening(case, grid, run.origins, run.directions, seen, args.grid_scale, axis,
+                                       forward)[:, None]
                 else:
                     d = (1.0 - lit * (1.0 - darkening(mu, a)))[:, None]
                 darkened.append(baked * d if args.peaks else (baked - broad) + broad * d)
