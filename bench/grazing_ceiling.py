@@ -1,0 +1,251 @@
+"""How much of the suite's error is the grazing exit, and what a limb-darkening term could take (docs/benchmarks.md,
+limb-dark).
+
+Each case's blocks (FINAL, --seed, the suite's cached references) get the exit cosine mu where their ray reaches
+optical depth 1 (the view's direction towards the camera dotted with the snow's outward normal, minus the trilinear
+density's gradient: bench/ramp_source_profile.py --by-exit). Two oracles on the baked render, the bench only:
+
+- ceiling(mu_c): the blocks of mu < mu_c given the reference's value (their error 0): what any change that moves
+  grazing exits alone can take at most;
+- darker(mu_c): only those of them brighter than the reference, per channel: what any darkening of grazing exits
+  can take at most;
+- limb(a): the render with the broad lobe's light (the render without the peaked grids, backlit_probe's
+  write_without_peaks) times D(mu) = 1 - a (1 - mu / MU_FULL) below MU_FULL, 1 above, on thick snow only (the
+  case's sigma_t h >= 3 and under half its voxels traced by the bake: a half-space's limb darkening does not exist in
+  thin snow, and a bake would write the term on its smooth surface patches only); --peaks also the peaked lobe's
+  light. With --lit L the amplitude times the lit share min(mu0 / L, 1) (mu0 the sun's cosine to the normal at
+  depth 1, 0 where snow or an occluder shades it: no darkening on shadowed or sky-lit snow). On a flat top the
+  render of S(w) D(w . n) through the ramp is D(mu) times the baked one exactly (one normal along the ray); on a
+  ball the normal at depth 1 stands for the few voxels the light comes from. a = 0.3 is the shape of slab_thick's
+  truth over its bake at az 90 (edge-fall: 0.73, 0.76, 0.88, 0.97 at mu 0.05, 0.10, 0.17, 0.34, the baked exit
+  flat there).
+- --grid: limb(a) as a grid would render it (the design: a Vec3 grid a x lit share x the outward unit normal on the
+  surface's band, carried two voxels into the air (--carry); the renderer reads it trilinearly, its length the
+  amplitude, its direction the normal), D averaged along each ray over the light it shows; --grid-scale 2 that grid
+  on voxels twice the density's; --l1-axis the amplitude alone from it and the broad lobe's own axis l1 as the
+  normal (no grid for the direction); --forward the darkening times 1 - max(w . p1 / |p1|, 0), w towards the
+  viewer: none along the peaked lobe's axis (the sun's forward travel out of a lit surface, where its limb is too
+  dark already).
+
+Per case: the mean |error| (the suite's, all channels), each oracle's, the worst block and its mu; the sum of the
+means. --blocks lists each case's five worst blocks (view, row, col, mu, error).
+
+    PYTHONPATH=build/python:bench python3 bench/grazing_ceiling.py [--cases a,b] [--amplitudes 0.15,0.3,0.45] \
+        [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis]] [--blocks]
+"""
+
+import argparse
+import os
+import tempfile
+
+import numpy as np
+import pyopenvdb
+
+import bake_suite as S
+from backlit_probe import sun_towards, write_without_peaks
+
+MU_FULL = 0.35  # above this exit cosine the truth's exit over the bake's is flat on slab_thick (edge-fall)
+THICK = 3.0  # sigma_t h from which a case's surfaces are a half-space's (the limb darkening is a thick medium's)
+
+
+def exit_cosines(case, origins, directions, seen):
+    """mu and mu0 per block (NaN where not seen; mu0 NaN without a sun): -direction and the direction towards the
+    sun dotted with the outward normal at the ray's optical depth 1 point (mu0 0 where snow or an occluder shades
+    the point 1.5 voxels out along the normal from the sun)."""
+    mu, mu0 = np.full(len(origins), np.nan), np.full(len(origins), np.nan)
+    hits = S.depth_one_points(case, origins[seen], directions[seen], np.ones(seen.sum(), bool)) / case.voxel
+    gradient = np.stack([S.trilinear(case.density, hits + e) - S.trilinear(case.density, hits - e)
+                         for e in 0.25 * np.eye(3)], 1)
+    normal = -gradient / np.maximum(np.linalg.norm(gradient, axis=1), 1e-30)[:, None]
+    mu[seen] = np.einsum("ij,ij->i", -directions[seen], normal)
+    if case.sun > 0.0:
+        mu0[seen] = normal @ sun_towards() * sun_seen(case, hits * case.voxel + 1.5 * case.voxel * normal)
+    return mu, mu0
+
+
+def sun_seen(case, points):
+    """1 where the sun reaches points (m) through under optical depth 1 of snow and past the occluders, else 0."""
+    steps = np.linspace(0.0, 1.0, 2000)
+    out = np.zeros(len(points))
+    for i, p in enumerate(points):
+        path = p + steps[:, None] * sun_towards()
+        tau = S.trilinear(case.density, path / case.voxel).sum() * (steps[1] - steps[0]) * case.sigma_t / case.rho
+        out[i] = float(tau < 1.0 and S.plate_hit(case, p, sun_towards()) == np.inf)
+    return out
+
+
+def darkening(mu, amplitude):
+    """D(mu): 1 - a (1 - mu / MU_FULL) below MU_FULL (mu under 0, a ray through the ramp only, as at 0), 1 above."""
+    return 1.0 - amplitude * np.clip(1.0 - np.nan_to_num(mu, nan=1.0) / MU_FULL, 0.0, 1.0)
+
+
+def limb_grid(case, amplitude, lit, carry=2):
+    """The term as a grid would hold it, on the density's voxels: amplitude x lit share x the outward unit normal
+    (minus the density's central-difference gradient) where that gradient is not 0 (the surface's band, a voxel
+    either side of its ramp), carried `carry` voxels on into the air (each empty voxel the mean of its face neighbours
+    holding one), 0 elsewhere; the lit share min(mu0 / lit, 1) with mu0 as exit_cosines'."""
+    gradient = np.stack(np.gradient(case.density.astype(float)), -1)
+    length = np.linalg.norm(gradient, axis=-1)
+    band = length > 1e-6 * case.rho
+    normal = -gradient[band] / length[band][:, None]
+    centres = np.argwhere(band) * case.voxel
+    share = np.ones(len(normal))
+    if lit > 0.0:
+        mu0 = normal @ sun_towards() * sun_seen(case, centres + 1.5 * case.voxel * normal) if case.sun > 0.0 else 0.0
+        share = np.clip(mu0 / lit, 0.0, 1.0)
+    grid = np.zeros(case.density.shape + (3,))
+    grid[band] = (amplitude * share)[:, None] * normal
+    for _ in range(carry):  # carried on into the air, as the source grids' values are (vdb-contract.md: two voxels)
+        empty = ~np.any(grid != 0.0, axis=-1) & (case.density == 0.0)
+        total, count = np.zeros(grid.shape), np.zeros(case.density.shape)
+        for a in range(3):
+            for shift in (-1, 1):
+                neighbour = np.roll(grid, shift, axis=a)
+                total += neighbour
+                count += np.any(neighbour != 0.0, axis=-1)
+        grid[empty] = total[empty] / np.maximum(count[empty], 1)[:, None]
+    return grid
+
+
+def coarsened(grid, scale):
+    """The grid on voxels `scale` times larger (voxel J where density voxel scale J is): each the mean of the fine
+    voxels within its trilinear hat, weighted by the hat."""
+    if scale == 1:
+        return grid
+    hat = 1.0 - np.abs(np.arange(-scale + 1, scale)) / scale
+    out = np.zeros(grid.shape)
+    for axis in range(3):  # separable: the hat along each axis in turn
+        padded = np.pad(grid if axis == 0 else out, [(scale - 1, scale - 1) if a == axis else (0, 0) for a in range(4)])
+        out = sum(w * np.take(padded, np.arange(k, k + grid.shape[axis]), axis=axis) for k, w in enumerate(hat))
+        out /= hat.sum()
+    return out[::scale, ::scale, ::scale]
+
+
+def broad_axis(path, shape):
+    """The broad lobe's l1 (green) on the density's voxels, from the baked file (the source grids' voxels are the
+    density's in the suite: source_scale 1)."""
+    out = np.zeros(shape + (3,))
+    for a, name in enumerate(("firn_source_x", "firn_source_y", "firn_source_z")):
+        values = np.zeros(shape + (3,), np.float32)
+        pyopenvdb.read(path, name).copyToArray(values, ijk=(0, 0, 0))
+        out[..., a] = values[..., 1]
+    return out
+
+
+def peak_axis(path, shape):
+    """The peaked lobe's p1 (one vector for all channels) on the density's voxels, from the baked file."""
+    out = np.zeros(shape + (3,), np.float32)
+    pyopenvdb.read(path, "firn_source_peak_l1").copyToArray(out, ijk=(0, 0, 0))
+    return out.astype(float)
+
+
+def grid_darkening(case, grid, origins, directions, seen, scale=1, axis=None, forward=None, step=0.05):
+    """Each seen ray's D averaged over the light it shows: sum of sigma_t e^-tau ds D(-direction, the trilinear
+    grid) over sum of sigma_t e^-tau ds, to optical depth 12 (the source along the first optical depths taken as
+    constant: a surface's exit radiance, as the contract holds it there)."""
+    out = np.ones(len(origins))
+    steps = np.arange(0.0, 2.0, step * case.voxel)
+    for i in np.nonzero(seen)[0]:
+        p = (origins[i] + steps[:, None] * directions[i]) / case.voxel
+        sigma = S.trilinear(case.density, p) * case.sigma_t / case.rho
+        tau = np.cumsum(sigma) * step * case.voxel
+        k = (sigma > 0.0) & (tau < 12.0)
+        v = np.stack([S.trilinear(grid[..., a], p[k] / scale) for a in range(3)], 1)
+        a = np.linalg.norm(v, axis=1)
+        if axis is not None:  # the amplitude alone from the grid, the direction the broad lobe's axis
+            v = np.stack([S.trilinear(axis[..., c], p[k]) for c in range(3)], 1)
+        mu = -(v @ directions[i]) / np.maximum(np.linalg.norm(v, axis=1), 1e-30)
+        d = 1.0 - a * np.clip(1.0 - mu / MU_FULL, 0.0, 1.0)
+        if forward is not None:  # none along the peaked lobe's travel: there the lit limb is too dark already
+            f = np.stack([S.trilinear(forward[..., c], p[k]) for c in range(3)], 1)
+            along = (f @ -directions[i]) / np.maximum(np.linalg.norm(f, axis=1), 1e-30)
+            d = 1.0 - (1.0 - d) * (1.0 - np.maximum(along, 0.0))
+        w = sigma[k] * np.exp(-tau[k])
+        out[i] = (w * d).sum() / max(w.sum(), 1e-30)
+    return out
+
+
+def mean_error(render, mean, seen):
+    return float(np.abs(render[seen] / np.maximum(mean[seen], 1e-30) - 1.0).mean())
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--cases", default="")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--ceilings", default="0.15,0.3")
+    parser.add_argument("--amplitudes", default="0.15,0.3,0.45")
+    parser.add_argument("--peaks", action="store_true", help="darken the peaked lobe's light too")
+    parser.add_argument("--lit", type=float, default=0.0,
+                        help="the amplitude times min(mu0 / LIT, 1), 0 where the sun is below the surface's horizon")
+    parser.add_argument("--grid", action="store_true",
+                        help="limb(a) as a grid renders it: limb_grid's vectors read trilinearly along the ray")
+    parser.add_argument("--l1-axis", action="store_true",
+                        help="--grid's amplitude only, about the broad lobe's axis l1 in place of the normal")
+    parser.add_argument("--forward", action="store_true",
+                        help="--grid's darkening times 1 - max(w . p1 / |p1|, 0): none along the peaked lobe's axis")
+    parser.add_argument("--carry", type=int, default=2, help="--grid's vectors carried this many voxels into the air")
+    parser.add_argument("--grid-scale", type=int, default=1, help="--grid's voxels this many density voxels wide")
+    parser.add_argument("--blocks", action="store_true", help="each case's five worst blocks")
+    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    args = parser.parse_args()
+    ceilings = [float(x) for x in args.ceilings.split(",")]
+    amplitudes = [float(x) for x in args.amplitudes.split(",")]
+    chosen = [c for c in S.cases() if not args.cases or c.name in args.cases.split(",")]
+    print("case               mean  " + "".join(f" ceil<{c:4.2f}" for c in ceilings) +
+          f" darker<{ceilings[-1]:4.2f}" + "".join(f"  limb {a:4.2f}" for a in amplitudes) +
+          "   worst (mu)        blocks mu<0.3 (|err|)")
+    totals = np.zeros(2 + len(ceilings) + len(amplitudes))
+    with tempfile.TemporaryDirectory() as folder:
+        for case in chosen:
+            path = os.path.join(folder, case.name + ".vdb")
+            run = S.baked_case(case, path, args.cache, "FINAL", args.seed)
+            baked = S.firncore.render_baked(path, case.optics, run.origins, run.directions, occluders=case.occluders)
+            write_without_peaks(path, path + ".broad.vdb")
+            broad = S.firncore.render_baked(path + ".broad.vdb", case.optics, run.origins, run.directions,
+                                            occluders=case.occluders)
+            seen = run.tau >= 1.0
+            mu, mu0 = exit_cosines(case, run.origins, run.directions, seen)
+            lit = np.clip(np.nan_to_num(mu0) / args.lit, 0.0, 1.0) if args.lit > 0.0 else 1.0
+            relative = baked / np.maximum(run.mean, 1e-30) - 1.0
+            row = [mean_error(baked, run.mean, seen)]
+            for c in ceilings:
+                fixed = np.where((mu < c)[:, None], run.mean, baked)
+                row.append(mean_error(fixed, run.mean, seen))
+            bright = (mu < ceilings[-1])[:, None] & (baked > run.mean)
+            row.append(mean_error(np.where(bright, run.mean, baked), run.mean, seen))
+            thick = case.sigma_t * case.voxel >= THICK and run.stats["traced_voxels"] < 0.5 * (case.density > 0).sum()
+            darkened = []
+            for a in amplitudes:
+                if not thick:
+                    d = 1.0
+                elif args.grid:
+                    axis = broad_axis(path, case.density.shape) if args.l1_axis else None
+                    forward = peak_axis(path, case.density.shape) if args.forward else None
+                    grid = coarsened(limb_grid(case, a, args.lit, args.carry), args.grid_scale)
+                    d = grid_darkening(case, grid, run.origins, run.directions, seen, args.grid_scale, axis,
+                                       forward)[:, None]
+                else:
+                    d = (1.0 - lit * (1.0 - darkening(mu, a)))[:, None]
+                darkened.append(baked * d if args.peaks else (baked - broad) + broad * d)
+                row.append(mean_error(darkened[-1], run.mean, seen))
+            totals += 100 * np.array(row)
+            k = np.unravel_index(np.argmax(np.where(seen[:, None], np.abs(relative), -1.0)), relative.shape)
+            low = seen & (mu < 0.3)
+            print(f"  {case.name:<16}" + "".join(f" {100 * x:8.2f}" for x in row) +
+                  f"   {100 * relative[k]:+5.0f} % ({mu[k[0]]:+.2f})   {low.sum():3d} / {seen.sum():3d} "
+                  f"({100 * np.abs(relative[low]).mean() if low.any() else 0.0:4.1f} %)", flush=True)
+            if args.blocks:
+                per = case.pixels ** 2
+                worst = np.argsort(-np.where(seen, np.abs(relative).max(1), -1.0))[:5]
+                for i in worst:
+                    v, j = divmod(int(i), per)
+                    c = np.abs(relative[i]).argmax()
+                    print(f"      view {tuple(case.views[v])} row {j // case.pixels} col {j % case.pixels}: "
+                          f"mu {mu[i]:+.2f}, error {100 * relative[i, c]:+5.1f} %, limb: " +
+                          " ".join(f"{100 * (x[i, c] / run.mean[i, c] - 1):+5.1f}" for x in darkened) + " %")
+    print("  sum of the means" + "".join(f" {x:8.2f}" for x in totals))
+
+
+if __name__ == "__main__":
+    main()
