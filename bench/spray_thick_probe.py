@@ -19,10 +19,12 @@ with the lump their camera ray reaches depth 1 in (connected through faces, edge
 each class's light in those regions, as a share of the bake's and of the truth's. With --depths, seed 0's bake
 rendered with the renderer scattering in the traced voxels under sigma_t h 2 (the mixed form), 10 and 20.5 (all of
 them). With --facing, the regions' light weight on the thick voxels split by what lies across their face towards the
-camera (air, thin snow, thick snow).
+camera (air, thin snow, thick snow). With --segments K, seed 0's baked render split along the rays of those regions
+by optical depth (spray_rims_probe.segments: each ray started again at 0.3, 1, 3, baked and K paths of Monte Carlo).
 
     PYTHONPATH=build/python /usr/bin/python3 bench/spray_thick_probe.py [--seeds 8] [--mixed 2048] [--save DIR |
         --load DIR] [--classes] [--depths] [--facing]
+        [--segments 4096]
 """
 
 import argparse
@@ -34,7 +36,7 @@ import pyopenvdb
 
 import bake_suite
 import firncore
-from spray_rims_probe import CLASSES, scattered_region, shares_in, voxel_classes, whose_light
+from spray_rims_probe import CLASSES, scattered_region, segments, shares_in, voxel_classes, whose_light
 from suite_regions import regions
 
 CASE = "spray_dense"
@@ -113,6 +115,9 @@ def main():
                         help="seed 0's bake rendered with the renderer scattering under sigma_t h 2, 10, 20.5")
     parser.add_argument("--facing", action="store_true",
                         help="the thick voxels' light split by their face towards each side view's camera")
+    parser.add_argument("--segments", type=int, default=0,
+                        help="seed 0: where along the rays the error arises, Monte Carlo of this many paths from "
+                             "optical depths 0.3, 1, 3 (spray_rims_probe.segments)")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args()
     case = bake_suite.case(CASE)
@@ -132,8 +137,9 @@ def main():
         relative = region_table(form, np.array([r[form] for r in runs]), reference, seen,
                                 parts + [(f"{g} *", p) for g, p in grouped], views)
         masked = np.where(seen[None, :, None], np.abs(relative), 0.0).max(2)
-        print(f"  the worst block per seed: " + ", ".join(
-            f"{s}: px {masked[s].argmax()} {100 * relative[s, masked[s].argmax()].mean():+.0f} %" for s in range(len(runs))))
+        worst = masked.argmax(1)
+        print("  the worst block per seed: " + ", ".join(
+            f"{s}: px {p} {100 * relative[s, p].mean():+.0f} %" for s, p in enumerate(worst)))
         if form == "baked":
             worst_blocks(case, origins, directions, tau, seen, lit, core, thin, relative, runs, masked)
     print("\n(* the regions grouped: shadowed thick = shadowed cores and thick rims)")
@@ -144,6 +150,15 @@ def main():
         class_shares(case, args.cache, shadowed_thick, lit_core, views)
     if args.depths:
         scatter_depths(case, args.cache, seen, shadowed_thick, lit_core, views)
+    if args.segments:
+        groups = [("shadowed thick 180", shadowed_thick & (views == 2)),
+                  ("shadowed thick 90", shadowed_thick & (views == 1)),
+                  ("lit core (0, 0)", lit_core & (views == 0)), ("lit core (0, 60)", lit_core & (views == 3))]
+        with tempfile.TemporaryDirectory() as folder:
+            path = os.path.join(folder, case.name + ".vdb")
+            run = bake_suite.baked_case(case, path, args.cache, "FINAL", 0)
+            rays = np.any([w for _, w in groups], axis=0)
+            segments(case, path, origins, directions, rays, groups, run.mean, [0.3, 1.0, 3.0], args.segments)
 
 
 def scatter_depths(case, cache, seen, shadowed_thick, lit_core, views):
@@ -160,10 +175,11 @@ def scatter_depths(case, cache, seen, shadowed_thick, lit_core, views):
             r, e = firncore.render_scattering_where_thin(path, case.optics, run.origins, run.directions,
                                                          suns=case.suns(), sky=case.skies(), occluders=case.occluders,
                                                          samples=2048, seed=1000, thin_depth=depth, traced_only=True)
+            relative = r / np.maximum(run.mean, 1e-30) - 1.0
+            noise = np.sqrt(2 / np.pi) * np.hypot(e, run.error) / np.maximum(run.mean, 1e-30)
             print(f"  under {depth:4g}: " + "  ".join(
-                f"{g} {100 * (r[w].sum() / run.mean[w].sum() - 1):+.1f} / {100 * np.abs(r[w] / run.mean[w] - 1).mean():.1f}"
-                f" ({100 * np.sqrt(2 / np.pi) * np.mean(np.hypot(e[w], run.error[w]) / run.mean[w]):.1f})"
-                for g, w in groups.items()), flush=True)
+                f"{g} {100 * (r[w].sum() / run.mean[w].sum() - 1):+.1f} / {100 * np.abs(relative[w]).mean():.1f}"
+                f" ({100 * noise[w].mean():.1f})" for g, w in groups.items()), flush=True)
 
 
 def facing_shares(case, origins, directions, shadowed_thick, lit_core, views):
@@ -172,8 +188,8 @@ def facing_shares(case, origins, directions, shadowed_thick, lit_core, views):
     open and gathered), thin snow (closed: the voxel's own value shows that side), thick snow."""
     depth = case.density * case.sigma_t / case.rho * case.voxel
     base = np.minimum(voxel_classes(case), 2)
-    names = ("air f, facing", "air o", "thin snow", "thick, open", "thick, on thin", "thick, on thick", "air f, lateral",
-             "air f, away")
+    names = ("air f, facing", "air o", "thin snow", "thick, open", "thick, on thin", "thick, on thick",
+             "air f, lateral", "air f, away")
     print("\nthe light's weight by voxel, the thick voxels by their face towards the camera:")
     for v, towards in ((0, (1, 0, 0)), (1, (0, 1, 0)), (2, (-1, 0, 0))):  # the camera's side of the lumps
         across = np.roll(np.pad(depth, 1), tuple(-t for t in towards), axis=(0, 1, 2))[1:-1, 1:-1, 1:-1]
@@ -236,7 +252,8 @@ def class_shares(case, cache, shadowed_thick, lit_core, views):
             return firncore.render_baked(p, case.optics, run.origins, run.directions, occluders=case.occluders)
 
         base = {m: render(path, m) for m in (False, True)}
-        print("\nseed 0, each voxel class's light (its source grids zeroed): share of the bake's, then of the truth's, %")
+        print("\nseed 0, each voxel class's light (its source grids zeroed): share of the bake's, then of the "
+              "truth's, %")
         for m in (False, True):
             print(f"  {'mixed' if m else 'baked'} bias of the sum: " + ", ".join(
                 f"{g} {100 * (base[m][w].sum() / run.mean[w].sum() - 1):+.1f} %" for g, w in groups.items()))
@@ -252,8 +269,9 @@ def class_shares(case, cache, shadowed_thick, lit_core, views):
             pyopenvdb.write(zeroed, grids=grids, metadata=metadata)
             for m in (False, True):
                 r = render(zeroed, m)
+                lost = {g: base[m][w].sum() - r[w].sum() for g, w in groups.items()}
                 print(f"  {'mixed' if m else 'baked'} {name:<6}" + "".join(
-                    f"   {g}: {100 * (1 - r[w].sum() / base[m][w].sum()):5.1f} {100 * (base[m][w].sum() - r[w].sum()) / run.mean[w].sum():5.1f}"
+                    f"   {g}: {100 * lost[g] / base[m][w].sum():5.1f} {100 * lost[g] / run.mean[w].sum():5.1f}"
                     for g, w in groups.items()), flush=True)
 
 
