@@ -59,13 +59,14 @@ def voxel_classes(case):
     return np.where(case.density > 0.0, np.digitize(depth, [2.0, 10.0]) + 2, np.where(beside, 0, 1))
 
 
-def whose_light(case, origins, directions, seen, classes):
-    """Per seen ray, the shares (4) of its weight sigma_t T ds on each voxel class (the rest: the ray leaves)."""
+def whose_light(case, origins, directions, seen, classes, count=len(CLASSES)):
+    """Per seen ray, the shares (`count` classes, CLASSES' by default) of its weight sigma_t T ds on each voxel class
+    (the rest: the ray leaves)."""
     n = np.array(case.density.shape)
     per_density = case.sigma_t / case.rho
     ds = 0.125 * case.voxel
     steps = np.arange(0.0, 2.0, ds)
-    out = np.zeros((len(origins), len(CLASSES)))
+    out = np.zeros((len(origins), count))
     for i in np.nonzero(seen)[0]:
         p = (origins[i] + steps[:, None] * directions[i]) / case.voxel
         f = np.floor(p).astype(int)
