@@ -15,10 +15,8 @@ time. The reference is cached by case under the output folder, so changing the b
 
 import argparse
 import hashlib
-import json
 import math
 import os
-import sys
 import tempfile
 import time
 from dataclasses import dataclass, field

@@ -15,7 +15,6 @@ away from the other face ("own": only this face seen). Printed per face and dire
 """
 
 import argparse
-import math
 import os
 import tempfile
 

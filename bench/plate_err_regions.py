@@ -20,7 +20,6 @@ point, region, and each light's error and reference radiance there.
 
 import argparse
 import copy
-import math
 import os
 import tempfile
 

@@ -15,8 +15,6 @@ import copy
 import os
 import tempfile
 
-import numpy as np
-
 import bake_suite as bs
 import firncore
 from plate_err_regions import REGIONS, cached_monte_carlo, region_of

@@ -23,7 +23,7 @@ mkdir -p "$(dirname "$report")"
   echo
   echo "## Bake accuracy on small, thin and thick shapes against the core's Monte Carlo (bench/bake_suite.py)"
   echo
-  PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/bench/bake_suite.py" --markdown --lobe | grep -E '^(\||firncore|all cases|$)' | cat -s
+  PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/bench/bake_suite.py" --markdown | grep -E '^(\||firncore|all cases|$)' | cat -s
   echo
   echo "## Baked render against Cycles brute force (same volume, same run)"
   echo

@@ -12,7 +12,6 @@ fraction further off (bake.md Method 2). Usage:
 """
 
 import argparse
-import math
 import os
 import tempfile
 import time

@@ -712,7 +712,6 @@ def test_a_lump_in_the_shadow_of_another_keeps_little_of_the_sun(tmp_path):
     # "sun-spread": what A scatters forwards and sends back is missing).
     import lumps_between_bench
     import sun_spread_bench
-    optics = firncore.VolumeOptics(*lumps_between_bench.OPTICS_ARGS)
     towards = sun_spread_bench.TOWARDS_SUN / np.linalg.norm(sun_spread_bench.TOWARDS_SUN)
     light = dict(suns=[firncore.SunLight(tuple(towards), (1.0,) * 3, 0.0093)], sky=firncore.Sky((0.0,) * 3))
     ground = [lumps_between_bench.plane(-0.05, 0.0)]

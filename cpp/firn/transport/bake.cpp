@@ -241,7 +241,10 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
         {
             SurfaceValues<SurfaceLight> leaving(topo.surfaceSlot, topo.surfaceVoxels());
             const SnowLight snow = pass > 0 ? SnowLight{&fromSnow.irradiance, &fromSnow.aim} : SnowLight{};
-            surfaceLight(scene, topo, light, snow, terms, phi, leaving, edgeFaces);
+            // The edge voxels' flat faces' lobes where the grids read them: not where the traced surface stands
+            // for them (REFERENCE's last pass).
+            const bool flatFaces = !(reference && pass + 1 == passes);
+            surfaceLight(scene, topo, light, snow, terms, phi, flatFaces, leaving, edgeFaces);
             terms = {};
             surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
             if (!reference) rampPeaked = rampPeaks(scene, topo, leaving);  // the reference's surface holds no peaks
@@ -251,7 +254,6 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             p.report(solved, "Path tracing the surface (reference)");
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface,
                              SubProgress(&p, solved, 0.95));
-            edgeFaces = {};  // the traced surface stands for the faces too
         }
         source = sourceFunction(scene, topo, light, phi, surface, traced);
         source.rampPeaks = std::move(rampPeaked);

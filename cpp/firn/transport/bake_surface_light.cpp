@@ -150,7 +150,7 @@ glm::dvec3 travelAlong(const glm::dvec3 &d, const glm::dvec3 &n) {
 // geometry and the neighbours read once for the three.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
                   const std::array<SurfaceTerms, 3> &terms, const std::array<std::vector<double>, 3> &phi,
-                  SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces) {
+                  bool flatFaces, SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const Channel kernelChannel{optics.extinctionPerDensity, optics.albedo[1], optics.g};  // one kernel for the three
@@ -352,7 +352,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const std::size_t i = own.key;
             const SurfacePatch &patch = topo.patches[i];
             for (int f = 0; f < 6; ++f)
-                if (patch.share[f] > 0.0f && goesOnFlat(topo, i, f)) own.flat |= std::uint8_t(1u << f);
+                if (flatFaces && patch.share[f] > 0.0f && goesOnFlat(topo, i, f)) own.flat |= std::uint8_t(1u << f);
             const glm::dvec3 surface = patchSurface(medium, topo, i);
             std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
             double curvature = -1.0;  // returnedThrough's, shared by the channels and faces

@@ -134,9 +134,9 @@ inline SourceLobe withCrossing(const SourceLobe &lobe, const SurfaceLight &light
 }
 
 // The three channels' light leaving each surface voxel (`out`), from their systems' surface terms and fluences phi,
-// and the sharp edge voxels' flat faces' own lobes (`edgeFaces`).
+// and where `flatFaces` the sharp edge voxels' flat faces' own lobes (`edgeFaces`; else none).
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
                   const std::array<SurfaceTerms, 3> &terms, const std::array<std::vector<double>, 3> &phi,
-                  SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces);
+                  bool flatFaces, SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces);
 
 }  // namespace firn::bake

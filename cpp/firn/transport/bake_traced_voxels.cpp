@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <limits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -75,6 +76,30 @@ bool drawnByRenderer(const Medium &medium, Medium::Accessor &density, const open
     return !(voxelOpticalDepth(medium, density, voxel) < BakedGrids::kScatterOpticalDepth);
 }
 
+// A pilot's paths per item it measures, and how many items it measures (pilotStepsPerPath).
+constexpr int kPilotSamples = 4;
+constexpr std::size_t kPilots = 64;
+
+// Tracking steps per path, a path's start (kStepsPerPath) included, measured on kPilotSamples paths of each of
+// `pilots` items spread over `count` (item count * k / pilots: with fewer items than pilots, one that repeats counts
+// again), `steps(i)` item i's paths' steps, summed in order (the same price every run); infinite as soon as the sum
+// exceeds `most` per path (a pilot dearer than what it prices stops). How the traced voxels (planGathering) and their
+// faces (faceStepsPerPath) are priced.
+template <class Steps>
+double pilotStepsPerPath(std::size_t count, std::size_t pilots, const Steps &steps,
+                         double most = std::numeric_limits<double>::infinity()) {
+    if (pilots == 0) return 0.0;
+    const double paths = double(pilots) * kPilotSamples;
+    double sum = 0.0, last = 0.0;  // last: the item before's steps (fewer items than pilots repeat theirs)
+    for (std::size_t k = 0; k < pilots; ++k) {
+        const std::size_t i = count * k / pilots;
+        if (k == 0 || i != count * (k - 1) / pilots) last = double(steps(i)) + kStepsPerPath * kPilotSamples;
+        sum += last;
+        if (sum > most * paths) return std::numeric_limits<double>::infinity();
+    }
+    return sum / paths;
+}
+
 }  // namespace
 
 namespace {
@@ -88,26 +113,17 @@ Gathering gathering(const Medium &medium, Medium::Accessor &density, const openv
 
 GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                             std::uint64_t seed) {
-    constexpr int kPilotVoxels = 64, kPilotSamples = 4, kMinSamples = 64;
+    constexpr int kMinSamples = 64;
     if (voxels.empty()) return {};
     const MonteCarloReference reference(scene);
     Medium::Accessor density = scene.medium->accessor();
     const double budget = kMaxTracedSteps / (double(voxels.size()) * kMinSamples);  // per path, at the least
-    double steps = 0.0, last = 0.0;  // last: voxel v's pilot steps (fewer voxels than pilots repeat theirs)
-    int paths = 0;
-    for (int k = 0; k < kPilotVoxels; ++k) {
-        const std::size_t v = voxels.size() * k / kPilotVoxels;
-        if (k == 0 || v != voxels.size() * (k - 1) / kPilotVoxels) {
-            // As traceSources gathers it: where cameras see it, those points' draws counted too.
-            const Gathering how = gathering(*scene.medium, density, voxels[v]);
-            last = double(reference.sourceIn(voxels[v], kPilotSamples, seed, v, how).steps) +
-                   kStepsPerPath * kPilotSamples;
-        }
-        steps += last;
-        paths += kPilotSamples;
-        if (steps > budget * kPilotVoxels * kPilotSamples) return {};  // too costly already
-    }
-    const double perPath = steps / paths;
+    const double perPath = pilotStepsPerPath(voxels.size(), kPilots, [&](std::size_t v) {
+        // As traceSources gathers it: where cameras see it, those points' draws counted too.
+        const Gathering how = gathering(*scene.medium, density, voxels[v]);
+        return reference.sourceIn(voxels[v], kPilotSamples, seed, v, how).steps;
+    }, budget);
+    if (perPath > budget) return {};  // too costly
     const int affordable = int(std::min(kMaxTracedPaths, kMaxTracedSteps / perPath) / double(voxels.size()));
     if (affordable < kMinSamples) return {};
     int samples = std::min(affordable, preset.tracedSamples);
@@ -368,30 +384,20 @@ unsigned airFaces(const Medium &medium, const Occluders &occluders, const SnowTo
     return open;
 }
 
-// Tracking steps a face's path takes, measured on a few of the faces first (kPilotFaces spread over `jobs`, as
-// planGathering's pilot on the voxels; its own stream, so the faces' estimates stay as without it). A lump's face
+// Tracking steps a face's path takes, measured on a few of the faces first (pilotStepsPerPath over `jobs`, as
+// planGathering's on the voxels; its own stream, so the faces' estimates stay as without it). A lump's face
 // gathers where its cameras collide, in its first optical depths, and those paths leave sooner than the voxel's,
 // which start throughout it: spray_dense's faces take 662-665 steps per path (this pilot reads 668-729, seeds 0-3)
 // against its voxels' pilot's 1336; priced at the voxels' the budget left held 144 of their 512 paths, at their own
 // 276-304 (docs/benchmarks.md, face-share, face-pilot).
 double faceStepsPerPath(const MonteCarloReference &reference, const std::vector<openvdb::Coord> &voxels,
                         const std::vector<FaceJob> &jobs, std::uint64_t seed) {
-    constexpr std::size_t kPilotFaces = 64;
-    constexpr int kPilotSamples = 4;
-    const std::size_t pilots = std::min(kPilotFaces, jobs.size());
-    if (pilots == 0) return 0.0;
-    std::vector<double> steps(pilots);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pilots, 4), [&](const auto &range) {
-        for (std::size_t k = range.begin(); k != range.end(); ++k) {
-            const auto [v, f] = jobs[jobs.size() * k / pilots];
-            const FaceEstimate pilot =
-                reference.faceSourceIn(voxels[v], f, kPilotSamples, seed, voxels.size() * (13 + f) + v);
-            steps[k] = double(pilot.carried.steps + pilot.shown.steps) + kStepsPerPath * kPilotSamples;
-        }
+    return pilotStepsPerPath(jobs.size(), std::min(kPilots, jobs.size()), [&](std::size_t j) {
+        const auto [v, f] = jobs[j];
+        const FaceEstimate pilot =
+            reference.faceSourceIn(voxels[v], f, kPilotSamples, seed, voxels.size() * (13 + f) + v);
+        return pilot.carried.steps + pilot.shown.steps;
     });
-    double sum = 0.0;
-    for (double s : steps) sum += s;  // in order: the same price every run
-    return sum / (double(pilots) * kPilotSamples);
 }
 
 }  // namespace
