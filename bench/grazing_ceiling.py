@@ -25,13 +25,17 @@ density's gradient: bench/ramp_source_profile.py --by-exit). Two oracles on the 
   on voxels twice the density's; --l1-axis the amplitude alone from it and the broad lobe's own axis l1 as the
   normal (no grid for the direction); --forward the darkening times 1 - max(w . p1 / |p1|, 0), w towards the
   viewer: none along the peaked lobe's axis (the sun's forward travel out of a lit surface, where its limb is too
-  dark already).
+  dark already); --derived D from the transport in place of a and MU_FULL (limb-derive: derived_table, the
+  half-space's exit over the broad lobe fitted to it by exit cosine, azimuth off the sun's travel and mu0, for the
+  case's green omega and g; the grid's length the lit share alone), --darken-only that D at most 1; --curve prints
+  it beside the fitted form.
 
 Per case: the mean |error| (the suite's, all channels), each oracle's, the worst block and its mu; the sum of the
 means. --blocks lists each case's five worst blocks (view, row, col, mu, error).
 
     PYTHONPATH=build/python:bench python3 bench/grazing_ceiling.py [--cases a,b] [--amplitudes 0.15,0.3,0.45] \
-        [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis]] [--blocks]
+        [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis] [--derived [--darken-only]]] \
+        [--curve] [--blocks]
 """
 
 import argparse
@@ -46,7 +50,7 @@ import pyopenvdb
 import bake_suite as S
 from backlit_probe import sun_towards, write_without_peaks
 from bake_halfspace import henyey_greenstein
-from lobe_form import axis, lobe, nelder_mead, sphere_grid
+from lobe_form import axis as lobe_axis, lobe, nelder_mead, sphere_grid
 
 MU_FULL = 0.35  # above this exit cosine the truth's exit over the bake's is flat on slab_thick (edge-fall)
 DERIVED_MU = np.array([0.01, 0.03, 0.05, 0.08, 0.12, 0.17, 0.23, 0.3, 0.4, 0.5, 0.65, 0.8, 1.0])  # the table's nodes
@@ -117,7 +121,7 @@ def broad_lobe_fit(truth, views, dw):
     weight = views[:, 2] * dw
 
     def shape(p, v):
-        return lobe(0.95 * math.tanh(p[0]), v @ axis(p[1], 0.0))
+        return lobe(0.95 * math.tanh(p[0]), v @ lobe_axis(p[1], 0.0))
 
     def scale(p):
         return (truth * weight).sum() / max((shape(p, views) * weight).sum(), 1e-30)
