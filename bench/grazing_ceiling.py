@@ -25,16 +25,22 @@ density's gradient: bench/ramp_source_profile.py --by-exit). Two oracles on the 
   on voxels twice the density's; --l1-axis the amplitude alone from it and the broad lobe's own axis l1 as the
   normal (no grid for the direction); --forward the darkening times 1 - max(w . p1 / |p1|, 0), w towards the
   viewer: none along the peaked lobe's axis (the sun's forward travel out of a lit surface, where its limb is too
-  dark already).
+  dark already); --derived D from the transport in place of a and MU_FULL (limb-derive: derived_table, the
+  half-space's exit over the broad lobe fitted to it by exit cosine, azimuth off the sun's travel and mu0, for the
+  case's green omega and g; the grid's length the lit share alone), --darken-only that D at most 1; --curve prints
+  it beside the fitted form.
 
 Per case: the mean |error| (the suite's, all channels), each oracle's, the worst block and its mu; the sum of the
 means. --blocks lists each case's five worst blocks (view, row, col, mu, error).
 
     PYTHONPATH=build/python:bench python3 bench/grazing_ceiling.py [--cases a,b] [--amplitudes 0.15,0.3,0.45] \
-        [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis]] [--blocks]
+        [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis] [--derived [--darken-only]]] \
+        [--curve] [--blocks]
 """
 
 import argparse
+import functools
+import math
 import os
 import tempfile
 
@@ -43,8 +49,13 @@ import pyopenvdb
 
 import bake_suite as S
 from backlit_probe import sun_towards, write_without_peaks
+from bake_halfspace import henyey_greenstein
+from lobe_form import axis as lobe_axis, lobe, nelder_mead, sphere_grid
 
 MU_FULL = 0.35  # above this exit cosine the truth's exit over the bake's is flat on slab_thick (edge-fall)
+DERIVED_MU = np.array([0.01, 0.03, 0.05, 0.08, 0.12, 0.17, 0.23, 0.3, 0.4, 0.5, 0.65, 0.8, 1.0])  # the table's nodes
+DERIVED_AZIMUTH = np.radians(np.arange(0.0, 181.0, 15.0))  # the exit's tangent part off the sun's travel
+DERIVED_MU0 = np.array([0.05, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0])
 THICK = 3.0  # sigma_t h from which a case's surfaces are a half-space's (the limb darkening is a thick medium's)
 
 
@@ -77,6 +88,95 @@ def sun_seen(case, points):
 def darkening(mu, amplitude):
     """D(mu): 1 - a (1 - mu / MU_FULL) below MU_FULL (mu under 0, a ray through the ramp only, as at 0), 1 above."""
     return 1.0 - amplitude * np.clip(1.0 - np.nan_to_num(mu, nan=1.0) / MU_FULL, 0.0, 1.0)
+
+
+def h_function(omega, mu, nodes=48):
+    """Chandrasekhar's H function of isotropic scattering at albedo omega, at the cosines mu (Radiative Transfer
+    1950, ch. V): 1 / H(mu) = sqrt(1 - omega) + omega / 2 int_0^1 x H(x) / (mu + x) dx, iterated on Gauss-Legendre
+    nodes (H(1) = 2.9078 at omega 1)."""
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    x, w = 0.5 * (x + 1.0), 0.5 * w
+    root = math.sqrt(max(1.0 - omega, 0.0))
+    h = np.ones(nodes)
+    for _ in range(2000):  # damped: undamped, it does not settle as omega nears 1
+        h = 0.5 * h + 0.5 / (root + 0.5 * omega * (w * x * h / (x[:, None] + x[None, :])).sum(1))
+    return 1.0 / (root + 0.5 * omega * (w * x * h / (np.asarray(mu)[..., None] + x)).sum(-1))
+
+
+def half_space_exit(omega, g, mu0, views):
+    """pi L / (mu0 E) of a half-space towards unit views (normal +z, the sun travelling towards +x): the exact single
+    scattering, pi omega HG(g, cos) / (mu + mu0), plus the multiple scattering of the similar isotropic half-space
+    (omega' = omega (1 - g) / (1 - omega g)), omega' (H(mu) H(mu0) - 1) / 4 (mu + mu0) (snow-optics.md)."""
+    mu = views[:, 2]
+    single = math.pi * omega * henyey_greenstein(g, views @ [math.sqrt(1.0 - mu0 * mu0), 0.0, -mu0]) / (mu + mu0)
+    similar = omega * (1.0 - g) / (1.0 - omega * g)
+    return single + similar * (h_function(similar, mu) * h_function(similar, mu0) - 1.0) / (4.0 * (mu + mu0))
+
+
+def broad_lobe_fit(truth, views, dw):
+    """The broad lobe fitted to a half-space's exit as the bake fits its lobes (docs/bake.md Method 5): one HG lobe
+    about an axis in the sun's plane, the exitance kept, least squares in relative error weighted by mu dw. The
+    peaked lobe is left out: fitted beside it (bench/limb_family_fit.py's family) at mu0 0.45-0.5 it turns into a
+    second broad lobe (k 0.03-0.2 straight up) and the rest's quotient is noise; the forward gate stands for it."""
+    weight = views[:, 2] * dw
+
+    def shape(p, v):
+        return lobe(0.95 * math.tanh(p[0]), v @ lobe_axis(p[1], 0.0))
+
+    def scale(p):
+        return (truth * weight).sum() / max((shape(p, views) * weight).sum(), 1e-30)
+
+    def cost(p):
+        return (weight * (scale(p) * shape(p, views) / truth - 1.0) ** 2).sum()
+
+    best = nelder_mead(cost, [0.4, 1.0], iterations=400)
+    return lambda v: scale(best) * shape(best, v)
+
+
+@functools.lru_cache(maxsize=None)
+def derived_table(omega, g):
+    """The limb darkening the broad lobe misses, D = the half-space's exit / the broad lobe fitted to it, on
+    DERIVED_MU0 x DERIVED_MU x DERIVED_AZIMUTH: no free constant, the transport's angular law against the
+    contract's form (D S1(w) renders the half-space's exit exactly)."""
+    views, dw = sphere_grid(12, 36, upper_only=True)
+    a, m = np.meshgrid(DERIVED_AZIMUTH, DERIVED_MU, indexing="ij")
+    s = np.sqrt(1.0 - m * m)
+    probes = np.stack([s * np.cos(a), s * np.sin(a), m], -1).reshape(-1, 3)
+    table = np.zeros((len(DERIVED_MU0), len(DERIVED_MU), len(DERIVED_AZIMUTH)))
+    for i, mu0 in enumerate(DERIVED_MU0):
+        broad = broad_lobe_fit(half_space_exit(omega, g, mu0, views), views, dw)(probes)
+        d = half_space_exit(omega, g, mu0, probes) / np.maximum(broad, 1e-30)
+        table[i] = d.reshape(a.shape).T
+    return table
+
+
+def table_value(table, mu0, mu, azimuth):
+    """The derived table read multilinearly at (mu0, mu, azimuth) (each clamped to its nodes)."""
+    corners = []
+    for nodes, x in ((DERIVED_MU0, mu0), (DERIVED_MU, mu), (DERIVED_AZIMUTH, azimuth)):
+        x = np.clip(x, nodes[0], nodes[-1])
+        i = np.clip(np.searchsorted(nodes, x) - 1, 0, len(nodes) - 2)
+        corners.append((i, (x - nodes[i]) / (nodes[i + 1] - nodes[i])))
+    (i, s), (j, t), (k, u) = corners
+    out = 0.0
+    for di, dj, dk in np.ndindex(2, 2, 2):
+        w = (s if di else 1.0 - s) * (t if dj else 1.0 - t) * (u if dk else 1.0 - u)
+        out = out + w * table[i + di, j + dj, k + dk]
+    return out
+
+
+def derived_darkening(table, normal, towards_viewer, darken_only):
+    """D from the derived table at unit normals and view directions, the suite's sun (1 where the sun is below the
+    normal's horizon: the table's lowest mu0 stands for it, and the lit share gates it to 0 there)."""
+    mu = np.einsum("ij,ij->i", towards_viewer, normal)
+    travel = -sun_towards()
+    mu0 = normal @ sun_towards()
+    out_t = towards_viewer - mu[:, None] * normal
+    sun_t = travel[None, :] - (normal @ travel)[:, None] * normal
+    cos = np.einsum("ij,ij->i", out_t, sun_t) / np.maximum(np.linalg.norm(out_t, axis=1) *
+                                                          np.linalg.norm(sun_t, axis=1), 1e-30)
+    d = table_value(table, mu0, mu, np.arccos(np.clip(cos, -1.0, 1.0)))
+    return np.minimum(d, 1.0) if darken_only else d
 
 
 def limb_grid(case, amplitude, lit, carry=2):
@@ -139,7 +239,8 @@ def peak_axis(path, shape):
     return out.astype(float)
 
 
-def grid_darkening(case, grid, origins, directions, seen, scale=1, axis=None, forward=None, step=0.05):
+def grid_darkening(case, grid, origins, directions, seen, scale=1, axis=None, forward=None, derived=None,
+                   darken_only=False, step=0.05):
     """Each seen ray's D averaged over the light it shows: sum of sigma_t e^-tau ds D(-direction, the trilinear
     grid) over sum of sigma_t e^-tau ds, to optical depth 12 (the source along the first optical depths taken as
     constant: a surface's exit radiance, as the contract holds it there)."""
@@ -155,7 +256,11 @@ def grid_darkening(case, grid, origins, directions, seen, scale=1, axis=None, fo
         if axis is not None:  # the amplitude alone from the grid, the direction the broad lobe's axis
             v = np.stack([S.trilinear(axis[..., c], p[k]) for c in range(3)], 1)
         mu = -(v @ directions[i]) / np.maximum(np.linalg.norm(v, axis=1), 1e-30)
-        d = 1.0 - a * np.clip(1.0 - mu / MU_FULL, 0.0, 1.0)
+        if derived is None:
+            d = 1.0 - a * np.clip(1.0 - mu / MU_FULL, 0.0, 1.0)
+        else:  # the grid's length the lit share alone, D from the transport's table
+            normal = v / np.maximum(np.linalg.norm(v, axis=1), 1e-30)[:, None]
+            d = 1.0 - a * (1.0 - derived_darkening(derived, normal, -directions[i][None, :], darken_only))
         if forward is not None:  # none along the peaked lobe's travel: there the lit limb is too dark already
             f = np.stack([S.trilinear(forward[..., c], p[k]) for c in range(3)], 1)
             along = (f @ -directions[i]) / np.maximum(np.linalg.norm(f, axis=1), 1e-30)
@@ -163,6 +268,17 @@ def grid_darkening(case, grid, origins, directions, seen, scale=1, axis=None, fo
         w = sigma[k] * np.exp(-tau[k])
         out[i] = (w * d).sum() / max(w.sum(), 1e-30)
     return out
+
+
+def print_curve(case, mu0=0.5, mus=(0.01, 0.03, 0.05, 0.1, 0.17, 0.25, 0.35, 0.5, 0.8),
+                azimuths=(0, 30, 90, 150, 180)):
+    """The derived D at mu0 (the suite's sun on a flat top) beside the fitted form, by exit cosine and azimuth."""
+    table = derived_table(case.omega[1], case.g)
+    print(f"  {case.name} (omega {case.omega[1]}, g {case.g}), mu0 {mu0}: D by mu " + " ".join(f"{m:5.2f}" for m in mus))
+    print("    fitted (a 0.3)     " + " ".join(f"{x:5.2f}" for x in darkening(np.array(mus), 0.3)))
+    for a in azimuths:
+        d = table_value(table, np.full(len(mus), mu0), np.array(mus), np.full(len(mus), math.radians(a)))
+        print(f"    derived az {a:3d}     " + " ".join(f"{x:5.2f}" for x in d))
 
 
 def mean_error(render, mean, seen):
@@ -184,14 +300,25 @@ def main():
                         help="--grid's amplitude only, about the broad lobe's axis l1 in place of the normal")
     parser.add_argument("--forward", action="store_true",
                         help="--grid's darkening times 1 - max(w . p1 / |p1|, 0): none along the peaked lobe's axis")
+    parser.add_argument("--derived", action="store_true",
+                        help="--grid's D from the transport (derived_table: the half-space's exit over the broad lobe "
+                             "fitted to it, by mu, azimuth off the sun's travel, mu0, the case's green omega and g) "
+                             "in place of 1 - a clamp(1 - mu / MU_FULL); --amplitudes is then 1")
+    parser.add_argument("--darken-only", action="store_true", help="--derived's D at most 1")
+    parser.add_argument("--curve", action="store_true",
+                        help="print each case's derived D beside the fitted 1 - 0.3 clamp(1 - mu / 0.35) at mu0 0.5")
     parser.add_argument("--carry", type=int, default=2, help="--grid's vectors carried this many voxels into the air")
     parser.add_argument("--grid-scale", type=int, default=1, help="--grid's voxels this many density voxels wide")
     parser.add_argument("--blocks", action="store_true", help="each case's five worst blocks")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args()
     ceilings = [float(x) for x in args.ceilings.split(",")]
-    amplitudes = [float(x) for x in args.amplitudes.split(",")]
+    amplitudes = [1.0] if args.derived else [float(x) for x in args.amplitudes.split(",")]
     chosen = [c for c in S.cases() if not args.cases or c.name in args.cases.split(",")]
+    if args.curve:
+        for case in chosen:
+            print_curve(case)
+        return
     print("case               mean  " + "".join(f" ceil<{c:4.2f}" for c in ceilings) +
           f" darker<{ceilings[-1]:4.2f}" + "".join(f"  limb {a:4.2f}" for a in amplitudes) +
           "   worst (mu)        blocks mu<0.3 (|err|)")
@@ -223,8 +350,9 @@ def main():
                     axis = broad_axis(path, case.density.shape) if args.l1_axis else None
                     forward = peak_axis(path, case.density.shape) if args.forward else None
                     grid = coarsened(limb_grid(case, a, args.lit, args.carry), args.grid_scale)
+                    table = derived_table(case.omega[1], case.g) if args.derived else None
                     d = grid_darkening(case, grid, run.origins, run.directions, seen, args.grid_scale, axis,
-                                       forward)[:, None]
+                                       forward, table, args.darken_only)[:, None]
                 else:
                     d = (1.0 - lit * (1.0 - darkening(mu, a)))[:, None]
                 darkened.append(baked * d if args.peaks else (baked - broad) + broad * d)
