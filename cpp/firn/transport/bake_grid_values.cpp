@@ -44,20 +44,27 @@ Source litFacesToward(const openvdb::Coord &n, const openvdb::Coord &offset, Tra
 }
 
 // What sharp edge voxel j (not traced) shows a neighbour at `offset`: the mean of its flat air faces' own lobes that
-// face it (EdgeFaceLobes), else `own`, its one lobe over all its faces.
-Source ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const openvdb::Coord &offset, const Source &own) {
+// face it (EdgeFaceLobes) and, of its peaked lobe, those faces' share (`peakShare`), else `own`, its one lobe over all
+// its faces (share 1).
+Source ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const openvdb::Coord &offset, const Source &own,
+                      float &peakShare) {
+    peakShare = 1.0f;
     const EdgeFaceLobes::Voxel *faces = edgeFaces.find(j);
     if (!faces) return own;
     Source sum;
     int count = 0;
+    float share = 0.0f;
     for (int a = 0; a < 3; ++a) {
         if (offset[a] == 0) continue;
         const int f = 2 * a + (offset[a] > 0);
-        if (faces->flat >> f & 1u) sum.l0 += faces->lobe[f].l0, sum.l1 += faces->lobe[f].l1, ++count;
+        if (faces->flat >> f & 1u)
+            sum.l0 += faces->lobe[f].l0, sum.l1 += faces->lobe[f].l1, share += faces->peakShare[f], ++count;
     }
     if (!count) return own;
     Source S = own;
-    S.l0 = sum.l0 / float(count), S.l1 = sum.l1 / float(count);  // the voxel's peaked lobe kept
+    S.l0 = sum.l0 / float(count), S.l1 = sum.l1 / float(count);
+    peakShare = share;
+    S.peak0 *= share, S.peak1 *= share;
     return S;
 }
 
@@ -91,12 +98,14 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
                 const openvdb::Coord n = c.offsetBy(-dx, -dy, -dz);
+                float peakShare = 1.0f;  // of j's peaked lobe, what its faces towards c hold
                 const Source v = topo.patches[j].sharp && tracedIndex.getValue(n) < 0
-                                     ? ownFacesToward(source.edgeFaces, std::size_t(j), {dx, dy, dz}, source[j])
+                                     ? ownFacesToward(source.edgeFaces, std::size_t(j), {dx, dy, dz}, source[j],
+                                                      peakShare)
                                      : litFacesToward(n, {dx, dy, dz}, tracedIndex, traced, source[j]);
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
-                addRampPart(c.offsetBy(-dx, -dy, -dz), j, w);
+                addRampPart(c.offsetBy(-dx, -dy, -dz), j, w * peakShare);
                 normal += w * topo.patches[j].normal;
                 total += w, ++count;
             }

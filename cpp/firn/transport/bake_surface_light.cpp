@@ -356,6 +356,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const glm::dvec3 surface = patchSurface(medium, topo, i);
             std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
             double curvature = -1.0;  // returnedThrough's, shared by the channels and faces
+            std::array<double, 6> facePeak{};  // W/m^2/sr: each face's SunPeak, the channels' sum
             for (int f = 0; f < 6; ++f)
                 if (patch.share[f] > 0.0f)
                     outflow[f] = neighbourhoodOutflow<glm::dvec3>(
@@ -365,6 +366,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 for (int f = 0; f < 6; ++f) {
                     if (patch.share[f] <= 0.0f) continue;
                     const glm::dvec3 n = faceNormal(f);
+                    const float peakBefore = out.surface(i).peak0[c];
                     const ReturnedLight r = returnedThrough(c, i, n, patch.share[f], SkyBeam{}, [&](std::size_t s) {
                         // The beam entered each face by its cosine to the light seen from the patch's surface, as
                         // the diffusion let it in (bake_diffusion_system.cpp).
@@ -374,6 +376,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                             if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
                         return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
                     }, &out.surface(i), index, curvature);
+                    facePeak[f] += out.surface(i).peak0[c] - peakBefore;
                     const double leaving = outflow[f].first[c], area = outflow[f].second;
                     const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
                     faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
@@ -394,6 +397,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     own.lobe[f].l1[c] = glm::vec3(shown.l1);
                 }
             }
+            const double peak = facePeak[0] + facePeak[1] + facePeak[2] + facePeak[3] + facePeak[4] + facePeak[5];
+            for (int f = 0; f < 6 && peak > 0.0; ++f) own.peakShare[f] = float(facePeak[f] / peak);
         }
     });
     edgeFaces.voxels.erase(std::remove_if(edgeFaces.voxels.begin(), edgeFaces.voxels.end(),
