@@ -349,9 +349,12 @@ def run_case(case, folder, cache, quality="FINAL", seed=0, sky_samples=0, mixed=
     }
     if mixed:
         start = time.perf_counter()
-        render, render_error = firncore.render_scattering_where_thin(
-            path, case.optics, origins, directions, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
-            samples=mixed, seed=1000 + seed, traced_only=True)
+        if len(firncore.scatter_voxels(path, case.optics, occluders=case.occluders)):
+            render, render_error = firncore.render_scattering_where_thin(
+                path, case.optics, origins, directions, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
+                samples=mixed, seed=1000 + seed, traced_only=True)
+        else:  # the renderer scatters nowhere: the mixed render is the baked one, without noise
+            render, render_error = baked, np.zeros_like(baked)
         out["mixed"] = {**out, "case": case.name + " (mixed)", **scored(case, render, mean, seen),
                         "render_noise": float(np.median(render_error[seen] / np.maximum(render[seen], 1e-30))),
                         "render_s": time.perf_counter() - start}
