@@ -61,20 +61,16 @@ def parse_args():
     return args
 
 
-def cycles_copy(core_path, path, voxel):
-    """The baked file (the bake's firn_scatter among its grids) voxel by voxel (Cycles draws tiles as nothing) in
-    Cycles' convention (translation -voxel/2)."""
+def cycles_copy(core_path, path):
+    """The baked file (the bake's firn_scatter among its grids) voxel by voxel (Cycles draws tiles as nothing), each
+    grid with its own transform: the bake writes them in Cycles' convention, firn_scatter on voxels SCATTER_SCALE
+    times the density's (docs/vdb-contract.md; given the density's transform, it shrank towards the origin)."""
     import pyopenvdb
-
-    def transform():
-        t = pyopenvdb.createLinearTransform(voxelSize=voxel)
-        t.translate((-voxel / 2,) * 3)
-        return t
 
     grids = []
     for source in pyopenvdb.readAll(core_path)[0]:
         grid = type(source)()
-        grid.name, grid.transform = source.name, transform()
+        grid.name, grid.transform = source.name, source.transform.deepCopy()
         accessor = grid.getAccessor()
         for item in source.citerOnValues():
             lo, hi = item["min"], item["max"]
@@ -221,7 +217,7 @@ def main():
         scatter = (firncore.grid_statistics(core_path, firncore.SCATTER_GRID_NAME)["active_voxels"]
                    if firncore.SCATTER_GRID_NAME in firncore.grid_names(core_path) else 0)
         path = os.path.join(directory, name + ".vdb")
-        cycles_copy(core_path, path, case.voxel)
+        cycles_copy(core_path, path)
         print(f"{name}: {case.what}; views {case.views}; {scatter} firn_scatter voxels (the bake's) "
               f"({int((case.density > 0).sum())} snow voxels); reference noise "
               f"{100 * np.median(error[seen] / np.maximum(reference[seen], 1e-30)):.1f} %", flush=True)
