@@ -2,15 +2,21 @@
 
 Each case is a density grid (balls, slabs, a sharp box, a bumpy layer with a plate, a cloud of thrown lumps), one
 optics, a sun and/or a sky, and orthographic views around the object (towards the sun, across the terminator,
-against the sun, from above and below). Every pixel is one block: one camera ray through its centre, the baked
-render (`firncore.render_baked`) against `firncore.monte_carlo_radiance` (all orders, sharing none of the bake's
-approximations), all three colour channels. Pixels whose ray passes through less than optical depth 1 of snow
-are left out (the renderer's own transparency, not the bake, decides those). Reported per case: mean and worst
-|relative error| over the blocks, bias (sum of baked radiance over sum of reference radiance, minus 1), the
-reference's median relative standard error per block (its noise is part of the errors), bake time and reference
-time. The reference is cached by case under the output folder, so changing the bake reruns only the bake.
+against the sun, from above and below). Every pixel is one block: one camera ray through its centre, all three
+colour channels, rendered two ways against `firncore.monte_carlo_radiance` (all orders, sharing none of the bake's
+approximations): the mixed form, the headline (`firncore.render_scattering_where_thin`: as Cycles renders the
+add-on's default material, Scatter Thin Snow, scattering in the bake's traced thin voxels and drawing the baked
+source elsewhere; a Monte Carlo render of --mixed paths per block, whose own noise the "render noise" column gives),
+and the baked form (`firncore.render_baked`, the emission-absorption integral Cycles draws with Scatter Thin Snow
+off; --baked-only for it alone, as tests/ and bench/against_sun.py score). Pixels whose ray passes through less
+than optical depth 1 of snow are left out (the renderer's own transparency, not the bake, decides those). Reported
+per case: mean and worst |relative error| over the blocks, bias (sum of rendered radiance over sum of reference
+radiance, minus 1), the reference's median relative standard error per block (its noise is part of the errors),
+bake time and reference time. The reference is cached by case under the output folder, so changing the bake reruns
+only the bake.
 
     PYTHONPATH=build/python python3 bench/bake_suite.py [--cases a,b] [--cache DIR] [--markdown] [--fresh] [--maps]
+        [--mixed PATHS | --baked-only]
 """
 
 import argparse
@@ -27,6 +33,7 @@ import pyopenvdb
 import firncore
 
 SUN_ELEVATION = math.radians(30.0)
+MIXED_PATHS = 32768  # the mixed render's paths per block: its noise under 0.5 point of every case's mean (mixed_noise.py)
 
 
 @dataclass
@@ -339,10 +346,16 @@ def run_case(case, folder, cache, quality="FINAL", seed=0, sky_samples=0, mixed=
         "trace_cpu_s": stats["cpu_seconds"]["trace"], "views": case.views, **scored(case, baked, mean, seen),
     }
     if mixed:
-        render, _ = firncore.render_scattering_where_thin(path, case.optics, origins, directions, suns=case.suns(),
-                                                          sky=case.skies(), occluders=case.occluders, samples=mixed,
-                                                          seed=1000 + seed, traced_only=True)
-        out["mixed"] = {**out, "case": case.name + " (mixed)", **scored(case, render, mean, seen)}
+        start = time.perf_counter()
+        if len(firncore.scatter_voxels(path, case.optics, occluders=case.occluders)):
+            render, render_error = firncore.render_scattering_where_thin(
+                path, case.optics, origins, directions, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
+                samples=mixed, seed=1000 + seed, traced_only=True)
+        else:  # the renderer scatters nowhere: the mixed render is the baked one, without noise
+            render, render_error = baked, np.zeros_like(baked)
+        out["mixed"] = {**out, "case": case.name + " (mixed)", **scored(case, render, mean, seen),
+                        "render_noise": float(np.median(render_error[seen] / np.maximum(render[seen], 1e-30))),
+                        "render_s": time.perf_counter() - start}
     return out
 
 
@@ -351,8 +364,9 @@ def over_seeds(runs):
     block the worst of any; "spread": the per-block spread of the baked render across seeds (relative standard
     deviation), the bake's own noise."""
     r = dict(runs[0])
-    for key in ("mean", "bias", "bake_s", "trace_cpu_s"):
-        r[key] = float(np.mean([x[key] for x in runs]))
+    for key in ("mean", "bias", "bake_s", "trace_cpu_s", "render_s", "render_noise"):
+        if key in r:
+            r[key] = float(np.mean([x[key] for x in runs]))
     r["view_bias"] = list(np.mean([x["view_bias"] for x in runs], axis=0))
     worst = max(runs, key=lambda x: x["worst"])
     r["worst"], r["worst_signed"] = worst["worst"], worst["worst_signed"]
@@ -369,23 +383,35 @@ def worst_view(r):
 
 def table(rows, markdown):
     seeds = any(r.get("spread") for r in rows)  # several bake seeds: their spread too
+    rendered = "render_noise" in rows[0]  # mixed rows: the render's own noise and seconds too
     head = ("case", "blocks", "mean", "worst", "bias", "worst view bias", "ref noise") + \
-        (("bake spread",) if seeds else ()) + ("bake s", "ref s")
+        (("render noise",) if rendered else ()) + (("bake spread",) if seeds else ()) + ("bake s", "ref s") + \
+        (("render s",) if rendered else ())
     if markdown:
         lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
         for r in rows:
+            noise = f"{100 * r['render_noise']:.1f} % | " if rendered else ""
             spread = f"{100 * r['spread']:.1f} % | " if seeds else ""
+            render = f" {r['render_s']:.1f} |" if rendered else ""
             lines.append(f"| {r['case']} | {r['blocks']} | {100 * r['mean']:.1f} % | {100 * r['worst_signed']:+.0f} % | "
-                         f"{100 * r['bias']:+.1f} % | {worst_view(r)} | {100 * r['noise']:.1f} % | {spread}{r['bake_s']:.2f} | "
-                         f"{r['reference_s']:.0f} |")
+                         f"{100 * r['bias']:+.1f} % | {worst_view(r)} | {100 * r['noise']:.1f} % | {noise}{spread}"
+                         f"{r['bake_s']:.2f} | {r['reference_s']:.0f} |{render}")
         return "\n".join(lines)
-    lines = [f"{'case':<14} {'blocks':>6} {'mean':>7} {'worst':>7} {'bias':>7} {'worst view bias':>22} {'noise':>6} "
-             f"{'bake s':>7} {'ref s':>7}"]
+    lines = [f"{'case':<14} {'blocks':>6} {'mean':>7} {'worst':>7} {'bias':>7} {'worst view bias':>22} {'noise':>6} " +
+             (f"{'render':>6} " if rendered else "") + f"{'bake s':>7} {'ref s':>7}" + (f" {'render s':>8}" if rendered else "")]
     for r in rows:
         lines.append(f"{r['case']:<14} {r['blocks']:>6} {100 * r['mean']:>6.1f}% {100 * r['worst_signed']:>+6.0f}% "
-                     f"{100 * r['bias']:>+6.1f}% {worst_view(r):>22} {100 * r['noise']:>5.1f}% {r['bake_s']:>7.2f} "
-                     f"{r['reference_s']:>7.1f}")
+                     f"{100 * r['bias']:>+6.1f}% {worst_view(r):>22} {100 * r['noise']:>5.1f}% " +
+                     (f"{100 * r['render_noise']:>5.1f}% " if rendered else "") +
+                     f"{r['bake_s']:>7.2f} {r['reference_s']:>7.1f}" + (f" {r['render_s']:>8.1f}" if rendered else ""))
     return "\n".join(lines)
+
+
+def summary(rows, what):
+    """The suite's one line for a table: the sum of its means (the suite's figure of merit), the largest, the worst
+    block."""
+    return (f"{what}: sum of the {len(rows)} means {sum(100 * r['mean'] for r in rows):.2f}, largest mean "
+            f"{100 * max(r['mean'] for r in rows):.1f} %, worst block {100 * max(r['worst'] for r in rows):.0f} %")
 
 
 def traced_how(row):
@@ -409,10 +435,12 @@ def main():
     parser.add_argument("--seeds", type=int, default=1,
                         help="bake each case with seeds 0..N-1 and report the means (traced voxels' noise: one seed's "
                              "mean error moves by up to 2 points)")
-    parser.add_argument("--mixed", type=int, default=0,
-                        help="also the mixed render, as Cycles renders firn_scatter (this many paths per block; "
-                             "1024: the render's own noise about 1.8 %% per block on spray_dense)")
+    parser.add_argument("--mixed", type=int, default=MIXED_PATHS,
+                        help="paths per block of the mixed render, as Cycles renders firn_scatter (the headline)")
+    parser.add_argument("--baked-only", action="store_true", help="the baked form alone (no mixed render)")
     args = parser.parse_args()
+    if args.baked_only:
+        args.mixed = 0
     chosen = [c for c in cases() if not args.cases or c.name in args.cases.split(",")]
     cache = None if args.fresh else args.cache
     if cache:
@@ -450,14 +478,16 @@ def main():
                     print(np.array2string(np.round(rel[v * per:(v + 1) * per, 1].reshape(case.pixels, case.pixels)[::-1], 2),
                                           max_line_width=200))
     print()
+    if mixed_rows:
+        print(f"mixed form, the headline ({args.mixed} paths per block; render s: its wall seconds):")
+        print(table(mixed_rows, args.markdown))
+        print()
+        print("baked form (Scatter Thin Snow off):")
     print(table(rows, args.markdown))
     print()
     if mixed_rows:
-        print(f"mixed render ({args.mixed} paths per block; bake s and ref s as above):")
-        print(table(mixed_rows, args.markdown))
-        print()
-    worst = max(r["mean"] for r in rows)
-    print(f"all cases: largest mean {100 * worst:.1f} %, worst block {100 * max(r['worst'] for r in rows):.0f} %")
+        print(summary(mixed_rows, f"mixed ({args.mixed} paths per block)"))
+    print(summary(rows, "baked"))
 
 
 if __name__ == "__main__":

@@ -10,9 +10,15 @@ the middle pixel of each factor x factor group is the suite's camera ray through
 compare one to one with the cached Monte Carlo reference (bench/bake_suite.py's figures: mean |error| over the
 blocks of optical depth >= 1, worst, bias, each view's bias). Noise: the mean |relative difference| of the
 blocks against the render at the most samples. Time: Cycles' wall seconds per render (its threads `--threads`).
+With `--core-paths N` the same bake is also rendered by the core's emulation of the mixed material
+(`render_scattering_where_thin`, bench/bake_suite.py's mixed rows, N paths per block) and each Cycles mixed render
+is set against it block by block: their bias (sum over sum) with its standard error, and chi2 per block, the sum
+of the squared relative differences over the sum of the two renders' relative variances (1 where they differ by
+noise alone; Cycles' variance from `--seeds` renders, at least 2, each its own Cycles seed, whose mean is the figure).
 
     bench/run.sh bench/thin_scatter_cycles.py -- [--cases slab_thin_forward,ball_forward] [--samples 64,256,1024]
-        [--baked-samples 64,1024] [--bounces 16] [--step-rate 1] [--factor 1] [--threads 2]
+        [--baked-samples 64,1024] [--bounces 16] [--step-rate 1] [--factor 1] [--threads 2] [--seeds 1]
+        [--core-paths 0]
 """
 
 import argparse
@@ -43,27 +49,28 @@ def parse_args():
     parser.add_argument("--step-rate", type=float, default=1.0, help="the scene's, times the material's")
     parser.add_argument("--factor", type=int, default=1, help="image pixels per suite block and axis (odd)")
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--seeds", type=int, default=1, help="Cycles mixed renders per sample count (their mean)")
+    parser.add_argument("--core-paths", type=int, default=0,
+                        help="paths per block of the core's mixed render to set Cycles' against (0: none)")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args(argv)
     if args.factor % 2 != 1:
         parser.error("--factor must be odd (a pixel centred on each block's ray)")
+    if args.core_paths and args.seeds < 2:
+        parser.error("--core-paths needs --seeds 2 or more (Cycles' own variance per block)")
     return args
 
 
-def cycles_copy(core_path, path, voxel):
-    """The baked file (the bake's firn_scatter among its grids) voxel by voxel (Cycles draws tiles as nothing) in
-    Cycles' convention (translation -voxel/2)."""
+def cycles_copy(core_path, path):
+    """The baked file (the bake's firn_scatter among its grids) voxel by voxel (Cycles draws tiles as nothing), each
+    grid with its own transform: the bake writes them in Cycles' convention, firn_scatter on voxels SCATTER_SCALE
+    times the density's (docs/vdb-contract.md; given the density's transform, it shrank towards the origin)."""
     import pyopenvdb
-
-    def transform():
-        t = pyopenvdb.createLinearTransform(voxelSize=voxel)
-        t.translate((-voxel / 2,) * 3)
-        return t
 
     grids = []
     for source in pyopenvdb.readAll(core_path)[0]:
         grid = type(source)()
-        grid.name, grid.transform = source.name, transform()
+        grid.name, grid.transform = source.name, source.transform.deepCopy()
         accessor = grid.getAccessor()
         for item in source.citerOnValues():
             lo, hi = item["min"], item["max"]
@@ -173,6 +180,18 @@ def scores(case, estimate, reference, seen):
             + " ".join(f"{100 * b:+4.0f}" for b in views))
 
 
+def agreement(cycles_mean, cycles_variance, core, core_error, seen):
+    """Cycles' mixed render (mean of its seeds and that mean's variance per block) against the core's (mean and
+    standard error per block) over the seen blocks: the bias with its standard error, chi2 per block."""
+    c, v, b, e = cycles_mean[seen], cycles_variance[seen], core[seen], core_error[seen]
+    bias = c.sum() / b.sum() - 1.0
+    bias_error = np.sqrt(v.sum() + (e ** 2).sum()) / b.sum()
+    scale = np.maximum(b, 1e-30) ** 2  # relative terms: every block weighs alike, bright or dim
+    chi2 = ((c - b) ** 2 / scale).sum() / ((v + e ** 2) / scale).sum()  # one noisy variance per block: pooled
+    return (f"against the core's: bias {100 * bias:+.2f} +- {100 * bias_error:.2f} %, chi2 per block {chi2:.2f}, "
+            f"mean |difference| {100 * np.abs(c / np.maximum(b, 1e-30) - 1).mean():.1f} %")
+
+
 def main():
     args = parse_args()
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -198,7 +217,7 @@ def main():
         scatter = (firncore.grid_statistics(core_path, firncore.SCATTER_GRID_NAME)["active_voxels"]
                    if firncore.SCATTER_GRID_NAME in firncore.grid_names(core_path) else 0)
         path = os.path.join(directory, name + ".vdb")
-        cycles_copy(core_path, path, case.voxel)
+        cycles_copy(core_path, path)
         print(f"{name}: {case.what}; views {case.views}; {scatter} firn_scatter voxels (the bake's) "
               f"({int((case.density > 0).sum())} snow voxels); reference noise "
               f"{100 * np.median(error[seen] / np.maximum(reference[seen], 1e-30)):.1f} %", flush=True)
@@ -213,12 +232,26 @@ def main():
         print(f"    Cycles baked / core render_baked - 1: mean |per block| "
               f"{100 * np.abs(baked[seen] / np.maximum(core_baked[seen], 1e-30) - 1).mean():.1f} %, sum "
               f"{100 * (baked[seen].sum() / core_baked[seen].sum() - 1):+.1f} %", flush=True)
+        if args.core_paths:
+            core, core_error = firncore.render_scattering_where_thin(
+                core_path, case.optics, origins, directions, suns=case.suns(), sky=case.skies(),
+                occluders=case.occluders, samples=args.core_paths, seed=1000, traced_only=True)
+            print(f"  {'core mixed, %d paths' % args.core_paths:<34} {scores(case, core, reference, seen)}   noise "
+                  f"{100 * np.median(core_error[seen] / np.maximum(core[seen], 1e-30)):.1f} %", flush=True)
         snow_material(snow, case, scatter=True)
         renders = {}
         for samples in counts:
-            renders[samples], _, seconds = render_views(case, directory, samples, 0, args)
-            print(f"  {'Cycles mixed, %d spp' % samples:<34} {scores(case, renders[samples], reference, seen)}"
-                  f"   {seconds:6.1f} s", flush=True)
+            seeded, seconds = [], 0.0
+            for seed in range(args.seeds):
+                blocks, _, spent = render_views(case, directory, samples, seed, args)
+                seeded.append(blocks)
+                seconds += spent
+            renders[samples] = np.mean(seeded, axis=0)
+            print(f"  {'Cycles mixed, %d spp x %d' % (samples, args.seeds):<34} "
+                  f"{scores(case, renders[samples], reference, seen)}   {seconds:6.1f} s", flush=True)
+            if args.core_paths:
+                variance = np.var(seeded, axis=0, ddof=1) / args.seeds
+                print(f"    {agreement(renders[samples], variance, core, core_error, seen)}", flush=True)
         best = renders[max(counts)]
         print("    noise (mean |block / the %d spp block - 1|): " % max(counts) +
               ", ".join(f"{s} spp {100 * np.abs(renders[s][seen] / np.maximum(best[seen], 1e-30) - 1).mean():.1f} %"
