@@ -417,6 +417,58 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     rampPart.peak1 = glm::vec3(lit * ramp1 / total + (1.0 - lit) * glm::dvec3(rampPart.peak1));
 }
 
+// The skin beneath a ramp voxel's carrier (the surface voxel facing it most): its curvature (per voxel,
+// surfaceCurvature), ramp thickness (voxels: 2 m / rho as its patch's, patchRampMass over densityBeneath, read from the
+// density, the topology keeping no links here) and the density beneath it. LimbSkins finds each once per carrier: the
+// ramp voxels around a carrier share it, and each walked the carrier's column and read its curvature again (the
+// curvature twice more: the ramp's gate, RampOfThickConvexSnow, asked it per ramp voxel).
+struct LimbSkin {
+    double curvature = 0.0, thickness = 0.0, beneath = 0.0;  // per voxel, voxels, kg/m^3; thickness 0: none
+};
+
+class LimbSkins {
+  public:
+    // carrier: any voxel (surfaceCurvature reads 0 off the surface).
+    double curvature(const SnowTopology &topo, const openvdb::Coord &carrier,
+                     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
+        return carried(topo, carrier, index).skin.curvature;
+    }
+    // carrier: a smooth surface voxel, j its unknown.
+    const LimbSkin &at(const SnowTopology &topo, const openvdb::Coord &carrier, std::int32_t j,
+                       openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::Accessor &density,
+                       Medium::ColumnMarcher &marcher, const Medium &medium) {
+        Carried &found = carried(topo, carrier, index);
+        LimbSkin &skin = found.skin;
+        if (found.skinFound) return skin;
+        found.skinFound = true;
+        if (!(skin.curvature > 0.0)) return skin;
+        const glm::dvec3 n = topo.patches[std::size_t(j)].normal;
+        const float under = density.getValue(carrier + faceStep(faceBeneath(n)));
+        skin.beneath = under > 0.0f ? under : density.getValue(carrier);
+        if (!(skin.beneath > 0.0)) return skin;
+        const double h = medium.voxelSize();
+        const double mass =  // kg/m^2
+            marcher.column(medium.voxelCentre(carrier), n, 4.0 * h, std::numeric_limits<double>::infinity());
+        skin.thickness = 2.0 * mass / (skin.beneath * h);
+        return skin;
+    }
+    // The carriers of a leaf's voxels lie within a voxel of it: cleared per leaf, the map stays small.
+    void clear() { skins_.clear(); }
+
+  private:
+    struct Carried {
+        LimbSkin skin;  // its curvature found on entry, the rest once `at` asks
+        bool skinFound = false;
+    };
+    Carried &carried(const SnowTopology &topo, const openvdb::Coord &carrier,
+                     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
+        const auto [it, inserted] = skins_.try_emplace(carrier);
+        if (inserted) it->second.skin.curvature = surfaceCurvature(topo, carrier, index);
+        return it->second;
+    }
+    std::map<openvdb::Coord, Carried> skins_;
+};
+
 // Whether the surface carrying a ramp voxel (`carrier`, the surface voxel facing it most: facingAverage) curves away
 // faster than a sphere of kSkyRampRadius voxels: only there is the sky the ramp sees below its plane past the snow's
 // limb worth its marches (a ball of 10 voxels misses 1 % of its sky, of 5 voxels 7 %: docs/benchmarks.md,
@@ -425,8 +477,8 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
 constexpr double kSkyRampRadius = 5.5;  // voxels
 
 bool onConvexSurface(const SnowTopology &topo, const openvdb::Coord &carrier,
-                     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
-    return surfaceCurvature(topo, carrier, index) * kSkyRampRadius > 1.0;
+                     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, LimbSkins &skins) {
+    return skins.curvature(topo, carrier, index) * kSkyRampRadius > 1.0;
 }
 
 // Whether ramp voxel c lies beside optically thick snow: some voxel of its 3^3 block at least a fringe's density
@@ -445,12 +497,12 @@ bool besideThickSnow(const Medium &medium, Medium::Accessor &density, const open
 class RampOfThickConvexSnow {
   public:
     RampOfThickConvexSnow(const SnowTopology &topo, const openvdb::Coord &c, const openvdb::Coord &carrier,
-                          openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::Accessor &density,
-                          const Medium &medium)
-        : topo_(topo), c_(c), carrier_(carrier), index_(index), density_(density), medium_(medium) {}
+                          openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, LimbSkins &skins,
+                          Medium::Accessor &density, const Medium &medium)
+        : topo_(topo), c_(c), carrier_(carrier), index_(index), skins_(skins), density_(density), medium_(medium) {}
     bool operator()() {
         if (!asked_) {
-            thickConvex_ = besideThickSnow(medium_, density_, c_) && onConvexSurface(topo_, carrier_, index_);
+            thickConvex_ = besideThickSnow(medium_, density_, c_) && onConvexSurface(topo_, carrier_, index_, skins_);
             asked_ = true;
         }
         return thickConvex_;
@@ -460,6 +512,7 @@ class RampOfThickConvexSnow {
     const SnowTopology &topo_;
     const openvdb::Coord &c_, &carrier_;
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index_;
+    LimbSkins &skins_;
     Medium::Accessor &density_;
     const Medium &medium_;
     bool asked_ = false, thickConvex_ = false;  // two flags, not std::optional<bool>: GCC 12 warns it unset
@@ -618,42 +671,6 @@ void skyInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &no
     S.l0 += glm::vec3(arriving * glm::dvec3(medium.optics().albedo) * kInvFourPi);
 }
 
-// The skin beneath a ramp voxel's carrier (the surface voxel facing it most): its curvature (per voxel,
-// surfaceCurvature), ramp thickness (voxels: 2 m / rho as its patch's, patchRampMass over densityBeneath, read from the
-// density, the topology keeping no links here) and the density beneath it. LimbSkins finds it once per carrier: the
-// ramp voxels around a carrier share it, and each walked the carrier's column and read its curvature again.
-struct LimbSkin {
-    double curvature = 0.0, thickness = 0.0, beneath = 0.0;  // per voxel, voxels, kg/m^3; thickness 0: none
-};
-
-class LimbSkins {
-  public:
-    // carrier: a smooth surface voxel, j its unknown.
-    const LimbSkin &at(const SnowTopology &topo, const openvdb::Coord &carrier, std::int32_t j,
-                       openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::Accessor &density,
-                       Medium::ColumnMarcher &marcher, const Medium &medium) {
-        const auto [it, inserted] = skins_.try_emplace(carrier);
-        LimbSkin &skin = it->second;
-        if (!inserted) return skin;
-        skin.curvature = surfaceCurvature(topo, carrier, index);
-        if (!(skin.curvature > 0.0)) return skin;
-        const glm::dvec3 n = topo.patches[std::size_t(j)].normal;
-        const float under = density.getValue(carrier + faceStep(faceBeneath(n)));
-        skin.beneath = under > 0.0f ? under : density.getValue(carrier);
-        if (!(skin.beneath > 0.0)) return skin;
-        const double h = medium.voxelSize();
-        const double mass =  // kg/m^2
-            marcher.column(medium.voxelCentre(carrier), n, 4.0 * h, std::numeric_limits<double>::infinity());
-        skin.thickness = 2.0 * mass / (skin.beneath * h);
-        return skin;
-    }
-    // The carriers of a leaf's voxels lie within a voxel of it: cleared per leaf, the map stays small.
-    void clear() { skins_.clear(); }
-
-  private:
-    std::map<openvdb::Coord, LimbSkin> skins_;
-};
-
 // The sun's light the skin of a convex surface carries past its limb (limb_carry.h), scattered once in ramp voxel c
 // (outside the unknowns, carrying its surface's radiance) beside optically thick snow (besideThickSnow) on its way:
 // a peaked lobe of k = g about the sun's travel, of mean omega F / 4 pi, the carried flux F = omega g^2 A E
@@ -794,7 +811,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 Source S, rampPart;
                 glm::dvec3 facing(0.0);  // the carrying surfaces' normal
                 openvdb::Coord carrier;  // and the surface voxel facing c most
-                RampOfThickConvexSnow rampOfThickConvexSnow(topo, c, carrier, index, density, medium);
+                RampOfThickConvexSnow rampOfThickConvexSnow(topo, c, carrier, index, limbSkins, density, medium);
                 if (t >= 0) S = ownValue(traced, t);
                 else if (!nearCarriedAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}

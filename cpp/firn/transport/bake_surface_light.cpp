@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -104,6 +105,30 @@ ThroughSnowFaces throughSnowFaces(const Scene &scene, const SnowTopology &topo, 
     return {across * h * h / topo.patches[i].area, spreadOut * h * h / topo.patches[i].area};
 }
 
+// What returnedThrough reads of surface voxel i whatever the channel and the face, found when first asked and kept
+// for i's three channels and (a sharp edge's) air faces: its curvature (surfaceCurvature, -1 until a low sun asks for
+// it) and each beam's way through its snow faces (throughSnowFaces, from the beam's direction at i's centre).
+class VoxelShared {
+  public:
+    explicit VoxelShared(std::size_t beams) : faces_(beams), facesFound_(beams, false) {}
+    void startVoxel(std::size_t i) {
+        i_ = i, curvature = -1.0;
+        std::fill(facesFound_.begin(), facesFound_.end(), false);
+    }
+    // w: beam b's direction towards its light at i's centre.
+    const ThroughSnowFaces &faces(const Scene &scene, const SnowTopology &topo, std::size_t b, const glm::dvec3 &w,
+                                  double h) {
+        if (!facesFound_[b]) faces_[b] = throughSnowFaces(scene, topo, i_, b, w, h), facesFound_[b] = true;
+        return faces_[b];
+    }
+    double curvature = -1.0;  // per voxel
+
+  private:
+    std::size_t i_ = 0;
+    std::vector<ThroughSnowFaces> faces_;
+    std::vector<bool> facesFound_;
+};
+
 // Light returned through a patch (W and the first moments of its linear radiance), over and above the escape
 // function's share: of the sky (and light from other snow) and of the beams.
 struct ReturnedLight {
@@ -193,11 +218,11 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     // `peak` (a smooth patch, or each air face of a sharp edge), the suns' light returned sharply forwards leaves as
     // the peaked lobe instead (SunPeak: at grazing sun the lit rim seen against the sun, bench/bake_halfspace.py),
     // added to `peak` (radiance), the rest linear:
-    // `index` finds the patch's neighbours for its curvature (restKept); `curvature`: voxel i's (surfaceCurvature),
-    // -1 until a low sun asks for it, then kept for i's other channels and faces.
+    // `index` finds the patch's neighbours for its curvature (restKept); `shared`: what voxel i's channels and faces
+    // share (VoxelShared, started at i).
     auto returnedThrough = [&](int c, std::size_t i, const glm::dvec3 &n, double skyShare, const SkyBeam &beam,
                                const auto &beamShare, SurfaceLight *peak,
-                               openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, double &curvature) {
+                               openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, VoxelShared &shared) {
         const Channel &ch = channels[c].ch;
         const double y = channels[c].y;
         const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), escape1 = 6.0 / 7.0 * n;
@@ -233,7 +258,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const glm::dvec3 t = travelAlong(d, n);
             const double returned = P * lobe.albedo;
             sunReturned += returned;
-            const ThroughSnowFaces faces = throughSnowFaces(scene, topo, i, s, -d, h);
+            const ThroughSnowFaces &faces = shared.faces(scene, topo, s, -d, h);
             sunMissed += P * (lobe.albedo - schemeBeamAlbedo(ch, voxelR, nodeR, mu0, faces.across, faces.spreadOut));
             if (!peak) {
                 sun0 += returned * (lobe.a - 3.0 / 7.0);
@@ -242,9 +267,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             }
             const SunPeak split = sunPeak(ch.g, mu0, y, lobe);
             // Under a low sun less than what returns, but where the surface curves (its limb shows grazing exits).
-            if (split.rest < 1.0 && curvature < 0.0)
-                curvature = std::max(0.0, surfaceCurvature(topo, topo.coord[i], index));
-            const double rest = (1.0 - split.share) * restKept(split, curvature);
+            if (split.rest < 1.0 && shared.curvature < 0.0)
+                shared.curvature = std::max(0.0, surfaceCurvature(topo, topo.coord[i], index));
+            const double rest = (1.0 - split.share) * restKept(split, shared.curvature);
             sun0 += returned * (rest * split.a() - 3.0 / 7.0);
             sun1 += returned * (rest * (split.b * n + split.c * t) - escape1);
             const double p0 = split.mean * returned / (kPi * topo.patches[i].area);
@@ -261,6 +286,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        VoxelShared shared(light.beams.size());  // returnedThrough's, started per voxel
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
@@ -275,14 +301,14 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             // Accuracy: the terminator). At most 3/7, so the form stays positive at grazing exit.
             const std::array<glm::dvec3, 3> gradient =
                 patch.sharp ? std::array<glm::dvec3, 3>{} : surfaceGradients(topo, phi, i, h);
-            double curvature = -1.0;  // returnedThrough's, shared by the channels
+            shared.startVoxel(i);
             for (int c = 0; c < 3; ++c) {
                 const Channel &ch = channels[c].ch;
                 const double leaving = terms[c].escaped[i] + terms[c].outConductance[i] * phi[c][i];
                 const auto whole = [](std::size_t) { return 1.0; };
                 const ReturnedLight r =
                     returnedThrough(c, i, patch.normal, 1.0, skyBeam, whole, patch.sharp ? nullptr : &surface, index,
-                                    curvature);
+                                    shared);
                 // The similarity-reduced beam is forward-scattered light: where it reaches a patch from inside
                 // it leaves around its direction, as a lobe of k = g (its exitance taken as pi l0 (1 + 3 k cos)),
                 // through the smooth surface or, at a sharp edge, through each air face.
@@ -347,6 +373,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edgeFaces.voxels.size(), 64), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         std::vector<FaceExit> faces;
+        VoxelShared shared(light.beams.size());  // returnedThrough's, started per voxel
         for (std::size_t k = range.begin(); k != range.end(); ++k) {
             EdgeFaceLobes::Voxel &own = edgeFaces.voxels[k];
             const std::size_t i = own.key;
@@ -355,7 +382,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 if (flatFaces && patch.share[f] > 0.0f && goesOnFlat(topo, i, f)) own.flat |= std::uint8_t(1u << f);
             const glm::dvec3 surface = patchSurface(medium, topo, i);
             std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
-            double curvature = -1.0;  // returnedThrough's, shared by the channels and faces
+            shared.startVoxel(i);
             std::array<double, 6> facePeak{};  // W/m^2/sr: each face's SunPeak, the channels' sum
             for (int f = 0; f < 6; ++f)
                 if (patch.share[f] > 0.0f)
@@ -375,7 +402,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                         for (int g = 0; g < 6; ++g)
                             if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
                         return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
-                    }, &out.surface(i), index, curvature);
+                    }, &out.surface(i), index, shared);
                     facePeak[f] += out.surface(i).peak0[c] - peakBefore;
                     const double leaving = outflow[f].first[c], area = outflow[f].second;
                     const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
