@@ -27,10 +27,9 @@ import numpy as np
 
 import bake_suite
 import firncore
-from spray_rims_probe import CLASSES, scattered_region, shares_in, voxel_classes
-from suite_regions import regions
+from spray_rims_probe import CLASSES, voxel_classes
+from spray_thick_probe import case_regions
 
-CASE = "spray_dense"
 GRIDS = ("firn_source", "firn_source_x", "firn_source_y", "firn_source_z", "firn_source_peak", "firn_source_peak_l1")
 
 
@@ -220,11 +219,7 @@ def main():
     parser.add_argument("--no-voxels", action="store_true", help="only the points along the rays")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args()
-    case = bake_suite.case(CASE)
-    origins, directions, tau = bake_suite.views(case)
-    seen, lit, core = regions(case, origins, directions, tau)
-    thin = shares_in(case, origins, directions, seen, scattered_region(case)) >= 0.5
-    views = np.repeat(np.arange(len(case.views)), case.pixels ** 2)
+    case, origins, directions, tau, seen, lit, core, thin, views = case_regions()
     against = seen & ~lit & (core | ~thin) & (views == 2)
     rays = np.nonzero(against)[0]
     w = -directions[rays[0]]  # towards the camera (an orthographic view: one direction)

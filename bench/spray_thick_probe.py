@@ -42,6 +42,17 @@ from suite_regions import regions
 CASE = "spray_dense"
 
 
+def case_regions():
+    """spray_dense's views and its blocks' regions: seen, lit, core (suite_regions), thin (the renderer scatters in
+    at least half their light's weight), and each block's view."""
+    case = bake_suite.case(CASE)
+    origins, directions, tau = bake_suite.views(case)
+    seen, lit, core = regions(case, origins, directions, tau)
+    thin = shares_in(case, origins, directions, seen, scattered_region(case)) >= 0.5
+    views = np.repeat(np.arange(len(case.views)), case.pixels ** 2)
+    return case, origins, directions, tau, seen, lit, core, thin, views
+
+
 def renders(case, seeds, mixed, cache, save, load):
     """Per seed: the baked and mixed renders, the reference and its error, the trace's processor seconds."""
     out = []
@@ -120,11 +131,7 @@ def main():
                              "optical depths 0.3, 1, 3 (spray_rims_probe.segments)")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args()
-    case = bake_suite.case(CASE)
-    origins, directions, tau = bake_suite.views(case)
-    seen, lit, core = regions(case, origins, directions, tau)
-    thin = shares_in(case, origins, directions, seen, scattered_region(case)) >= 0.5
-    views = np.repeat(np.arange(len(case.views)), case.pixels ** 2)
+    case, origins, directions, tau, seen, lit, core, thin, views = case_regions()
     runs = renders(case, args.seeds, args.mixed, args.cache, args.save, args.load)
     reference = runs[0]["reference"]
     print(f"{case.name}, FINAL, seeds 0-{len(runs) - 1}, mixed render {args.mixed} paths per block; views "
