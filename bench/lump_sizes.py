@@ -1,9 +1,9 @@
 """The suite's pieces of snow that the renderer could scatter whole (docs/benchmarks.md, spray-lumpscatter): per case
-its pieces (connected through faces, edges and corners, as bake_thin_snow.cpp's pieceAround), and those of at most
-343 voxels (a small piece, traced whole) holding a voxel of sigma_t h >= 2 with their voxels, the sum of
-(sigma_tr h)^3 in the least absorbing channel, the thickest sigma_t h, how many voxels of sigma_t h >= 2, extent.
+its pieces (connected through faces, edges and corners, as bake_thin_snow.cpp's pieceAround; spray_thick_probe.lumps),
+and those of at most 343 voxels (a small piece, traced whole) holding a voxel of sigma_t h >= 2 with their voxels, the
+sum of (sigma_tr h)^3 in the least absorbing channel, the thickest sigma_t h, how many voxels of sigma_t h >= 2, extent.
 
-    PYTHONPATH=build/python /usr/bin/python3 bench/lump_sizes.py [spray_dense,spray_lumps]
+    PYTHONPATH=build/python:bench /usr/bin/python3 bench/lump_sizes.py [spray_dense,spray_lumps]
 """
 
 import sys
@@ -11,29 +11,9 @@ import sys
 import numpy as np
 
 import bake_suite
+from spray_thick_probe import lumps
 
 SMALL_PIECE_VOXELS = 343  # bake_thin_snow.cpp, kSmallPieceVoxels
-
-
-def pieces(density):
-    """The 26-connected pieces of density > 0, each an (n, 3) array of voxel indices."""
-    label = np.zeros(density.shape, dtype=bool)
-    out = []
-    for seed in map(tuple, np.argwhere(density > 0)):
-        if label[seed]:
-            continue
-        label[seed] = True
-        stack, voxels = [seed], [seed]
-        while stack:
-            p = stack.pop()
-            for offset in np.ndindex(3, 3, 3):
-                q = tuple(int(p[a] + offset[a] - 1) for a in range(3))
-                if all(0 <= q[a] < density.shape[a] for a in range(3)) and density[q] > 0 and not label[q]:
-                    label[q] = True
-                    stack.append(q)
-                    voxels.append(q)
-        out.append(np.array(voxels))
-    return out
 
 
 def main():
@@ -42,7 +22,8 @@ def main():
         c = bake_suite.case(name)
         tau = c.sigma_t / c.rho * c.density * c.voxel
         reduced = tau * (1.0 - max(c.omega) * c.g)
-        found = pieces(c.density)
+        label = lumps(c.density > 0)
+        found = [np.argwhere(label == k) for k in range(1, label.max() + 1)]
         print(f"{name}: {len(found)} pieces of {[len(p) for p in found]} voxels, {int((tau >= 2).sum())} voxels of "
               "sigma_t h >= 2")
         for p in sorted(found, key=lambda p: -(reduced[tuple(p.T)] ** 3).sum()):
