@@ -23,7 +23,8 @@ namespace {
 #include "firn/transport/sun_lobe_table.inc"
 #include "firn/transport/sun_peak_table.inc"
 
-constexpr int kMuBins = kLimbMuBins, kPhiBins = kLimbAzimuthBins;  // outgoing cos(zenith) in [0, 1], |azimuth| in [0, pi]
+// Outgoing cos(zenith) in [0, 1], |azimuth| in [0, pi].
+constexpr int kMuBins = kLimbMuBins, kPhiBins = kLimbAzimuthBins;
 constexpr double kDeepTransportPaths = 30.0;
 
 // omega of the similarity parameter y at this g (inverse of absorptionParameter).
@@ -447,11 +448,10 @@ SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe) {
 }
 
 std::vector<LimbBin> limbDarkening(double g, double mu0, double y, long photons, std::uint64_t seed) {
-    // The Monte Carlo in chunks of its own streams, summed as flux per bin (R A).
-    constexpr long kChunk = 100000;
-    const long chunks = std::max(1L, photons / kChunk);
+    // The Monte Carlo in chunks of their own streams (about 1e5 photons each), summed as flux per bin (R A).
+    const long chunks = std::max(1L, photons / 100000), perChunk = photons / chunks;
     std::vector<Reflection> parts(chunks);
-    tbb::parallel_for(long(0), chunks, [&](long i) { parts[i] = halfSpaceReflection(g, mu0, y, kChunk, seed + i); });
+    tbb::parallel_for(long(0), chunks, [&](long i) { parts[i] = halfSpaceReflection(g, mu0, y, perChunk, seed + i); });
     const SunLobe lobe = sunLobe(g, mu0, y);
     const SunPeak split = sunPeak(g, mu0, y, lobe);  // flat: the rest as the table has it (restKept at curvature 0)
     const glm::dvec3 peak1 =
