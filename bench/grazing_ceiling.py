@@ -27,14 +27,15 @@ density's gradient: bench/ramp_source_profile.py --by-exit). Two oracles on the 
   viewer: none along the peaked lobe's axis (the sun's forward travel out of a lit surface, where its limb is too
   dark already); --derived D from the transport in place of a and MU_FULL (limb-derive: derived_table, the
   half-space's exit over the broad lobe fitted to it by exit cosine, azimuth off the sun's travel and mu0, for the
-  case's green omega and g; the grid's length the lit share alone), --darken-only that D at most 1; --curve prints
-  it beside the fitted form.
+  case's green omega and g; the grid's length the lit share alone), --darken-only that D at most 1; --own that D
+  from the bake's own lobes (limb-own: own_table, the half-space's Monte Carlo over the peaked and broad lobes the
+  bake writes for it, tools/sun_lobe_table's `limb` mode); --curve prints it beside the fitted form.
 
 Per case: the mean |error| (the suite's, all channels), each oracle's, the worst block and its mu; the sum of the
 means. --blocks lists each case's five worst blocks (view, row, col, mu, error).
 
     PYTHONPATH=build/python:bench python3 bench/grazing_ceiling.py [--cases a,b] [--amplitudes 0.15,0.3,0.45] \
-        [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis] [--derived [--darken-only]]] \
+        [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis] [--derived [--own] [--darken-only]]] \
         [--curve] [--blocks]
 """
 
@@ -42,7 +43,9 @@ import argparse
 import functools
 import math
 import os
+import subprocess
 import tempfile
+from collections import namedtuple
 
 import numpy as np
 import pyopenvdb
@@ -56,6 +59,7 @@ MU_FULL = 0.35  # above this exit cosine the truth's exit over the bake's is fla
 DERIVED_MU = np.array([0.01, 0.03, 0.05, 0.08, 0.12, 0.17, 0.23, 0.3, 0.4, 0.5, 0.65, 0.8, 1.0])  # the table's nodes
 DERIVED_AZIMUTH = np.radians(np.arange(0.0, 181.0, 15.0))  # the exit's tangent part off the sun's travel
 DERIVED_MU0 = np.array([0.05, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0])
+OWN_PHOTONS = 4000000  # per sun: a grazing bin (1.4e-4 of the projected solid angle) gets ~300 of them (+-6 %)
 THICK = 3.0  # sigma_t h from which a case's surfaces are a half-space's (the limb darkening is a thick medium's)
 
 
@@ -133,6 +137,9 @@ def broad_lobe_fit(truth, views, dw):
     return lambda v: scale(best) * shape(best, v)
 
 
+Table = namedtuple("Table", "mu0 mu azimuth values")  # D on mu0 x mu x azimuth (radians off the sun's travel)
+
+
 @functools.lru_cache(maxsize=None)
 def derived_table(omega, g):
     """The limb darkening the broad lobe misses, D = the half-space's exit / the broad lobe fitted to it, on
@@ -147,13 +154,34 @@ def derived_table(omega, g):
         broad = broad_lobe_fit(half_space_exit(omega, g, mu0, views), views, dw)(probes)
         d = half_space_exit(omega, g, mu0, probes) / np.maximum(broad, 1e-30)
         table[i] = d.reshape(a.shape).T
-    return table
+    return Table(DERIVED_MU0, DERIVED_MU, DERIVED_AZIMUTH, table)
+
+
+@functools.lru_cache(maxsize=None)
+def own_table(omega, g, photons=OWN_PHOTONS):
+    """The limb darkening the bake's own lobes miss (limb-own): D = (R / A - P) / B per outgoing bin (20 exit cosines x
+    18 azimuths off the sun's travel) at DERIVED_MU0, R the half-space's reflection function from the core's Monte
+    Carlo (sun_lobe_table.inc's), P and B the peaked lobe and the rest's broad lobe that sunPeak's split writes for a
+    flat surface, as the grids render them: D B + P is the half-space's exit, no constant chosen. From
+    tools/sun_lobe_table's `limb` mode, run once per snow and kept in the temp folder; at least 0 (forwards at grazing
+    the peaked lobe alone is brighter than the half-space; the forward gate keeps the term off there)."""
+    path = os.path.join(tempfile.gettempdir(), "limb-own", f"limb_{g}_{omega}_{photons}.txt")
+    if not os.path.exists(path):
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        tool = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build", "tools", "sun_lobe_table")
+        with open(path + ".part", "w") as out:
+            subprocess.run([tool, str(photons), "limb", str(g), str(omega)], stdout=out, check=True)
+        os.replace(path + ".part", path)
+    rows = np.loadtxt(path)
+    mu0, mu, azimuth = (np.unique(rows[:, k]) for k in range(3))
+    values = rows[:, 3].reshape(len(mu0), len(mu), len(azimuth))
+    return Table(mu0, mu, np.radians(azimuth), np.maximum(values, 0.0))
 
 
 def table_value(table, mu0, mu, azimuth):
-    """The derived table read multilinearly at (mu0, mu, azimuth) (each clamped to its nodes)."""
+    """A D table read multilinearly at (mu0, mu, azimuth) (each clamped to its nodes)."""
     corners = []
-    for nodes, x in ((DERIVED_MU0, mu0), (DERIVED_MU, mu), (DERIVED_AZIMUTH, azimuth)):
+    for nodes, x in ((table.mu0, mu0), (table.mu, mu), (table.azimuth, azimuth)):
         x = np.clip(x, nodes[0], nodes[-1])
         i = np.clip(np.searchsorted(nodes, x) - 1, 0, len(nodes) - 2)
         corners.append((i, (x - nodes[i]) / (nodes[i + 1] - nodes[i])))
@@ -161,7 +189,7 @@ def table_value(table, mu0, mu, azimuth):
     out = 0.0
     for di, dj, dk in np.ndindex(2, 2, 2):
         w = (s if di else 1.0 - s) * (t if dj else 1.0 - t) * (u if dk else 1.0 - u)
-        out = out + w * table[i + di, j + dj, k + dk]
+        out = out + w * table.values[i + di, j + dj, k + dk]
     return out
 
 
@@ -270,10 +298,10 @@ def grid_darkening(case, grid, origins, directions, seen, scale=1, axis=None, fo
     return out
 
 
-def print_curve(case, mu0=0.5, mus=(0.01, 0.03, 0.05, 0.1, 0.17, 0.25, 0.35, 0.5, 0.8),
+def print_curve(case, own, photons=OWN_PHOTONS, mu0=0.5, mus=(0.01, 0.03, 0.05, 0.1, 0.17, 0.25, 0.35, 0.5, 0.8),
                 azimuths=(0, 30, 90, 150, 180)):
     """The derived D at mu0 (the suite's sun on a flat top) beside the fitted form, by exit cosine and azimuth."""
-    table = derived_table(case.omega[1], case.g)
+    table = own_table(case.omega[1], case.g, photons) if own else derived_table(case.omega[1], case.g)
     print(f"  {case.name} (omega {case.omega[1]}, g {case.g}), mu0 {mu0}: D by mu " + " ".join(f"{m:5.2f}" for m in mus))
     print("    fitted (a 0.3)     " + " ".join(f"{x:5.2f}" for x in darkening(np.array(mus), 0.3)))
     for a in azimuths:
@@ -305,6 +333,9 @@ def main():
                              "fitted to it, by mu, azimuth off the sun's travel, mu0, the case's green omega and g) "
                              "in place of 1 - a clamp(1 - mu / MU_FULL); --amplitudes is then 1")
     parser.add_argument("--darken-only", action="store_true", help="--derived's D at most 1")
+    parser.add_argument("--own", action="store_true",
+                        help="--derived's D over the bake's own lobes (own_table: tools/sun_lobe_table limb)")
+    parser.add_argument("--own-photons", type=int, default=OWN_PHOTONS, help="--own's Monte Carlo photons per sun")
     parser.add_argument("--curve", action="store_true",
                         help="print each case's derived D beside the fitted 1 - 0.3 clamp(1 - mu / 0.35) at mu0 0.5")
     parser.add_argument("--carry", type=int, default=2, help="--grid's vectors carried this many voxels into the air")
@@ -317,7 +348,7 @@ def main():
     chosen = [c for c in S.cases() if not args.cases or c.name in args.cases.split(",")]
     if args.curve:
         for case in chosen:
-            print_curve(case)
+            print_curve(case, args.own, args.own_photons)
         return
     print("case               mean  " + "".join(f" ceil<{c:4.2f}" for c in ceilings) +
           f" darker<{ceilings[-1]:4.2f}" + "".join(f"  limb {a:4.2f}" for a in amplitudes) +
@@ -350,7 +381,10 @@ def main():
                     axis = broad_axis(path, case.density.shape) if args.l1_axis else None
                     forward = peak_axis(path, case.density.shape) if args.forward else None
                     grid = coarsened(limb_grid(case, a, args.lit, args.carry), args.grid_scale)
-                    table = derived_table(case.omega[1], case.g) if args.derived else None
+                    table = None
+                    if args.derived:
+                        table = (own_table(case.omega[1], case.g, args.own_photons) if args.own else
+                                 derived_table(case.omega[1], case.g))
                     d = grid_darkening(case, grid, run.origins, run.directions, seen, args.grid_scale, axis,
                                        forward, table, args.darken_only)[:, None]
                 else:

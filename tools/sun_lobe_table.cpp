@@ -3,6 +3,9 @@
 // `peak`, sun_peak_table.inc: the returned sun split into a peaked lobe and a linear rest (SunPeak).
 //   build/tools/sun_lobe_table [photons] > cpp/firn/transport/sun_lobe_table.inc
 //   build/tools/sun_lobe_table [photons] peak > cpp/firn/transport/sun_peak_table.inc
+// With `limb g omega`, the limb darkening the grids miss on a flat surface of that snow (limbDarkening), one line
+// per sun cosine and outgoing bin: mu0 mu azimuth(degrees off the sun's travel) D (bench/grazing_ceiling.py --own).
+//   build/tools/sun_lobe_table [photons] limb g omega > limb.txt
 #include <array>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/transport/sun_lobe.h"
+#include "firn/util/sampling.h"
 
 namespace {
 template <std::size_t N>
@@ -20,10 +24,25 @@ void printNodes(const char *name, const std::array<double, N> &nodes) {
     for (std::size_t i = 0; i < N; ++i) std::printf("%s%.2f", i ? ", " : "", nodes[i]);
     std::printf("};\n");
 }
+
+// The suns of the limb table: bench/grazing_ceiling.py's DERIVED_MU0 (its lowest the table's first node).
+void printLimb(long photons, double g, double omega) {
+    const std::array<double, 8> mu0s{0.05, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0};
+    const double y = firn::absorptionParameter(omega, g);
+    std::printf("# limbDarkening g %.3f omega %.5f (y %.4f), %ld photons per sun: mu0 mu azimuth_deg D\n", g, omega,
+                y, photons);
+    for (std::size_t i = 0; i < mu0s.size(); ++i)
+        for (const firn::LimbBin &bin : firn::limbDarkening(g, mu0s[i], y, photons, 5000 + 1000000 * i))
+            std::printf("%.2f %.3f %.1f %.4f\n", mu0s[i], bin.mu, bin.azimuth * 180.0 / firn::kPi, bin.darkening);
+}
 }  // namespace
 
 int main(int argc, char **argv) {
     const long photons = argc > 1 ? std::atol(argv[1]) : 40000;
+    if (argc > 4 && std::string(argv[2]) == "limb") {
+        printLimb(photons, std::atof(argv[3]), std::atof(argv[4]));
+        return 0;
+    }
     // y: from clean snow (1e-3 .. 0.1) to omega ~ 0.8; g: every 0.1 and 0.95; mu0: every 0.05.
     const std::array<double, 12> ys{0.0, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0};
     const std::array<double, 11> gs{0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95};

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 namespace firn {
 
@@ -77,6 +78,20 @@ double sphericalAlbedo(double g, double y);
 // Interpolated in (y, g, mu0) like sunLobe, from sun_peak_table.inc; `lobe` = sunLobe(g, mu0, y), which the
 // split fades into (the caller has it already).
 SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe);
+
+// The limb darkening the grids miss on a flat snow surface (docs/benchmarks.md, limb-own): per outgoing bin (cos
+// zenith mu over kLimbMuBins, the azimuth off the sun's travel over kLimbAzimuthBins, 0 forward), D such that the
+// split sunPeak writes renders the half-space exactly when its rest's broad lobe is D times darker or brighter:
+//   R / A_table = P(w) + D(w) rest(w),
+// R the half-space's reflection function (Monte Carlo, as the table's), P the split's peaked lobe and rest its broad
+// lobe (exitLobe of the linear rest, exitance (1 - share) rest) as the grids render them, bin means. Not a fit: the
+// truth over the bake's own lobes. Used by tools/sun_lobe_table.cpp.
+constexpr int kLimbMuBins = 20, kLimbAzimuthBins = 18;
+struct LimbBin {
+    double mu = 0.0, azimuth = 0.0;  // bin centre; radians
+    double darkening = 1.0;
+};
+std::vector<LimbBin> limbDarkening(double g, double mu0, double y, long photons, std::uint64_t seed);
 
 // The table's source: 1D Monte Carlo of a half-space with analog absorption; photons deeper than 30 transport
 // mean free paths return with diffusion's probability exp(-kappa (z + z_b)) in the escape function's shape.
