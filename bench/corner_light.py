@@ -8,7 +8,11 @@ leaks round the corner, not the sun's forward light). The -x face hit at depths 
 its half-density plane, seen head-on, "both" (the diagonal between top and side) and "own" (the normal tilted away
 from the top, downwards): green radiance, Monte Carlo and bake.
 
-    PYTHONPATH=build/python python3 bench/corner_light.py [--paths 4096]
+With --voxels also the baked source S(w) (broad + peaked lobe, green) of the voxels around the edge in its y = 6
+slice, x 1..3 (the air across the side, the edge voxel, the top beside it), z 5..8 (the air row above the edge down
+the side), towards each of the three ways (bench/spray_shade_probe.py's `lobes`; docs/benchmarks.md, corner-lean).
+
+    PYTHONPATH=build/python python3 bench/corner_light.py [--paths 4096] [--voxels]
 """
 
 import argparse
@@ -40,6 +44,7 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--paths", type=int, default=4096)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_corner_light"))
+    parser.add_argument("--voxels", action="store_true", help="print the baked source of the voxels around the edge")
     args = parser.parse_args()
     case = bake_suite.case("box_sharp")
     e = bake_suite.SUN_ELEVATION
@@ -66,6 +71,22 @@ def main():
                 cut = slice(k * len(DEPTHS), (k + 1) * len(DEPTHS))
                 print(f"  {way:<8} MC   " + "  ".join(f"{m:.4f}" for m in mc[cut, 1]))
                 print(f"  {'':<8} bake " + "  ".join(f"{b:.4f}" for b in baked[cut, 1]))
+            if args.voxels:
+                print_voxels(path, case.voxel)
+
+
+def print_voxels(path, h):
+    """The baked source S(w) (broad + peaked, green) of voxels (x, 6, z), x 1..3, z 8..5, towards each way."""
+    from spray_shade_probe import grid_values, lobes
+    voxels = [(x, 6, z) for z in (8, 7, 6, 5) for x in (1, 2, 3)]
+    values = grid_values(path, np.array(voxels, dtype=np.float64) * h)
+    for way, w in WAYS:
+        w = np.array(w) / np.linalg.norm(w)
+        broad, peak = lobes(values, w, "broad")[:, 1], lobes(values, w, "peak")[:, 1]
+        print(f"  {way:<8} source at (x, 6, z), broad + peak:")
+        for row in range(4):
+            cells = range(3 * row, 3 * row + 3)
+            print("    " + "  ".join(f"{voxels[i]}: {broad[i]:.4f} + {peak[i]:.4f}" for i in cells))
 
 
 if __name__ == "__main__":

@@ -55,8 +55,9 @@ struct EdgeFaceLobes {
         std::uint32_t key = 0;  // the unknown
         std::uint8_t flat = 0;  // bit f: air face f holds its own lobe
         std::array<BroadLobe, 6> lobe{};
-        // Of the voxel's peaked lobe (the suns returned sharply forwards, SunPeak), the share that entered and leaves
-        // through air face f: a lit top's grazing return leaves through the top, not the shadowed side beside it.
+        // What leaves through air face f of the suns returned sharply forwards (SunPeak), as a multiple of the
+        // voxel's stored peaked lobe (what its one value shows, peakSeenThroughFaces): a lit top's grazing return
+        // leaves through the top, not the shadowed side beside it.
         std::array<float, 6> peakShare{};
     };
     std::vector<Voxel> voxels;  // in key order

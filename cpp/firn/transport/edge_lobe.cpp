@@ -86,6 +86,16 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
     return {l0, 3.0 * bestK * l0 * axis};
 }
 
+double peakSeenThroughFaces(const std::vector<glm::dvec3> &normals, const std::vector<double> &radiance,
+                            const glm::dvec3 &axis) {
+    double shown = 0.0, seen = 0.0;
+    for (std::size_t f = 0; f < normals.size(); ++f) {
+        const double c = std::max(0.0, glm::dot(normals[f], axis));
+        shown += radiance[f] * c, seen += c;
+    }
+    return seen > 0.0 ? shown / seen : 1.0;
+}
+
 void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double voxelInDiffusionLengths) {
     for (const FaceExit &a : faces)
         for (const FaceExit &b : faces)

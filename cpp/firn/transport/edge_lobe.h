@@ -25,6 +25,17 @@ struct FaceExit {
 // than T's largest value (exitLobe's rule: a lobe pointing into the snow would hide its light).
 SourceLobe edgeLobe(const std::vector<FaceExit> &faces);
 
+// Of a sharp voxel's peaked lobe about the unit `axis` (the suns returned sharply forwards, stored as the voxel's
+// radiance over all its air faces), the part its one value shows. Air face f of normal normals[f] sends its own
+// radiance, radiance[f] times the voxel's (its share of the peak over its share of the faces' area); a camera towards
+// w sees the voxel through the faces that face w in proportion to their projected area (edgeLobe's mix), so along the
+// lobe's axis, where it is seen, the voxel shows
+//   sum_f radiance[f] max(0, n_f . axis) / sum_f max(0, n_f . axis)
+// times the stored lobe (1 where no face faces the axis). A lit top's grazing return along the shadowed side beside
+// it is seen through the top's thin projected area, not through the whole side (docs/benchmarks.md, corner-lean).
+double peakSeenThroughFaces(const std::vector<glm::dvec3> &normals, const std::vector<double> &radiance,
+                            const glm::dvec3 &axis);
+
 // Each face's form taken as its mean over the face where the light beneath it also leaves through the faces beside
 // it. Near their shared edge the snow's fluence is one for both faces: by symmetry the two exits meet at the edge at
 // their mean, and the difference relaxes away from it over the fluence's lateral length, the diffusion length

@@ -165,10 +165,11 @@ TEST(Bake, EdgeFacesBesideALitFaceShowTheirOwnExit) {
             EXPECT_NEAR(rendered, expected, 0.025);
         } else {
             // The shadowed side shows none of the lit top's sharply forward return (its SunPeak leaves through the
-            // top: EdgeFaceLobes::peakShare): 1.57 times the truth with it, 1.43 without; the rest of the excess is
-            // the side's one value per voxel where the truth falls within two mean free paths of the edge
-            // (docs/benchmarks.md, corner-fwd).
-            EXPECT_LT(rendered, 1.5 * expected);
+            // top: EdgeFaceLobes::peakShare, and the edge voxel shows it through the top's projected area alone,
+            // peakSeenThroughFaces): 1.57 times the truth with it in the air across the side, 1.43 with it in the
+            // edge voxel alone, 1.30 without; the rest of the excess is the side's one value per voxel where the
+            // truth falls within two mean free paths of the edge (docs/benchmarks.md, corner-fwd, corner-lean).
+            EXPECT_LT(rendered, 1.4 * expected);
         }
     }
 }

@@ -72,4 +72,20 @@ TEST(EdgeLobe, RelaxedFacesMeetAtMostAtTheirMean) {
     }
 }
 
+// A lit top's grazing return beside a shadowed side (the edge voxel's two faces, half its area each: the top, which
+// sends all of the peak, at twice the voxel's radiance): a camera along the peak's axis, 5 degrees above the top, sees
+// the voxel through the top's projected area sin 5 and the side's cos 5, so the voxel's one value shows
+// 2 sin 5 / (sin 5 + cos 5) of its stored peak there; a peak straight up shows the top's own radiance, one that leaves
+// through both faces alike the voxel's, and one that no face faces is kept whole.
+TEST(EdgeLobe, PeakSeenThroughTheFaceItLeaves) {
+    const std::vector<glm::dvec3> normals{{0.0, 0.0, 1.0}, {-1.0, 0.0, 0.0}};
+    const double e = 5.0 * kPi / 180.0;
+    const glm::dvec3 grazing(-std::cos(e), 0.0, std::sin(e));
+    EXPECT_NEAR(peakSeenThroughFaces(normals, {2.0, 0.0}, grazing), 2.0 * std::sin(e) / (std::sin(e) + std::cos(e)),
+                1e-12);
+    EXPECT_NEAR(peakSeenThroughFaces(normals, {2.0, 0.0}, {0.0, 0.0, 1.0}), 2.0, 1e-12);
+    EXPECT_NEAR(peakSeenThroughFaces(normals, {1.0, 1.0}, grazing), 1.0, 1e-12);
+    EXPECT_NEAR(peakSeenThroughFaces(normals, {2.0, 0.0}, glm::normalize(glm::dvec3(1.0, 0.0, -0.2))), 1.0, 1e-12);
+}
+
 }  // namespace firn
