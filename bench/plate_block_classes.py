@@ -1,0 +1,171 @@
+"""bumpy_plate's per-block error split by the block's light and geometry classes, with each class's weight in the
+case's mean (docs/benchmarks.md, "bumpy-sides").
+
+Each seen block (one camera ray; bench/bake_suite.py) is classed by the point where its ray reaches optical depth 1
+and the trilinear density's normal there (n = −∇ρ / |∇ρ|, central differences of half a voxel), first match wins:
+  cut sides    within 1.5 voxels of the layer's x or y bounds;
+  plate shadow the sun's ray from the point, half a voxel out along n, meets the plate;
+  sky only     the sun's cosine n·s ≤ 0.05, or that ray crosses more than 2 optical depths of snow (self-shadow);
+  grazing      the exit cosine n·(−d) < 0.3 (limb-dark's grazing class);
+  slopes to sun / slopes away   n tilted more than 15° from +z, its horizontal part towards / away from the sun (+x);
+  lit top      the rest.
+Printed per class: blocks, its points of the mean (its summed |relative error| over all blocks' count: the
+points add up to the mean), share, mean |error|, bias (sum baked / sum reference − 1), per view points and bias.
+
+Lights: "full" against the suite's cached reference; "sun" and "sky" against fresh core Monte Carlo of --samples paths
+(bench/plate_err_regions.py's cache). --worst N lists the N worst blocks of the first light (green).
+
+    PYTHONPATH=build/python:bench python3 bench/plate_block_classes.py [--samples 2048] [--lights full,sun,sky]
+        [--worst N]
+"""
+
+import argparse
+import math
+import os
+import tempfile
+
+import numpy as np
+
+import bake_suite as bs
+import firncore
+from plate_err_regions import cached_monte_carlo, light_case
+
+CLASSES = ("cut sides", "plate shadow", "sky only", "grazing", "slopes to sun", "slopes away", "lit top")
+SUN = np.array([math.cos(bs.SUN_ELEVATION), 0.0, math.sin(bs.SUN_ELEVATION)])
+
+
+def normals(case, points):
+    """−∇ρ / |∇ρ| of the trilinear density at world points (N, 3)."""
+    h, p = case.voxel, points / case.voxel
+    grad = np.stack([bs.trilinear(case.density, p + 0.5 * e) - bs.trilinear(case.density, p - 0.5 * e)
+                     for e in np.eye(3)], axis=1)
+    return -grad / np.maximum(np.linalg.norm(grad, axis=1), 1e-12)[:, None]
+
+
+def sun_depth(case, points):
+    """Optical depth of snow along the sun from each point, up to the grid's top."""
+    steps = np.arange(0.0, 0.6, 0.25 * case.voxel)
+    tau = np.array([bs.trilinear(case.density, (p + steps[:, None] * SUN) / case.voxel).sum() for p in points])
+    return tau * (steps[1] - steps[0]) * case.sigma_t / case.rho
+
+
+def classes(case, origins, directions, seen):
+    """Each block's class name (the module's docstring), its depth-one point, normal, sun and exit cosines."""
+    h = case.voxel
+    hit = bs.depth_one_points(case, origins, directions, seen)
+    label = np.full(len(hit), "", dtype=object)
+    idx = np.nonzero(seen)[0]
+    p = hit[idx]
+    n = normals(case, p)
+    out = p + 0.5 * h * n
+    mu0, mu = n @ SUN, -(n * directions[idx]).sum(1)
+    plate = np.array([bs.plate_hit(case, o, SUN) < math.inf for o in out])
+    blocked = sun_depth(case, out) > 2.0
+    last = (case.density.shape[0] - 1) * h
+    x, y = p[:, 0], p[:, 1]
+    side = (x < 1.5 * h) | (x > last - 1.5 * h) | (y < 1.5 * h) | (y > last - 1.5 * h)
+    tilted = n[:, 2] < math.cos(math.radians(15.0))
+    order = [("cut sides", side), ("plate shadow", plate & (mu0 > 0.05)), ("sky only", (mu0 <= 0.05) | blocked),
+             ("grazing", mu < 0.3), ("slopes to sun", tilted & (n[:, 0] > 0.0)), ("slopes away", tilted),
+             ("lit top", np.ones(len(p), bool))]
+    sub = label[idx]
+    for name, mask in order:
+        sub[(sub == "") & mask] = name
+    label[idx] = sub
+    geometry = {k: np.full(len(hit), np.nan) for k in ("mu0", "mu", "nz")}
+    geometry["mu0"][idx], geometry["mu"][idx], geometry["nz"][idx] = mu0, mu, n[:, 2]
+    geometry["hit"] = hit
+    return label, geometry
+
+
+def side_split(geometry, case):
+    """The cut sides' blocks by bound (−x, +x, −y, +y: the nearest) and by the normal: wall (|n_z| < 0.5) or top edge."""
+    h, last = case.voxel, (case.density.shape[0] - 1) * case.voxel
+    p, nz = geometry["hit"], geometry["nz"]
+    d = np.stack([p[:, 0], last - p[:, 0], p[:, 1], last - p[:, 1]], axis=1)
+    bound = np.array(["-x", "+x", "-y", "+y"])[np.argmin(np.nan_to_num(d, nan=1.0), axis=1)]
+    return np.where(np.abs(nz) < 0.5, np.char.add(bound, " wall"), np.char.add(bound, " top edge"))
+
+
+def report(title, baked, reference, label, view, views, parts=None):
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rel = np.abs(baked / reference - 1.0)
+    seen = label != ""
+    count = rel[seen].size
+    mean = 100 * rel[seen].mean()
+    print(f"{title}: mean {mean:.2f} %, bias {100 * (baked[seen].sum() / reference[seen].sum() - 1):+.1f} %")
+    print(f"  {'class':<13} {'blocks':>6} {'points':>6} {'share':>6} {'mean':>6} {'bias':>7}   " +
+          "   ".join(f"{str(v):>9} points/bias" for v in views))
+    for name in CLASSES:
+        m = label == name
+        if not m.any():
+            continue
+        per_view = []
+        for v in range(len(views)):
+            mv = m & (view == v)
+            per_view.append(f"{100 * rel[mv].sum() / count:5.2f} {100 * (baked[mv].sum() / reference[mv].sum() - 1):+6.1f}"
+                            if mv.any() else " " * 12)
+        print(f"  {name:<13} {3 * m.sum():>6} {100 * rel[m].sum() / count:6.2f} {100 * rel[m].sum() / rel[seen].sum():5.1f}% "
+              f"{100 * rel[m].mean():5.1f}% {100 * (baked[m].sum() / reference[m].sum() - 1):+6.1f}%   "
+              + "        ".join(per_view), flush=True)
+        if parts is not None and name == "cut sides":
+            for part in sorted(set(parts[m])):
+                k = m & (parts == part)
+                per_view = [f"{100 * rel[k & (view == v)].sum() / count:5.2f} "
+                            f"{100 * (baked[k & (view == v)].sum() / reference[k & (view == v)].sum() - 1):+6.1f}"
+                            if (k & (view == v)).any() else " " * 12 for v in range(len(views))]
+                print(f"    {part:<11} {3 * k.sum():>6} {100 * rel[k].sum() / count:6.2f} "
+                      f"{100 * rel[k].sum() / rel[seen].sum():5.1f}% {100 * rel[k].mean():5.1f}% "
+                      f"{100 * (baked[k].sum() / reference[k].sum() - 1):+6.1f}%   " + "        ".join(per_view))
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--samples", type=int, default=2048)
+    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_plate_err"))
+    parser.add_argument("--suite-cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--lights", default="full,sun,sky")
+    parser.add_argument("--worst", type=int, default=0)
+    args = parser.parse_args()
+    os.makedirs(args.cache, exist_ok=True)
+    case = bs.case("bumpy_plate")
+    origins, directions, tau = bs.views(case)
+    seen = tau >= 1.0
+    label, geometry = classes(case, origins, directions, seen)
+    view = np.repeat(np.arange(len(case.views)), case.pixels ** 2)
+    results = {}
+    with tempfile.TemporaryDirectory() as folder:
+        path = os.path.join(folder, "bumpy.vdb")
+        bs.write_density(path, case.density, case.voxel)
+        for light in args.lights.split(","):
+            c = light_case(case, light)
+            if light == "full":
+                reference, error, _ = bs.reference(case, path, origins, directions, args.suite_cache)
+                title = f"full (suite reference, {case.samples} paths)"
+            else:
+                file = os.path.join(args.cache, f"{light}_{args.samples}.npz")
+                reference, error = cached_monte_carlo(file, path, c, origins, directions, args.samples)
+                title = f"{light} only ({args.samples} paths)"
+            noise = np.median(error[seen] / np.maximum(reference[seen], 1e-30))
+            firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
+            baked = firncore.render_baked(path, c.optics, origins, directions, occluders=c.occluders)
+            report(f"{title}, reference noise {100 * noise:.1f} %", baked, reference, label, view, case.views,
+                   side_split(geometry, case))
+            results[light] = (baked, reference)
+    if args.worst:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rel = {k: b[:, 1] / r[:, 1] - 1.0 for k, (b, r) in results.items()}
+        first = np.where(label != "", np.abs(np.nan_to_num(rel[next(iter(results))])), -1.0)
+        per = case.pixels ** 2
+        print("worst blocks (green): view, row from the top, column, depth-one point (cm), class, mu0, mu, " +
+              ", ".join(f"{k} error" for k in results))
+        for i in np.argsort(-first)[:args.worst]:
+            v, q = divmod(int(i), per)
+            point = " ".join(f"{100 * x:5.1f}" for x in geometry["hit"][i])
+            print(f"  {str(case.views[v]):>9} {case.pixels - 1 - q // case.pixels:2d} {q % case.pixels:2d}  ({point})  "
+                  f"{label[i]:<13} {geometry['mu0'][i]:+.2f} {geometry['mu'][i]:+.2f}  " +
+                  "  ".join(f"{100 * rel[k][i]:+6.1f} %" for k in results))
+
+
+if __name__ == "__main__":
+    main()
