@@ -27,8 +27,7 @@ import tempfile
 import numpy as np
 
 import bake_suite as bs
-import firncore
-from plate_err_regions import cached_monte_carlo, light_case
+from plate_err_regions import baked_against_lights
 
 CLASSES = ("cut sides", "plate shadow", "sky only", "grazing", "slopes to sun", "slopes away", "lit top")
 SUN = np.array([math.cos(bs.SUN_ELEVATION), 0.0, math.sin(bs.SUN_ELEVATION)])
@@ -36,7 +35,7 @@ SUN = np.array([math.cos(bs.SUN_ELEVATION), 0.0, math.sin(bs.SUN_ELEVATION)])
 
 def normals(case, points):
     """−∇ρ / |∇ρ| of the trilinear density at world points (N, 3)."""
-    h, p = case.voxel, points / case.voxel
+    p = points / case.voxel
     grad = np.stack([bs.trilinear(case.density, p + 0.5 * e) - bs.trilinear(case.density, p - 0.5 * e)
                      for e in np.eye(3)], axis=1)
     return -grad / np.maximum(np.linalg.norm(grad, axis=1), 1e-12)[:, None]
@@ -80,7 +79,7 @@ def classes(case, origins, directions, seen):
 
 def side_split(geometry, case):
     """The cut sides' blocks by bound (−x, +x, −y, +y: the nearest) and by the normal: wall (|n_z| < 0.5) or top edge."""
-    h, last = case.voxel, (case.density.shape[0] - 1) * case.voxel
+    last = (case.density.shape[0] - 1) * case.voxel
     p, nz = geometry["hit"], geometry["nz"]
     d = np.stack([p[:, 0], last - p[:, 0], p[:, 1], last - p[:, 1]], axis=1)
     bound = np.array(["-x", "+x", "-y", "+y"])[np.argmin(np.nan_to_num(d, nan=1.0), axis=1)]
@@ -134,24 +133,9 @@ def main():
     label, geometry = classes(case, origins, directions, seen)
     view = np.repeat(np.arange(len(case.views)), case.pixels ** 2)
     results = {}
-    with tempfile.TemporaryDirectory() as folder:
-        path = os.path.join(folder, "bumpy.vdb")
-        bs.write_density(path, case.density, case.voxel)
-        for light in args.lights.split(","):
-            c = light_case(case, light)
-            if light == "full":
-                reference, error, _ = bs.reference(case, path, origins, directions, args.suite_cache)
-                title = f"full (suite reference, {case.samples} paths)"
-            else:
-                file = os.path.join(args.cache, f"{light}_{args.samples}.npz")
-                reference, error = cached_monte_carlo(file, path, c, origins, directions, args.samples)
-                title = f"{light} only ({args.samples} paths)"
-            noise = np.median(error[seen] / np.maximum(reference[seen], 1e-30))
-            firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
-            baked = firncore.render_baked(path, c.optics, origins, directions, occluders=c.occluders)
-            report(f"{title}, reference noise {100 * noise:.1f} %", baked, reference, label, view, case.views,
-                   side_split(geometry, case))
-            results[light] = (baked, reference)
+    for light, title, baked, reference in baked_against_lights(case, args, origins, directions, seen):
+        report(title, baked, reference, label, view, case.views, side_split(geometry, case))
+        results[light] = (baked, reference)
     if args.worst:
         with np.errstate(invalid="ignore", divide="ignore"):
             rel = {k: b[:, 1] / r[:, 1] - 1.0 for k, (b, r) in results.items()}

@@ -109,6 +109,28 @@ def worst_blocks(count, results, label, hit, case):
         print(f"  {str(case.views[v]):>9} {row:2d} {column:2d}  ({point})  {label[i]:<12} {errors}")
 
 
+def baked_against_lights(case, args, origins, directions, seen):
+    """Per light of args.lights: (light, title with the reference's median relative noise, baked, reference), the
+    FINAL bake (seed 0) rendered along the rays; "full" against the suite's cached reference (args.suite_cache), "sun"
+    and "sky" against cached_monte_carlo of args.samples paths in args.cache."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = os.path.join(folder, "bumpy.vdb")
+        bs.write_density(path, case.density, case.voxel)
+        for light in args.lights.split(","):
+            c = light_case(case, light)
+            if light == "full":
+                reference, error, _ = bs.reference(case, path, origins, directions, args.suite_cache)
+                title = f"full (suite reference, {case.samples} paths)"
+            else:
+                file = os.path.join(args.cache, f"{light}_{args.samples}.npz")
+                reference, error = cached_monte_carlo(file, path, c, origins, directions, args.samples)
+                title = f"{light} only ({args.samples} paths)"
+            noise = np.median(error[seen] / np.maximum(reference[seen], 1e-30))
+            firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
+            baked = firncore.render_baked(path, c.optics, origins, directions, occluders=c.occluders)
+            yield light, f"{title}, reference noise {100 * noise:.1f} %", baked, reference
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--samples", type=int, default=2048)
@@ -125,23 +147,9 @@ def main():
     label = region_of(case, hit, seen)
     view = np.repeat(np.arange(len(case.views)), case.pixels ** 2)
     results = {}
-    with tempfile.TemporaryDirectory() as folder:
-        path = os.path.join(folder, "bumpy.vdb")
-        bs.write_density(path, case.density, case.voxel)
-        for light in args.lights.split(","):
-            c = light_case(case, light)
-            if light == "full":
-                reference, error, _ = bs.reference(case, path, origins, directions, args.suite_cache)
-                title = f"full (suite reference, {case.samples} paths)"
-            else:
-                file = os.path.join(args.cache, f"{light}_{args.samples}.npz")
-                reference, error = cached_monte_carlo(file, path, c, origins, directions, args.samples)
-                title = f"{light} only ({args.samples} paths)"
-            noise = np.median(error[seen] / np.maximum(reference[seen], 1e-30))
-            firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
-            baked = firncore.render_baked(path, c.optics, origins, directions, occluders=c.occluders)
-            report(f"{title}, reference noise {100 * noise:.1f} %", baked, reference, label, view, case.views)
-            results[light] = (baked, reference)
+    for light, title, baked, reference in baked_against_lights(case, args, origins, directions, seen):
+        report(title, baked, reference, label, view, case.views)
+        results[light] = (baked, reference)
     if args.worst:
         worst_blocks(args.worst, results, label, hit, case)
 
