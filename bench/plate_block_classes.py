@@ -87,35 +87,32 @@ def side_split(geometry, case):
 
 
 def report(title, baked, reference, label, view, views, parts=None):
+    """Per class (and, given parts, per part of the cut sides): blocks, points, share, mean |error|, bias, per view."""
     with np.errstate(invalid="ignore", divide="ignore"):
         rel = np.abs(baked / reference - 1.0)
     seen = label != ""
-    count = rel[seen].size
-    mean = 100 * rel[seen].mean()
-    print(f"{title}: mean {mean:.2f} %, bias {100 * (baked[seen].sum() / reference[seen].sum() - 1):+.1f} %")
+    count, total = rel[seen].size, rel[seen].sum()
+
+    def bias(m):
+        return 100 * (baked[m].sum() / reference[m].sum() - 1)
+
+    def row(name, m, indent):
+        cells = [f"{100 * rel[k].sum() / count:5.2f} {bias(k):+6.1f}" if k.any() else " " * 12
+                 for k in (m & (view == v) for v in range(len(views)))]
+        print(f"{' ' * indent}{name:<{15 - indent}} {3 * m.sum():>6} {100 * rel[m].sum() / count:6.2f} "
+              f"{100 * rel[m].sum() / total:5.1f}% {100 * rel[m].mean():5.1f}% {bias(m):+6.1f}%   " + "        ".join(cells),
+              flush=True)
+
+    print(f"{title}: mean {100 * rel[seen].mean():.2f} %, bias {bias(seen):+.1f} %")
     print(f"  {'class':<13} {'blocks':>6} {'points':>6} {'share':>6} {'mean':>6} {'bias':>7}   " +
           "   ".join(f"{str(v):>9} points/bias" for v in views))
     for name in CLASSES:
         m = label == name
-        if not m.any():
-            continue
-        per_view = []
-        for v in range(len(views)):
-            mv = m & (view == v)
-            per_view.append(f"{100 * rel[mv].sum() / count:5.2f} {100 * (baked[mv].sum() / reference[mv].sum() - 1):+6.1f}"
-                            if mv.any() else " " * 12)
-        print(f"  {name:<13} {3 * m.sum():>6} {100 * rel[m].sum() / count:6.2f} {100 * rel[m].sum() / rel[seen].sum():5.1f}% "
-              f"{100 * rel[m].mean():5.1f}% {100 * (baked[m].sum() / reference[m].sum() - 1):+6.1f}%   "
-              + "        ".join(per_view), flush=True)
-        if parts is not None and name == "cut sides":
+        if m.any():
+            row(name, m, 2)
+        if m.any() and parts is not None and name == "cut sides":
             for part in sorted(set(parts[m])):
-                k = m & (parts == part)
-                per_view = [f"{100 * rel[k & (view == v)].sum() / count:5.2f} "
-                            f"{100 * (baked[k & (view == v)].sum() / reference[k & (view == v)].sum() - 1):+6.1f}"
-                            if (k & (view == v)).any() else " " * 12 for v in range(len(views))]
-                print(f"    {part:<11} {3 * k.sum():>6} {100 * rel[k].sum() / count:6.2f} "
-                      f"{100 * rel[k].sum() / rel[seen].sum():5.1f}% {100 * rel[k].mean():5.1f}% "
-                      f"{100 * (baked[k].sum() / reference[k].sum() - 1):+6.1f}%   " + "        ".join(per_view))
+                row(part, m & (parts == part), 4)
 
 
 def main():
