@@ -22,12 +22,11 @@ Lights: "full" against the suite's cached reference; "sun" and "sky" against fre
 import argparse
 import math
 import os
-import tempfile
 
 import numpy as np
 
 import bake_suite as bs
-from plate_err_regions import baked_against_lights
+from plate_err_regions import baked_against_lights, light_arguments
 
 CLASSES = ("cut sides", "plate shadow", "sky only", "grazing", "slopes to sun", "slopes away", "lit top")
 SUN = np.array([math.cos(bs.SUN_ELEVATION), 0.0, math.sin(bs.SUN_ELEVATION)])
@@ -117,10 +116,7 @@ def report(title, baked, reference, label, view, views, parts=None):
 
 def main():
     parser = argparse.ArgumentParser()
-    parser.add_argument("--samples", type=int, default=2048)
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_plate_err"))
-    parser.add_argument("--suite-cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
-    parser.add_argument("--lights", default="full,sun,sky")
+    light_arguments(parser)
     parser.add_argument("--worst", type=int, default=0)
     args = parser.parse_args()
     os.makedirs(args.cache, exist_ok=True)

@@ -109,6 +109,14 @@ def worst_blocks(count, results, label, hit, case):
         print(f"  {str(case.views[v]):>9} {row:2d} {column:2d}  ({point})  {label[i]:<12} {errors}")
 
 
+def light_arguments(parser):
+    """baked_against_lights' options: --samples, --cache, --suite-cache, --lights."""
+    parser.add_argument("--samples", type=int, default=2048)
+    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_plate_err"))
+    parser.add_argument("--suite-cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--lights", default="full,sun,sky")
+
+
 def baked_against_lights(case, args, origins, directions, seen):
     """Per light of args.lights: (light, title with the reference's median relative noise, baked, reference), the
     FINAL bake (seed 0) rendered along the rays; "full" against the suite's cached reference (args.suite_cache), "sun"
@@ -133,10 +141,7 @@ def baked_against_lights(case, args, origins, directions, seen):
 
 def main():
     parser = argparse.ArgumentParser()
-    parser.add_argument("--samples", type=int, default=2048)
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_plate_err"))
-    parser.add_argument("--suite-cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
-    parser.add_argument("--lights", default="full,sun,sky")
+    light_arguments(parser)
     parser.add_argument("--worst", type=int, default=0, help="list this many worst blocks")
     args = parser.parse_args()
     os.makedirs(args.cache, exist_ok=True)
