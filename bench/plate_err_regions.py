@@ -109,22 +109,18 @@ def worst_blocks(count, results, label, hit, case):
         print(f"  {str(case.views[v]):>9} {row:2d} {column:2d}  ({point})  {label[i]:<12} {errors}")
 
 
-def main():
-    parser = argparse.ArgumentParser()
+def light_arguments(parser):
+    """baked_against_lights' options: --samples, --cache, --suite-cache, --lights."""
     parser.add_argument("--samples", type=int, default=2048)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_plate_err"))
     parser.add_argument("--suite-cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     parser.add_argument("--lights", default="full,sun,sky")
-    parser.add_argument("--worst", type=int, default=0, help="list this many worst blocks")
-    args = parser.parse_args()
-    os.makedirs(args.cache, exist_ok=True)
-    case = next(c for c in bs.cases() if c.name == "bumpy_plate")
-    origins, directions, tau = bs.views(case)
-    seen = tau >= 1.0
-    hit = bs.depth_one_points(case, origins, directions, seen)
-    label = region_of(case, hit, seen)
-    view = np.repeat(np.arange(len(case.views)), case.pixels ** 2)
-    results = {}
+
+
+def baked_against_lights(case, args, origins, directions, seen):
+    """Per light of args.lights: (light, title with the reference's median relative noise, baked, reference), the
+    FINAL bake (seed 0) rendered along the rays; "full" against the suite's cached reference (args.suite_cache), "sun"
+    and "sky" against cached_monte_carlo of args.samples paths in args.cache."""
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "bumpy.vdb")
         bs.write_density(path, case.density, case.voxel)
@@ -140,8 +136,25 @@ def main():
             noise = np.median(error[seen] / np.maximum(reference[seen], 1e-30))
             firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
             baked = firncore.render_baked(path, c.optics, origins, directions, occluders=c.occluders)
-            report(f"{title}, reference noise {100 * noise:.1f} %", baked, reference, label, view, case.views)
-            results[light] = (baked, reference)
+            yield light, f"{title}, reference noise {100 * noise:.1f} %", baked, reference
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    light_arguments(parser)
+    parser.add_argument("--worst", type=int, default=0, help="list this many worst blocks")
+    args = parser.parse_args()
+    os.makedirs(args.cache, exist_ok=True)
+    case = next(c for c in bs.cases() if c.name == "bumpy_plate")
+    origins, directions, tau = bs.views(case)
+    seen = tau >= 1.0
+    hit = bs.depth_one_points(case, origins, directions, seen)
+    label = region_of(case, hit, seen)
+    view = np.repeat(np.arange(len(case.views)), case.pixels ** 2)
+    results = {}
+    for light, title, baked, reference in baked_against_lights(case, args, origins, directions, seen):
+        report(title, baked, reference, label, view, case.views)
+        results[light] = (baked, reference)
     if args.worst:
         worst_blocks(args.worst, results, label, hit, case)
 

@@ -418,11 +418,15 @@ void averageOverNeighbours(const SnowTopology &topo, SurfaceValues<glm::vec3> &v
     });
 }
 
-glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::size_t i, Medium::Accessor &density) {
+namespace {
+
+// patchOutside out along `normal` (unit): the patch's own or one of a sharp voxel's air faces'.
+glm::dvec3 outsideAlongNormal(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &normal,
+                              Medium::Accessor &density) {
     const double h = medium.voxelSize();
     const double thin = kMinVoxelOpticalDepth / (medium.optics().extinctionPerDensity * h);
-    const glm::dvec3 step = 0.5 * h * topo.patches[i].normal;
-    glm::dvec3 p = medium.voxelCentre(topo.coord[i]) + h * topo.patches[i].normal;
+    const glm::dvec3 step = 0.5 * h * normal;
+    glm::dvec3 p = medium.voxelCentre(topo.coord[i]) + h * normal;
     double rho = medium.densityAt(p, density);
     // Out of the patch's own ramp: where the density rises again the walk has entered other snow's (a narrow
     // groove's opposite wall), so it stops at the least dense point, never inside other snow.
@@ -434,15 +438,34 @@ glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::siz
     return p;
 }
 
+}  // namespace
+
+glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topo, std::size_t i, Medium::Accessor &density) {
+    return outsideAlongNormal(medium, topo, i, topo.patches[i].normal, density);
+}
+
 glm::dvec3 patchSurface(const Medium &medium, const SnowTopology &topo, std::size_t i) {
     return medium.voxelCentre(topo.coord[i]) + 0.5 * medium.voxelSize() * topo.patches[i].normal;
 }
 
 glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
                              Medium::Accessor &density) {
-    const glm::dvec3 n = topo.patches[i].normal;
-    const glm::dvec3 surface = patchSurface(medium, topo, i);
-    const double height = glm::length(patchOutside(medium, topo, i, density) - surface);
+    const SurfacePatch &patch = topo.patches[i];
+    glm::dvec3 n = patch.normal;
+    glm::dvec3 surface = patchSurface(medium, topo, i);
+    if (patch.sharp) {
+        // A sharp voxel's light enters by its air face most open to w, out of that face's own ramp: along the smooth
+        // normal, which points out of the edge, a face lit past the normal's horizon started its ray 20 heights away,
+        // beyond the snow in front (a cut side's corner on a slope facing away from the sun skipped the crest that
+        // shades it: docs/benchmarks.md, bumpy-sides).
+        double most = -2.0;
+        for (int f = 0; f < 6; ++f) {
+            const double c = glm::dot(faceNormal(f), w);
+            if (patch.share[f] > 0.0f && c > most) most = c, n = faceNormal(f);
+        }
+        surface = medium.voxelCentre(topo.coord[i]) + 0.5 * medium.voxelSize() * n;
+    }
+    const double height = glm::length(outsideAlongNormal(medium, topo, i, n, density) - surface);
     // Out of the own ramp down to the sun lobe's least cosine (0.05, 3 degrees): capped at mu 1/3, a flat top's ray
     // under a sun below 20 degrees started inside its trilinear ramp and crossed it on a long chord (a sun 10 degrees
     // up -27.8 %, 3 degrees -87.5 % against the core's Monte Carlo; docs/benchmarks.md, grazing-sun).

@@ -141,7 +141,8 @@ glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std:
 // Where a ray from surface voxel i's patch along w (unit, leaving the patch) lies as high above the patch as
 // patchOutside (past the density ramp and any fringe; the ray at most 20 times that height long): a light's shadow
 // taken from there falls where the snow in front casts it. From patchOutside itself, up to 3.5 voxels out along
-// the normal, a small piece's patches looked past the shadow of a piece its own size.
+// the normal, a small piece's patches looked past the shadow of a piece its own size. A sharp voxel's ray leaves its
+// air face most open to w, as high above that face as the face's own ramp reaches.
 glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
                              Medium::Accessor &density);
 

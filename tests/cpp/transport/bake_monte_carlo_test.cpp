@@ -273,8 +273,9 @@ TEST(BakeVersusMonteCarlo, SkyLitBallKeepsTheSkyItsRampSeesFromBelow) {
 
 // The same ball under a sun 30 degrees up, seen against it (the suite's view (180 deg, 0 deg)): the light the skin
 // carries past the limb lights the limb ring (limbCarriedInRamp, bake_grid_values.cpp; docs/benchmarks.md,
-// limb-ramp): without it the bake reads 0.8457 of the reference, with it 0.8596 (the reference's relative standard
-// error 0.0067, the same paths for both: the bound between them holds the change, not the noise).
+// limb-ramp): without it the bake reads 0.8197 of the reference, with it 0.8331 (the reference's relative standard
+// error 0.0067, the same paths for both: the bound between them holds the change, not the noise). Before
+// bumpy-sides 0.8457 and 0.8596: sharp voxels on the ball's dark side took the sun through the ball.
 TEST(BakeVersusMonteCarlo, SunLitBallSeenAgainstTheSunKeepsTheLightItsSkinCarriesPastTheLimb) {
     Scene scene;
     scene.medium = std::make_shared<Medium>(issueBall(), VolumeOptics{1000.0 / 100.0, Rgb(0.98), 0.85});
@@ -283,7 +284,7 @@ TEST(BakeVersusMonteCarlo, SunLitBallSeenAgainstTheSunKeepsTheLightItsSkinCarrie
     std::printf("ball against the sun: baked / reference %.4f (reference's relative standard error %.4f)\n",
                 view.ratio, view.noise);
     EXPECT_LT(view.noise, 0.01);
-    EXPECT_GT(view.ratio, 0.853);
+    EXPECT_GT(view.ratio, 0.827);
     EXPECT_LT(view.ratio, 1.0 + 2.0 * view.noise);
 }
 

@@ -1,7 +1,8 @@
 // Where a surface patch's gather and sky rays start (patchOutside, incident_light.h): out of its own snow, never
 // inside other snow. A narrow V-groove (bench/groove_probe.py's): a wall's patch near the floor's line looks along
 // its normal across the groove at the opposite wall, whose density ramp it meets a few voxels out
-// (docs/benchmarks.md, valley-answer 1 and gather-start).
+// (docs/benchmarks.md, valley-answer 1 and gather-start). Where a sun's beam starts (patchOutsideAlong): in front of
+// the snow that shades the patch (docs/benchmarks.md, bumpy-sides).
 #include <algorithm>
 #include <cmath>
 
@@ -79,6 +80,38 @@ TEST(PatchOutside, VGrooveWallPatchStartsOutsideTheOppositeWall) {
     }
     EXPECT_GT(patches, 20);
     EXPECT_LT(deepest, 0.02);
+}
+
+// A tread three voxels deep at the foot of a wall eight high, both cut off at y 0 and the tread at x 0: the tread's
+// corner voxel (air faces -x, -y, +z; a sharp corner) lies in the wall's shadow under a sun 30 degrees up from +x,
+// its smooth normal (about (-1, -1, 1) / sqrt 3) 12 degrees past that sun's horizon. The beam's march must start in
+// front of the wall: more than 5 optical depths of the trilinear snow between the start and the sun. On main it
+// started 20 heights out along the light (the smooth normal's cosine floored at 0.05), past the wall, in none.
+TEST(PatchOutside, SharpCornerInAWallsShadowStartsItsBeamInFrontOfTheWall) {
+    initializeOpenVdb();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    auto acc = grid->getAccessor();
+    for (int x = 0; x < 12; ++x)
+        for (int y = 0; y < 8; ++y)
+            for (int z = 1; z < (x < 4 ? 4 : 12); ++z) acc.setValue(openvdb::Coord(x, y, z), 100.0f);
+    const Medium medium(grid, VolumeOptics{15.0, Rgb(0.999), 0.7});  // sigma_t h 15
+    const SnowTopology topo = buildSnowTopology(medium, Occluders{}, SubProgress(nullptr, 0.0, 1.0));
+    Medium::Accessor density = medium.accessor();
+    const glm::dvec3 w(std::cos(M_PI / 6.0), 0.0, std::sin(M_PI / 6.0));  // towards the sun
+    std::size_t corner = topo.size();
+    for (std::size_t i = 0; i < topo.size(); ++i)
+        if (topo.coord[i] == openvdb::Coord(0, 0, 3)) corner = i;
+    ASSERT_LT(corner, topo.size());
+    ASSERT_TRUE(topo.patches[corner].sharp);
+    ASSERT_LT(glm::dot(topo.patches[corner].normal, w), 0.0);
+    ASSERT_TRUE(topo.patches[corner].facesTowards(w));
+    const glm::dvec3 start = patchOutsideAlong(medium, topo, corner, w, density);
+    double depth = 0.0;  // optical depth from the start towards the sun, 30 voxels, in 0.05-voxel steps
+    for (int k = 0; k < 600; ++k)
+        depth += 15.0 / 100.0 * medium.densityAt(start + (k + 0.5) * 0.05 * 0.01 * w, density) * 0.05;
+    EXPECT_GT(depth, 5.0);
 }
 
 }  // namespace firn
