@@ -65,8 +65,8 @@ def paired_rounds(name, limits, rounds, render):
             print(f"  round {r} bounces {limit:3d}: {wall:6.1f} s wall {cpu:6.1f} s cpu, brightness {brightness:.6g}, "
                   f"load {os.getloadavg()[0]:.1f}", flush=True)
     first = limits[0]
-    print(f"{name}: {rounds} rounds; per limit: median wall s, median cpu s, cpu / {first}'s per round (mean, min-max), "
-          f"brightness / {first}'s - 1", flush=True)
+    print(f"{name}: {rounds} rounds; per limit: median wall s, median cpu s, cpu / {first}'s per round "
+          f"(mean, min-max), brightness / {first}'s - 1", flush=True)
     for limit in limits:
         wall = np.median([w for _, w, _ in results[limit]])
         cpu = np.median([c for _, _, c in results[limit]])
