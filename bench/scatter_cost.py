@@ -2,7 +2,7 @@
 snow baked FINAL) and one spray frame (blend_samples/skier.py, its lumps and tracked snow lit DRAFT), each rendered
 with the option on (material form BAKED_SCATTER where the bake wrote firn_scatter) and off (BAKED): Cycles' wall
 seconds and peak memory (MB, its status line's "Peak"), and the firn_scatter voxels. The same render settings
-both ways (the bake's: volume bounces 16); `--samples` per pixel at `--width` × 9/16 pixels.
+both ways (the bake's: volume bounces 32; 16 before tidy-63); `--samples` per pixel at `--width` × 9/16 pixels.
 
 bench/run.sh bench/scatter_cost.py -- [--width 500] [--samples 32] [--spray-frames 6] [--scenes car,spray]
 """

@@ -27,7 +27,7 @@ import numpy as np
 
 import bake_suite
 import firncore
-from spray_rims_probe import CLASSES, voxel_classes
+from spray_rims_probe import CLASSES, cut_points, voxel_classes
 from spray_thick_probe import case_regions
 
 GRIDS = ("firn_source", "firn_source_x", "firn_source_y", "firn_source_z", "firn_source_peak", "firn_source_peak_l1")
@@ -153,34 +153,20 @@ def corner_values(path, case, points, keep):
     return out, total
 
 
-def cut_points(case, origins, directions, rays, cuts):
-    """Per ray of `rays` and cut, the point where the snow's optical depth along it reaches the cut (NaN: never)."""
-    per_density = case.sigma_t / case.rho
-    ds = 0.0625 * case.voxel
-    steps = np.arange(0.0, 2.0, ds)
-    out = np.full((len(rays), len(cuts), 3), np.nan)
-    for r, i in enumerate(rays):
-        p = origins[i] + steps[:, None] * directions[i]
-        tau = np.concatenate([[0.0], np.cumsum(bake_suite.trilinear(case.density, p / case.voxel)) * per_density * ds])
-        for k, cut in enumerate(cuts):
-            j = np.searchsorted(tau, cut)
-            if j < len(tau):
-                out[r, k] = origins[i] + (steps[j - 1] + ds * (cut - tau[j - 1]) / max(tau[j] - tau[j - 1], 1e-30)) * directions[i]
-    return out
-
-
 def along_rays(case, path, origins, directions, rays, w, args, seed):
     """At the points of the rays where their optical depth reaches each cut: the blend the renderer reads, the
     thick voxels' own values alone (their corners of the hat), the air's alone, against Monte Carlo."""
     cuts = [0.3, 0.6, 1.0, 1.5, 2.0, 3.0]
-    points = cut_points(case, origins, directions, rays, cuts)
+    seen = np.zeros(len(origins), bool)
+    seen[rays] = True
+    points = cut_points(case, origins, directions, seen, cuts)[:, rays]  # per cut, per ray of `rays`
     print(f"\nseed {seed}: along the {len(rays)} rays, at optical depth: the blend the render reads, the hat's "
           "thick corners alone (sigma_t h > 2), its air corners alone, its thin snow corners alone, each / Monte "
           "Carlo (green, sums over the rays); the hat's weight on thick, air (facing a thick face), other air, thin")
     rows = []
     for k, cut in enumerate(cuts):
-        ok = np.all(np.isfinite(points[:, k]), axis=1)
-        x = points[ok, k]
+        ok = np.all(np.isfinite(points[k]), axis=1)
+        x = points[k, ok]
         mc = np.array([monte_carlo_source(case, path, p, w, args.directions, args.samples, 7919 * seed + 97 * k + n)
                        for n, p in enumerate(x)])
         truth, err, direct = mc[:, 0, 1], mc[:, 1, 1], mc[:, 2, 1]

@@ -258,4 +258,5 @@ def main():
                         for s in counts if s != max(counts)), flush=True)
 
 
-main()
+if __name__ == "__main__":  # bench/bounce_cost.py imports its scene
+    main()

@@ -97,7 +97,7 @@ def test_scattering_snow_is_the_monte_carlo_of_the_same_snow(clean_scene, tmp_pa
     assert materials.material_form(obj) == "BAKED_SCATTER"
     scene = bpy.context.scene
     changed = bake.scatter_render_settings(scene)
-    assert scene.cycles.volume_bounces >= 16 and scene.cycles.max_bounces >= 16 and len(changed) == 2
+    assert scene.cycles.volume_bounces >= 32 and scene.cycles.max_bounces >= 32 and len(changed) == 2
     assert "darkens" in bake._clamp_warning(scene, [], scattering=True)  # factory clamp 10
     scene.cycles.sample_clamp_direct = scene.cycles.sample_clamp_indirect = 0.0  # as the warning asks
     scene.render.film_transparent = True  # the reference leaves the sky seen straight through the snow out
@@ -130,11 +130,11 @@ def test_a_bake_of_thin_snow_scatters_it_and_sets_the_bounces(clean_scene, tmp_p
     obj.firn.albedo, obj.firn.anisotropy = ALBEDO, G
     obj.select_set(True)
     scene = bpy.context.scene
-    assert scene.cycles.volume_bounces < 16
+    assert scene.cycles.volume_bounces < 32
     assert bpy.ops.firn.bake_scattering(quality="DRAFT") == {"FINISHED"}
     assert materials.SCATTER_GRID in firncore.grid_names(path)
     assert materials.material_form(obj) == "BAKED_SCATTER"
-    assert (scene.cycles.volume_bounces, scene.cycles.max_bounces) == (16, 16)
+    assert (scene.cycles.volume_bounces, scene.cycles.max_bounces) == (32, 32)
     assert tuple(obj.firn.bake_albedo) == pytest.approx(ALBEDO) and obj.firn.bake_anisotropy == pytest.approx(G)
     assert bpy.ops.firn.clear_bake() == {"FINISHED"}
     assert materials.SCATTER_GRID not in firncore.grid_names(path)

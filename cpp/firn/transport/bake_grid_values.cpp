@@ -43,14 +43,20 @@ Source litFacesToward(const openvdb::Coord &n, const openvdb::Coord &offset, Tra
     return sum;
 }
 
+// What a surface voxel shows a neighbour, and of its peaked lobe, the share its faces towards that neighbour hold
+// (1: all of it, where it shows one lobe over all its faces).
+struct ShownToward {
+    Source source;
+    float peakShare = 1.0f;
+};
+
 // What sharp edge voxel j (not traced) shows a neighbour at `offset`: the mean of its flat air faces' own lobes that
-// face it (EdgeFaceLobes) and, of its peaked lobe, those faces' share (`peakShare`), else `own`, its one lobe over all
-// its faces (share 1).
-Source ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const openvdb::Coord &offset, const Source &own,
-                      float &peakShare) {
-    peakShare = 1.0f;
+// face it (EdgeFaceLobes) and, of its peaked lobe, those faces' share (EdgeFaceLobes::Voxel::peakShare), else `own`,
+// its one lobe over all its faces (share 1).
+ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const openvdb::Coord &offset,
+                           const Source &own) {
     const EdgeFaceLobes::Voxel *faces = edgeFaces.find(j);
-    if (!faces) return own;
+    if (!faces) return {own};
     Source sum;
     int count = 0;
     float share = 0.0f;
@@ -60,12 +66,11 @@ Source ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const openv
         if (faces->flat >> f & 1u)
             sum.l0 += faces->lobe[f].l0, sum.l1 += faces->lobe[f].l1, share += faces->peakShare[f], ++count;
     }
-    if (!count) return own;
+    if (!count) return {own};
     Source S = own;
     S.l0 = sum.l0 / float(count), S.l1 = sum.l1 / float(count);
-    peakShare = share;
     S.peak0 *= share, S.peak1 *= share;
-    return S;
+    return {S, share};
 }
 
 // The radiance the surface voxels around voxel c (outside the snow) show towards it: their values
@@ -98,14 +103,13 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
                 const openvdb::Coord n = c.offsetBy(-dx, -dy, -dz);
-                float peakShare = 1.0f;  // of j's peaked lobe, what its faces towards c hold
-                const Source v = topo.patches[j].sharp && tracedIndex.getValue(n) < 0
-                                     ? ownFacesToward(source.edgeFaces, std::size_t(j), {dx, dy, dz}, source[j],
-                                                      peakShare)
-                                     : litFacesToward(n, {dx, dy, dz}, tracedIndex, traced, source[j]);
+                const auto [v, peakShare] =
+                    topo.patches[j].sharp && tracedIndex.getValue(n) < 0
+                        ? ownFacesToward(source.edgeFaces, std::size_t(j), {dx, dy, dz}, source[j])
+                        : ShownToward{litFacesToward(n, {dx, dy, dz}, tracedIndex, traced, source[j])};
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
-                addRampPart(c.offsetBy(-dx, -dy, -dz), j, w * peakShare);
+                addRampPart(c.offsetBy(-dx, -dy, -dz), j, w * peakShare);  // of j's peaked lobe, its faces' to c
                 normal += w * topo.patches[j].normal;
                 total += w, ++count;
             }

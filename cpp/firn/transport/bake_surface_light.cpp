@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -424,7 +425,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     own.lobe[f].l1[c] = glm::vec3(shown.l1);
                 }
             }
-            const double peak = facePeak[0] + facePeak[1] + facePeak[2] + facePeak[3] + facePeak[4] + facePeak[5];
+            const double peak = std::accumulate(facePeak.begin(), facePeak.end(), 0.0);
             for (int f = 0; f < 6 && peak > 0.0; ++f) own.peakShare[f] = float(facePeak[f] / peak);
             // The voxel's one value shows its faces' peaks through every air face (edgeLobe's mix), the air across
             // each flat face that face's own (ownFacesToward). Only where every air face is a flat wall's: a ball's
