@@ -374,6 +374,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edgeFaces.voxels.size(), 64), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         std::vector<FaceExit> faces;
+        std::vector<glm::dvec3> normals;  // the air faces', for peakSeenThroughFaces
+        std::vector<double> radiance;     // each face's peak radiance over the voxel's
         VoxelShared shared(light.beams.size());  // returnedThrough's, started per voxel
         for (std::size_t k = range.begin(); k != range.end(); ++k) {
             EdgeFaceLobes::Voxel &own = edgeFaces.voxels[k];
@@ -432,8 +434,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             // staircase faces stand for one curved surface, whose peak leaves through it whole (with them ball_issue's
             // view against the sun lost 2 % of its light). Kept whole where no face shows it along its axis.
             SurfaceLight &lit = out.surface(i);
-            std::vector<glm::dvec3> normals;
-            std::vector<double> radiance;  // each face's peak radiance over the voxel's
+            normals.clear(), radiance.clear();
             bool walls = true;
             for (int f = 0; f < 6; ++f)
                 if (patch.share[f] > 0.0f) {
