@@ -293,6 +293,7 @@ def reference(case, path, origins, directions, cache):
                                                 seed=11)
     seconds = time.perf_counter() - start
     if file:
+        os.makedirs(cache, exist_ok=True)
         np.savez(file + ".tmp.npz", mean=mean, error=error, seconds=seconds)
         os.replace(file + ".tmp.npz", file)
     return mean, error, seconds
