@@ -430,19 +430,14 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             }
             const double peak = std::accumulate(facePeak.begin(), facePeak.end(), 0.0);
             for (int f = 0; f < 6 && peak > 0.0; ++f) own.peakShare[f] = float(facePeak[f] / peak);
-            // The voxel's one value shows its faces' peaks through every air face (edgeLobe's mix), the air across
-            // each flat face that face's own (ownFacesToward). Only where every air face is a flat wall's: a ball's
-            // staircase faces stand for one curved surface, whose peak leaves through it whole (with them ball_issue's
-            // view against the sun lost 2 % of its light). Kept whole where no face shows it along its axis.
+            // Where its faces are walls, the voxel's one value shows their peaks through every air face (edgeLobe's
+            // mix), the air across each face that face's own (ownFacesToward); kept whole where no face shows it
+            // along its axis.
             SurfaceLight &lit = out.surface(i);
+            if (!own.facesAreWalls(patch) || !(peak > 0.0) || lit.peak1 == glm::vec3(0.0f)) continue;
             radiance.clear();
-            bool walls = true;
             for (int f = 0; f < 6; ++f)
-                if (patch.share[f] > 0.0f) {
-                    radiance.push_back(own.peakShare[f] / patch.share[f]);
-                    walls = walls && (own.flat >> f & 1u);
-                }
-            if (!walls || !(peak > 0.0) || lit.peak1 == glm::vec3(0.0f)) continue;
+                if (patch.share[f] > 0.0f) radiance.push_back(own.peakShare[f] / patch.share[f]);
             const float shown = float(peakSeenThroughFaces(normals, radiance, glm::normalize(glm::dvec3(lit.peak1))));
             if (!(shown > 0.0f)) continue;
             lit.peak0 *= shown, lit.peak1 *= shown, lit.rampPeak0 *= shown, lit.rampPeak1 *= shown;
