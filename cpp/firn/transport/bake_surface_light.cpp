@@ -374,7 +374,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edgeFaces.voxels.size(), 64), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         std::vector<FaceExit> faces;
-        std::vector<glm::dvec3> normals;  // the air faces', for peakSeenThroughFaces
+        std::vector<glm::dvec3> normals;  // the air faces'
         std::vector<double> radiance;     // each face's peak radiance over the voxel's
         VoxelShared shared(light.beams.size());  // returnedThrough's, started per voxel
         for (std::size_t k = range.begin(); k != range.end(); ++k) {
@@ -383,6 +383,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             const SurfacePatch &patch = topo.patches[i];
             for (int f = 0; f < 6; ++f)
                 if (flatFaces && patch.share[f] > 0.0f && goesOnFlat(topo, i, f)) own.flat |= std::uint8_t(1u << f);
+            normals.clear();
+            for (int f = 0; f < 6; ++f)
+                if (patch.share[f] > 0.0f) normals.push_back(faceNormal(f));
             const glm::dvec3 surface = patchSurface(medium, topo, i);
             std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
             shared.startVoxel(i);
@@ -401,10 +404,8 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                         // The beam entered each face by its cosine to the light seen from the patch's surface, as
                         // the diffusion let it in (bake_diffusion_system.cpp).
                         const glm::dvec3 w = towardsBeam(scene, s, surface);
-                        double total = 0.0;
-                        for (int g = 0; g < 6; ++g)
-                            if (patch.share[g] > 0.0f) total += std::max(0.0, glm::dot(faceNormal(g), w));
-                        return total > 0.0 ? std::max(0.0, glm::dot(n, w)) / total : 0.0;
+                        const double seen = projectedArea(normals, w);
+                        return seen > 0.0 ? std::max(0.0, glm::dot(n, w)) / seen : 0.0;
                     }, &out.surface(i), index, shared);
                     facePeak[f] += out.surface(i).peak0[c] - peakBefore;
                     const double leaving = outflow[f].first[c], area = outflow[f].second;
@@ -429,19 +430,14 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             }
             const double peak = std::accumulate(facePeak.begin(), facePeak.end(), 0.0);
             for (int f = 0; f < 6 && peak > 0.0; ++f) own.peakShare[f] = float(facePeak[f] / peak);
-            // The voxel's one value shows its faces' peaks through every air face (edgeLobe's mix), the air across
-            // each flat face that face's own (ownFacesToward). Only where every air face is a flat wall's: a ball's
-            // staircase faces stand for one curved surface, whose peak leaves through it whole (with them ball_issue's
-            // view against the sun lost 2 % of its light). Kept whole where no face shows it along its axis.
+            // Where its faces are walls, the voxel's one value shows their peaks through every air face (edgeLobe's
+            // mix), the air across each face that face's own (ownFacesToward); kept whole where no face shows it
+            // along its axis.
             SurfaceLight &lit = out.surface(i);
-            normals.clear(), radiance.clear();
-            bool walls = true;
+            if (!own.facesAreWalls(patch) || !(peak > 0.0) || lit.peak1 == glm::vec3(0.0f)) continue;
+            radiance.clear();
             for (int f = 0; f < 6; ++f)
-                if (patch.share[f] > 0.0f) {
-                    normals.push_back(faceNormal(f)), radiance.push_back(own.peakShare[f] / patch.share[f]);
-                    walls = walls && (own.flat >> f & 1u);
-                }
-            if (!walls || !(peak > 0.0) || lit.peak1 == glm::vec3(0.0f)) continue;
+                if (patch.share[f] > 0.0f) radiance.push_back(own.peakShare[f] / patch.share[f]);
             const float shown = float(peakSeenThroughFaces(normals, radiance, glm::normalize(glm::dvec3(lit.peak1))));
             if (!(shown > 0.0f)) continue;
             lit.peak0 *= shown, lit.peak1 *= shown, lit.rampPeak0 *= shown, lit.rampPeak1 *= shown;

@@ -56,9 +56,21 @@ struct EdgeFaceLobes {
         std::uint8_t flat = 0;  // bit f: air face f holds its own lobe
         std::array<BroadLobe, 6> lobe{};
         // What leaves through air face f of the suns returned sharply forwards (SunPeak), as a multiple of the
-        // voxel's stored peaked lobe (what its one value shows, peakSeenThroughFaces): a lit top's grazing return
-        // leaves through the top, not the shadowed side beside it.
+        // voxel's stored peaked lobe: a lit top's grazing return leaves through the top, not the shadowed side beside
+        // it. The stored lobe is what the voxel's one value shows of its faces' peaks (peakSeenThroughFaces) where
+        // its faces are walls, else the peaks' sum.
         std::array<float, 6> peakShare{};
+
+        // Whether every air face of the voxel's patch goes on as a flat wall (holds its own lobe): a corner of flat
+        // walls, each face its own surface, which shows its own peak to the air across it and to cameras through
+        // its projected area (peakSeenThroughFaces). Where a face stops at a step the faces stand for one curved
+        // surface (a ball's staircase), whose peak leaves through it whole (seen through the faces, ball_issue's view
+        // against the sun lost 2 % of its light; docs/benchmarks.md, corner-lean).
+        bool facesAreWalls(const SurfacePatch &patch) const {
+            for (int f = 0; f < 6; ++f)
+                if (patch.share[f] > 0.0f && !(flat >> f & 1u)) return false;
+            return true;
+        }
     };
     std::vector<Voxel> voxels;  // in key order
 

@@ -41,13 +41,11 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
     double flux = 0.0, most = 0.0, seen = 0.0;  // flux: the linear forms', negative parts included (their energy)
     glm::dvec3 moment(0.0);
     for (const glm::dvec3 &w : sphereDirections()) {
-        double weight = 0.0, mixed = 0.0;
-        for (const FaceExit &face : faces) {
-            const double c = glm::dot(face.normal, w);
-            if (c <= 0.0) continue;
-            const double L = face.e0 + glm::dot(face.e1, w);
-            weight += c, mixed += c * std::max(0.0, L), flux += c * L;
-        }
+        double mixed = 0.0;
+        const double weight = projectedArea(faces, w, [&](std::size_t f, double c) {
+            const double L = faces[f].e0 + glm::dot(faces[f].e1, w);
+            mixed += c * std::max(0.0, L), flux += c * L;
+        });
         if (weight <= 0.0) continue;
         directions[count] = w, nodes[count++] = {0.0, mixed / weight, weight};
         most = std::max(most, mixed / weight), seen += weight, moment += mixed * w;
@@ -88,11 +86,8 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
 
 double peakSeenThroughFaces(const std::vector<glm::dvec3> &normals, const std::vector<double> &radiance,
                             const glm::dvec3 &axis) {
-    double shown = 0.0, seen = 0.0;
-    for (std::size_t f = 0; f < normals.size(); ++f) {
-        const double c = std::max(0.0, glm::dot(normals[f], axis));
-        shown += radiance[f] * c, seen += c;
-    }
+    double shown = 0.0;
+    const double seen = projectedArea(normals, axis, [&](std::size_t f, double c) { shown += radiance[f] * c; });
     return seen > 0.0 ? shown / seen : 1.0;
 }
 

@@ -1,7 +1,9 @@
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
 #include "firn/transport/source_lobe.h"
@@ -15,6 +17,27 @@ struct FaceExit {
     double e0 = 0.0;
     glm::dvec3 e1{0.0};
 };
+
+// A face's outward normal, the face given as a FaceExit or as its normal (projectedArea's faces).
+inline const glm::dvec3 &outwardNormal(const FaceExit &face) { return face.normal; }
+inline const glm::dvec3 &outwardNormal(const glm::dvec3 &normal) { return normal; }
+
+// A camera looking along -w sees a voxel through those of its faces that face w, each in proportion to its projected
+// area c_f = max(0, n_f . w) (per unit face area, n_f the face's outward normal), and a beam travelling along -w enters
+// them in the same proportion (edgeLobe's mix, peakSeenThroughFaces, the beam's share of each face in surfaceLight).
+// The faces' projected area sum_f c_f (0 where none faces w), calling seen(f, c_f) for each face f (its index in
+// `faces`) that faces w, in order.
+template <typename Faces, typename Seen>
+double projectedArea(const Faces &faces, const glm::dvec3 &w, const Seen &seen) {
+    double area = 0.0;
+    for (std::size_t f = 0; f < faces.size(); ++f)
+        if (const double c = glm::dot(outwardNormal(faces[f]), w); c > 0.0) area += c, seen(f, c);
+    return area;
+}
+template <typename Faces>
+double projectedArea(const Faces &faces, const glm::dvec3 &w) {
+    return projectedArea(faces, w, [](std::size_t, double) {});
+}
 
 // The lobe to store for such a voxel. A camera looking along -w sees it through the faces that face w, each
 // in proportion to its projected area, so what the voxel shows towards w is the mix

@@ -458,11 +458,7 @@ glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std
         // normal, which points out of the edge, a face lit past the normal's horizon started its ray 20 heights away,
         // beyond the snow in front (a cut side's corner on a slope facing away from the sun skipped the crest that
         // shades it: docs/benchmarks.md, bumpy-sides).
-        double most = -2.0;
-        for (int f = 0; f < 6; ++f) {
-            const double c = glm::dot(faceNormal(f), w);
-            if (patch.share[f] > 0.0f && c > most) most = c, n = faceNormal(f);
-        }
+        if (const int f = patch.airFaceMostOpenTo(w); f >= 0) n = faceNormal(f);
         surface = medium.voxelCentre(topo.coord[i]) + 0.5 * medium.voxelSize() * n;
     }
     const double height = glm::length(outsideAlongNormal(medium, topo, i, n, density) - surface);

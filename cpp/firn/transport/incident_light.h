@@ -142,7 +142,8 @@ glm::dvec3 patchOutside(const Medium &medium, const SnowTopology &topology, std:
 // patchOutside (past the density ramp and any fringe; the ray at most 20 times that height long): a light's shadow
 // taken from there falls where the snow in front casts it. From patchOutside itself, up to 3.5 voxels out along
 // the normal, a small piece's patches looked past the shadow of a piece its own size. A sharp voxel's ray leaves its
-// air face most open to w, as high above that face as the face's own ramp reaches.
+// air face most open to w (SurfacePatch::airFaceMostOpenTo), as high above that face as the face's own
+// ramp reaches.
 glm::dvec3 patchOutsideAlong(const Medium &medium, const SnowTopology &topo, std::size_t i, const glm::dvec3 &w,
                              Medium::Accessor &density);
 

@@ -63,12 +63,21 @@ struct SurfacePatch {
     bool sharp = false;
     bool isSurface() const { return area > 0.0; }
     // Whether light travelling against w enters the snow here: through the smooth surface, or at a sharp
-    // edge through any of its air faces.
+    // edge through any of its air faces (then through the one most open to it).
     bool facesTowards(const glm::dvec3 &w) const {
         if (!sharp) return glm::dot(normal, w) > 0.0;
+        const int f = airFaceMostOpenTo(w);
+        return f >= 0 && glm::dot(faceNormal(f), w) > 0.0;
+    }
+    // The air face (0..5 as in faceStep) most open to light travelling against w, of the largest n_f . w (the first
+    // of equals), -1 where there is none: a sharp voxel's light enters by it (patchOutsideAlong).
+    int airFaceMostOpenTo(const glm::dvec3 &w) const {
+        int most = -1;
+        double open = 0.0;  // n . w of face `most`
         for (int f = 0; f < 6; ++f)
-            if (share[f] > 0.0f && glm::dot(faceNormal(f), w) > 0.0) return true;
-        return false;
+            if (const double c = glm::dot(faceNormal(f), w); share[f] > 0.0f && (most < 0 || c > open))
+                most = f, open = c;
+        return most;
     }
 };
 

@@ -394,6 +394,34 @@ SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t s
     return renderedSplit(r, best, std::move(model), ceiling, mu0);
 }
 
+std::vector<LimbBin> limbDarkening(double g, double mu0, double y, long photons, std::uint64_t seed) {
+    // The Monte Carlo in chunks of their own streams (about 1e5 photons each), summed as flux per bin (R A).
+    const long chunks = std::max(1L, photons / 100000), perChunk = photons / chunks;
+    std::vector<Reflection> parts(chunks);
+    tbb::parallel_for(long(0), chunks, [&](long i) { parts[i] = halfSpaceReflection(g, mu0, y, perChunk, seed + i); });
+    const SunLobe lobe = sunLobe(g, mu0, y);
+    const SunPeak split = sunPeak(g, mu0, y, lobe);  // flat: the rest as the table has it (restKept at curvature 0)
+    const glm::dvec3 peak1 =
+        3.0 * split.k * glm::dvec3(std::cos(split.elevation), 0.0, std::sin(split.elevation));
+    const SourceLobe rest = exitLobe(split.a(), glm::dvec3(split.c, 0.0, split.b), glm::dvec3(0.0, 0.0, 1.0));
+    const double restExitance = (1.0 - split.share) * split.rest;
+    constexpr int kSub = 8;
+    std::vector<LimbBin> out;
+    for (int m = 0; m < kMuBins; ++m)
+        for (int p = 0; p < kPhiBins; ++p) {
+            const std::size_t b = std::size_t(m) * kPhiBins + p;
+            double returned = 0.0;  // R / A_table
+            for (const Reflection &r : parts)
+                if (!r.bins.empty()) returned += r.bins[b].R * r.albedo;
+            returned /= double(chunks) * lobe.albedo;
+            const double peak = split.share > 0.0 ? binMean(split.mean, peak1, m, p, kSub) : 0.0;
+            const double broad = restExitance * binMean(rest.l0, rest.l1, m, p, kSub);
+            out.push_back({(m + 0.5) / kMuBins, (p + 0.5) * kPi / kPhiBins,
+                           broad > 0.0 ? (returned - peak) / broad : 1.0});
+        }
+    return out;
+}
+
 namespace {
 // Trilinear in (y, g, mu0) between a table's entries of K values.
 template <std::size_t K, typename Table>
@@ -445,34 +473,6 @@ SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe) {
     peak.share *= s, peak.mean *= s;
     peak.rest = rest / (1.0 - peak.share);
     return peak;
-}
-
-std::vector<LimbBin> limbDarkening(double g, double mu0, double y, long photons, std::uint64_t seed) {
-    // The Monte Carlo in chunks of their own streams (about 1e5 photons each), summed as flux per bin (R A).
-    const long chunks = std::max(1L, photons / 100000), perChunk = photons / chunks;
-    std::vector<Reflection> parts(chunks);
-    tbb::parallel_for(long(0), chunks, [&](long i) { parts[i] = halfSpaceReflection(g, mu0, y, perChunk, seed + i); });
-    const SunLobe lobe = sunLobe(g, mu0, y);
-    const SunPeak split = sunPeak(g, mu0, y, lobe);  // flat: the rest as the table has it (restKept at curvature 0)
-    const glm::dvec3 peak1 =
-        3.0 * split.k * glm::dvec3(std::cos(split.elevation), 0.0, std::sin(split.elevation));
-    const SourceLobe rest = exitLobe(split.a(), glm::dvec3(split.c, 0.0, split.b), glm::dvec3(0.0, 0.0, 1.0));
-    const double restExitance = (1.0 - split.share) * split.rest;
-    constexpr int kSub = 8;
-    std::vector<LimbBin> out;
-    for (int m = 0; m < kMuBins; ++m)
-        for (int p = 0; p < kPhiBins; ++p) {
-            const std::size_t b = std::size_t(m) * kPhiBins + p;
-            double returned = 0.0;  // R / A_table
-            for (const Reflection &r : parts)
-                if (!r.bins.empty()) returned += r.bins[b].R * r.albedo;
-            returned /= double(chunks) * lobe.albedo;
-            const double peak = split.share > 0.0 ? binMean(split.mean, peak1, m, p, kSub) : 0.0;
-            const double broad = restExitance * binMean(rest.l0, rest.l1, m, p, kSub);
-            out.push_back({(m + 0.5) / kMuBins, (p + 0.5) * kPi / kPhiBins,
-                           broad > 0.0 ? (returned - peak) / broad : 1.0});
-        }
-    return out;
 }
 
 double restKept(const SunPeak &split, double curvaturePerVoxel) {

@@ -79,24 +79,26 @@ double sphericalAlbedo(double g, double y);
 // split fades into (the caller has it already).
 SunPeak sunPeak(double g, double mu0, double y, const SunLobe &lobe);
 
+// The tables' source, used by tools/sun_lobe_table.cpp and the tests (the bake reads the tables alone): 1D Monte Carlo
+// of a half-space with analog absorption; photons deeper than 30 transport mean free paths return with diffusion's
+// probability exp(-kappa (z + z_b)) in the escape function's shape.
+SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t seed);
+SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t seed);
+
 // The limb darkening the grids miss on a flat snow surface (docs/benchmarks.md, limb-own): per outgoing bin (cos
 // zenith mu over kLimbMuBins, the azimuth off the sun's travel over kLimbAzimuthBins, 0 forward), D such that the
 // split sunPeak writes renders the half-space exactly when its rest's broad lobe is D times darker or brighter:
 //   R / A_table = P(w) + D(w) rest(w),
 // R the half-space's reflection function (Monte Carlo, as the table's), P the split's peaked lobe and rest its broad
 // lobe (exitLobe of the linear rest, exitance (1 - share) rest) as the grids render them, bin means. Not a fit: the
-// truth over the bake's own lobes. Used by tools/sun_lobe_table.cpp.
+// truth over the bake's own lobes. Used by tools/sun_lobe_table.cpp (`limb`) alone, yet kept here beside the fits:
+// it is their Monte Carlo over their outgoing bins (the fits' bins are these) with the same bin means of the rendered
+// lobes, which the tool would otherwise copy or this header export; half_space_test checks it as it checks them.
 constexpr int kLimbMuBins = 20, kLimbAzimuthBins = 18;
 struct LimbBin {
     double mu = 0.0, azimuth = 0.0;  // bin centre; radians
     double darkening = 1.0;
 };
 std::vector<LimbBin> limbDarkening(double g, double mu0, double y, long photons, std::uint64_t seed);
-
-// The table's source: 1D Monte Carlo of a half-space with analog absorption; photons deeper than 30 transport
-// mean free paths return with diffusion's probability exp(-kappa (z + z_b)) in the escape function's shape.
-// Used by tools/sun_lobe_table.cpp.
-SunLobe fitSunLobe(double g, double mu0, double y, long photons, std::uint64_t seed);
-SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t seed);
 
 }  // namespace firn

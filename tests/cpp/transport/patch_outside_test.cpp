@@ -40,12 +40,18 @@ double wallFill(double (*above)(const glm::dvec3 &), const glm::dvec3 &q) {
     return fill;
 }
 
-// The snow under both walls, each antialiased along its own normal over a voxel, sigma_t h 15.
-Medium vGroove() {
+// An empty density grid of 1 cm voxels.
+openvdb::FloatGrid::Ptr densityGrid() {
     initializeOpenVdb();
     auto grid = openvdb::FloatGrid::create(0.0f);
     grid->setName("density");
     grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    return grid;
+}
+
+// The snow under both walls, each antialiased along its own normal over a voxel, sigma_t h 15.
+Medium vGroove() {
+    auto grid = densityGrid();
     auto acc = grid->getAccessor();
     for (int x = 0; x < kWidth; ++x)
         for (int y = 0; y < kLength; ++y)
@@ -88,10 +94,7 @@ TEST(PatchOutside, VGrooveWallPatchStartsOutsideTheOppositeWall) {
 // front of the wall: more than 5 optical depths of the trilinear snow between the start and the sun. On main it
 // started 20 heights out along the light (the smooth normal's cosine floored at 0.05), past the wall, in none.
 TEST(PatchOutside, SharpCornerInAWallsShadowStartsItsBeamInFrontOfTheWall) {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    auto grid = densityGrid();
     auto acc = grid->getAccessor();
     for (int x = 0; x < 12; ++x)
         for (int y = 0; y < 8; ++y)

@@ -197,6 +197,27 @@ TEST(SnowTopology, AWallsEdgeUnderASlopeIsSharp) {
     EXPECT_FALSE(sharpAt(5, 5, 7));
 }
 
+// A box's top edge voxel, air across its +x side and its top (+z): light travelling against w enters by the face of
+// the largest cosine to w (a sun low over the side by the side, though the edge's smooth normal leans to the top),
+// the first of equals along the diagonal; light from behind and below the edge enters by no face (the side, least
+// closed to it, still the most open), and a patch without air faces has none to enter by.
+TEST(SurfacePatch, ASharpEdgesLightEntersByTheAirFaceMostOpenToIt) {
+    SurfacePatch edge;
+    edge.sharp = true, edge.area = 2e-4, edge.normal = glm::normalize(glm::dvec3(1.0, 0.0, 1.0));
+    edge.share[1] = edge.share[5] = 0.5f;
+    const glm::dvec3 lowOverSide = glm::normalize(glm::dvec3(1.0, 0.0, 0.2));
+    const glm::dvec3 behindBelow = glm::normalize(glm::dvec3(-0.3, 0.0, -0.95));
+    EXPECT_EQ(edge.airFaceMostOpenTo(lowOverSide), 1);
+    EXPECT_EQ(edge.airFaceMostOpenTo({0.0, 0.0, 1.0}), 5);
+    EXPECT_EQ(edge.airFaceMostOpenTo(glm::normalize(glm::dvec3(1.0, 0.0, 1.0))), 1);
+    EXPECT_EQ(edge.airFaceMostOpenTo(behindBelow), 1);
+    EXPECT_TRUE(edge.facesTowards(lowOverSide));
+    EXPECT_TRUE(edge.facesTowards({0.0, 0.0, 1.0}));
+    EXPECT_FALSE(edge.facesTowards(behindBelow));
+    EXPECT_FALSE(edge.facesTowards({-1.0, 0.0, 0.0}));
+    EXPECT_EQ(SurfacePatch{}.airFaceMostOpenTo({0.0, 0.0, 1.0}), -1);
+}
+
 // A layer's cut side under a top half a voxel above its last full voxel: bench/bake_suite.py's bumpy_plate along its
 // cut sides (sigma_t h 15), a flat layer of 16 x 16 voxels filled clip(6 - z + 0.5) on a ground (z 1-5 full, z 6 half).
 // The wall's top full voxel (0, 8, 5) has the -x face alone in air; the trilinear density's half-density surface
