@@ -2,10 +2,11 @@
 (docs/benchmarks.md, "plate-sides"): rays in the plane y = Y (voxels) of the view, started at z 14 voxels, whose
 depth-one points run over the slope facing away from the sun up to its crest (x 12-18), and the same bump phase
 inside (y 11). Printed per ray: x of its depth-one point, the Monte Carlo's green radiance and its standard error,
-the bake's error. The Monte Carlo is cached per light and path count in --cache.
+the bake's error. The Monte Carlo is cached per light and path count in --cache. --scale X,Z,F (an oracle): the render with every
+firn_source grid's values scaled by F over the voxel row (X, every y, Z).
 
     PYTHONPATH=build/python:bench /usr/bin/python3 bench/plate_crest_rows.py [--light sun|sky|full]
-        [--samples 2048] [--rows=-0.35,0,0.5,11]
+        [--samples 2048] [--rows=-0.35,0,0.5,11] [--scale X,Z,F ...]
 """
 
 import argparse
@@ -14,6 +15,7 @@ import os
 import tempfile
 
 import numpy as np
+import pyopenvdb
 
 import bake_suite as bs
 import firncore
@@ -28,11 +30,27 @@ def rays(case, rows, starts):
     return origins, np.tile(-back, (len(origins), 1))
 
 
+def scaled_row(path, x, z, factor, out):
+    """The baked file at path written to out with every firn_source grid scaled by factor over voxels (x, *, z)."""
+    grids, metadata = pyopenvdb.readAll(path)
+    for g in grids:
+        if not g.name.startswith("firn_source"):
+            continue
+        accessor = g.getAccessor()
+        for y in range(-2, 40):
+            value, on = accessor.probeValue((x, y, z))
+            if on:
+                accessor.setValueOn((x, y, z), tuple(factor * v for v in value) if isinstance(value, tuple)
+                                    else factor * value)
+    pyopenvdb.write(out, grids=grids, metadata=metadata)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--light", default="sun", choices=("full", "sun", "sky"))
     parser.add_argument("--samples", type=int, default=2048)
     parser.add_argument("--rows", default="-0.35,0,0.5,11")
+    parser.add_argument("--scale", action="append", default=[], help="X,Z,F: the row (X, *, Z) scaled by F")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_plate_crest"))
     args = parser.parse_args()
     os.makedirs(args.cache, exist_ok=True)
@@ -55,9 +73,14 @@ def main():
             np.savez(file, mean=truth, error=error)
         firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
                       quality="FINAL", seed=0)
+        for k, spec in enumerate(args.scale):
+            x, z, factor = spec.split(",")
+            shown = os.path.join(folder, f"scaled{k}.vdb")
+            scaled_row(path, int(x), int(z), float(factor), shown)
+            path = shown
         baked = firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)
     print(f"bumpy_plate, {args.light} alone, view (180, 50), {args.samples} paths: per row, each ray's depth-one x "
-          f"(voxels), Monte Carlo green, bake error %")
+          f"(voxels), Monte Carlo green, bake error %" + (f"; scaled {args.scale}" if args.scale else ""))
     n = len(starts)
     for k, y in enumerate(rows):
         m = slice(k * n, (k + 1) * n)
