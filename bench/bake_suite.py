@@ -282,21 +282,26 @@ def depth_one_points(case, origins, directions, seen):
     return hit
 
 
-def reference(case, path, origins, directions, cache):
-    file = os.path.join(cache, f"{case.name}_{case.key()}.npz") if cache else None
+def cached_monte_carlo(file, case, path, origins, directions, samples, seed):
+    """The core's Monte Carlo of `case` along the rays (mean, error, seconds), kept in `file` (None: not kept) and read
+    back from it when there; written whole (temp file + rename)."""
     if file and os.path.exists(file):
         data = np.load(file)
         return data["mean"], data["error"], float(data["seconds"])
     start = time.perf_counter()
     mean, error = firncore.monte_carlo_radiance(path, case.optics, origins, directions, suns=case.suns(),
-                                                sky=case.skies(), occluders=case.occluders, samples=case.samples,
-                                                seed=11)
+                                                sky=case.skies(), occluders=case.occluders, samples=samples, seed=seed)
     seconds = time.perf_counter() - start
     if file:
-        os.makedirs(cache, exist_ok=True)
+        os.makedirs(os.path.dirname(file), exist_ok=True)
         np.savez(file + ".tmp.npz", mean=mean, error=error, seconds=seconds)
         os.replace(file + ".tmp.npz", file)
     return mean, error, seconds
+
+
+def reference(case, path, origins, directions, cache):
+    file = os.path.join(cache, f"{case.name}_{case.key()}.npz") if cache else None
+    return cached_monte_carlo(file, case, path, origins, directions, case.samples, seed=11)
 
 
 class Baked:

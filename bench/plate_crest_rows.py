@@ -63,14 +63,7 @@ def main():
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "bumpy.vdb")
         bs.write_density(path, case.density, case.voxel)
-        if os.path.exists(file):
-            data = np.load(file)
-            truth, error = data["mean"], data["error"]
-        else:
-            truth, error = firncore.monte_carlo_radiance(path, case.optics, origins, directions, suns=case.suns(),
-                                                         sky=case.skies(), occluders=case.occluders,
-                                                         samples=args.samples, seed=5)
-            np.savez(file, mean=truth, error=error)
+        truth, error, _ = bs.cached_monte_carlo(file, case, path, origins, directions, args.samples, seed=5)
         firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
                       quality="FINAL", seed=0)
         for k, spec in enumerate(args.scale):
