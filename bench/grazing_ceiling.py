@@ -29,13 +29,17 @@ density's gradient: bench/ramp_source_profile.py --by-exit). Two oracles on the 
   half-space's exit over the broad lobe fitted to it by exit cosine, azimuth off the sun's travel and mu0, for the
   case's green omega and g; the grid's length the lit share alone), --darken-only that D at most 1; --own that D
   from the bake's own lobes (limb-own: own_table, the half-space's Monte Carlo over the peaked and broad lobes the
-  bake writes for it, tools/sun_lobe_table's `limb` mode); --curve prints it beside the fitted form.
+  bake writes for it, tools/sun_lobe_table's `limb` mode); --curve prints it beside the fitted form. The edge gates
+  (limb-grid): --unsharp no term on the sharp edges' voxels (the core's onSharpEdge, sharp_voxels) nor the air beside
+  them alone; --sharp-least a sharp voxel's lit share its least lit air face's; --face-cap the derived D at most 1
+  where the exit cosine is over MU_FULL (no limb there).
 
 Per case: the mean |error| (the suite's, all channels), each oracle's, the worst block and its mu; the sum of the
 means. --blocks lists each case's five worst blocks (view, row, col, mu, error).
 
     PYTHONPATH=build/python:bench python3 bench/grazing_ceiling.py [--cases a,b] [--amplitudes 0.15,0.3,0.45] \
-        [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis] [--derived [--own] [--darken-only]]] \
+        [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis] [--unsharp | --sharp-least] \
+        [--derived [--own] [--darken-only | --face-cap]]] \
         [--curve] [--blocks]
 """
 
@@ -204,7 +208,76 @@ def derived_darkening(table, normal, towards_viewer, darken_only):
     cos = np.einsum("ij,ij->i", out_t, sun_t) / np.maximum(np.linalg.norm(out_t, axis=1) *
                                                           np.linalg.norm(sun_t, axis=1), 1e-30)
     d = table_value(table, mu0, mu, np.arccos(np.clip(cos, -1.0, 1.0)))
+    if darken_only == "face":  # no brightening where the exit is no limb's (mu over MU_FULL)
+        return np.where(mu >= MU_FULL, np.minimum(d, 1.0), d)
     return np.minimum(d, 1.0) if darken_only else d
+
+
+def sharp_voxels(density):
+    """The snow voxels on a sharp edge or corner, as the core's onSharpEdge (snow_topology.cpp) finds them: two air
+    faces at right angles, each going on flat past the edge for 2 voxels (or 3 and 1)."""
+    snow = density > 0.0
+    padded = np.pad(snow, 4)
+    steps = [np.eye(3, dtype=int)[f // 2] * (1 if f & 1 else -1) for f in range(6)]
+
+    def shifted(step):  # the padded mask at voxel + step, on the unpadded grid
+        return padded[tuple(slice(4 + d, 4 + d + n) for d, n in zip(step, snow.shape))]
+
+    def air(f, offset=(0, 0, 0)):  # snow at voxel + offset with face f in air
+        return shifted(offset) & ~shifted(np.add(offset, steps[f]))
+
+    def flat_past(f, g, voxels):  # face f goes on flat for `voxels` voxels inwards from face g
+        out = np.ones(snow.shape, bool)
+        for k in range(1, voxels + 1):
+            out &= air(f, -k * steps[g])
+        return out
+
+    sharp = np.zeros(snow.shape, bool)
+    for f in range(6):
+        for g in range(f + 1, 6):
+            if f // 2 != g // 2:
+                both = air(f) & air(g)
+                sharp |= both & ((flat_past(f, g, 2) & flat_past(g, f, 2)) | (flat_past(f, g, 3) & flat_past(g, f, 1)) |
+                                 (flat_past(f, g, 1) & flat_past(g, f, 3)))
+    return sharp
+
+
+def unsharpened(grid, density):
+    """The grid without the sharp edges' voxels (no smooth surface there, no normal: vdb-contract's firn_limb) and the
+    air voxels whose only snow neighbours across a face are sharp."""
+    sharp = sharp_voxels(density)
+    smooth = (density > 0.0) & ~sharp
+    padded = np.pad(smooth, 1)
+    beside_smooth = np.zeros(density.shape, bool)
+    for a in range(3):
+        for d in (0, 2):
+            beside_smooth |= padded[tuple(slice(d if b == a else 1, (d if b == a else 1) + n)
+                                          for b, n in enumerate(density.shape))]
+    keep = smooth | ((density == 0.0) & beside_smooth)
+    return np.where(keep[..., None], grid, 0.0)
+
+
+def sharp_least_lit(grid, case, lit):
+    """The grid with each sharp voxel's lit share that of its least lit air face (min over its air faces of
+    min(mu0_f / lit, 1), mu0_f the sun's cosine to the face's normal, 0 where the sun does not reach the point 1.5
+    voxels out of it): an edge between a lit and a shadowed face gets no term, one between two lit faces keeps it."""
+    out = grid.copy()
+    snow = case.density > 0.0
+    padded = np.pad(snow, 1)
+    for q in np.argwhere(sharp_voxels(case.density)):
+        least = 1.0
+        for f in range(6):
+            n = np.eye(3)[f // 2] * (1 if f & 1 else -1)
+            if padded[tuple(q + 1 + n.astype(int))]:
+                continue  # snow across this face
+            mu0 = n @ sun_towards() if case.sun > 0.0 else 0.0
+            if mu0 > 0.0:
+                mu0 *= sun_seen(case, ((q + 1.5 * n) * case.voxel)[None, :])[0]
+            least = min(least, float(np.clip(mu0 / lit, 0.0, 1.0)))
+        length = np.linalg.norm(grid[tuple(q)])
+        if length > 0.0:
+            out[tuple(q)] = grid[tuple(q)] / length * least
+    return out
 
 
 def limb_grid(case, amplitude, lit, carry=2):
@@ -333,12 +406,18 @@ def main():
                              "fitted to it, by mu, azimuth off the sun's travel, mu0, the case's green omega and g) "
                              "in place of 1 - a clamp(1 - mu / MU_FULL); --amplitudes is then 1")
     parser.add_argument("--darken-only", action="store_true", help="--derived's D at most 1")
+    parser.add_argument("--face-cap", action="store_true",
+                        help="--derived's D at most 1 where the exit cosine is over MU_FULL (no limb there)")
     parser.add_argument("--own", action="store_true",
                         help="--derived's D over the bake's own lobes (own_table: tools/sun_lobe_table limb)")
     parser.add_argument("--own-photons", type=int, default=OWN_PHOTONS, help="--own's Monte Carlo photons per sun")
     parser.add_argument("--curve", action="store_true",
                         help="print each case's derived D beside the fitted 1 - 0.3 clamp(1 - mu / 0.35) at mu0 0.5")
     parser.add_argument("--carry", type=int, default=2, help="--grid's vectors carried this many voxels into the air")
+    parser.add_argument("--unsharp", action="store_true",
+                        help="--grid without the sharp edges' voxels (nor the air beside them alone)")
+    parser.add_argument("--sharp-least", action="store_true",
+                        help="--grid's sharp voxels lit by their least lit air face (sharp_least_lit)")
     parser.add_argument("--grid-scale", type=int, default=1, help="--grid's voxels this many density voxels wide")
     parser.add_argument("--blocks", action="store_true", help="each case's five worst blocks")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
@@ -380,13 +459,18 @@ def main():
                 elif args.grid:
                     axis = broad_axis(path, case.density.shape) if args.l1_axis else None
                     forward = peak_axis(path, case.density.shape) if args.forward else None
-                    grid = coarsened(limb_grid(case, a, args.lit, args.carry), args.grid_scale)
+                    grid = limb_grid(case, a, args.lit, args.carry)
+                    if args.unsharp:
+                        grid = unsharpened(grid, case.density)
+                    if args.sharp_least:
+                        grid = sharp_least_lit(grid, case, args.lit)
+                    grid = coarsened(grid, args.grid_scale)
                     table = None
                     if args.derived:
                         table = (own_table(case.omega[1], case.g, args.own_photons) if args.own else
                                  derived_table(case.omega[1], case.g))
                     d = grid_darkening(case, grid, run.origins, run.directions, seen, args.grid_scale, axis,
-                                       forward, table, args.darken_only)[:, None]
+                                       forward, table, "face" if args.face_cap else args.darken_only)[:, None]
                 else:
                     d = (1.0 - lit * (1.0 - darkening(mu, a)))[:, None]
                 darkened.append(baked * d if args.peaks else (baked - broad) + broad * d)
