@@ -105,20 +105,24 @@ def monte_carlo_sources(case, path, x, w, directions, samples, seed):
     return omega * (per.mean(1) + direct), omega * per.std(1) / np.sqrt(directions)
 
 
+def corners(case, path, x, w):
+    """Per world point x (N, 3) and each of its 8 hat corners: the corner voxel (8, N, 3), its hat weight (8, N) and
+    its own lobes towards w (8, N)."""
+    p = x / case.voxel
+    f = np.floor(p).astype(int)
+    t = p - f
+    offsets = [np.array([(corner >> a) & 1 for a in range(3)]) for corner in range(8)]
+    hats = np.array([np.prod(np.where(o, t, 1.0 - t), axis=1) for o in offsets])
+    own = np.array([lobes(grid_values(path, ((f + o) * case.voxel).astype(np.float64)), w)[:, 1] for o in offsets])
+    return np.array([f + o for o in offsets]), hats, own
+
+
 def corner_blend(case, path, x, w):
     """Per world point x (N, 3): the grids' blend as the renderer reads it (the six grids' trilinear values, then
     the lobes towards w: k from the blended moments) and the blend of the corners' own sources towards w (each
     voxel's lobes evaluated, then weighted by the trilinear hat: linear in the voxels' values)."""
-    read = lobes(grid_values(path, x), w)[:, 1]
-    p = x / case.voxel
-    f = np.floor(p).astype(int)
-    t = p - f
-    linear = np.zeros(len(x))
-    for corner in range(8):
-        o = np.array([(corner >> a) & 1 for a in range(3)])
-        hat = np.prod(np.where(o, t, 1.0 - t), axis=1)
-        linear += hat * lobes(grid_values(path, ((f + o) * case.voxel).astype(np.float64)), w)[:, 1]
-    return read, linear
+    _, hats, own = corners(case, path, x, w)
+    return lobes(grid_values(path, x), w)[:, 1], (hats * own).sum(0)
 
 
 def check_rays(case, path, cache, origins, directions, rays, w, per_ray, args):
@@ -131,6 +135,7 @@ def check_rays(case, path, cache, origins, directions, rays, w, per_ray, args):
     ds = 0.0625 * case.voxel
     rng = np.random.default_rng(5)
     sums = np.zeros((4, len(rays)))
+    classes, by_class = voxel_classes(case), np.zeros((len(CLASSES), 2))
     for n, i in enumerate(rays):
         s = np.arange(0.0, 6.0 * case.voxel * max(case.density.shape), ds)
         p = origins[i] + s[:, None] * directions[i]
@@ -142,11 +147,20 @@ def check_rays(case, path, cache, origins, directions, rays, w, per_ray, args):
         read, linear = corner_blend(case, path, x, w)
         S = monte_carlo_sources(case, path, x, w, args.directions, args.samples, int(i))[0] if args.directions else read
         sums[:, n] = (1 - np.exp(-total)) * np.array([S.mean(), read.mean(), linear.mean(), 0.0])
+        if args.directions:  # per voxel class, its values against S at these rays' own points, hat-weighted
+            voxel, hats, own = corners(case, path, x, w)
+            k = classes[tuple(voxel.reshape(-1, 3).clip(0, np.array(case.density.shape) - 1).T)].reshape(hats.shape)
+            q = (1 - np.exp(-total)) / per_ray * hats
+            for c in range(len(CLASSES)):
+                by_class[c] += [(q * own)[k == c].sum(), (q * S[None, :])[k == c].sum()]
     m = mean[rays, 1]
     print(f"the {len(rays)} rays, {per_ray} points each (reference noise {np.sqrt((error[rays, 1] ** 2).sum()) / m.sum():.3f}): "
           f"quadrature of Monte Carlo S / reference {sums[0].sum() / m.sum():.3f}; baked render / reference "
           f"{render.sum() / m.sum():.3f}; quadrature of the baked blend as read / reference {sums[1].sum() / m.sum():.3f}, "
           f"of the corners' sources blended linearly {sums[2].sum() / m.sum():.3f}")
+    if args.directions:
+        print("  per class, its values / S at these rays' points (hat-weighted; the class's share of the linear blend): " +
+              "  ".join(f"{CLASSES[c]} {a / b:.2f} ({a / by_class[:, 0].sum():.2f})" for c, (a, b) in enumerate(by_class) if b > 0))
     print("  per ray, MC S, read, linear / reference: " + "  ".join(
         f"{a / r:.2f} {b / r:.2f} {c / r:.2f}" for a, b, c, r in zip(sums[0], sums[1], sums[2], m)), flush=True)
 
