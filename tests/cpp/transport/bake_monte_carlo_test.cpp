@@ -8,9 +8,9 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "density_grid.h"
 #include "firn/transport/bake.h"
 #include "firn/transport/monte_carlo.h"
-#include "firn/util/openvdb_library.h"
 #include "firn/util/sampling.h"
 
 namespace firn {
@@ -24,10 +24,7 @@ constexpr float kDensity = 300.0f;  // kg/m^3
 // at the top like the snow generator's, standing on a ground plane at z = 0 (its density reaches two
 // voxels below, as metaballs' does).
 openvdb::FloatGrid::Ptr bumpyLayer() {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto grid = test::densityGrid(kVoxel);
     auto access = grid->getAccessor();
     for (int i = -20; i < 20; ++i)
         for (int j = -20; j < 20; ++j) {
@@ -212,10 +209,7 @@ namespace {
 // bench/bake_suite.py's ball_issue ball: r 5 cm on 1 cm voxels, its surface antialiased over one voxel, its centre
 // between voxel centres (index -0.5 per axis), 100 kg/m^3 inside.
 openvdb::FloatGrid::Ptr issueBall() {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto grid = test::densityGrid(kVoxel);
     auto access = grid->getAccessor();
     for (int i = -8; i < 8; ++i)
         for (int j = -8; j < 8; ++j)
