@@ -58,17 +58,12 @@ def main():
     args = parser.parse_args()
     case = bake_suite.case("box_sharp")
     origins, directions, labels, w = rays(case)
-    os.makedirs(args.cache, exist_ok=True)
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "box.vdb")
         bake_suite.write_density(path, case.density, case.voxel)
-        cached = os.path.join(args.cache, f"foot_{args.paths}.npz")
-        if os.path.exists(cached):
-            mc, error = (np.load(cached)[k] for k in ("mc", "error"))
-        else:
-            mc, error = firncore.monte_carlo_radiance(path, case.optics, origins, directions, suns=case.suns(),
-                                                      sky=case.skies(), occluders=[], samples=args.paths, seed=13)
-            np.savez(cached, mc=mc, error=error)
+        # bake_suite's kept Monte Carlo; _mc: not the older files' keys (mc, error)
+        cached = os.path.join(args.cache, f"foot_{args.paths}_mc.npz")
+        mc, error, _ = bake_suite.cached_monte_carlo(cached, case, path, origins, directions, args.paths, seed=13)
         firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=[], quality="FINAL", seed=0)
         baked = firncore.render_baked(path, case.optics, origins, directions, occluders=[])
         print(f"box_sharp's worst block {case.views[VIEW]} row {ROW} col {COLUMN}, towards {np.round(w, 3)}; "

@@ -9,13 +9,12 @@ xvfb-run blender --factory-startup --enable-event-simulate --python job_controls
 import os
 import sys
 import time
-import traceback
 
 import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, job_running, worker_alive  # noqa: E402
+from ui_test import HUNG, fail, job_running, passed, run_timer, worker_alive  # noqa: E402
 
 state = {"phase": "start", "ticks": 0, "since": 0.0, "heard": 0}
 
@@ -108,58 +107,51 @@ def status_bar_entries():
     return entries
 
 
-def tick():
-    try:
-        state["ticks"] += 1
-        phase = state["phase"]
-        if phase == "start":
-            addon_utils.enable("firn", default_set=True)
-            register_waiting_job()
-            invoke(bpy.ops.firn.test_listen)
-            start_job()
-            state["phase"], state["ticks"] = "typing", 0
-        elif phase == "typing" and state["ticks"] == 3:
-            if not job_running():
-                fail("the job is not running")
-            if status_bar_entries() != [("firn.cancel_jobs", "Cancel Waiting")]:
-                fail(f"status bar shows {status_bar_entries()}")
-            press("K")
-            state["phase"], state["ticks"] = "typed", 0
-        elif phase == "typed" and state["ticks"] == 3:
-            if state["heard"] != 1:
-                fail(f"the listener heard {state['heard']} key presses while the job ran, expected 1")
-            bpy.ops.firn.cancel_jobs()  # what the status bar's and the panel's Cancel buttons run
-            state["phase"], state["since"] = "cancel button", time.perf_counter()
-        elif phase == "cancel button" and not job_running():
-            print(f"Cancel stopped the job in {time.perf_counter() - state['since']:.2f} s")
-            if status_bar_entries() != []:
-                fail("the status bar still shows a Cancel button")
-            start_job()
-            state["phase"], state["ticks"] = "esc", 0
-        elif phase == "esc" and state["ticks"] == 3:
-            window().event_simulate(type="ESC", value="PRESS")
-            window().event_simulate(type="ESC", value="RELEASE")
-            state["phase"], state["since"] = "escaped", time.perf_counter()
-        elif phase == "escaped" and not job_running():
-            print(f"Esc stopped the job in {time.perf_counter() - state['since']:.2f} s")
-            start_job()
-            state["phase"], state["ticks"] = "open", 0
-        elif phase == "open" and state["ticks"] == 3:
-            bpy.ops.wm.read_homefile(use_empty=True)  # Blender drops the running operator
-            if job_running():
-                fail("the job's operator outlived the file it ran in")
-            state["phase"], state["since"] = "opened", time.perf_counter()
-        elif phase == "opened" and not worker_alive():
-            print(f"opening a file stopped the job in {time.perf_counter() - state['since']:.2f} s")
-            print("PASS")
-            bpy.ops.wm.quit_blender()
-            return None
-        if phase in {"cancel button", "escaped", "opened"} and time.perf_counter() - state["since"] > HUNG:
-            fail(f"{phase}: the job did not stop: hung")
-    except Exception:
-        traceback.print_exc()
-        fail("exception")
-    return 0.05
+def step():
+    state["ticks"] += 1
+    phase = state["phase"]
+    if phase == "start":
+        addon_utils.enable("firn", default_set=True)
+        register_waiting_job()
+        invoke(bpy.ops.firn.test_listen)
+        start_job()
+        state["phase"], state["ticks"] = "typing", 0
+    elif phase == "typing" and state["ticks"] == 3:
+        if not job_running():
+            fail("the job is not running")
+        if status_bar_entries() != [("firn.cancel_jobs", "Cancel Waiting")]:
+            fail(f"status bar shows {status_bar_entries()}")
+        press("K")
+        state["phase"], state["ticks"] = "typed", 0
+    elif phase == "typed" and state["ticks"] == 3:
+        if state["heard"] != 1:
+            fail(f"the listener heard {state['heard']} key presses while the job ran, expected 1")
+        bpy.ops.firn.cancel_jobs()  # what the status bar's and the panel's Cancel buttons run
+        state["phase"], state["since"] = "cancel button", time.perf_counter()
+    elif phase == "cancel button" and not job_running():
+        print(f"Cancel stopped the job in {time.perf_counter() - state['since']:.2f} s")
+        if status_bar_entries() != []:
+            fail("the status bar still shows a Cancel button")
+        start_job()
+        state["phase"], state["ticks"] = "esc", 0
+    elif phase == "esc" and state["ticks"] == 3:
+        press("ESC")
+        state["phase"], state["since"] = "escaped", time.perf_counter()
+    elif phase == "escaped" and not job_running():
+        print(f"Esc stopped the job in {time.perf_counter() - state['since']:.2f} s")
+        start_job()
+        state["phase"], state["ticks"] = "open", 0
+    elif phase == "open" and state["ticks"] == 3:
+        bpy.ops.wm.read_homefile(use_empty=True)  # Blender drops the running operator
+        if job_running():
+            fail("the job's operator outlived the file it ran in")
+        state["phase"], state["since"] = "opened", time.perf_counter()
+    elif phase == "opened" and not worker_alive():
+        print(f"opening a file stopped the job in {time.perf_counter() - state['since']:.2f} s")
+        passed()
+        return False
+    if phase in {"cancel button", "escaped", "opened"} and time.perf_counter() - state["since"] > HUNG:
+        fail(f"{phase}: the job did not stop: hung")
 
 
-bpy.app.timers.register(tick, first_interval=0.5, persistent=True)  # persistent: it outlives the file load
+run_timer(step, persistent=True)  # persistent: it outlives the file load

@@ -8,13 +8,13 @@ xvfb-run blender --factory-startup --enable-event-simulate --python modal_bake.p
 import os
 import sys
 import time
-import traceback
 
 import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, gate_worker, job_running, ui_tick, window_context, worker_alive  # noqa: E402
+from ui_test import (  # noqa: E402
+    HUNG, fail, gate_worker, job_running, passed, press_esc, run_timer, ui_tick, window_context, worker_alive)
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "blender"))
 
@@ -62,65 +62,57 @@ def file_bytes(obj):
         return file.read()
 
 
-def tick():
+def step():
     from firn.material import nodes as materials
 
-    try:
-        state["ticks"] += 1
-        state["while_computing"] += worker_alive()
-        ui_tick()
-        phase = state["phase"]
-        slab = bpy.data.objects.get("Slab")
-        if phase == "start":
-            addon_utils.enable("firn", default_set=True)
-            from firn.bake.operators import FIRN_OT_bake_scattering
+    state["ticks"] += 1
+    state["while_computing"] += worker_alive()
+    ui_tick()
+    phase = state["phase"]
+    slab = bpy.data.objects.get("Slab")
+    if phase == "start":
+        addon_utils.enable("firn", default_set=True)
+        from firn.bake.operators import FIRN_OT_bake_scattering
 
-            gate_worker(FIRN_OT_bake_scattering)  # its worker bakes only once the UI has run beside it
-            setup()
-            start_bake("DRAFT")
-            state["phase"] = "baking"
-        elif phase == "baking" and not job_running():
-            # The UI (this timer) ran while the worker baked (gate_worker); how often depends on the load.
-            if slab.firn.bake_state != "BAKED":
-                fail(f"after the bake the state is {slab.firn.bake_state}")
-            print(f"bake finished after {time.perf_counter() - state['since']:.2f} s with "
-                  f"{state['while_computing']} UI ticks while it computed")
-            state["before"] = (file_bytes(slab), slab.firn.bake_fingerprint)
-            sky_world()
-            start_bake("REFERENCE")
-            state["phase"] = "second"
-        elif phase == "second" and state["ticks"] == 4:
-            if not job_running():
-                fail("the second bake ended before Esc could be tested")
-            window = bpy.context.window_manager.windows[0]
-            window.event_simulate(type="ESC", value="PRESS")
-            window.event_simulate(type="ESC", value="RELEASE")
-            state["phase"], state["since"] = "cancelled", time.perf_counter()
-        elif phase == "cancelled" and not job_running():
-            print(f"Esc stopped the bake in {time.perf_counter() - state['since']:.2f} s")
-            if (file_bytes(slab), slab.firn.bake_fingerprint) != state["before"]:
-                fail("Esc changed the previous bake's file or fingerprint")
-            if not materials.is_baked_material(materials.snow_material(slab)):
-                fail("Esc changed the material")
-            if os.path.exists(bpy.path.abspath(slab.data.filepath) + ".firn-bake.vdb"):
-                fail("a staged file was left behind")
-            if slab.firn.bake_state != "OUTDATED":  # the world changed since the kept bake
-                fail(f"state {slab.firn.bake_state} after the cancelled re-bake")
-            start_bake("DRAFT")
-            state["phase"] = "sky"
-        elif phase == "sky" and not job_running():
-            if slab.firn.bake_state != "BAKED" or "sky Nishita" not in slab.firn.bake_summary:
-                fail(f"the bake under a sky texture: {slab.firn.bake_state}, '{slab.firn.bake_summary}'")
-            print(f"sky bake: {slab.firn.bake_summary}")
-            print("PASS")
-            bpy.ops.wm.quit_blender()
-            return None
-        elif phase in {"baking", "cancelled", "sky"} and time.perf_counter() - state["since"] > HUNG:
-            fail(f"{phase}: hung")
-    except Exception:
-        traceback.print_exc()
-        fail("exception")
-    return 0.05
+        gate_worker(FIRN_OT_bake_scattering)  # its worker bakes only once the UI has run beside it
+        setup()
+        start_bake("DRAFT")
+        state["phase"] = "baking"
+    elif phase == "baking" and not job_running():
+        # The UI (this timer) ran while the worker baked (gate_worker); how often depends on the load.
+        if slab.firn.bake_state != "BAKED":
+            fail(f"after the bake the state is {slab.firn.bake_state}")
+        print(f"bake finished after {time.perf_counter() - state['since']:.2f} s with "
+              f"{state['while_computing']} UI ticks while it computed")
+        state["before"] = (file_bytes(slab), slab.firn.bake_fingerprint)
+        sky_world()
+        start_bake("REFERENCE")
+        state["phase"] = "second"
+    elif phase == "second" and state["ticks"] == 4:
+        if not job_running():
+            fail("the second bake ended before Esc could be tested")
+        press_esc()
+        state["phase"], state["since"] = "cancelled", time.perf_counter()
+    elif phase == "cancelled" and not job_running():
+        print(f"Esc stopped the bake in {time.perf_counter() - state['since']:.2f} s")
+        if (file_bytes(slab), slab.firn.bake_fingerprint) != state["before"]:
+            fail("Esc changed the previous bake's file or fingerprint")
+        if not materials.is_baked_material(materials.snow_material(slab)):
+            fail("Esc changed the material")
+        if os.path.exists(bpy.path.abspath(slab.data.filepath) + ".firn-bake.vdb"):
+            fail("a staged file was left behind")
+        if slab.firn.bake_state != "OUTDATED":  # the world changed since the kept bake
+            fail(f"state {slab.firn.bake_state} after the cancelled re-bake")
+        start_bake("DRAFT")
+        state["phase"] = "sky"
+    elif phase == "sky" and not job_running():
+        if slab.firn.bake_state != "BAKED" or "sky Nishita" not in slab.firn.bake_summary:
+            fail(f"the bake under a sky texture: {slab.firn.bake_state}, '{slab.firn.bake_summary}'")
+        print(f"sky bake: {slab.firn.bake_summary}")
+        passed()
+        return False
+    elif phase in {"baking", "cancelled", "sky"} and time.perf_counter() - state["since"] > HUNG:
+        fail(f"{phase}: hung")
 
 
-bpy.app.timers.register(tick, first_interval=0.5)
+run_timer(step)

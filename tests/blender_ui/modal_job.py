@@ -7,13 +7,13 @@ xvfb-run blender --factory-startup --enable-event-simulate --python modal_job.py
 import os
 import sys
 import time
-import traceback
 
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from ui_test import (  # noqa: E402
-    HUNG, fail, gate_worker, job_running, plane_alone, ui_tick, window_context, worker_alive)
+    HUNG, fail, gate_worker, job_running, passed, plane_alone, press_esc, run_timer, ui_tick, window_context,
+    worker_alive)
 
 state = {"ticks": 0, "phase": "start", "started": 0.0, "while_computing": 0}
 
@@ -42,49 +42,42 @@ def snow_objects():
     return [obj for obj in bpy.data.objects if obj.firn.is_snow]
 
 
-def tick():
-    try:
-        state["ticks"] += 1
-        state["while_computing"] += worker_alive()
-        ui_tick()
-        if state["phase"] == "start":
-            setup()
+def step():
+    state["ticks"] += 1
+    state["while_computing"] += worker_alive()
+    ui_tick()
+    if state["phase"] == "start":
+        setup()
+        start_job()
+        state["phase"] = "running"
+        state["ticks"] = 0
+    elif state["phase"] == "running":
+        if snow_objects():
+            # The UI (this timer) ran while the worker computed (gate_worker); how often depends on the load.
+            print(f"modal job finished after {time.perf_counter() - state['started']:.2f} s with "
+                  f"{state['while_computing']} UI ticks while it computed")
+            state["phase"] = "cancel"
+            bpy.ops.mesh.primitive_plane_add(size=12.0, location=(50, 0, 0))
             start_job()
-            state["phase"] = "running"
             state["ticks"] = 0
-        elif state["phase"] == "running":
-            if snow_objects():
-                # The UI (this timer) ran while the worker computed (gate_worker); how often depends on the load.
-                print(f"modal job finished after {time.perf_counter() - state['started']:.2f} s with "
-                      f"{state['while_computing']} UI ticks while it computed")
-                state["phase"] = "cancel"
-                bpy.ops.mesh.primitive_plane_add(size=12.0, location=(50, 0, 0))
-                start_job()
-                state["ticks"] = 0
-            elif time.perf_counter() - state["started"] > HUNG:
-                fail("modal job hung")
-        elif state["phase"] == "cancel":
-            if state["ticks"] == 4:  # the job is under way: press Esc as a user would
-                if not job_running():
-                    fail("the second job ended before Esc could be tested")
-                bpy.context.window_manager.windows[0].event_simulate(type="ESC", value="PRESS")
-                bpy.context.window_manager.windows[0].event_simulate(type="ESC", value="RELEASE")
-                state["phase"] = "cancelled"
-                state["started"] = time.perf_counter()
-        elif state["phase"] == "cancelled":
+        elif time.perf_counter() - state["started"] > HUNG:
+            fail("modal job hung")
+    elif state["phase"] == "cancel":
+        if state["ticks"] == 4:  # the job is under way: press Esc as a user would
             if not job_running():
-                print(f"Esc stopped the job in {time.perf_counter() - state['started']:.2f} s")
-                if len(snow_objects()) != 1:
-                    fail(f"Esc left {len(snow_objects())} snow objects, expected the first one only")
-                print("PASS")
-                bpy.ops.wm.quit_blender()
-                return None
-            if time.perf_counter() - state["started"] > HUNG:
-                fail("Esc did not stop the job: hung")
-    except Exception:
-        traceback.print_exc()
-        fail("exception")
-    return 0.05
+                fail("the second job ended before Esc could be tested")
+            press_esc()
+            state["phase"] = "cancelled"
+            state["started"] = time.perf_counter()
+    elif state["phase"] == "cancelled":
+        if not job_running():
+            print(f"Esc stopped the job in {time.perf_counter() - state['started']:.2f} s")
+            if len(snow_objects()) != 1:
+                fail(f"Esc left {len(snow_objects())} snow objects, expected the first one only")
+            passed()
+            return False
+        if time.perf_counter() - state["started"] > HUNG:
+            fail("Esc did not stop the job: hung")
 
 
-bpy.app.timers.register(tick, first_interval=0.5)
+run_timer(step)

@@ -13,16 +13,14 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import aim_view, fail, passed, plane_alone, window_context  # noqa: E402
+from ui_test import aim_view, fail, passed, plane_alone, press_esc, window_context  # noqa: E402
 
 state = {"phase": "start", "events": []}
 ABOVE_OLD_TOP = (0.0, 0.0, 0.14)  # m: above the 0.1 m layer, under the painted snow
 
 
 def setup():
-    window = bpy.context.window_manager.windows[0]
-    window.event_simulate(type="ESC", value="PRESS")  # closes the splash screen, as a user would
-    window.event_simulate(type="ESC", value="RELEASE")
+    press_esc()  # closes the splash screen, as a user would
     plane_alone(4.0)
     if bpy.ops.firn.add_snow_layer(depth=0.1) != {"FINISHED"}:
         fail("Add Snow Layer did not finish")

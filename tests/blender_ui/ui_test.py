@@ -82,8 +82,9 @@ def passed(message="PASS"):
     bpy.ops.wm.quit_blender()
 
 
-def run_timer(step, interval=0.05, first_interval=0.5):
-    """Runs `step()` on a timer until it returns False; an exception in it fails the test."""
+def run_timer(step, interval=0.05, first_interval=0.5, persistent=False):
+    """Runs `step()` on a timer until it returns False; an exception in it fails the test. `persistent`: the timer
+    outlives a file load."""
     import traceback
 
     def tick():
@@ -93,7 +94,7 @@ def run_timer(step, interval=0.05, first_interval=0.5):
             traceback.print_exc()
             fail("exception")
 
-    bpy.app.timers.register(tick, first_interval=first_interval)
+    bpy.app.timers.register(tick, first_interval=first_interval, persistent=persistent)
 
 
 def plane_alone(size):

@@ -9,13 +9,12 @@ import os
 import sys
 import tempfile
 import time
-import traceback
 
 import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, aim_view, fail, plane_alone, window_context  # noqa: E402
+from ui_test import HUNG, aim_view, fail, passed, plane_alone, press_esc, run_timer, window_context  # noqa: E402
 
 GROUND = (0.3, 0.3, 0.3, 1.0)  # a mid-grey ground: white snow on it must stand out
 MIN_SNOW_PIXELS = 2000  # the snow covers a quarter of the view (about 100k pixels): far more than this
@@ -28,9 +27,7 @@ def view3d():
 
 
 def setup():
-    window = bpy.context.window_manager.windows[0]
-    window.event_simulate(type="ESC", value="PRESS")  # closes the splash screen, as a user would
-    window.event_simulate(type="ESC", value="RELEASE")
+    press_esc()  # closes the splash screen, as a user would
     ground = plane_alone(4.0)
     material = bpy.data.materials.new("Ground")
     material.diffuse_color = GROUND
@@ -82,46 +79,40 @@ def snow_is_visible(with_snow, without_snow, mode):
     return snow > beneath + 0.1, message
 
 
-def tick():
+def step():
     """Phases per shading mode: set the mode, shot with the snow, shot without; repeat until the snow shows
     (EEVEE compiles its shaders in the background first) or the hang guard fires."""
-    try:
-        state["ticks"] += 1
-        phase = state["phase"]
-        if phase == "start":
-            setup()
-            state["modes"] = ["SOLID", "MATERIAL"]
-            state["phase"] = "mode"
-        elif phase == "mode":
-            _context, space = view3d()
-            space.shading.type = state["modes"][0]
-            state["started"], state["phase"] = time.perf_counter(), "with"
-            show_snow(True)
-        elif phase == "with":
-            state["with"] = screenshot(f"{state['modes'][0].lower()}_snow")
-            show_snow(False)
-            state["phase"] = "without"
-        elif phase == "without":
-            without = screenshot(f"{state['modes'][0].lower()}_ground")
-            show_snow(True)
-            visible, message = snow_is_visible(state["with"], without, state["modes"][0])
-            if visible:
-                print(message, flush=True)
-                state["modes"].pop(0)
-                state["phase"] = "mode" if state["modes"] else "done"
-            elif time.perf_counter() - state["started"] > HUNG:
-                fail(message)
-            else:
-                state["phase"] = "with"  # shaders still compiling: look again
-        elif phase == "done":
-            print(f"PASS: screenshots in {state['folder']}", flush=True)
-            bpy.ops.wm.quit_blender()
-            return None
-        view3d()[0]["area"].tag_redraw()
-    except Exception:
-        traceback.print_exc()
-        fail("exception in the UI test")
-    return 0.5
+    state["ticks"] += 1
+    phase = state["phase"]
+    if phase == "start":
+        setup()
+        state["modes"] = ["SOLID", "MATERIAL"]
+        state["phase"] = "mode"
+    elif phase == "mode":
+        _context, space = view3d()
+        space.shading.type = state["modes"][0]
+        state["started"], state["phase"] = time.perf_counter(), "with"
+        show_snow(True)
+    elif phase == "with":
+        state["with"] = screenshot(f"{state['modes'][0].lower()}_snow")
+        show_snow(False)
+        state["phase"] = "without"
+    elif phase == "without":
+        without = screenshot(f"{state['modes'][0].lower()}_ground")
+        show_snow(True)
+        visible, message = snow_is_visible(state["with"], without, state["modes"][0])
+        if visible:
+            print(message, flush=True)
+            state["modes"].pop(0)
+            state["phase"] = "mode" if state["modes"] else "done"
+        elif time.perf_counter() - state["started"] > HUNG:
+            fail(message)
+        else:
+            state["phase"] = "with"  # shaders still compiling: look again
+    elif phase == "done":
+        passed(f"PASS: screenshots in {state['folder']}")
+        return False
+    view3d()[0]["area"].tag_redraw()
 
 
-bpy.app.timers.register(tick, first_interval=1.0)
+run_timer(step, interval=0.5, first_interval=1.0)

@@ -24,7 +24,7 @@ struct BakeSettings {
     double tolerance = 0.0;    // relative residual of the diffusion solve
     int referenceSamples = 0;  // Reference: paths per direction per surface voxel
     // The source grids' voxel size in density voxels: 1 keeps them as fine as the density, 2 stores an eighth
-    // of the voxels, which is what Cycles' memory follows (baked_grids.h: coarsenedSource). 0: the finest whose
+    // of the voxels, which is what Cycles' memory follows (baked_grids.h: coarsenedSources). 0: the finest whose
     // dense box Cycles will allocate stays within kSourceBudgetBytes.
     int sourceScale = 0;
     // Light tracing (docs/bake.md Method 3) where gathering per voxel is over the budget; false leaves those voxels

@@ -50,9 +50,9 @@ struct IncidentLight {
     double occluderShare = 0.0;
     // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
     std::vector<glm::vec3> skyUnderSnow;
-    // Per surface voxel: 1 where its sky was not traced but is its sky donors' mean (skyDonors: the traced lattice
-    // patches about it, which agree within their noise); its snowRays and occluderRays are 0, and the light gathered
-    // from other snow onto it is its donors' mean too (fillFromSkyDonors).
+    // Per surface voxel: 1 where its sky was not traced but is its sky donors' mean (forEachSkyDonor: the traced
+    // lattice patches about it, which agree within their noise); its snowRays and occluderRays are 0, and the light
+    // gathered from other snow onto it is its donors' mean too (fillFromSkyDonors).
     SurfaceValues<std::uint8_t> fromDonors;
     std::size_t skyTraced = 0;  // surface voxels whose sky rays were traced
     bool skyLattice = false;    // traced on the lattice (skyRaysAt), where the sky is pooled over neighbours

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "density_grid.h"
 #include "firn/util/error.h"
 
 namespace firn {
@@ -17,10 +18,7 @@ std::filesystem::path tempPath(const std::string &name) {
 }
 
 openvdb::FloatGrid::Ptr cubeWithTile(double voxelSize) {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelSize));
+    auto grid = test::densityGrid(voxelSize);
     grid->tree().addTile(1, openvdb::Coord(0), 250.0f, true);  // one 8^3 tile of snow, 250 kg/m^3
     grid->tree().setValue(openvdb::Coord(20, 0, 0), 100.0f);
     return grid;

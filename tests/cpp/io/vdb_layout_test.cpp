@@ -9,9 +9,9 @@
 
 #include <gtest/gtest.h>
 
+#include "density_grid.h"
 #include "firn/io/vdb_io.h"
 #include "firn/util/error.h"
-#include "firn/util/openvdb_library.h"
 
 namespace firn {
 
@@ -25,10 +25,7 @@ std::filesystem::path tempPath(const std::string &name) {
 
 // A density grid of a few leaves and a baked-like Vec3 grid, as Firn writes them.
 std::string writeSnowFile(const std::string &name) {
-    initializeOpenVdb();
-    auto density = openvdb::FloatGrid::create(0.0f);
-    density->setName("density");
-    density->setTransform(openvdb::math::Transform::createLinearTransform(0.02));
+    auto density = test::densityGrid(0.02);
     for (int i = 0; i < 40; ++i) density->tree().setValue({i, (i * 7) % 23, -(i % 5)}, 250.0f + float(i));
     auto source = openvdb::Vec3SGrid::create();
     source->setName("firn_source");

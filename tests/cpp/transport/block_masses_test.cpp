@@ -5,6 +5,7 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "density_grid.h"
 #include "firn/transport/incident_light.h"
 
 namespace firn {
@@ -13,8 +14,7 @@ namespace {
 constexpr double kVoxel = 0.01;  // m
 
 openvdb::FloatGrid::Ptr boxOfSnow(const openvdb::CoordBBox &box, float density) {
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto grid = test::densityGrid(kVoxel);
     grid->tree().fill(box, density, true);
     grid->tree().voxelizeActiveTiles();
     return grid;
@@ -53,8 +53,7 @@ TEST(BlockMasses, BesideALoneSmallPieceItTakesWhatTheConeSpreadsOverThePoint) {
 TEST(BlockMasses, SnowFarApartKeepsTheBlocksWithinBudget) {
     // Two voxels 200,000 apart (a fuzzed grid): 4^3 blocks over their box would be 2.5e9 floats (bad_alloc in a
     // bake); the finest blocks grow instead, and a window narrower than them counts nothing.
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto grid = test::densityGrid(kVoxel);
     grid->tree().setValue(openvdb::Coord(-100000, -100000, 0), 300.0f);
     grid->tree().setValue(openvdb::Coord(100000, 100000, 0), 300.0f);
     const BlockMasses blocks(*grid, kVoxel, glm::dvec3(0.0));

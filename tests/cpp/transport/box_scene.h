@@ -5,8 +5,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "density_grid.h"
 #include "firn/transport/scene.h"
-#include "firn/util/openvdb_library.h"
 
 namespace firn::test {
 
@@ -15,10 +15,7 @@ constexpr double kBoxVoxel = 0.01;  // m
 // Voxels [lo, hi] of `density` (kg/m^3) with `optics`, lit by a sun from `toSun` (normalised here).
 inline Scene boxScene(const openvdb::CoordBBox &voxels, float density, const VolumeOptics &optics,
                       const glm::dvec3 &toSun) {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(kBoxVoxel));
+    auto grid = densityGrid(kBoxVoxel);
     grid->fill(voxels, density);
     Scene scene;
     scene.medium = std::make_shared<Medium>(grid, optics);

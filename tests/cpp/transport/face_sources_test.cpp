@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "box_scene.h"
+#include "density_grid.h"
 #include "firn/transport/bake.h"
 #include "firn/transport/bake_grid_values.h"
 #include "firn/transport/bake_traced_voxels.h"
@@ -17,7 +18,6 @@
 #include "firn/transport/source_lobe.h"
 #include "firn/transport/traced_source.h"
 #include "firn/util/error.h"
-#include "firn/util/openvdb_library.h"
 
 namespace firn {
 
@@ -286,10 +286,7 @@ namespace {
 // The sunlitLump with a fringe on its sunlit +x side: a layer of sigma_t h 3 at x = 4 (part of the density ramp, not
 // an unknown, yet traced and thicker than kMaxDirectionFitTau).
 Scene lumpWithFringe() {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(test::kBoxVoxel));
+    auto grid = test::densityGrid(test::kBoxVoxel);
     const float perTau = float(1.0 / (10.0 * test::kBoxVoxel));  // kg/m^3 for sigma_t h 1 at 10 m^2/kg
     grid->fill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(3, 3, 3)), 8.0f * perTau);
     grid->fill(openvdb::CoordBBox(openvdb::Coord(4, 0, 0), openvdb::Coord(4, 3, 3)), 3.0f * perTau);

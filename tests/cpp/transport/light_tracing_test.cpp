@@ -7,8 +7,8 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "density_grid.h"
 #include "firn/transport/light_tracing.h"
-#include "firn/util/openvdb_library.h"
 #include "firn/util/random.h"
 #include "test_geometry.h"
 
@@ -22,10 +22,7 @@ constexpr double kVoxel = 0.01;  // m
 // voxels touching through faces, edges or corners, more than a small piece (343); its lowest voxels' centres
 // `bottom` voxels above z = 0 (the medium's bounds one voxel lower).
 openvdb::FloatGrid::Ptr cloud(int bottom = 2) {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto grid = test::densityGrid(kVoxel);
     auto access = grid->getAccessor();
     Rng rng(7, 0);
     for (int i = 0; i < 1000; ++i)

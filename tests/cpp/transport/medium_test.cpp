@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <openvdb/tools/Interpolation.h>
 
+#include "density_grid.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
 
@@ -17,8 +18,7 @@ namespace firn {
 // rule on steps of 1/256 voxel along the whole ray, reading the density everywhere.
 TEST(Medium, MarchIntegratesEverySnowyCell) {
     constexpr double kVoxel = 0.02;  // m
-    auto density = openvdb::FloatGrid::create(0.0f);
-    density->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto density = test::densityGrid(kVoxel);
     Rng rng(7, 0);
     auto acc = density->getAccessor();
     for (int n = 0; n < 400; ++n)  // scattered snowy voxels in a 40^3 box: mostly air around them
@@ -55,8 +55,7 @@ TEST(Medium, MarchIntegratesEverySnowyCell) {
 // itself.
 TEST(Medium, DensitySamplerReadsAsDensityAtBitForBit) {
     constexpr double kVoxel = 0.02;  // m
-    auto density = openvdb::FloatGrid::create(0.0f);
-    density->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto density = test::densityGrid(kVoxel);
     density->transform().postTranslate(openvdb::Vec3d(0.013, -0.4, 1.7));  // an origin off the voxel lattice
     Rng rng(11, 0);
     auto acc = density->getAccessor();
@@ -87,8 +86,7 @@ TEST(Medium, DensitySamplerReadsAsDensityAtBitForBit) {
 TEST(Medium, ColumnCountsSnowAcrossEmptyBlocks) {
     constexpr double kVoxel = 0.02;  // m
     constexpr float kRho = 300.0f;   // kg/m^3
-    auto density = openvdb::FloatGrid::create(0.0f);
-    density->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto density = test::densityGrid(kVoxel);
     auto acc = density->getAccessor();
     const openvdb::Coord lumps[2] = {openvdb::Coord(0, 0, 0), openvdb::Coord(150, 40, 90)};
     for (const openvdb::Coord &lump : lumps)
@@ -123,8 +121,7 @@ TEST(Medium, ColumnCountsSnowAcrossEmptyBlocks) {
 TEST(Medium, ColumnCountsItsSteps) {
     constexpr double kVoxel = 0.02;  // m
     constexpr float kRho = 300.0f;   // kg/m^3
-    auto density = openvdb::FloatGrid::create(0.0f);
-    density->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto density = test::densityGrid(kVoxel);
     density->fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(19)), kRho);
     const Medium medium(density, VolumeOptics{10.0, Rgb(0.99), 0.8});
     Medium::ColumnMarcher marcher(medium);

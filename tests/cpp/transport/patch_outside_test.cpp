@@ -9,16 +9,17 @@
 #include <glm/common.hpp>
 #include <gtest/gtest.h>
 
+#include "density_grid.h"
 #include "firn/transport/incident_light.h"
 #include "firn/transport/scene.h"
 #include "firn/transport/snow_topology.h"
-#include "firn/util/openvdb_library.h"
 
 namespace firn {
 
 namespace {
 
 constexpr int kWidth = 24, kLength = 12, kHeight = 20;  // voxels of 1 cm
+constexpr double kVoxel = 0.01;                         // m
 constexpr double kFloor = 4.0;                          // voxels: the floor's line above the grid's z = 0
 const double kMiddle = (kWidth - 1) / 2.0 + 0.23;       // the floor line's x (voxels), off the grid's nodes
 const double kAngle = 55.0 * M_PI / 180.0;              // the walls' slope
@@ -40,18 +41,9 @@ double wallFill(double (*above)(const glm::dvec3 &), const glm::dvec3 &q) {
     return fill;
 }
 
-// An empty density grid of 1 cm voxels.
-openvdb::FloatGrid::Ptr densityGrid() {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
-    return grid;
-}
-
 // The snow under both walls, each antialiased along its own normal over a voxel, sigma_t h 15.
 Medium vGroove() {
-    auto grid = densityGrid();
+    auto grid = test::densityGrid(kVoxel);
     auto acc = grid->getAccessor();
     for (int x = 0; x < kWidth; ++x)
         for (int y = 0; y < kLength; ++y)
@@ -94,7 +86,7 @@ TEST(PatchOutside, VGrooveWallPatchStartsOutsideTheOppositeWall) {
 // front of the wall: more than 5 optical depths of the trilinear snow between the start and the sun. On main it
 // started 20 heights out along the light (the smooth normal's cosine floored at 0.05), past the wall, in none.
 TEST(PatchOutside, SharpCornerInAWallsShadowStartsItsBeamInFrontOfTheWall) {
-    auto grid = densityGrid();
+    auto grid = test::densityGrid(kVoxel);
     auto acc = grid->getAccessor();
     for (int x = 0; x < 12; ++x)
         for (int y = 0; y < 8; ++y)

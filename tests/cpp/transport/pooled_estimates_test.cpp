@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "density_grid.h"
 #include "firn/transport/pooled_estimates.h"
-#include "firn/util/openvdb_library.h"
 
 namespace firn {
 
@@ -24,9 +24,7 @@ struct Block {
 
     // `thick`, if given, holds `thickDensity` instead.
     explicit Block(float density, const openvdb::Coord *thick = nullptr, float thickDensity = 0.0f) {
-        initializeOpenVdb();
-        auto grid = openvdb::FloatGrid::create(0.0f);
-        grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+        auto grid = test::densityGrid(kVoxel);
         for (int i = 0; i < 125; ++i) {
             const openvdb::Coord c(i % 5, i / 5 % 5, i / 25);
             grid->tree().setValue(c, thick && c == *thick ? thickDensity : density);

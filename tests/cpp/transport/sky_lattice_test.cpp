@@ -6,11 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include "density_grid.h"
 #include "firn/transport/incident_light.h"
 #include "firn/transport/scene.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/util/color.h"
-#include "firn/util/openvdb_library.h"
 #include "firn/util/sampling.h"
 
 namespace firn {
@@ -31,10 +31,7 @@ double openShare(double x) {
 }
 
 Scene roofedSlab() {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto grid = test::densityGrid(kVoxel);
     grid->fill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(kLength - 1, kWidth - 1, 3)), 300.0f);
     Scene scene;
     scene.medium = std::make_shared<Medium>(grid, VolumeOptics{16.4, Rgb(0.999), 0.85});  // 98 optical depths a voxel

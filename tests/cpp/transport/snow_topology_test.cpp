@@ -6,30 +6,23 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "density_grid.h"
 #include "firn/geometry/mesh.h"
 #include "firn/transport/scene.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/transport/sun_lobe.h"
 #include "firn/util/error.h"
-#include "firn/util/openvdb_library.h"
 
 namespace firn {
 
 namespace {
 
-// An empty density grid of 1 cm voxels.
-openvdb::FloatGrid::Ptr densityGrid() {
-    initializeOpenVdb();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
-    return grid;
-}
+constexpr double kVoxel = 0.01;  // m: the density grids' voxels
 
 // bench/bake_suite.py's ball(): radius r voxels of 1 cm, centred between voxels, its density `rho` falling from
 // full to none over the voxel across the sphere (a one-voxel antialiased surface), in a grid 2r + 6 voxels wide.
 Medium ball(int r, float rho, double extinctionPerDensity) {
-    auto grid = densityGrid();
+    auto grid = test::densityGrid(kVoxel);
     const int n = 2 * r + 6;
     const double centre = (n - 1) / 2.0;
     auto acc = grid->getAccessor();
@@ -78,7 +71,7 @@ double worstNormalAngle(const Medium &medium, int r) {
 // Returns the largest angle (degrees) between a top patch's normal, away from the layer's sides, and the plane's.
 double worstTiltedLayerAngle(double top0, double rise, double tauPerVoxel) {
     const int w = 20;
-    auto grid = densityGrid();
+    auto grid = test::densityGrid(kVoxel);
     auto acc = grid->getAccessor();
     for (int x = 0; x < w; ++x)
         for (int y = 0; y < w; ++y)
@@ -112,7 +105,7 @@ double worstObliquePlaneAngle(double degrees, double azimuthDegrees, double phas
     const double tilt = degrees * M_PI / 180.0, azimuth = azimuthDegrees * M_PI / 180.0;
     const glm::dvec3 plane(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth), std::cos(tilt));
     const glm::dvec3 point(0.5 * (w - 1), 0.5 * (w - 1), 12.0 + phase);
-    auto grid = densityGrid();
+    auto grid = test::densityGrid(kVoxel);
     auto acc = grid->getAccessor();
     for (int x = 0; x < w; ++x)
         for (int y = 0; y < w; ++y)
@@ -179,7 +172,7 @@ TEST(SnowTopology, NormalsOfATiltedLayerOnTheGroundUnderItsFringeFollowItsPlane)
 // two voxels, was sharp already; the stair's own steps (their +z and -x faces, neither flat past the other: a
 // staircase) stay smooth.
 TEST(SnowTopology, AWallsEdgeUnderASlopeIsSharp) {
-    auto grid = densityGrid();
+    auto grid = test::densityGrid(kVoxel);
     auto acc = grid->getAccessor();
     for (int x = 0; x < 10; ++x)
         for (int y = 0; y < 10; ++y)
@@ -228,7 +221,7 @@ TEST(SurfacePatch, ASharpEdgesLightEntersByTheAirFaceMostOpenToIt) {
 // above its exit's peak (docs/benchmarks.md, plate-valleys). The wall's middle (0, 8, 3) and the top's own patches
 // keep their normals.
 TEST(SnowTopology, AWallsTopVoxelUnderAHalfFilledTopKeepsTheWallsNormal) {
-    auto grid = densityGrid();
+    auto grid = test::densityGrid(kVoxel);
     auto acc = grid->getAccessor();
     for (int x = 0; x < 16; ++x)
         for (int y = 0; y < 16; ++y)
@@ -280,7 +273,7 @@ TEST(SnowTopology, SurfaceCurvatureIsOneOverTheRadiusOnABallAndZeroOnAFlatTop) {
     EXPECT_GT(sum / patches, 1.0 / 5.5);
     EXPECT_LT(sum / patches, 1.0 / 4.5);
 
-    auto grid = densityGrid();
+    auto grid = test::densityGrid(kVoxel);
     grid->fill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(19, 19, 3)), 100.0f);
     const SnowTopology flat =
         buildSnowTopology(Medium(grid, VolumeOptics{10.0, Rgb(0.9), 0.6}), Occluders{}, SubProgress(nullptr, 0.0, 1.0));

@@ -7,6 +7,7 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "density_grid.h"
 #include "firn/util/sampling.h"
 
 namespace firn {
@@ -96,8 +97,7 @@ TEST(FitByDirection, NoneWithoutLight) {
 // than one optical depth and from below through the other seven; from the side, through more than the cap of 10.
 TEST(VisibilityFrom, FallsWithTheSnowAlongEachDirection) {
     constexpr double kVoxel = 0.01, kDensity = 100.0;  // m, kg/m^3
-    auto density = openvdb::FloatGrid::create(0.0f);
-    density->setTransform(openvdb::math::Transform::createLinearTransform(kVoxel));
+    auto density = test::densityGrid(kVoxel);
     density->fill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(39, 39, 7)), float(kDensity));
     const Medium medium(density, VolumeOptics{1.0 / (kDensity * kVoxel), Rgb(0.99), 0.87});  // tau 1 per voxel
     Medium::ColumnMarcher marcher(medium);
