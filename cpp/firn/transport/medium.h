@@ -40,7 +40,6 @@ class Medium {
     ~Medium();
 
     const openvdb::FloatGrid &density() const { return *density_; }
-    openvdb::FloatGrid::ConstPtr densityPtr() const { return density_; }
     const VolumeOptics &optics() const { return optics_; }
     double voxelSize() const { return h_; }  // m
     double maxDensity() const { return maxDensity_; }  // kg/m^3

@@ -33,7 +33,6 @@ class Rng {
     std::uint64_t nextBits() { return mix64(state_++); }
     // Uniform in [0, 1).
     double uniform() { return static_cast<double>(nextBits() >> 11) * 0x1.0p-53; }
-    float uniformFloat() { return static_cast<float>(nextBits() >> 40) * 0x1.0p-24f; }
 
   private:
     std::uint64_t state_;
