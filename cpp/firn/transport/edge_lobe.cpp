@@ -92,7 +92,7 @@ double peakSeenThroughFaces(const std::vector<glm::dvec3> &normals, const std::v
 }
 
 double edgeExitShare(double voxelInDiffusionLengths, double voxelInTransportPaths) {
-    // Over the plane about a source at depth z: rho dr = rho drho, and of the ring of radius r the part beyond the
+    // Over the plane about a source at depth z: r dr = rho drho, and of the ring of radius r the part beyond the
     // line at x, averaged over x in [0, 1], is within(r) = int min(r cos t, 1) dt over |t| < pi/2. With t = z / rho
     // (0 at infinity, 1 above the source): int R(rho) within(r) r dr / (2 pi) = int_0^1 (1 + s z / t) exp(-s z / t)
     // within(z sqrt(1 / t^2 - 1)) dt / (2 pi), by the midpoint rule (smooth but for a kink at r = 1).
