@@ -44,13 +44,10 @@ Source litFacesToward(const openvdb::Coord &n, const openvdb::Coord &offset, Tra
 }
 
 // What a surface voxel shows a neighbour, and of its peaked lobe, the share its faces towards that neighbour hold
-// (1: all of it, where it shows one lobe over all its faces); `facing`: how much the faces it shows face that
-// neighbour (the largest cosine of their normals to the offset; 0 where it shows its one lobe, which faces the
-// neighbour by the voxel's normal).
+// (1: all of it, where it shows one lobe over all its faces).
 struct ShownToward {
     Source source;
     float peakShare = 1.0f;
-    double facing = 0.0;
 };
 
 // What sharp edge voxel j (not traced) shows a neighbour at `offset`: the mean of its flat air faces' own lobes that
@@ -60,24 +57,20 @@ ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const 
                            const Source &own) {
     const EdgeFaceLobes::Voxel *faces = edgeFaces.find(j);
     if (!faces) return {own};
-    const glm::dvec3 towards = glm::normalize(glm::dvec3(offset.x(), offset.y(), offset.z()));
     Source sum;
     int count = 0;
     float share = 0.0f;
-    double facing = 0.0;
     for (int a = 0; a < 3; ++a) {
         if (offset[a] == 0) continue;
         const int f = 2 * a + (offset[a] > 0);
-        if (faces->flat >> f & 1u) {
+        if (faces->flat >> f & 1u)
             sum.l0 += faces->lobe[f].l0, sum.l1 += faces->lobe[f].l1, share += faces->peakShare[f], ++count;
-            facing = std::max(facing, glm::dot(faceNormal(f), towards));
-        }
     }
     if (!count) return {own};
     Source S = own;
     S.l0 = sum.l0 / float(count), S.l1 = sum.l1 / float(count);
     S.peak0 *= share, S.peak1 *= share;
-    return {S, share, facing};
+    return {S, share};
 }
 
 // The radiance the surface voxels around voxel c (outside the snow) show towards it: their values
@@ -104,19 +97,16 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
             for (int dz = -1; dz <= 1; ++dz) {
                 const std::int32_t j = index.getValue(c.offsetBy(-dx, -dy, -dz));
                 if (j < 0 || !topo.patches[j].isSurface()) continue;
+                const double w =
+                    std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
+                const int k = (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);  // blockOffset(k): (dx, dy, dz)
+                if (w > most || (w == most && w > 0.0 && k < mostAt))
+                    most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
                 const openvdb::Coord n = c.offsetBy(-dx, -dy, -dz);
-                const auto [v, peakShare, facesFacing] =
+                const auto [v, peakShare] =
                     topo.patches[j].sharp && tracedIndex.getValue(n) < 0
                         ? ownFacesToward(source.edgeFaces, std::size_t(j), {dx, dy, dz}, source[j])
                         : ShownToward{litFacesToward(n, {dx, dy, dz}, tracedIndex, traced, source[j])};
-                // An edge voxel showing its flat faces' own lobes is weighed as those faces face c, not by its normal
-                // (the mean of its faces': the air across a lit wall's foot took as much of the wall a row up as of
-                // the foot's own face, and the air a row up none of the foot; docs/benchmarks.md, box-edge).
-                const double w = facesFacing > 0.0 ? facesFacing
-                                                   : std::max(0.0, glm::dot(topo.patches[j].normal,
-                                                                            glm::normalize(glm::dvec3(dx, dy, dz))));
-                const int k = (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);  // blockOffset(k): (dx, dy, dz)
-                if (w > most || (w == most && w > 0.0 && k < mostAt)) most = w, mostAt = k, carrier = n;
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
                 addRampPart(c.offsetBy(-dx, -dy, -dz), j, w * peakShare);  // of j's peaked lobe, its faces' to c

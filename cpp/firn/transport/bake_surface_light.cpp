@@ -159,16 +159,6 @@ SkyBeam skyBeamPart(const glm::dvec3 &m, const glm::dvec3 &n) {
     return {share, glm::normalize(towards)};
 }
 
-// edgeExitShare for the last snow asked again (an integral per call; an edge's voxels lie over one density).
-struct LastExitShare {
-    double s = -1.0, transportPaths = -1.0, share = 0.0;
-    double operator()(double voxelInDiffusionLengths, double voxelInTransportPaths) {
-        if (voxelInDiffusionLengths != s || voxelInTransportPaths != transportPaths)
-            s = voxelInDiffusionLengths, transportPaths = voxelInTransportPaths, share = edgeExitShare(s, transportPaths);
-        return share;
-    }
-};
-
 }  // namespace
 
 bool beamLightsRamp(const Scene &scene, std::size_t b, double mu0) {
@@ -387,7 +377,6 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         std::vector<glm::dvec3> normals;  // the air faces'
         std::vector<double> radiance;     // each face's peak radiance over the voxel's
         VoxelShared shared(light.beams.size());  // returnedThrough's, started per voxel
-        std::array<LastExitShare, 3> exitShare;   // per channel: the snow beneath is mostly one density
         for (std::size_t k = range.begin(); k != range.end(); ++k) {
             EdgeFaceLobes::Voxel &own = edgeFaces.voxels[k];
             const std::size_t i = own.key;
@@ -426,7 +415,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 }
                 // sigma_eff h = 3 kappa D sigma_tr h: the voxel in diffusion lengths of the snow beneath the patch.
                 const double sigmaTr = channels[c].ch.sigmaTr(densityBeneath(topo, i, patch.normal));
-                relaxTowardsNeighbours(faces, exitShare[c](3.0 * channels[c].ch.beta() * sigmaTr * h, sigmaTr * h));
+                relaxTowardsNeighbours(faces, 3.0 * channels[c].ch.beta() * sigmaTr * h);
                 const SourceLobe lobe = edgeLobe(faces);
                 out.surface(i).returned.l0[c] = float(lobe.l0);
                 out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);

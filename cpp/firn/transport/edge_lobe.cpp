@@ -91,31 +91,12 @@ double peakSeenThroughFaces(const std::vector<glm::dvec3> &normals, const std::v
     return seen > 0.0 ? shown / seen : 1.0;
 }
 
-double edgeExitShare(double voxelInDiffusionLengths, double voxelInTransportPaths) {
-    // Over the plane about a source at depth z: r dr = rho drho, and of the ring of radius r the part beyond the
-    // line at x, averaged over x in [0, 1], is within(r) = int min(r cos t, 1) dt over |t| < pi/2. With t = z / rho
-    // (0 at infinity, 1 above the source): int R(rho) within(r) r dr / (2 pi) = int_0^1 (1 + s z / t) exp(-s z / t)
-    // within(z sqrt(1 / t^2 - 1)) dt / (2 pi), by the midpoint rule (smooth but for a kink at r = 1).
-    constexpr int kSteps = 128;
-    const double s = voxelInDiffusionLengths;
-    const auto within = [](double r) {  // 2 (acos(1/r) + r - sqrt(r^2 - 1)) past r = 1, the last two as one quotient
-        return r <= 1.0 ? 2.0 * r : 2.0 * (std::acos(1.0 / r) + 1.0 / (r + std::sqrt(r * r - 1.0)));
-    };
-    double beyond = 0.0, leaving = 0.0;
-    for (const double z : {1.0 / voxelInTransportPaths, 7.0 / 3.0 / voxelInTransportPaths}) {
-        for (int k = 0; k < kSteps; ++k) {
-            const double t = (k + 0.5) / kSteps, far = s * z / t;
-            beyond += (1.0 + far) * std::exp(-far) * within(z * std::sqrt(1.0 / (t * t) - 1.0)) / (2.0 * kPi * kSteps);
-        }
-        leaving += std::exp(-s * z);
-    }
-    return beyond / leaving;
-}
-
-void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double kappa) {
+void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double voxelInDiffusionLengths) {
     for (const FaceExit &a : faces)
         for (const FaceExit &b : faces)
             if (glm::dot(a.normal, b.normal) < -0.5) return;  // no snow beneath a face: a lump's tip, a thin plate
+    const double s = voxelInDiffusionLengths;  // kappa: the mean of exp(-x s) / 2 over x in [0, 1]; 1/2 as s -> 0
+    const double kappa = s > 1e-6 ? 0.5 * -std::expm1(-s) / s : 0.5;
     std::vector<double> mean(faces.size());  // W/m^2/sr: e0 + 2/3 e1 . n, the exitance over pi
     for (std::size_t f = 0; f < faces.size(); ++f)
         mean[f] = faces[f].e0 + 2.0 / 3.0 * glm::dot(faces[f].e1, faces[f].normal);

@@ -59,26 +59,16 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces);
 double peakSeenThroughFaces(const std::vector<glm::dvec3> &normals, const std::vector<double> &radiance,
                             const glm::dvec3 &axis);
 
-// Of the exit through a face over the voxel beside its edge, the share that entered the snow beyond the edge, where
-// a half-space would spread it laterally: the dipole's exit from light entering at a point, R(rho) ~ z (1 + s rho)
-// exp(-s rho) / rho^3 for the real source at depth z_r = 1 / sigma_tr and its image at 7/3 z_r (the escape
-// function's extrapolation 2/3 of a transport mean free path beyond the surface), rho the distance to the source;
-// each weighed by the light it lets out, exp(-s z). Mean over the voxel x in [0, 1] of the share of R beyond a line
-// at x: 1/2 at the edge, over about a transport mean free path, not the diffusion length (the exponential
-// exp(-x s) / 2 moved twice what the Monte Carlo shows: docs/benchmarks.md, edge-own). Where s -> 0,
-// 1/2 - sum_z [atan(1/z) - z/2 ln(1 + 1/z^2)] / (2 pi), z in voxels. s: the voxel in diffusion lengths (sigma_eff h),
-// voxelInTransportPaths: sigma_tr h.
-double edgeExitShare(double voxelInDiffusionLengths, double voxelInTransportPaths);
-
 // Each face's form taken as its mean over the face where the light beneath it also leaves through the faces beside
-// it. Near their shared edge the snow's light is one for both faces: by symmetry the two exits meet at the edge at
-// their mean, and the difference relaxes away from it as the light entering one face spreads beneath the other, so
-// the face's mean moves by kappa (g - f) towards each neighbour g at right angles (f, g: the forms' mean radiance over
-// their hemispheres; kappa = edgeExitShare <= 1/2, the two faces' mean at most), and what the brighter face loses the
-// darker gains (equal areas). Where the faces carry the same light nothing moves; over a dark ground a convex edge's
-// top falls towards its side (docs/benchmarks.md, edge-corner, edge-relax, edge-own). Only where snow lies beneath
-// every face (no two air faces opposite: the edges and corners of snow thicker than a voxel); relaxed, a cloud of
-// small lumps read 0.93 of the Monte Carlo (test_bake_accuracy.py).
-void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double kappa);
+// it. Near their shared edge the snow's fluence is one for both faces: by symmetry the two exits meet at the edge at
+// their mean, and the difference relaxes away from it over the fluence's lateral length, the diffusion length
+// 1 / sigma_eff (sigma_eff = sqrt(3 sigma_a sigma_tr)): f + (g - f) / 2 exp(-x sigma_eff h), x across the voxel in
+// voxels. The face's mean moves by kappa (g - f), kappa = (1 - exp(-s)) / (2 s), s = sigma_eff h, towards each
+// neighbour g at right angles (f, g: the forms' mean radiance over their hemispheres); kappa <= 1/2, the two faces'
+// mean at most, and what the brighter face loses the darker gains (equal areas). Where the faces carry the same light
+// nothing moves; over a dark ground a convex edge's top falls towards its side (docs/benchmarks.md, edge-corner,
+// edge-relax). Only where snow lies beneath every face (no two air faces opposite: the edges and corners of snow
+// thicker than a voxel); relaxed, a cloud of small lumps read 0.93 of the Monte Carlo (test_bake_accuracy.py).
+void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double voxelInDiffusionLengths);
 
 }  // namespace firn
