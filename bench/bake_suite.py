@@ -284,10 +284,10 @@ def depth_one_points(case, origins, directions, seen):
 
 def cached_monte_carlo(file, case, path, origins, directions, samples, seed):
     """The core's Monte Carlo of `case` along the rays (mean, error, seconds), kept in `file` (None: not kept) and read
-    back from it when there; written whole (temp file + rename)."""
+    back from it when there (seconds NaN from files kept before they held it); written whole (temp file + rename)."""
     if file and os.path.exists(file):
         data = np.load(file)
-        return data["mean"], data["error"], float(data["seconds"])
+        return data["mean"], data["error"], float(data["seconds"]) if "seconds" in data else float("nan")
     start = time.perf_counter()
     mean, error = firncore.monte_carlo_radiance(path, case.optics, origins, directions, suns=case.suns(),
                                                 sky=case.skies(), occluders=case.occluders, samples=samples, seed=seed)
