@@ -60,17 +60,6 @@ def light_case(case, light):
     return c
 
 
-def cached_monte_carlo(file, path, case, origins, directions, samples):
-    """The core's Monte Carlo of `case` along the rays (seed 11), (mean, standard error), kept in `file`."""
-    if not os.path.exists(file):
-        mean, error = firncore.monte_carlo_radiance(path, case.optics, origins, directions, suns=case.suns(),
-                                                    sky=case.skies(), occluders=case.occluders, samples=samples,
-                                                    seed=11)
-        np.savez(file, mean=mean, error=error)
-    data = np.load(file)
-    return data["mean"], data["error"]
-
-
 def report(title, baked, reference, label, view, views):
     with np.errstate(invalid="ignore", divide="ignore"):  # blocks not seen: NaN, left out below
         rel = np.abs(baked / reference - 1.0)  # (N, 3)
@@ -120,7 +109,7 @@ def light_arguments(parser):
 def baked_against_lights(case, args, origins, directions, seen):
     """Per light of args.lights: (light, title with the reference's median relative noise, baked, reference), the
     FINAL bake (seed 0) rendered along the rays; "full" against the suite's cached reference (args.suite_cache), "sun"
-    and "sky" against cached_monte_carlo of args.samples paths in args.cache."""
+    and "sky" against bake_suite.cached_monte_carlo of args.samples paths (seed 11) in args.cache."""
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "bumpy.vdb")
         bs.write_density(path, case.density, case.voxel)
@@ -131,7 +120,7 @@ def baked_against_lights(case, args, origins, directions, seen):
                 title = f"full (suite reference, {case.samples} paths)"
             else:
                 file = os.path.join(args.cache, f"{light}_{args.samples}.npz")
-                reference, error = cached_monte_carlo(file, path, c, origins, directions, args.samples)
+                reference, error, _ = bs.cached_monte_carlo(file, c, path, origins, directions, args.samples, seed=11)
                 title = f"{light} only ({args.samples} paths)"
             noise = np.median(error[seen] / np.maximum(reference[seen], 1e-30))
             firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
@@ -144,8 +133,7 @@ def main():
     light_arguments(parser)
     parser.add_argument("--worst", type=int, default=0, help="list this many worst blocks")
     args = parser.parse_args()
-    os.makedirs(args.cache, exist_ok=True)
-    case = next(c for c in bs.cases() if c.name == "bumpy_plate")
+    case = bs.case("bumpy_plate")
     origins, directions, tau = bs.views(case)
     seen = tau >= 1.0
     hit = bs.depth_one_points(case, origins, directions, seen)

@@ -20,7 +20,7 @@ import numpy as np
 
 import bake_suite as bs
 import firncore
-from plate_err_regions import cached_monte_carlo, light_case
+from plate_err_regions import light_case
 
 
 def groups(case, origins, hit, seen):
@@ -46,7 +46,6 @@ def main():
     parser.add_argument("--samples", type=int, default=2048)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_plate_ground"))
     args = parser.parse_args()
-    os.makedirs(args.cache, exist_ok=True)
     albedo = tuple(float(a) for a in args.albedo.split(","))
     case = bs.case("bumpy_plate")
     origins, directions, tau = bs.views(case)
@@ -58,7 +57,7 @@ def main():
         for light in args.lights.split(","):
             c = over_ground(case, light, albedo)
             file = os.path.join(args.cache, f"{light}_{args.albedo}_{args.samples}.npz")
-            truth, error = cached_monte_carlo(file, path, c, origins, directions, args.samples)
+            truth, error, _ = bs.cached_monte_carlo(file, c, path, origins, directions, args.samples, seed=11)
             firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
             baked = firncore.render_baked(path, c.optics, origins, directions, occluders=c.occluders)
             noise = np.median(error[seen] / truth[seen])

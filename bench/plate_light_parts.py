@@ -17,7 +17,7 @@ import tempfile
 
 import bake_suite as bs
 import firncore
-from plate_err_regions import REGIONS, cached_monte_carlo, region_of
+from plate_err_regions import REGIONS, region_of
 
 BLACK = (0.0, 0.0, 0.0)
 
@@ -47,7 +47,6 @@ def main():
     parser.add_argument("--samples", type=int, default=4096)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_plate_parts"))
     args = parser.parse_args()
-    os.makedirs(args.cache, exist_ok=True)
     case = bs.case("bumpy_plate")
     origins, directions, tau = bs.views(case)
     seen = tau >= 1.0
@@ -60,7 +59,7 @@ def main():
         for name in names:
             c = variant(case, name)
             file = os.path.join(args.cache, f"{name}_{args.samples}.npz")
-            truth, _ = cached_monte_carlo(file, path, c, origins, directions, args.samples)
+            truth, _, _ = bs.cached_monte_carlo(file, c, path, origins, directions, args.samples, seed=11)
             firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), occluders=c.occluders, quality="FINAL", seed=0)
             baked = firncore.render_baked(path, c.optics, origins, directions, occluders=c.occluders)
             light[name] = (baked.mean(1), truth.mean(1))
