@@ -2,22 +2,42 @@
 the phases (`stats["seconds"]`, `stats["cpu_seconds"]`) and the bake's peak memory per active voxel, FINAL quality
 on all the cores firncore sees, each bake in a fresh process (bench/bake_measure.py).
 
-    bench/run.sh bench/car_scene.py -- FOLDER          # once: writes the car's bake inputs (Blender)
-    PYTHONPATH=build/python /usr/bin/python3 bench/car_bake.py FOLDER [repeats [seed]]
+    PYTHONPATH=build/python /usr/bin/python3 bench/car_bake.py [FOLDER [repeats [seed]]]
+
+FOLDER (default build/car_inputs, beside the build's add-on; $FIRN_BUILD as bench/run.sh) holds the car's bake inputs;
+where it has none they are written first by `bench/run.sh bench/car_scene.py -- FOLDER` (Blender, about a minute),
+so a fresh clone with a build needs only the line above.
 
 Each bake reads a fresh copy of FOLDER's density (the core rewrites the file it bakes), and is followed by the slab
 of bench/bake_scaling.py at 1 M voxels: the car's processor µs per active voxel over the slab's, measured side by
 side so that the shared machine's load cancels (issue 10 item 4's ratio).
 """
 
+import argparse
 import os
 import shutil
-import sys
+import subprocess
 import tempfile
 import time
 
 import bake_measure
 import bake_scaling
+
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DEFAULT_FOLDER = os.path.join(os.environ.get("FIRN_BUILD", os.path.join(HERE, "..", "build")), "car_inputs")
+
+
+def car_folder(folder=None):
+    """`folder` (default DEFAULT_FOLDER) holding the car's bake inputs, written by bench/car_scene.py (Blender through
+    bench/run.sh) where it has none."""
+    folder = os.path.abspath(folder or DEFAULT_FOLDER)
+    if not os.path.exists(os.path.join(folder, "car_inputs.npz")):
+        print(f"car inputs: none in {folder}; writing them (bench/car_scene.py in Blender)", flush=True)
+        subprocess.run([os.path.join(HERE, "run.sh"), os.path.join(HERE, "car_scene.py"), "--", folder], check=True)
+        if not os.path.exists(os.path.join(folder, "car_inputs.npz")):
+            raise RuntimeError(f"bench/car_scene.py wrote no car_inputs.npz in {folder} (is Blender on the PATH?)")
+    return folder
 
 
 def car_inputs(folder):
@@ -58,8 +78,12 @@ def bake_copy(path, optics, suns, sky, occluders, seed, progress=None):
 def main():
     import firncore
 
-    folder, repeats = sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 1
-    seed = int(sys.argv[3]) if len(sys.argv) > 3 else 0
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("folder", nargs="?", help="the car's bake inputs (default: build/car_inputs, written if absent)")
+    parser.add_argument("repeats", nargs="?", type=int, default=1)
+    parser.add_argument("seed", nargs="?", type=int, default=0)
+    args = parser.parse_args()
+    folder, repeats, seed = car_folder(args.folder), args.repeats, args.seed
     print(f"firncore {firncore.__version__}, car sample, {firncore.hardware_threads()} threads, FINAL quality")
     print("wall: seconds on the clock; cpu: processor seconds of all threads (on a busy machine wall > cpu / threads)")
     for _ in range(repeats):

@@ -2,7 +2,9 @@
 500 × 281 pixels, with the baked grids as fine as the density and 2× coarser (the default). Cycles' peak is the
 "Peak" of its status line (its own allocations, the dense volume textures included).
 
-bench/run.sh bench/car_memory.py
+    bench/run.sh bench/car_memory.py
+
+It builds the car scene itself (blend_samples/car_under_snow.py, its snow as the sample's): a build is all it needs.
 """
 
 import os

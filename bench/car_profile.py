@@ -15,8 +15,8 @@ active voxel and per surface voxel.
     PYTHONPATH=build/python /usr/bin/python3 bench/car_profile.py bake car car.json 2> car_laps.txt
     /usr/bin/python3 bench/car_profile.py laps car_laps.txt[,more] slab_laps.txt[,more]
 
-The car's inputs as bench/car_scene.py writes them (default /tmp/car-rays/car); the slab bench/bake_scaling.py's
-bumpy layer at 1 M voxels.
+The car's inputs as bench/car_scene.py writes them (FOLDER, default build/car_inputs: bench/car_bake.py's car_folder,
+which writes them there first where they are missing); the slab bench/bake_scaling.py's bumpy layer at 1 M voxels.
 """
 
 import bisect
@@ -33,10 +33,13 @@ CAR_VOXELS, CAR_SURFACE = 2724345, 500313  # the car's active and surface voxels
 SLAB_VOXELS, SLAB_SURFACE = 1053749, 117116
 
 
-def bake(which, out, folder="/tmp/car-rays/car"):
+def bake(which, out, folder=None):
     import bake_scaling
     import car_bake
     import firncore
+
+    if which == "car":
+        folder = car_bake.car_folder(folder)
 
     stages = []
 
@@ -197,8 +200,10 @@ def table(car_files, slab_files):
 
 
 if __name__ == "__main__":
-    mode = sys.argv[1]
-    if mode == "bake":
+    mode = sys.argv[1] if len(sys.argv) > 1 else "--help"
+    if mode in ("-h", "--help"):
+        print(__doc__)
+    elif mode == "bake":
         bake(*sys.argv[2:])
     elif mode == "threads":
         threads(sys.argv[2], sys.argv[3], sys.argv[4], *(int(a) for a in sys.argv[5:]))

@@ -53,7 +53,7 @@ def main():
     folder = sys.argv[sys.argv.index("--") + 1]
     os.makedirs(folder, exist_ok=True)
     _scene, targets = car.build_scene()
-    snow = common.add_snow(targets, depth=0.12, spacing=0.06, voxel_size=0.02)
+    snow = car.add_car_snow(targets)
     capture_bake_inputs(snow, folder)
     print(f"car scene: bake inputs -> {folder}")
 

@@ -22,6 +22,7 @@ def bake(folder, names, quality, seed, car=""):
     if car:
         import car_bake
 
+        car = car_bake.car_folder(car)
         path = shutil.copy(os.path.join(car, "car_density.vdb"), os.path.join(folder, "car.vdb"))
         stats = car_bake.bake_copy(path, *car_bake.car_inputs(car), seed)
         print(f"car: baked ({stats['voxels']} active voxels)", flush=True)
