@@ -245,7 +245,7 @@ class PathTracer {
         }
     }
 
-    // Where the ray p + t d leaves the empty aligned block (Medium::clearBlockEdge) that holds p + t d, or t if that
+    // Where the ray p + t d leaves the empty aligned block (Medium::emptyBlockEdge) that holds p + t d, or t if that
     // point's block holds snow.
     double emptyBlockExit(const glm::dvec3 &p, const glm::dvec3 &d, double t) {
         const glm::dvec3 ijk = medium_.worldToIndex(p + t * d);
