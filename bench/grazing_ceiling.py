@@ -40,7 +40,7 @@ means. --blocks lists each case's five worst blocks (view, row, col, mu, error).
     PYTHONPATH=build/python:bench python3 bench/grazing_ceiling.py [--cases a,b] [--amplitudes 0.15,0.3,0.45] \
         [--lit 0.3] [--grid [--forward] [--carry 2] [--grid-scale 2] [--l1-axis] [--unsharp | --sharp-least] \
         [--derived [--own] [--darken-only | --face-cap]]] \
-        [--curve] [--blocks]
+        [--curve] [--blocks] [--dump DIR]
 """
 
 import argparse
@@ -167,9 +167,10 @@ def own_table(omega, g, photons=OWN_PHOTONS):
     18 azimuths off the sun's travel) at DERIVED_MU0, R the half-space's reflection function from the core's Monte
     Carlo (sun_lobe_table.inc's), P and B the peaked lobe and the rest's broad lobe that sunPeak's split writes for a
     flat surface, as the grids render them: D B + P is the half-space's exit, no constant chosen. From
-    tools/sun_lobe_table's `limb` mode, run once per snow and kept in the temp folder; at least 0 (forwards at grazing
-    the peaked lobe alone is brighter than the half-space; the forward gate keeps the term off there)."""
-    path = os.path.join(tempfile.gettempdir(), "limb-own", f"limb_{g}_{omega}_{photons}.txt")
+    tools/sun_lobe_table's `limb` mode, run once per snow and kept in the temp folder (limb-rule's folder: limb-own's
+    tables rendered P with the anisotropy k / mean, not k, wrong wherever the split has a peak, mu0 < 0.6); at least 0
+    (forwards at grazing the peaked lobe alone may outshine the half-space; the forward gate keeps the term off there)."""
+    path = os.path.join(tempfile.gettempdir(), "limb-rule", f"limb_{g}_{omega}_{photons}.txt")  # limb-own's peak fixed
     if not os.path.exists(path):
         os.makedirs(os.path.dirname(path), exist_ok=True)
         tool = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build", "tools", "sun_lobe_table")
@@ -420,6 +421,9 @@ def main():
                         help="--grid's sharp voxels lit by their least lit air face (sharp_least_lit)")
     parser.add_argument("--grid-scale", type=int, default=1, help="--grid's voxels this many density voxels wide")
     parser.add_argument("--blocks", action="store_true", help="each case's five worst blocks")
+    parser.add_argument("--dump", help="a folder: per case NAME.npz of the blocks' reference, baked and limb-darkened "
+                                       "radiances (and the broad lobe's alone), mu, mu0, seen and the depth-one "
+                                       "points (limb-rule)")
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
     args = parser.parse_args()
     ceilings = [float(x) for x in args.ceilings.split(",")]
@@ -476,6 +480,11 @@ def main():
                 darkened.append(baked * d if args.peaks else (baked - broad) + broad * d)
                 row.append(mean_error(darkened[-1], run.mean, seen))
             totals += 100 * np.array(row)
+            if args.dump:
+                os.makedirs(args.dump, exist_ok=True)
+                np.savez(os.path.join(args.dump, case.name + ".npz"), reference=run.mean, baked=baked, broad=broad,
+                         darkened=np.array(darkened), mu=mu, mu0=mu0, seen=seen,
+                         hit=S.depth_one_points(case, run.origins, run.directions, seen))
             k = np.unravel_index(np.argmax(np.where(seen[:, None], np.abs(relative), -1.0)), relative.shape)
             low = seen & (mu < 0.3)
             print(f"  {case.name:<16}" + "".join(f" {100 * x:8.2f}" for x in row) +

@@ -4,7 +4,8 @@
 //   build/tools/sun_lobe_table [photons] > cpp/firn/transport/sun_lobe_table.inc
 //   build/tools/sun_lobe_table [photons] peak > cpp/firn/transport/sun_peak_table.inc
 // With `limb g omega`, the limb darkening the grids miss on a flat surface of that snow (limbDarkening), one line
-// per sun cosine and outgoing bin: mu0 mu azimuth(degrees off the sun's travel) D (bench/grazing_ceiling.py --own).
+// per sun cosine and outgoing bin: mu0 mu azimuth(degrees off the sun's travel) D, then the split's peaked and broad
+// lobes P and B as rendered (no Monte Carlo in them) (bench/grazing_ceiling.py --own; docs/benchmarks.md limb-rule).
 //   build/tools/sun_lobe_table [photons] limb g omega > limb.txt
 #include <array>
 #include <cstdio>
@@ -29,11 +30,12 @@ void printNodes(const char *name, const std::array<double, N> &nodes) {
 void printLimb(long photons, double g, double omega) {
     const std::array<double, 8> mu0s{0.05, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0};
     const double y = firn::absorptionParameter(omega, g);
-    std::printf("# limbDarkening g %.3f omega %.5f (y %.4f), %ld photons per sun: mu0 mu azimuth_deg D\n", g, omega,
+    std::printf("# limbDarkening g %.3f omega %.5f (y %.4f), %ld photons per sun: mu0 mu azimuth_deg D P B\n", g, omega,
                 y, photons);
     for (std::size_t i = 0; i < mu0s.size(); ++i)
         for (const firn::LimbBin &bin : firn::limbDarkening(g, mu0s[i], y, photons, 5000 + 1000000 * i))
-            std::printf("%.2f %.3f %.1f %.4f\n", mu0s[i], bin.mu, bin.azimuth * 180.0 / firn::kPi, bin.darkening);
+            std::printf("%.2f %.3f %.1f %.4f %.6f %.6f\n", mu0s[i], bin.mu, bin.azimuth * 180.0 / firn::kPi,
+                        bin.darkening, bin.peak, bin.broad);
 }
 }  // namespace
 

@@ -401,8 +401,9 @@ std::vector<LimbBin> limbDarkening(double g, double mu0, double y, long photons,
     tbb::parallel_for(long(0), chunks, [&](long i) { parts[i] = halfSpaceReflection(g, mu0, y, perChunk, seed + i); });
     const SunLobe lobe = sunLobe(g, mu0, y);
     const SunPeak split = sunPeak(g, mu0, y, lobe);  // flat: the rest as the table has it (restKept at curvature 0)
+    // The peaked lobe as the bake stores it (bake_surface_light: p1 = 3 k m mean(p0)), anisotropy k whatever its mean.
     const glm::dvec3 peak1 =
-        3.0 * split.k * glm::dvec3(std::cos(split.elevation), 0.0, std::sin(split.elevation));
+        3.0 * split.k * split.mean * glm::dvec3(std::cos(split.elevation), 0.0, std::sin(split.elevation));
     const SourceLobe rest = exitLobe(split.a(), glm::dvec3(split.c, 0.0, split.b), glm::dvec3(0.0, 0.0, 1.0));
     const double restExitance = (1.0 - split.share) * split.rest;
     constexpr int kSub = 8;
@@ -417,7 +418,7 @@ std::vector<LimbBin> limbDarkening(double g, double mu0, double y, long photons,
             const double peak = split.share > 0.0 ? binMean(split.mean, peak1, m, p, kSub) : 0.0;
             const double broad = restExitance * binMean(rest.l0, rest.l1, m, p, kSub);
             out.push_back({(m + 0.5) / kMuBins, (p + 0.5) * kPi / kPhiBins,
-                           broad > 0.0 ? (returned - peak) / broad : 1.0});
+                           broad > 0.0 ? (returned - peak) / broad : 1.0, peak, broad});
         }
     return out;
 }

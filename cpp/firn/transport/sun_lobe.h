@@ -95,9 +95,13 @@ SunPeak fitSunPeak(double g, double mu0, double y, long photons, std::uint64_t s
 // it is their Monte Carlo over their outgoing bins (the fits' bins are these) with the same bin means of the rendered
 // lobes, which the tool would otherwise copy or this header export; half_space_test checks it as it checks them.
 constexpr int kLimbMuBins = 20, kLimbAzimuthBins = 18;
+// Each bin also holds P and rest as rendered (bin means, the split's exitance 1): their flux over the bins is the
+// exitance the grids show, and D's flux mean over some bins says whether D adds light there or moves it
+// (docs/benchmarks.md, limb-rule: from mu0 0.3 up the lobes keep the half-space's exitance).
 struct LimbBin {
     double mu = 0.0, azimuth = 0.0;  // bin centre; radians
     double darkening = 1.0;
+    double peak = 0.0, broad = 0.0;  // P and rest, bin means
 };
 std::vector<LimbBin> limbDarkening(double g, double mu0, double y, long photons, std::uint64_t seed);
 
