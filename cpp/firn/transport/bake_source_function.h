@@ -17,6 +17,7 @@
 #include "firn/transport/snow_topology.h"
 #include "firn/transport/source_lobe.h"
 #include "firn/util/progress.h"
+#include "firn/util/unwritten_vector.h"
 
 namespace firn::bake {
 
@@ -67,8 +68,8 @@ class PeakedLobes {
 
 // The source function of every unknown.
 struct SourceValues {
-    std::vector<BroadLobe> broad;  // per unknown
-    PeakedLobes peaked;            // by unknown
+    UnwrittenVector<BroadLobe> broad;  // per unknown (sourceFunction writes them all)
+    PeakedLobes peaked;                // by unknown
     // By surface voxel, with lamps alone: the part of its peaked lobe its ramp scatters itself (SurfaceLight).
     PeakedLobes rampPeaks;
     // The sharp edge voxels' flat faces' own lobes, carried by the air across each (SurfaceLight's; none at REFERENCE).

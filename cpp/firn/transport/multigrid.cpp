@@ -51,9 +51,9 @@ struct MultigridSolver::Hierarchy {
         Stencil<float> A;
         // Per row, its voxel's parity (i + j + k) & 1: a sweep's colour (a byte a row where lists of each colour's
         // rows took four; a colour's rows read only the other's, so the order they are visited in does not matter).
-        std::vector<std::uint8_t> colour;
+        UnwrittenVector<std::uint8_t> colour;
         std::vector<std::uint32_t> membersStart, members;  // next level's rows -> rows here (CSR)
-        mutable std::vector<float> b, x;
+        mutable UnwrittenVector<float> b, x;  // written before they are read (sweep's fromZero)
     };
     std::vector<Level> levels;
     // The finest rows' neighbour table the levels were built over: a solver takes them over only for the same
@@ -119,11 +119,11 @@ using Level = MultigridSolver::Hierarchy::Level;
 void prepare(Level &level) {
     const std::size_t n = level.A.size();
     level.colour.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
+    parallelRows(n, [&](std::size_t i) {
         const openvdb::Coord &c = (*level.A.coord)[i];
         level.colour[i] = std::uint8_t((c.x() + c.y() + c.z()) & 1);
-    }
-    level.b.assign(n, 0.0), level.x.assign(n, 0.0);
+    });
+    level.b.resize(n), level.x.resize(n);
 }
 
 // The next level's rows: 2x2x2 blocks of this one's voxels (fine.members, coarse's voxels; `block`: each fine row's
@@ -178,8 +178,7 @@ void sumCoarseOperator(const Level &fine, const std::vector<std::uint32_t> &bloc
     const Stencil<float>::Neighbours &N = *A.neighbour;
     const std::size_t nc = fine.membersStart.size() - 1;
     Stencil<float> &C = coarse.A;
-    C.conductance.assign(nc, {});
-    C.diag.assign(nc, 0.0);
+    C.conductance.resize(nc), C.diag.resize(nc);  // every row written below
     // A block's neighbour along an axis is the block its members' links on that side cross into (a voxel's
     // neighbour one step away lies in its own block or in the next one that way). A neighbouring block that no
     // link reaches gets none: its conductance would be 0, which adds nothing to a sum.
@@ -272,7 +271,9 @@ double segmentedSum(std::size_t n, const Segment &segment) {
     for (double part : partial) sum += part;
     return sum;
 }
-double dot(const std::vector<double> &a, const std::vector<double> &b) {
+// (Vectors: the caller's std::vector<double> or a workspace's UnwrittenVector<double>.)
+template <typename VectorA, typename VectorB>
+double dot(const VectorA &a, const VectorB &b) {
     return segmentedSum(a.size(), [&](std::size_t, std::size_t begin, std::size_t end) {
         double part = 0.0;
         for (std::size_t i = begin; i < end; ++i) part += a[i] * b[i];
@@ -290,8 +291,9 @@ double infNorm(const std::vector<double> &a) {
 }
 // z = one V-cycle applied to r, scaled into float's range (the bake's sources span many decades between scenes) by
 // r's largest |r_i|.
+template <typename Vector>
 void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector<double> &r, double largest,
-                  std::vector<double> &z) {
+                  Vector &z) {
     const auto &top = hierarchy.levels.front();
     const double scale = std::max(largest, 1e-300);
     parallelRows(top.b.size(), [&](std::size_t i) { top.b[i] = float(r[i] / scale); });
@@ -300,14 +302,16 @@ void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector
 }
 
 // y = a x + y.
-void axpy(double a, const std::vector<double> &x, std::vector<double> &y) {
+template <typename Vector>
+void axpy(double a, const Vector &x, std::vector<double> &y) {
     parallelRows(y.size(), [&](std::size_t i) { y[i] = a * x[i] + y[i]; });
 }
 
 // The iteration's step in one pass over the vectors: x += alpha p, r -= alpha q; returns <r, r> (as dot) and sets
 // `largest` to the largest |r_i| of the new r.
-double step(double alpha, const std::vector<double> &p, const std::vector<double> &q, std::vector<double> &x,
-            std::vector<double> &r, double &largest) {
+template <typename Vector>
+double step(double alpha, const Vector &p, const Vector &q, std::vector<double> &x, std::vector<double> &r,
+            double &largest) {
     std::array<double, kSegments> most{};  // per segment of segmentedSum
     const double sum = segmentedSum(r.size(), [&](std::size_t s, std::size_t begin, std::size_t end) {
         double part = 0.0, top = 0.0;
@@ -415,7 +419,8 @@ MultigridSolver::Result MultigridSolver::iterate(std::vector<double> &b, std::ve
     const double tolerance = std::max(relativeTolerance, kFinestTolerance);
     const double largestB = infNorm(b), normB = largestB == 0.0 ? 1.0 : largestB;
     w.p.resize(n), w.z.resize(n);
-    std::vector<double> &r = b, &p = w.p, &z = w.z;  // z: M^-1 r, then A p
+    std::vector<double> &r = b;
+    UnwrittenVector<double> &p = w.p, &z = w.z;  // z: M^-1 r, then A p
     A.multiply(x.data(), z.data());
     axpy(-1.0, z, r);  // r = b - A x
     double largest = infNorm(r);
@@ -427,12 +432,12 @@ MultigridSolver::Result MultigridSolver::iterate(std::vector<double> &b, std::ve
         result.iterations = iteration + 1;
         precondition(*hierarchy_, r, largest, z);
         const double rDotZ = dot(r, z);
-        if (iteration == 0) p = z;
+        if (iteration == 0) parallelRows(n, [&](std::size_t i) { p[i] = z[i]; });
         else {
             const double beta = rDotZ / rDotZPrevious;
             parallelRows(n, [&](std::size_t i) { p[i] = beta * p[i] + z[i]; });
         }
-        std::vector<double> &q = z;
+        UnwrittenVector<double> &q = z;
         A.multiply(p.data(), q.data());
         const double alpha = rDotZ / dot(p, q);
         rDotZPrevious = rDotZ;

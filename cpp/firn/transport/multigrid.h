@@ -9,6 +9,7 @@
 #include <openvdb/openvdb.h>
 
 #include "firn/util/progress.h"
+#include "firn/util/unwritten_vector.h"
 
 namespace firn {
 
@@ -25,8 +26,9 @@ struct Stencil {
     // voxels rather than a copy of them (12 bytes per row, copied for every solve).
     std::shared_ptr<const std::vector<openvdb::Coord>> coord;
     std::shared_ptr<const Neighbours> neighbour;
-    std::vector<std::array<T, 6>> conductance;
-    std::vector<T> diag;
+    // Sized unwritten (UnwrittenVector): whoever sizes them writes every row, in parallel.
+    UnwrittenVector<std::array<T, 6>> conductance;
+    UnwrittenVector<T> diag;
 
     std::size_t size() const { return diag.size(); }
     T row(std::size_t i, const T *x) const;  // (A x)_i
@@ -58,7 +60,7 @@ class MultigridSolver {
     // neighbours and colours depend on the voxels alone, so only its coarse operators are summed again.
     struct Hierarchy;  // levels, defined in multigrid.cpp (so held by shared_ptr: complete where it is deleted)
     struct Workspace {
-        std::vector<double> p, z;
+        UnwrittenVector<double> p, z;  // written before they are read
         std::vector<double> spare;          // b's storage after a solve (holding its last residual)
         std::shared_ptr<Hierarchy> levels;  // a spent solver's levels, or none
     };

@@ -98,7 +98,7 @@ bake::MonteCarloVoxels tracedWithFaces(const Scene &scene, const std::vector<ope
 bake::SourceValues tracedUnknowns(const SnowTopology &topo, const std::vector<openvdb::Coord> &voxels,
                                   const bake::MonteCarloVoxels &traced) {
     bake::SourceValues source;
-    source.broad.resize(topo.size());
+    source.broad.assign(topo.size(), BroadLobe{});
     for (std::size_t v = 0; v < voxels.size(); ++v)
         if (const std::int32_t i = topo.index->getValue(voxels[v]); i >= 0) {
             source.broad[std::size_t(i)] = traced.source[v];

@@ -1,0 +1,48 @@
+#pragma once
+
+#include <memory>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace firn {
+
+// An allocator whose vectors grow (resize) without writing their new elements: for per-unknown arrays that a
+// parallel loop then writes in full. Each page is first touched (faulted in and cleared by the kernel) by the thread
+// that writes it, not zero-filled on the calling thread beforehand; copies and assign(n, value) write as usual.
+// (docs/benchmarks.md, car-prof: such fills made 14-36 % of the solve stages' processor time single-threaded.)
+template <class T>
+struct UnwrittenAllocator : std::allocator<T> {
+    template <class U>
+    struct rebind {
+        using other = UnwrittenAllocator<U>;
+    };
+    UnwrittenAllocator() = default;
+    template <class U>
+    UnwrittenAllocator(const UnwrittenAllocator<U> &) noexcept {}
+
+    template <class U>
+    void construct(U *) noexcept {
+        static_assert(std::is_trivially_copyable_v<U> && std::is_trivially_destructible_v<U>,
+                      "an element left unwritten must be plain data");
+    }
+    template <class U, class... Args>
+    void construct(U *p, Args &&...args) {
+        ::new (static_cast<void *>(p)) U(std::forward<Args>(args)...);
+    }
+};
+
+template <class T, class U>
+bool operator==(const UnwrittenAllocator<T> &, const UnwrittenAllocator<U> &) {
+    return true;
+}
+template <class T, class U>
+bool operator!=(const UnwrittenAllocator<T> &, const UnwrittenAllocator<U> &) {
+    return false;
+}
+
+// A vector whose resize leaves its new elements to be written (UnwrittenAllocator).
+template <class T>
+using UnwrittenVector = std::vector<T, UnwrittenAllocator<T>>;
+
+}  // namespace firn
