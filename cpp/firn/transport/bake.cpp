@@ -38,9 +38,9 @@ using bake::ChannelStorage, bake::ChannelSystem, bake::EdgeFaceLobes, bake::Gath
 using bake::addFaceSources, bake::assemble, bake::gatheredVoxelFaces, bake::gridValues, bake::layerFaces,
     bake::lightTracedAtGatheringCost, bake::lightTraceSources,
     bake::makeGrids, bake::planGathering, bake::rampPeaks, bake::referenceSurface, bake::scatterGrid,
-    bake::snowIrradiance, bake::sourceFunction, bake::sourceGrid, bake::surfaceLight, bake::surfaceRadiance,
-    bake::thinVoxels, bake::traceSources;
-using bake::kMaxTracedSteps, bake::kWholePieceTracedSteps;
+    bake::smallScenePlan, bake::snowIrradiance, bake::sourceFunction, bake::sourceGrid, bake::surfaceLight,
+    bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
+using bake::kMaxTracedSteps, bake::kSmallSceneTracedSteps, bake::kWholePieceTracedSteps;
 
 namespace {
 
@@ -52,9 +52,10 @@ constexpr int kMaxSunSamples = 4096, kMaxReferenceSamples = 65536;
 constexpr double kSendBackWorthPasses = 0.15;
 
 Preset resolve(const BakeSettings &s) {
-    Preset p = s.quality == BakeQuality::Draft ? Preset{9, 1, 1e-4, 0, 1, 64, 64, true, 0.25}
-               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true, 1.0}
-                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false, 1.0};
+    constexpr double kSmall = kSmallSceneTracedSteps;  // DRAFT, a preview, keeps its counts
+    Preset p = s.quality == BakeQuality::Draft ? Preset{9, 1, 1e-4, 0, 1, 64, 64, true, 0.25, 0.0}
+               : s.quality == BakeQuality::Final ? Preset{9, 4, 1e-5, 0, 1, 256, 1024, true, 1.0, kSmall}
+                                                 : Preset{64, 8, 1e-7, 64, 2, 1024, 1024, false, 1.0, kSmall};
     if (s.skySamples < 0 || s.sunSamples < 0 || s.referenceSamples < 0 || !(s.tolerance >= 0.0) || s.tolerance >= 1.0)
         throw InvalidArgument("bake settings: sample counts must be >= 0 and the tolerance in [0, 1)");
     // Conjugate gradients in double precision stall near 1e-15: asked for less, it iterated on a residual of
@@ -389,7 +390,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                     }
                 }
                 if (traced.source.empty()) {
-                    const GatheringPlan plan = planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull);
+                    const GatheringPlan plan =
+                        smallScenePlan(scene, preset, planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull));
                     if (settings.lightTracing)
                         traced =
                             lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);

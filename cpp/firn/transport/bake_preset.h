@@ -22,6 +22,9 @@ struct Preset {
     // (seeds 1-3 12.6, 12.1, 11.3 %), the snow with them from above 10.2 -> 13.1 %; half: 8.2 + 5.3 s, 8.3 %, 12.7 %.
     // Without the least photons scaled too the joint bake's lumps fell to the diffusion: from above 29.8 %.
     double lightTracingShare;
+    // Tracking steps the traced voxels of a small scene may take in all, their paths per voxel (or photons) raised
+    // beyond the counts above (smallScenePlan, bake_traced_voxels.h); 0: never raised.
+    double smallSceneTracedSteps;
 };
 
 }  // namespace firn::bake

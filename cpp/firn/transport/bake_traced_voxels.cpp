@@ -145,6 +145,18 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
             std::min(kLitFaceMultiple * kLitFacePaths, preset.cheapTracedSamples)};
 }
 
+GatheringPlan smallScenePlan(const Scene &scene, const Preset &preset, GatheringPlan plan) {
+    if (plan.paths <= 0) return plan;
+    const double snowVoxels = double(scene.medium->density().activeVoxelCount());
+    const double budget = preset.smallSceneTracedSteps * std::min(1.0, kSmallSceneVoxels / std::max(snowVoxels, 1.0));
+    const double perPath = plan.steps / plan.paths;  // all the voxels' steps for one path each
+    const double most = double(kMostTracedShare) * preset.cheapTracedSamples;
+    const int paths = int(std::clamp(budget / perPath, double(plan.paths), most));
+    if (paths == plan.paths) return plan;
+    plan.paths = paths, plan.steps = perPath * paths, plan.drawnPaths = std::max(plan.drawnPaths, paths);
+    return plan;
+}
+
 namespace {
 
 // The traced voxels' sources from their estimates (`estimate(v)`: voxel v's, called in parallel, gathered by

@@ -117,8 +117,8 @@ struct TracedGrids {
     TracedGrids(const Scene &scene, const std::vector<openvdb::Coord> &voxels)
         : topo(buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0))),
           traced(tracedWithFaces(scene, voxels, 256)), source(tracedUnknowns(topo, voxels, traced)),
-          values(bake::gridValues(scene, topo, source, traced, bake::Preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25},
-                                  BakeSettings{}, true)) {}
+          values(bake::gridValues(scene, topo, source, traced,
+                                  bake::Preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25, 0.0}, BakeSettings{}, true)) {}
     // The grids' value at voxel c.
     Source at(const openvdb::Coord &c) const { return bake::BakedValuesSampler(topo, source, traced, values).at(c); }
 };
@@ -498,7 +498,7 @@ TEST(FaceSources, TheFacesArePricedAtTheirOwnStepsPerPath) {
     const double perPath = all.stepsPerPath * double(all.faces);  // one path on every face
     // The voxels' own pilot: their paths longer than the faces'.
     const bake::GatheringPlan voxelsPlan =
-        bake::planGathering(scene, bake::Preset{9, 4, 1e-5, 0, 1, 256, 256, true, 1.0}, voxels, 1);
+        bake::planGathering(scene, bake::Preset{9, 4, 1e-5, 0, 1, 256, 256, true, 1.0, 0.0}, voxels, 1);
     ASSERT_EQ(voxelsPlan.paths, 256);
     EXPECT_LT(all.stepsPerPath, voxelsPlan.steps / (256.0 * double(voxels.size())));
 

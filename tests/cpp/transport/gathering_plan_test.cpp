@@ -1,7 +1,7 @@
 // The traced voxels' paths (bake_traced_voxels.h, planGathering): where the plan holds the preset's paths, the voxels
 // the renderer draws rather than scatters (sigma_t h at least BakedGrids::kScatterOpticalDepth) take twice as many, up
 // to the preset's cheap paths; none more where the budget already cuts the paths; the faces' and lit faces' paths
-// (addFaceSources).
+// (addFaceSources); a small scene's paths raised within its traced work (smallScenePlan).
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -30,7 +30,12 @@ std::vector<openvdb::Coord> lumpVoxels() {
 }
 
 // FINAL's preset but for its traced paths and the cheap paths' cap.
-bake::Preset preset(int traced, int cheap) { return {9, 4, 1e-5, 0, 1, traced, cheap, true, 1.0}; }
+bake::Preset preset(int traced, int cheap, double smallScene = 0.0) {
+    return {9, 4, 1e-5, 0, 1, traced, cheap, true, 1.0, smallScene};
+}
+
+// A plan of `paths` per voxel costing `perPath` tracking steps for one path of each voxel.
+bake::GatheringPlan planOf(int paths, double perPath) { return {paths, perPath * paths, paths, 1024, 1024}; }
 
 }  // namespace
 
@@ -81,6 +86,49 @@ TEST(GatheringPlan, TheFacesShareWhatTheVoxelsLeaveOfTheBudget) {
     EXPECT_EQ(how.fewestPaths, 64);
     EXPECT_DOUBLE_EQ(how.budget, 1e6);
     EXPECT_EQ(how.litPaths, 1024);
+}
+
+// A small scene's paths are as many as its traced work affords (Preset::smallSceneTracedSteps), up to
+// kMostTracedShare times the cheap paths; the faces keep theirs. 1e4 steps per path of all the voxels: FINAL's 1e8
+// affords 10000.
+TEST(GatheringPlan, ASmallScenesPathsRiseWithinItsTracedWork) {
+    const bake::GatheringPlan raised =
+        bake::smallScenePlan(smallLump(), preset(256, 1024, bake::kSmallSceneTracedSteps), planOf(1024, 1e4));
+    EXPECT_EQ(raised.paths, 10000);
+    EXPECT_EQ(raised.drawnPaths, 10000);
+    EXPECT_DOUBLE_EQ(raised.steps, 1e8);
+    EXPECT_EQ(raised.facePaths, 1024);
+    // Cheap paths: up to the cap.
+    EXPECT_EQ(bake::smallScenePlan(smallLump(), preset(256, 1024, bake::kSmallSceneTracedSteps), planOf(1024, 1.0))
+                  .paths,
+              bake::kMostTracedShare * 1024);
+    // DRAFT (no small-scene work), and a plan the budget cut (none) or that already costs more: as planned.
+    EXPECT_EQ(bake::smallScenePlan(smallLump(), preset(64, 64), planOf(64, 1e4)).paths, 64);
+    EXPECT_EQ(bake::smallScenePlan(smallLump(), preset(256, 1024, 1e8), bake::GatheringPlan{}).paths, 0);
+    EXPECT_EQ(bake::smallScenePlan(smallLump(), preset(256, 1024, 1e8), planOf(256, 1e6)).paths, 256);
+}
+
+// A large scene's traced voxels keep the preset's paths: the traced work shrinks inversely as its snow voxels pass
+// kSmallSceneVoxels (a 100^3 block of snow: a tenth of it, 1e7 steps, under what 1024 paths cost there).
+TEST(GatheringPlan, ALargeScenesPathsStayThePresets) {
+    const openvdb::CoordBBox block(openvdb::Coord(0), openvdb::Coord(99));
+    const Scene large = test::boxScene(block, 1.0f, VolumeOptics{10.0, Rgb(0.999), 0.85}, glm::dvec3(0.0, 0.0, 1.0));
+    ASSERT_EQ(large.medium->density().activeVoxelCount(), 1000000);
+    const bake::Preset final = preset(256, 1024, bake::kSmallSceneTracedSteps);
+    EXPECT_EQ(bake::smallScenePlan(large, final, planOf(1024, 1e4)).paths, 1024);
+    EXPECT_EQ(bake::smallScenePlan(smallLump(), final, planOf(1024, 1e4)).paths, 10000);
+}
+
+// The same scene and seed plan the same paths (planGathering's pilot is seeded): the bake stays deterministic.
+TEST(GatheringPlan, ASmallScenesPlanIsTheSameForTheSameSeed) {
+    const bake::Preset final = preset(256, 1024, bake::kSmallSceneTracedSteps);
+    const auto plan = [&] {
+        return bake::smallScenePlan(smallLump(), final, bake::planGathering(smallLump(), final, lumpVoxels(), 7));
+    };
+    const bake::GatheringPlan a = plan(), b = plan();
+    EXPECT_GT(a.paths, 1024);  // 8 voxels of a few hundred steps per path
+    EXPECT_EQ(a.paths, b.paths);
+    EXPECT_DOUBLE_EQ(a.steps, b.steps);
 }
 
 }  // namespace firn
