@@ -10,15 +10,15 @@
 
 namespace firn {
 
+// m: how far beyond a link's segment LinkTriangles looks: far past the float rounding of the ray's origin and of
+// Embree's test in a scene as wide as the medium and the occluders.
+double linkPad(const Medium &medium, const Occluders &occluders);
+
 // The occluder triangles near a block of voxels' links, and an exact pre-test of one link against them before
 // occluderOnLink's Embree ray (snow_topology.h). The ray meets a triangle only at a point both share, so a link whose
 // segment, padded by more than Embree's and the ray origin's rounding, no triangle overlaps has no hit and needs no
 // ray: the car's topology cast one per link of every voxel of a leaf near an occluder (9.2 M, 3.4 per active voxel),
 // most of them voxels away from any triangle (docs/benchmarks.md, car-links).
-// m: how far beyond a link's segment LinkTriangles looks: far past the float rounding of the ray's origin and of
-// Embree's test in a scene as wide as the medium and the occluders.
-double linkPad(const Medium &medium, const Occluders &occluders);
-
 class LinkTriangles {
   public:
     // The triangles that may cross a link up any axis from a voxel in `lowers` (index space, closed), each link's
