@@ -16,6 +16,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/link_triangles.h"
+
 namespace firn {
 
 namespace {
@@ -387,6 +389,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
 
     openvdb::tree::LeafManager<openvdb::Int32Tree> leaves(*topo.index);
     const auto near = leavesNearOccluders(medium, occluders, leaves);
+    const double linkPad = firn::linkPad(medium, occluders);
     progress.report(0.4);
     progress.throwIfCancelled();
 
@@ -401,6 +404,13 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
         std::vector<std::optional<RayCaster::Hit>> upHits(3 * IndexLeaf::SIZE);
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             const IndexLeaf &leaf = leaves.leaf(l);
+            // The links' lower voxels: the leaf's own and the ones below its lower faces.
+            std::optional<LinkTriangles> linkTriangles;
+            if (near[l])
+                linkTriangles.emplace(medium, occluders,
+                                      openvdb::CoordBBox(leaf.origin() - openvdb::Coord(1), leaf.origin() + openvdb::Coord(7)),
+                                      linkPad);
+            const bool nearTriangles = linkTriangles && !linkTriangles->empty();
             const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
             for (auto it = leaf.cbeginValueOn(); it; ++it) {
                 const std::uint32_t i = std::uint32_t(*it);
@@ -409,7 +419,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
                 topo.density[i] = densityLeaf->getValue(it.pos());
                 for (int f = 0; f < 6; ++f) {
                     BoundaryFace face{i, std::uint8_t(f), false, 0.0f, 0};
-                    if (near[l]) {
+                    if (nearTriangles) {
                         // Voxels come in offset order: the one below in the same leaf has tested its link up.
                         const bool up = f & 1;
                         const openvdb::Coord lower = up ? c : c + faceStep(f);
@@ -418,7 +428,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
                         std::optional<RayCaster::Hit> hit;
                         if (!up && (c[f / 2] & 7) != 0 && leaf.isValueOn(lowerOffset))
                             hit = upHits[3 * lowerOffset + f / 2];
-                        else
+                        else if (linkTriangles->mayCross(lower, f / 2))
                             hit = occluderOnLink(medium, occluders, lower, f / 2);
                         if (up) upHits[3 * lowerOffset + f / 2] = hit;
                         if (hit) {
