@@ -63,22 +63,17 @@ struct GatheringPlan {
     // Per voxel the renderer draws rather than scatters (drawnByRenderer); 0: `paths`. Its paths beyond `paths` are
     // priced apart (kDrawnExtraSteps), not in `steps`.
     int drawnPaths = 0;
-    // Per face of the voxels' faces (gatheredVoxelFaces): kFacePathsPerVoxelPath times `paths`; per lit face
-    // kLitFacePaths times the faces' multiple of half the voxel's (their ratio to the faces kept); each up to the
-    // preset's cheapTracedSamples.
+    // Per face of the voxels' faces (gatheredVoxelFaces): kFacePathsPerVoxelPath times the preset's paths (`paths`
+    // but for a small scene's raise); per lit face kLitFacePaths times the faces' multiple of half the voxel's (their
+    // ratio to the faces kept); each up to the preset's cheapTracedSamples.
     int facePaths = 0;
     int litFacePaths = 0;
 };
-// The paths per voxel to gather `voxels` with, their cost per path measured on a few of them first.
-GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
-                            std::uint64_t seed);
-
 // A small scene's traced work (Preset::smallSceneTracedSteps): FINAL's traced voxels may take this many tracking
 // steps in all (about 6 processor seconds) in a scene of at most kSmallSceneVoxels snow voxels, and a share of it
 // inversely as the snow voxels beyond (the rest of a bake grows with them: a car's 2.7 M voxels leave 3.7e6, under
 // what its 3 traced voxels take at the preset's paths, so its plan is the preset's): as many paths per voxel as it
-// affords, up to kMostTracedShare times the preset's cheapTracedSamples, never fewer than planGathering's (the
-// Kronecker sequence stratifies any count).
+// affords, up to kMostTracedShare times the preset's cheapTracedSamples, never fewer than the preset's (planGathering).
 // Where the suite's traced error is the bake's own noise, 16 times the paths or photons read several cases lower
 // (docs/bake.md, per-voxel noise); a small scene's traced voxels take well under a second at the preset's counts.
 // Over seeds 0-3 (docs/benchmarks.md, spray-paths): ball_thin_forward 5.4 -> 4.4 % per block (photons 16x, the trace
@@ -86,9 +81,11 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
 constexpr double kSmallSceneTracedSteps = 1e8;
 constexpr double kSmallSceneVoxels = 1e5;
 constexpr int kMostTracedShare = 16;
-// `plan` (planGathering's for `scene`) with as many paths per voxel as the scene's share of the preset's
-// smallSceneTracedSteps affords; light tracing at the gathering's cost (lightTracedAtGatheringCost) follows.
-GatheringPlan smallScenePlan(const Scene &scene, const Preset &preset, GatheringPlan plan);
+// The paths per voxel to gather `voxels` with, their cost per path measured on a few of them first: the preset's,
+// fewer within kMaxTracedSteps, more where they cost little or a small scene's traced work affords them. Light
+// tracing at the gathering's cost (lightTracedAtGatheringCost) follows the plan's steps.
+GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
+                            std::uint64_t seed);
 
 // The voxels' sources gathered by brute force, `samples` paths each, `drawnSamples` (0: `samples`) those the renderer
 // draws rather than scatters (drawnByRenderer).
