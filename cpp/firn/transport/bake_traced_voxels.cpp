@@ -158,7 +158,8 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
     constexpr int kLitFaceMultiple = 2 * kFacePathsPerVoxelPath;
     return {samples, allVoxels * samples, drawnPaths,
             std::min(kFacePathsPerVoxelPath * doubled, preset.cheapTracedSamples),
-            std::min(kLitFaceMultiple * kLitFacePaths, preset.cheapTracedSamples)};
+            std::min(kLitFaceMultiple * kLitFacePaths, preset.cheapTracedSamples),
+            small - allVoxels * (samples - doubled)};
 }
 
 namespace {
@@ -420,7 +421,7 @@ double faceStepsPerPath(const MonteCarloReference &reference, const std::vector<
 
 FaceGathering gatheredVoxelFaces(const GatheringPlan &plan) {
     const int fewest = std::min(plan.facePaths, std::max(64, plan.paths / 4));  // a raised plan's quarter may pass them
-    return {plan.facePaths, fewest, kMaxTracedSteps - plan.steps, {}, plan.litFacePaths};
+    return {plan.facePaths, fewest, kMaxTracedSteps - plan.steps + plan.smallSceneSteps, {}, plan.litFacePaths};
 }
 
 // A lump's lit face (litFace) is what the air beside it carries towards the cameras that see the lump's sunlit side,

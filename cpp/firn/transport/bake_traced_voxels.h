@@ -68,6 +68,9 @@ struct GatheringPlan {
     // ratio to the faces kept); each up to the preset's cheapTracedSamples.
     int facePaths = 0;
     int litFacePaths = 0;
+    // What a small scene's traced work (kSmallSceneTracedSteps) leaves beyond the preset's paths' steps: its faces may
+    // take it beyond what the voxels leave of kMaxTracedSteps (gatheredVoxelFaces).
+    double smallSceneSteps = 0.0;
 };
 // A small scene's traced work (Preset::smallSceneTracedSteps): FINAL's traced voxels may take this many tracking
 // steps in all (about 6 processor seconds) in a scene of at most kSmallSceneVoxels snow voxels, and a share of it
@@ -104,7 +107,8 @@ struct FaceGathering {
     int litPaths = 0;
 };
 // The gathered voxels' faces: the plan's facePaths, else as many as fit down to a quarter of the voxel's, within what
-// the gathering leaves of kMaxTracedSteps; their lit faces the plan's litFacePaths (litFacePaths).
+// the gathering leaves of kMaxTracedSteps and a small scene's traced work (GatheringPlan::smallSceneSteps); their lit
+// faces the plan's litFacePaths (litFacePaths).
 FaceGathering gatheredVoxelFaces(const GatheringPlan &plan);
 
 // A gathered face's paths per path of its voxel's (planGathering), up to the preset's cheapTracedSamples (DRAFT's faces
@@ -113,6 +117,9 @@ FaceGathering gatheredVoxelFaces(const GatheringPlan &plan);
 // tracing, every path four times 1.6 points for 17 s). Within kMaxTracedSteps, priced at the faces' own steps per path
 // (addFaceSources), spray_dense's 438 faces take 276-304 of the 512 and its lit faces 838-866: 14.7 -> 14.0 % over
 // seeds 0-7, no seed higher, the trace 5.8 -> 7.5 processor s (face-pilot; at the voxels' price 144, face-share).
+// With a small scene's traced work beside (GatheringPlan::smallSceneSteps) they take all 512 (the lit faces up to 1024):
+// 13.9 -> 13.3 % over seeds 0-3, every seed lower, the trace 8.8 -> 10.7 processor s, where twice the voxels' paths
+// read 13.8 % for 6 s more and the faces at 1024 13.7 % (docs/benchmarks.md, spray-faces).
 constexpr int kFacePathsPerVoxelPath = 2;
 
 // A gathered lump's lit face: its lobe pair's path-noise bias along its normal, c / N at N paths (c in paths:

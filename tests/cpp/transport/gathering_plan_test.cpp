@@ -75,8 +75,8 @@ TEST(GatheringPlan, FacesTakeAMultipleOfTheVoxelsPathsUpToTheCheapPaths) {
     EXPECT_EQ(draft.litFacePaths, 64);
 }
 
-// The faces take the plan's paths within what the voxels' paths leave of kMaxTracedSteps, down to a quarter of the
-// voxel's, never more than the faces' own (addFaceSources prices them at their
+// The faces take the plan's paths within what the voxels' paths leave of kMaxTracedSteps and of a small scene's
+// traced work, down to a quarter of the voxel's, never more than the faces' own (addFaceSources prices them at their
 // own steps per path).
 TEST(GatheringPlan, TheFacesShareWhatTheVoxelsLeaveOfTheBudget) {
     const bake::GatheringPlan plan{256, bake::kMaxTracedSteps - 1e6, 256, 512, 1024};
@@ -85,7 +85,9 @@ TEST(GatheringPlan, TheFacesShareWhatTheVoxelsLeaveOfTheBudget) {
     EXPECT_EQ(how.fewestPaths, 64);
     EXPECT_DOUBLE_EQ(how.budget, 1e6);
     EXPECT_EQ(how.litPaths, 1024);
-    const bake::GatheringPlan raised{16384, 1e8, 16384, 1024, 1024};
+    const bake::GatheringPlan small{256, bake::kMaxTracedSteps - 1e6, 256, 512, 1024, 3e7};
+    EXPECT_DOUBLE_EQ(bake::gatheredVoxelFaces(small).budget, 3.1e7);
+    const bake::GatheringPlan raised{16384, 1e8, 16384, 1024, 1024, 0.0};
     EXPECT_EQ(bake::gatheredVoxelFaces(raised).fewestPaths, 1024);
 }
 
@@ -105,6 +107,11 @@ TEST(GatheringPlan, ASmallScenesPathsRiseWithinItsTracedWork) {
     EXPECT_EQ(raised.drawnPaths, raised.paths);
     EXPECT_EQ(raised.facePaths, cheap.facePaths);
     EXPECT_EQ(raised.litFacePaths, cheap.litFacePaths);
+    // The traced work the raise leaves goes to the faces (gatheredVoxelFaces); none raised, all of it.
+    EXPECT_DOUBLE_EQ(raised.smallSceneSteps, bake::kSmallSceneTracedSteps - perPath * (raised.paths - cheap.paths));
+    EXPECT_DOUBLE_EQ(cheap.smallSceneSteps, 0.0);
+    EXPECT_DOUBLE_EQ(bake::planGathering(smallLump(), preset(256, 1024, perPath * 100.0), lumpVoxels(), 1).smallSceneSteps,
+                     perPath * 100.0);
     // Less traced work: fewer paths (any count), never fewer than the preset's.
     EXPECT_EQ(bake::planGathering(smallLump(), preset(256, 1024, perPath * 3000.5), lumpVoxels(), 1).paths, 3000);
     EXPECT_EQ(bake::planGathering(smallLump(), preset(256, 1024, perPath * 100.0), lumpVoxels(), 1).paths, 1024);
@@ -123,7 +130,9 @@ TEST(GatheringPlan, ALargeScenesPathsStayThePresets) {
     ASSERT_EQ(cheap.paths, 1024);
     ASSERT_GT(cheap.steps, 0.1 * bake::kSmallSceneTracedSteps);
     ASSERT_LT(cheap.steps, 0.5 * bake::kSmallSceneTracedSteps);
-    EXPECT_EQ(bake::planGathering(large, preset(256, 1024, bake::kSmallSceneTracedSteps), corner, 1).paths, 1024);
+    const bake::GatheringPlan final = bake::planGathering(large, preset(256, 1024, bake::kSmallSceneTracedSteps), corner, 1);
+    EXPECT_EQ(final.paths, 1024);
+    EXPECT_DOUBLE_EQ(final.smallSceneSteps, 0.1 * bake::kSmallSceneTracedSteps);
 }
 
 // The same scene and seed plan the same paths (planGathering's pilot is seeded): the bake stays deterministic.
