@@ -117,9 +117,9 @@ FaceGathering gatheredVoxelFaces(const GatheringPlan &plan);
 // tracing, every path four times 1.6 points for 17 s). Within kMaxTracedSteps, priced at the faces' own steps per path
 // (addFaceSources), spray_dense's 438 faces take 276-304 of the 512 and its lit faces 838-866: 14.7 -> 14.0 % over
 // seeds 0-7, no seed higher, the trace 5.8 -> 7.5 processor s (face-pilot; at the voxels' price 144, face-share).
-// With a small scene's traced work beside (GatheringPlan::smallSceneSteps) they take all 512 (the lit faces up to 1024):
-// 13.9 -> 13.3 % over seeds 0-3, every seed lower, the trace 8.8 -> 10.7 processor s, where twice the voxels' paths
-// read 13.8 % for 6 s more and the faces at 1024 13.7 % (docs/benchmarks.md, spray-faces).
+// With a small scene's traced work beside (GatheringPlan::smallSceneSteps) they take all 512 (the lit faces up to
+// 1024): 13.9 -> 13.3 % over seeds 0-3, every seed lower, the trace 8.8 -> 10.7 processor s, where twice the voxels'
+// paths read 13.8 % for 6 s more and the faces at 1024 13.7 % (docs/benchmarks.md, spray-faces).
 constexpr int kFacePathsPerVoxelPath = 2;
 
 // A gathered lump's lit face: its lobe pair's path-noise bias along its normal, c / N at N paths (c in paths:
