@@ -38,7 +38,7 @@ using bake::ChannelStorage, bake::ChannelSystem, bake::EdgeFaceLobes, bake::Gath
 using bake::addFaceSources, bake::assemble, bake::gatheredVoxelFaces, bake::gridValues, bake::layerFaces,
     bake::lightTracedAtGatheringCost, bake::lightTraceSources,
     bake::makeGrids, bake::planGathering, bake::rampPeaks, bake::referenceSurface, bake::scatterGrid,
-    bake::smallScenePlan, bake::snowIrradiance, bake::sourceFunction, bake::sourceGrid, bake::surfaceLight,
+    bake::snowIrradiance, bake::sourceFunction, bake::sourceGrid, bake::surfaceLight,
     bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
 using bake::kMaxTracedSteps, bake::kSmallSceneTracedSteps, bake::kWholePieceTracedSteps;
 
@@ -390,8 +390,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                     }
                 }
                 if (traced.source.empty()) {
-                    const GatheringPlan plan =
-                        smallScenePlan(scene, preset, planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull));
+                    const GatheringPlan plan = planGathering(scene, preset, thin, settings.seed ^ 0x7EACEull);
                     if (settings.lightTracing)
                         traced =
                             lightTracedAtGatheringCost(scene, thin, plan, settings.seed ^ 0x7EACEull, progress, local);

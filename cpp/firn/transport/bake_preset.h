@@ -23,7 +23,7 @@ struct Preset {
     // Without the least photons scaled too the joint bake's lumps fell to the diffusion: from above 29.8 %.
     double lightTracingShare;
     // Tracking steps the traced voxels of a small scene may take in all, their paths per voxel (or photons) raised
-    // beyond the counts above (smallScenePlan, bake_traced_voxels.h); 0: never raised.
+    // beyond the counts above (planGathering, bake_traced_voxels.h); 0: never raised.
     double smallSceneTracedSteps;
 };
 

@@ -111,6 +111,16 @@ Gathering gathering(const Medium &medium, Medium::Accessor &density, const openv
 
 }  // namespace
 
+namespace {
+
+// The tracking steps a small scene's traced voxels may take in all (Preset::smallSceneTracedSteps, kSmallSceneVoxels).
+double smallSceneSteps(const Scene &scene, const Preset &preset) {
+    const double snowVoxels = double(scene.medium->density().activeVoxelCount());
+    return preset.smallSceneTracedSteps * std::min(1.0, kSmallSceneVoxels / std::max(snowVoxels, 1.0));
+}
+
+}  // namespace
+
 GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                             std::uint64_t seed) {
     constexpr int kMinSamples = 64;
@@ -126,35 +136,30 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
     if (perPath > budget) return {};  // too costly
     const int affordable = int(std::min(kMaxTracedPaths, kMaxTracedSteps / perPath) / double(voxels.size()));
     if (affordable < kMinSamples) return {};
+    const double allVoxels = perPath * double(voxels.size());  // one path of each voxel
+    // The preset's paths, doubled while they cost little (up to its cheap paths), then as many as a small scene's
+    // traced work affords (up to kMostTracedShare times those; the Kronecker sequence stratifies any count).
     int samples = std::min(affordable, preset.tracedSamples);
     const double cheap = perPath <= kShortPathSteps ? kShortTracedSteps : kCheapTracedSteps;
-    while (2 * samples <= preset.cheapTracedSamples && perPath * 2.0 * samples * double(voxels.size()) <= cheap)
-        samples *= 2;
-    int drawnPaths = samples;
-    if (samples >= preset.tracedSamples && kDrawnPathShare * samples <= preset.cheapTracedSamples) {
+    while (2 * samples <= preset.cheapTracedSamples && allVoxels * 2.0 * samples <= cheap) samples *= 2;
+    const int doubled = samples;
+    const double small = smallSceneSteps(scene, preset);
+    const double most = double(kMostTracedShare) * preset.cheapTracedSamples;
+    if (small > 0.0) samples = std::max(samples, int(std::min(small / allVoxels, most)));
+    int drawnPaths = samples;  // twice the preset's where those hold (kDrawnPathShare), as many as the raise's above
+    if (doubled >= preset.tracedSamples && kDrawnPathShare * doubled <= preset.cheapTracedSamples) {
         const auto drawn = std::count_if(voxels.begin(), voxels.end(), [&](const openvdb::Coord &c) {
             return drawnByRenderer(*scene.medium, density, c);
         });
-        if (perPath * (kDrawnPathShare - 1) * samples * double(drawn) <= kDrawnExtraSteps)
-            drawnPaths = kDrawnPathShare * samples;
+        if (perPath * (kDrawnPathShare - 1) * doubled * double(drawn) <= kDrawnExtraSteps)
+            drawnPaths = std::max(samples, kDrawnPathShare * doubled);
     }
     // The lit faces' ratio to the faces as when these took half the voxel's paths and the lit faces kLitFacePaths.
     constexpr int kLitFaceMultiple = 2 * kFacePathsPerVoxelPath;
-    return {samples, perPath * samples * double(voxels.size()), drawnPaths,
-            std::min(kFacePathsPerVoxelPath * samples, preset.cheapTracedSamples),
-            std::min(kLitFaceMultiple * kLitFacePaths, preset.cheapTracedSamples)};
-}
-
-GatheringPlan smallScenePlan(const Scene &scene, const Preset &preset, GatheringPlan plan) {
-    if (plan.paths <= 0) return plan;
-    const double snowVoxels = double(scene.medium->density().activeVoxelCount());
-    const double budget = preset.smallSceneTracedSteps * std::min(1.0, kSmallSceneVoxels / std::max(snowVoxels, 1.0));
-    const double perPath = plan.steps / plan.paths;  // all the voxels' steps for one path each
-    const double most = double(kMostTracedShare) * preset.cheapTracedSamples;
-    const int paths = int(std::clamp(budget / perPath, double(plan.paths), most));
-    if (paths == plan.paths) return plan;
-    plan.paths = paths, plan.steps = perPath * paths, plan.drawnPaths = std::max(plan.drawnPaths, paths);
-    return plan;
+    return {samples, allVoxels * samples, drawnPaths,
+            std::min(kFacePathsPerVoxelPath * doubled, preset.cheapTracedSamples),
+            std::min(kLitFaceMultiple * kLitFacePaths, preset.cheapTracedSamples),
+            small - allVoxels * (samples - doubled)};
 }
 
 namespace {
@@ -415,7 +420,8 @@ double faceStepsPerPath(const MonteCarloReference &reference, const std::vector<
 }  // namespace
 
 FaceGathering gatheredVoxelFaces(const GatheringPlan &plan) {
-    return {plan.facePaths, std::max(64, plan.paths / 4), kMaxTracedSteps - plan.steps, {}, plan.litFacePaths};
+    const int fewest = std::min(plan.facePaths, std::max(64, plan.paths / 4));  // a raised plan's quarter may pass them
+    return {plan.facePaths, fewest, kMaxTracedSteps - plan.steps + plan.smallSceneSteps, {}, plan.litFacePaths};
 }
 
 // A lump's lit face (litFace) is what the air beside it carries towards the cameras that see the lump's sunlit side,
@@ -434,7 +440,9 @@ int litFacePaths(int paths, int wanted, double litSteps) {
 
 FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                          std::vector<bool> inLayer, std::uint64_t seed) {
-    const GatheringPlan plan = planGathering(scene, preset, voxels, seed);
+    Preset notRaised = preset;  // light tracing took the small scene's traced work (lightTraceSources)
+    notRaised.smallSceneTracedSteps = 0.0;
+    const GatheringPlan plan = planGathering(scene, notRaised, voxels, seed);
     if (plan.paths < kMinLayerFacePaths) return {};
     return {plan.paths, plan.paths, kMaxTracedSteps - kWholePieceTracedSteps, std::move(inLayer)};
 }

@@ -63,22 +63,20 @@ struct GatheringPlan {
     // Per voxel the renderer draws rather than scatters (drawnByRenderer); 0: `paths`. Its paths beyond `paths` are
     // priced apart (kDrawnExtraSteps), not in `steps`.
     int drawnPaths = 0;
-    // Per face of the voxels' faces (gatheredVoxelFaces): kFacePathsPerVoxelPath times `paths`; per lit face
-    // kLitFacePaths times the faces' multiple of half the voxel's (their ratio to the faces kept); each up to the
-    // preset's cheapTracedSamples.
+    // Per face of the voxels' faces (gatheredVoxelFaces): kFacePathsPerVoxelPath times the preset's paths (`paths`
+    // but for a small scene's raise); per lit face kLitFacePaths times the faces' multiple of half the voxel's (their
+    // ratio to the faces kept); each up to the preset's cheapTracedSamples.
     int facePaths = 0;
     int litFacePaths = 0;
+    // What a small scene's traced work (kSmallSceneTracedSteps) leaves beyond the preset's paths' steps: its faces may
+    // take it beyond what the voxels leave of kMaxTracedSteps (gatheredVoxelFaces).
+    double smallSceneSteps = 0.0;
 };
-// The paths per voxel to gather `voxels` with, their cost per path measured on a few of them first.
-GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
-                            std::uint64_t seed);
-
 // A small scene's traced work (Preset::smallSceneTracedSteps): FINAL's traced voxels may take this many tracking
 // steps in all (about 6 processor seconds) in a scene of at most kSmallSceneVoxels snow voxels, and a share of it
 // inversely as the snow voxels beyond (the rest of a bake grows with them: a car's 2.7 M voxels leave 3.7e6, under
 // what its 3 traced voxels take at the preset's paths, so its plan is the preset's): as many paths per voxel as it
-// affords, up to kMostTracedShare times the preset's cheapTracedSamples, never fewer than planGathering's (the
-// Kronecker sequence stratifies any count).
+// affords, up to kMostTracedShare times the preset's cheapTracedSamples, never fewer than the preset's (planGathering).
 // Where the suite's traced error is the bake's own noise, 16 times the paths or photons read several cases lower
 // (docs/bake.md, per-voxel noise); a small scene's traced voxels take well under a second at the preset's counts.
 // Over seeds 0-3 (docs/benchmarks.md, spray-paths): ball_thin_forward 5.4 -> 4.4 % per block (photons 16x, the trace
@@ -86,9 +84,11 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
 constexpr double kSmallSceneTracedSteps = 1e8;
 constexpr double kSmallSceneVoxels = 1e5;
 constexpr int kMostTracedShare = 16;
-// `plan` (planGathering's for `scene`) with as many paths per voxel as the scene's share of the preset's
-// smallSceneTracedSteps affords; light tracing at the gathering's cost (lightTracedAtGatheringCost) follows.
-GatheringPlan smallScenePlan(const Scene &scene, const Preset &preset, GatheringPlan plan);
+// The paths per voxel to gather `voxels` with, their cost per path measured on a few of them first: the preset's,
+// fewer within kMaxTracedSteps, more where they cost little or a small scene's traced work affords them. Light
+// tracing at the gathering's cost (lightTracedAtGatheringCost) follows the plan's steps.
+GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
+                            std::uint64_t seed);
 
 // The voxels' sources gathered by brute force, `samples` paths each, `drawnSamples` (0: `samples`) those the renderer
 // draws rather than scatters (drawnByRenderer).
@@ -107,7 +107,8 @@ struct FaceGathering {
     int litPaths = 0;
 };
 // The gathered voxels' faces: the plan's facePaths, else as many as fit down to a quarter of the voxel's, within what
-// the gathering leaves of kMaxTracedSteps; their lit faces the plan's litFacePaths (litFacePaths).
+// the gathering leaves of kMaxTracedSteps and a small scene's traced work (GatheringPlan::smallSceneSteps); their lit
+// faces the plan's litFacePaths (litFacePaths).
 FaceGathering gatheredVoxelFaces(const GatheringPlan &plan);
 
 // A gathered face's paths per path of its voxel's (planGathering), up to the preset's cheapTracedSamples (DRAFT's faces
@@ -116,6 +117,9 @@ FaceGathering gatheredVoxelFaces(const GatheringPlan &plan);
 // tracing, every path four times 1.6 points for 17 s). Within kMaxTracedSteps, priced at the faces' own steps per path
 // (addFaceSources), spray_dense's 438 faces take 276-304 of the 512 and its lit faces 838-866: 14.7 -> 14.0 % over
 // seeds 0-7, no seed higher, the trace 5.8 -> 7.5 processor s (face-pilot; at the voxels' price 144, face-share).
+// With a small scene's traced work beside (GatheringPlan::smallSceneSteps) they take all 512 (the lit faces up to
+// 1024): 13.9 -> 13.3 % over seeds 0-3, every seed lower, the trace 8.8 -> 10.7 processor s, where twice the voxels'
+// paths read 13.8 % for 6 s more and the faces at 1024 13.7 % (docs/benchmarks.md, spray-faces).
 constexpr int kFacePathsPerVoxelPath = 2;
 
 // A gathered lump's lit face: its lobe pair's path-noise bias along its normal, c / N at N paths (c in paths:

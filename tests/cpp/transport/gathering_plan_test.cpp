@@ -1,7 +1,8 @@
 // The traced voxels' paths (bake_traced_voxels.h, planGathering): where the plan holds the preset's paths, the voxels
 // the renderer draws rather than scatters (sigma_t h at least BakedGrids::kScatterOpticalDepth) take twice as many, up
 // to the preset's cheap paths; none more where the budget already cuts the paths; the faces' and lit faces' paths
-// (addFaceSources); a small scene's paths raised within its traced work (smallScenePlan).
+// (addFaceSources); a small scene's paths raised within its traced work.
+#include <algorithm>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -33,9 +34,6 @@ std::vector<openvdb::Coord> lumpVoxels() {
 bake::Preset preset(int traced, int cheap, double smallScene = 0.0) {
     return {9, 4, 1e-5, 0, 1, traced, cheap, true, 1.0, smallScene};
 }
-
-// A plan of `paths` per voxel costing `perPath` tracking steps for one path of each voxel.
-bake::GatheringPlan planOf(int paths, double perPath) { return {paths, perPath * paths, paths, 1024, 1024}; }
 
 }  // namespace
 
@@ -77,8 +75,9 @@ TEST(GatheringPlan, FacesTakeAMultipleOfTheVoxelsPathsUpToTheCheapPaths) {
     EXPECT_EQ(draft.litFacePaths, 64);
 }
 
-// The faces take the plan's paths within what the voxels' paths leave of kMaxTracedSteps, down to a quarter of the
-// voxel's (addFaceSources prices them at their own steps per path).
+// The faces take the plan's paths within what the voxels' paths leave of kMaxTracedSteps and of a small scene's
+// traced work, down to a quarter of the voxel's, never more than the faces' own (addFaceSources prices them at their
+// own steps per path).
 TEST(GatheringPlan, TheFacesShareWhatTheVoxelsLeaveOfTheBudget) {
     const bake::GatheringPlan plan{256, bake::kMaxTracedSteps - 1e6, 256, 512, 1024};
     const bake::FaceGathering how = bake::gatheredVoxelFaces(plan);
@@ -86,47 +85,64 @@ TEST(GatheringPlan, TheFacesShareWhatTheVoxelsLeaveOfTheBudget) {
     EXPECT_EQ(how.fewestPaths, 64);
     EXPECT_DOUBLE_EQ(how.budget, 1e6);
     EXPECT_EQ(how.litPaths, 1024);
+    const bake::GatheringPlan small{256, bake::kMaxTracedSteps - 1e6, 256, 512, 1024, 3e7};
+    EXPECT_DOUBLE_EQ(bake::gatheredVoxelFaces(small).budget, 3.1e7);
+    const bake::GatheringPlan raised{16384, 1e8, 16384, 1024, 1024, 0.0};
+    EXPECT_EQ(bake::gatheredVoxelFaces(raised).fewestPaths, 1024);
 }
 
 // A small scene's paths are as many as its traced work affords (Preset::smallSceneTracedSteps), up to
-// kMostTracedShare times the cheap paths; the faces keep theirs. 1e4 steps per path of all the voxels: FINAL's 1e8
-// affords 10000.
+// kMostTracedShare times the cheap paths, never fewer than the preset's; the faces and the drawn voxels keep what the
+// preset's paths give them. The lump's 8 voxels take a few hundred steps per path: FINAL's cheap 1024 first.
 TEST(GatheringPlan, ASmallScenesPathsRiseWithinItsTracedWork) {
+    const bake::GatheringPlan cheap = bake::planGathering(smallLump(), preset(256, 1024), lumpVoxels(), 1);
+    ASSERT_EQ(cheap.paths, 1024);
+    const double perPath = cheap.steps / cheap.paths;  // all the voxels' steps for one path each (the same pilot)
+    ASSERT_GT(bake::kSmallSceneTracedSteps / perPath, 2.0 * cheap.paths);
     const bake::GatheringPlan raised =
-        bake::smallScenePlan(smallLump(), preset(256, 1024, bake::kSmallSceneTracedSteps), planOf(1024, 1e4));
-    EXPECT_EQ(raised.paths, 10000);
-    EXPECT_EQ(raised.drawnPaths, 10000);
-    EXPECT_DOUBLE_EQ(raised.steps, 1e8);
-    EXPECT_EQ(raised.facePaths, 1024);
-    // Cheap paths: up to the cap.
-    EXPECT_EQ(bake::smallScenePlan(smallLump(), preset(256, 1024, bake::kSmallSceneTracedSteps), planOf(1024, 1.0))
-                  .paths,
-              bake::kMostTracedShare * 1024);
-    // DRAFT (no small-scene work), and a plan the budget cut (none) or that already costs more: as planned.
-    EXPECT_EQ(bake::smallScenePlan(smallLump(), preset(64, 64), planOf(64, 1e4)).paths, 64);
-    EXPECT_EQ(bake::smallScenePlan(smallLump(), preset(256, 1024, 1e8), bake::GatheringPlan{}).paths, 0);
-    EXPECT_EQ(bake::smallScenePlan(smallLump(), preset(256, 1024, 1e8), planOf(256, 1e6)).paths, 256);
+        bake::planGathering(smallLump(), preset(256, 1024, bake::kSmallSceneTracedSteps), lumpVoxels(), 1);
+    EXPECT_EQ(raised.paths, std::min(int(bake::kSmallSceneTracedSteps / perPath), bake::kMostTracedShare * 1024));
+    EXPECT_DOUBLE_EQ(raised.steps, perPath * raised.paths);
+    EXPECT_LE(raised.steps, bake::kSmallSceneTracedSteps);
+    EXPECT_EQ(raised.drawnPaths, raised.paths);
+    EXPECT_EQ(raised.facePaths, cheap.facePaths);
+    EXPECT_EQ(raised.litFacePaths, cheap.litFacePaths);
+    // The traced work the raise leaves goes to the faces (gatheredVoxelFaces); none raised, all of it.
+    EXPECT_DOUBLE_EQ(raised.smallSceneSteps, bake::kSmallSceneTracedSteps - perPath * (raised.paths - cheap.paths));
+    EXPECT_DOUBLE_EQ(cheap.smallSceneSteps, 0.0);
+    const bake::GatheringPlan unraised =
+        bake::planGathering(smallLump(), preset(256, 1024, perPath * 100.0), lumpVoxels(), 1);
+    EXPECT_DOUBLE_EQ(unraised.smallSceneSteps, perPath * 100.0);
+    // Less traced work: fewer paths (any count), never fewer than the preset's.
+    EXPECT_EQ(bake::planGathering(smallLump(), preset(256, 1024, perPath * 3000.5), lumpVoxels(), 1).paths, 3000);
+    EXPECT_EQ(bake::planGathering(smallLump(), preset(256, 1024, perPath * 100.0), lumpVoxels(), 1).paths, 1024);
 }
 
 // A large scene's traced voxels keep the preset's paths: the traced work shrinks inversely as its snow voxels pass
-// kSmallSceneVoxels (a 100^3 block of snow: a tenth of it, 1e7 steps, under what 1024 paths cost there).
+// kSmallSceneVoxels (a 100^3 block of snow: a tenth of it, 1e7 steps, under what 1024 paths of its corner's 1000 voxels
+// cost, which the whole 1e8 would raise).
 TEST(GatheringPlan, ALargeScenesPathsStayThePresets) {
     const openvdb::CoordBBox block(openvdb::Coord(0), openvdb::Coord(99));
     const Scene large = test::boxScene(block, 1.0f, VolumeOptics{10.0, Rgb(0.999), 0.85}, glm::dvec3(0.0, 0.0, 1.0));
     ASSERT_EQ(large.medium->density().activeVoxelCount(), 1000000);
-    const bake::Preset final = preset(256, 1024, bake::kSmallSceneTracedSteps);
-    EXPECT_EQ(bake::smallScenePlan(large, final, planOf(1024, 1e4)).paths, 1024);
-    EXPECT_EQ(bake::smallScenePlan(smallLump(), final, planOf(1024, 1e4)).paths, 10000);
+    std::vector<openvdb::Coord> corner;
+    for (const openvdb::Coord &c : openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(9))) corner.push_back(c);
+    const bake::GatheringPlan cheap = bake::planGathering(large, preset(256, 1024), corner, 1);
+    ASSERT_EQ(cheap.paths, 1024);
+    ASSERT_GT(cheap.steps, 0.1 * bake::kSmallSceneTracedSteps);
+    ASSERT_LT(cheap.steps, 0.5 * bake::kSmallSceneTracedSteps);
+    const bake::GatheringPlan final =
+        bake::planGathering(large, preset(256, 1024, bake::kSmallSceneTracedSteps), corner, 1);
+    EXPECT_EQ(final.paths, 1024);
+    EXPECT_DOUBLE_EQ(final.smallSceneSteps, 0.1 * bake::kSmallSceneTracedSteps);
 }
 
 // The same scene and seed plan the same paths (planGathering's pilot is seeded): the bake stays deterministic.
 TEST(GatheringPlan, ASmallScenesPlanIsTheSameForTheSameSeed) {
     const bake::Preset final = preset(256, 1024, bake::kSmallSceneTracedSteps);
-    const auto plan = [&] {
-        return bake::smallScenePlan(smallLump(), final, bake::planGathering(smallLump(), final, lumpVoxels(), 7));
-    };
+    const auto plan = [&] { return bake::planGathering(smallLump(), final, lumpVoxels(), 7); };
     const bake::GatheringPlan a = plan(), b = plan();
-    EXPECT_GT(a.paths, 1024);  // 8 voxels of a few hundred steps per path
+    EXPECT_GT(a.paths, 1024);
     EXPECT_EQ(a.paths, b.paths);
     EXPECT_DOUBLE_EQ(a.steps, b.steps);
 }
