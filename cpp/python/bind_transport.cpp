@@ -326,6 +326,7 @@ py::dict statsDict(const firn::BakeStats &stats) {
     d["air_faces"] = stats.airFaces;
     d["occluder_faces"] = stats.occluderFaces;
     d["iterations"] = stats.iterations;
+    d["beam_iterations"] = stats.beamIterations;
     d["relative_residual"] = stats.relativeResidual;
     d["passes"] = stats.passes;
     d["source_scale"] = stats.sourceScale;

@@ -25,6 +25,7 @@
 #include "firn/transport/bounce_tail.h"
 #include "firn/transport/incident_light.h"
 #include "firn/transport/multigrid.h"
+#include "firn/transport/skin_ring.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/util/error.h"
 #include "firn/util/threads.h"
@@ -38,8 +39,8 @@ using bake::ChannelStorage, bake::ChannelSystem, bake::EdgeFaceLobes, bake::Gath
 using bake::addFaceSources, bake::assemble, bake::gatheredVoxelFaces, bake::gridValues, bake::layerFaces,
     bake::lightTracedAtGatheringCost, bake::lightTraceSources,
     bake::makeGrids, bake::planGathering, bake::rampPeaks, bake::referenceSurface, bake::scatterGrid,
-    bake::snowIrradiance, bake::sourceFunction, bake::sourceGrid, bake::surfaceLight,
-    bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
+    bake::skinRingGrowths, bake::skyShares, bake::snowIrradiance, bake::sourceFunction, bake::sourceGrid,
+    bake::surfaceLight, bake::surfaceRadiance, bake::thinVoxels, bake::traceSources;
 using bake::kMaxTracedSteps, bake::kSmallSceneTracedSteps, bake::kWholePieceTracedSteps;
 
 namespace {
@@ -160,6 +161,39 @@ void keepIndexAndPatches(SnowTopology &topo) {
     releaseFreedMemory();
 }
 
+// The channel whose light leaving the surface voxels is split between the beams and the sky (solveBeamsApart).
+constexpr int kSplitChannel = 1;
+
+// Of the light leaving each surface voxel (SurfaceTerms::skyLeaving), the part the sky and other snow drive, apart
+// from the beams' (suns and lamps): `solver`'s system, spent on its solution phi, solved again with the beams' sources
+// alone (`beams`, as assemble wrote them; the solve is linear, the rest is the sky's), in `beams` itself from phi
+// scaled by the beams' share of the sources (`sources`, W; with no sky that is the solution, and no iteration runs).
+// The grids read a share of it (spreadCarriedSun), so 0.1 % will do. One channel stands for the three (their albedos
+// differ little), solved in the next channel's phi before that channel starts: no array more at the solves' plateau,
+// the bake's peak memory. Returns the iterations.
+int solveBeamsApart(const SnowTopology &topo, const MultigridSolver &solver, MultigridSolver::Workspace &workspace,
+                    const std::vector<double> &phi, double sources, std::vector<double> &beams, SurfaceTerms &surface,
+                    const SubProgress &progress) {
+    std::vector<double> b = std::move(workspace.spare);  // the spent solve's right-hand side
+    b = beams;
+    double beamSources = 0.0;  // W
+    for (const double v : b) beamSources += v;
+    int iterations = 0;
+    if (beamSources > 0.0 && sources > 0.0) {
+        for (std::size_t i = 0; i < phi.size(); ++i) beams[i] = phi[i] * (beamSources / sources);
+        iterations = solver.solve(std::move(b), beams, 1e-3, 500, progress, &workspace).iterations;
+    } else {
+        std::fill(beams.begin(), beams.end(), 0.0);
+        workspace.spare = std::move(b);
+    }
+    surface.skyLeaving = ChannelSystem::surfaceZeros(topo);
+    for (std::size_t i = 0; i < topo.size(); ++i)
+        if (topo.patches[i].isSurface())
+            surface.skyLeaving.surface(i) =
+                float(surface.escaped[i] - surface.sunEscaped[i] + surface.outConductance[i] * (phi[i] - beams[i]));
+    return iterations;
+}
+
 // Progress when the diffusion solves are done (REFERENCE: before path tracing the surface).
 constexpr double kSolvedProgress = 0.9, kSolvedProgressReference = 0.5;
 
@@ -178,6 +212,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
     SnowIrradiance fromSnow;  // gathered from other snow onto surface patches (after the first pass)
     SurfaceValues<glm::vec3> before, older;  // the two gathers before it (bounceTail only)
     SourceValues source;
+    const SurfaceValues<float> skinRings = skinRingGrowths(scene, topo);  // the same for every channel and pass
     for (int pass = 0; pass < passes; ++pass) {
         const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
         // A pass after the first gathers first: the first half of its progress, the three solves the rest.
@@ -210,14 +245,26 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             // function and the gathering come after).
             ChannelStorage storage;
             MultigridSolver::Workspace workspace;
+            // The last pass splits the light leaving between the beams and the sky where the grids read it: not the
+            // reference's surface (path traced).
+            const bool splitPass = pass + 1 == passes && !reference && !light.beams.empty() && topo.size() > 0;
             for (int c = 0; c < 3; ++c) {
                 const SubProgress sub(&p, gathered + (end - gathered) * c / 3.0,
                                       gathered + (end - gathered) * (c + 1) / 3.0);
                 p.report(gathered + (end - gathered) * c / 3.0, "Solving multiple scattering");
-                ChannelSystem system = assemble(scene, topo, light, c, sub, std::move(storage));
+                // The beams' sources apart (solveBeamsApart) in the next channel's phi, which then starts from
+                // this one's.
+                const bool beamsApart = splitPass && c == kSplitChannel;
+                ChannelSystem system =
+                    assemble(scene, topo, light, skinRings, c, sub, std::move(storage),
+                             beamsApart ? &phi[c + 1] : nullptr);
                 if (pass > 0) system.addDiffuse(fromSnow.irradiance, c);
                 system.releaseDiffuseTerms();
-                if (pass == 0 && c > 0) phi[c] = phi[c - 1];  // albedos differ little between channels
+                double sources = 0.0;  // W
+                if (beamsApart)
+                    for (const double v : system.b) sources += v;
+                // Albedos differ little between channels.
+                if (c > 0 && (pass == 0 || (splitPass && c == kSplitChannel + 1))) phi[c] = phi[c - 1];
                 if (topo.size() > 0) {
                     // The channel before's levels taken over: the rows, blocks and colours are the same.
                     MultigridSolver solver(std::move(system.A), std::move(system.remainder), &workspace);
@@ -228,6 +275,9 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                         solver.solve(std::move(system.b), phi[c], tolerance, 500, sub, &workspace);
                     stats.iterations[c] += result.iterations;
                     stats.relativeResidual[c] = result.relativeResidual;
+                    if (beamsApart)
+                        stats.beamIterations +=
+                            solveBeamsApart(topo, solver, workspace, phi[c], sources, phi[c + 1], system.surface, sub);
                     if (c + 1 < 3) {
                         std::tie(storage.A, storage.remainder) = std::move(solver).release(&workspace);
                         storage.b = std::move(workspace.spare);
@@ -239,6 +289,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
         SurfaceValues<Source> surface;
         PeakedLobes rampPeaked;
         EdgeFaceLobes edgeFaces;
+        SurfaceValues<float> skyShare;
         {
             SurfaceValues<SurfaceLight> leaving(topo.surfaceSlot, topo.surfaceVoxels());
             const SnowLight snow = pass > 0 ? SnowLight{&fromSnow.irradiance, &fromSnow.aim} : SnowLight{};
@@ -246,8 +297,10 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             // for them (REFERENCE's last pass).
             const bool flatFaces = !(reference && pass + 1 == passes);
             surfaceLight(scene, topo, light, snow, terms, phi, flatFaces, leaving, edgeFaces);
+            const bool beamsApart = !terms[kSplitChannel].skyLeaving.values().empty();
             terms = {};
             surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
+            skyShare = skyShares(topo, leaving, surface, beamsApart);
             if (!reference) rampPeaked = rampPeaks(scene, topo, leaving);  // the reference's surface holds no peaks
         }  // the light leaving, freed before the source function
         releaseFreedMemory();  // the surface's arrays (without, the slab's grids peaked 3 bytes per voxel higher)
@@ -259,6 +312,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
         source = sourceFunction(scene, topo, light, phi, surface, traced);
         source.rampPeaks = std::move(rampPeaked);
         source.edgeFaces = std::move(edgeFaces);
+        source.skyShare = std::move(skyShare);
         clock.lap(&BakeStats::Phases::solve);
     }
     return source;

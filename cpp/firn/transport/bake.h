@@ -50,6 +50,7 @@ struct BakeStats {
     int passes = 0;                            // diffusion solves per channel (1 + snow-to-snow bounces)
     int sourceScale = 1;                       // the source grids' voxel size in density voxels
     std::array<int, 3> iterations{};          // per colour channel, all passes
+    int beamIterations = 0;                    // the beams' own solve, one channel (bake.cpp, solveBeamsApart)
     std::array<double, 3> relativeResidual{};  // per colour channel, last pass
     // Per phase: voxels and faces, sun and sky tracing, Monte Carlo in thin snow, diffusion solves, gathering
     // between snow surfaces, writing the grids.

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/transport/diffusion_links.h"
+#include "firn/transport/skin_ring.h"
 
 namespace firn::bake {
 
@@ -93,8 +94,9 @@ double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, doubl
                                  sideways * ((1.0 - B0 * halfPass) * escaping(L) + passedDown));
 }
 
-ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, int c,
-                       const SubProgress &progress, ChannelStorage storage) {
+ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                       const SurfaceValues<float> &skinRings, int c, const SubProgress &progress,
+                       ChannelStorage storage, std::vector<double> *beamSources) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};
@@ -111,6 +113,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         progress.throwIfCancelled();
         Medium::Accessor density = medium.accessor();
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         const SharedLinks links(topo.link, topo.density, ch.sigmaTrPerDensity(), beta, h, range.begin(), range.end());
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const double sigmaTr = ch.sigmaTr(topo.density[i]);
@@ -169,10 +172,14 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
 
             // Sun beams: the power each face lets in or out; the difference is scattered in this voxel.
             std::array<double, 6> groundLight{};  // W/m^2 occluders under the snow send back in
+            std::array<double, 6> groundBeams{};  // of it, the beams'
             for (int f = 0; f < 6; ++f)
                 if (boundary[f] && albedo[f] > 0.0)
                     groundLight[f] = albedo[f] * light.skyUnderSnow[SnowTopology::faceIndex(topo.link[i][f])][c];
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]), surface = patchSurface(medium, topo, i);
+            // The suns' light the soft skin beyond the patches' sphere intercepts, scattered at the nodes it passes
+            // over (skin_ring.h); the carried light's divergence (spreadCarriedSun) needs it.
+            const double ringGrowth = skinRings[i];
             for (std::size_t s = 0; s < light.beams.size(); ++s) {
                 const IncidentLight::Beam &beam = light.beams[s];
                 // W/m^2. Bs: facing the light, the beam outside the patch; facing away, the beam in the ramp
@@ -194,6 +201,8 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                 }
                 const double patchIn = in;
                 if (patchIn <= 0.0 && Bs > 0.0) source += rampInflow(aPrime, Bs, rampScatter);
+                if (ringGrowth > 1.0 && s < scene.suns.size())
+                    source += aPrime * skinRingIrradiance(ringGrowth, glm::dot(patch.normal, wPatch), Bs) * patch.area;
                 std::array<double, 6> flow{};  // W through each link and occluder face, positive inwards
                 for (int f = 0; f < 6; ++f) {
                     const double mu = faceCosineToBeam(scene, s, centre, f, h);
@@ -205,7 +214,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                         const double B = Bv * std::exp(-sigmaTr * topo.faces[SnowTopology::faceIndex(link)].distance /
                                                        std::max(-mu, 0.05));
                         flow[f] = h2 * mu * B;
-                        groundLight[f] += albedo[f] * -mu * B;
+                        groundLight[f] += albedo[f] * -mu * B, groundBeams[f] += albedo[f] * -mu * B;
                     }
                     (flow[f] > 0.0 ? in : out) += std::abs(flow[f]);
                 }
@@ -226,10 +235,14 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     sys.surface.sunEscaped.surface(i) += boundary[f]->toBoundary(R) * P;
                 }
             }
+            double beams = source;  // W: so far the node's sources are the beams' alone
             // Light reflected by occluders under the snow enters diffusely through their faces.
             for (int f = 0; f < 6; ++f)
-                if (groundLight[f] > 0.0)
+                if (groundLight[f] > 0.0) {
                     source += 4.0 * groundLight[f] / (1.0 - albedo[f]) * h2 * boundary[f]->conductance();
+                    beams += 4.0 * groundBeams[f] / (1.0 - albedo[f]) * h2 * boundary[f]->conductance();
+                }
+            if (beamSources) (*beamSources)[i] = beams;
             const double sky = light.skyOnSurface[i][c];
             for (int f = 0; f < 6; ++f) sys.A.conductance[i][f] = float(conductance[f]);
             sys.A.diag[i] = float(diag);

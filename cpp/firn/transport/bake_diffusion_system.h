@@ -46,6 +46,9 @@ struct SurfaceTerms {
     SurfaceValues<float> outConductance;      // W per (W/m^2) of fluence: sum of the air faces' conductances
     std::vector<SurfaceValues<float>> sunIn;  // per beam (sun or lamp), W entering through air faces
     SurfaceValues<float> skyIn;               // W entering through air faces
+    // W: of the light leaving (escaped plus what the node's fluence sends out), the part the sky and other snow drive;
+    // found by the beams' own solve (bake.cpp, solveBeamsApart), empty where none ran.
+    SurfaceValues<float> skyLeaving;
 };
 
 // The diffusion system of one channel plus what the surface needs afterwards.
@@ -62,7 +65,7 @@ struct ChannelSystem {
     ChannelSystem(const SnowTopology &topo, std::size_t beams, ChannelStorage storage)
         : A(std::move(storage.A)), remainder(std::move(storage.remainder)), b(std::move(storage.b)),
           surface{surfaceZeros(topo), surfaceZeros(topo), surfaceZeros(topo),
-                  std::vector<SurfaceValues<float>>(beams, surfaceZeros(topo)), surfaceZeros(topo)},
+                  std::vector<SurfaceValues<float>>(beams, surfaceZeros(topo)), surfaceZeros(topo), {}},
           skyToNode(surfaceZeros(topo)), skyReturned(surfaceZeros(topo)), area(surfaceZeros(topo)) {
         b.assign(topo.size(), 0.0);
     }
@@ -86,8 +89,11 @@ struct ChannelSystem {
 // What the voxel scheme returns of a beam entering a half-space of uniform snow (bake_diffusion_system.cpp).
 double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, double across, double spreadOut);
 
-// Channel c's diffusion system, in `storage`'s vectors.
-ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, int c,
-                       const SubProgress &progress, ChannelStorage storage);
+// Channel c's diffusion system, in `storage`'s vectors; `skinRings`: skinRingGrowths (skin_ring.h). Where `beamSources` is given (sized as the unknowns), the part
+// of b the beams (suns and lamps) drive is written there (W: what they scatter at the nodes and send in off occluders;
+// the rest is the sky's): the solve is linear, so its solution apart is the fluence the beams drive.
+ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
+                       const SurfaceValues<float> &skinRings, int c, const SubProgress &progress,
+                       ChannelStorage storage, std::vector<double> *beamSources = nullptr);
 
 }  // namespace firn::bake

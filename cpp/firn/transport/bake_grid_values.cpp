@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -15,6 +16,7 @@
 
 #include "firn/transport/incident_light.h"
 #include "firn/transport/limb_carry.h"
+#include "firn/transport/skin_ring.h"
 #include "firn/transport/sun_lobe.h"
 #include "firn/util/sampling.h"
 #include "firn/util/version.h"
@@ -456,6 +458,15 @@ class LimbSkins {
         skin.thickness = 2.0 * mass / (skin.beneath * h);
         return skin;
     }
+    // carrier: a surface voxel, j its unknown; voxels from its node out to its surface (skin_ring.h, surfaceOffset).
+    double surfaceOffset(const SnowTopology &topo, const openvdb::Coord &carrier, std::int32_t j,
+                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::Accessor &density,
+                         const Medium &medium) {
+        Carried &found = carried(topo, carrier, index);
+        if (!found.offset)
+            found.offset = bake::surfaceOffset(medium, carrier, topo.patches[std::size_t(j)].normal, density);
+        return *found.offset;
+    }
     // The carriers of a leaf's voxels lie within a voxel of it: cleared per leaf, the map stays small.
     void clear() { skins_.clear(); }
 
@@ -463,6 +474,7 @@ class LimbSkins {
     struct Carried {
         LimbSkin skin;  // its curvature found on entry, the rest once `at` asks
         bool skinFound = false;
+        std::optional<double> offset;  // surfaceOffset, once asked
     };
     Carried &carried(const SnowTopology &topo, const openvdb::Coord &carrier,
                      openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
@@ -474,15 +486,38 @@ class LimbSkins {
 };
 
 // Whether the surface carrying a ramp voxel (`carrier`, the surface voxel facing it most: facingAverage) curves away
-// faster than a sphere of kSkyRampRadius voxels: only there is the sky the ramp sees below its plane past the snow's
-// limb worth its marches (a ball of 10 voxels misses 1 % of its sky, of 5 voxels 7 %: docs/benchmarks.md,
-// backlit-balls 2; the 5-voxel balls read kappa 0.20-0.25). Of the car's 710 k ramp voxels 39 k pass beside thick
-// snow (73 k at 8 voxels).
-constexpr double kSkyRampRadius = 5.5;  // voxels
-
+// faster than a sphere of kSkyRampRadius voxels (skin_ring.h): only there is the sky the ramp sees below its plane
+// past the snow's limb worth its marches. Of the car's 710 k ramp voxels 39 k pass beside thick snow (73 k at 8
+// voxels).
 bool onConvexSurface(const SnowTopology &topo, const openvdb::Coord &carrier,
                      openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, LimbSkins &skins) {
     return skins.curvature(topo, carrier, index) * kSkyRampRadius > 1.0;
+}
+
+// The suns' light a convex surface carries out into its ramp, shown over the larger sphere a ramp voxel d voxels out
+// lies on: radiance per m^2 of the sphere of radius R shown over one of R + d divides by (1 + kappa d)^2 (the balls'
+// lit cap rendered at 1.19 times the truth while the patches let out the truth's; docs/benchmarks.md, cap-shape,
+// cap-spread). The whole divergence: the sun the skin intercepts beyond R, which the undivided light stood for, is
+// its own source now (skinRingGrowth, given to the patches in assemble). The sky's carried light is not spread: an
+// even sky on the sphere of R + d brings that much more, the skin's own ring (ball_sky is right as it is), so the
+// beams' part alone (SourceValues::skyShare, the solves' split; the peaked lobe is the beams' whole). d from the
+// carrier's own surface (surfaceOffset: the density's half level, where the patches' sphere lies; from the node or
+// the staircase's half voxel instead the balls' bias swung by 5 points: docs/benchmarks.md, cap-ring).
+void spreadCarriedSun(const Medium &medium, const SnowTopology &topo, const SourceValues &source,
+                      const openvdb::Coord &c, const openvdb::Coord &carrier, const glm::dvec3 &facing,
+                      openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, Medium::Accessor &density,
+                      LimbSkins &skins, Source &S, Source &rampPart) {
+    if (source.skyShare.values().empty() || glm::length(facing) == 0.0) return;
+    const double kappa = skins.curvature(topo, carrier, index);
+    if (!spreadsAsSphere(topo, carrier, index, kappa)) return;
+    const glm::dvec3 out(c.x() - carrier.x(), c.y() - carrier.y(), c.z() - carrier.z());
+    const std::int32_t j = index.getValue(carrier);
+    const double d = glm::dot(out, facing) - skins.surfaceOffset(topo, carrier, j, index, density, medium);  // voxels
+    if (d <= 0.0) return;
+    const float spread = float(1.0 / ((1.0 + kappa * d) * (1.0 + kappa * d)));
+    const float sky = source.skyShare[std::size_t(index.getValue(carrier))], keep = sky + (1.0f - sky) * spread;
+    S.l0 *= keep, S.l1 *= keep;
+    S.peak0 *= spread, S.peak1 *= spread, rampPart.peak0 *= spread, rampPart.peak1 *= spread;
 }
 
 // Whether ramp voxel c lies beside optically thick snow: some voxel of its 3^3 block at least a fringe's density
@@ -822,11 +857,14 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!nearSurfaceAt.isValueOn(c)) continue;
                 else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, rampPart, facing, carrier))
                     continue;
-                else if (nearPeakAt.isValueOn(c)) {
-                    forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, sunAt, facing, S,
-                                       rampPart);
-                    beamsInRamp(scene, c, facing, marcher, sunAt, rampOfThickConvexSnow, preset.sunSamples,
-                                settings.seed, std::uint64_t(l), rampPart, S);
+                else {
+                    spreadCarriedSun(medium, topo, source, c, carrier, facing, index, density, limbSkins, S, rampPart);
+                    if (nearPeakAt.isValueOn(c)) {
+                        forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, sunAt, facing,
+                                           S, rampPart);
+                        beamsInRamp(scene, c, facing, marcher, sunAt, rampOfThickConvexSnow, preset.sunSamples,
+                                    settings.seed, std::uint64_t(l), rampPart, S);
+                    }
                 }
                 if (!gathering) {
                     skyInRamp(scene, c, facing, index, rampOfThickConvexSnow, marcher, S);

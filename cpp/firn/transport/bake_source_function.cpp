@@ -1,5 +1,6 @@
 #include "firn/transport/bake_source_function.h"
 
+#include <algorithm>
 #include <atomic>
 
 #include <glm/geometric.hpp>
@@ -86,6 +87,26 @@ SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopo
                 out.surface(i).l1[c] = glm::vec3(shown.l1);
             }
             out.surface(i).peak0 = solved[i].peak0, out.surface(i).peak1 = solved[i].peak1;
+        }
+    });
+    return out;
+}
+
+SurfaceValues<float> skyShares(const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved,
+                               const SurfaceValues<Source> &radiance, bool apart) {
+    if (!apart) return {};
+    SurfaceValues<float> out(topo.surfaceSlot, topo.surfaceVoxels());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface()) continue;
+            const glm::dvec3 &n = topo.patches[i].normal;
+            const double leaving = neighbourhoodOutflow<double>(
+                topo, i, n, [&](std::size_t j) { return double(solved[j].leaving.y); }).first;
+            const double sky = neighbourhoodOutflow<double>(
+                topo, i, n, [&](std::size_t j) { return double(solved[j].skyLeaving); }).first;
+            const double l0 = radiance[i].l0.y, crossing = solved[i].crossing.y / topo.patches[i].area;
+            const double broad = l0 > 0.0 ? std::clamp(1.0 - crossing / l0, 0.0, 1.0) : 1.0;
+            out.surface(i) = float(leaving > 0.0 ? std::clamp(sky / leaving, 0.0, 1.0) * broad : 1.0);
         }
     });
     return out;

@@ -74,6 +74,9 @@ struct SourceValues {
     PeakedLobes rampPeaks;
     // The sharp edge voxels' flat faces' own lobes, carried by the air across each (SurfaceLight's; none at REFERENCE).
     EdgeFaceLobes edgeFaces;
+    // By surface voxel, the share of its broad lobe the sky and other snow drive (skyShares; the peaked lobe is the
+    // beams' alone); empty where the solves kept no beams apart.
+    SurfaceValues<float> skyShare;
 
     Source operator[](std::size_t i) const { return peaked.with(broad[i], i); }
 };
@@ -81,6 +84,13 @@ struct SourceValues {
 // Radiance leaving each surface voxel (its fitted lobe) from the solves' surface light.
 SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
                                       const SurfaceValues<SurfaceLight> &solved);
+
+// Of each surface voxel's broad lobe (surfaceRadiance's `radiance`), the share the sky and other snow drive, read
+// in green for the three channels (SurfaceLight::skyLeaving): its neighbourhood's exitance so driven over the whole,
+// as surfaceRadiance averages it, less the crossing beams' part; the returned light's shape, which moves no exitance,
+// is not split. Empty where the solves kept no beams apart (`apart` false).
+SurfaceValues<float> skyShares(const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved,
+                               const SurfaceValues<Source> &radiance, bool apart);
 
 // The surface voxels' rampPeak0 and rampPeak1 (SourceValues::rampPeaks), where the scene has lamps: with suns alone
 // beamsInRamp never reads them.

@@ -336,6 +336,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 }
                 surface.crossing[c] = float(crossing);
                 if (crossing > 0.0) surface.crossingAxis = glm::vec3(axis / crossing);
+                if (!terms[c].skyLeaving.values().empty()) surface.skyLeaving = terms[c].skyLeaving[i];
                 if (patch.sharp) {
                     surface.returned.l0[c] = float(r.sky0 + r.sun0);
                     surface.returned.l1[c] = glm::vec3(r.sky1 + r.sun1 + leaving * drift);

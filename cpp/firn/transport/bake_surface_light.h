@@ -43,6 +43,9 @@ struct SurfaceLight {
     // but spread unevenly over a voxel staircase; the suns' light that escaped at once left out: it leaves
     // downstream, SunReturned).
     glm::vec3 leaving{0.0f};
+    // Of `leaving`'s green, the part the sky and other snow drive (W, the rest the beams'), where the solves kept the
+    // beams apart (SurfaceTerms::skyLeaving; else 0).
+    float skyLeaving = 0.0f;
 };
 
 // The air faces of sharp edge voxels (SurfacePatch::sharp) that go on as a flat wall away from the voxel's other air
