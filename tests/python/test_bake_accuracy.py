@@ -5,9 +5,11 @@ Oracles: `firncore.monte_carlo_radiance` (all orders, exact Henyey-Greenstein ph
 approximations; seeded, so its noise is fixed), and for a non-absorbing medium under a uniform sky the exact
 isotropic field (every point sees the sky's radiance L from every direction, so the source function is L)."""
 
+import functools
 import itertools
 import math
 import os
+import shutil
 import sys
 import tempfile
 
@@ -29,24 +31,39 @@ def case(name):
     return next(c for c in bake_suite.cases() if c.name == name)
 
 
-def baked_against_reference(folder, name, samples, views=None):
-    """The suite's case `name` baked and rendered against a fresh reference of `samples` paths per block (the
-    suite's cached ones take up to 16384: less noise; these suffice here), seen from `views` or the case's own."""
+@functools.cache
+def suite_run(folder, name, samples, views=None, seed=0):
+    """bake_suite.run_case of the suite's case `name` at bake `seed` against a reference of `samples` paths per block
+    (the suite's cached ones take up to 16384: less noise; these suffice here), seen from `views` (a tuple) or the
+    case's own. Computed once for the module: the bake and the Monte Carlo are seeded, so the tests that read the same
+    run share it; its reference is kept in `folder` for the case's other seeds."""
     c = case(name)
     c.samples = samples
     if views is not None:
-        c.views = views
-    return bake_suite.run_case(c, folder, cache=None)
+        c.views = list(views)
+    return bake_suite.run_case(c, folder, os.path.join(folder, "references"), seed=seed)
+
+
+def baked_against_reference(folder, name, samples, views=None):
+    """The suite's case `name` baked (seed 0) and rendered against a fresh reference of `samples` paths per block,
+    seen from `views` or the case's own."""
+    return suite_run(folder, name, samples, None if views is None else tuple(views))
 
 
 def over_seeds_against_reference(folder, name, samples, seeds):
-    """The suite's case `name` baked with seeds 0..seeds-1 against one fresh reference of `samples` paths per block
-    (cached in `folder` for the module), as bake_suite.over_seeds sums them."""
+    """The suite's case `name` baked with seeds 0..seeds-1 against one fresh reference of `samples` paths per block,
+    as bake_suite.over_seeds sums them."""
+    return bake_suite.over_seeds([suite_run(folder, name, samples, seed=seed) for seed in range(seeds)])
+
+
+@functools.cache
+def sun_alone_baked(folder, name):
+    """The suite's case `name` baked (FINAL, seed 0) under its sun alone, once for the module: the file's path."""
     c = case(name)
-    c.samples = samples
-    cache = os.path.join(folder, "references")
-    os.makedirs(cache, exist_ok=True)
-    return bake_suite.over_seeds([bake_suite.run_case(c, folder, cache, seed=seed) for seed in range(seeds)])
+    path = os.path.join(folder, f"{name}_sun_alone.vdb")
+    bake_suite.write_density(path, c.density, c.voxel)
+    firncore.bake(path, c.optics, suns=c.suns(), quality="FINAL", seed=0)
+    return path
 
 
 def sun_alone_against_monte_carlo(folder, name, blocks, samples=4096):
@@ -55,13 +72,18 @@ def sun_alone_against_monte_carlo(folder, name, blocks, samples=4096):
     c = case(name)
     origins, directions, _ = bake_suite.views(c)
     pick = [c.views.index((180, 0)) * c.pixels ** 2 + b for b in blocks]
-    path = os.path.join(folder, f"{name}_sun_alone.vdb")
-    bake_suite.write_density(path, c.density, c.voxel)
-    firncore.bake(path, c.optics, suns=c.suns(), quality="FINAL", seed=0)
+    path = sun_alone_baked(folder, name)
     baked = firncore.render_baked(path, c.optics, origins[pick], directions[pick])[:, 1].sum()
     truth, _ = firncore.monte_carlo_radiance(path, c.optics, origins[pick], directions[pick], suns=c.suns(),
                                              samples=samples, seed=31)
     return baked / truth[:, 1].sum() - 1
+
+
+@functools.cache
+def lamp_row(folder, kind):
+    """bench/lamp_terminator.py's row of ball_grey under lamp `kind` against 1024 Monte Carlo paths per block, once for
+    the module."""
+    return lamp_terminator.measure(case("ball_grey"), kind, folder, cache=None, samples=1024)
 
 
 @pytest.fixture(scope="module")
@@ -237,11 +259,9 @@ def sun_leaving_along_the_normal(folder, name, angles, samples=4096):
     origins, directions, labels = bake_terminator.rays(c, angles)
     normal = [k for k, (_, exit_name, _) in enumerate(labels) if exit_name == "normal"]
     origins, directions = origins[normal], directions[normal]
-    path = os.path.join(folder, name + "_sun.vdb")
-    bake_suite.write_density(path, c.density, c.voxel)
+    path = sun_alone_baked(folder, name)
     reference, _ = firncore.monte_carlo_radiance(path, c.optics, origins, directions, samples=samples, seed=7,
                                                  suns=c.suns(), sky=None)
-    firncore.bake(path, c.optics, quality="FINAL", suns=c.suns(), sky=None)
     return firncore.render_baked(path, c.optics, origins, directions)[:, 1], reference[:, 1]
 
 
@@ -304,7 +324,7 @@ def test_large_area_lamp_near_a_ball_lights_the_patches_that_see_part_of_it(fold
     # their distance to the snow (lamps.h, lampPieces) -6 %, those blocks -6 to -21 % (docs/benchmarks.md, ramp-lamps,
     # review-mends49). These 1024 paths: main -30.0 %, past -43 to -67 %; in pieces -5.7 %, past -5 to -20 %; with the
     # patches' way to the lamp from their surface (lamp-near) -9.7 %, past -9 to -27 %.
-    result = lamp_terminator.measure(case("ball_grey"), "area", folder, cache=None, samples=1024)
+    result = lamp_row(folder, "area")
     past = [cells[2] for cells in result["bands"]]  # (baked / Monte Carlo - 1, blocks) per view
     assert all(blocks > 0 for _, blocks in past), past
     assert -0.15 < result["bias"] < 0.1 and min(r for r, _ in past) > -0.35, (result["bias"], past)
@@ -318,7 +338,7 @@ def test_point_lamp_near_a_ball_lights_its_patches_from_their_surface(folder):
     # at the lamp's direction from each block's terminator +37 % there); from the patches' surface (incident_light.h,
     # patchSurface) +22 % (docs/benchmarks.md, lamp-near). These 1024 paths: main +59 %, the bias over the views
     # -2.2 %; the patches' surface +24 %, -8.2 %.
-    result = lamp_terminator.measure(case("ball_grey"), "point", folder, cache=None, samples=1024)
+    result = lamp_row(folder, "point")
     past = [cells[2] for cells in result["bands"]]  # (baked / Monte Carlo - 1, blocks) per view
     assert all(blocks > 0 for _, blocks in past), past
     assert max(r for r, _ in past) < 0.4 and -0.15 < result["bias"] < 0.05, (result["bias"], past)
@@ -332,8 +352,8 @@ def test_lamps_scatter_their_light_in_the_ramp_beside_grazing_patches(folder):
     # their terminator, the point lamp on its lit side only (0 <= mu0): -5.2 %, -6.9 %, -7.4 %. The upper bound 0.4 on
     # the point lamp's view against it catches the ramp given past its terminator too (+82 % against 16384-path
     # references; this view reads +27.7 % here, main +19.5 %) (docs/benchmarks.md, lamp-shell, lamp-ramp).
-    area = lamp_terminator.measure(case("ball_grey"), "area", folder, cache=None, samples=1024)
-    point = lamp_terminator.measure(case("ball_grey"), "point", folder, cache=None, samples=1024)
+    area = lamp_row(folder, "area")
+    point = lamp_row(folder, "point")
     against = 2  # view (180, 0)
     assert -0.08 < area["bias"] < 0.05 and area["views"][against] > -0.18, (area["bias"], area["views"])
     assert -0.09 < point["bias"] < 0.05 and point["views"][against] < 0.4, (point["bias"], point["views"])
@@ -1062,8 +1082,10 @@ def test_ramp_of_a_small_thick_ball_scatters_the_sun_crossing_its_rim(folder):
         assert -0.28 < bias < -0.10, (name, bias)
 
 
+@functools.cache
 def thin_slab_baked(folder):
-    """slab_thin_forward (sigma_t h 1: every voxel thin) baked, with its camera rays (seen ones)."""
+    """slab_thin_forward (sigma_t h 1: every voxel thin) baked, with its camera rays (seen ones); once for the module,
+    so a test that changes the file changes a copy."""
     c = case("slab_thin_forward")
     path = os.path.join(folder, "thin_slab_scattered.vdb")
     bake_suite.write_density(path, c.density, c.voxel)
@@ -1180,7 +1202,9 @@ def test_the_scatter_grid_goes_with_its_bake(folder):
     # A bake of snow nowhere thin (slab_thick, sigma_t h 30) writes none; baked again over a file holding an
     # earlier bake's scatter grid, the new bake removes it (thin snow again: replaces it, one grid, the same
     # voxels); Clear Bake's remove_grids leaves the snow's grids alone.
-    c, path, _, _ = thin_slab_baked(folder)
+    c, baked, _, _ = thin_slab_baked(folder)
+    path = os.path.join(folder, "thin_slab_rebaked.vdb")
+    shutil.copyfile(baked, path)
     before = scatter_on(scatter_grid(path))
     firncore.bake(path, c.optics, suns=c.suns(), sky=c.skies(), quality="FINAL", seed=1)
     assert scatter_on(scatter_grid(path)) == before

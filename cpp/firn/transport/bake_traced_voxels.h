@@ -72,11 +72,12 @@ struct GatheringPlan {
     // take it beyond what the voxels leave of kMaxTracedSteps (gatheredVoxelFaces).
     double smallSceneSteps = 0.0;
 };
-// A small scene's traced work (Preset::smallSceneTracedSteps): FINAL's traced voxels may take this many tracking
-// steps in all (about 6 processor seconds) in a scene of at most kSmallSceneVoxels snow voxels, and a share of it
-// inversely as the snow voxels beyond (the rest of a bake grows with them: a car's 2.7 M voxels leave 3.7e6, under
-// what its 3 traced voxels take at the preset's paths, so its plan is the preset's): as many paths per voxel as it
-// affords, up to kMostTracedShare times the preset's cheapTracedSamples, never fewer than the preset's (planGathering).
+// A small scene's traced work (Preset::smallSceneTracedSteps): FINAL's and REFERENCE's traced voxels may take this
+// many tracking steps in all (about 6 processor seconds) in a scene of at most kSmallSceneVoxels snow voxels, and a
+// share of it inversely as the snow voxels beyond (the rest of a bake grows with them: a car's 2.7 M voxels leave
+// 3.7e6, under what its 3 traced voxels take at the preset's paths, so its plan is the preset's): as many paths per
+// voxel as it affords, up to kMostTracedShare times the preset's cheapTracedSamples, never fewer than the preset's
+// (planGathering; DRAFT, a preview, keeps the preset's).
 // Where the suite's traced error is the bake's own noise, 16 times the paths or photons read several cases lower
 // (docs/bake.md, per-voxel noise); a small scene's traced voxels take well under a second at the preset's counts.
 // Over seeds 0-3 (docs/benchmarks.md, spray-paths): ball_thin_forward 5.4 -> 4.4 % per block (photons 16x, the trace
