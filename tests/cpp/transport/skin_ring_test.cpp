@@ -64,6 +64,19 @@ double chordGrowth(double kappa, const std::function<double(double)> &depth, dou
     return 1.0 + ring / (R * R);
 }
 
+// The block's top-centre patch (above voxel (6, 6, 5)) and its topology.
+struct TopPatch {
+    explicit TopPatch(const Scene &scene)
+        : topo(buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0))),
+          i(topCentre(topo, openvdb::Coord(6, 6, 5))) {}
+    // Voxels from its node out to its surface (surfaceOffset).
+    double offset(const Medium &medium, Medium::Accessor &density) const {
+        return bake::surfaceOffset(medium, topo.coord[i], topo.patches[i].normal, density);
+    }
+    SnowTopology topo;
+    std::size_t i;
+};
+
 }  // namespace
 
 // An opaque skin stops every ray that touches it: the ring is its whole thickness. With no skin layer the top full
@@ -71,12 +84,13 @@ double chordGrowth(double kappa, const std::function<double(double)> &depth, dou
 // delta = 1/2 voxel, at kappa 0.1 a growth of 1.05^2.
 TEST(SkinRing, AnOpaqueSkinInterceptsItsWholeThickness) {
     const Scene scene = skinnedBlock(1e5, 0.0f);
-    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    const std::size_t i = topCentre(topo, openvdb::Coord(6, 6, 5));
-    ASSERT_LT(i, topo.size());
-    ASSERT_NEAR(topo.patches[i].normal.z, 1.0, 1e-9);
+    const TopPatch top(scene);
+    ASSERT_LT(top.i, top.topo.size());
+    ASSERT_NEAR(top.topo.patches[top.i].normal.z, 1.0, 1e-9);
     Medium::Accessor density = scene.medium->accessor();
-    const double offset = bake::surfaceOffset(*scene.medium, topo.coord[i], topo.patches[i].normal, density);
+    const double offset = top.offset(*scene.medium, density);
+    const SnowTopology &topo = top.topo;
+    const std::size_t i = top.i;
     EXPECT_NEAR(offset, 0.5, 1e-6);
     EXPECT_NEAR(bake::skinRingGrowth(*scene.medium, topo, i, 0.1, offset, density), 1.05 * 1.05, 2e-3);
     EXPECT_NEAR(bake::skinRingGrowth(*scene.medium, topo, i, 0.02, offset, density), 1.01 * 1.01, 1e-3);
@@ -87,12 +101,13 @@ TEST(SkinRing, AnOpaqueSkinInterceptsItsWholeThickness) {
 // density 1 - 0.7 z (z voxels above the node) falls to half at z = 5/7.
 TEST(SkinRing, ASoftSkinInterceptsWhatItsChordsStop) {
     const Scene scene = skinnedBlock(4.0, 0.3f);
-    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    const std::size_t i = topCentre(topo, openvdb::Coord(6, 6, 5));
-    ASSERT_LT(i, topo.size());
-    ASSERT_NEAR(topo.patches[i].normal.z, 1.0, 1e-9);
+    const TopPatch top(scene);
+    ASSERT_LT(top.i, top.topo.size());
+    ASSERT_NEAR(top.topo.patches[top.i].normal.z, 1.0, 1e-9);
     Medium::Accessor density = scene.medium->accessor();
-    const double offset = bake::surfaceOffset(*scene.medium, topo.coord[i], topo.patches[i].normal, density);
+    const double offset = top.offset(*scene.medium, density);
+    const SnowTopology &topo = top.topo;
+    const std::size_t i = top.i;
     EXPECT_NEAR(offset, 5.0 / 7.0, 1e-3);
     // Heights y above the surface, z = y + 5/7: the skin layer's centre at z 1, nothing from z 2.
     const auto depth = [](double y) {
