@@ -69,6 +69,8 @@ struct TopPatch {
     explicit TopPatch(const Scene &scene)
         : topo(buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0))),
           i(topCentre(topo, openvdb::Coord(6, 6, 5))) {}
+    // Found, its normal straight up (+z).
+    bool facesUp() const { return i < topo.size() && std::abs(topo.patches[i].normal.z - 1.0) < 1e-9; }
     // Voxels from its node out to its surface (surfaceOffset).
     double offset(const Medium &medium, Medium::Accessor &density) const {
         return bake::surfaceOffset(medium, topo.coord[i], topo.patches[i].normal, density);
@@ -85,8 +87,7 @@ struct TopPatch {
 TEST(SkinRing, AnOpaqueSkinInterceptsItsWholeThickness) {
     const Scene scene = skinnedBlock(1e5, 0.0f);
     const TopPatch top(scene);
-    ASSERT_LT(top.i, top.topo.size());
-    ASSERT_NEAR(top.topo.patches[top.i].normal.z, 1.0, 1e-9);
+    ASSERT_TRUE(top.facesUp());
     Medium::Accessor density = scene.medium->accessor();
     const double offset = top.offset(*scene.medium, density);
     const SnowTopology &topo = top.topo;
@@ -102,8 +103,7 @@ TEST(SkinRing, AnOpaqueSkinInterceptsItsWholeThickness) {
 TEST(SkinRing, ASoftSkinInterceptsWhatItsChordsStop) {
     const Scene scene = skinnedBlock(4.0, 0.3f);
     const TopPatch top(scene);
-    ASSERT_LT(top.i, top.topo.size());
-    ASSERT_NEAR(top.topo.patches[top.i].normal.z, 1.0, 1e-9);
+    ASSERT_TRUE(top.facesUp());
     Medium::Accessor density = scene.medium->accessor();
     const double offset = top.offset(*scene.medium, density);
     const SnowTopology &topo = top.topo;
