@@ -85,7 +85,8 @@ Points testPoints(const Medium &medium, const Occluders &occluders, const SunLig
 
 TEST(SunClearance, ClearsNoPointWithAHitUnderRandomTriangles) {
     // Triangles with corners on half voxels, jittered by 0 or up to 1e-6 voxels (edges and planes shared with the
-    // points'), and points on the same lattice and just above and below the triangles' corners along the sun.
+    // points'), and points on the same lattice, just above and below the triangles' corners along the sun, and just
+    // under and over their middles.
     const Medium medium = block();
     std::mt19937 rng(11);
     std::uniform_int_distribution<int> halves(-10, 10);
@@ -108,6 +109,12 @@ TEST(SunClearance, ClearsNoPointWithAHitUnderRandomTriangles) {
         for (const glm::dvec3 &c : corners)
             for (const double along : {-1e-4, 0.0, 1e-6, 1e-4, 0.01, 0.5})
                 points.push_back(kVoxel * (c + along * sun.direction));
+        // Just under and over each triangle's middle: those under it (beyond the rays' tNear) are in its shadow.
+        for (std::size_t t = 0; t < corners.size(); t += 3) {
+            const glm::dvec3 middle = (corners[t] + corners[t + 1] + corners[t + 2]) / 3.0;
+            for (const double along : {-0.5, -0.005, 0.005})
+                points.push_back(kVoxel * (middle + along * sun.direction));
+        }
         const Points p = testPoints(medium, occluders, sun, points);
         EXPECT_FALSE(p.wrong) << "scene " << scene;
         cleared += p.cleared, hit += p.hit, all += p.all;
