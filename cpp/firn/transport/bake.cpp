@@ -27,7 +27,6 @@
 #include "firn/transport/multigrid.h"
 #include "firn/transport/skin_ring.h"
 #include "firn/transport/snow_topology.h"
-#include "firn/transport/sun_clearance.h"
 #include "firn/util/error.h"
 #include "firn/util/threads.h"
 
@@ -381,8 +380,7 @@ BakedGrids emptyBakedGrids(const openvdb::FloatGrid &density, const VolumeOptics
 
 BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Progress *progress, BakeStats *stats) {
     validate(scene);
-    Scene lit = withLampPieces(scene);  // the beams' lights; the traced voxels' Monte Carlo samples lamps whole
-    lit.sunClearance = sunClearances(lit);
+    const Scene lit = withLampPieces(scene);  // the beams' lights; the traced voxels' Monte Carlo samples lamps whole
     const Preset preset = resolve(settings);
     const int sourceScale = sourceScaleFor(*scene.medium, settings);
     Progress quiet;

@@ -12,7 +12,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "firn/transport/sun_clearance.h"
 #include "firn/util/color.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
@@ -333,9 +332,7 @@ BeamSample beamAt(const Scene &scene, std::size_t b, const glm::dvec3 &point, in
     if (sun) {
         const SunLight &light = scene.suns[b];
         int visible = samples;
-        // Rays the pre-test clears would each miss: all of them visible without asking Embree.
-        const bool clear = b < scene.sunClearance.size() && scene.sunClearance[b]->clear(glm::dvec3(from));
-        if (!scene.occluders->empty() && !clear) {
+        if (!scene.occluders->empty()) {
             visible = 0;
             for (int s = 0; s < samples; ++s) {
                 const glm::dvec3 d =

@@ -13,8 +13,6 @@
 
 namespace firn {
 
-class SunClearance;
-
 // Opaque, diffusely reflecting scene surfaces: they cast shadows on and in the snow, block the sky, and
 // reflect light back into snow lying on them (the ground under the snow shows through thin snow).
 class Occluders {
@@ -53,8 +51,6 @@ struct Scene {
     std::vector<Lamp> lamps;
     Sky sky;
     std::shared_ptr<const Occluders> occluders = std::make_shared<Occluders>();
-    // Per sun, or none: beamAt's exact pre-test before its shadow rays (sunClearances, the bake's scene).
-    std::vector<std::shared_ptr<const SunClearance>> sunClearance;
 };
 
 // Throws InvalidArgument if a light is malformed or the medium is missing.
