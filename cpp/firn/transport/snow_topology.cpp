@@ -363,9 +363,8 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
             const IndexLeaf &leaf = leaves.leaf(l);
             // The links' lower voxels: the leaf's own and the ones below its lower faces. A leaf no triangle comes
             // near (one Embree box query) casts no ray.
-            const LinkTriangles linkTriangles(
-                medium, occluders, openvdb::CoordBBox(leaf.origin() - openvdb::Coord(1), leaf.origin() + openvdb::Coord(7)),
-                linkPad);
+            const openvdb::CoordBBox lowers(leaf.origin() - openvdb::Coord(1), leaf.origin() + openvdb::Coord(7));
+            const LinkTriangles linkTriangles(medium, occluders, lowers, linkPad);
             const bool nearTriangles = !linkTriangles.empty();
             const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
             for (auto it = leaf.cbeginValueOn(); it; ++it) {
