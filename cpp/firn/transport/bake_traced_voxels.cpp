@@ -122,7 +122,7 @@ double smallSceneSteps(const Scene &scene, const Preset &preset) {
 }  // namespace
 
 GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
-                            std::uint64_t seed) {
+                            std::uint64_t seed, SmallSceneWork smallScene) {
     constexpr int kMinSamples = 64;
     if (voxels.empty()) return {};
     const MonteCarloReference reference(scene);
@@ -143,7 +143,7 @@ GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std:
     const double cheap = perPath <= kShortPathSteps ? kShortTracedSteps : kCheapTracedSteps;
     while (2 * samples <= preset.cheapTracedSamples && allVoxels * 2.0 * samples <= cheap) samples *= 2;
     const int doubled = samples;
-    const double small = smallSceneSteps(scene, preset);
+    const double small = smallScene == SmallSceneWork::Available ? smallSceneSteps(scene, preset) : 0.0;
     const double most = double(kMostTracedShare) * preset.cheapTracedSamples;
     if (small > 0.0) samples = std::max(samples, int(std::min(small / allVoxels, most)));
     int drawnPaths = samples;  // twice the preset's where those hold (kDrawnPathShare), as many as the raise's above
@@ -440,9 +440,7 @@ int litFacePaths(int paths, int wanted, double litSteps) {
 
 FaceGathering layerFaces(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
                          std::vector<bool> inLayer, std::uint64_t seed) {
-    Preset notRaised = preset;  // light tracing took the small scene's traced work (lightTraceSources)
-    notRaised.smallSceneTracedSteps = 0.0;
-    const GatheringPlan plan = planGathering(scene, notRaised, voxels, seed);
+    const GatheringPlan plan = planGathering(scene, preset, voxels, seed, SmallSceneWork::TakenByLightTracing);
     if (plan.paths < kMinLayerFacePaths) return {};
     return {plan.paths, plan.paths, kMaxTracedSteps - kWholePieceTracedSteps, std::move(inLayer)};
 }

@@ -85,11 +85,13 @@ struct GatheringPlan {
 constexpr double kSmallSceneTracedSteps = 1e8;
 constexpr double kSmallSceneVoxels = 1e5;
 constexpr int kMostTracedShare = 16;
+// Whether a small scene's traced work is the plan's to take, or light tracing took it (layerFaces).
+enum class SmallSceneWork { Available, TakenByLightTracing };
 // The paths per voxel to gather `voxels` with, their cost per path measured on a few of them first: the preset's,
-// fewer within kMaxTracedSteps, more where they cost little or a small scene's traced work affords them. Light
-// tracing at the gathering's cost (lightTracedAtGatheringCost) follows the plan's steps.
+// fewer within kMaxTracedSteps, more where they cost little or a small scene's traced work (where available) affords
+// them. Light tracing at the gathering's cost (lightTracedAtGatheringCost) follows the plan's steps.
 GatheringPlan planGathering(const Scene &scene, const Preset &preset, const std::vector<openvdb::Coord> &voxels,
-                            std::uint64_t seed);
+                            std::uint64_t seed, SmallSceneWork smallScene = SmallSceneWork::Available);
 
 // The voxels' sources gathered by brute force, `samples` paths each, `drawnSamples` (0: `samples`) those the renderer
 // draws rather than scatters (drawnByRenderer).

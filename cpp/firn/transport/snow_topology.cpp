@@ -2,13 +2,11 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <optional>
 #include <queue>
-#include <unordered_map>
 
 #include <glm/geometric.hpp>
 #include <openvdb/tools/PoissonSolver.h>
@@ -23,46 +21,6 @@ namespace firn {
 namespace {
 
 using IndexLeaf = openvdb::Int32Tree::LeafNodeType;
-
-std::uint64_t leafKey(const openvdb::Coord &c) {
-    auto part = [](int v) { return std::uint64_t(std::uint32_t((v >> 3) + (1 << 20)) & 0x1FFFFF); };
-    return part(c.x()) | part(c.y()) << 21 | part(c.z()) << 42;
-}
-
-// Flags the leaves an occluder triangle may cut (bounding box, then plane against the leaf's box grown by
-// one voxel): only their voxels need ray tests along their links.
-std::unique_ptr<std::atomic<bool>[]> leavesNearOccluders(const Medium &medium, const Occluders &occluders,
-                                                         const openvdb::tree::LeafManager<openvdb::Int32Tree> &leaves) {
-    auto near = std::make_unique<std::atomic<bool>[]>(leaves.leafCount());
-    for (std::size_t i = 0; i < leaves.leafCount(); ++i) near[i] = false;
-    if (occluders.empty()) return near;
-    std::unordered_map<std::uint64_t, std::size_t> leafIndex;
-    for (std::size_t i = 0; i < leaves.leafCount(); ++i) leafIndex[leafKey(leaves.leaf(i).origin())] = i;
-    const TriangleMesh &mesh = occluders.mesh();
-    const double h = medium.voxelSize();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.triangleCount(), 64), [&](const auto &range) {
-        for (std::size_t t = range.begin(); t != range.end(); ++t) {
-            glm::dvec3 lo(1e300), hi(-1e300);
-            for (int k = 0; k < 3; ++k) {
-                const glm::dvec3 ijk = medium.worldToIndex(glm::dvec3(mesh.vertex(t, k)));
-                lo = glm::min(lo, ijk), hi = glm::max(hi, ijk);
-            }
-            const glm::dvec3 p0(mesh.vertex(t, 0));
-            const glm::dvec3 n = glm::normalize(glm::dvec3(mesh.crossNormal(t)));
-            const double reach = 4.5 * h * (std::abs(n.x) + std::abs(n.y) + std::abs(n.z));
-            auto leafOf = [](double v) { return int(std::floor(v)) & ~7; };
-            for (int x = leafOf(lo.x - 1); x <= leafOf(hi.x + 1); x += 8)
-                for (int y = leafOf(lo.y - 1); y <= leafOf(hi.y + 1); y += 8)
-                    for (int z = leafOf(lo.z - 1); z <= leafOf(hi.z + 1); z += 8) {
-                        const auto found = leafIndex.find(leafKey(openvdb::Coord(x, y, z)));
-                        if (found == leafIndex.end()) continue;
-                        const glm::dvec3 centre = medium.indexToWorld(glm::dvec3(x + 3.5, y + 3.5, z + 3.5));
-                        if (std::abs(glm::dot(n, centre - p0)) <= reach) near[found->second] = true;
-                    }
-        }
-    });
-    return near;
-}
 
 // Whether face f goes on flat past voxel i for `voxels` voxels inwards from its face g (each has f in air).
 bool flatPast(const SnowTopology &topo, std::size_t i, int f, int g, int voxels) {
@@ -388,7 +346,6 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
     progress.report(0.2);
 
     openvdb::tree::LeafManager<openvdb::Int32Tree> leaves(*topo.index);
-    const auto near = leavesNearOccluders(medium, occluders, leaves);
     const double linkPad = firn::linkPad(medium, occluders);
     progress.report(0.4);
     progress.throwIfCancelled();
@@ -404,13 +361,11 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
         std::vector<std::optional<RayCaster::Hit>> upHits(3 * IndexLeaf::SIZE);
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             const IndexLeaf &leaf = leaves.leaf(l);
-            // The links' lower voxels: the leaf's own and the ones below its lower faces.
-            std::optional<LinkTriangles> linkTriangles;
-            if (near[l])
-                linkTriangles.emplace(medium, occluders,
-                                      openvdb::CoordBBox(leaf.origin() - openvdb::Coord(1), leaf.origin() + openvdb::Coord(7)),
-                                      linkPad);
-            const bool nearTriangles = linkTriangles && !linkTriangles->empty();
+            // The links' lower voxels: the leaf's own and the ones below its lower faces. A leaf no triangle comes
+            // near (one Embree box query) casts no ray.
+            const openvdb::CoordBBox lowers(leaf.origin() - openvdb::Coord(1), leaf.origin() + openvdb::Coord(7));
+            const LinkTriangles linkTriangles(medium, occluders, lowers, linkPad);
+            const bool nearTriangles = !linkTriangles.empty();
             const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
             for (auto it = leaf.cbeginValueOn(); it; ++it) {
                 const std::uint32_t i = std::uint32_t(*it);
@@ -428,7 +383,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
                         std::optional<RayCaster::Hit> hit;
                         if (!up && (c[f / 2] & 7) != 0 && leaf.isValueOn(lowerOffset))
                             hit = upHits[3 * lowerOffset + f / 2];
-                        else if (linkTriangles->mayCross(lower, f / 2))
+                        else if (linkTriangles.mayCross(lower, f / 2))
                             hit = occluderOnLink(medium, occluders, lower, f / 2);
                         if (up) upHits[3 * lowerOffset + f / 2] = hit;
                         if (hit) {

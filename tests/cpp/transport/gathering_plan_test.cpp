@@ -1,7 +1,7 @@
 // The traced voxels' paths (bake_traced_voxels.h, planGathering): where the plan holds the preset's paths, the voxels
 // the renderer draws rather than scatters (sigma_t h at least BakedGrids::kScatterOpticalDepth) take twice as many, up
 // to the preset's cheap paths; none more where the budget already cuts the paths; the faces' and lit faces' paths
-// (addFaceSources); a small scene's paths raised within its traced work.
+// (addFaceSources); a small scene's paths raised within its traced work, unless light tracing took it.
 #include <algorithm>
 #include <vector>
 
@@ -116,6 +116,19 @@ TEST(GatheringPlan, ASmallScenesPathsRiseWithinItsTracedWork) {
     // Less traced work: fewer paths (any count), never fewer than the preset's.
     EXPECT_EQ(bake::planGathering(smallLump(), preset(256, 1024, perPath * 3000.5), lumpVoxels(), 1).paths, 3000);
     EXPECT_EQ(bake::planGathering(smallLump(), preset(256, 1024, perPath * 100.0), lumpVoxels(), 1).paths, 1024);
+}
+
+// Where light tracing took a small scene's traced work (layerFaces), the plan is the preset's, as in a scene whose
+// preset has none: the lump's raise above is not taken twice.
+TEST(GatheringPlan, ASmallScenesWorkTakenByLightTracingRaisesNothing) {
+    const bake::GatheringPlan none = bake::planGathering(smallLump(), preset(256, 1024), lumpVoxels(), 1);
+    const bake::GatheringPlan taken = bake::planGathering(smallLump(), preset(256, 1024, bake::kSmallSceneTracedSteps),
+                                                          lumpVoxels(), 1, bake::SmallSceneWork::TakenByLightTracing);
+    ASSERT_EQ(none.paths, 1024);
+    EXPECT_EQ(taken.paths, none.paths);
+    EXPECT_EQ(taken.drawnPaths, none.drawnPaths);
+    EXPECT_DOUBLE_EQ(taken.steps, none.steps);
+    EXPECT_DOUBLE_EQ(taken.smallSceneSteps, 0.0);
 }
 
 // A large scene's traced voxels keep the preset's paths: the traced work shrinks inversely as its snow voxels pass
