@@ -391,15 +391,18 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
             shared.startVoxel(i);
             std::array<double, 6> facePeak{};  // W/m^2/sr: each face's SunPeak, the channels' sum
+            const bool walls = own.facesAreWalls(patch);
             for (int f = 0; f < 6; ++f)
                 if (patch.share[f] > 0.0f)
                     outflow[f] = neighbourhoodOutflow<glm::dvec3>(
                         topo, i, faceNormal(f), [&](std::size_t j) { return glm::dvec3(out[j].leaving); });
             for (int c = 0; c < 3; ++c) {
                 faces.clear();
+                std::vector<FaceExit> skimmedIn;  // per air face, the skimmed beam's return (W/m^2/sr)
                 for (int f = 0; f < 6; ++f) {
                     if (patch.share[f] <= 0.0f) continue;
                     const glm::dvec3 n = faceNormal(f);
+                    const double voxelOpticalDepth = channels[c].ch.sigmaT(densityBeneath(topo, i, n)) * h;
                     const float peakBefore = out.surface(i).peak0[c];
                     const ReturnedLight r = returnedThrough(c, i, n, patch.share[f], SkyBeam{}, [&](std::size_t s) {
                         // The beam entered each face by its cosine to the light seen from the patch's surface, as
@@ -408,15 +411,29 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                         const double seen = projectedArea(normals, w);
                         return seen > 0.0 ? std::max(0.0, glm::dot(n, w)) / seen : 0.0;
                     }, &out.surface(i), index, shared);
+                    const auto skimmed = [&](std::size_t s) {
+                        static const bool skimOff = std::getenv("FIRN_SKIMOFF");  // TEMP switch
+                        if (!walls || skimOff) return 0.0;
+                        const glm::dvec3 w = towardsBeam(scene, s, surface);
+                        const double seen = projectedArea(normals, w);
+                        return seen > 0.0 ? skimmedThroughRamp(normals, n, w, voxelOpticalDepth, channels[c].ch.g) / seen
+                                          : 0.0;
+                    };
+                    const ReturnedLight skim =
+                        returnedThrough(c, i, n, 0.0, SkyBeam{}, skimmed, &out.surface(i), index, shared);
                     facePeak[f] += out.surface(i).peak0[c] - peakBefore;
                     const double leaving = outflow[f].first[c], area = outflow[f].second;
                     const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
+                    skimmedIn.push_back({n, (skim.sunShape0 + skim.sunReturned * 3.0 / 7.0) / own,
+                                         (skim.sunShape1 + skim.sunReturned * 6.0 / 7.0 * n) / own});
                     faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
                                      (r.sky1 + r.sun1) / own + exitance * 6.0 / 7.0 / kPi * n});
                 }
                 // sigma_eff h = 3 kappa D sigma_tr h: the voxel in diffusion lengths of the snow beneath the patch.
                 const double sigmaTr = channels[c].ch.sigmaTr(densityBeneath(topo, i, patch.normal));
                 relaxTowardsNeighbours(faces, 3.0 * channels[c].ch.beta() * sigmaTr * h);
+                for (std::size_t q = 0; q < faces.size(); ++q)
+                    faces[q].e0 += skimmedIn[q].e0, faces[q].e1 += skimmedIn[q].e1;
                 const SourceLobe lobe = edgeLobe(faces);
                 out.surface(i).returned.l0[c] = float(lobe.l0);
                 out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);

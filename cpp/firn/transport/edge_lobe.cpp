@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 #include <limits>
 
 #include <glm/geometric.hpp>
@@ -84,11 +86,74 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
     return {l0, 3.0 * bestK * l0 * axis};
 }
 
+SourceLobe lobeBeyondFaces(const std::vector<FaceLobe> &faces) {
+    double mean = 0.0;  // T's mean over the sphere and its first moment, over the directions' equal solid angles
+    glm::dvec3 moment(0.0);
+    for (const glm::dvec3 &w : sphereDirections()) {
+        if (std::any_of(faces.begin(), faces.end(), [&](const FaceLobe &f) { return glm::dot(f.normal, w) <= 0.0; }))
+            continue;
+        double mixed = 0.0;
+        const double seen = projectedArea(faces, w, [&](std::size_t f, double c) {
+            mixed += c * lobeRadiance(faces[f].l0, faces[f].l1, w);
+        });
+        mean += mixed / seen / kDirections, moment += mixed / seen / kDirections * w;
+    }
+    static const char *variant = std::getenv("FIRN_CORNERFIT");  // TEMP
+    if (variant && std::string(variant) == "level" && mean > 0.0) {
+        const double k = std::min(glm::length(moment) / mean, kMaxLobeAnisotropy);
+        const glm::dvec3 axis = glm::normalize(moment);
+        double inside = 0.0, lobe = 0.0;
+        for (const glm::dvec3 &w : sphereDirections()) {
+            if (std::any_of(faces.begin(), faces.end(), [&](const FaceLobe &f) { return glm::dot(f.normal, w) <= 0.0; }))
+                continue;
+            const double d = 1.0 + k * k - 2.0 * k * glm::dot(axis, w);
+            lobe += (1.0 - k * k) / (d * std::sqrt(d)), inside += 1.0;
+        }
+        const double l0 = mean * kDirections / lobe;
+        return {l0, 3.0 * k * l0 * axis};
+    }
+    if (variant && std::string(variant).rfind("blur", 0) == 0) return {mean, 3.0 * std::atof(variant + 4) * moment};
+    return {mean, 3.0 * moment};
+}
+
 double peakSeenThroughFaces(const std::vector<glm::dvec3> &normals, const std::vector<double> &radiance,
                             const glm::dvec3 &axis) {
     double shown = 0.0;
     const double seen = projectedArea(normals, axis, [&](std::size_t f, double c) { shown += radiance[f] * c; });
     return seen > 0.0 ? shown / seen : 1.0;
+}
+
+namespace {
+
+// Of light travelling at sin(beta) = rise out of a plane and scattered once by a Henyey-Greenstein phase function of
+// asymmetry g, the share heading back through the plane: over the scattering angle's cosine m (HG's density),
+// the azimuths phi with m rise + sqrt(1 - m^2) cos(phi) sqrt(1 - rise^2) < 0; 1/2 at rise 0 by symmetry.
+double scatteredBackThroughPlane(double g, double rise) {
+    constexpr int kSteps = 256;
+    const double across = std::sqrt(std::max(0.0, 1.0 - rise * rise));
+    double share = 0.0, all = 0.0;  // the rule's own sum of the density: a sharp peak's midpoints miss a little
+    for (int k = 0; k < kSteps; ++k) {
+        const double m = -1.0 + 2.0 * (k + 0.5) / kSteps, sine = std::sqrt(1.0 - m * m);
+        const double density = 1.0 / std::pow(1.0 + g * g - 2.0 * g * m, 1.5);
+        const double q = sine * across > 0.0 ? -m * rise / (sine * across) : (m * rise < 0.0 ? 2.0 : -2.0);
+        share += density * (1.0 - std::acos(std::clamp(q, -1.0, 1.0)) / kPi), all += density;  // cos(phi) < q
+    }
+    return share / all;
+}
+
+}  // namespace
+
+double skimmedThroughRamp(const std::vector<glm::dvec3> &normals, const glm::dvec3 &n, const glm::dvec3 &w,
+                          double voxelOpticalDepth, double g) {
+    const double mu = glm::dot(n, w);
+    if (mu > 0.0) return 0.0;
+    double lit = 0.0;  // the lit neighbouring faces' cosines
+    for (const glm::dvec3 &a : normals)
+        if (std::abs(glm::dot(a, n)) < 0.5) lit += std::max(0.0, glm::dot(a, w));
+    if (!(lit > 0.0)) return 0.0;
+    const double spread = std::max(-mu, 1e-12) * 2.0 / voxelOpticalDepth;  // 1 / a
+    const double caught = 1.0 - std::sqrt(kPi * spread) * std::erf(0.5 / std::sqrt(spread));
+    return 0.5 * lit * caught * scatteredBackThroughPlane(g, -mu);
 }
 
 void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double voxelInDiffusionLengths) {
