@@ -74,6 +74,8 @@ ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const 
     if (!count) return {own};
     Source S = own;
     S.l0 = sum.l0 / float(count), S.l1 = sum.l1 / float(count);
+    static const bool fluxSum = std::getenv("FIRN_FLUXSUM");  // TEMP
+    if (fluxSum) S.l1 = sum.l1;
     static const bool corner = !std::getenv("FIRN_CORNER");  // TEMP switch
     if (count > 1 && corner) {
         std::vector<FaceLobe> beyond(count);

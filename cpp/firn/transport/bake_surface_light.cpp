@@ -434,6 +434,17 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 relaxTowardsNeighbours(faces, 3.0 * channels[c].ch.beta() * sigmaTr * h);
                 for (std::size_t q = 0; q < faces.size(); ++q)
                     faces[q].e0 += skimmedIn[q].e0, faces[q].e1 += skimmedIn[q].e1;
+                static const double darkBoost = std::getenv("FIRN_DARKX") ? std::atof(std::getenv("FIRN_DARKX")) : 1.0;  // TEMP
+                if (darkBoost != 1.0 && !scene.suns.empty()) {
+                    const glm::dvec3 sunW = scene.suns[0].direction;
+                    for (FaceExit &face : faces) {
+                        if (glm::dot(face.normal, sunW) >= 0.0) continue;
+                        bool litBeside = false;
+                        for (const FaceExit &o : faces)
+                            litBeside = litBeside || (std::abs(glm::dot(o.normal, face.normal)) < 0.5 && glm::dot(o.normal, sunW) > 0.1);
+                        if (litBeside) face.e0 *= darkBoost, face.e1 *= darkBoost;
+                    }
+                }
                 const SourceLobe lobe = edgeLobe(faces);
                 out.surface(i).returned.l0[c] = float(lobe.l0);
                 out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);
