@@ -1,7 +1,6 @@
 #include "firn/transport/bake_grid_values.h"
 
 #include <algorithm>
-#include <cstdlib>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -64,7 +63,7 @@ ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const 
     Source sum;
     int count = 0;
     float share = 0.0f;
-    std::array<int, 3> flat{};
+    std::array<int, 3> flat{};  // the faces towards the neighbour
     for (int a = 0; a < 3; ++a) {
         if (offset[a] == 0) continue;
         const int f = 2 * a + (offset[a] > 0);
@@ -73,11 +72,8 @@ ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const 
     }
     if (!count) return {own};
     Source S = own;
-    S.l0 = sum.l0 / float(count), S.l1 = sum.l1 / float(count);
-    static const bool fluxSum = std::getenv("FIRN_FLUXSUM");  // TEMP
-    if (fluxSum) S.l1 = sum.l1;
-    static const bool corner = !std::getenv("FIRN_CORNER");  // TEMP switch
-    if (count > 1 && corner) {
+    S.l0 = sum.l0, S.l1 = sum.l1;
+    if (count > 1) {  // diagonal to the edge: beyond all of those faces (lobeBeyondFaces)
         std::vector<FaceLobe> beyond(count);
         for (int c = 0; c < 3; ++c) {
             for (int q = 0; q < count; ++q)

@@ -374,7 +374,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         if (topo.patches[i].sharp) edgeFaces.voxels.push_back({std::uint32_t(i)});
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edgeFaces.voxels.size(), 64), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
-        std::vector<FaceExit> faces;
+        std::vector<FaceExit> faces, skimmedIn;  // skimmedIn: per air face, the sun skimming its ramp (W/m^2/sr)
         std::vector<glm::dvec3> normals;  // the air faces'
         std::vector<double> radiance;     // each face's peak radiance over the voxel's
         VoxelShared shared(light.beams.size());  // returnedThrough's, started per voxel
@@ -397,8 +397,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                     outflow[f] = neighbourhoodOutflow<glm::dvec3>(
                         topo, i, faceNormal(f), [&](std::size_t j) { return glm::dvec3(out[j].leaving); });
             for (int c = 0; c < 3; ++c) {
-                faces.clear();
-                std::vector<FaceExit> skimmedIn;  // per air face, the skimmed beam's return (W/m^2/sr)
+                faces.clear(), skimmedIn.clear();
                 for (int f = 0; f < 6; ++f) {
                     if (patch.share[f] <= 0.0f) continue;
                     const glm::dvec3 n = faceNormal(f);
@@ -411,9 +410,11 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                         const double seen = projectedArea(normals, w);
                         return seen > 0.0 ? std::max(0.0, glm::dot(n, w)) / seen : 0.0;
                     }, &out.surface(i), index, shared);
+                    // The sun skimming the face's ramp beyond a lit edge (skimmedThroughRamp), returned as the
+                    // half-space returns a grazing beam; on a corner of flat walls only (a staircase's next step takes
+                    // that strip in itself: ball_issue 8.45 -> 8.82 % ungated; docs/benchmarks.md, edge-skim).
                     const auto skimmed = [&](std::size_t s) {
-                        static const bool skimOff = std::getenv("FIRN_SKIMOFF");  // TEMP switch
-                        if (!walls || skimOff) return 0.0;
+                        if (!walls) return 0.0;
                         const glm::dvec3 w = towardsBeam(scene, s, surface);
                         const double seen = projectedArea(normals, w);
                         return seen > 0.0 ? skimmedThroughRamp(normals, n, w, voxelOpticalDepth, channels[c].ch.g) / seen
@@ -432,19 +433,10 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                 // sigma_eff h = 3 kappa D sigma_tr h: the voxel in diffusion lengths of the snow beneath the patch.
                 const double sigmaTr = channels[c].ch.sigmaTr(densityBeneath(topo, i, patch.normal));
                 relaxTowardsNeighbours(faces, 3.0 * channels[c].ch.beta() * sigmaTr * h);
+                // The skimmed light after relaxing: it stays on the face whose ramp caught it (before, it lifted the
+                // lit face's corner air: slab_thick +8 -> +16 %).
                 for (std::size_t q = 0; q < faces.size(); ++q)
                     faces[q].e0 += skimmedIn[q].e0, faces[q].e1 += skimmedIn[q].e1;
-                static const double darkBoost = std::getenv("FIRN_DARKX") ? std::atof(std::getenv("FIRN_DARKX")) : 1.0;  // TEMP
-                if (darkBoost != 1.0 && !scene.suns.empty()) {
-                    const glm::dvec3 sunW = scene.suns[0].direction;
-                    for (FaceExit &face : faces) {
-                        if (glm::dot(face.normal, sunW) >= 0.0) continue;
-                        bool litBeside = false;
-                        for (const FaceExit &o : faces)
-                            litBeside = litBeside || (std::abs(glm::dot(o.normal, face.normal)) < 0.5 && glm::dot(o.normal, sunW) > 0.1);
-                        if (litBeside) face.e0 *= darkBoost, face.e1 *= darkBoost;
-                    }
-                }
                 const SourceLobe lobe = edgeLobe(faces);
                 out.surface(i).returned.l0[c] = float(lobe.l0);
                 out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);

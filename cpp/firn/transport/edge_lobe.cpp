@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdlib>
-#include <string>
 #include <limits>
 
 #include <glm/geometric.hpp>
@@ -87,33 +85,30 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
 }
 
 SourceLobe lobeBeyondFaces(const std::vector<FaceLobe> &faces) {
-    double mean = 0.0;  // T's mean over the sphere and its first moment, over the directions' equal solid angles
+    const auto seenBeyond = [&](const glm::dvec3 &w) {  // every face faces w
+        return std::all_of(faces.begin(), faces.end(), [&](const FaceLobe &f) { return glm::dot(f.normal, w) > 0.0; });
+    };
+    double light = 0.0;  // T summed over the directions (equal solid angles), and its first moment
     glm::dvec3 moment(0.0);
     for (const glm::dvec3 &w : sphereDirections()) {
-        if (std::any_of(faces.begin(), faces.end(), [&](const FaceLobe &f) { return glm::dot(f.normal, w) <= 0.0; }))
-            continue;
+        if (!seenBeyond(w)) continue;
         double mixed = 0.0;
         const double seen = projectedArea(faces, w, [&](std::size_t f, double c) {
             mixed += c * lobeRadiance(faces[f].l0, faces[f].l1, w);
         });
-        mean += mixed / seen / kDirections, moment += mixed / seen / kDirections * w;
+        light += mixed / seen, moment += mixed / seen * w;
     }
-    static const char *variant = std::getenv("FIRN_CORNERFIT");  // TEMP
-    if (variant && std::string(variant) == "level" && mean > 0.0) {
-        const double k = std::min(glm::length(moment) / mean, kMaxLobeAnisotropy);
-        const glm::dvec3 axis = glm::normalize(moment);
-        double inside = 0.0, lobe = 0.0;
-        for (const glm::dvec3 &w : sphereDirections()) {
-            if (std::any_of(faces.begin(), faces.end(), [&](const FaceLobe &f) { return glm::dot(f.normal, w) <= 0.0; }))
-                continue;
+    if (!(light > 0.0)) return {};
+    const double k = std::min(glm::length(moment) / light, kMaxLobeAnisotropy);
+    const glm::dvec3 axis = glm::normalize(moment);
+    double lobe = 0.0;  // the lobe of mean 1 summed over the same directions
+    for (const glm::dvec3 &w : sphereDirections())
+        if (seenBeyond(w)) {
             const double d = 1.0 + k * k - 2.0 * k * glm::dot(axis, w);
-            lobe += (1.0 - k * k) / (d * std::sqrt(d)), inside += 1.0;
+            lobe += (1.0 - k * k) / (d * std::sqrt(d));
         }
-        const double l0 = mean * kDirections / lobe;
-        return {l0, 3.0 * k * l0 * axis};
-    }
-    if (variant && std::string(variant).rfind("blur", 0) == 0) return {mean, 3.0 * std::atof(variant + 4) * moment};
-    return {mean, 3.0 * moment};
+    const double l0 = light / lobe;
+    return {l0, 3.0 * k * l0 * axis};
 }
 
 double peakSeenThroughFaces(const std::vector<glm::dvec3> &normals, const std::vector<double> &radiance,
