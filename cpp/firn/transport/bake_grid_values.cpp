@@ -14,6 +14,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/transport/edge_lobe.h"
 #include "firn/transport/incident_light.h"
 #include "firn/transport/limb_carry.h"
 #include "firn/transport/skin_ring.h"
@@ -62,15 +63,25 @@ ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const 
     Source sum;
     int count = 0;
     float share = 0.0f;
+    std::array<int, 3> flat{};  // the faces towards the neighbour
     for (int a = 0; a < 3; ++a) {
         if (offset[a] == 0) continue;
         const int f = 2 * a + (offset[a] > 0);
         if (faces->flat >> f & 1u)
-            sum.l0 += faces->lobe[f].l0, sum.l1 += faces->lobe[f].l1, share += faces->peakShare[f], ++count;
+            sum.l0 += faces->lobe[f].l0, sum.l1 += faces->lobe[f].l1, share += faces->peakShare[f], flat[count++] = f;
     }
     if (!count) return {own};
     Source S = own;
-    S.l0 = sum.l0 / float(count), S.l1 = sum.l1 / float(count);
+    S.l0 = sum.l0, S.l1 = sum.l1;
+    if (count > 1) {  // diagonal to the edge: beyond all of those faces (lobeBeyondFaces)
+        std::vector<FaceLobe> beyond(count);
+        for (int c = 0; c < 3; ++c) {
+            for (int q = 0; q < count; ++q)
+                beyond[q] = {faceNormal(flat[q]), faces->lobe[flat[q]].l0[c], glm::dvec3(faces->lobe[flat[q]].l1[c])};
+            const SourceLobe lobe = lobeBeyondFaces(beyond);
+            S.l0[c] = float(lobe.l0), S.l1[c] = glm::vec3(lobe.l1);
+        }
+    }
     S.peak0 *= share, S.peak1 *= share;
     return {S, share};
 }

@@ -374,7 +374,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         if (topo.patches[i].sharp) edgeFaces.voxels.push_back({std::uint32_t(i)});
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edgeFaces.voxels.size(), 64), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
-        std::vector<FaceExit> faces;
+        std::vector<FaceExit> faces, skimmedIn;  // skimmedIn: per air face, the sun skimming its ramp (W/m^2/sr)
         std::vector<glm::dvec3> normals;  // the air faces'
         std::vector<double> radiance;     // each face's peak radiance over the voxel's
         VoxelShared shared(light.beams.size());  // returnedThrough's, started per voxel
@@ -391,15 +391,17 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
             std::array<std::pair<glm::dvec3, double>, 6> outflow;  // per air face, the three channels' at once
             shared.startVoxel(i);
             std::array<double, 6> facePeak{};  // W/m^2/sr: each face's SunPeak, the channels' sum
+            const bool walls = own.facesAreWalls(patch);
             for (int f = 0; f < 6; ++f)
                 if (patch.share[f] > 0.0f)
                     outflow[f] = neighbourhoodOutflow<glm::dvec3>(
                         topo, i, faceNormal(f), [&](std::size_t j) { return glm::dvec3(out[j].leaving); });
             for (int c = 0; c < 3; ++c) {
-                faces.clear();
+                faces.clear(), skimmedIn.clear();
                 for (int f = 0; f < 6; ++f) {
                     if (patch.share[f] <= 0.0f) continue;
                     const glm::dvec3 n = faceNormal(f);
+                    const double voxelOpticalDepth = channels[c].ch.sigmaT(densityBeneath(topo, i, n)) * h;
                     const float peakBefore = out.surface(i).peak0[c];
                     const ReturnedLight r = returnedThrough(c, i, n, patch.share[f], SkyBeam{}, [&](std::size_t s) {
                         // The beam entered each face by its cosine to the light seen from the patch's surface, as
@@ -408,15 +410,33 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
                         const double seen = projectedArea(normals, w);
                         return seen > 0.0 ? std::max(0.0, glm::dot(n, w)) / seen : 0.0;
                     }, &out.surface(i), index, shared);
+                    // The sun skimming the face's ramp beyond a lit edge (skimmedThroughRamp), returned as the
+                    // half-space returns a grazing beam; on a corner of flat walls only (a staircase's next step takes
+                    // that strip in itself: ball_issue 8.45 -> 8.82 % ungated; docs/benchmarks.md, edge-skim).
+                    const auto skimmed = [&](std::size_t s) {
+                        if (!walls) return 0.0;
+                        const glm::dvec3 w = towardsBeam(scene, s, surface);
+                        const double seen = projectedArea(normals, w);
+                        return seen > 0.0 ? skimmedThroughRamp(normals, n, w, voxelOpticalDepth, channels[c].ch.g) / seen
+                                          : 0.0;
+                    };
+                    const ReturnedLight skim =
+                        returnedThrough(c, i, n, 0.0, SkyBeam{}, skimmed, &out.surface(i), index, shared);
                     facePeak[f] += out.surface(i).peak0[c] - peakBefore;
                     const double leaving = outflow[f].first[c], area = outflow[f].second;
                     const double exitance = area > 0.0 ? leaving / area : 0.0, own = kPi * h * h;
+                    skimmedIn.push_back({n, (skim.sunShape0 + skim.sunReturned * 3.0 / 7.0) / own,
+                                         (skim.sunShape1 + skim.sunReturned * 6.0 / 7.0 * n) / own});
                     faces.push_back({n, (r.sky0 + r.sun0) / own + exitance * (3.0 / 7.0 / kPi),
                                      (r.sky1 + r.sun1) / own + exitance * 6.0 / 7.0 / kPi * n});
                 }
                 // sigma_eff h = 3 kappa D sigma_tr h: the voxel in diffusion lengths of the snow beneath the patch.
                 const double sigmaTr = channels[c].ch.sigmaTr(densityBeneath(topo, i, patch.normal));
                 relaxTowardsNeighbours(faces, 3.0 * channels[c].ch.beta() * sigmaTr * h);
+                // The skimmed light after relaxing: it stays on the face whose ramp caught it (before, it lifted the
+                // lit face's corner air: slab_thick +8 -> +16 %).
+                for (std::size_t q = 0; q < faces.size(); ++q)
+                    faces[q].e0 += skimmedIn[q].e0, faces[q].e1 += skimmedIn[q].e1;
                 const SourceLobe lobe = edgeLobe(faces);
                 out.surface(i).returned.l0[c] = float(lobe.l0);
                 out.surface(i).returned.l1[c] = glm::vec3(lobe.l1);

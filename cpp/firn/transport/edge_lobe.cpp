@@ -84,11 +84,71 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
     return {l0, 3.0 * bestK * l0 * axis};
 }
 
+SourceLobe lobeBeyondFaces(const std::vector<FaceLobe> &faces) {
+    const auto seenBeyond = [&](const glm::dvec3 &w) {  // every face faces w
+        return std::all_of(faces.begin(), faces.end(), [&](const FaceLobe &f) { return glm::dot(f.normal, w) > 0.0; });
+    };
+    double light = 0.0;  // T summed over the directions (equal solid angles), and its first moment
+    glm::dvec3 moment(0.0);
+    for (const glm::dvec3 &w : sphereDirections()) {
+        if (!seenBeyond(w)) continue;
+        double mixed = 0.0;
+        const double seen = projectedArea(faces, w, [&](std::size_t f, double c) {
+            mixed += c * lobeRadiance(faces[f].l0, faces[f].l1, w);
+        });
+        light += mixed / seen, moment += mixed / seen * w;
+    }
+    if (!(light > 0.0)) return {};
+    const double k = std::min(glm::length(moment) / light, kMaxLobeAnisotropy);
+    const glm::dvec3 axis = glm::normalize(moment);
+    double lobe = 0.0;  // the lobe of mean 1 summed over the same directions
+    for (const glm::dvec3 &w : sphereDirections())
+        if (seenBeyond(w)) {
+            const double d = 1.0 + k * k - 2.0 * k * glm::dot(axis, w);
+            lobe += (1.0 - k * k) / (d * std::sqrt(d));
+        }
+    const double l0 = light / lobe;
+    return {l0, 3.0 * k * l0 * axis};
+}
+
 double peakSeenThroughFaces(const std::vector<glm::dvec3> &normals, const std::vector<double> &radiance,
                             const glm::dvec3 &axis) {
     double shown = 0.0;
     const double seen = projectedArea(normals, axis, [&](std::size_t f, double c) { shown += radiance[f] * c; });
     return seen > 0.0 ? shown / seen : 1.0;
+}
+
+namespace {
+
+// Of light travelling at sin(beta) = rise out of a plane and scattered once by a Henyey-Greenstein phase function of
+// asymmetry g, the share heading back through the plane: over the scattering angle's cosine m (HG's density),
+// the azimuths phi with m rise + sqrt(1 - m^2) cos(phi) sqrt(1 - rise^2) < 0; 1/2 at rise 0 by symmetry.
+double scatteredBackThroughPlane(double g, double rise) {
+    constexpr int kSteps = 256;
+    const double across = std::sqrt(std::max(0.0, 1.0 - rise * rise));
+    double share = 0.0, all = 0.0;  // the rule's own sum of the density: a sharp peak's midpoints miss a little
+    for (int k = 0; k < kSteps; ++k) {
+        const double m = -1.0 + 2.0 * (k + 0.5) / kSteps, sine = std::sqrt(1.0 - m * m);
+        const double density = 1.0 / std::pow(1.0 + g * g - 2.0 * g * m, 1.5);
+        const double q = sine * across > 0.0 ? -m * rise / (sine * across) : (m * rise < 0.0 ? 2.0 : -2.0);
+        share += density * (1.0 - std::acos(std::clamp(q, -1.0, 1.0)) / kPi), all += density;  // cos(phi) < q
+    }
+    return share / all;
+}
+
+}  // namespace
+
+double skimmedThroughRamp(const std::vector<glm::dvec3> &normals, const glm::dvec3 &n, const glm::dvec3 &w,
+                          double voxelOpticalDepth, double g) {
+    const double mu = glm::dot(n, w);
+    if (mu > 0.0) return 0.0;
+    double lit = 0.0;  // the lit neighbouring faces' cosines
+    for (const glm::dvec3 &a : normals)
+        if (std::abs(glm::dot(a, n)) < 0.5) lit += std::max(0.0, glm::dot(a, w));
+    if (!(lit > 0.0)) return 0.0;
+    const double spread = std::max(-mu, 1e-12) * 2.0 / voxelOpticalDepth;  // 1 / a
+    const double caught = 1.0 - std::sqrt(kPi * spread) * std::erf(0.5 / std::sqrt(spread));
+    return 0.5 * lit * caught * scatteredBackThroughPlane(g, -mu);
 }
 
 void relaxTowardsNeighbours(std::vector<FaceExit> &faces, double voxelInDiffusionLengths) {

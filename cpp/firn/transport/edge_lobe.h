@@ -18,8 +18,16 @@ struct FaceExit {
     glm::dvec3 e1{0.0};
 };
 
+// One flat air face of a sharp edge voxel and the lobe the air across it carries (EdgeFaceLobes' lobe, one channel).
+struct FaceLobe {
+    glm::dvec3 normal{0.0, 0.0, 1.0};
+    double l0 = 0.0;
+    glm::dvec3 l1{0.0};
+};
+
 // A face's outward normal, the face given as a FaceExit or as its normal (projectedArea's faces).
 inline const glm::dvec3 &outwardNormal(const FaceExit &face) { return face.normal; }
+inline const glm::dvec3 &outwardNormal(const FaceLobe &face) { return face.normal; }
 inline const glm::dvec3 &outwardNormal(const glm::dvec3 &normal) { return normal; }
 
 // A camera looking along -w sees a voxel through those of its faces that face w, each in proportion to its projected
@@ -48,6 +56,19 @@ double projectedArea(const Faces &faces, const glm::dvec3 &w) {
 // than T's largest value (exitLobe's rule: a lobe pointing into the snow would hide its light).
 SourceLobe edgeLobe(const std::vector<FaceExit> &faces);
 
+// The lobe for the air diagonal to a sharp edge or corner, beyond all of `faces` (two or three flat faces at right
+// angles, each with the lobe the air across it carries): the faces' light reaches that air only travelling away from
+// every one of them (seen along -w through it, a face lies behind only where n_f . w > 0 for each f; towards any other
+// w the snow lies beside the way). So it shows towards w the faces' mix T(w) = sum_f c_f L_f(w) / sum_f c_f
+// (c_f = n_f . w, edgeLobe's) where every face faces w, and none of their light elsewhere. The lobe: axis and k from T's
+// first moment (k = |mean of T w| / mean of T), l0 keeping the light T carries over the directions it is seen from, as
+// exitLobe keeps a face's over its hemisphere (k from T's moment alone, with l0 its mean over the whole sphere, read
+// the edge's air too dark from within: a convex edge under the sky 1.02 of the inside against the Monte Carlo's 1.09).
+// The faces' lobes' mean (before) showed a camera above box_sharp's lit wall's foot the wall's light in the corner
+// air below the bottom's plane, where the light climbing the wall never passes: that block +50 %, with this +30 %
+// (docs/benchmarks.md, box-edge, corner-air).
+SourceLobe lobeBeyondFaces(const std::vector<FaceLobe> &faces);
+
 // Of a sharp voxel's peaked lobe about the unit `axis` (the suns returned sharply forwards, stored as the voxel's
 // radiance over all its air faces), the part its one value shows. Air face f of normal normals[f] sends its own
 // radiance, radiance[f] times the voxel's (its share of the peak over its share of the faces' area); a camera towards
@@ -58,6 +79,20 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces);
 // it is seen through the top's thin projected area, not through the whole side (docs/benchmarks.md, corner-lean).
 double peakSeenThroughFaces(const std::vector<glm::dvec3> &normals, const std::vector<double> &radiance,
                             const glm::dvec3 &axis);
+
+// The sun a sharp edge voxel's air face of normal n takes in through its density ramp beyond the edge, per unit face
+// area, the way the beam travels being -w: the beam crossing a lit neighbouring face's plane (n_a . w > 0, n_a at right
+// angles to n) within the ramp outside n's half-density plane, where no face's intake counts it (half a voxel wide:
+// the trilinear fill falls from 1/2 there to 0), caught by that ramp while travelling along the face (n . w = 0: all of
+// it) or away from it (n . w < 0: along a chord), and scattered back through n's plane into the snow. The fill
+// 1/2 - u at u voxels out gives the way from u0 the optical depth tau (1/2 - u0)^2 / (2 |n . w|), tau the voxel's at the
+// snow's density; caught, averaged over u0: 1 - sqrt(pi / a) erf(sqrt(a) / 2), a = tau / (2 |n . w|). Scattered once
+// by HG(g), the share heading back into the snow: 1/2 along the face, less as the beam leaves it. slab_thick's grazing
+// side beside its lit side (the sun in the side's plane): the Monte Carlo's light there fell 43 % with that strip
+// screened off, the bake's 18 % (docs/benchmarks.md, edge-skim). 0 where the face itself faces the light (its own
+// intake holds those rays).
+double skimmedThroughRamp(const std::vector<glm::dvec3> &normals, const glm::dvec3 &n, const glm::dvec3 &w,
+                          double voxelOpticalDepth, double g);
 
 // Each face's form taken as its mean over the face where the light beneath it also leaves through the faces beside
 // it. Near their shared edge the snow's fluence is one for both faces: by symmetry the two exits meet at the edge at

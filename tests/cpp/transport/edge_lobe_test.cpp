@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "firn/util/random.h"
 #include "firn/util/sampling.h"
 
 namespace firn {
@@ -86,6 +88,73 @@ TEST(EdgeLobe, PeakSeenThroughTheFaceItLeaves) {
     EXPECT_NEAR(peakSeenThroughFaces(normals, {2.0, 0.0}, {0.0, 0.0, 1.0}), 2.0, 1e-12);
     EXPECT_NEAR(peakSeenThroughFaces(normals, {1.0, 1.0}, grazing), 1.0, 1e-12);
     EXPECT_NEAR(peakSeenThroughFaces(normals, {2.0, 0.0}, glm::normalize(glm::dvec3(1.0, 0.0, -0.2))), 1.0, 1e-12);
+}
+
+// The sun skimming a grazing face's density ramp beyond a lit edge, against a beam marched through that ramp: the
+// beam crosses the lit face's plane (normal +x) at u0 voxels out from the grazing face's half-density plane (normal
+// +y), u0 uniform over the half voxel where the trilinear fill 1/2 - u is not zero; it travels along -w, leaving the
+// ramp at |n . w| per unit way; where its free path (in optical depths, tau a voxel at the snow's density) ends within
+// the ramp it scatters once by HG(g), and counts where its new direction heads back through the grazing face's plane.
+// Per unit area of that face: half a voxel of strip, times the lit face's cosine, times that chance.
+TEST(EdgeLobe, SkimmedThroughRampMatchesAMarchedBeam) {
+    const glm::dvec3 lit(1.0, 0.0, 0.0), grazing(0.0, 1.0, 0.0);
+    const std::vector<glm::dvec3> normals{lit, grazing};
+    for (const double tau : {2.0, 8.0})
+        for (const double g : {0.0, 0.7})
+            for (const double away : {0.0, 0.1, 0.5}) {  // -n . w: the beam leaving the grazing face's ramp
+                const glm::dvec3 w = glm::normalize(glm::dvec3(0.5, -away, 0.8));
+                Rng rng(7, std::uint64_t(100 * tau + 10 * g + 1000 * away));
+                constexpr int kBeams = 100000;
+                constexpr double kStep = 0.01;  // voxels of way, the fill read at each step's middle
+                const double out = -glm::dot(grazing, w) * kStep;
+                double back = 0.0;
+                for (int k = 0; k < kBeams; ++k) {
+                    double u = 0.5 * rng.uniform(), depth = 0.0;
+                    const double freePath = -std::log(1.0 - rng.uniform());
+                    while (u < 0.5 && depth < freePath) depth += tau * std::max(0.0, 0.5 - u - 0.5 * out) * kStep, u += out;
+                    if (!(depth >= freePath)) continue;
+                    const glm::dvec3 after = sampleHenyeyGreenstein(-w, g, rng.uniform(), rng.uniform());
+                    if (glm::dot(after, grazing) < 0.0) back += 1.0;
+                }
+                const double marched = 0.5 * glm::dot(lit, w) * back / kBeams;
+                const double skimmed = skimmedThroughRamp(normals, grazing, w, tau, g);
+                EXPECT_NEAR(skimmed, marched, 0.03 * marched + 1e-4) << "tau " << tau << " g " << g << " away " << away;
+            }
+    // None where the face faces the light itself (its own intake holds those rays).
+    EXPECT_EQ(skimmedThroughRamp(normals, grazing, glm::normalize(glm::dvec3(0.5, 0.2, 0.8)), 8.0, 0.7), 0.0);
+}
+
+// The air diagonal to an edge between a lit wall (+x, radiance 0.3) and the bottom beneath it (-z, 0.05): the faces'
+// light reaches it only travelling away from both, so towards a camera above (w . -z < 0) it shows little, where the
+// faces' lobes' mean showed half the wall's light; its lobe keeps the light T carries over the directions both faces
+// face, its axis along T's first moment (by a finer quadrature here than the core's 128 directions).
+TEST(EdgeLobe, AirBeyondTwoFacesShowsOnlyLightLeavingBoth) {
+    const glm::dvec3 wall(1.0, 0.0, 0.0), bottom(0.0, 0.0, -1.0);
+    const SourceLobe wallLobe = exitLobe(0.3, glm::dvec3(0.0), wall), bottomLobe = exitLobe(0.05, glm::dvec3(0.0), bottom);
+    const std::vector<FaceLobe> faces{{wall, wallLobe.l0, wallLobe.l1}, {bottom, bottomLobe.l0, bottomLobe.l1}};
+    const SourceLobe lobe = lobeBeyondFaces(faces);
+    constexpr int n = 400;
+    double light = 0.0, shown = 0.0;  // over the directions both faces face, per unit solid angle / 4 pi
+    glm::dvec3 moment(0.0);
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const double mu = -1.0 + 2.0 * (i + 0.5) / n, phi = 2.0 * kPi * (j + 0.5) / n, s = std::sqrt(1.0 - mu * mu);
+            const glm::dvec3 w(s * std::cos(phi), s * std::sin(phi), mu);
+            const double a = glm::dot(wall, w), b = glm::dot(bottom, w);
+            if (a <= 0.0 || b <= 0.0) continue;
+            const double T =
+                (a * lobeRadiance(wallLobe.l0, wallLobe.l1, w) + b * lobeRadiance(bottomLobe.l0, bottomLobe.l1, w)) / (a + b);
+            light += T / (double(n) * n), moment += T * w / (double(n) * n);
+            shown += lobeRadiance(lobe.l0, lobe.l1, w) / (double(n) * n);
+        }
+    EXPECT_NEAR(shown, light, 0.03 * light);
+    EXPECT_GT(glm::dot(glm::normalize(lobe.l1), glm::normalize(moment)), 0.999);
+    const glm::dvec3 above = glm::normalize(glm::dvec3(0.354, -0.612, 0.707));  // box_sharp's worst block's camera
+    const double faceMean = 0.5 * (lobeRadiance(wallLobe.l0, wallLobe.l1, above) +
+                                   lobeRadiance(bottomLobe.l0, bottomLobe.l1, above));
+    const double seenAbove = lobeRadiance(lobe.l0, lobe.l1, above);
+    std::printf("towards the camera above: %.4f, the faces' lobes' mean %.4f\n", seenAbove, faceMean);
+    EXPECT_LT(seenAbove, 0.5 * faceMean);
 }
 
 }  // namespace firn
