@@ -442,7 +442,7 @@ as `bake`'s.)doc");
             const firn::BakeSettings settings = bakeSettings(quality, seed, 0, 0, 0, 0);
             longCall([&] {
                 const openvdb::FloatGrid::Ptr density = jointDensity(path);
-                writeBaked(path, density, firn::emptyBakedGrids(*density, optics, settings), outputPath);
+                writeBaked(path, density, firn::emptyBakedGrids(*density, optics, settings), outputPath, nullptr);
             });
         },
         py::arg("vdb_path"), py::arg("output_path"), py::arg("optics"), py::arg("quality") = "FINAL",

@@ -16,8 +16,8 @@ namespace firn {
 
 namespace {
 
-// A slab under a small lump (traced whole) that hides part of its sky: every stage of a FINAL bake runs, the
-// gathering between snow surfaces too.
+// A slab under a small lump that hides part of its sky: every stage of a bake runs, the gathering between snow
+// surfaces too.
 Scene slabUnderLump() {
     constexpr double kVoxel = 0.01;     // m
     constexpr float kDensity = 300.0f;  // kg/m^3
@@ -49,7 +49,7 @@ std::vector<std::string> stagesOf(const Scene &scene, const BakeSettings &settin
 // grids); "Done" comes after the work, where the binding's write checks (the test below).
 TEST(BakeCancel, EveryStageStopsWithinItself) {
     const Scene scene = slabUnderLump();
-    const BakeSettings settings{BakeQuality::Final, 5};
+    const BakeSettings settings{BakeQuality::Draft, 5};
     const std::vector<std::string> stages = stagesOf(scene, settings);
     for (const char *expected : {"Finding the snow's voxels", kLightAndTraceStage, "Solving multiple scattering",
                                  "Gathering light between snow surfaces", "Finding the light leaving the surface",
