@@ -2,7 +2,7 @@
 `firncore.Cancelled`, at instants spread over the bake (docs/bake.md, Cancelling).
 
     PYTHONPATH=build/python:bench /usr/bin/python3 bench/cancel_latency.py [--scenes car,spray_dense,ball_grey]
-        [--instants 16] [--car build/car_inputs]
+        [--instants 16] [--car build/car_inputs] [--stage NAME --delays 0.5,2]
 
 Per scene, a first uncancelled bake (FINAL, seed 0, as bench/suite_grids.py bakes) gives the duration D and the
 stages the progress showed (polled every 5 ms: when each began). Then `--instants` fresh bakes, each on a fresh copy
@@ -10,7 +10,9 @@ of the density, run on a worker thread (firncore releases the GIL, as the add-on
 cancels the i-th at (i + 0.5) / N of D. Printed per instant: when, the stage the progress showed at the cancel, and
 the latency (s) until the call raised Cancelled, or until it returned unstopped ("(not stopped)": the cancel
 came too late for any check, or in work that checks none; a latency too), then the scene's worst
-latency and the machine's load average (the machine may be shared: latencies grow with its load). The inputs: the
+latency and the machine's load average (the machine may be shared: latencies grow with its load). With --stage,
+no uncancelled bake: one bake per delay, cancelled that many seconds after the progress first shows stage NAME
+(a stage a shared machine's spread of durations makes the instants miss). The inputs: the
 car's from bench/car_scene.py (bench/car_bake.py writes them where absent), the cases' from bench/bake_suite.py.
 """
 
@@ -54,10 +56,11 @@ def scene_bakers(names, car_folder):
     return bakers
 
 
-def timed_bake(bake, write, cancel_at=None):
+def timed_bake(bake, write, cancel_at=None, stage_shown=None):
     """One bake on a worker thread of a fresh density file. Returns (seconds from start to end, stages as
     [(seconds, name)] polled every 5 ms, the stage at the cancel, the seconds from the cancel to the call's end or
-    None without a cancel, whether it raised Cancelled)."""
+    None without a cancel, whether it raised Cancelled). With `stage_shown`, cancel_at counts from when the progress
+    first shows that stage."""
     progress = firncore.Progress()
     outcome = {}
     with tempfile.TemporaryDirectory() as scratch:
@@ -80,7 +83,8 @@ def timed_bake(bake, write, cancel_at=None):
             stage = progress.stage
             if not stages or stages[-1][1] != stage:
                 stages.append((now, stage))
-            if cancel_at is not None and cancelled_at is None and now >= cancel_at:
+            shown = next((at for at, name in stages if name == stage_shown), None) if stage_shown else 0.0
+            if cancel_at is not None and cancelled_at is None and shown is not None and now >= shown + cancel_at:
                 stage_at_cancel = stage
                 cancelled_at = time.perf_counter()
                 progress.cancel()
@@ -94,11 +98,22 @@ def main():
     parser.add_argument("--scenes", default="car,spray_dense,ball_grey")
     parser.add_argument("--instants", type=int, default=16)
     parser.add_argument("--car", default=None, help="the car's bake inputs (bench/car_bake.py's default folder)")
+    parser.add_argument("--stage", default=None, help="cancel --delays seconds after this stage first shows")
+    parser.add_argument("--delays", default="0.5,2")
     args = parser.parse_args()
     bakers = scene_bakers(args.scenes.split(","), args.car)
     print(f"firncore {firncore.__version__}, {firncore.hardware_threads()} threads, FINAL, seed 0; "
           f"{args.instants} cancels per scene", flush=True)
     worst = {}
+    if args.stage:
+        for name, (bake, write) in bakers.items():
+            for delay in (float(d) for d in args.delays.split(",")):
+                load = os.getloadavg()[0]
+                _, _, stage, latency, stopped = timed_bake(bake, write, delay, args.stage)
+                shown = "ended" if latency is None else f"{latency:.3f}" + ("" if stopped else " (not stopped)")
+                print(f"{name}: {delay:.1f} s after {args.stage!r}: latency {shown} ({stage}); load average "
+                      f"{load:.1f}", flush=True)
+        return
     for name, (bake, write) in bakers.items():
         load = os.getloadavg()[0]
         duration, stages, _, _, _ = timed_bake(bake, write)
