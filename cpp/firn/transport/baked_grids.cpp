@@ -69,7 +69,8 @@ std::array<openvdb::Vec3fTree::Ptr, BakedGrids::kCount> coarsenedSources(const o
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             std::array<Vec3Tree::LeafNodeType *, kCount> leaf;
             leaf[0] = &leaves.leaf(l);
-            work.add(WorkCheck::kVoxel * std::uint64_t(factor * factor * factor) * leaf[0]->onVoxelCount());  // fine ones
+            // Each coarse voxel reads factor^3 fine ones.
+            work.add(WorkCheck::kVoxel * std::uint64_t(factor * factor * factor) * leaf[0]->onVoxelCount());
             for (std::size_t g = 1; g < kCount; ++g) leaf[g] = trees[g]->probeLeaf(leaf[0]->origin());
             for (auto it = leaf[0]->beginValueOn(); it; ++it) {
                 const openvdb::Coord C = it.getCoord();
