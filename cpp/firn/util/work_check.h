@@ -15,7 +15,7 @@ namespace firn {
 class WorkCheck {
   public:
     static constexpr std::uint64_t kUnits = std::uint64_t(1) << 16;
-    static constexpr std::uint64_t kVoxel = 64;  // a voxel's light, a source or a grid value: a check per 1024
+    static constexpr std::uint64_t kVoxel = 256;  // a voxel's light, a source or a grid value: a check per 256
 
     explicit WorkCheck(const SubProgress &progress) : progress_(progress) { progress_.throwIfCancelled(); }
 
