@@ -285,16 +285,18 @@ firn::BakeSettings bakeSettings(const std::string &quality, std::uint64_t seed, 
 }
 
 // Writes `output`: the grids of `path` with `density` in its density's place and `baked` in place of any earlier
-// bake's grids, its scatter grid too (the car's surface grid is read only now: 14 bytes per voxel).
+// bake's grids, its scatter grid too (the car's surface grid is read only now: 14 bytes per voxel). A cancel of
+// `progress` (may be null) while the grids are compressed leaves `output` as it was.
 void writeBaked(const std::string &path, const openvdb::GridBase::Ptr &density, const firn::BakedGrids &baked,
-                const std::string &output) {
+                const std::string &output, const firn::Progress *progress) {
     openvdb::GridPtrVec grids;
     for (const std::string &name : firn::gridNames(path))
         if (name == "density") grids.push_back(density);
         else if (!firn::BakedGrids::isBaked(name))
             grids.push_back(firn::readGrid(path, name));
     for (const auto &grid : baked.grids()) grids.push_back(grid);
-    firn::writeGrids(output, grids);
+    if (progress) progress->throwIfCancelled();  // the other grids' read
+    firn::writeGrids(output, grids, progress);
 }
 
 // The 'density' grid of one of a joint bake's files (read alone). Throws InvalidArgument when it has none.
@@ -367,7 +369,7 @@ void bindTransport(py::module_ &m) {
                 const firn::Scene scene = sceneFrom(density ? openvdb::GridPtrVec{density} : openvdb::GridPtrVec{}, path,
                                                     optics, suns, lamps, sky, std::move(blockers));
                 const firn::BakedGrids baked = firn::bakeScattering(scene, settings, progress.get(), &stats);
-                writeBaked(path, density, baked, outputPath.value_or(path));
+                writeBaked(path, density, baked, outputPath.value_or(path), progress.get());
             });
             return statsDict(stats);
         },
@@ -412,9 +414,11 @@ firncore.WriteError (an OSError) when the result cannot be written. Returns the 
                 const firn::Scene scene =
                     sceneFrom({joint}, paths.front(), optics, suns, lamps, sky, std::move(blockers));
                 const firn::BakedGrids baked = firn::bakeScattering(scene, settings, progress.get(), &stats);
+                // Not cancelled once written: a cancel between two files would leave one new beside one old.
                 for (std::size_t i = 0; i < paths.size(); ++i)
                     if (outputPaths[i])
-                        writeBaked(paths[i], densities[i], firn::bakedGridsOf(baked, *densities[i]), *outputPaths[i]);
+                        writeBaked(paths[i], densities[i], firn::bakedGridsOf(baked, *densities[i]), *outputPaths[i],
+                                   nullptr);
             });
             return statsDict(stats);
         },
@@ -438,7 +442,7 @@ as `bake`'s.)doc");
             const firn::BakeSettings settings = bakeSettings(quality, seed, 0, 0, 0, 0);
             longCall([&] {
                 const openvdb::FloatGrid::Ptr density = jointDensity(path);
-                writeBaked(path, density, firn::emptyBakedGrids(*density, optics, settings), outputPath);
+                writeBaked(path, density, firn::emptyBakedGrids(*density, optics, settings), outputPath, nullptr);
             });
         },
         py::arg("vdb_path"), py::arg("output_path"), py::arg("optics"), py::arg("quality") = "FINAL",

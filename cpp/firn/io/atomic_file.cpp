@@ -28,6 +28,10 @@ void writeFileAtomically(const std::string &path, const std::function<void(std::
             throw std::runtime_error(errno != 0 ? std::strerror(errno) : "write failed");
         }
         std::filesystem::rename(temp, target);
+    } catch (const Cancelled &) {  // the writer was cancelled: `path` stays as it was, and the cancel is no error
+        std::error_code ignored;
+        std::filesystem::remove(temp, ignored);
+        throw;
     } catch (const std::exception &e) {
         std::error_code ignored;
         std::filesystem::remove(temp, ignored);

@@ -34,8 +34,9 @@ class CompressedLeaves {
   public:
     virtual ~CompressedLeaves() = default;
     // Compresses every leaf as its writeBuffers would write it to `settings` (compression, half floats) on all
-    // cores; `archiveCompression` is the file's flags, which size the delayed-load table.
-    virtual void compress(std::ostream &settings, std::uint32_t archiveCompression) = 0;
+    // cores; `archiveCompression` is the file's flags, which size the delayed-load table. Checks `progress` for
+    // cancellation per chunk of leaves.
+    virtual void compress(std::ostream &settings, std::uint32_t archiveCompression, const Progress *progress) = 0;
     // The delayed-load table OpenVDB would write for the grid, or null for a type it writes none for.
     virtual io::DelayedLoadMetadata::Ptr delayedLoad() const = 0;
 };
@@ -61,7 +62,7 @@ class PrecompressedGrid : public GridT, public CompressedLeaves {
   public:
     explicit PrecompressedGrid(GridT &grid) : GridT(grid, openvdb::ShallowCopy()) {}
 
-    void compress(std::ostream &settings, std::uint32_t archiveCompression) override {
+    void compress(std::ostream &settings, std::uint32_t archiveCompression, const Progress *progress) override {
         using Leaf = typename GridT::TreeType::LeafNodeType;
         constexpr bool kTable = DelayedLoadGridTypes::Contains<GridT>;
         if constexpr (kTable) delayedLoad_ = std::make_shared<io::DelayedLoadMetadata>();
@@ -81,6 +82,7 @@ class PrecompressedGrid : public GridT, public CompressedLeaves {
         constexpr std::size_t kLeavesPerChunk = 64;
         chunks_.assign((leaves.size() + kLeavesPerChunk - 1) / kLeavesPerChunk, std::string());
         tbb::parallel_for(std::size_t(0), chunks_.size(), [&](std::size_t c) {
+            if (progress) progress->throwIfCancelled();  // a chunk: 64 leaves, at most 32768 values
             std::ostringstream chunk;
             chunk.copyfmt(settings);  // OpenVDB's per-stream settings: compression, half floats, background
             const std::size_t first = c * kLeavesPerChunk, end = std::min(leaves.size(), first + kLeavesPerChunk);
@@ -145,7 +147,8 @@ Precompressed precompressed(const openvdb::GridBase::Ptr &grid) {
 // (OpenVDB 10.0, io/Archive.cc: the same steps in the same order, so the same bytes).
 class ArchiveWriter : public io::Archive {
   public:
-    void write(std::ostream &os, const std::vector<Precompressed> &grids, const openvdb::MetaMap &meta) const {
+    void write(std::ostream &os, const std::vector<Precompressed> &grids, const openvdb::MetaMap &meta,
+               const Progress *progress) const {
         io::StreamMetadata::Ptr fileSettings = io::getStreamMetadataPtr(os);
         if (!fileSettings) {
             fileSettings = std::make_shared<io::StreamMetadata>();
@@ -163,6 +166,7 @@ class ArchiveWriter : public io::Archive {
         std::set<std::string> uniqueNames;
         std::map<const openvdb::TreeBase *, io::GridDescriptor> written;  // trees already in the file
         for (const Precompressed &g : grids) {
+            if (progress) progress->throwIfCancelled();  // the grid before written out
             const openvdb::GridBase &grid = *g.grid;
             std::string name = grid.getName();
             if (name.empty() || nameCount[name] > 1) name = io::GridDescriptor::addSuffix(name, 0);
@@ -175,7 +179,7 @@ class ArchiveWriter : public io::Archive {
                 gd.setInstanceParentName(same->second.uniqueName());
                 writeGridInstance(gd, g.grid, os, /*seekable=*/true);
             } else {
-                writeGrid(gd, g, os, fileSettings);
+                writeGrid(gd, g, os, fileSettings, progress);
                 written[&grid.baseTree()] = gd;
             }
             io::setDataCompression(os, compression());  // mask compression is set per grid
@@ -184,7 +188,7 @@ class ArchiveWriter : public io::Archive {
 
   private:
     void writeGrid(io::GridDescriptor &gd, const Precompressed &g, std::ostream &os,
-                   io::StreamMetadata::Ptr &fileSettings) const {
+                   io::StreamMetadata::Ptr &fileSettings, const Progress *progress) const {
         const openvdb::GridBase &grid = *g.grid;
         // Per-grid stream settings, the file's back on the way out.
         io::StreamMetadata::Ptr gridSettings = std::make_shared<io::StreamMetadata>(*fileSettings);
@@ -202,7 +206,7 @@ class ArchiveWriter : public io::Archive {
         gd.writeStreamPos(os);  // a placeholder, rewritten at the end
         gd.setGridPos(os.tellp());
         setGridCompression(os, grid);
-        g.leaves->compress(os, compression());
+        g.leaves->compress(os, compression(), progress);
 
         const openvdb::GridBase::Ptr copy = g.grid->copyGrid();  // shallow: the file's metadata added to it
         if (const io::DelayedLoadMetadata::Ptr table = g.leaves->delayedLoad())
@@ -228,11 +232,12 @@ class ArchiveWriter : public io::Archive {
 
 }  // namespace
 
-void writeVdbArchive(std::ostream &stream, const openvdb::GridPtrVec &grids, const openvdb::MetaMap &meta) {
+void writeVdbArchive(std::ostream &stream, const openvdb::GridPtrVec &grids, const openvdb::MetaMap &meta,
+                     const Progress *progress) {
     std::vector<Precompressed> wrapped;
     for (const openvdb::GridBase::Ptr &grid : grids)
         if (grid) wrapped.push_back(precompressed(grid));
-    ArchiveWriter().write(stream, wrapped, meta);
+    ArchiveWriter().write(stream, wrapped, meta, progress);
 }
 
 }  // namespace firn

@@ -24,13 +24,14 @@ void shiftHalfVoxel(const openvdb::GridPtrVec &grids, double sign) {
 
 // Through writeFileAtomically's checked stream: openvdb::io::File::write ignores stream errors, so a full disk
 // would give a truncated file that the rename then puts in place of a good one.
-void writeVdbAtomically(const std::string &path, const openvdb::GridPtrVec &grids, const openvdb::MetaMap &meta) {
-    writeFileAtomically(path, [&](std::ostream &stream) { writeVdbArchive(stream, grids, meta); });
+void writeVdbAtomically(const std::string &path, const openvdb::GridPtrVec &grids, const openvdb::MetaMap &meta,
+                        const Progress *progress = nullptr) {
+    writeFileAtomically(path, [&](std::ostream &stream) { writeVdbArchive(stream, grids, meta, progress); });
 }
 
 }  // namespace
 
-void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids) {
+void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids, const Progress *progress) {
     initializeOpenVdb();
     if (grids.empty()) throw InvalidArgument("no grids to write to " + path);
     // Copies whose transforms are shifted; their trees are shared with the grids' unless active tiles must be made
@@ -54,7 +55,7 @@ void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids) {
     openvdb::MetaMap meta;
     meta.insertMeta(kShiftKey, openvdb::BoolMetadata(true));
     meta.insertMeta("creator", openvdb::StringMetadata(std::string("Firn ") + kVersion));
-    writeVdbAtomically(path, copies, meta);
+    writeVdbAtomically(path, copies, meta, progress);
 }
 
 openvdb::GridPtrVec readGrids(const std::string &path) {

@@ -5,6 +5,8 @@
 
 #include <openvdb/openvdb.h>
 
+#include "firn/util/progress.h"
+
 namespace firn {
 
 // Reads and writes Firn's VDB files, the seam with the add-on (the contract is docs/vdb-contract.md).
@@ -14,8 +16,9 @@ namespace firn {
 // shifted by -h/2; readGrids shifts it back. The file says so in its metadata.
 
 // Writes to a temporary file beside `path`, then renames it over `path`: a reader never sees half a file.
-// Active tiles are voxelized first (Cycles renders tiles as empty).
-void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids);
+// Active tiles are voxelized first (Cycles renders tiles as empty). Throws firn::Cancelled, `path` left as it was,
+// when `progress` is cancelled while the grids are compressed.
+void writeGrids(const std::string &path, const openvdb::GridPtrVec &grids, const Progress *progress = nullptr);
 
 // Every grid in the file, read in full, with in-memory (unshifted) transforms. Throws IoError, also for a
 // damaged (truncated, corrupted) file, a file without grids, and any exception OpenVDB's reader raises.

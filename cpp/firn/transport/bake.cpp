@@ -207,12 +207,13 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                                  int passes, bool bounceTail, Progress &p, Stopwatch &clock, BakeStats &stats) {
     const bool reference = settings.quality == BakeQuality::Reference;
     const double solved = reference ? kSolvedProgressReference : kSolvedProgress;
+    const SubProgress cancel(&p, 0.0, 0.0);  // checked for cancellation by the steps that report no progress
     std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
     for (auto &channel : phi) channel.assign(topo.size(), 0.0);
     SnowIrradiance fromSnow;  // gathered from other snow onto surface patches (after the first pass)
     SurfaceValues<glm::vec3> before, older;  // the two gathers before it (bounceTail only)
     SourceValues source;
-    const SurfaceValues<float> skinRings = skinRingGrowths(scene, topo);  // the same for every channel and pass
+    const SurfaceValues<float> skinRings = skinRingGrowths(scene, topo, cancel);  // the same for every channel and pass
     for (int pass = 0; pass < passes; ++pass) {
         const double begin = 0.4 + (solved - 0.4) * pass / passes, end = 0.4 + (solved - 0.4) * (pass + 1) / passes;
         // A pass after the first gathers first: the first half of its progress, the three solves the rest.
@@ -221,7 +222,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             // Snow lit by snow: gather the previous pass's radiance and solve again (one bounce a pass).
             p.report(begin, "Gathering light between snow surfaces");
             {
-                const GridValues values = gridValues(scene, topo, source, traced, preset, settings, true);
+                const GridValues values = gridValues(scene, topo, source, traced, preset, settings, true, cancel);
                 if (bounceTail) older = std::move(before), before = std::move(fromSnow.irradiance);
                 fromSnow = snowIrradiance(scene, topo, light, source, traced, values, SkyRays(preset.skySamples),
                                           settings.seed ^ 0x5C1Eull, SubProgress(&p, begin, gathered));
@@ -286,6 +287,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                 terms[c] = std::move(system.surface);
             }
         }
+        p.report(end, "Finding the light leaving the surface");
         SurfaceValues<Source> surface;
         PeakedLobes rampPeaked;
         EdgeFaceLobes edgeFaces;
@@ -296,11 +298,11 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             // The edge voxels' flat faces' lobes where the grids read them: not where the traced surface stands
             // for them (REFERENCE's last pass).
             const bool flatFaces = !(reference && pass + 1 == passes);
-            surfaceLight(scene, topo, light, snow, terms, phi, flatFaces, leaving, edgeFaces);
+            surfaceLight(scene, topo, light, snow, terms, phi, flatFaces, leaving, edgeFaces, cancel);
             const bool beamsApart = !terms[kSplitChannel].skyLeaving.values().empty();
             terms = {};
-            surface = surfaceRadiance(scene.medium->optics(), topo, leaving);
-            skyShare = skyShares(topo, leaving, surface, beamsApart);
+            surface = surfaceRadiance(scene.medium->optics(), topo, leaving, cancel);
+            skyShare = skyShares(topo, leaving, surface, beamsApart, cancel);
             if (!reference) rampPeaked = rampPeaks(scene, topo, leaving);  // the reference's surface holds no peaks
         }  // the light leaving, freed before the source function
         releaseFreedMemory();  // the surface's arrays (without, the slab's grids peaked 3 bytes per voxel higher)
@@ -309,7 +311,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             referenceSurface(scene, topo, preset.referenceSamples, settings.seed, surface,
                              SubProgress(&p, solved, 0.95));
         }
-        source = sourceFunction(scene, topo, light, phi, surface, traced);
+        source = sourceFunction(scene, topo, light, phi, surface, traced, cancel);
         source.rampPeaks = std::move(rampPeaked);
         source.edgeFaces = std::move(edgeFaces);
         source.skyShare = std::move(skyShare);
@@ -488,7 +490,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     light = IncidentLight{};  // the grids need it no more
     keepIndexAndPatches(topo);
     p.report(reference ? 0.95 : kSolvedProgress, "Writing the grids");
-    BakedGrids grids = makeGrids(lit, topo, source, traced, preset, settings, sourceScale);
+    BakedGrids grids = makeGrids(lit, topo, source, traced, preset, settings, sourceScale, SubProgress(&p, 1.0, 1.0));
     local.sourceScale = sourceScale;
     local.scatterVoxels = shares->activeVoxelCount();
     if (local.scatterVoxels > 0)

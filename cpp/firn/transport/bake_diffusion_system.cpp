@@ -11,6 +11,7 @@
 
 #include "firn/transport/diffusion_links.h"
 #include "firn/transport/skin_ring.h"
+#include "firn/util/work_check.h"
 
 namespace firn::bake {
 
@@ -111,11 +112,12 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     sys.A.conductance.resize(n), sys.A.diag.resize(n), sys.remainder.resize(n);
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
-        progress.throwIfCancelled();
         Medium::Accessor density = medium.accessor();
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         const SharedLinks links(topo.link, topo.density, ch.sigmaTrPerDensity(), beta, h, range.begin(), range.end());
+        WorkCheck work(progress);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            work.add(WorkCheck::kVoxel);
             const double sigmaTr = ch.sigmaTr(topo.density[i]);
             const SurfacePatch &patch = topo.patches[i];
             double diag = 0.0, source = 0.0;  // W scattered at the node

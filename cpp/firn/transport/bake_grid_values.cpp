@@ -21,6 +21,7 @@
 #include "firn/transport/sun_lobe.h"
 #include "firn/util/sampling.h"
 #include "firn/util/version.h"
+#include "firn/util/work_check.h"
 
 namespace firn::bake {
 
@@ -782,7 +783,7 @@ void limbCarriedInRamp(const Scene &scene, const SnowTopology &topo, const openv
 // rim; the sky rays between snow surfaces hardly meet it.
 GridValues gridValues(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
                       const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
-                      bool gathering) {
+                      bool gathering, const SubProgress &progress) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     GridValues out;
@@ -852,10 +853,12 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
         Medium::Accessor density = medium.accessor();
         QuarterPointSun sunAt(medium, scene.suns.size());
         LimbSkins limbSkins;
+        WorkCheck work(progress);
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             sunAt.startLeaf(leaves.leaf(l).origin());
             limbSkins.clear();
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
+                work.add(WorkCheck::kVoxel);
                 const openvdb::Coord c = it.getCoord();
                 const std::int32_t t = tracedIndex.getValue(c);
                 Source S, rampPart;
@@ -898,8 +901,10 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> nearCarriedAt(nearCarried);
         Medium::Accessor density = medium.accessor();
         Medium::ColumnMarcher marcher(medium);
+        WorkCheck work(progress);
         for (std::size_t l = range.begin(); l != range.end(); ++l)
             for (auto it = leaves.leaf(l).cbeginValueOn(); it; ++it) {
+                work.add(WorkCheck::kVoxel);
                 const openvdb::Coord c = it.getCoord();
                 if (index.getValue(c) >= 0 || carriedSlot.getValue(c) >= 0) continue;
                 const bool mayBeNear = nearCarriedAt.isValueOn(c), snow = density.getValue(c) > 0.0f;
@@ -931,14 +936,16 @@ namespace {
 
 // Grid k of BakedGrids (l0, then l1's x, y and z) at the density's resolution.
 openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology &topo, const SourceValues &source,
-                                   const MonteCarloVoxels &traced, int k) {
+                                   const MonteCarloVoxels &traced, int k, const SubProgress &progress) {
     auto tree = std::make_shared<openvdb::Vec3fTree>(*values.topology, openvdb::Vec3f(0.0f), openvdb::TopologyCopy());
     openvdb::tree::LeafManager<openvdb::Vec3fTree> leaves(*tree);  // in the topology's leaf order
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         TracedIndex tracedIndex(traced);
+        WorkCheck work(progress);
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             auto &leaf = leaves.leaf(l);
+            work.add(WorkCheck::kVoxel * leaf.onVoxelCount());
             for (auto it = leaf.beginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
                 if (const std::int32_t i = index.getValue(c); i >= 0 && tracedIndex.getValue(c) < 0)
@@ -997,14 +1004,15 @@ openvdb::FloatGrid::Ptr scatterGrid(openvdb::FloatTree::Ptr shares, const openvd
 // before the next; coarser, all six are coarsened together from the values directly (coarsenedSources), none
 // built at the density's resolution.
 BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
-                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale) {
-    GridValues values = gridValues(scene, topo, source, traced, preset, settings, false);
+                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale,
+                     const SubProgress &progress) {
+    GridValues values = gridValues(scene, topo, source, traced, preset, settings, false, progress);
     BakedGrids out;
     if (scale == 1) {
         values.at = nullptr;  // only the coarsening's readers (BakedValuesSampler) read it
         for (int k = 0; k < int(BakedGrids::kCount); ++k)
-            out.source[k] = sourceGrid(sourceTree(values, topo, source, traced, k), k, scale, scene.medium->density(),
-                                       scene.medium->optics().extinctionPerDensity, settings);
+            out.source[k] = sourceGrid(sourceTree(values, topo, source, traced, k, progress), k, scale,
+                                       scene.medium->density(), scene.medium->optics().extinctionPerDensity, settings);
         return out;
     }
     const auto newReader = [&] {
@@ -1012,7 +1020,7 @@ BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceV
             return sourceComponents(baked->at(c));
         };
     };
-    auto trees = coarsenedSources(*values.topology, newReader, scene.medium->density().tree(), scale);
+    auto trees = coarsenedSources(*values.topology, newReader, scene.medium->density().tree(), scale, progress);
     for (int k = 0; k < int(BakedGrids::kCount); ++k)
         out.source[k] = sourceGrid(std::move(trees[k]), k, scale, scene.medium->density(),
                                    scene.medium->optics().extinctionPerDensity, settings);

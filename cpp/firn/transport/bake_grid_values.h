@@ -100,9 +100,10 @@ struct GridValues {
 };
 
 // What the source grids hold beyond the unknowns (`gathering`: what the gathering between snow surfaces reads).
+// Stops with firn::Cancelled when `progress` is cancelled.
 GridValues gridValues(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
                       const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings,
-                      bool gathering);
+                      bool gathering, const SubProgress &progress);
 
 // Grid k of BakedGrids' value from a source function: the broad lobe's four (l0, then l1 per axis), then the
 // peaked lobe's p0 and p1.
@@ -214,8 +215,10 @@ class BakedValuesSampler {
     openvdb::Vec3f corners_[BakedGrids::kCount][2][2][2];
 };
 
-// The source grids at `scale` times the density's voxel size.
+// The source grids at `scale` times the density's voxel size. Stops with firn::Cancelled when `progress` is
+// cancelled.
 BakedGrids makeGrids(const Scene &scene, const SnowTopology &topo, const SourceValues &source,
-                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale);
+                     const MonteCarloVoxels &traced, const Preset &preset, const BakeSettings &settings, int scale,
+                     const SubProgress &progress);
 
 }  // namespace firn::bake

@@ -11,6 +11,7 @@
 #include "firn/transport/monte_carlo.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
+#include "firn/util/work_check.h"
 
 namespace firn::bake {
 
@@ -84,13 +85,14 @@ SnowIrradiance snowIrradiance(const Scene &scene, const SnowTopology &topo, cons
     SnowIrradiance out{SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f)), {}};
     out.aim = out.irradiance;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 256), [&](const auto &range) {
-        progress.throwIfCancelled();
         Medium::ColumnMarcher marcher(*scene.medium);
         Medium::Accessor density = scene.medium->accessor();
         BakedValuesSampler baked(topo, source, traced, values);
+        WorkCheck work(progress);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!light.snowRays[i] && !light.occluderRays[i]) continue;
             const SkyRays own = skyRaysAt(topo, i, rays.count(), light.skyLattice);
+            work.add(WorkCheck::kVoxel * std::uint64_t(1 + own.count()));  // a ray marched about as a voxel's work
             const glm::dvec3 p = patchOutside(*scene.medium, topo, i, density);
             glm::dvec3 sum(0.0), towards(0.0);
             for (int k = 0; k < own.count(); ++k) {

@@ -83,14 +83,14 @@ struct SourceValues {
 
 // Radiance leaving each surface voxel (its fitted lobe) from the solves' surface light.
 SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
-                                      const SurfaceValues<SurfaceLight> &solved);
+                                      const SurfaceValues<SurfaceLight> &solved, const SubProgress &progress);
 
 // Of each surface voxel's broad lobe (surfaceRadiance's `radiance`), the share the sky and other snow drive, read
 // in green for the three channels (SurfaceLight::skyLeaving): its neighbourhood's exitance so driven over the whole,
 // as surfaceRadiance averages it, less the crossing beams' part; the returned light's shape, which moves no exitance,
 // is not split. Empty where the solves kept no beams apart (`apart` false).
 SurfaceValues<float> skyShares(const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved,
-                               const SurfaceValues<Source> &radiance, bool apart);
+                               const SurfaceValues<Source> &radiance, bool apart, const SubProgress &progress);
 
 // The surface voxels' rampPeak0 and rampPeak1 (SourceValues::rampPeaks), where the scene has lamps: with suns alone
 // beamsInRamp never reads them.
@@ -99,7 +99,7 @@ PeakedLobes rampPeaks(const Scene &scene, const SnowTopology &topo, const Surfac
 // The source function of every unknown from the channels' fluence phi, the surface's radiance and the traced voxels.
 SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
                             const std::array<std::vector<double>, 3> &phi, const SurfaceValues<Source> &surface,
-                            const MonteCarloVoxels &traced);
+                            const MonteCarloVoxels &traced, const SubProgress &progress);
 
 // REFERENCE quality: the surface voxels' radiance path traced (`samples` paths a direction) into `out`.
 void referenceSurface(const Scene &scene, const SnowTopology &topo, int samples, std::uint64_t seed,

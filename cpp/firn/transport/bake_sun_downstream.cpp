@@ -8,6 +8,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/util/work_check.h"
+
 namespace firn::bake {
 
 namespace {
@@ -111,7 +113,7 @@ glm::dvec3 downstreamWeights(const SurfacePatch &a, const std::array<const SunRe
 // terminator the patches downstream take what entered before it (docs/bake.md, Method 5). The channels share each
 // pair's reads (the loops are bound by them).
 void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValues<SunReturned>, 3> &sun, double h,
-                          SurfaceValues<SurfaceLight> &out) {
+                          SurfaceValues<SurfaceLight> &out, const SubProgress &progress) {
     // By surface slot: each neighbour's slot looked up once.
     const std::vector<std::int32_t> &slot = *topo.surfaceSlot;
     const std::vector<SurfacePatch> &patch = topo.patches.values();
@@ -122,9 +124,11 @@ void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValu
     std::vector<glm::vec3> atOnce(topo.surfaceVoxels(), glm::vec3(0.0f));  // W sent, averaged
     auto smooth = [&](std::int32_t s) { return s >= 0 && patch[s].isSurface() && !patch[s].sharp; };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        WorkCheck work(progress);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const std::int32_t si = slot[i];
             if (!smooth(si)) continue;
+            work.add(WorkCheck::kVoxel);
             const auto atOnceOf = [&](std::size_t j) {
                 return glm::dvec3(sun[0][j].atOnce, sun[1][j].atOnce, sun[2][j].atOnce);
             };
@@ -141,9 +145,11 @@ void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValu
         }
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        WorkCheck work(progress);
         for (std::size_t j = range.begin(); j != range.end(); ++j) {
             const std::int32_t sj = slot[j];
             if (!smooth(sj)) continue;
+            work.add(WorkCheck::kVoxel);
             const glm::dvec3 to = patch[sj].normal;
             glm::vec3 l0(0.0f);
             glm::mat3 l1(0.0f);  // column c: channel c's

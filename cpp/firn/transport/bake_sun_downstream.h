@@ -34,6 +34,6 @@ void downstreamKernel(const Scene &scene, const IncidentLight &light, const Surf
 
 // The three channels' sun light each smooth patch returns at once, moved to where it leaves (added to `out`).
 void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValues<SunReturned>, 3> &sun, double h,
-                          SurfaceValues<SurfaceLight> &out);
+                          SurfaceValues<SurfaceLight> &out, const SubProgress &progress);
 
 }  // namespace firn::bake

@@ -13,6 +13,7 @@
 #include "firn/transport/edge_lobe.h"
 #include "firn/transport/sun_lobe.h"
 #include "firn/util/sampling.h"
+#include "firn/util/work_check.h"
 
 namespace firn::bake {
 
@@ -176,7 +177,8 @@ glm::dvec3 travelAlong(const glm::dvec3 &d, const glm::dvec3 &n) {
 // geometry and the neighbours read once for the three.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
                   const std::array<SurfaceTerms, 3> &terms, const std::array<std::vector<double>, 3> &phi,
-                  bool flatFaces, SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces) {
+                  bool flatFaces, SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces,
+                  const SubProgress &progress) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const Channel kernelChannel{optics.extinctionPerDensity, optics.albedo[1], optics.g};  // one kernel for the three
@@ -288,8 +290,10 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         VoxelShared shared(light.beams.size());  // returnedThrough's, started per voxel
+        WorkCheck work(progress);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (!topo.patches[i].isSurface()) continue;
+            work.add(WorkCheck::kVoxel);
             const glm::dvec3 centre = medium.voxelCentre(topo.coord[i]);
             const SurfacePatch &patch = topo.patches[i];
             SurfaceLight &surface = out.surface(i);
@@ -378,7 +382,9 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
         std::vector<glm::dvec3> normals;  // the air faces'
         std::vector<double> radiance;     // each face's peak radiance over the voxel's
         VoxelShared shared(light.beams.size());  // returnedThrough's, started per voxel
+        WorkCheck work(progress);
         for (std::size_t k = range.begin(); k != range.end(); ++k) {
+            work.add(WorkCheck::kVoxel);
             EdgeFaceLobes::Voxel &own = edgeFaces.voxels[k];
             const std::size_t i = own.key;
             const SurfacePatch &patch = topo.patches[i];
@@ -468,7 +474,7 @@ void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLi
     edgeFaces.voxels.erase(std::remove_if(edgeFaces.voxels.begin(), edgeFaces.voxels.end(),
                                           [](const EdgeFaceLobes::Voxel &v) { return v.flat == 0; }),
                            edgeFaces.voxels.end());
-    sunLeavingDownstream(topo, sun, h, out);
+    sunLeavingDownstream(topo, sun, h, out, progress);
 }
 
 }  // namespace firn::bake

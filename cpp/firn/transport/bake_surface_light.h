@@ -20,6 +20,7 @@
 #include "firn/transport/scene.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/transport/source_lobe.h"
+#include "firn/util/progress.h"
 
 namespace firn::bake {
 
@@ -153,9 +154,11 @@ inline SourceLobe withCrossing(const SourceLobe &lobe, const SurfaceLight &light
 }
 
 // The three channels' light leaving each surface voxel (`out`), from their systems' surface terms and fluences phi,
-// and where `flatFaces` the sharp edge voxels' flat faces' own lobes (`edgeFaces`; else none).
+// and where `flatFaces` the sharp edge voxels' flat faces' own lobes (`edgeFaces`; else none). Stops with
+// firn::Cancelled when `progress` is cancelled.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
                   const std::array<SurfaceTerms, 3> &terms, const std::array<std::vector<double>, 3> &phi,
-                  bool flatFaces, SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces);
+                  bool flatFaces, SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces,
+                  const SubProgress &progress);
 
 }  // namespace firn::bake

@@ -176,10 +176,10 @@ MonteCarloVoxels tracedVoxels(const MonteCarloReference &reference, const std::v
     const SourceDirections &directions = reference.directions();
     std::atomic<std::size_t> done{0};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 4), [&](const auto &range) {
-        progress.throwIfCancelled();
         Medium::Accessor density = medium.accessor();
         Medium::ColumnMarcher marcher(medium);
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
+            progress.throwIfCancelled();  // each voxel's paths (a chunk may hold many voxels)
             out.source[v] = fittedByDirection(medium, density, voxels[v])
                                 ? tracedSourceByDirection(estimate(v), directions,
                                                           visibilityFrom(medium, marcher, voxels[v], directions), g)
@@ -322,8 +322,8 @@ void moreOnLitFaces(const Scene &scene, const MonteCarloReference &reference, co
     const int extra = litFacePaths(paths, wanted, litSteps) - paths;
     if (extra <= 0) return;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lit.size(), 2), [&](const auto &range) {
-        progress.throwIfCancelled();
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            progress.throwIfCancelled();  // each face's paths (a chunk may hold many faces)
             const std::size_t j = lit[i];
             const auto [v, f] = jobs[j];
             const FaceEstimate more = reference.faceSourceIn(voxels[v], f, extra, seed, voxels.size() * (7 + f) + v);
@@ -514,8 +514,8 @@ FacesTraced addFaceSources(const Scene &scene, const SnowTopology &topo, const s
     }
     std::vector<FaceEstimate> estimates(jobs.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 4), [&](const auto &range) {
-        progress.throwIfCancelled();  // up to kMaxTracedSteps of paths (Esc keeps the previous bake)
         for (std::size_t j = range.begin(); j != range.end(); ++j) {
+            progress.throwIfCancelled();  // each face's paths (a chunk may hold many faces)
             const auto [v, f] = jobs[j];
             estimates[j] = reference.faceSourceIn(voxels[v], f, samples, seed, voxels.size() * (1 + f) + v);
         }

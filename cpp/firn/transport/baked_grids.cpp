@@ -12,6 +12,7 @@
 #include "firn/transport/bake_thin_snow.h"
 #include "firn/transport/snow_topology.h"
 #include "firn/util/error.h"
+#include "firn/util/work_check.h"
 
 namespace firn {
 
@@ -43,7 +44,8 @@ int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
 std::array<openvdb::Vec3fTree::Ptr, BakedGrids::kCount> coarsenedSources(const openvdb::BoolTree &fineTopology,
                                                                          const FineValuesReaders &newReader,
-                                                                         const openvdb::FloatTree &density, int factor) {
+                                                                         const openvdb::FloatTree &density, int factor,
+                                                                         const SubProgress &progress) {
     if (factor < 2) throw InvalidArgument("source grids: coarsening factor must be at least 2");
     using Vec3Tree = openvdb::Vec3fTree;
     constexpr std::size_t kCount = BakedGrids::kCount;
@@ -63,9 +65,12 @@ std::array<openvdb::Vec3fTree::Ptr, BakedGrids::kCount> coarsenedSources(const o
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(density);
         auto in = newReader();
+        WorkCheck work(progress);
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             std::array<Vec3Tree::LeafNodeType *, kCount> leaf;
             leaf[0] = &leaves.leaf(l);
+            // Each coarse voxel reads factor^3 fine ones.
+            work.add(WorkCheck::kVoxel * std::uint64_t(factor * factor * factor) * leaf[0]->onVoxelCount());
             for (std::size_t g = 1; g < kCount; ++g) leaf[g] = trees[g]->probeLeaf(leaf[0]->origin());
             for (auto it = leaf[0]->beginValueOn(); it; ++it) {
                 const openvdb::Coord C = it.getCoord();

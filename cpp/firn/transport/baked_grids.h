@@ -13,6 +13,7 @@
 #include "firn/transport/scene.h"
 #include "firn/transport/source_lobe.h"
 #include "firn/util/color.h"
+#include "firn/util/progress.h"
 
 namespace firn {
 
@@ -57,7 +58,8 @@ struct BakedGrids {
 using FineValuesReaders = std::function<std::function<BakedGrids::Values(const openvdb::Coord &)>()>;
 std::array<openvdb::Vec3fTree::Ptr, BakedGrids::kCount> coarsenedSources(const openvdb::BoolTree &fineTopology,
                                                                          const FineValuesReaders &newReader,
-                                                                         const openvdb::FloatTree &density, int factor);
+                                                                         const openvdb::FloatTree &density, int factor,
+                                                                         const SubProgress &progress);
 
 // The baked source towards w (unit, towards the viewer) from the grids' values at a point: per channel the broad
 // lobe plus the peaked one, W/m^2/sr per unit extinction.

@@ -231,11 +231,16 @@ bool skyDonorsAgree(const SnowTopology &topo, const SurfaceValues<SkyEstimate> &
     return true;
 }
 
+// body over [0, n) in pieces of at most kPiece items, a cancellation check before each: the auto partitioner's
+// chunks may hold a large share of the scene (each item's values are its own: the pieces change none).
 template <typename Body>
 void parallelChunks(std::size_t n, const SubProgress &progress, const Body &body) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const auto &range) {
-        progress.throwIfCancelled();
-        body(range);
+    constexpr std::size_t kPiece = 256;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kPiece), [&](const auto &range) {
+        for (std::size_t begin = range.begin(); begin < range.end(); begin += kPiece) {
+            progress.throwIfCancelled();
+            body(tbb::blocked_range<std::size_t>(begin, std::min(range.end(), begin + kPiece)));
+        }
     });
 }
 

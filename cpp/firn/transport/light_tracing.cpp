@@ -16,6 +16,7 @@
 #include "firn/transport/traced_source.h"
 #include "firn/util/color.h"
 #include "firn/util/sampling.h"
+#include "firn/util/work_check.h"
 
 namespace firn {
 
@@ -197,7 +198,7 @@ std::vector<std::pair<std::int32_t, Sum>> inOrder(const std::unordered_map<std::
 // The light photons [first, last) bring to the voxels (index >= 0; `towardSlot`: VoxelSums').
 ChunkSums traceChunk(const MonteCarloReference &reference, const BoxEmitter &emitter, const openvdb::Int32Tree &index,
                      const std::vector<std::int32_t> &towardSlot, long first, long last, std::uint64_t seed,
-                     long &steps) {
+                     long &steps, const SubProgress &progress) {
     const Medium &medium = *reference.scene().medium;
     const VolumeOptics &optics = medium.optics();
     const SourceDirections &directions = reference.directions();
@@ -213,10 +214,13 @@ ChunkSums traceChunk(const MonteCarloReference &reference, const BoxEmitter &emi
         if (const std::int32_t slot = towardSlot[std::size_t(v)]; slot >= 0) toward[slot].add(power, travel, optics, directions);
     };
     PhotonTracer tracer(reference);
+    WorkCheck work(progress);  // a chunk's photons in dense snow: half a second of tracking steps
     for (long i = first; i < last; ++i) {
         Rng rng(seed, std::uint64_t(i));
+        const long before = tracer.steps();
         const Photon photon = emitter.emit(rng, tracer);
         if (photon.power != Rgb(0.0)) tracer.follow(photon, emitter.boxMin(), emitter.boxMax(), rng, tally);
+        work.add(std::uint64_t(tracer.steps() - before) + 1);
     }
     steps += tracer.steps() + kStepsPerTally * tallies;
     return ChunkSums{inOrder(light), inOrder(toward)};
@@ -279,7 +283,7 @@ LightTracingPlan planLightTracing(const MonteCarloReference &reference, const st
     tbb::parallel_for(tbb::blocked_range<long>(0, kPilotPieces, 1), [&](const auto &range) {
         for (long k = range.begin(); k != range.end(); ++k)
             traceChunk(reference, emitter, index, towardSlot, k * kPilotPhotons / kPilotPieces,
-                       (k + 1) * kPilotPhotons / kPilotPieces, seed, pieceSteps[k]);
+                       (k + 1) * kPilotPhotons / kPilotPieces, seed, pieceSteps[k], SubProgress(nullptr, 0.0, 1.0));
     });
     const double pilotSteps = double(std::accumulate(pieceSteps.begin(), pieceSteps.end(), 0L));
     const double perPhoton = pilotSteps / kPilotPhotons + kStepsPerPhoton;
@@ -313,7 +317,7 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
             for (long c = range.begin(); c != range.end(); ++c)
                 batch[c - first] = traceChunk(reference, emitter, index, sums.towardSlot, c * kPhotonsPerChunk,
                                               std::min(plan.photons, (c + 1) * kPhotonsPerChunk), seed,
-                                              batchSteps[c - first]);
+                                              batchSteps[c - first], progress);
         });
         for (std::size_t c = 0; c < batch.size(); ++c) {
             for (const auto &[v, light] : batch[c].light) sums.light[v] += light;
@@ -328,20 +332,27 @@ std::vector<SourceEstimate> lightTracedSources(const MonteCarloReference &refere
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 64), [&](const auto &range) {
         Medium::Accessor density = medium.accessor();
         PhotonTracer tracer(reference);
+        WorkCheck work(progress);
         for (std::size_t v = range.begin(); v != range.end(); ++v) {
+            const long before = tracer.steps();
             const std::int32_t slot = sums.towardSlot[v];
             Rng rng(seed ^ kOutsideSeed, v);
             const double weights = double(plan.photons) * extinctionIntegral(medium, density, voxels[v]) *
                                    outsideShare(medium, density, occluders, tracer, voxels[v], rng);
             scattered[v] = sourceOf(sums.light[v], slot >= 0 ? &sums.toward[std::size_t(slot)] : nullptr, weights,
                                     medium.optics());
+            work.add(WorkCheck::kVoxel + std::uint64_t(tracer.steps() - before));
         }
     });
     std::vector<SourceEstimate> out = pooledEstimates(medium, index, voxels, scattered);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 64), [&](const auto &range) {
-        progress.throwIfCancelled();
-        for (std::size_t v = range.begin(); v != range.end(); ++v)
-            out[v] += reference.sourceIn(voxels[v], plan.beamSamples, seed ^ kBeamSeed, v, Gathering::BeamsOnly);
+        WorkCheck work(progress);
+        for (std::size_t v = range.begin(); v != range.end(); ++v) {
+            const SourceEstimate beams =
+                reference.sourceIn(voxels[v], plan.beamSamples, seed ^ kBeamSeed, v, Gathering::BeamsOnly);
+            work.add(std::uint64_t(beams.steps) + 1);
+            out[v] += beams;
+        }
     });
     out.front().steps += steps;  // the photons' steps, counted once
     progress.report(1.0);

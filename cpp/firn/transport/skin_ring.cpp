@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/transport/incident_light.h"
+#include "firn/util/work_check.h"
 
 namespace firn::bake {
 
@@ -86,16 +87,18 @@ double skinRingIrradiance(double growth, double mu0, double sunIrradiance) {
     return (growth - 1.0) * sunIrradiance / (4.0 * sinAlpha);
 }
 
-SurfaceValues<float> skinRingGrowths(const Scene &scene, const SnowTopology &topo) {
+SurfaceValues<float> skinRingGrowths(const Scene &scene, const SnowTopology &topo, const SubProgress &progress) {
     SurfaceValues<float> growth(topo.surfaceSlot, topo.surfaceVoxels(), 1.0f);
     if (scene.suns.empty()) return growth;
     const Medium &medium = *scene.medium;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         Medium::Accessor density = medium.accessor();
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        WorkCheck work(progress);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const SurfacePatch &patch = topo.patches[i];
             if (!patch.isSurface() || patch.sharp) continue;
+            work.add(WorkCheck::kVoxel);
             const double kappa = surfaceCurvature(topo, topo.coord[i], index);
             const double widest = (1.0 + 3.0 * kappa) * (1.0 + 3.0 * kappa);
             const glm::dvec3 surface = patchSurface(medium, topo, i);

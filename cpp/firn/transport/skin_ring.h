@@ -8,6 +8,7 @@
 #include "firn/transport/medium.h"
 #include "firn/transport/scene.h"
 #include "firn/transport/snow_topology.h"
+#include "firn/util/progress.h"
 
 namespace firn::bake {
 
@@ -49,7 +50,7 @@ double skinRingGrowth(const Medium &medium, const SnowTopology &topo, std::size_
 // is the skin beyond patchSurface, where the patches' beams are read (the sun they miss), not beyond the half level
 // the carried light's divergence starts from (surfaceOffset): from there the balls' bias rose 6 points, the ring's
 // light the sun the patches already take (docs/benchmarks.md, cap-sphere).
-SurfaceValues<float> skinRingGrowths(const Scene &scene, const SnowTopology &topo);
+SurfaceValues<float> skinRingGrowths(const Scene &scene, const SnowTopology &topo, const SubProgress &progress);
 
 // W/m^2 of patch area a smooth convex patch lit at cosine mu0 scatters at its node, of the sun (irradiance E normal
 // to it) its skin's ring intercepts, before the albedo: the ring's rays pass over the band 0 < mu0 < sin alpha (cos

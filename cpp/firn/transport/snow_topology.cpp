@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/transport/link_triangles.h"
+#include "firn/util/work_check.h"
 
 namespace firn {
 
@@ -135,7 +136,7 @@ constexpr double kFringeNormalExponent = 8.0;
 // Outward normal from the density gradient (a 3x3x3 Sobel stencil, plus each fringe voxel's in front by
 // kFringeNormalExponent), or from the air faces where the gradient is flat or points the wrong way or the voxel's one
 // air face lies on a flat wall (onFlatWall).
-void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
+void computeSurfacePatches(const Medium &medium, SnowTopology &topo, const SubProgress &progress) {
     auto slot = std::make_shared<std::vector<std::int32_t>>(topo.size(), -1);
     std::int32_t surfaceVoxels = 0;
     for (std::size_t i = 0; i < topo.size(); ++i)
@@ -149,7 +150,9 @@ void computeSurfacePatches(const Medium &medium, SnowTopology &topo) {
     const double h = medium.voxelSize();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         Medium::Accessor density = medium.accessor();
+        WorkCheck work(progress);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            work.add(WorkCheck::kVoxel);
             glm::dvec3 faces(0.0);
             int airFaces = 0;
             for (int f = 0; f < 6; ++f)
@@ -223,11 +226,12 @@ float rampMass(const Medium &medium, Medium::Accessor &density, const openvdb::C
 }
 
 // A block's lists in one vector (a vector per unknown took 65 MB and 2.5 M allocations on the car sample).
-void computeNeighbourhoods(SnowTopology &topo) {
+void computeNeighbourhoods(SnowTopology &topo, const SubProgress &progress) {
     constexpr std::size_t kBlock = 4096;
     topo.neighbourhoodStart.assign(topo.size() + 1, 0);
     std::vector<std::vector<std::uint32_t>> lists((topo.size() + kBlock - 1) / kBlock);  // per block, in order
     tbb::parallel_for(std::size_t(0), lists.size(), [&](std::size_t b) {
+        progress.throwIfCancelled();  // a block: kBlock voxels
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         for (std::size_t i = b * kBlock; i < std::min(topo.size(), (b + 1) * kBlock); ++i) {
             if (!topo.patches[i].isSurface()) continue;
@@ -248,7 +252,7 @@ void computeNeighbourhoods(SnowTopology &topo) {
 
 // Optical depth (sigma_t) from outside to each voxel centre near the surface by Dijkstra from the surface
 // voxels inwards, over the shell only.
-void computeShell(const Medium &medium, SnowTopology &topo, int shellVoxels) {
+void computeShell(const Medium &medium, SnowTopology &topo, int shellVoxels, const SubProgress &progress) {
     constexpr double kShellStart = 3.0, kShellEnd = 6.0;
     const double k = medium.optics().extinctionPerDensity, h = medium.voxelSize();
     std::vector<double> depth(topo.size(), std::numeric_limits<double>::infinity());
@@ -256,8 +260,10 @@ void computeShell(const Medium &medium, SnowTopology &topo, int shellVoxels) {
     topo.shellWeight.assign(topo.size(), 0.0f);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);
+        WorkCheck work(progress);
         for (std::size_t i = range.begin(); i != range.end(); ++i)
             if (topo.patches[i].isSurface()) {
+                work.add(WorkCheck::kVoxel);
                 depth[i] = k * marcher.column(medium.voxelCentre(topo.coord[i]), topo.patches[i].normal, 3.0 * h, kShellEnd / k);
                 topo.shellOwner[i] = std::int32_t(i);
                 topo.shellWeight[i] = 1.0f;
@@ -267,7 +273,9 @@ void computeShell(const Medium &medium, SnowTopology &topo, int shellVoxels) {
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
     for (std::size_t i = 0; i < topo.size(); ++i)  // only shallow surface voxels have a shell to fill
         if (topo.patches[i].isSurface() && depth[i] < kShellEnd) queue.emplace(depth[i], std::int32_t(i));
+    WorkCheck work(progress);
     while (!queue.empty()) {
+        work.add(WorkCheck::kVoxel);
         const auto [d, i] = queue.top();
         queue.pop();
         if (d > depth[i]) continue;
@@ -353,7 +361,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
     // Links and boundary faces, leaf by leaf; faces are numbered in leaf order afterwards.
     std::vector<std::vector<BoundaryFace>> leafFaces(leaves.leafCount());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
-        progress.throwIfCancelled();
+        WorkCheck work(progress);
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         Medium::Accessor density = medium.accessor();
         // The occluder hit up each axis from each voxel of the leaf (by offset), taken over by the voxel above
@@ -368,6 +376,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
             const bool nearTriangles = !linkTriangles.empty();
             const auto *densityLeaf = densityTree.probeConstLeaf(leaf.origin());
             for (auto it = leaf.cbeginValueOn(); it; ++it) {
+                work.add(WorkCheck::kVoxel);
                 const std::uint32_t i = std::uint32_t(*it);
                 const openvdb::Coord c = it.getCoord();
                 topo.coord[i] = c;
@@ -413,9 +422,9 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
             link = -1 - std::int32_t(offset[l] + SnowTopology::faceIndex(link));
         }
     });
-    computeSurfacePatches(medium, topo);
-    computeNeighbourhoods(topo);
-    computeShell(medium, topo, shellVoxels);
+    computeSurfacePatches(medium, topo, progress);
+    computeNeighbourhoods(topo, progress);
+    computeShell(medium, topo, shellVoxels, progress);
     progress.report(1.0);
     return topo;
 }

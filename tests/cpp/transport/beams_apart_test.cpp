@@ -40,7 +40,7 @@ Apart greenSystem(const Scene &scene, const SnowTopology &topo) {
     const SubProgress none(nullptr, 0.0, 1.0);
     const IncidentLight light = computeIncidentLight(scene, topo, {16, 4, 7, false}, none);
     std::vector<double> beams(topo.size(), -1.0);
-    bake::ChannelSystem system = bake::assemble(scene, topo, light, bake::skinRingGrowths(scene, topo), 1, none, bake::ChannelStorage{}, &beams);
+    bake::ChannelSystem system = bake::assemble(scene, topo, light, bake::skinRingGrowths(scene, topo, none), 1, none, bake::ChannelStorage{}, &beams);
     return {std::move(system), std::move(beams)};
 }
 

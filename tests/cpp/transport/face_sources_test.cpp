@@ -118,7 +118,8 @@ struct TracedGrids {
         : topo(buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0))),
           traced(tracedWithFaces(scene, voxels, 256)), source(tracedUnknowns(topo, voxels, traced)),
           values(bake::gridValues(scene, topo, source, traced,
-                                  bake::Preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25, 0.0}, BakeSettings{}, true)) {}
+                                  bake::Preset{1, 1, 1e-3, 1, 0, 256, 256, false, 0.25, 0.0}, BakeSettings{}, true,
+                                  SubProgress(nullptr, 0.0, 1.0))) {}
     // The grids' value at voxel c.
     Source at(const openvdb::Coord &c) const { return bake::BakedValuesSampler(topo, source, traced, values).at(c); }
 };
