@@ -56,25 +56,29 @@ double skinRingGrowth(const Medium &medium, const SnowTopology &topo, std::size_
     const double h = medium.voxelSize();
     const glm::dvec3 n = topo.patches[i].normal, surface = medium.voxelCentre(topo.coord[i]) + offset * h * n;
     std::array<double, kSteps> depth{};
-    for (int k = 0; k < kSteps; ++k)
+    int clear = 0;  // depthAt is exactly 0 from sample position `clear` on (the air above the skin)
+    for (int k = 0; k < kSteps; ++k) {
         depth[k] = medium.optics().extinctionPerDensity * medium.densityAt(surface + (k + 0.5) * dy * h * n, density) * h;
-    const auto depthAt = [&](double y) {  // linear between the samples, none beyond
-        const double at = y / dy - 0.5;
-        if (at >= kSteps - 1) return 0.0;
-        if (at <= 0.0) return depth[0];
-        const int k = int(at);
-        return depth[k] + (at - k) * (depth[k + 1] - depth[k]);
-    };
+        if (depth[k] != 0.0) clear = k + 1;
+    }
+    clear = std::min(clear, kSteps - 1);
     const double R = 1.0 / kappaPerVoxel, top = R + kSteps * dy;
     double ring = 0.0;  // (1 + kappa delta)^2 - 1
+    // Heights grow along each chord and from chord to chord, so the marches stop where the depth is 0 for good:
+    // the terms they skip add exactly 0 (the sums are the full midpoint rules', bit for bit).
     for (int m = 0; m < kSteps; ++m) {
         const double b = R + (m + 0.5) * dy;  // the ray's nearest distance from the centre, voxels
+        if ((b - R) / dy - 0.5 >= clear) break;
         const double reach = std::sqrt(top * top - b * b);
         const int steps = int(std::ceil(reach / dy));
         double tau = 0.0;  // both halves of the chord, midpoint rule along it
         for (int u = 0; u < steps; ++u) {
             const double along = (u + 0.5) * reach / steps;
-            tau += 2.0 * depthAt(std::sqrt(along * along + b * b) - R) * reach / steps;
+            const double at = (std::sqrt(along * along + b * b) - R) / dy - 0.5;  // in samples
+            if (at >= clear) break;
+            // Linear between the samples, the nearest below the first.
+            const int k = int(at);
+            tau += 2.0 * (at <= 0.0 ? depth[0] : depth[k] + (at - k) * (depth[k + 1] - depth[k])) * reach / steps;
         }
         ring += 2.0 * kappaPerVoxel * kappaPerVoxel * b * (1.0 - std::exp(-tau)) * dy;
     }
