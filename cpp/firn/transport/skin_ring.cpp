@@ -56,7 +56,7 @@ double skinRingGrowth(const Medium &medium, const SnowTopology &topo, std::size_
     const double h = medium.voxelSize();
     const glm::dvec3 n = topo.patches[i].normal, surface = medium.voxelCentre(topo.coord[i]) + offset * h * n;
     std::array<double, kSteps> depth{};
-    int clear = 0;  // depthAt is exactly 0 from sample position `clear` on (the air above the skin)
+    int clear = 0;  // the profile, linear between the samples, is exactly 0 from sample `clear` on (the air above)
     for (int k = 0; k < kSteps; ++k) {
         depth[k] = medium.optics().extinctionPerDensity * medium.densityAt(surface + (k + 0.5) * dy * h * n, density) * h;
         if (depth[k] != 0.0) clear = k + 1;
