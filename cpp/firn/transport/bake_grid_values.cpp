@@ -75,10 +75,11 @@ ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const 
     Source S = own;
     S.l0 = sum.l0, S.l1 = sum.l1;
     if (count > 1) {  // diagonal to the edge: beyond all of those faces (lobeBeyondFaces)
-        std::vector<FaceLobe> beyond(count);
+        FaceLobes beyond;
+        beyond.count = std::size_t(count);
         for (int c = 0; c < 3; ++c) {
             for (int q = 0; q < count; ++q)
-                beyond[q] = {faceNormal(flat[q]), faces->lobe[flat[q]].l0[c], glm::dvec3(faces->lobe[flat[q]].l1[c])};
+                beyond.face[q] = {faceNormal(flat[q]), faces->lobe[flat[q]].l0[c], glm::dvec3(faces->lobe[flat[q]].l1[c])};
             const SourceLobe lobe = lobeBeyondFaces(beyond);
             S.l0[c] = float(lobe.l0), S.l1[c] = glm::vec3(lobe.l1);
         }

@@ -203,7 +203,7 @@ MonteCarloVoxels traceSources(const Scene &scene, const std::vector<openvdb::Coo
     return tracedVoxels(reference, voxels, [&](std::size_t v) {
             Medium::Accessor density = medium.accessor();
             const int paths = drawnSamples > 0 && drawnByRenderer(medium, density, voxels[v]) ? drawnSamples : samples;
-            return reference.sourceIn(voxels[v], paths, seed, v, gathering(medium, density, voxels[v]));
+            return reference.sourceIn(voxels[v], paths, seed, v, gathering(medium, density, voxels[v]), progress);
         }, progress);
 }
 
@@ -323,10 +323,10 @@ void moreOnLitFaces(const Scene &scene, const MonteCarloReference &reference, co
     if (extra <= 0) return;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lit.size(), 2), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            progress.throwIfCancelled();  // each face's paths (a chunk may hold many faces)
             const std::size_t j = lit[i];
             const auto [v, f] = jobs[j];
-            const FaceEstimate more = reference.faceSourceIn(voxels[v], f, extra, seed, voxels.size() * (7 + f) + v);
+            const FaceEstimate more =
+                reference.faceSourceIn(voxels[v], f, extra, seed, voxels.size() * (7 + f) + v, progress);
             estimates[j] = pooled(estimates[j], paths, more, extra);
         }
     });
@@ -515,9 +515,8 @@ FacesTraced addFaceSources(const Scene &scene, const SnowTopology &topo, const s
     std::vector<FaceEstimate> estimates(jobs.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 4), [&](const auto &range) {
         for (std::size_t j = range.begin(); j != range.end(); ++j) {
-            progress.throwIfCancelled();  // each face's paths (a chunk may hold many faces)
             const auto [v, f] = jobs[j];
-            estimates[j] = reference.faceSourceIn(voxels[v], f, samples, seed, voxels.size() * (1 + f) + v);
+            estimates[j] = reference.faceSourceIn(voxels[v], f, samples, seed, voxels.size() * (1 + f) + v, progress);
         }
     });
     if (how.litPaths > samples)

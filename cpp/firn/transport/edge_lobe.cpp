@@ -84,7 +84,7 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces) {
     return {l0, 3.0 * bestK * l0 * axis};
 }
 
-SourceLobe lobeBeyondFaces(const std::vector<FaceLobe> &faces) {
+SourceLobe lobeBeyondFaces(const FaceLobes &faces) {
     const auto seenBeyond = [&](const glm::dvec3 &w) {  // every face faces w
         return std::all_of(faces.begin(), faces.end(), [&](const FaceLobe &f) { return glm::dot(f.normal, w) > 0.0; });
     };

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -23,6 +24,18 @@ struct FaceLobe {
     glm::dvec3 normal{0.0, 0.0, 1.0};
     double l0 = 0.0;
     glm::dvec3 l1{0.0};
+};
+
+// The two or three flat faces of an edge or corner (lobeBeyondFaces'), held in place: the air beside an edge asks for
+// them on every read of its value.
+struct FaceLobes {
+    std::array<FaceLobe, 3> face{};
+    std::size_t count = 0;
+
+    std::size_t size() const { return count; }
+    const FaceLobe &operator[](std::size_t f) const { return face[f]; }
+    const FaceLobe *begin() const { return face.data(); }
+    const FaceLobe *end() const { return face.data() + count; }
 };
 
 // A face's outward normal, the face given as a FaceExit or as its normal (projectedArea's faces).
@@ -67,7 +80,7 @@ SourceLobe edgeLobe(const std::vector<FaceExit> &faces);
 // The faces' lobes' mean (before) showed a camera above box_sharp's lit wall's foot the wall's light in the corner
 // air below the bottom's plane, where the light climbing the wall never passes: that block +50 %, with this +30 %
 // (docs/benchmarks.md, box-edge, corner-air).
-SourceLobe lobeBeyondFaces(const std::vector<FaceLobe> &faces);
+SourceLobe lobeBeyondFaces(const FaceLobes &faces);
 
 // Of a sharp voxel's peaked lobe about the unit `axis` (the suns returned sharply forwards, stored as the voxel's
 // radiance over all its air faces), the part its one value shows. Air face f of normal normals[f] sends its own

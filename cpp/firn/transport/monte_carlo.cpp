@@ -15,10 +15,18 @@
 #include "firn/transport/visible_points.h"
 #include "firn/util/random.h"
 #include "firn/util/sampling.h"
+#include "firn/util/work_check.h"
 
 namespace firn {
 
 namespace {
+
+// The tracking steps a tracer took since `counted` (its steps when last asked), which becomes `now` (WorkCheck units).
+std::uint64_t stepsSince(long now, long &counted) {
+    const long since = now - counted;
+    counted = now;
+    return std::uint64_t(since);
+}
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr double kSurfaceEpsilon = 1e-5;  // m: rays leaving a surface start this far off it
@@ -425,7 +433,7 @@ long PhotonTracer::steps() const { return tracer_->steps; }
 bool PhotonTracer::enclosed(const glm::dvec3 &p) const { return tracer_->enclosed(p); }
 
 SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed,
-                                             std::uint64_t stream, Gathering how) const {
+                                             std::uint64_t stream, Gathering how, const SubProgress &progress) const {
     const bool scattered = how != Gathering::BeamsOnly;
     PathTracer tracer(*this, !scattered);  // the per-voxel gathering's draws as they were (bench/bake_suite.py)
     Rng rng(seed, stream);
@@ -444,7 +452,10 @@ SourceEstimate MonteCarloReference::sourceIn(const openvdb::Coord &voxel, int sa
         KroneckerSequence candidates(rng);
         seen = visiblePoints(medium, voxel, directions_, samples, threeOf(candidates), rng, seenSteps);
     }
+    WorkCheck work(progress);
+    long counted = 0;
     for (int s = 0; s < samples; ++s) {
+        work.add(stepsSince(tracer.steps, counted));
         const std::array<double, 5> u = points.next();
         const glm::dvec3 p = seen.empty() ? centre + medium.voxelSize() * (glm::dvec3(u[0], u[1], u[2]) - 0.5) : seen[s];
         const double w = seen.empty() ? tracer.sigmaT(p) : 1.0;
@@ -480,7 +491,8 @@ double drawnDensity(double depth, double chord) {
 }  // namespace
 
 FaceEstimate MonteCarloReference::faceSourceIn(const openvdb::Coord &voxel, int face, int samples,
-                                               std::uint64_t seed, std::uint64_t stream) const {
+                                               std::uint64_t seed, std::uint64_t stream,
+                                               const SubProgress &progress) const {
     PathTracer tracer(*this, false);
     Rng rng(seed, stream);
     const Medium &medium = *scene_.medium;
@@ -498,7 +510,10 @@ FaceEstimate MonteCarloReference::faceSourceIn(const openvdb::Coord &voxel, int 
     ArrivingToward carriedToward, shownToward;
     std::array<double, kSourceDirections> carriedTowardWeights{}, shownTowardWeights{};
     double carriedWeights = 0.0, shownWeights = 0.0;
+    WorkCheck work(progress);
+    long counted = 0;
     for (const FacePoint &p : seen) {
+        work.add(stepsSince(tracer.steps, counted));
         const std::array<double, 5> u = points.next();
         if (tracer.enclosed(p.p)) continue;
         ArrivingLight one;

@@ -145,15 +145,17 @@ class MonteCarloReference {
     // the Henyey-Greenstein phase function to first order in w, with the exact fluence phi and flux F; the
     // direct beams' share apart; the higher moments of the directions the light travels, which tell how peaked
     // the source is; and the exact source in directions().
-    // `how`: see Gathering.
+    // `how`: see Gathering. Cancelled through `progress` within its paths (WorkCheck on their tracking steps): one
+    // voxel's paths run for seconds in dense snow.
     SourceEstimate sourceIn(const openvdb::Coord &voxel, int samples, std::uint64_t seed, std::uint64_t stream,
-                            Gathering how = Gathering::Spread) const;
+                            Gathering how = Gathering::Spread,
+                            const SubProgress &progress = SubProgress(nullptr, 0.0, 1.0)) const;
 
     // What cameras looking at the air face `face` (0..5: -x, +x, -y, +y, -z, +z) of a thick voxel see of it, from
     // `samples` points where they collide (facePoints), all orders: split by the trilinear hat between the air
-    // neighbour's value and the voxel's (FaceEstimate). Its steps in `carried`.
+    // neighbour's value and the voxel's (FaceEstimate). Its steps in `carried`. Cancelled as sourceIn.
     FaceEstimate faceSourceIn(const openvdb::Coord &voxel, int face, int samples, std::uint64_t seed,
-                              std::uint64_t stream) const;
+                              std::uint64_t stream, const SubProgress &progress = SubProgress(nullptr, 0.0, 1.0)) const;
 
     const Scene &scene() const { return scene_; }
     // Where every estimate of this reference gathers the exact source (sourceIn, light tracing's tallies), and

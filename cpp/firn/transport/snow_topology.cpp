@@ -231,9 +231,10 @@ void computeNeighbourhoods(SnowTopology &topo, const SubProgress &progress) {
     topo.neighbourhoodStart.assign(topo.size() + 1, 0);
     std::vector<std::vector<std::uint32_t>> lists((topo.size() + kBlock - 1) / kBlock);  // per block, in order
     tbb::parallel_for(std::size_t(0), lists.size(), [&](std::size_t b) {
-        progress.throwIfCancelled();  // a block: kBlock voxels
+        WorkCheck work(progress);
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         for (std::size_t i = b * kBlock; i < std::min(topo.size(), (b + 1) * kBlock); ++i) {
+            work.add(WorkCheck::kVoxel);
             if (!topo.patches[i].isSurface()) continue;
             const std::size_t before = lists[b].size();
             for (int dx = -1; dx <= 1; ++dx)

@@ -131,7 +131,7 @@ TEST(EdgeLobe, SkimmedThroughRampMatchesAMarchedBeam) {
 TEST(EdgeLobe, AirBeyondTwoFacesShowsOnlyLightLeavingBoth) {
     const glm::dvec3 wall(1.0, 0.0, 0.0), bottom(0.0, 0.0, -1.0);
     const SourceLobe wallLobe = exitLobe(0.3, glm::dvec3(0.0), wall), bottomLobe = exitLobe(0.05, glm::dvec3(0.0), bottom);
-    const std::vector<FaceLobe> faces{{wall, wallLobe.l0, wallLobe.l1}, {bottom, bottomLobe.l0, bottomLobe.l1}};
+    const FaceLobes faces{{{{wall, wallLobe.l0, wallLobe.l1}, {bottom, bottomLobe.l0, bottomLobe.l1}}}, 2};
     const SourceLobe lobe = lobeBeyondFaces(faces);
     constexpr int n = 400;
     double light = 0.0, shown = 0.0;  // over the directions both faces face, per unit solid angle / 4 pi
