@@ -64,27 +64,22 @@ struct MultigridSolver::Hierarchy {
 
     // fromZero: the first sweep of a cycle, whose neighbours all hold x = 0 (they are not read; the level's x need
     // not be cleared first: the other colour's sweep writes the rest before anything reads it).
-    // The rows of one range, through raw pointers held in registers (read through the vectors or a lambda's
-    // captures, each was reloaded after every store to x, which might alias them); fromZero a template argument.
-    template <bool fromZero>
-    static void sweepRange(std::size_t begin, std::size_t end, int colour, const std::uint8_t *rowColour,
-                           const std::array<std::int32_t, 6> *N, const std::array<float, 6> *conductance,
-                           const float *diag, const float *b, float *x) {
-        for (std::size_t i = begin; i != end; ++i) {
-            if (rowColour[i] != colour) continue;
-            float sum = b[i];
-            if constexpr (!fromZero)
-                for (int k = 0; k < 6; ++k)
-                    if (N[i][k] >= 0) sum += conductance[i][k] * x[N[i][k]];
-            x[i] = sum / diag[i];
-        }
-    }
     void sweep(const Level &level, int colour, bool fromZero = false) const {
         const Stencil<float> &A = level.A;
+        const Stencil<float>::Neighbours &N = *A.neighbour;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, A.size(), 8192), [&](const auto &range) {
-            (fromZero ? sweepRange<true> : sweepRange<false>)(range.begin(), range.end(), colour, level.colour.data(),
-                                                             A.neighbour->data(), A.conductance.data(),
-                                                             A.diag.data(), level.b.data(), level.x.data());
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                if (level.colour[i] != colour) continue;
+                // the row's arrays taken before the branches (read inside them, their addresses were reloaded per
+                // link: the stores to x might alias them)
+                const std::array<std::int32_t, 6> &neighbour = N[i];
+                const std::array<float, 6> &conductance = A.conductance[i];
+                const float *x = level.x.data();
+                float sum = level.b[i];
+                for (int k = 0; k < 6 && !fromZero; ++k)
+                    if (neighbour[k] >= 0) sum += conductance[k] * x[neighbour[k]];
+                level.x[i] = sum / A.diag[i];
+            }
         });
     }
 
@@ -254,9 +249,12 @@ struct FineOperator {
     void multiply(const double *x, double *y) const {
         const Stencil<float>::Neighbours &N = *A.neighbour;
         parallelRows(A.size(), [&](std::size_t i) {
+            // the row's arrays taken before the branches (read inside them, their addresses were reloaded per link)
+            const std::array<std::int32_t, 6> &neighbour = N[i];
+            const std::array<float, 6> &conductance = A.conductance[i];
             double sum = double(remainder[i]) * x[i];
             for (int k = 0; k < 6; ++k)
-                if (N[i][k] >= 0) sum += double(A.conductance[i][k]) * (x[i] - x[N[i][k]]);
+                if (neighbour[k] >= 0) sum += double(conductance[k]) * (x[i] - x[neighbour[k]]);
             y[i] = sum;
         });
     }
