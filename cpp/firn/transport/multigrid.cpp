@@ -32,10 +32,12 @@ void parallelRows(std::size_t n, const Body &body) {
 
 template <typename T>
 T Stencil<T>::row(std::size_t i, const T *x) const {
+    // the row's arrays taken before the links' branches (read inside them, their addresses were reloaded per link)
     const std::array<std::int32_t, 6> &N = (*neighbour)[i];
+    const std::array<T, 6> &c = conductance[i];
     T sum = diag[i] * x[i];
     for (int k = 0; k < 6; ++k)
-        if (N[k] >= 0) sum -= conductance[i][k] * x[N[k]];
+        if (N[k] >= 0) sum -= c[k] * x[N[k]];
     return sum;
 }
 
