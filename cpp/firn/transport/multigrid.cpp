@@ -32,10 +32,12 @@ void parallelRows(std::size_t n, const Body &body) {
 
 template <typename T>
 T Stencil<T>::row(std::size_t i, const T *x) const {
+    // the row's arrays taken before the links' branches (read inside them, their addresses were reloaded per link)
     const std::array<std::int32_t, 6> &N = (*neighbour)[i];
+    const std::array<T, 6> &c = conductance[i];
     T sum = diag[i] * x[i];
     for (int k = 0; k < 6; ++k)
-        if (N[k] >= 0) sum -= conductance[i][k] * x[N[k]];
+        if (N[k] >= 0) sum -= c[k] * x[N[k]];
     return sum;
 }
 
@@ -70,9 +72,14 @@ struct MultigridSolver::Hierarchy {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, A.size(), 8192), [&](const auto &range) {
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
                 if (level.colour[i] != colour) continue;
+                // the row's arrays taken before the branches (read inside them, their addresses were reloaded per
+                // link: the stores to x might alias them)
+                const std::array<std::int32_t, 6> &neighbour = N[i];
+                const std::array<float, 6> &conductance = A.conductance[i];
+                const float *x = level.x.data();
                 float sum = level.b[i];
                 for (int k = 0; k < 6 && !fromZero; ++k)
-                    if (N[i][k] >= 0) sum += A.conductance[i][k] * level.x[N[i][k]];
+                    if (neighbour[k] >= 0) sum += conductance[k] * x[neighbour[k]];
                 level.x[i] = sum / A.diag[i];
             }
         });
@@ -244,9 +251,12 @@ struct FineOperator {
     void multiply(const double *x, double *y) const {
         const Stencil<float>::Neighbours &N = *A.neighbour;
         parallelRows(A.size(), [&](std::size_t i) {
+            // the row's arrays taken before the branches (read inside them, their addresses were reloaded per link)
+            const std::array<std::int32_t, 6> &neighbour = N[i];
+            const std::array<float, 6> &conductance = A.conductance[i];
             double sum = double(remainder[i]) * x[i];
             for (int k = 0; k < 6; ++k)
-                if (N[i][k] >= 0) sum += double(A.conductance[i][k]) * (x[i] - x[N[i][k]]);
+                if (neighbour[k] >= 0) sum += double(conductance[k]) * (x[i] - x[neighbour[k]]);
             y[i] = sum;
         });
     }
