@@ -17,6 +17,8 @@ active voxel and per surface voxel.
 
 The car's inputs as bench/car_scene.py writes them (FOLDER, default build/car_inputs: bench/car_bake.py's car_folder,
 which writes them there first where they are missing); the slab bench/bake_scaling.py's bumpy layer at 1 M voxels.
+A record with call chains (`perf record -g`) splits as one without: each sample counts its leaf symbol (perf script
+--hide-call-graph; without it every sample of such a record was dropped or misread, car-surface-b).
 """
 
 import bisect
@@ -75,7 +77,7 @@ def split(data, stages_file, top=25):
     """perf's samples by the stage they fell in (the n-th stage as n:name), the leading symbols of each."""
     stages = json.load(open(stages_file))["stages"]
     times = [t for t, _ in stages]
-    script = subprocess.run(["perf", "script", "-i", data, "-F", "time,ip,sym", "--ns"], capture_output=True,
+    script = subprocess.run(["perf", "script", "-i", data, "-F", "time,ip,sym", "--ns", "--hide-call-graph"], capture_output=True,
                             text=True).stdout
     by = collections.defaultdict(collections.Counter)
     for line in script.splitlines():
@@ -135,7 +137,8 @@ def threads(switch_data, sample_data, stages_file, top=8):
         i = bisect.bisect_right(starts, t) - 1
         return i >= 0 and asleep_from[i][1] == "S"
 
-    script = subprocess.run(["perf", "script", "-i", sample_data, "-F", "tid,time,ip,sym", "--ns"], capture_output=True,
+    script = subprocess.run(["perf", "script", "-i", sample_data, "-F", "tid,time,ip,sym", "--ns",
+                             "--hide-call-graph"], capture_output=True,
                             text=True).stdout
     alone, together = collections.defaultdict(collections.Counter), collections.Counter()
     for line in script.splitlines():
