@@ -77,8 +77,8 @@ def split(data, stages_file, top=25):
     """perf's samples by the stage they fell in (the n-th stage as n:name), the leading symbols of each."""
     stages = json.load(open(stages_file))["stages"]
     times = [t for t, _ in stages]
-    script = subprocess.run(["perf", "script", "-i", data, "-F", "time,ip,sym", "--ns", "--hide-call-graph"], capture_output=True,
-                            text=True).stdout
+    script = subprocess.run(["perf", "script", "-i", data, "-F", "time,ip,sym", "--ns", "--hide-call-graph"],
+                            capture_output=True, text=True).stdout
     by = collections.defaultdict(collections.Counter)
     for line in script.splitlines():
         parts = line.split(None, 2)
@@ -138,8 +138,7 @@ def threads(switch_data, sample_data, stages_file, top=8):
         return i >= 0 and asleep_from[i][1] == "S"
 
     script = subprocess.run(["perf", "script", "-i", sample_data, "-F", "tid,time,ip,sym", "--ns",
-                             "--hide-call-graph"], capture_output=True,
-                            text=True).stdout
+                             "--hide-call-graph"], capture_output=True, text=True).stdout
     alone, together = collections.defaultdict(collections.Counter), collections.Counter()
     for line in script.splitlines():
         m = re.match(r"\s*(\d+)\s+([\d.]+):\s+[0-9a-f]+\s+(.*)$", line)

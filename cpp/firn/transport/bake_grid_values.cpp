@@ -78,8 +78,10 @@ ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const 
         FaceLobes beyond;
         beyond.count = std::size_t(count);
         for (int c = 0; c < 3; ++c) {
-            for (int q = 0; q < count; ++q)
-                beyond.face[q] = {faceNormal(flat[q]), faces->lobe[flat[q]].l0[c], glm::dvec3(faces->lobe[flat[q]].l1[c])};
+            for (int q = 0; q < count; ++q) {
+                const BroadLobe &face = faces->lobe[flat[q]];
+                beyond.face[q] = {faceNormal(flat[q]), face.l0[c], glm::dvec3(face.l1[c])};
+            }
             const SourceLobe lobe = lobeBeyondFaces(beyond);
             S.l0[c] = float(lobe.l0), S.l1[c] = glm::vec3(lobe.l1);
         }
