@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 
 #include <tbb/blocked_range.h>
@@ -50,14 +51,21 @@ template struct Stencil<float>;
 
 struct MultigridSolver::Hierarchy {
     struct Level {
+        // A swept level's rows are numbered colour by colour, a colour being its voxels' parity (i + j + k) & 1:
+        // colour c's rows are [colourStart[c], colourStart[c + 1]), each colour's in the order they were built in.
+        // So a colour's sweep streams its own rows' arrays, not every row's to update half of them (a colour's rows
+        // read only the other's: the order they are visited in does not matter). A bottom solved densely keeps its
+        // order, the one its factor was computed in.
         Stencil<float> A;
-        // Per row, its voxel's parity (i + j + k) & 1: a sweep's colour (a byte a row where lists of each colour's
-        // rows took four; a colour's rows read only the other's, so the order they are visited in does not matter).
-        UnwrittenVector<std::uint8_t> colour;
+        std::array<std::size_t, 3> colourStart{};
         std::vector<std::uint32_t> membersStart, members;  // next level's rows -> rows here (CSR)
         mutable UnwrittenVector<float> b, x;  // written before they are read (sweep's fromZero)
     };
     std::vector<Level> levels;
+    // The caller's operator in its own rows (conjugate gradients'; levels.front() holds it renumbered), and each of
+    // its rows' row in levels.front().
+    Stencil<float> fine;
+    std::vector<std::uint32_t> colourRow;
     // The finest rows' neighbour table the levels were built over: a solver takes them over only for the same
     // table (another's colours would let a sweep's rows read each other).
     const Stencil<float>::Neighbours *builtOver = nullptr;
@@ -69,9 +77,9 @@ struct MultigridSolver::Hierarchy {
     void sweep(const Level &level, int colour, bool fromZero = false) const {
         const Stencil<float> &A = level.A;
         const Stencil<float>::Neighbours &N = *A.neighbour;
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, A.size(), 8192), [&](const auto &range) {
+        const std::size_t begin = level.colourStart[colour], end = level.colourStart[colour + 1];
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 8192), [&](const auto &range) {
             for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                if (level.colour[i] != colour) continue;
                 // the row's arrays taken before the branches (read inside them, their addresses were reloaded per
                 // link: the stores to x might alias them)
                 const std::array<std::int32_t, 6> &neighbour = N[i];
@@ -123,14 +131,50 @@ namespace {
 
 using Level = MultigridSolver::Hierarchy::Level;
 
-void prepare(Level &level) {
-    const std::size_t n = level.A.size();
-    level.colour.resize(n);
-    parallelRows(n, [&](std::size_t i) {
-        const openvdb::Coord &c = (*level.A.coord)[i];
-        level.colour[i] = std::uint8_t((c.x() + c.y() + c.z()) & 1);
+// Each row's new row, numbered colour by colour (Level::colourStart), each colour's rows in their order.
+std::vector<std::uint32_t> colourOrder(const std::vector<openvdb::Coord> &coord, std::array<std::size_t, 3> &start) {
+    const auto colour = [](const openvdb::Coord &c) { return (c.x() + c.y() + c.z()) & 1; };
+    std::array<std::size_t, 2> count{};
+    for (const openvdb::Coord &c : coord) ++count[colour(c)];
+    start = {0, count[0], coord.size()};
+    std::array<std::uint32_t, 2> next{0, std::uint32_t(count[0])};
+    std::vector<std::uint32_t> row(coord.size());
+    for (std::size_t i = 0; i < coord.size(); ++i) row[i] = next[colour(coord[i])]++;
+    return row;
+}
+
+// `to`'s conductances and diagonal: `from`'s, each row i's moved to row[i].
+void renumberCoefficients(const Stencil<float> &from, const std::vector<std::uint32_t> &row, Stencil<float> &to) {
+    to.conductance.resize(from.size()), to.diag.resize(from.size());  // every row written below
+    parallelRows(from.size(), [&](std::size_t i) {
+        to.conductance[row[i]] = from.conductance[i];
+        to.diag[row[i]] = from.diag[i];
     });
-    level.b.resize(n), level.x.resize(n);
+}
+
+// A level's rows renumbered (`row`: each row's new row; `from`: its operator in the rows it was built in): its
+// operator, its rows as members of the next level's blocks, and the finer level's blocks (given one), each block's
+// members in the same order, so that every sum over them is added as before.
+void renumber(Level &level, const Stencil<float> &from, const std::vector<std::uint32_t> &row, Level *finer) {
+    const Stencil<float>::Neighbours &N = *from.neighbour;
+    auto neighbour = std::make_shared<Stencil<float>::Neighbours>(N.size());
+    parallelRows(N.size(), [&](std::size_t i) {
+        for (int k = 0; k < 6; ++k) (*neighbour)[row[i]][k] = N[i][k] >= 0 ? std::int32_t(row[N[i][k]]) : N[i][k];
+    });
+    level.A.neighbour = std::move(neighbour);
+    renumberCoefficients(from, row, level.A);
+    parallelRows(level.members.size(), [&](std::size_t m) { level.members[m] = row[level.members[m]]; });
+    level.b.resize(row.size()), level.x.resize(row.size());
+    if (!finer) return;
+    std::vector<std::uint32_t> start(row.size() + 1, 0), members(finer->members.size());
+    for (std::size_t I = 0; I < row.size(); ++I)
+        start[row[I] + 1] = finer->membersStart[I + 1] - finer->membersStart[I];
+    for (std::size_t I = 0; I < row.size(); ++I) start[I + 1] += start[I];
+    parallelRows(row.size(), [&](std::size_t I) {
+        std::copy(finer->members.begin() + finer->membersStart[I], finer->members.begin() + finer->membersStart[I + 1],
+                  members.begin() + start[row[I]]);
+    });
+    finer->membersStart = std::move(start), finer->members = std::move(members);
 }
 
 // The next level's rows: 2x2x2 blocks of this one's voxels (fine.members, coarse's voxels; `block`: each fine row's
@@ -305,10 +349,11 @@ template <typename Vector>
 void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector<double> &r, double largest,
                   Vector &z) {
     const auto &top = hierarchy.levels.front();
+    const std::vector<std::uint32_t> &row = hierarchy.colourRow;
     const double scale = std::max(largest, 1e-300);
-    parallelRows(top.b.size(), [&](std::size_t i) { top.b[i] = float(r[i] / scale); });
+    parallelRows(row.size(), [&](std::size_t i) { top.b[row[i]] = float(r[i] / scale); });
     hierarchy.vcycle(0);
-    parallelRows(top.x.size(), [&](std::size_t i) { z[i] = double(top.x[i]) * scale; });
+    parallelRows(row.size(), [&](std::size_t i) { z[i] = double(top.x[row[i]]) * scale; });
 }
 
 // y = a x + y.
@@ -369,27 +414,40 @@ MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remaind
     hierarchy_ = takeOver ? std::move(workspace->levels) : std::make_shared<Hierarchy>();
     Hierarchy &h = *hierarchy_;
     h.builtOver = fine.neighbour.get();
+    h.remainder = std::move(remainder);
     if (takeOver) {
-        // The levels' rows, blocks and colours as they were: only the coarse operators are summed again (their
-        // vectors b and x are written before they are read).
-        h.levels.front().A = std::move(fine);
-        h.remainder = std::move(remainder);
+        // The levels' rows, blocks and colours as they were: only the operators are renumbered and summed again
+        // (their vectors b and x are written before they are read).
+        h.fine = std::move(fine);
+        renumberCoefficients(h.fine, h.colourRow, h.levels.front().A);
         for (std::size_t l = 0; l + 1 < h.levels.size(); ++l)
             sumCoarseOperator(h.levels[l], blockOfRows(h.levels[l]), h.levels[l + 1], nullptr);
     } else {
+        // Built in the caller's rows, then renumbered by colour: the same blocks, sums and factor as built.
         h.levels.emplace_back();
         h.levels.back().A = std::move(fine);
-        h.remainder = std::move(remainder);
         while (h.levels.back().A.size() > kDenseLimit) {
             Level next;
             if (!coarsen(h.levels.back(), next)) break;
             h.levels.push_back(std::move(next));
         }
-        for (Level &level : h.levels) prepare(level);
+        const bool denseBottom = h.levels.back().A.size() <= kDenseLimit;
+        h.fine = std::move(h.levels.front().A);
+        for (std::size_t l = 0; l < h.levels.size(); ++l) {
+            Level &level = h.levels[l];
+            // the finest level's operator copied (conjugate gradients keep it), the coarser ones' replaced
+            const Stencil<float> built = l == 0 ? Stencil<float>{} : std::move(level.A);
+            const Stencil<float> &from = l == 0 ? h.fine : built;
+            std::vector<std::uint32_t> row(from.size());
+            if (denseBottom && l + 1 == h.levels.size()) std::iota(row.begin(), row.end(), 0u);
+            else row = colourOrder(*from.coord, level.colourStart);
+            renumber(level, from, row, l == 0 ? nullptr : &h.levels[l - 1]);
+            if (l == 0) h.colourRow = std::move(row);
+        }
     }
     h.cholesky.clear();
     if (h.levels.back().A.size() <= kDenseLimit) h.cholesky = denseCholesky(h.levels.back().A);
-    for (Level &level : h.levels) level.A.coord.reset();  // they only placed the rows in colours and blocks
+    h.fine.coord.reset();  // the voxels only placed the rows in colours and blocks
 }
 
 MultigridSolver::~MultigridSolver() = default;
@@ -397,7 +455,7 @@ MultigridSolver::~MultigridSolver() = default;
 int MultigridSolver::levelCount() const { return int(hierarchy_->levels.size()); }
 
 std::pair<Stencil<float>, std::vector<float>> MultigridSolver::release(Workspace *workspace) && {
-    std::pair<Stencil<float>, std::vector<float>> out{std::move(hierarchy_->levels.front().A),
+    std::pair<Stencil<float>, std::vector<float>> out{std::move(hierarchy_->fine),
                                                        std::move(hierarchy_->remainder)};
     if (workspace) workspace->levels = std::move(hierarchy_);
     hierarchy_.reset();
@@ -418,14 +476,14 @@ MultigridSolver::Result MultigridSolver::iterate(std::vector<double> &b, std::ve
                                                  double relativeTolerance, int maxIterations,
                                                  const SubProgress &progress, Workspace &w) const {
     const std::size_t n = b.size();
-    if (x.size() != n || hierarchy_->levels.front().A.size() != n)
+    if (x.size() != n || hierarchy_->fine.size() != n)
         throw InvalidArgument("multigrid solve: the operator, b and x differ in size");
     Result result;
     if (n == 0) return result;
     // Preconditioned conjugate gradients, the steps of OpenVDB's pcg::solve in its order (the same iterates), in
     // b and x rather than in copies: r takes b's place, A p takes z's (32 bytes per unknown, against 48). p and z
     // are written before they are read, so a workspace's earlier values do not matter.
-    const FineOperator A{hierarchy_->levels.front().A, hierarchy_->remainder};
+    const FineOperator A{hierarchy_->fine, hierarchy_->remainder};
     const double tolerance = std::max(relativeTolerance, kFinestTolerance);
     const double largestB = infNorm(b), normB = largestB == 0.0 ? 1.0 : largestB;
     w.p.resize(n), w.z.resize(n);
