@@ -58,7 +58,9 @@ struct MultigridSolver::Hierarchy {
         // order, the one its factor was computed in.
         Stencil<float> A;
         std::array<std::size_t, 3> colourStart{};
-        std::vector<std::uint32_t> membersStart, members;  // next level's rows -> rows here (CSR)
+        // The next level's blocks in the order they were built (the order of their members here, so that the loops
+        // over them stream these rows) -> rows here (CSR), and each block's row in the next level.
+        std::vector<std::uint32_t> membersStart, members, blockRow;
         mutable UnwrittenVector<float> b, x;  // written before they are read (sweep's fromZero)
     };
     std::vector<Level> levels;
@@ -116,12 +118,12 @@ struct MultigridSolver::Hierarchy {
             double sum = 0.0;
             for (std::uint32_t m = level.membersStart[I]; m < level.membersStart[I + 1]; ++m)
                 sum += level.b[level.members[m]] - level.A.row(level.members[m], level.x.data());
-            coarse.b[I] = sum;
+            coarse.b[level.blockRow[I]] = sum;
         });
         vcycle(l + 1);
         parallelRows(coarse.A.size(), [&](std::size_t I) {
             for (std::uint32_t m = level.membersStart[I]; m < level.membersStart[I + 1]; ++m)
-                level.x[level.members[m]] += coarse.x[I];
+                level.x[level.members[m]] += coarse.x[level.blockRow[I]];
         });
         for (int s = 0; s < kSweeps; ++s) sweep(level, 1), sweep(level, 0);
     }
@@ -153,8 +155,8 @@ void renumberCoefficients(const Stencil<float> &from, const std::vector<std::uin
 }
 
 // A level's rows renumbered (`row`: each row's new row; `from`: its operator in the rows it was built in): its
-// operator, its rows as members of the next level's blocks, and the finer level's blocks (given one), each block's
-// members in the same order, so that every sum over them is added as before.
+// operator, its rows as members of the next level's blocks, and the rows of the finer level's blocks (given one).
+// The blocks keep their members and the order they were built in, so that every sum over them is added as before.
 void renumber(Level &level, const Stencil<float> &from, const std::vector<std::uint32_t> &row, Level *finer) {
     const Stencil<float>::Neighbours &N = *from.neighbour;
     auto neighbour = std::make_shared<Stencil<float>::Neighbours>(N.size());
@@ -165,16 +167,8 @@ void renumber(Level &level, const Stencil<float> &from, const std::vector<std::u
     renumberCoefficients(from, row, level.A);
     parallelRows(level.members.size(), [&](std::size_t m) { level.members[m] = row[level.members[m]]; });
     level.b.resize(row.size()), level.x.resize(row.size());
-    if (!finer) return;
-    std::vector<std::uint32_t> start(row.size() + 1, 0), members(finer->members.size());
-    for (std::size_t I = 0; I < row.size(); ++I)
-        start[row[I] + 1] = finer->membersStart[I + 1] - finer->membersStart[I];
-    for (std::size_t I = 0; I < row.size(); ++I) start[I + 1] += start[I];
-    parallelRows(row.size(), [&](std::size_t I) {
-        std::copy(finer->members.begin() + finer->membersStart[I], finer->members.begin() + finer->membersStart[I + 1],
-                  members.begin() + start[row[I]]);
-    });
-    finer->membersStart = std::move(start), finer->members = std::move(members);
+    if (finer)
+        parallelRows(finer->blockRow.size(), [&](std::size_t I) { finer->blockRow[I] = row[finer->blockRow[I]]; });
 }
 
 // The next level's rows: 2x2x2 blocks of this one's voxels (fine.members, coarse's voxels; `block`: each fine row's
@@ -206,6 +200,8 @@ bool aggregate(Level &fine, Level &coarse, std::vector<std::uint32_t> &block) {
     for (std::uint32_t a : block) ++fine.membersStart[a + 1];
     for (std::size_t I = 0; I < nc; ++I) fine.membersStart[I + 1] += fine.membersStart[I];
     fine.members.resize(n);
+    fine.blockRow.resize(nc);
+    std::iota(fine.blockRow.begin(), fine.blockRow.end(), 0u);
     std::vector<std::uint32_t> fill(fine.membersStart.begin(), fine.membersStart.end() - 1);
     for (std::size_t i = 0; i < n; ++i) fine.members[fill[block[i]]++] = std::uint32_t(i);
     return true;
@@ -221,8 +217,9 @@ std::vector<std::uint32_t> blockOfRows(const Level &fine) {
     return block;
 }
 
-// The next level's operator summed from this one's over its blocks (`block`: each fine row's), and where `neighbour`
-// is given (a fresh build; levels taken over have theirs) the next level's neighbours.
+// The next level's operator summed from this one's over its blocks (`block`: each fine row's, as built; written to
+// the blocks' rows), and where `neighbour` is given (a fresh build; levels taken over have theirs) the next level's
+// neighbours.
 void sumCoarseOperator(const Level &fine, const std::vector<std::uint32_t> &block, Level &coarse,
                        Stencil<float>::Neighbours *neighbour) {
     const Stencil<float> &A = fine.A;
@@ -249,13 +246,14 @@ void sumCoarseOperator(const Level &fine, const std::vector<std::uint32_t> &bloc
                     if (block[j] != I) crossing[k] += A.conductance[i][k], across[k] = std::int32_t(block[j]);
                 }
             }
+            const std::uint32_t row = fine.blockRow[I];
             double diag = remainder;
             for (int k = 0; k < 6; ++k) {
-                if (neighbour) (*neighbour)[I][k] = across[k];
-                C.conductance[I][k] = float(across[k] < 0 ? 0.0 : 0.5 * crossing[k]);
-                diag += C.conductance[I][k];
+                if (neighbour) (*neighbour)[row][k] = across[k] < 0 ? across[k] : std::int32_t(fine.blockRow[across[k]]);
+                C.conductance[row][k] = float(across[k] < 0 ? 0.0 : 0.5 * crossing[k]);
+                diag += C.conductance[row][k];
             }
-            C.diag[I] = float(diag);
+            C.diag[row] = float(diag);
         }
     });
 }
