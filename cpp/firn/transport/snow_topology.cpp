@@ -225,6 +225,48 @@ float rampMass(const Medium &medium, Medium::Accessor &density, const openvdb::C
     return float(mass);
 }
 
+// SurfacePatch::curvature of surface voxel j at cj, from its block's patches' normals.
+double curvatureAround(const SnowTopology &topo, std::size_t j, const openvdb::Coord &cj,
+                       openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
+    const glm::dvec3 n = topo.patches[j].normal;
+    std::array<std::pair<glm::dvec3, glm::dvec3>, 27> near;  // offsets (voxels) and normals
+    std::array<double, 27> weight{};
+    int count = 0;
+    glm::dvec3 mean(0.0);
+    double total = 0.0;
+    for (int k = 0; k < 27; ++k) {
+        const openvdb::Coord d = blockOffset(k);
+        const std::int32_t i = index.getValue(cj + d);
+        if (i < 0 || !topo.patches[std::size_t(i)].isSurface()) continue;
+        const double w = glm::dot(n, topo.patches[std::size_t(i)].normal);
+        if (w <= 0.0) continue;
+        near[count] = {glm::dvec3(d.x(), d.y(), d.z()), topo.patches[std::size_t(i)].normal}, weight[count++] = w;
+        mean += w * glm::dvec3(d.x(), d.y(), d.z()), total += w;
+    }
+    if (total <= 0.0) return 0.0;
+    mean /= total;
+    double bending = 0.0, spread = 0.0;
+    for (int k = 0; k < count; ++k) {
+        const glm::dvec3 p = near[k].first - mean, t = p - glm::dot(p, n) * n;
+        bending += weight[k] * glm::dot(near[k].second, t), spread += weight[k] * glm::dot(t, t);
+    }
+    return spread > 1e-6 ? bending / spread : 0.0;
+}
+
+// Every surface patch's curvature, once its block's normals are all known: the light's skin ring, each pass's
+// surface light and the grids' ramps read it (it was worked out again for each).
+void computeCurvatures(SnowTopology &topo, const SubProgress &progress) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 4096), [&](const auto &range) {
+        WorkCheck work(progress);
+        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            work.add(WorkCheck::kVoxel);
+            if (topo.patches[i].isSurface())
+                topo.patches.surface(i).curvature = curvatureAround(topo, i, topo.coord[i], index);
+        }
+    });
+}
+
 // A block's lists in one vector (a vector per unknown took 65 MB and 2.5 M allocations on the car sample).
 void computeNeighbourhoods(SnowTopology &topo, const SubProgress &progress) {
     constexpr std::size_t kBlock = 4096;
@@ -425,6 +467,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
     });
     computeSurfacePatches(medium, topo, progress);
     computeNeighbourhoods(topo, progress);
+    computeCurvatures(topo, progress);
     computeShell(medium, topo, shellVoxels, progress);
     progress.report(1.0);
     return topo;
@@ -433,30 +476,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
 double surfaceCurvature(const SnowTopology &topo, const openvdb::Coord &cj,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
     const std::int32_t j = index.getValue(cj);
-    if (j < 0 || !topo.patches[std::size_t(j)].isSurface()) return 0.0;  // no surface at cj: nothing curves
-    const glm::dvec3 n = topo.patches[std::size_t(j)].normal;
-    std::array<std::pair<glm::dvec3, glm::dvec3>, 27> near;  // offsets (voxels) and normals
-    std::array<double, 27> weight{};
-    int count = 0;
-    glm::dvec3 mean(0.0);
-    double total = 0.0;
-    for (int k = 0; k < 27; ++k) {
-        const openvdb::Coord d = blockOffset(k);
-        const std::int32_t i = index.getValue(cj + d);
-        if (i < 0 || !topo.patches[std::size_t(i)].isSurface()) continue;
-        const double w = glm::dot(n, topo.patches[std::size_t(i)].normal);
-        if (w <= 0.0) continue;
-        near[count] = {glm::dvec3(d.x(), d.y(), d.z()), topo.patches[std::size_t(i)].normal}, weight[count++] = w;
-        mean += w * glm::dvec3(d.x(), d.y(), d.z()), total += w;
-    }
-    if (total <= 0.0) return 0.0;
-    mean /= total;
-    double bending = 0.0, spread = 0.0;
-    for (int k = 0; k < count; ++k) {
-        const glm::dvec3 p = near[k].first - mean, t = p - glm::dot(p, n) * n;
-        bending += weight[k] * glm::dot(near[k].second, t), spread += weight[k] * glm::dot(t, t);
-    }
-    return spread > 1e-6 ? bending / spread : 0.0;
+    return j < 0 ? 0.0 : topo.patches[std::size_t(j)].curvature;  // an inner voxel's patch: 0
 }
 
 }  // namespace firn
