@@ -19,6 +19,7 @@ namespace {
 
 constexpr std::size_t kDenseLimit = 512;  // rows solved directly at the bottom of the hierarchy
 constexpr int kSweeps = 2;                // red-black Gauss-Seidel sweeps before and after the coarse solve
+constexpr std::size_t kChunk = 8192;      // rows grouped by colour within each run of this many (Level)
 
 int floorHalf(int v) { return v >= 0 ? v / 2 : -((-v + 1) / 2); }
 
@@ -51,26 +52,25 @@ template struct Stencil<float>;
 
 struct MultigridSolver::Hierarchy {
     struct Level {
-        // A swept level's rows are numbered colour by colour, a colour being its voxels' parity (i + j + k) & 1:
-        // colour c's rows are [colourStart[c], colourStart[c + 1]), each colour's in the order they were built in.
-        // So a colour's sweep streams its own rows' arrays, not every row's to update half of them (a colour's rows
-        // read only the other's: the order they are visited in does not matter). A bottom solved densely keeps its
-        // order, the one its factor was computed in.
+        // A swept level's rows are grouped by colour, a colour being its voxels' parity (i + j + k) & 1, within
+        // each chunk of kChunk rows as built: chunk q's colour 0 rows first, up to colourSplit[q], then its colour 1
+        // rows, each colour's in the order they were built in. So a colour's sweep streams its own rows' arrays, not
+        // every row's to update half of them (a colour's rows read only the other's: the order they are visited in
+        // does not matter), and the coefficients are regrouped in place, a chunk at a time. A bottom solved densely
+        // keeps its order, the one its factor was computed in.
         Stencil<float> A;
-        std::array<std::size_t, 3> colourStart{};
+        std::vector<std::uint32_t> colourSplit;
         // The next level's blocks in the order they were built (the order of their members here, so that the loops
         // over them stream these rows) -> rows here (CSR), and each block's row in the next level.
         std::vector<std::uint32_t> membersStart, members, blockRow;
         mutable UnwrittenVector<float> b, x;  // written before they are read (sweep's fromZero)
     };
     std::vector<Level> levels;
-    // The caller's operator in its own rows (conjugate gradients'; levels.front() holds it renumbered), and each of
-    // its rows' row in levels.front().
-    Stencil<float> fine;
+    // The caller's neighbour table (its rows', conjugate gradients' order; levels.front() holds the caller's
+    // coefficients regrouped, with its own table), and each of the caller's rows' row in levels.front(). A solver
+    // takes the levels over only for the same table (another's colours would let a sweep's rows read each other).
+    std::shared_ptr<const Stencil<float>::Neighbours> fineNeighbour;
     std::vector<std::uint32_t> colourRow;
-    // The finest rows' neighbour table the levels were built over: a solver takes them over only for the same
-    // table (another's colours would let a sweep's rows read each other).
-    const Stencil<float>::Neighbours *builtOver = nullptr;
     std::vector<double> cholesky;  // lower factor of the bottom level, dense row-major
     std::vector<float> remainder;  // finest level: diag minus the conductances
 
@@ -79,18 +79,21 @@ struct MultigridSolver::Hierarchy {
     void sweep(const Level &level, int colour, bool fromZero = false) const {
         const Stencil<float> &A = level.A;
         const Stencil<float>::Neighbours &N = *A.neighbour;
-        const std::size_t begin = level.colourStart[colour], end = level.colourStart[colour + 1];
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 8192), [&](const auto &range) {
-            for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                // the row's arrays taken before the branches (read inside them, their addresses were reloaded per
-                // link: the stores to x might alias them)
-                const std::array<std::int32_t, 6> &neighbour = N[i];
-                const std::array<float, 6> &conductance = A.conductance[i];
-                const float *x = level.x.data();
-                float sum = level.b[i];
-                for (int k = 0; k < 6 && !fromZero; ++k)
-                    if (neighbour[k] >= 0) sum += conductance[k] * x[neighbour[k]];
-                level.x[i] = sum / A.diag[i];
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, level.colourSplit.size(), 1), [&](const auto &chunks) {
+            for (std::size_t q = chunks.begin(); q != chunks.end(); ++q) {
+                const std::size_t split = level.colourSplit[q];
+                const std::size_t end = colour == 0 ? split : std::min(A.size(), (q + 1) * kChunk);
+                for (std::size_t i = colour == 0 ? q * kChunk : split; i != end; ++i) {
+                    // the row's arrays taken before the branches (read inside them, their addresses were reloaded
+                    // per link: the stores to x might alias them)
+                    const std::array<std::int32_t, 6> &neighbour = N[i];
+                    const std::array<float, 6> &conductance = A.conductance[i];
+                    const float *x = level.x.data();
+                    float sum = level.b[i];
+                    for (int k = 0; k < 6 && !fromZero; ++k)
+                        if (neighbour[k] >= 0) sum += conductance[k] * x[neighbour[k]];
+                    level.x[i] = sum / A.diag[i];
+                }
             }
         });
     }
@@ -133,38 +136,44 @@ namespace {
 
 using Level = MultigridSolver::Hierarchy::Level;
 
-// Each row's new row, numbered colour by colour (Level::colourStart), each colour's rows in their order.
-std::vector<std::uint32_t> colourOrder(const std::vector<openvdb::Coord> &coord, std::array<std::size_t, 3> &start) {
+// Each row's new row, grouped by colour within its chunk (Level::colourSplit), each colour's rows in their order.
+std::vector<std::uint32_t> colourOrder(const std::vector<openvdb::Coord> &coord, std::vector<std::uint32_t> &split) {
     const auto colour = [](const openvdb::Coord &c) { return (c.x() + c.y() + c.z()) & 1; };
-    std::array<std::size_t, 2> count{};
-    for (const openvdb::Coord &c : coord) ++count[colour(c)];
-    start = {0, count[0], coord.size()};
-    std::array<std::uint32_t, 2> next{0, std::uint32_t(count[0])};
+    split.resize((coord.size() + kChunk - 1) / kChunk);
     std::vector<std::uint32_t> row(coord.size());
-    for (std::size_t i = 0; i < coord.size(); ++i) row[i] = next[colour(coord[i])]++;
+    parallelRows(split.size(), [&](std::size_t q) {
+        const std::size_t begin = q * kChunk, end = std::min(coord.size(), begin + kChunk);
+        std::size_t colour0 = 0;
+        for (std::size_t i = begin; i < end; ++i) colour0 += colour(coord[i]) == 0;
+        std::array<std::uint32_t, 2> next{std::uint32_t(begin), std::uint32_t(begin + colour0)};
+        for (std::size_t i = begin; i < end; ++i) row[i] = next[colour(coord[i])]++;
+        split[q] = next[0];
+    });
     return row;
 }
 
-// `to`'s conductances and diagonal: `from`'s, each row i's moved to row[i].
-void renumberCoefficients(const Stencil<float> &from, const std::vector<std::uint32_t> &row, Stencil<float> &to) {
-    to.conductance.resize(from.size()), to.diag.resize(from.size());  // every row written below
-    parallelRows(from.size(), [&](std::size_t i) {
-        to.conductance[row[i]] = from.conductance[i];
-        to.diag[row[i]] = from.diag[i];
+// A's conductances and diagonal regrouped in place: each row i's moved to row[i], within its chunk.
+void regroupCoefficients(Stencil<float> &A, const std::vector<std::uint32_t> &row) {
+    parallelRows((A.size() + kChunk - 1) / kChunk, [&](std::size_t q) {
+        const std::size_t begin = q * kChunk, end = std::min(A.size(), begin + kChunk);
+        const std::vector<std::array<float, 6>> conductance(A.conductance.begin() + begin, A.conductance.begin() + end);
+        const std::vector<float> diag(A.diag.begin() + begin, A.diag.begin() + end);
+        for (std::size_t i = begin; i < end; ++i)
+            A.conductance[row[i]] = conductance[i - begin], A.diag[row[i]] = diag[i - begin];
     });
 }
 
-// A level's rows renumbered (`row`: each row's new row; `from`: its operator in the rows it was built in): its
-// operator, its rows as members of the next level's blocks, and the rows of the finer level's blocks (given one).
-// The blocks keep their members and the order they were built in, so that every sum over them is added as before.
-void renumber(Level &level, const Stencil<float> &from, const std::vector<std::uint32_t> &row, Level *finer) {
-    const Stencil<float>::Neighbours &N = *from.neighbour;
+// A level's rows regrouped (`row`: each row's new row): its operator (a neighbour table of its own), its rows as
+// members of the next level's blocks, and the rows of the finer level's blocks (given one). The blocks keep their
+// members and the order they were built in, so that every sum over them is added as before.
+void regroup(Level &level, const std::vector<std::uint32_t> &row, Level *finer) {
+    const Stencil<float>::Neighbours &N = *level.A.neighbour;
     auto neighbour = std::make_shared<Stencil<float>::Neighbours>(N.size());
     parallelRows(N.size(), [&](std::size_t i) {
         for (int k = 0; k < 6; ++k) (*neighbour)[row[i]][k] = N[i][k] >= 0 ? std::int32_t(row[N[i][k]]) : N[i][k];
     });
     level.A.neighbour = std::move(neighbour);
-    renumberCoefficients(from, row, level.A);
+    regroupCoefficients(level.A, row);
     parallelRows(level.members.size(), [&](std::size_t m) { level.members[m] = row[level.members[m]]; });
     level.b.resize(row.size()), level.x.resize(row.size());
     if (finer)
@@ -286,16 +295,16 @@ std::vector<double> denseCholesky(const Stencil<float> &A) {
 // precision (the coefficients' rounding perturbs the system by 1e-7, far below the solve's tolerance; one copy of
 // the operator serves both the iteration and its preconditioner).
 struct FineOperator {
-    const Stencil<float> &A;
+    const MultigridSolver::Hierarchy &h;  // the finest level's coefficients (at h.colourRow), the caller's rows
     const std::vector<float> &remainder;  // diag - sum of conductances: the absorption and boundary terms
     // remainder x_i + sum_k c_ik (x_i - x_k): the same operator, without the rounding of a large diagonal
     // swamping a small absorption (clean snow's blue: 1e-5 of the diagonal).
     void multiply(const double *x, double *y) const {
-        const Stencil<float>::Neighbours &N = *A.neighbour;
-        parallelRows(A.size(), [&](std::size_t i) {
+        const Stencil<float>::Neighbours &N = *h.fineNeighbour;
+        parallelRows(N.size(), [&](std::size_t i) {
             // the row's arrays taken before the branches (read inside them, their addresses were reloaded per link)
             const std::array<std::int32_t, 6> &neighbour = N[i];
-            const std::array<float, 6> &conductance = A.conductance[i];
+            const std::array<float, 6> &conductance = h.levels.front().A.conductance[h.colourRow[i]];
             double sum = double(remainder[i]) * x[i];
             for (int k = 0; k < 6; ++k)
                 if (neighbour[k] >= 0) sum += double(conductance[k]) * (x[i] - x[neighbour[k]]);
@@ -408,20 +417,21 @@ Stencil<float> singlePrecision(const StencilOperator &A) {
 MultigridSolver::MultigridSolver(StencilOperator fine) : MultigridSolver(singlePrecision(fine), remainderOf(fine)) {}
 
 MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remainder, Workspace *workspace) {
-    const bool takeOver = workspace && workspace->levels && workspace->levels->builtOver == fine.neighbour.get();
+    const bool takeOver = workspace && workspace->levels && workspace->levels->fineNeighbour == fine.neighbour;
     hierarchy_ = takeOver ? std::move(workspace->levels) : std::make_shared<Hierarchy>();
     Hierarchy &h = *hierarchy_;
-    h.builtOver = fine.neighbour.get();
     h.remainder = std::move(remainder);
     if (takeOver) {
-        // The levels' rows, blocks and colours as they were: only the operators are renumbered and summed again
+        // The levels' rows, blocks and colours as they were: only the operators are regrouped and summed again
         // (their vectors b and x are written before they are read).
-        h.fine = std::move(fine);
-        renumberCoefficients(h.fine, h.colourRow, h.levels.front().A);
+        Stencil<float> &top = h.levels.front().A;
+        top.conductance = std::move(fine.conductance), top.diag = std::move(fine.diag);
+        regroupCoefficients(top, h.colourRow);
         for (std::size_t l = 0; l + 1 < h.levels.size(); ++l)
             sumCoarseOperator(h.levels[l], blockOfRows(h.levels[l]), h.levels[l + 1], nullptr);
     } else {
-        // Built in the caller's rows, then renumbered by colour: the same blocks, sums and factor as built.
+        // Built in the caller's rows, then regrouped by colour: the same blocks, sums and factor as built.
+        h.fineNeighbour = fine.neighbour;
         h.levels.emplace_back();
         h.levels.back().A = std::move(fine);
         while (h.levels.back().A.size() > kDenseLimit) {
@@ -430,22 +440,18 @@ MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remaind
             h.levels.push_back(std::move(next));
         }
         const bool denseBottom = h.levels.back().A.size() <= kDenseLimit;
-        h.fine = std::move(h.levels.front().A);
         for (std::size_t l = 0; l < h.levels.size(); ++l) {
             Level &level = h.levels[l];
-            // the finest level's operator copied (conjugate gradients keep it), the coarser ones' replaced
-            const Stencil<float> built = l == 0 ? Stencil<float>{} : std::move(level.A);
-            const Stencil<float> &from = l == 0 ? h.fine : built;
-            std::vector<std::uint32_t> row(from.size());
+            std::vector<std::uint32_t> row(level.A.size());
             if (denseBottom && l + 1 == h.levels.size()) std::iota(row.begin(), row.end(), 0u);
-            else row = colourOrder(*from.coord, level.colourStart);
-            renumber(level, from, row, l == 0 ? nullptr : &h.levels[l - 1]);
+            else row = colourOrder(*level.A.coord, level.colourSplit);
+            regroup(level, row, l == 0 ? nullptr : &h.levels[l - 1]);
             if (l == 0) h.colourRow = std::move(row);
         }
     }
     h.cholesky.clear();
     if (h.levels.back().A.size() <= kDenseLimit) h.cholesky = denseCholesky(h.levels.back().A);
-    h.fine.coord.reset();  // the voxels only placed the rows in colours and blocks
+    for (Level &level : h.levels) level.A.coord.reset();  // they only placed the rows in colours and blocks
 }
 
 MultigridSolver::~MultigridSolver() = default;
@@ -453,8 +459,13 @@ MultigridSolver::~MultigridSolver() = default;
 int MultigridSolver::levelCount() const { return int(hierarchy_->levels.size()); }
 
 std::pair<Stencil<float>, std::vector<float>> MultigridSolver::release(Workspace *workspace) && {
-    std::pair<Stencil<float>, std::vector<float>> out{std::move(hierarchy_->fine),
-                                                       std::move(hierarchy_->remainder)};
+    // The coefficients' storage, regrouped (the caller writes every row afresh), under the caller's table; the
+    // finest level keeps its own.
+    Stencil<float> &top = hierarchy_->levels.front().A;
+    std::pair<Stencil<float>, std::vector<float>> out;
+    out.first.neighbour = hierarchy_->fineNeighbour;
+    out.first.conductance = std::move(top.conductance), out.first.diag = std::move(top.diag);
+    out.second = std::move(hierarchy_->remainder);
     if (workspace) workspace->levels = std::move(hierarchy_);
     hierarchy_.reset();
     return out;
@@ -474,14 +485,14 @@ MultigridSolver::Result MultigridSolver::iterate(std::vector<double> &b, std::ve
                                                  double relativeTolerance, int maxIterations,
                                                  const SubProgress &progress, Workspace &w) const {
     const std::size_t n = b.size();
-    if (x.size() != n || hierarchy_->fine.size() != n)
+    if (x.size() != n || hierarchy_->levels.front().A.size() != n)
         throw InvalidArgument("multigrid solve: the operator, b and x differ in size");
     Result result;
     if (n == 0) return result;
     // Preconditioned conjugate gradients, the steps of OpenVDB's pcg::solve in its order (the same iterates), in
     // b and x rather than in copies: r takes b's place, A p takes z's (32 bytes per unknown, against 48). p and z
     // are written before they are read, so a workspace's earlier values do not matter.
-    const FineOperator A{hierarchy_->fine, hierarchy_->remainder};
+    const FineOperator A{*hierarchy_, hierarchy_->remainder};
     const double tolerance = std::max(relativeTolerance, kFinestTolerance);
     const double largestB = infNorm(b), normB = largestB == 0.0 ? 1.0 : largestB;
     w.p.resize(n), w.z.resize(n);
