@@ -19,7 +19,8 @@ namespace firn {
 template <typename T>
 struct Stencil {
     // Per row, its neighbours -x, +x, -y, +y, -z, +z: a row, or negative for none (SnowTopology::link's layout,
-    // so that the bake's finest level reads the topology's links rather than a copy of them: 24 bytes per row).
+    // so that conjugate gradients read the topology's links rather than a copy of them: 24 bytes per row; the
+    // multigrid's finest level holds its rows regrouped by colour, with a table of its own).
     using Neighbours = std::vector<std::array<std::int32_t, 6>>;
     static constexpr std::int32_t kNone = -1;
     // Voxel per row (axis neighbours differ by 1); shared, so that the bake's finest level reads the topology's
@@ -49,7 +50,8 @@ inline double rowRemainder(double diag, const std::array<double, 6> &conductance
 // Solves A x = b by conjugate gradients (OpenVDB's pcg, in the caller's b and x) preconditioned with one
 // symmetric V-cycle of aggregation multigrid: 2x2x2 voxel blocks per coarser level, coarse operators summed from the fine one
 // (conductances halved, as rediscretizing at twice the spacing would give), red-black Gauss-Seidel
-// smoothing, a dense Cholesky solve at the bottom. The V-cycle works in single precision (it only has to
+// smoothing (each level's rows regrouped by colour, so that a colour's sweep streams its own rows alone; the finest
+// level's coefficients regrouped in the caller's storage, in place), a dense Cholesky solve at the bottom. The V-cycle works in single precision (it only has to
 // precondition; the iteration itself is double), halving its memory traffic. Work per iteration is linear in the voxel count and
 // the iteration count does not grow with the domain.
 class MultigridSolver {
@@ -57,7 +59,7 @@ class MultigridSolver {
     // The vectors conjugate gradients work in, for a caller that solves systems of one size in turn: kept
     // between solves, their pages are reused rather than mapped and cleared afresh (the bake's three channels).
     // A spent solver's levels (release) serve the next solver of the same rows and neighbours: their blocks,
-    // neighbours and colours depend on the voxels alone, so only its coarse operators are summed again.
+    // neighbours and colours depend on the voxels alone, so only its operators are regrouped and summed again.
     struct Hierarchy;  // levels, defined in multigrid.cpp (so held by shared_ptr: complete where it is deleted)
     struct Workspace {
         UnwrittenVector<double> p, z;  // written before they are read
@@ -91,7 +93,8 @@ class MultigridSolver {
                  const SubProgress &progress, Workspace *workspace = nullptr) const;
 
     // The finest level's operator and remainder handed back, the solver spent: their storage can hold the next
-    // system of the same size; given a workspace, the levels go to it for the next solver of the same rows.
+    // system of the same size (the conductances and diagonal come back regrouped: the caller writes every row);
+    // given a workspace, the levels go to it for the next solver of the same rows.
     std::pair<Stencil<float>, std::vector<float>> release(Workspace *workspace = nullptr) &&;
 
     int levelCount() const;
