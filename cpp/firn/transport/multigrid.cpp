@@ -258,7 +258,8 @@ void sumCoarseOperator(const Level &fine, const std::vector<std::uint32_t> &bloc
             const std::uint32_t row = fine.blockRow[I];
             double diag = remainder;
             for (int k = 0; k < 6; ++k) {
-                if (neighbour) (*neighbour)[row][k] = across[k] < 0 ? across[k] : std::int32_t(fine.blockRow[across[k]]);
+                if (neighbour)
+                    (*neighbour)[row][k] = across[k] < 0 ? across[k] : std::int32_t(fine.blockRow[across[k]]);
                 C.conductance[row][k] = float(across[k] < 0 ? 0.0 : 0.5 * crossing[k]);
                 diag += C.conductance[row][k];
             }

@@ -225,9 +225,10 @@ float rampMass(const Medium &medium, Medium::Accessor &density, const openvdb::C
     return float(mass);
 }
 
-// SurfacePatch::curvature of surface voxel j at cj, from its block's patches' normals.
-double curvatureAround(const SnowTopology &topo, std::size_t j, const openvdb::Coord &cj,
+// SurfacePatch::curvature of surface voxel j, from its block's patches' normals.
+double curvatureAround(const SnowTopology &topo, std::size_t j,
                        openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
+    const openvdb::Coord &cj = topo.coord[j];
     const glm::dvec3 n = topo.patches[j].normal;
     std::array<std::pair<glm::dvec3, glm::dvec3>, 27> near;  // offsets (voxels) and normals
     std::array<double, 27> weight{};
@@ -262,7 +263,7 @@ void computeCurvatures(SnowTopology &topo, const SubProgress &progress) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             work.add(WorkCheck::kVoxel);
             if (topo.patches[i].isSurface())
-                topo.patches.surface(i).curvature = curvatureAround(topo, i, topo.coord[i], index);
+                topo.patches.surface(i).curvature = curvatureAround(topo, i, index);
         }
     });
 }

@@ -166,8 +166,8 @@ inline openvdb::Coord blockOffset(int k) { return openvdb::Coord(k % 3 - 1, k / 
 // The curvature (per voxel, positive convex) of the surface around surface voxel j at cj: over the surface voxels k
 // of its 3^3 block, weighted by the cosine w_k between their normals and j's, the ratio
 // sum w_k n_k . t_k / sum w_k |t_k|^2, t_k their offsets from the block's weighted mean across n_j (so sum w_k t_k = 0:
-// a sphere of R voxels with exact normals gives 1 / R), flat snow 0; worked out once per patch (SurfacePatch::curvature)
-// as the topology is built, and read here by the topology's index. 0 where cj is no surface voxel (air, an inner voxel).
+// a sphere of R voxels with exact normals gives 1 / R), flat snow 0; worked out once per patch as the topology is
+// built (SurfacePatch::curvature), read here by the topology's index. 0 where cj is no surface voxel (air, inner).
 double surfaceCurvature(const SnowTopology &topo, const openvdb::Coord &cj,
                         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index);
 
