@@ -17,7 +17,6 @@
 #include "firn/transport/edge_lobe.h"
 #include "firn/transport/incident_light.h"
 #include "firn/transport/limb_carry.h"
-#include "firn/transport/ramp_lobe.h"
 #include "firn/transport/skin_ring.h"
 #include "firn/transport/sun_lobe.h"
 #include "firn/util/sampling.h"
@@ -55,21 +54,11 @@ struct ShownToward {
     float peakShare = 1.0f;
 };
 
-// The broad lobe of the air across a face of outward normal n whose voxel shows v: the in-scatter of the face's exit
-// radiance in the face's density ramp (rampLobe), per channel; the peaked lobe as v's.
-Source acrossFace(Source v, const glm::dvec3 &n, const VolumeOptics &optics) {
-    for (int c = 0; c < 3; ++c) {
-        const SourceLobe lobe = rampLobe(v.l0[c], glm::dvec3(v.l1[c]), n, optics.g, optics.albedo[c]);
-        v.l0[c] = float(lobe.l0), v.l1[c] = glm::vec3(lobe.l1);
-    }
-    return v;
-}
-
 // What sharp edge voxel j (not traced) shows a neighbour at `offset`: the mean of its flat air faces' own lobes that
-// face it (EdgeFaceLobes; across one face, as the air across it scatters it: acrossFace) and, of its peaked lobe,
-// those faces' share (EdgeFaceLobes::Voxel::peakShare), else `own`, its one lobe over all its faces (share 1).
+// face it (EdgeFaceLobes) and, of its peaked lobe, those faces' share (EdgeFaceLobes::Voxel::peakShare), else `own`,
+// its one lobe over all its faces (share 1).
 ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const openvdb::Coord &offset,
-                           const Source &own, const VolumeOptics &optics) {
+                           const Source &own) {
     const EdgeFaceLobes::Voxel *faces = edgeFaces.find(j);
     if (!faces) return {own};
     Source sum;
@@ -96,8 +85,6 @@ ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const 
             const SourceLobe lobe = lobeBeyondFaces(beyond);
             S.l0[c] = float(lobe.l0), S.l1[c] = glm::vec3(lobe.l1);
         }
-    } else {
-        S = acrossFace(S, faceNormal(flat[0]), optics);
     }
     S.peak0 *= share, S.peak1 *= share;
     return {S, share};
@@ -111,8 +98,8 @@ ShownToward ownFacesToward(const EdgeFaceLobes &edgeFaces, std::size_t j, const 
 // weighted.
 bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, const SourceValues &source,
-                   TracedIndex &tracedIndex, const MonteCarloVoxels &traced, const VolumeOptics &optics, Source &S,
-                   Source &rampPart, glm::dvec3 &facing, openvdb::Coord &carrier) {
+                   TracedIndex &tracedIndex, const MonteCarloVoxels &traced, Source &S, Source &rampPart,
+                   glm::dvec3 &facing, openvdb::Coord &carrier) {
     double total = 0.0, most = 0.0;
     int count = 0, mostAt = 27;
     glm::dvec3 l0(0.0), peak0(0.0), peak1(0.0), ramp0(0.0), ramp1(0.0), normal(0.0);
@@ -133,12 +120,10 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
                 const openvdb::Coord n = c.offsetBy(-dx, -dy, -dz);
-                const bool ownLobe = tracedIndex.getValue(n) < 0;
                 const auto [v, peakShare] =
-                    topo.patches[j].sharp && ownLobe
-                        ? ownFacesToward(source.edgeFaces, std::size_t(j), {dx, dy, dz}, source[j], optics)
-                    : ownLobe ? ShownToward{acrossFace(source[j], topo.patches[j].normal, optics)}
-                              : ShownToward{litFacesToward(n, {dx, dy, dz}, tracedIndex, traced, source[j])};
+                    topo.patches[j].sharp && tracedIndex.getValue(n) < 0
+                        ? ownFacesToward(source.edgeFaces, std::size_t(j), {dx, dy, dz}, source[j])
+                        : ShownToward{litFacesToward(n, {dx, dy, dz}, tracedIndex, traced, source[j])};
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
                 addRampPart(c.offsetBy(-dx, -dy, -dz), j, w * peakShare);  // of j's peaked lobe, its faces' to c
@@ -887,8 +872,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!nearCarriedAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
                 else if (!nearSurfaceAt.isValueOn(c)) continue;
-                else if (!facingAverage(topo, c, index, source, tracedIndex, traced, optics, S, rampPart, facing,
-                                        carrier))
+                else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, rampPart, facing, carrier))
                     continue;
                 else {
                     spreadCarriedSun(medium, topo, source, c, carrier, facing, index, density, limbSkins, S, rampPart);
