@@ -2,9 +2,9 @@
 (docs/benchmarks.md, spray-dense, stop 71).
 
 A traced voxel's value reads right against the Monte Carlo over its whole trilinear hat (spray-core), but the renderer
-blends those values trilinearly again: a twice-smoothed field. Per axis the tent of half-width h has variance h²/6, so
-its mean is m = f + (h²/12) f'' + O(h⁴) and the centre value is f ≈ m − (1/12) Σ_axes (m₊ + m₋ − 2m) (the discrete
-Laplacian of the stored values). Here the bake's six source grids of the snow voxels are scaled by f/m of
+blends those values trilinearly again: a twice-smoothed field. Per axis the tent of half-width h has variance
+h²/6, so its mean is m = f + (h²/12) f'' + O(h⁴) and the centre value is f ≈ m − (1/12) Σ_axes (m₊ + m₋ − 2m)
+(the discrete Laplacian of the stored values). Here the bake's six source grids of the snow voxels are scaled by f/m of
 firn_source (per channel, the voxels' lobes kept) and the case rendered baked against the suite's reference:
 "interior" sharpens only voxels whose six neighbours are snow, "all" every snow voxel (the air neighbours' carried
 face values in its Laplacian).
@@ -71,7 +71,8 @@ def main():
                     rescaled(path, p, sharpened_scale(source.astype(np.float64), snow, variant))
                 render = firncore.render_baked(p, case.optics, run.origins, run.directions, occluders=case.occluders)
                 s = bake_suite.scored(case, render[:, 1], run.mean[:, 1], seen)
-                line += f"  {label} mean {100 * s['mean']:.2f} % worst {100 * s['worst_signed']:+.0f} % bias {100 * s['bias']:+.2f} %"
+                line += (f"  {label} mean {100 * s['mean']:.2f} % worst {100 * s['worst_signed']:+.0f} % "
+                         f"bias {100 * s['bias']:+.2f} %")
             print(line, flush=True)
 
 
