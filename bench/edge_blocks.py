@@ -40,15 +40,22 @@ def peak_fill(case, origins, directions, seen):
     return out
 
 
-def kinds(case, peak, hits, seen):
-    """Per seen ray: "ramp only", "through the ball", or for boxes and slabs how many of the filled block's face planes
-    (the density's half level, half a voxel past the full voxels) lie within a voxel of where it reaches depth 1."""
+def kinds(case, peak, hits, seen, sun):
+    """Per seen ray: for the sprays' partly filled lumps "thin" or "thick" (the voxel where the ray reaches depth 1 has
+    σt h under or over 2), "lit" or "shadowed" (the sun's optical depth from there under or over 1); else "ramp only",
+    "through the ball", or for boxes and slabs how many of the filled
+    block's face planes (the density's half level, half a voxel past the full voxels) lie within a voxel of where it
+    reaches depth 1."""
     full = np.argwhere(case.density >= case.rho)
     low, high = full.min(0) - 0.5, full.max(0) + 0.5
     ball = case.name.startswith("ball")
     out = np.full(len(peak), "", dtype=object)
     for i in np.nonzero(seen)[0]:
-        if peak[i] < 0.99:
+        if case.name.startswith("spray"):
+            v = tuple(np.clip(np.rint(hits[i] / case.voxel).astype(int), 0, np.array(case.density.shape) - 1))
+            thick = case.sigma_t * case.density[v] / case.rho * case.voxel >= 2.0
+            out[i] = ("thick " if thick else "thin ") + ("lit" if sun[i] < 1.0 else "shadowed")
+        elif peak[i] < 0.99:
             out[i] = "ramp only"
         elif ball:
             out[i] = "through the ball"
@@ -122,7 +129,7 @@ def main():
     hits = bake_suite.depth_one_points(case, origins, directions, seen)
     sun = sun_depth(case, hits)
     peak = peak_fill(case, origins, directions, seen)
-    kind = kinds(case, peak, hits, seen)
+    kind = kinds(case, peak, hits, seen, sun)
     first = np.abs(np.nan_to_num(relative[0]))
     print(f"{case.name}: seed 0 mean {100 * runs[0]['mean']:.2f} %, worst {100 * runs[0]['worst_signed']:+.1f} %; "
           f"{(first > args.over).sum()} of {seen.sum()} pixels over {100 * args.over:.0f} %")
@@ -137,7 +144,10 @@ def main():
         where = seen & (kind == k)
         over = (first[where] > args.over).sum()
         print(f"  {k:<16} {where.sum():4d} pixels  mean |error| {100 * first[where].mean():5.1f} %  "
-              f"over {100 * args.over:.0f} %: {over:3d}  worst {100 * first[where].max():5.1f} %")
+              f"over {100 * args.over:.0f} %: {over:3d}  worst {100 * first[where].max():5.1f} %  "
+              f"seeds' mean |error| {100 * np.abs(ratio[:, where].mean(0) - 1.0).mean():5.1f} % "
+              f"(signed {100 * (ratio[:, where].mean(0) - 1.0).mean():+5.1f} %)  "
+              f"spread {100 * spread[where].mean():4.1f} %")
 
 
 if __name__ == "__main__":
