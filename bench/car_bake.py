@@ -16,6 +16,7 @@ side so that the shared machine's load cancels (issue 10 item 4's ratio).
 import argparse
 import os
 import shutil
+import statistics
 import subprocess
 import tempfile
 import time
@@ -86,6 +87,7 @@ def main():
     folder, repeats, seed = car_folder(args.folder), args.repeats, args.seed
     print(f"firncore {firncore.__version__}, car sample, {firncore.hardware_threads()} threads, FINAL quality")
     print("wall: seconds on the clock; cpu: processor seconds of all threads (on a busy machine wall > cpu / threads)")
+    pairs = []  # (car, slab) processor µs per active voxel
     for _ in range(repeats):
         load = os.getloadavg()[0]
         r = bake_measure.measure_fresh(bake_car, folder, seed)
@@ -108,6 +110,18 @@ def main():
         car_us, slab_us = 1e6 * r["cpu_seconds_total"] / voxels, 1e6 * slab["cpu_seconds_total"] / slab_voxels
         print(f"slab {slab_voxels} active voxels: cpu {slab['cpu_seconds_total']:.2f} s, {slab_us:.2f} us/voxel; "
               f"car / slab {car_us / slab_us:.2f}x", flush=True)
+        pairs.append((car_us, slab_us))
+    if len(pairs) > 1:
+        print(median_summary(pairs))
+
+
+def median_summary(pairs):
+    """The medians of (car, slab) processor µs per active voxel over the pairs, and their ratio: one pair's ratio
+    moves with the slab's few seconds on a shared machine, the medians' far less."""
+    car, slab = (statistics.median(p[i] for p in pairs) for i in (0, 1))
+    ratios = [c / s for c, s in pairs]
+    return (f"over {len(pairs)} pairs: car median {car:.2f} us/voxel, slab median {slab:.2f} us/voxel; "
+            f"car / slab of the medians {car / slab:.2f}x (pairs {min(ratios):.2f}-{max(ratios):.2f}x)")
 
 
 if __name__ == "__main__":
