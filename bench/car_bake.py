@@ -10,7 +10,9 @@ so a fresh clone with a build needs only the line above.
 
 Each bake reads a fresh copy of FOLDER's density (the core rewrites the file it bakes), and is followed by the slab
 of bench/bake_scaling.py at 1 M voxels: the car's processor µs per active voxel over the slab's, measured side by
-side so that the shared machine's load cancels (issue 10 item 4's ratio).
+side so that the shared machine's load cancels (issue 10 item 4's ratio). With repeats > 1 the run ends with the
+medians over the pairs and their ratio: one pair's ratio moved by 20 % between consecutive pairs on stop 73's
+machine (docs/benchmarks.md, lead-73).
 """
 
 import argparse
@@ -118,7 +120,7 @@ def main():
 def median_summary(pairs):
     """The medians of (car, slab) processor µs per active voxel over the pairs, and their ratio: one pair's ratio
     moves with the slab's few seconds on a shared machine, the medians' far less."""
-    car, slab = (statistics.median(p[i] for p in pairs) for i in (0, 1))
+    car, slab = statistics.median(c for c, _ in pairs), statistics.median(s for _, s in pairs)
     ratios = [c / s for c, s in pairs]
     return (f"over {len(pairs)} pairs: car median {car:.2f} us/voxel, slab median {slab:.2f} us/voxel; "
             f"car / slab of the medians {car / slab:.2f}x (pairs {min(ratios):.2f}-{max(ratios):.2f}x)")
