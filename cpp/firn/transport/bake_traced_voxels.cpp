@@ -238,8 +238,8 @@ bool litFace(const Scene &scene, const glm::dvec3 &centre, int f, const SourceEs
 
 // Where a face lies in a flat layer: at least this many of its voxel's 8 neighbours in the face's plane hold the
 // same face, their density within kPooledDensityRatio (a layer's rim has 5). Elsewhere (a lump's thin part,
-// spray_dense: 20.2 % over 4 seeds with all its faces so, against 19.2 %) the face's air neighbour carries the
-// whole collisions' source, fitted to its moments, and the voxel keeps its own.
+// spray_dense: 20.2 % over 4 seeds with all its faces so, against 19.2 %) the face's air neighbour carries its own
+// share of the collisions' source, fitted to its moments, and the voxel keeps its own value (addFaceSources).
 constexpr int kMinLayerNeighbours = 5;
 
 // The estimates' source towards each direction pooled over the face's layer neighbours (kMinLayerNeighbours),
@@ -536,10 +536,15 @@ FacesTraced addFaceSources(const Scene &scene, const SnowTopology &topo, const s
             const DirectionWeights visibility = visibilityFrom(medium, marcher, voxels[v], directions);
             FaceSources &faces = traced.faces[traced.facesAt[v]];
             for (std::size_t j = first; j < last; ++j) {
-                const SourceEstimate all = whole(estimates[j]);
+                // The air carries what its hat holds of the collisions, the shallow part cameras cross in the ramp,
+                // outside a flat layer too: the whole collisions' source (the voxel's share, its own value's, in it)
+                // read grazing rays bright, lit ones +17 % (spray_dense over seeds 0-7 13.60 -> 13.25 % per block;
+                // docs/benchmarks.md, spray-rims 2026-12-04).
+                const SourceEstimate &carried = estimates[j].carried;
                 faces.source[jobs[j].second] = inLayer[j]
-                                                   ? tracedSourceByDirection(estimates[j].carried, directions, visibility, g)
-                                                   : tracedSourceByMoments(all, g);
+                                                   ? tracedSourceByDirection(carried, directions, visibility, g)
+                                                   : tracedSourceByMoments(carried, g);
+                const SourceEstimate all = whole(estimates[j]);
                 faces.lit |= unsigned(litFace(scene, medium.voxelCentre(voxels[v]), jobs[j].second, all))
                              << jobs[j].second;
             }
