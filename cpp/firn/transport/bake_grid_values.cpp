@@ -868,6 +868,10 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 glm::dvec3 facing(0.0);  // the carrying surfaces' normal
                 openvdb::Coord carrier;  // and the surface voxel facing c most
                 RampOfThickConvexSnow rampOfThickConvexSnow(topo, c, carrier, index, limbSkins, density, medium);
+                // A traced carrier's value is the Monte Carlo's over its hat, the ramp's sky and limb light in it,
+                // which skyInRamp and limbCarriedInRamp add to the half-space surface's (spray_dense over seeds 0-7
+                // 13.31 -> 13.25 % per block; docs/benchmarks.md, spray-rims 2026-12-04).
+                bool tracedCarrier = false;
                 if (t >= 0) S = ownValue(traced, t);
                 else if (!nearCarriedAt.isValueOn(c) || index.getValue(c) >= 0) continue;
                 else if (faceCarried(c, tracedIndex, traced, S)) {}
@@ -875,6 +879,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                 else if (!facingAverage(topo, c, index, source, tracedIndex, traced, S, rampPart, facing, carrier))
                     continue;
                 else {
+                    tracedCarrier = tracedIndex.getValue(carrier) >= 0;
                     spreadCarriedSun(medium, topo, source, c, carrier, facing, index, density, limbSkins, S, rampPart);
                     if (nearPeakAt.isValueOn(c)) {
                         forwardPeakThrough(scene, topo, c, index, tracedIndex, source, peaksAt, marcher, sunAt, facing,
@@ -883,7 +888,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
                                     settings.seed, std::uint64_t(l), rampPart, S);
                     }
                 }
-                if (!gathering) {
+                if (!gathering && !tracedCarrier) {
                     skyInRamp(scene, c, facing, index, rampOfThickConvexSnow, marcher, S);
                     limbCarriedInRamp(scene, topo, c, carrier, facing, index, density, marcher, sunAt, limbSkins, S);
                 }
