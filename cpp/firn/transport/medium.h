@@ -163,9 +163,13 @@ class Medium {
         // The support's leaf holding `cell` (null where none), the last one kept: a walk takes several steps in each
         // leaf, and the accessor's own cache sits behind a call and three levels' checks.
         using SupportLeaf = openvdb::BoolTree::LeafNodeType;
+        // Compared and kept coordinate by coordinate: a Coord built on the stack and copied in one 8-byte load
+        // stalled each change of leaf on the two 4-byte stores it read (store forwarding).
         const SupportLeaf *supportLeaf(const openvdb::Coord &cell) {
-            const openvdb::Coord origin = cell & ~int(SupportLeaf::DIM - 1);
-            if (origin != leafOrigin_) leafOrigin_ = origin, leaf_ = support_.probeConstLeaf(cell);
+            constexpr int kOrigin = ~int(SupportLeaf::DIM - 1);
+            const int x = cell.x() & kOrigin, y = cell.y() & kOrigin, z = cell.z() & kOrigin;
+            if (x != leafOrigin_.x() || y != leafOrigin_.y() || z != leafOrigin_.z())
+                leafOrigin_.reset(x, y, z), leaf_ = support_.probeConstLeaf(cell);
             return leaf_;
         }
 
