@@ -33,6 +33,7 @@ import pyopenvdb
 import firncore
 
 SUN_ELEVATION = math.radians(30.0)
+CACHE = os.path.join(tempfile.gettempdir(), "firn_bake_suite")  # the references, by case
 MIXED_PATHS = 32768  # the mixed render's paths per block: its noise under 0.5 point of every case's mean (mixed_noise.py)
 
 
@@ -430,7 +431,7 @@ def traced_how(row):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--cases", default="", help="comma-separated case names (default: all)")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"),
+    parser.add_argument("--cache", default=CACHE,
                         help="folder caching the Monte Carlo reference per case")
     parser.add_argument("--fresh", action="store_true", help="recompute the reference")
     parser.add_argument("--markdown", action="store_true")

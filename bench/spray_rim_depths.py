@@ -43,10 +43,9 @@ def main():
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     case = bake_suite.case(args.case)
-    cache = os.path.join(tempfile.gettempdir(), "firn_bake_suite")
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "s.vdb")
-        run = bake_suite.baked_case(case, path, cache, "FINAL", args.seed)
+        run = bake_suite.baked_case(case, path, bake_suite.CACHE, "FINAL", args.seed)
         seen = run.tau >= 1.0
         render = firncore.render_baked(path, case.optics, run.origins, run.directions, occluders=case.occluders)
         s = bake_suite.scored(case, render[:, 1], run.mean[:, 1], seen)

@@ -18,21 +18,10 @@ import numpy as np
 
 import bake_suite
 import firncore
+from grazing_ceiling import exit_cosines
 from suite_regions import sun_depth
 
 BINS = [(-1.0, 0.25), (0.25, 0.5), (0.5, 0.75), (0.75, 1.01)]
-
-
-def outward_cosine(case, hits, directions, seen):
-    """Per seen ray: the outward normal at its depth-1 point (minus the density's gradient) dotted with the direction
-    towards the camera; NaN for the others."""
-    mu = np.full(len(seen), np.nan)
-    for i in np.nonzero(seen)[0]:
-        p = hits[i] / case.voxel
-        grad = np.array([bake_suite.trilinear(case.density, (p + 0.5 * e)[None])[0] -
-                         bake_suite.trilinear(case.density, (p - 0.5 * e)[None])[0] for e in np.eye(3)])
-        mu[i] = np.dot(grad, directions[i]) / max(np.linalg.norm(grad), 1e-30)
-    return mu
 
 
 def main():
@@ -41,19 +30,18 @@ def main():
     parser.add_argument("--seeds", type=int, default=2)
     args = parser.parse_args()
     case = bake_suite.case(args.case)
-    cache = os.path.join(tempfile.gettempdir(), "firn_bake_suite")
     relative = []
     with tempfile.TemporaryDirectory() as folder:
         for seed in range(args.seeds):
             path = os.path.join(folder, "s.vdb")
-            run = bake_suite.baked_case(case, path, cache, "FINAL", seed)
+            run = bake_suite.baked_case(case, path, bake_suite.CACHE, "FINAL", seed)
             render = firncore.render_baked(path, case.optics, run.origins, run.directions, occluders=case.occluders)
             relative.append(render[:, 1] / np.maximum(run.mean[:, 1], 1e-30) - 1.0)
     relative = np.array(relative)
     seen = run.tau >= 1.0
     hits = bake_suite.depth_one_points(case, run.origins, run.directions, seen)
     sun = sun_depth(case, hits)
-    mu = outward_cosine(case, hits, run.directions, seen)
+    mu = exit_cosines(case, run.origins, run.directions, seen)[0]
     view = np.arange(len(seen)) // case.pixels ** 2
     print(f"{case.name}, seeds 0-{args.seeds - 1}: per block the seeds' mean error, by mu at depth 1 and the sun")
     for lit in (True, False):
