@@ -10,8 +10,13 @@ Per kind of surface voxel (crest, slope, trough of the bump's phase; lit or self
 cut sides), the bake's intake over the marched intake.
 
     git apply bench/sun_intake_switch.diff && cmake --build build --target firncore
-    PYTHONPATH=build/python:bench python3 bench/sun_intake_probe.py [--flat]
+    PYTHONPATH=build/python:bench python3 bench/sun_intake_probe.py [--flat] [--reduced] [--against BUILD]
     (the switch's FIRN_PROBE_SUNSCALE=x multiplies every patch's sun: the sensitivity test in docs/benchmarks.md)
+
+--reduced: the oracle's rays lose the similarity beam's sigma_tr, as the bake's beams do (what a crest's ramp scatters
+forwards goes on to the next bump); --against BUILD: another firncore built with the switch (e.g. main's, with this
+build carrying bench/sun_intake_marched.diff too), its intake per kind printed beside (docs/benchmarks.md,
+bumpy-intake).
 """
 
 import argparse
@@ -29,9 +34,9 @@ import bake_suite
 import bumpy_blocks
 
 
-def baked_intake(case):
+def baked_intake(case, build=None):
     """Per surface voxel (i, j, k): the bake's green sunIn (W), from the switch's print in a child process (sun only,
-    no plate)."""
+    no plate); `build`: the folder holding that firncore (default: this process's PYTHONPATH)."""
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "layer.vdb")
         bake_suite.write_density(path, case.density, case.voxel)
@@ -44,7 +49,9 @@ def baked_intake(case):
                 "firncore.bake(sys.argv[1], c.optics, suns=c.suns(), sky=None, occluders=c.occluders, "
                 "quality='FINAL', seed=0)")
         err = subprocess.run([sys.executable, "-c", code, path, pickled], capture_output=True, text=True,
-                             env=dict(os.environ, FIRN_PROBE_SUNIN="1")).stderr
+                             env=dict(os.environ, FIRN_PROBE_SUNIN="1",
+                                      **({"PYTHONPATH": build + os.pathsep + os.path.dirname(__file__)} if build
+                                         else {}))).stderr
     out = {}
     for line in err.splitlines():
         if line.startswith("VOX "):
@@ -53,8 +60,9 @@ def baked_intake(case):
     return out
 
 
-def marched_intake(case, surface, spacing=0.001, step=0.0005):
-    """Per surface voxel: the sun's power (W) its rays leave in the snow, by the rule in the module's text."""
+def marched_intake(case, surface, spacing=0.001, step=0.0005, reduced=False):
+    """Per surface voxel: the sun's power (W) its rays leave in the snow, by the rule in the module's text; `reduced`:
+    the similarity beam's extinction (1 - omega g) sigma_t, green, as the bake's beams, instead of sigma_t."""
     sun = np.array([math.cos(bake_suite.SUN_ELEVATION), 0.0, math.sin(bake_suite.SUN_ELEVATION)])
     across = np.array([-sun[2], 0.0, sun[0]])
     n = np.array(case.density.shape)
@@ -67,7 +75,7 @@ def marched_intake(case, surface, spacing=0.001, step=0.0005):
     t = np.arange(0.0, 1.2, step)
     keys = np.array(list(surface))
     out = dict.fromkeys(surface, 0.0)
-    sigma = case.sigma_t / case.rho
+    sigma = case.sigma_t / case.rho * ((1.0 - case.omega[1] * case.g) if reduced else 1.0)
     for chunk in np.array_split(starts, max(1, len(starts) // 2000)):
         p = chunk[:, None, :] - t[None, :, None] * sun
         p = np.where(p[:, :, 2:3] > 0.005, p, 1e3)  # the ground stops the ray (1e3: outside the grid)
@@ -86,6 +94,9 @@ def marched_intake(case, surface, spacing=0.001, step=0.0005):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--flat", action="store_true", help="the layer flat (6 voxels) instead of bumpy")
+    parser.add_argument("--reduced", action="store_true", help="the oracle's rays lose sigma_tr, not sigma_t")
+    parser.add_argument("--against", metavar="BUILD", help="another firncore's folder (built with the switch): its "
+                        "intake per kind beside this one's (bench/sun_intake_marched.diff against main)")
     args = parser.parse_args()
     case = copy.copy(bake_suite.case("bumpy_plate"))
     if args.flat:
@@ -94,7 +105,8 @@ def main():
         fill[:, :, 0] = 0.0
         case.density = fill * case.rho
     baked = baked_intake(case)
-    marched = marched_intake(case, baked)
+    other = baked_intake(case, args.against) if args.against else None
+    marched = marched_intake(case, baked, reduced=args.reduced)
     keys = np.array(list(baked))
     b = np.array([baked[k] for k in baked])
     m = np.array([marched[k] for k in baked])
@@ -111,7 +123,8 @@ def main():
     for k in sorted(set(kind)):
         w = kind == k
         print(f"  {k:<22} {w.sum():5d} voxels  bake {b[w].sum():.5f} W  marched {m[w].sum():.5f} W  "
-              f"bake/marched {b[w].sum() / max(m[w].sum(), 1e-30):.3f}")
+              f"bake/marched {b[w].sum() / max(m[w].sum(), 1e-30):.3f}" +
+              (f"  against {sum(other.get(tuple(q), 0.0) for q in keys[w]):.5f} W" if other else ""))
 
 
 if __name__ == "__main__":
