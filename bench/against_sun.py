@@ -57,7 +57,7 @@ def main():
     parser.add_argument("--cases", default="")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--blocks", action="store_true", help="list the limb ring's blocks (view (180, 0))")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=S.CACHE)
     args = parser.parse_args()
     chosen = [c for c in S.cases() if not args.cases or c.name in args.cases.split(",")]
     total = 0.0

@@ -105,7 +105,7 @@ def write_without_peaks(path, out):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--case", default="ball_issue")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=S.CACHE)
     parser.add_argument("--finer", action="store_true")
     parser.add_argument("--flat", action="store_true")
     args = parser.parse_args()

@@ -81,7 +81,7 @@ def main():
     parser.add_argument("--case", default="ball_issue", choices=sorted(RADIUS))
     parser.add_argument("--view", type=int, default=2, help="index into the case's views (2: against the sun)")
     parser.add_argument("--photons", type=int, default=3000)
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     args = parser.parse_args()
     case = bake_suite.case(args.case)
     radius, channel = RADIUS[case.name], 1

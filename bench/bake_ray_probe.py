@@ -61,7 +61,7 @@ def classes(case, seeds):
     rim = np.array([first_half_density(case, o, d) is None for o, d in zip(origins, directions)])[seen]
     view = (np.arange(len(tau)) // case.pixels ** 2)[seen]
     with tempfile.TemporaryDirectory() as folder:
-        cache = os.path.join(tempfile.gettempdir(), "firn_bake_suite")
+        cache = bake_suite.CACHE
         runs = [bake_suite.run_case(case, folder, cache, seed=s)["relative"] for s in range(seeds)]
     relative = np.array(runs)[:, :, 1]  # seeds x seen rays, channel G
     for name, mask in (("rim", rim), ("core", ~rim)):

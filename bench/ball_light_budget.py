@@ -92,7 +92,7 @@ def main():
     parser.add_argument("--maps", action="store_true",
                         help="per view, the pixel maps of e, e_sun, e_sky and the sun's parts")
     parser.add_argument("--parts-cache", default=os.path.join(tempfile.gettempdir(), "firn_light_budget"))
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     args = parser.parse_args()
     case = bake_suite.case(args.case)
     if args.voxel > 0.0:  # the same ball and snow on other voxels; the reference: the two lights' runs summed

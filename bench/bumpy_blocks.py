@@ -86,8 +86,8 @@ def uncut(case, origins, directions, seen, cache):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--seeds", type=int, default=4)
-    parser.add_argument("--list", action="store_true", help="every block over 10 %")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--list", action="store_true", help="every block over 10 %%")
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     parser.add_argument("--uncut", action="store_true", help="the same blocks on a layer that does not end")
     parser.add_argument("--uncut-cache", default=os.path.join(tempfile.gettempdir(), "firn_bumpy_uncut"))
     args = parser.parse_args()

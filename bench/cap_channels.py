@@ -25,7 +25,7 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--cases", default="ball_rgb")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=S.CACHE)
     args = parser.parse_args()
     for case in [c for c in S.cases() if c.name in args.cases.split(",")]:
         with tempfile.TemporaryDirectory() as folder:

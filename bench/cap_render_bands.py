@@ -91,7 +91,7 @@ def main():
     parser.add_argument("--samples", type=int, default=0,
                         help="Monte Carlo paths per ray: the core's truth over the same rays and bands (0: none)")
     parser.add_argument("--suite", action="store_true", help="the suite's own views against its cached references")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bs.CACHE)
     args = parser.parse_args()
     if args.suite:
         suite_views(bs.case(args.case), args)

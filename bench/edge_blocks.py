@@ -100,7 +100,7 @@ def main():
     parser.add_argument("--case", default="box_sharp")
     parser.add_argument("--seeds", type=int, default=2)
     parser.add_argument("--over", type=float, default=0.10, help="|relative error| listed (the suite's goal: 0.10)")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     parser.add_argument("--scan", default="", help="VIEW,ROW,COL: scan that block's ray across the image")
     parser.add_argument("--axis", default="u", choices=("u", "v"))
     parser.add_argument("--paths", type=int, default=4096, help="Monte Carlo paths per ray of the scan")

@@ -424,7 +424,7 @@ def main():
     parser.add_argument("--dump", help="a folder: per case NAME.npz of the blocks' reference, baked and limb-darkened "
                                        "radiances (and the broad lobe's alone), mu, mu0, seen and the depth-one "
                                        "points (limb-rule)")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=S.CACHE)
     args = parser.parse_args()
     ceilings = [float(x) for x in args.ceilings.split(",")]
     amplitudes = [1.0] if args.derived else [float(x) for x in args.amplitudes.split(",")]

@@ -21,7 +21,7 @@ def main():
     parser.add_argument("--paths", type=int, default=256, help="the mixed render's paths per block")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--regions", action="store_true")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=S.CACHE)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         for case in [c for c in S.cases() if c.name in args.cases.split(",")]:

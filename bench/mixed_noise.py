@@ -38,7 +38,7 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--cases", default="", help="comma-separated case names (default: all with thin snow scattered)")
     parser.add_argument("--paths", default="1024,2048,4096,8192,16384", help="paths per block of the renders")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=S.CACHE)
     args = parser.parse_args()
     counts = [int(x) for x in args.paths.split(",")]
     chosen = [c for c in S.cases() if not args.cases or c.name in args.cases.split(",")]

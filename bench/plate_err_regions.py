@@ -102,7 +102,7 @@ def light_arguments(parser):
     """baked_against_lights' options: --samples, --cache, --suite-cache, --lights."""
     parser.add_argument("--samples", type=int, default=2048)
     parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_plate_err"))
-    parser.add_argument("--suite-cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--suite-cache", default=bs.CACHE)
     parser.add_argument("--lights", default="full,sun,sky")
 
 

@@ -49,7 +49,7 @@ def baked_and_reference(case, folder, origins, directions):
     path = os.path.join(folder, case.name + ".vdb")
     bs.write_density(path, case.density, case.voxel)
     reference, _, _ = bs.reference(case, path, origins, directions,
-                                   os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+                                   bs.CACHE)
     firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders, quality="FINAL",
                   seed=0)
     return path, firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders), reference

@@ -84,7 +84,7 @@ def suite_oracle():
         path = os.path.join(folder, "bumpy.vdb")
         bs.write_density(path, case.density, case.voxel)
         reference = bs.reference(case, path, origins, directions,
-                                 os.path.join(tempfile.gettempdir(), "firn_bake_suite"))[0]
+                                 bs.CACHE)[0]
         firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
                       quality="FINAL", seed=0)
         for which in ("none", "above", "across", "all"):

@@ -191,7 +191,7 @@ def main():
     parser.add_argument("--g", type=float, help="the case's anisotropy replaced")
     parser.add_argument("--sun", type=float, help="the case's sun irradiance replaced (0: the sky alone)")
     parser.add_argument("--by-exit", default="", help="cases: their blocks' errors by exit cosine")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     parser.add_argument("--side", action="store_true", help="--exits onto the -x side (angles from its plane)")
     args = parser.parse_args()
     if args.side_air:

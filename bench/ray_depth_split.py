@@ -54,7 +54,7 @@ def main():
     parser.add_argument("--region", default="lit & core", help="a numpy expression of lit, core (boolean per pixel)")
     parser.add_argument("--seed", type=int, default=0, help="the bake's")
     parser.add_argument("--samples", type=int, default=4096, help="Monte Carlo paths per point")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     args = parser.parse_args()
     case = bake_suite.case(args.case)
     origins, directions, tau = bake_suite.views(case)

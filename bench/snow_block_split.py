@@ -89,7 +89,7 @@ def main():
     parser.add_argument("--pixels", default="40,47", help="blocks within the view, row-major from the bottom")
     parser.add_argument("--seed", type=int, default=0, help="the bake's")
     parser.add_argument("--samples", type=int, default=2048, help="Monte Carlo paths per point")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     parser.add_argument("--exits", action="store_true", help="the sun alone leaving the limb, by direction")
     args = parser.parse_args()
     case = bake_suite.case(args.case)

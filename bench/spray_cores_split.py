@@ -38,7 +38,7 @@ def main():
         path = os.path.join(folder, case.name + ".vdb")
         bake_suite.write_density(path, case.density, case.voxel)
         reference, _, _ = bake_suite.reference(case, path, origins, directions,
-                                               os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+                                               bake_suite.CACHE)
         if args.paths:
             os.environ["FIRN_SC_PATHS"] = str(args.paths)
         firncore.bake(path, case.optics, suns=case.suns(), sky=case.skies(), occluders=case.occluders,

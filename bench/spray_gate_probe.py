@@ -24,7 +24,7 @@ import firncore
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--cases", default="spray_dense,spray_lumps")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     parser.add_argument("--seeds", default="0", help="comma-separated bake seeds")
     parser.add_argument("--bounds", default="0,1024", help="FIRN_LUMP values: a lump's sum of (sigma_tr h)^3")
     parser.add_argument("--bounces", default="32,0", help="the renderer's volume bounces (0: unlimited)")

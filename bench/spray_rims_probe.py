@@ -210,7 +210,7 @@ def main():
     parser.add_argument("--overlap", action="store_true",
                         help="also render the grids with other air beside snow holding its snow's values (overlap)")
     parser.add_argument("--save", default="", help="an npz of the per-pixel renders, reference, shares and regions")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     args = parser.parse_args()
     case = bake_suite.case(args.case)
     origins, directions, tau = bake_suite.views(case)

@@ -182,7 +182,7 @@ def main():
                         "(0, 60)) instead of the shadowed thick blocks of (180, 0)")
     parser.add_argument("--check-rays", type=int, default=0, help="only S's quadrature along the rays, this many "
                         "points per ray, against the reference")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     args = parser.parse_args()
     case, origins, directions, tau, seen, lit, core, thin, views = case_regions()
     rays = np.nonzero(seen & lit & core & (views == args.lit_cores) if args.lit_cores >= 0 else

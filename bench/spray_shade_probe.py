@@ -203,7 +203,7 @@ def main():
     parser.add_argument("--share", type=float, default=0.9, help="the voxels holding this share of the weight")
     parser.add_argument("--no-rays", action="store_true", help="only the voxel centres")
     parser.add_argument("--no-voxels", action="store_true", help="only the points along the rays")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     args = parser.parse_args()
     case, origins, directions, tau, seen, lit, core, thin, views = case_regions()
     against = seen & ~lit & (core | ~thin) & (views == 2)

@@ -31,7 +31,7 @@ ratio = d["mc"][:, 1] / np.maximum(d["baked"][:, 1], 1e-30)
 n = np.array(case.density.shape)
 with tempfile.TemporaryDirectory() as folder:
     path = os.path.join(folder, "s.vdb")
-    run = bake_suite.baked_case(case, path, os.path.join(tempfile.gettempdir(), "firn_bake_suite"), "FINAL", 0)
+    run = bake_suite.baked_case(case, path, bake_suite.CACHE, "FINAL", 0)
     def show(p, label):
         b = firncore.render_baked(p, case.optics, run.origins[against], run.directions[against], occluders=case.occluders)
         m, _ = firncore.render_scattering_where_thin(p, case.optics, run.origins[against], run.directions[against],

@@ -54,7 +54,7 @@ def main():
     args = parser.parse_args()
     case = bake_suite.case(args.case)
     snow = case.density > 0.0
-    cache = os.path.join(tempfile.gettempdir(), "firn_bake_suite")
+    cache = bake_suite.CACHE
     for seed in (int(s) for s in args.seeds.split(",")):
         with tempfile.TemporaryDirectory() as folder:
             path = os.path.join(folder, "s.vdb")

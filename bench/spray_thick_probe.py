@@ -129,7 +129,7 @@ def main():
     parser.add_argument("--segments", type=int, default=0,
                         help="seed 0: where along the rays the error arises, Monte Carlo of this many paths from "
                              "optical depths 0.3, 1, 3 (spray_rims_probe.segments)")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     args = parser.parse_args()
     case, origins, directions, tau, seen, lit, core, thin, views = case_regions()
     runs = renders(case, args.seeds, args.mixed, args.cache, args.save, args.load)

@@ -68,7 +68,7 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--case", default="spray_dense")
     parser.add_argument("--seeds", type=int, default=4)
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     parser.add_argument("--mixed", type=int, default=0, help="paths per block of the mixed render (0: baked only)")
     args = parser.parse_args()
     if args.seeds < 2:

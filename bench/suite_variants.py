@@ -29,7 +29,7 @@ def main():
     parser.add_argument("--seeds", type=int, default=8)
     parser.add_argument("--first", type=int, default=0, help="the first seed")
     parser.add_argument("--runs", default=os.path.join(tempfile.gettempdir(), "firn_suite_variants"))
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     args = parser.parse_args()
     if args.seeds < 2:
         parser.error("--seeds must be 2 or more (the spread across seeds)")

@@ -49,7 +49,7 @@ def main():
     parser.add_argument("--traced-only", action="store_true", help="scatter only in voxels the bake traces")
     parser.add_argument("--scales", default=str(firncore.SCATTER_SCALE),
                         help="the shares' voxels in density voxels (1: the density's own)")
-    parser.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "firn_bake_suite"))
+    parser.add_argument("--cache", default=bake_suite.CACHE)
     args = parser.parse_args()
     print(f"firncore {firncore.__version__}, {firncore.hardware_threads()} threads; per case: mean, worst, bias, "
           "per-view bias, render cost (wall seconds per camera ray over the threads)")
