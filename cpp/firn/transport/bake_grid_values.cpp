@@ -119,6 +119,9 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 const int k = (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);  // blockOffset(k): (dx, dy, dz)
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
+                ++count;
+                // Facing away from c, it weighs nothing: its values are not read (each a cache miss).
+                if (w == 0.0) continue;
                 const openvdb::Coord n = c.offsetBy(-dx, -dy, -dz);
                 const auto [v, peakShare] =
                     topo.patches[j].sharp && tracedIndex.getValue(n) < 0
@@ -128,7 +131,7 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
                 addRampPart(c.offsetBy(-dx, -dy, -dz), j, w * peakShare);  // of j's peaked lobe, its faces' to c
                 normal += w * topo.patches[j].normal;
-                total += w, ++count;
+                total += w;
             }
     if (count == 0) return false;
     facing = glm::length(normal) > 0.0 ? glm::normalize(normal) : normal;
