@@ -120,7 +120,7 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
                     most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
                 ++count;
-                // Facing away from c, it weighs nothing: its values are not read (each a cache miss).
+                // Not facing c (w 0), it adds nothing but its count: its values are not read (each a cache miss).
                 if (w == 0.0) continue;
                 const openvdb::Coord n = c.offsetBy(-dx, -dy, -dz);
                 const auto [v, peakShare] =
