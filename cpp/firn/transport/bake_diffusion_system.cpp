@@ -110,11 +110,6 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     sys.A.coord = std::shared_ptr<const std::vector<openvdb::Coord>>(std::shared_ptr<void>(), &topo.coord);
     sys.A.neighbour = std::shared_ptr<const Stencil<float>::Neighbours>(std::shared_ptr<void>(), &topo.link);
     sys.A.conductance.resize(n), sys.A.diag.resize(n), sys.remainder.resize(n);
-    // A sun's way is the same at every face: its six faces' cosines (faceCosineToBeam's, which reads no point for a
-    // sun) once, not six calls a voxel each assembly.
-    std::vector<std::array<double, 6>> sunFaceCosines(scene.suns.size());
-    for (std::size_t s = 0; s < scene.suns.size(); ++s)
-        for (int f = 0; f < 6; ++f) sunFaceCosines[s][f] = faceCosineToBeam(scene, s, glm::dvec3(0.0), f, h);
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {
         Medium::Accessor density = medium.accessor();
@@ -212,8 +207,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
                     source += aPrime * skinRingIrradiance(ringGrowth, glm::dot(patch.normal, wPatch), Bs) * patch.area;
                 std::array<double, 6> flow{};  // W through each link and occluder face, positive inwards
                 for (int f = 0; f < 6; ++f) {
-                    const double mu =
-                        s < sunFaceCosines.size() ? sunFaceCosines[s][f] : faceCosineToBeam(scene, s, centre, f, h);
+                    const double mu = faceCosineToBeam(scene, s, centre, f, h);
                     const std::int32_t link = topo.link[i][f];
                     if (!SnowTopology::isFace(link)) {
                         flow[f] = h2 * mu * std::sqrt(Bv * double(beam.atVoxel[link][c]));

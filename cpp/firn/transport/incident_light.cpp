@@ -304,7 +304,7 @@ glm::dvec3 faceWayToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &ce
     return glm::normalize(atCentre + d2 / (d2 + a2) * (atFace - atCentre));
 }
 
-double faceCosineToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &centre, int f, double h) {
+double nearFaceCosineToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &centre, int f, double h) {
     const glm::dvec3 n = faceNormal(f);
     return glm::dot(n, faceWayToBeam(scene, b, centre, centre + 0.5 * h * n));
 }

@@ -178,8 +178,13 @@ glm::dvec3 towardsBeam(const Scene &scene, std::size_t b, const glm::dvec3 &poin
 // alone took ball_issue's bias under the 40 cm lamp from -4.7 to -8.3 %).
 glm::dvec3 faceWayToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &centre, const glm::dvec3 &face);
 // The cosine between face f's outward normal and that way at its centre, for the voxel of width h (m) centred at
-// `centre`: positive where beam b enters through the face.
-double faceCosineToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &centre, int f, double h);
+// `centre`: positive where beam b enters through the face. A sun's way is the same everywhere: its cosine is one
+// component of its direction (inline, since the assembly asks it six times a voxel).
+double nearFaceCosineToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &centre, int f, double h);
+inline double faceCosineToBeam(const Scene &scene, std::size_t b, const glm::dvec3 &centre, int f, double h) {
+    if (b < scene.suns.size()) return (f & 1) ? scene.suns[b].direction[f / 2] : -scene.suns[b].direction[f / 2];
+    return nearFaceCosineToBeam(scene, b, centre, f, h);
+}
 
 struct BeamSample {
     glm::vec3 irradiance{0.0f};  // W/m^2 on a plane facing the light
