@@ -24,32 +24,43 @@ BANDS = ((0.15, 1.01, "lit limb"), (-0.15, 0.15, "terminator"), (-0.35, -0.15, "
          (-1.01, -0.35, "dark face"))
 
 
-def against_regions(case, origins, directions, tau, mean, baked, broad, blocks=False):
+def limb_bands(case, origins, directions, tau):
+    """The view (180, 0)'s rays by the ball's normal at their optical depth 1 point: mu0 band and rim (tau under 30)
+    or core, as (band label, rim label, mask over the view's rays); the view's seen mask and its slice of the rays.
+    None where the case has no such view or is no ball."""
     per = case.pixels ** 2
     v = [i for i, view in enumerate(case.views) if tuple(view) == (180, 0)]
     if not v or not case.name.startswith("ball"):
-        return
+        return None
     s = slice(v[0] * per, (v[0] + 1) * per)
     seen = tau[s] >= 1.0
     hit = S.depth_one_points(case, origins[s], directions[s], seen)
     centre = (np.array(case.density.shape) - 1) / 2 * case.voxel
     normal = (hit - centre) / np.linalg.norm(hit - centre, axis=1)[:, None]
     mu0 = normal @ sun_towards()
+    bands = [(what, label, seen & (mu0 >= lo) & (mu0 < hi) & ((tau[s] < 30.0) == rim), lo, mu0)
+             for lo, hi, what in BANDS for rim, label in ((True, "rim"), (False, "core"))]
+    return s, seen, bands
+
+
+def against_regions(case, origins, directions, tau, mean, baked, broad, blocks=False):
+    split = limb_bands(case, origins, directions, tau)
+    if split is None:
+        return
+    s, seen, bands = split
     m, b, p = mean[s, 1], baked[s, 1], baked[s, 1] - broad[s, 1]
     missing = m[seen].sum() - b[seen].sum()
     print(f"    (180, 0): reference {m[seen].sum():.4f}, baked {b[seen].sum():.4f}, missing {missing:+.4f}")
-    for lo, hi, what in BANDS:
-        for rim, label in ((True, "rim"), (False, "core")):
-            k = seen & (mu0 >= lo) & (mu0 < hi) & ((tau[s] < 30.0) == rim)
-            if k.sum():
-                gap = m[k].sum() - b[k].sum()
-                print(f"      {what:<10} {label:<4} {k.sum():2d} blocks: reference {m[k].sum():.4f}, "
-                      f"baked {b[k].sum():.4f} ({b[k].sum() / m[k].sum() - 1:+6.1%}; peaked {p[k].sum():.4f}), "
-                      f"missing {gap:+.4f} ({gap / missing:+5.0%} of the view's)")
-                if blocks and rim and lo > -0.3:
-                    for j in np.nonzero(k)[0]:
-                        print(f"        block {j:2d}: tau {tau[s][j]:5.1f}, mu0 {mu0[j]:+.2f}, reference {m[j]:.4f}, "
-                              f"baked {b[j]:.4f} ({b[j] / m[j] - 1:+6.1%}; peaked {p[j]:.4f})")
+    for what, label, k, lo, mu0 in bands:
+        if k.sum():
+            gap = m[k].sum() - b[k].sum()
+            print(f"      {what:<10} {label:<4} {k.sum():2d} blocks: reference {m[k].sum():.4f}, "
+                  f"baked {b[k].sum():.4f} ({b[k].sum() / m[k].sum() - 1:+6.1%}; peaked {p[k].sum():.4f}), "
+                  f"missing {gap:+.4f} ({gap / missing:+5.0%} of the view's)")
+            if blocks and label == "rim" and lo > -0.3:
+                for j in np.nonzero(k)[0]:
+                    print(f"        block {j:2d}: tau {tau[s][j]:5.1f}, mu0 {mu0[j]:+.2f}, reference {m[j]:.4f}, "
+                          f"baked {b[j]:.4f} ({b[j] / m[j] - 1:+6.1%}; peaked {p[j]:.4f})")
 
 
 def main():

@@ -1,9 +1,14 @@
-"""A suite case's view against the sun split by light (docs/benchmarks.md, "ball-outflow"): the sun alone and the sky
-alone, each baked (FINAL, seed 0) and rendered against the core's Monte Carlo, the sun's single scattering exact
-(backlit_probe.single_scattering; the rest of the Monte Carlo's sun is its multiple scattering), summed over the
-view's pixels that cross optical depth 1, over the rim (total optical depth under 30) and the core.
+"""A suite case's view against the sun split by light (docs/benchmarks.md, "ball-outflow", "ball-back"): the sun alone
+and the sky alone, each baked (FINAL, seed 0) and rendered against the core's Monte Carlo, the sun's single scattering
+exact (backlit_probe.single_scattering; the rest of the Monte Carlo's sun is its multiple scattering), the baked sun's
+peaked lobes' part apart (its grids firn_source_peak* cleared); with --orders, the Monte Carlo's sun by order of
+scattering (render_scattering_where_thin scattering everywhere, no baked emission, at most that many bounces after the
+first scattering: 0 is single scattering, the exact one's check), summed over the view's pixels that cross optical depth
+1: all, the rim (total optical depth under 30) and the core, and for a ball's view (180, 0) by against_sun.py's bands
+(the ball's normal at the ray's optical depth 1 point: lit limb, terminator, dark limb, dark face; rim or core).
 
-    PYTHONPATH=build/python python3 bench/backlit_light_split.py [--case ball_issue] [--view 180,0] [--samples 4096]
+    PYTHONPATH=build/python:bench python3 bench/backlit_light_split.py [--case ball_issue] [--view 180,0]
+        [--samples 4096] [--orders 0,1,2,4]
 """
 
 import argparse
@@ -14,7 +19,8 @@ import numpy as np
 
 import bake_suite
 import firncore
-from backlit_probe import single_scattering
+from against_sun import limb_bands
+from backlit_probe import single_scattering, write_without_peaks
 
 
 def main():
@@ -22,7 +28,9 @@ def main():
     parser.add_argument("--case", default="ball_issue")
     parser.add_argument("--view", default="180,0", help="azimuth, elevation (deg)")
     parser.add_argument("--samples", type=int, default=4096, help="Monte Carlo paths per pixel")
+    parser.add_argument("--orders", default="", help="bounces after the first scattering, e.g. 0,1,2,4")
     args = parser.parse_args()
+    bounces = [int(b) for b in args.orders.split(",") if b]
     case = bake_suite.case(args.case)
     case.views = [tuple(int(x) for x in args.view.split(","))]
     origins, directions, tau = bake_suite.views(case)
@@ -37,15 +45,34 @@ def main():
             baked[name] = firncore.render_baked(path, case.optics, origins, directions)[:, 1]
             mc[name] = firncore.monte_carlo_radiance(path, case.optics, origins, directions, samples=args.samples,
                                                      seed=11, **kw)[0][:, 1]
+            if name == "sun":
+                write_without_peaks(path, path + ".broad.vdb")
+                broad = firncore.render_baked(path + ".broad.vdb", case.optics, origins, directions)[:, 1]
+                upto = {b: firncore.render_scattering_where_thin(path, case.optics, origins, directions, samples=args.samples,
+                                                                 seed=11, thin_depth=1e30, bounces=b, **kw)[0][:, 1]
+                        for b in bounces}
     once = case.sun * np.array([single_scattering(case, o, d) if s else 0.0
                                 for o, d, s in zip(origins, directions, seen)])
+    regions = [("all", "", seen), ("rim (tau < 30)", "", seen & (tau < 30)), ("core", "", seen & (tau >= 30))]
+    split = limb_bands(case, origins, directions, tau)
+    if split is not None:
+        regions += [(what, label, k) for what, label, k, _, _ in split[2] if k.sum()]
     print(f"{case.name}, view {args.view}, green, W/m^2/sr summed over the pixels; {args.samples} paths per pixel")
-    for label, m in (("all", seen), ("rim (tau < 30)", seen & (tau < 30)), ("core", seen & (tau >= 30))):
-        sun, sky = mc["sun"][m].sum(), mc["sky"][m].sum()
-        both = (baked["sun"][m] + baked["sky"][m]).sum() / (sun + sky) - 1
-        print(f"  {label:<15} {m.sum():3d} pixels: Monte Carlo sun {sun:.4f} (once {once[m].sum():.4f}, more "
-              f"{sun - once[m].sum():.4f}), sky {sky:.4f}; baked sun {baked['sun'][m].sum() / sun - 1:+.1%}, sky "
-              f"{baked['sky'][m].sum() / sky - 1:+.1%}, both {both:+.1%}")
+    print("  region               pixels | Monte Carlo: sun (once, more)          sky    | baked: sun (peaked)       "
+          "sky     | baked / MC: sun   sky   both  | missing: sun    sky")
+    for what, label, m in regions:
+        sun, sky, sun_b, sky_b = mc["sun"][m].sum(), mc["sky"][m].sum(), baked["sun"][m].sum(), baked["sky"][m].sum()
+        print(f"  {what + ' ' + label:<20} {m.sum():4d}   | {sun:.4f} ({once[m].sum():.4f}, {sun - once[m].sum():.4f})  "
+              f"{sky:.4f} | {sun_b:.4f} ({sun_b - broad[m].sum():.4f})  {sky_b:.4f} | "
+              f"{sun_b / sun - 1:+6.1%} {sky_b / sky - 1:+6.1%} {(sun_b + sky_b) / (sun + sky) - 1:+6.1%} | "
+              f"{sun - sun_b:+.4f} {sky - sky_b:+.4f}")
+    if bounces:
+        print("  the Monte Carlo's sun by order: the share of all orders in orders 1..n (n = bounces + 1), then the "
+              "baked sun's share")
+        for what, label, m in regions:
+            sun = mc["sun"][m].sum()
+            print(f"  {what + ' ' + label:<20} " + "  ".join(f"<={b + 1}: {upto[b][m].sum() / sun:5.3f}" for b in bounces)
+                  + f"  baked {baked['sun'][m].sum() / sun:5.3f} (peaked {(baked['sun'][m] - broad[m]).sum() / sun:5.3f})")
 
 
 if __name__ == "__main__":
