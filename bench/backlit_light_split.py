@@ -8,7 +8,10 @@ first scattering: 0 is single scattering, the exact one's check), summed over th
 (the ball's normal at the ray's optical depth 1 point: lit limb, terminator, dark limb, dark face; rim or core).
 
     PYTHONPATH=build/python:bench python3 bench/backlit_light_split.py [--case ball_issue] [--view 180,0]
-        [--samples 4096] [--orders 0,1,2,4]
+        [--samples 4096] [--orders 0,1,2,4] [--sharp]
+
+--sharp: the case's density thresholded at half its largest value (a staircase ball, no antialiased skin), both for
+the bake and the Monte Carlo: how much of the view's deficit the soft skin holds.
 """
 
 import argparse
@@ -29,10 +32,13 @@ def main():
     parser.add_argument("--view", default="180,0", help="azimuth, elevation (deg)")
     parser.add_argument("--samples", type=int, default=4096, help="Monte Carlo paths per pixel")
     parser.add_argument("--orders", default="", help="bounces after the first scattering, e.g. 0,1,2,4")
+    parser.add_argument("--sharp", action="store_true", help="the density thresholded at half its largest value")
     args = parser.parse_args()
     bounces = [int(b) for b in args.orders.split(",") if b]
     case = bake_suite.case(args.case)
     case.views = [tuple(int(x) for x in args.view.split(","))]
+    if args.sharp:
+        case.density = np.where(case.density >= 0.5 * case.density.max(), case.density.max(), 0.0)
     origins, directions, tau = bake_suite.views(case)
     seen = tau >= 1.0
     light = {"sun": dict(suns=case.suns()), "sky": dict(sky=case.skies())}
