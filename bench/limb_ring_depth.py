@@ -80,14 +80,14 @@ def main():
         at += n
         print(f"  {what} {label} ({n} rays), density at the starts (of full): "
               + " ".join(f"{x:.2f}" for x in f.mean(0)))
-        print("    from  " + "  ".join(f"{t:>3}: {m[:, j].sum():.4f} / {b[:, j].sum():.4f} "
+        print("    from   " + "  ".join(f"{t:>3}: {m[:, j].sum():.4f} / {b[:, j].sum():.4f} "
                                        f"({b[:, j].sum() / max(m[:, j].sum(), 1e-12) - 1:+6.1%})" for j, t in enumerate(DEPTHS)))
         sm = m[:, :-1] - attenuation * m[:, 1:]
         sb = b[:, :-1] - attenuation * b[:, 1:]
-        print("    segs  " + "  ".join(f"{a}-{c}: {sm[:, j].sum():.4f} / {sb[:, j].sum():.4f}"
+        print("    segs   " + "  ".join(f"{a}-{c}: {sm[:, j].sum():.4f} / {sb[:, j].sum():.4f}"
                                        for j, (a, c) in enumerate(zip(DEPTHS[:-1], DEPTHS[1:]))))
         opacity = 1 - attenuation
-        print("    source" + "  ".join(f"{a}-{c}: {sm[:, j].sum() / opacity[j] / n:.4f} / {sb[:, j].sum() / opacity[j] / n:.4f}"
+        print("    source " + "  ".join(f"{a}-{c}: {sm[:, j].sum() / opacity[j] / n:.4f} / {sb[:, j].sum() / opacity[j] / n:.4f}"
                                        for j, (a, c) in enumerate(zip(DEPTHS[:-1], DEPTHS[1:]))))
         for key, v in part.items():
             s = v[:, :-1] - attenuation * v[:, 1:]
