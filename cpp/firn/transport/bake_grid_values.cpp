@@ -387,9 +387,14 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     // sigma_t (1 - f)).
     const double forwardKept = optics.albedo.y * optics.g * optics.g;
     const glm::dvec3 centre = medium.voxelCentre(c);
-    glm::dvec3 p0(0.0), p1(0.0), ramp0(0.0), ramp1(0.0);
+    glm::dvec3 p0(0.0), p1(0.0);
     double total = 0.0;
-    std::array<std::pair<openvdb::Coord, double>, 124> taken;  // the peaks taken (of the 124 offsets) and weights
+    struct Taken {
+        openvdb::Coord from;
+        std::int32_t j;  // its unknown
+        double w;
+    };
+    std::array<Taken, 124> taken;  // the peaks taken (of the 124 offsets) and their weights
     std::size_t takenCount = 0;
     for (const Offset &o : offsets) {
         const openvdb::Coord from = c + o.from;
@@ -403,15 +408,17 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
         if (along <= 0.0) continue;
         const double w = along * along * facing;
         p0 += w * glm::dvec3(v.peak0), p1 += w * glm::dvec3(v.peak1), total += w;
-        const Source r = source.rampPeaks.with(BroadLobe{}, std::size_t(j));
-        ramp0 += w * glm::dvec3(r.peak0), ramp1 += w * glm::dvec3(r.peak1);
-        taken[takenCount++] = {from, w};
+        taken[takenCount++] = {from, j, w};
     }
     if (!(total > 0.0) || (p0.x + p0.y + p0.z) / total <= 2.0 * double(S.peak0.x + S.peak0.y + S.peak0.z)) return;
+    // The peaks' ramp parts only where they are carried: most ramp voxels near a peak end above.
+    glm::dvec3 ramp0(0.0), ramp1(0.0);
     double crossing = 0.0;
-    for (std::size_t k = 0; k < takenCount; ++k)
-        crossing += taken[k].second * rampCrossing(medium, medium.voxelCentre(taken[k].first), centre, forwardKept,
-                                                   marcher);
+    for (std::size_t k = 0; k < takenCount; ++k) {
+        const Source r = source.rampPeaks.with(BroadLobe{}, std::size_t(taken[k].j));
+        ramp0 += taken[k].w * glm::dvec3(r.peak0), ramp1 += taken[k].w * glm::dvec3(r.peak1);
+        crossing += taken[k].w * rampCrossing(medium, medium.voxelCentre(taken[k].from), centre, forwardKept, marcher);
+    }
     double arriving = 0.0, outside = 0.0;  // W/m^2 (green): delta-scaled through the snow, and outside it
     for (std::size_t b = 0; b < scene.suns.size(); ++b) {
         const SunLight &sun = scene.suns[b];
