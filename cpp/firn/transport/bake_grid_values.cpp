@@ -280,13 +280,25 @@ class QuarterPointSun {
 template <typename T, typename F>
 T hatAverage(const openvdb::Coord &c, Medium::ColumnMarcher &marcher, const F &f) {
     constexpr int kPoints[4] = {-3, -1, 1, 3};  // quarter voxels from c's centre, per axis
+    const auto point = [&](int k) {  // point k, x fastest
+        return openvdb::Coord(4 * c.x() + kPoints[k % 4], 4 * c.y() + kPoints[k / 4 % 4], 4 * c.z() + kPoints[k / 16]);
+    };
+    // The density at the points read cell by cell: the hat's 8 cells hold 2^3 points each, and the sampler reads a
+    // cell's eight corners again each time the walk re-enters it (in the points' order, 32 times a hat, not 8).
+    std::array<double, 64> density;
+    for (int cell = 0; cell < 8; ++cell)
+        for (int n = 0; n < 8; ++n) {
+            const int k = 2 * (cell & 1) + (n & 1) + 4 * (2 * (cell >> 1 & 1) + (n >> 1 & 1)) +
+                          16 * (2 * (cell >> 2) + (n >> 2));
+            const openvdb::Coord q = point(k);
+            density[k] = marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0);
+        }
     T sum(0.0);
     double weights = 0.0;
     for (int k = 0; k < 64; ++k) {
-        const openvdb::Coord offset(kPoints[k % 4], kPoints[k / 4 % 4], kPoints[k / 16]);
-        const openvdb::Coord q(4 * c.x() + offset.x(), 4 * c.y() + offset.y(), 4 * c.z() + offset.z());
-        const double w = (4 - std::abs(offset.x())) * (4 - std::abs(offset.y())) * (4 - std::abs(offset.z())) *
-                         marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0);
+        const openvdb::Coord q = point(k);
+        const double w = (4 - std::abs(kPoints[k % 4])) * (4 - std::abs(kPoints[k / 4 % 4])) *
+                         (4 - std::abs(kPoints[k / 16])) * density[k];
         if (w <= 0.0) continue;
         sum += w * f(q);
         weights += w;
