@@ -112,24 +112,24 @@ bool facingAverage(const SnowTopology &topo, const openvdb::Coord &c,
     for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
             for (int dz = -1; dz <= 1; ++dz) {
-                const std::int32_t j = index.getValue(c.offsetBy(-dx, -dy, -dz));
+                const openvdb::Coord n = c.offsetBy(-dx, -dy, -dz);
+                const std::int32_t j = index.getValue(n);
                 if (j < 0 || !topo.patches[j].isSurface()) continue;
                 const double w =
                     std::max(0.0, glm::dot(topo.patches[j].normal, glm::normalize(glm::dvec3(dx, dy, dz))));
                 const int k = (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);  // blockOffset(k): (dx, dy, dz)
                 if (w > most || (w == most && w > 0.0 && k < mostAt))
-                    most = w, mostAt = k, carrier = c.offsetBy(-dx, -dy, -dz);
+                    most = w, mostAt = k, carrier = n;
                 ++count;
                 // Not facing c (w 0), it adds nothing but its count: its values are not read (each a cache miss).
                 if (w == 0.0) continue;
-                const openvdb::Coord n = c.offsetBy(-dx, -dy, -dz);
                 const auto [v, peakShare] =
                     topo.patches[j].sharp && tracedIndex.getValue(n) < 0
                         ? ownFacesToward(source.edgeFaces, std::size_t(j), {dx, dy, dz}, source[j])
                         : ShownToward{litFacesToward(n, {dx, dy, dz}, tracedIndex, traced, source[j])};
                 l0 += w * glm::dvec3(v.l0), l1 += w * glm::dmat3(v.l1);
                 peak0 += w * glm::dvec3(v.peak0), peak1 += w * glm::dvec3(v.peak1);
-                addRampPart(c.offsetBy(-dx, -dy, -dz), j, w * peakShare);  // of j's peaked lobe, its faces' to c
+                addRampPart(n, j, w * peakShare);  // of j's peaked lobe, its faces' to c
                 normal += w * topo.patches[j].normal;
                 total += w;
             }
@@ -285,11 +285,12 @@ T hatAverage(const openvdb::Coord &c, Medium::ColumnMarcher &marcher, const F &f
     };
     // The density at the points read cell by cell: the hat's 8 cells hold 2^3 points each, and the sampler reads a
     // cell's eight corners again each time the walk re-enters it (in the points' order, 32 times a hat, not 8).
+    // Along each axis a point's index is 2 (its cell's bit) + (its bit within the cell).
+    const auto along = [](int cell, int n, int axis) { return 2 * (cell >> axis & 1) + (n >> axis & 1); };
     std::array<double, 64> density;
     for (int cell = 0; cell < 8; ++cell)
         for (int n = 0; n < 8; ++n) {
-            const int k = 2 * (cell & 1) + (n & 1) + 4 * (2 * (cell >> 1 & 1) + (n >> 1 & 1)) +
-                          16 * (2 * (cell >> 2) + (n >> 2));
+            const int k = along(cell, n, 0) + 4 * along(cell, n, 1) + 16 * along(cell, n, 2);
             const openvdb::Coord q = point(k);
             density[k] = marcher.densityAt(openvdb::Vec3d(q.x(), q.y(), q.z()) / 4.0);
         }
