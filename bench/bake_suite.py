@@ -170,7 +170,7 @@ def cases():
     add = out.append
     # The issue's ball: small, moderately thick, somewhat absorbing, sun plus a dim sky.
     add(Case("ball_issue", "ball r 5 cm, 1 cm voxels (tau 10), omega 0.98, g 0.85", ball(0.05, 0.01) * 100, 0.01,
-             1000.0, 100.0, (0.98,) * 3, 0.85, views=ROUND, samples=16384))
+             1000.0, 100.0, (0.98,) * 3, 0.85, views=ROUND, samples=65536))
     add(Case("ball_thin", "ball r 3 cm, tau 1 per voxel, 3 tmfp across, omega 0.999, g 0.5", ball(0.03, 0.01) * 100,
              0.01, 100.0, 100.0, (0.999,) * 3, 0.5, views=ROUND, samples=16384))
     add(Case("ball_thin_forward", "ball r 3 cm, tau 1 per voxel, under 1 tmfp across, omega 0.999, g 0.85",
@@ -182,11 +182,11 @@ def cases():
     add(Case("ball_rgb", "ball r 6 cm, tau 3, omega 0.95 / 0.99 / 0.999, g 0.7", ball(0.06, 0.01) * 100, 0.01,
              300.0, 100.0, (0.95, 0.99, 0.999), 0.7, views=ROUND, samples=16384))
     add(Case("ball_snow", "ball r 8 cm, tau 20 per voxel, omega 0.9999, g 0.85 (snow)", ball(0.08, 0.01) * 300, 0.01,
-             2000.0, 300.0, (0.9999,) * 3, 0.85, views=ROUND, samples=8192))
+             2000.0, 300.0, (0.9999,) * 3, 0.85, views=ROUND, samples=32768))
     add(Case("ball_clean", "ball r 4 cm, 5 mm voxels, tau 30, omega 1-1e-7, g 0.85", ball(0.04, 0.005) * 300, 0.005,
-             6000.0, 300.0, (1.0 - 1e-7,) * 3, 0.85, views=ROUND, samples=8192))
+             6000.0, 300.0, (1.0 - 1e-7,) * 3, 0.85, views=ROUND, samples=32768))
     add(Case("ball_forward", "ball r 5 cm, tau 4, omega 0.999, g 0.9", ball(0.05, 0.01) * 100, 0.01, 400.0, 100.0,
-             (0.999,) * 3, 0.9, views=ROUND, samples=16384))
+             (0.999,) * 3, 0.9, views=ROUND, samples=65536))
     add(Case("ball_sky", "ball r 5 cm under sky only, tau 5, omega 0.99, g 0.7", ball(0.05, 0.01) * 100, 0.01, 500.0,
              100.0, (0.99,) * 3, 0.7, sun=0.0, sky=1.0, views=[(0, 0), (0, 60), (0, -60)], samples=16384))
     add(Case("slab_thin", "slab 3 cm (3 voxels, tau 2 each), omega 0.99, g 0.6", slab(24, 3) * 100, 0.01, 200.0, 100.0,
@@ -201,7 +201,7 @@ def cases():
     occluders = [plate(0.10, 0.20, 0.05, 0.25, 0.22, (0.2, 0.2, 0.2)), plate(-1.0, 2.0, -1.0, 2.0, 0.005, (0.6, 0.3, 0.2))]
     add(Case("bumpy_plate", "bumpy layer 6 cm +- 3 cm, plate shadow, reddish ground, tau 15, omega 0.999, g 0.7",
              bumpy(30, 6, 3) * 300, 0.01, 1500.0, 300.0, (0.999,) * 3, 0.7, views=[(0, 60), (180, 50)],
-             pixels=10, occluders=occluders, samples=4096))
+             pixels=10, occluders=occluders, samples=16384))
     add(Case("spray_lumps", "24 lumps r 0.5-1.5 cm on 1.5 cm voxels (partly filled), omega 0.9999, g 0.85",
              spray(0.015) * 100, 0.015, 400.0, 100.0, (0.9999,) * 3, 0.85, views=ROUND, samples=16384))
     add(Case("spray_dense", "the lumps on 1 cm voxels, denser (tau up to 20 per voxel), omega 0.999, g 0.85",
