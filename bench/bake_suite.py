@@ -193,7 +193,7 @@ def cases():
              (0.99,) * 3, 0.6, views=[(0, 60), (90, 75), (0, -60), (180, -75)], samples=16384))
     add(Case("slab_thin_forward", "slab 3 cm (3 voxels, tau 1 each), omega 0.9999, g 0.87", slab(24, 3) * 100, 0.01,
              100.0, 100.0, (0.9999,) * 3, 0.87, views=[(0, 60), (90, 75), (0, -60), (180, -75), (180, -30)],
-             samples=16384))
+             samples=65536))
     add(Case("slab_thick", "slab 20 cm (20 voxels, tau 30 each), omega 0.9999, g 0.87", slab(24, 20) * 300, 0.01,
              3000.0, 300.0, (0.9999,) * 3, 0.87, views=[(0, 60), (180, 60), (90, 80)], samples=65536))
     add(Case("box_sharp", "box 12 x 10 x 6 cm, sharp edges, tau 8, omega 0.995, g 0.7", box((0.12, 0.10, 0.06), 0.01) * 200,
@@ -205,7 +205,7 @@ def cases():
     add(Case("spray_lumps", "24 lumps r 0.5-1.5 cm on 1.5 cm voxels (partly filled), omega 0.9999, g 0.85",
              spray(0.015) * 100, 0.015, 400.0, 100.0, (0.9999,) * 3, 0.85, views=ROUND, samples=16384))
     add(Case("spray_dense", "the lumps on 1 cm voxels, denser (tau up to 20 per voxel), omega 0.999, g 0.85",
-             spray(0.01) * 300, 0.01, 2000.0, 300.0, (0.999,) * 3, 0.85, views=ROUND, samples=16384))
+             spray(0.01) * 300, 0.01, 2000.0, 300.0, (0.999,) * 3, 0.85, views=ROUND, samples=65536))
     return out
 
 
