@@ -195,10 +195,10 @@ int solveBeamsApart(const SnowTopology &topo, const MultigridSolver &solver, Mul
 }
 
 // The relative residual that solves of passes before the last stop at: they only feed the gathering between
-// surfaces, whose light is a small part of the last pass's sources (the car's: 5.5 % of b), so their error reaches
-// the grids at that share. On the car 1e-2 against 1e-3 takes the first pass's V-cycles 9 -> 5 (the last pass's
-// 13 -> 14) and moves its grids' voxels by 4e-6 (median; 99th percentile 5e-4) where another seed moves them by
-// 0.04 (docs/benchmarks.md, car-pass2).
+// surfaces, whose light is a small part of the last pass's sources (the car's: about 5 % of b), so their error
+// reaches the grids at that share. On the car 1e-2 against 1e-3 takes the first pass's V-cycles 9 -> 5 (the last
+// pass's 13 -> 14) and moves its grids' voxels by 4e-6 (median; 99th percentile 5e-4) where another seed moves
+// them by 0.04 (docs/benchmarks.md, car-pass2).
 constexpr double kGatheredPassTolerance = 1e-2;
 
 // Progress when the diffusion solves are done (REFERENCE: before path tracing the surface).
