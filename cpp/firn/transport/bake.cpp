@@ -257,6 +257,9 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             // The last pass splits the light leaving between the beams and the sky where the grids read it: not the
             // reference's surface (path traced).
             const bool splitPass = pass + 1 == passes && !reference && !light.beams.empty() && topo.size() > 0;
+            const double feeding = bounceTail ? kExtrapolatedPassTolerance : kGatheredPassTolerance;
+            const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, feeding) : preset.tolerance;
+            stats.relativeResidual.emplace_back();
             for (int c = 0; c < 3; ++c) {
                 const SubProgress sub(&p, gathered + (end - gathered) * c / 3.0,
                                       gathered + (end - gathered) * (c + 1) / 3.0);
@@ -278,12 +281,10 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                     // The channel before's levels taken over: the rows, blocks and colours are the same.
                     MultigridSolver solver(std::move(system.A), std::move(system.remainder), &workspace);
                     releaseFreedMemory();  // what building the hierarchy freed, before CG's vectors
-                    const double feeding = bounceTail ? kExtrapolatedPassTolerance : kGatheredPassTolerance;
-                    const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, feeding) : preset.tolerance;
                     const MultigridSolver::Result result =
                         solver.solve(std::move(system.b), phi[c], tolerance, 500, sub, &workspace);
                     stats.iterations[c] += result.iterations;
-                    stats.relativeResidual[c] = result.relativeResidual;
+                    stats.relativeResidual.back()[c] = result.relativeResidual;
                     if (beamsApart)
                         stats.beamIterations +=
                             solveBeamsApart(topo, solver, workspace, phi[c], sources, phi[c + 1], system.surface, sub);

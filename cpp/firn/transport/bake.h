@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include "firn/transport/baked_grids.h"
 #include "firn/transport/scene.h"
@@ -51,7 +52,7 @@ struct BakeStats {
     int sourceScale = 1;                       // the source grids' voxel size in density voxels
     std::array<int, 3> iterations{};          // per colour channel, all passes
     int beamIterations = 0;                    // the beams' own solve, one channel (bake.cpp, solveBeamsApart)
-    std::array<double, 3> relativeResidual{};  // per colour channel, last pass
+    std::vector<std::array<double, 3>> relativeResidual;  // per pass, per colour channel
     // Per phase: voxels and faces, sun and sky tracing, Monte Carlo in thin snow, diffusion solves, gathering
     // between snow surfaces, writing the grids.
     struct Phases {
