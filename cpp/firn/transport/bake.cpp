@@ -485,7 +485,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     for (const BoundaryFace &face : topo.faces) ++(face.occluder ? local.occluderFaces : local.airFaces);
     local.surfaceVoxels = topo.surfaceVoxels();
     local.skyTracedVoxels = light.skyTraced;
-    const std::vector<std::uint64_t> &snowRays = light.snowRays.values();
+    const auto &snowRays = light.snowRays.values();
     // Snow hides some patch's sky, or occluders send back enough of the snow's light (bake_snow_irradiance.cpp):
     // gather.
     const bool hidden = light.occluderShare >= kSendBackWorthPasses ||

@@ -107,7 +107,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     ChannelSystem sys(topo, light.beams.size(), std::move(storage));
     // The topology's voxels and links, not copies: the topology outlives the solver (aliasing pointers owning
     // nothing).
-    sys.A.coord = std::shared_ptr<const std::vector<openvdb::Coord>>(std::shared_ptr<void>(), &topo.coord);
+    sys.A.coord = std::shared_ptr<const Stencil<float>::Voxels>(std::shared_ptr<void>(), &topo.coord);
     sys.A.neighbour = std::shared_ptr<const Stencil<float>::Neighbours>(std::shared_ptr<void>(), &topo.link);
     sys.A.conductance.resize(n), sys.A.diag.resize(n), sys.remainder.resize(n);
 

@@ -34,7 +34,7 @@ struct Channel {
 // pages are reused rather than mapped and cleared afresh (the kernel's page clearing was 6 % of the car's bake).
 struct ChannelStorage {
     Stencil<float> A;
-    std::vector<float> remainder;
+    UnwrittenVector<float> remainder;
     std::vector<double> b;
 };
 
@@ -54,7 +54,7 @@ struct SurfaceTerms {
 // The diffusion system of one channel plus what the surface needs afterwards.
 struct ChannelSystem {
     Stencil<float> A;              // what the solver keeps of the operator (MultigridSolver)
-    std::vector<float> remainder;  // diag minus the conductances, summed in double
+    UnwrittenVector<float> remainder;  // diag minus the conductances, summed in double (assemble writes every row)
     std::vector<double> b;  // W: diffuse sources at the voxel nodes
     SurfaceTerms surface;   // surface voxels only (what crosses air faces)
     // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
@@ -67,7 +67,7 @@ struct ChannelSystem {
           surface{surfaceZeros(topo), surfaceZeros(topo), surfaceZeros(topo),
                   std::vector<SurfaceValues<float>>(beams, surfaceZeros(topo)), surfaceZeros(topo), {}},
           skyToNode(surfaceZeros(topo)), skyReturned(surfaceZeros(topo)), area(surfaceZeros(topo)) {
-        b.assign(topo.size(), 0.0);
+        b.resize(topo.size());  // assemble writes every row (a reused b holds the last solve's residual)
     }
     static SurfaceValues<float> surfaceZeros(const SnowTopology &topo) {
         return SurfaceValues<float>(topo.surfaceSlot, topo.surfaceVoxels(), 0.0f);

@@ -116,7 +116,7 @@ void sunLeavingDownstream(const SnowTopology &topo, const std::array<SurfaceValu
                           SurfaceValues<SurfaceLight> &out, const SubProgress &progress) {
     // By surface slot: each neighbour's slot looked up once.
     const std::vector<std::int32_t> &slot = *topo.surfaceSlot;
-    const std::vector<SurfacePatch> &patch = topo.patches.values();
+    const auto &patch = topo.patches.values();
     auto sent = [&](std::int32_t s) {
         return std::array<const SunReturned *, 3>{&sun[0].values()[s], &sun[1].values()[s], &sun[2].values()[s]};
     };

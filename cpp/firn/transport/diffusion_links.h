@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "firn/util/unwritten_vector.h"
+
 namespace firn {
 
 // Finite volumes with exponential fitting: every link between two unknowns, and between an unknown and
@@ -40,8 +42,8 @@ inline Link interiorLink(double beta, double R) {
 // SnowTopology::link); `density` kg/m^3; sigma_tr = sigmaTrPerDensity * density (1/m); h the voxel (m).
 class SharedLinks {
   public:
-    using Neighbours = std::vector<std::array<std::int32_t, 6>>;
-    SharedLinks(const Neighbours &link, const std::vector<float> &density, double sigmaTrPerDensity, double beta,
+    using Neighbours = UnwrittenVector<std::array<std::int32_t, 6>>;
+    SharedLinks(const Neighbours &link, const UnwrittenVector<float> &density, double sigmaTrPerDensity, double beta,
                 double h, std::size_t begin, std::size_t end)
         : link_(link), density_(density), sigmaTrPerDensity_(sigmaTrPerDensity), beta_(beta), h_(h), begin_(begin),
           end_(end), upper_(3 * (end - begin)) {
@@ -65,7 +67,7 @@ class SharedLinks {
         return interiorLink(beta_, 1.5 * h_ * (sigmaTrPerDensity_ * density_[i] + sigmaTrPerDensity_ * density_[j]));
     }
     const Neighbours &link_;
-    const std::vector<float> &density_;
+    const UnwrittenVector<float> &density_;
     double sigmaTrPerDensity_, beta_, h_;
     std::size_t begin_, end_;
     std::vector<Link> upper_;  // per unknown of the run, its +x, +y, +z links (where a neighbour is)

@@ -405,7 +405,7 @@ void fillFromSkyDonors(const SnowTopology &topo, const SurfaceValues<std::uint8_
 }
 
 void averageOverNeighbours(const SnowTopology &topo, SurfaceValues<glm::vec3> &values) {
-    const std::vector<glm::vec3> own = values.values();
+    const auto own = values.values();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const SurfacePatch &patch = topo.patches[i];
@@ -493,7 +493,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
 
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
         IncidentLight::Beam beam;
-        beam.atVoxel.assign(topo.size(), glm::vec3(0.0f));
+        parallelAssign(beam.atVoxel, topo.size(), glm::vec3(0.0f));
         beam.atSurface = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
         const std::uint64_t seed = settings.seed ^ (0x5A17ull + b);
         // Voxel centres nearest the light first: a voxel inside the snow whose neighbours towards the light

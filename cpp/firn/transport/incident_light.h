@@ -23,7 +23,7 @@ struct IncidentLight {
     // sigma_tr = (1 - omega g) sigma_t: light that scattered forwards still travels with the beam) and
     // occluders (averaged over the sun's disc or the lamp).
     struct Beam {
-        std::vector<glm::vec3> atVoxel;      // at each unknown's centre
+        UnwrittenVector<glm::vec3> atVoxel;  // at each unknown's centre
         // Two things by the patch's side: facing the light, just outside the patch; facing away (cos > -0.5 to the
         // light, kRampBeamCosine in incident_light.cpp), the beam in the density ramp a voxel out along the normal
         // (rampInflow). 0 elsewhere. A reader must tell the two apart by the patch's facing to the light seen from

@@ -70,9 +70,9 @@ struct MultigridSolver::Hierarchy {
     // coefficients regrouped, with its own table), and each of the caller's rows' row in levels.front(). A solver
     // takes the levels over only for the same table (another's colours would let a sweep's rows read each other).
     std::shared_ptr<const Stencil<float>::Neighbours> fineNeighbour;
-    std::vector<std::uint32_t> colourRow;
+    UnwrittenVector<std::uint32_t> colourRow;
     std::vector<double> cholesky;  // lower factor of the bottom level, dense row-major
-    std::vector<float> remainder;  // finest level: diag minus the conductances
+    UnwrittenVector<float> remainder;  // finest level: diag minus the conductances
 
     // fromZero: the first sweep of a cycle, whose neighbours all hold x = 0 (they are not read; the level's x need
     // not be cleared first: the other colour's sweep writes the rest before anything reads it).
@@ -137,10 +137,10 @@ namespace {
 using Level = MultigridSolver::Hierarchy::Level;
 
 // Each row's new row, grouped by colour within its chunk (Level::colourSplit), each colour's rows in their order.
-std::vector<std::uint32_t> colourOrder(const std::vector<openvdb::Coord> &coord, std::vector<std::uint32_t> &split) {
+UnwrittenVector<std::uint32_t> colourOrder(const Stencil<float>::Voxels &coord, std::vector<std::uint32_t> &split) {
     const auto colour = [](const openvdb::Coord &c) { return (c.x() + c.y() + c.z()) & 1; };
     split.resize((coord.size() + kChunk - 1) / kChunk);
-    std::vector<std::uint32_t> row(coord.size());
+    UnwrittenVector<std::uint32_t> row(coord.size());
     parallelRows(split.size(), [&](std::size_t q) {
         const std::size_t begin = q * kChunk, end = std::min(coord.size(), begin + kChunk);
         std::size_t colour0 = 0;
@@ -153,7 +153,7 @@ std::vector<std::uint32_t> colourOrder(const std::vector<openvdb::Coord> &coord,
 }
 
 // A's conductances and diagonal regrouped in place: each row i's moved to row[i], within its chunk.
-void regroupCoefficients(Stencil<float> &A, const std::vector<std::uint32_t> &row) {
+void regroupCoefficients(Stencil<float> &A, const UnwrittenVector<std::uint32_t> &row) {
     parallelRows((A.size() + kChunk - 1) / kChunk, [&](std::size_t q) {
         const std::size_t begin = q * kChunk, end = std::min(A.size(), begin + kChunk);
         const std::vector<std::array<float, 6>> conductance(A.conductance.begin() + begin, A.conductance.begin() + end);
@@ -166,7 +166,7 @@ void regroupCoefficients(Stencil<float> &A, const std::vector<std::uint32_t> &ro
 // A level's rows regrouped (`row`: each row's new row): its operator (a neighbour table of its own), its rows as
 // members of the next level's blocks, and the rows of the finer level's blocks (given one). The blocks keep their
 // members and the order they were built in, so that every sum over them is added as before.
-void regroup(Level &level, const std::vector<std::uint32_t> &row, Level *finer) {
+void regroup(Level &level, const UnwrittenVector<std::uint32_t> &row, Level *finer) {
     const Stencil<float>::Neighbours &N = *level.A.neighbour;
     auto neighbour = std::make_shared<Stencil<float>::Neighbours>(N.size());
     parallelRows(N.size(), [&](std::size_t i) {
@@ -188,7 +188,7 @@ bool aggregate(Level &fine, Level &coarse, std::vector<std::uint32_t> &block) {
     openvdb::Int32Tree index(-1);
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> access(index);
     block.resize(n);
-    auto coord = std::make_shared<std::vector<openvdb::Coord>>();
+    auto coord = std::make_shared<Stencil<float>::Voxels>();
     for (std::size_t i = 0; i < n; ++i) {
         const openvdb::Coord &c = (*A.coord)[i];
         const openvdb::Coord cc(floorHalf(c.x()), floorHalf(c.y()), floorHalf(c.z()));
@@ -297,7 +297,7 @@ std::vector<double> denseCholesky(const Stencil<float> &A) {
 // the operator serves both the iteration and its preconditioner).
 struct FineOperator {
     const MultigridSolver::Hierarchy &h;  // the finest level's coefficients (at h.colourRow), the caller's rows
-    const std::vector<float> &remainder;  // diag - sum of conductances: the absorption and boundary terms
+    const UnwrittenVector<float> &remainder;  // diag - sum of conductances: the absorption and boundary terms
     // remainder x_i + sum_k c_ik (x_i - x_k): the same operator, without the rounding of a large diagonal
     // swamping a small absorption (clean snow's blue: 1e-5 of the diagonal).
     void multiply(const double *x, double *y) const {
@@ -357,7 +357,7 @@ template <typename Vector>
 void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector<double> &r, double largest,
                   Vector &z) {
     const auto &top = hierarchy.levels.front();
-    const std::vector<std::uint32_t> &row = hierarchy.colourRow;
+    const UnwrittenVector<std::uint32_t> &row = hierarchy.colourRow;
     const double scale = std::max(largest, 1e-300);
     parallelRows(row.size(), [&](std::size_t i) { top.b[row[i]] = float(r[i] / scale); });
     hierarchy.vcycle(0);
@@ -396,8 +396,8 @@ double step(double alpha, const Vector &p, const Vector &q, std::vector<double> 
 namespace {
 
 // Every row's remainder (rowRemainder), stored in float.
-std::vector<float> remainderOf(const StencilOperator &A) {
-    std::vector<float> out(A.size());
+UnwrittenVector<float> remainderOf(const StencilOperator &A) {
+    UnwrittenVector<float> out(A.size());
     parallelRows(A.size(), [&](std::size_t i) { out[i] = float(rowRemainder(A.diag[i], A.conductance[i], (*A.neighbour)[i])); });
     return out;
 }
@@ -417,7 +417,7 @@ Stencil<float> singlePrecision(const StencilOperator &A) {
 
 MultigridSolver::MultigridSolver(StencilOperator fine) : MultigridSolver(singlePrecision(fine), remainderOf(fine)) {}
 
-MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remainder, Workspace *workspace) {
+MultigridSolver::MultigridSolver(Stencil<float> fine, UnwrittenVector<float> remainder, Workspace *workspace) {
     const bool takeOver = workspace && workspace->levels && workspace->levels->fineNeighbour == fine.neighbour;
     hierarchy_ = takeOver ? std::move(workspace->levels) : std::make_shared<Hierarchy>();
     Hierarchy &h = *hierarchy_;
@@ -443,8 +443,8 @@ MultigridSolver::MultigridSolver(Stencil<float> fine, std::vector<float> remaind
         const bool denseBottom = h.levels.back().A.size() <= kDenseLimit;
         for (std::size_t l = 0; l < h.levels.size(); ++l) {
             Level &level = h.levels[l];
-            std::vector<std::uint32_t> row(level.A.size());
-            if (denseBottom && l + 1 == h.levels.size()) std::iota(row.begin(), row.end(), 0u);
+            UnwrittenVector<std::uint32_t> row;
+            if (denseBottom && l + 1 == h.levels.size()) row.resize(level.A.size()), std::iota(row.begin(), row.end(), 0u);
             else row = colourOrder(*level.A.coord, level.colourSplit);
             regroup(level, row, l == 0 ? nullptr : &h.levels[l - 1]);
             if (l == 0) h.colourRow = std::move(row);
@@ -459,11 +459,11 @@ MultigridSolver::~MultigridSolver() = default;
 
 int MultigridSolver::levelCount() const { return int(hierarchy_->levels.size()); }
 
-std::pair<Stencil<float>, std::vector<float>> MultigridSolver::release(Workspace *workspace) && {
+std::pair<Stencil<float>, UnwrittenVector<float>> MultigridSolver::release(Workspace *workspace) && {
     // The coefficients' storage, regrouped (the caller writes every row afresh), under the caller's table; the
     // finest level keeps its own.
     Stencil<float> &top = hierarchy_->levels.front().A;
-    std::pair<Stencil<float>, std::vector<float>> out;
+    std::pair<Stencil<float>, UnwrittenVector<float>> out;
     out.first.neighbour = hierarchy_->fineNeighbour;
     out.first.conductance = std::move(top.conductance), out.first.diag = std::move(top.diag);
     out.second = std::move(hierarchy_->remainder);

@@ -21,11 +21,13 @@ struct Stencil {
     // Per row, its neighbours -x, +x, -y, +y, -z, +z: a row, or negative for none (SnowTopology::link's layout,
     // so that conjugate gradients read the topology's links rather than a copy of them: 24 bytes per row; the
     // multigrid's finest level holds its rows regrouped by colour, with a table of its own).
-    using Neighbours = std::vector<std::array<std::int32_t, 6>>;
+    // Sized unwritten: whoever sizes a table writes every row, in parallel.
+    using Neighbours = UnwrittenVector<std::array<std::int32_t, 6>>;
+    using Voxels = UnwrittenVector<openvdb::Coord>;
     static constexpr std::int32_t kNone = -1;
     // Voxel per row (axis neighbours differ by 1); shared, so that the bake's finest level reads the topology's
     // voxels rather than a copy of them (12 bytes per row, copied for every solve).
-    std::shared_ptr<const std::vector<openvdb::Coord>> coord;
+    std::shared_ptr<const Voxels> coord;
     std::shared_ptr<const Neighbours> neighbour;
     // Sized unwritten (UnwrittenVector): whoever sizes them writes every row, in parallel.
     UnwrittenVector<std::array<T, 6>> conductance;
@@ -72,7 +74,7 @@ class MultigridSolver {
     // summed in double): what the solver keeps of it (the bake assembles them so, without a double copy).
     // With a workspace holding a spent solver's levels for the same rows and neighbours (release), their layout is
     // taken over: the same solver as a fresh build, bit for bit.
-    MultigridSolver(Stencil<float> fine, std::vector<float> remainder, Workspace *workspace = nullptr);
+    MultigridSolver(Stencil<float> fine, UnwrittenVector<float> remainder, Workspace *workspace = nullptr);
     ~MultigridSolver();
     // Not copied: copies would share the levels' mutable vectors, and one's release would empty the other.
     MultigridSolver(const MultigridSolver &) = delete;
@@ -95,7 +97,7 @@ class MultigridSolver {
     // The finest level's operator and remainder handed back, the solver spent: their storage can hold the next
     // system of the same size (the conductances and diagonal come back regrouped: the caller writes every row);
     // given a workspace, the levels go to it for the next solver of the same rows.
-    std::pair<Stencil<float>, std::vector<float>> release(Workspace *workspace = nullptr) &&;
+    std::pair<Stencil<float>, UnwrittenVector<float>> release(Workspace *workspace = nullptr) &&;
 
     int levelCount() const;
 

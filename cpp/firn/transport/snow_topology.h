@@ -15,6 +15,7 @@
 #include "firn/transport/medium.h"
 #include "firn/transport/scene.h"
 #include "firn/util/progress.h"
+#include "firn/util/unwritten_vector.h"
 
 namespace firn {
 
@@ -90,17 +91,19 @@ class SurfaceValues {
     SurfaceValues() = default;
     // slot: per unknown, its surface voxel's index or -1 (SnowTopology::surfaceSlot).
     SurfaceValues(std::shared_ptr<const std::vector<std::int32_t>> slot, std::size_t surfaceVoxels, const T &inside = T{})
-        : slot_(std::move(slot)), values_(surfaceVoxels, inside), inside_(inside) {}
+        : slot_(std::move(slot)), inside_(inside) {
+        parallelAssign(values_, surfaceVoxels, inside);
+    }
     const T &operator[](std::size_t i) const {
         const std::int32_t s = (*slot_)[i];
         return s < 0 ? inside_ : values_[std::size_t(s)];
     }
     T &surface(std::size_t i) { return values_[std::size_t((*slot_)[i])]; }  // i: a surface voxel
-    const std::vector<T> &values() const { return values_; }                  // surface voxels in unknown order
+    const UnwrittenVector<T> &values() const { return values_; }              // surface voxels in unknown order
 
   private:
     std::shared_ptr<const std::vector<std::int32_t>> slot_;
-    std::vector<T> values_;
+    UnwrittenVector<T> values_;
     T inside_{};
 };
 
@@ -109,9 +112,10 @@ class SurfaceValues {
 // boundary face.
 struct SnowTopology {
     openvdb::Int32Tree::Ptr index;  // voxel -> unknown, -1 elsewhere
-    std::vector<openvdb::Coord> coord;
-    std::vector<float> density;                     // kg/m^3
-    std::vector<std::array<std::int32_t, 6>> link;  // >= 0: neighbour unknown; < 0: face -1 - link
+    // Sized unwritten (UnwrittenVector): buildSnowTopology's leaf loop writes every unknown's, in parallel.
+    UnwrittenVector<openvdb::Coord> coord;
+    UnwrittenVector<float> density;                     // kg/m^3
+    UnwrittenVector<std::array<std::int32_t, 6>> link;  // >= 0: neighbour unknown; < 0: face -1 - link
     std::vector<BoundaryFace> faces;
     std::shared_ptr<const std::vector<std::int32_t>> surfaceSlot;  // per unknown: index among surface voxels, or -1
     SurfaceValues<SurfacePatch> patches;  // per unknown (area 0 inside the snow)

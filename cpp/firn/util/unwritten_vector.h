@@ -1,9 +1,14 @@
 #pragma once
 
+#include <algorithm>
+#include <cstddef>
 #include <memory>
 #include <type_traits>
 #include <utility>
 #include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 namespace firn {
 
@@ -44,5 +49,15 @@ bool operator!=(const UnwrittenAllocator<T> &, const UnwrittenAllocator<U> &) {
 // A vector whose resize leaves its new elements to be written (UnwrittenAllocator).
 template <class T>
 using UnwrittenVector = std::vector<T, UnwrittenAllocator<T>>;
+
+// v made n copies of `value`, written in parallel: each page is first touched by the thread that writes it (what
+// assign(n, value) does on the calling thread alone).
+template <class T>
+void parallelAssign(UnwrittenVector<T> &v, std::size_t n, const T &value) {
+    v.resize(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384), [&](const tbb::blocked_range<std::size_t> &r) {
+        std::fill(v.begin() + r.begin(), v.begin() + r.end(), value);
+    });
+}
 
 }  // namespace firn

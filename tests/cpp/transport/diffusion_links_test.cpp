@@ -15,7 +15,7 @@ namespace {
 // faces), unknowns in x-major order as the topology's, densities drawn at random (as the car's: all distinct).
 struct Block {
     SharedLinks::Neighbours link;
-    std::vector<float> density;
+    UnwrittenVector<float> density;
 };
 Block holedBlock(int nx, int ny, int nz, std::uint32_t seed) {
     std::vector<std::int32_t> index(std::size_t(nx) * ny * nz, -1);

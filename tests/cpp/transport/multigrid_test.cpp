@@ -17,7 +17,7 @@ StencilOperator ballProblem(int r, double mass) {
     StencilOperator A;
     openvdb::Int32Tree index(-1);
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> access(index);
-    auto coord = std::make_shared<std::vector<openvdb::Coord>>();
+    auto coord = std::make_shared<StencilOperator::Voxels>();
     for (int i = -r; i <= r; ++i)
         for (int j = -r; j <= r; ++j)
             for (int k = -r; k <= r; ++k)
@@ -69,7 +69,7 @@ TEST(Multigrid, SolvesToToleranceInFewIterationsAtAnySize) {
 // stays exactly dark, and the lit one solves to tolerance.
 TEST(Multigrid, BlocksThatTouchWithoutLinksStayApart) {
     constexpr int side = 24;
-    auto coord = std::make_shared<std::vector<openvdb::Coord>>();
+    auto coord = std::make_shared<StencilOperator::Voxels>();
     openvdb::Int32Tree index(-1);
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> access(index);
     for (int z : {0, 1, 3})
@@ -126,7 +126,7 @@ struct TwoSystems {
     }
     // The first solved in `workspace` and spent (its levels to the workspace when `keepLevels`), the second
     // written over its operator's storage, as the bake's assembly does.
-    std::pair<Stencil<float>, std::vector<float>> secondInFirstsStorage(MultigridSolver::Workspace &workspace,
+    std::pair<Stencil<float>, UnwrittenVector<float>> secondInFirstsStorage(MultigridSolver::Workspace &workspace,
                                                                          bool keepLevels) const {
         std::vector<double> x(n, 0.0);
         MultigridSolver solver(first);
