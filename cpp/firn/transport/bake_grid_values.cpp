@@ -189,7 +189,7 @@ void placeValues(const LeafValues &values, const openvdb::tree::LeafManager<cons
         for (std::size_t l = range.begin(); l != range.end(); ++l) {
             if (values.emptyIn(l)) continue;
             openvdb::Int32Tree::LeafNodeType &leaf = *at.probeLeaf(leaves.leaf(l).origin());
-            values.forEachIn(l, [&](std::size_t k) { leaf.setValueOnly(values.values[k].first, std::int32_t(k)); });
+            values.forEachIn(l, [&](std::size_t k) { leaf.setValueOnly(values.values[k].offset, std::int32_t(k)); });
         }
     });
 }
@@ -984,7 +984,7 @@ openvdb::Vec3fTree::Ptr sourceTree(const GridValues &values, const SnowTopology 
             }
             const LeafValues &beyond = *values.beyond;
             beyond.forEachIn(l, [&](std::size_t m) {
-                leaf.setValueOnly(beyond.values[m].first, k < 4 ? broadComponent(beyond.values[m].second, k)
+                leaf.setValueOnly(beyond.values[m].offset, k < 4 ? broadComponent(beyond.values[m].lobe, k)
                                                                 : sourceComponent(beyond[m], k));
             });
         }

@@ -12,6 +12,8 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tree/LeafManager.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "firn/transport/bake.h"
 #include "firn/transport/bake_preset.h"
@@ -24,23 +26,42 @@
 
 namespace firn::bake {
 
-using VoxelValue = std::pair<openvdb::Index, BroadLobe>;  // offset in its leaf, value
+struct VoxelValue {
+    openvdb::Index offset;  // in its leaf
+    BroadLobe lobe;
+};
 
 // Source functions at voxels, in order: broad lobes, with the peaked lobes by place (PeakedLobes).
 struct VoxelValues {
-    std::vector<VoxelValue> values;
+    UnwrittenVector<VoxelValue> values;
     PeakedLobes peaked;
 
     void add(openvdb::Index offset, const Source &S) {
         peaked.add(values.size(), S);
-        values.emplace_back(offset, S);
+        values.push_back({offset, S});
     }
-    void append(const VoxelValues &other, std::size_t begin, std::size_t end) {  // other's values [begin, end)
-        for (auto peak = other.peaked.from(begin); peak != other.peaked.peaks().end() && peak->key < end; ++peak)
-            peaked.push({std::uint32_t(values.size() + peak->key - begin), peak->peak0, peak->peak1});
-        values.insert(values.end(), other.values.begin() + begin, other.values.begin() + end);
+    // The blocks' values after these, block by block (consumed; the values copied in parallel, each page first
+    // touched by the thread that copies into it: appended one by one they were the gathering's and the grids' largest
+    // single-threaded step on the car, docs/benchmarks.md lead-80); returns where each block's values begin, and
+    // where the last one's end.
+    std::vector<std::size_t> appendAll(std::vector<VoxelValues> &&blocks) {
+        std::vector<std::size_t> start{values.size()};
+        for (VoxelValues &block : blocks) {
+            for (const PeakedLobes::Peak &peak : block.peaked.peaks())
+                peaked.push({std::uint32_t(start.back() + peak.key), peak.peak0, peak.peak1});
+            block.peaked = PeakedLobes();
+            start.push_back(start.back() + block.values.size());
+        }
+        values.resize(start.back());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16), [&](const auto &range) {
+            for (std::size_t b = range.begin(); b != range.end(); ++b) {
+                std::copy(blocks[b].values.begin(), blocks[b].values.end(), values.begin() + start[b]);
+                blocks[b] = VoxelValues();  // (= {} would keep its capacity)
+            }
+        });
+        return start;
     }
-    Source operator[](std::size_t k) const { return peaked.with(values[k].second, k); }
+    Source operator[](std::size_t k) const { return peaked.with(values[k].lobe, k); }
 };
 
 // Values by leaf of the grids' topology: leaf l's lie at [start[l], start[l + 1]) and, where a second block was
@@ -51,29 +72,21 @@ struct LeafValues : VoxelValues {
     // One block: perLeaf's values leaf by leaf (consumed), with room for `more` values after them, so that a
     // second block appended within it does not move the first (the old array and the new together were the car's
     // gathering peak). Room never written holds no memory (the pages of a large array are the system's until used).
-    LeafValues(std::vector<VoxelValues> &&perLeaf, std::size_t more) : start{0} {
+    LeafValues(std::vector<VoxelValues> &&perLeaf, std::size_t more) {
         std::size_t total = 0;
         for (const auto &leaf : perLeaf) total += leaf.values.size();
         values.reserve(total + more);
-        for (VoxelValues &leaf : perLeaf) {
-            append(leaf, 0, leaf.values.size());
-            leaf = VoxelValues();  // (= {} would keep its capacity)
-            start.push_back(values.size());
-        }
+        start = appendAll(std::move(perLeaf));
         later.assign(start.size(), values.size());
     }
     // first's block taken over as it is (a copy of it was the gathering's and the grids' memory peak), then
     // `then`'s values leaf by leaf (consumed).
     LeafValues(LeafValues &&first, std::vector<VoxelValues> &&then)
-        : VoxelValues(std::move(first)), start(std::move(first.start)), later{values.size()} {
+        : VoxelValues(std::move(first)), start(std::move(first.start)) {
         std::size_t total = values.size();
         for (const auto &leaf : then) total += leaf.values.size();
         values.reserve(total);
-        for (VoxelValues &leaf : then) {
-            append(leaf, 0, leaf.values.size());
-            leaf = VoxelValues();
-            later.push_back(values.size());
-        }
+        later = appendAll(std::move(then));
     }
     template <typename Body>
     void forEachIn(std::size_t l, const Body &body) const {  // body(k) for leaf l's values

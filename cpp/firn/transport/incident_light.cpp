@@ -556,7 +556,7 @@ IncidentLight computeIncidentLight(const Scene &scene, const SnowTopology &topo,
     light.occluderRays = SurfaceValues<std::uint64_t>(topo.surfaceSlot, topo.surfaceVoxels(), 0);
     light.skyAim = SurfaceValues<glm::vec3>(topo.surfaceSlot, topo.surfaceVoxels(), glm::vec3(0.0f));
     const SkyRays rays(settings.skySamples);
-    light.skyUnderSnow.assign(topo.faces.size(), glm::vec3(0.0f));
+    parallelAssign(light.skyUnderSnow, topo.faces.size(), glm::vec3(0.0f));
     const bool bounce = !scene.occluders->empty();
     const double limit = columnLimit(reducedExtinctionPerDensity(medium.optics()));
     const std::uint64_t seed = settings.seed ^ 0x5C1Eull;

@@ -49,7 +49,7 @@ struct IncidentLight {
     // bake_snow_irradiance.cpp; worth passes of its own only where large, bake.cpp).
     double occluderShare = 0.0;
     // W/m^2 per boundary face, occluder faces only: sky light reaching the surface under thin snow.
-    std::vector<glm::vec3> skyUnderSnow;
+    UnwrittenVector<glm::vec3> skyUnderSnow;
     // Per surface voxel: 1 where its sky was not traced but is its sky donors' mean (forEachSkyDonor: the traced
     // lattice patches about it, which agree within their noise); its snowRays and occluderRays are 0, and the light
     // gathered from other snow onto it is its donors' mean too (fillFromSkyDonors).

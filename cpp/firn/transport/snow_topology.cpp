@@ -300,8 +300,8 @@ void computeShell(const Medium &medium, SnowTopology &topo, int shellVoxels, con
     constexpr double kShellStart = 3.0, kShellEnd = 6.0;
     const double k = medium.optics().extinctionPerDensity, h = medium.voxelSize();
     std::vector<double> depth(topo.size(), std::numeric_limits<double>::infinity());
-    topo.shellOwner.assign(topo.size(), -1);
-    topo.shellWeight.assign(topo.size(), 0.0f);
+    parallelAssign(topo.shellOwner, topo.size(), std::int32_t(-1));
+    parallelAssign(topo.shellWeight, topo.size(), 0.0f);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
         Medium::ColumnMarcher marcher(medium);
         WorkCheck work(progress);

@@ -124,8 +124,8 @@ struct SnowTopology {
     // Voxels just under the surface, within a few mean free paths: the surface voxel nearest to them (-1
     // for the others) and how much of its radiance they carry (1 down to optical depth 3, 0 from 6, and 1 for
     // the first shellVoxels - 1 voxels under the surface whatever their depth: see buildSnowTopology).
-    std::vector<std::int32_t> shellOwner;
-    std::vector<float> shellWeight;
+    UnwrittenVector<std::int32_t> shellOwner;
+    UnwrittenVector<float> shellWeight;
 
     std::size_t size() const { return coord.size(); }
     std::size_t surfaceVoxels() const { return patches.values().size(); }
