@@ -182,7 +182,7 @@ void regroup(Level &level, const UnwrittenVector<std::uint32_t> &row, Level *fin
 
 // The next level's rows: 2x2x2 blocks of this one's voxels (fine.members, coarse's voxels; `block`: each fine row's
 // block, its row there); returns false when that would barely shrink it.
-bool aggregate(Level &fine, Level &coarse, std::vector<std::uint32_t> &block) {
+bool aggregate(Level &fine, Level &coarse, UnwrittenVector<std::uint32_t> &block) {
     const Stencil<float> &A = fine.A;
     const std::size_t n = A.size();
     openvdb::Int32Tree index(-1);
@@ -217,8 +217,8 @@ bool aggregate(Level &fine, Level &coarse, std::vector<std::uint32_t> &block) {
 }
 
 // Each fine row's block (its row on the next level), from the blocks' members.
-std::vector<std::uint32_t> blockOfRows(const Level &fine) {
-    std::vector<std::uint32_t> block(fine.A.size());
+UnwrittenVector<std::uint32_t> blockOfRows(const Level &fine) {
+    UnwrittenVector<std::uint32_t> block(fine.A.size());
     parallelRows(fine.membersStart.size() - 1, [&](std::size_t I) {
         for (std::uint32_t m = fine.membersStart[I]; m < fine.membersStart[I + 1]; ++m)
             block[fine.members[m]] = std::uint32_t(I);
@@ -229,7 +229,7 @@ std::vector<std::uint32_t> blockOfRows(const Level &fine) {
 // The next level's operator summed from this one's over its blocks (`block`: each fine row's, as built; written to
 // the blocks' rows), and where `neighbour` is given (a fresh build; levels taken over have theirs) the next level's
 // neighbours.
-void sumCoarseOperator(const Level &fine, const std::vector<std::uint32_t> &block, Level &coarse,
+void sumCoarseOperator(const Level &fine, const UnwrittenVector<std::uint32_t> &block, Level &coarse,
                        Stencil<float>::Neighbours *neighbour) {
     const Stencil<float> &A = fine.A;
     const Stencil<float>::Neighbours &N = *A.neighbour;
@@ -270,7 +270,7 @@ void sumCoarseOperator(const Level &fine, const std::vector<std::uint32_t> &bloc
 
 // The next level: 2x2x2 blocks of this one; returns false when that would barely shrink it.
 bool coarsen(Level &fine, Level &coarse) {
-    std::vector<std::uint32_t> block;
+    UnwrittenVector<std::uint32_t> block;
     if (!aggregate(fine, coarse, block)) return false;
     auto neighbour = std::make_shared<Stencil<float>::Neighbours>(fine.membersStart.size() - 1);
     sumCoarseOperator(fine, block, coarse, neighbour.get());
