@@ -1,0 +1,61 @@
+// The gathering's and the grids' values are built leaf by leaf in parallel and then joined (VoxelValues::appendAll):
+// joined, they must read as the same values added one by one, peaked lobes at the same places.
+#include "firn/transport/bake_grid_values.h"
+
+#include <cstddef>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace firn::bake {
+
+namespace {
+
+// Value v of block b: a broad lobe and, for every third value, a peaked lobe, all telling b and v apart.
+Source sourceOf(std::size_t b, std::size_t v) {
+    Source S;
+    S.l0 = glm::vec3(float(b), float(v), 1.0f);
+    S.l1[0] = glm::vec3(float(b + v));
+    if (v % 3 == 1) S.peak0 = glm::vec3(float(10 * b + v)), S.peak1 = glm::vec3(0.0f, 0.0f, float(v + 1));
+    return S;
+}
+
+void expectSame(const VoxelValues &joined, const VoxelValues &added) {
+    ASSERT_EQ(joined.values.size(), added.values.size());
+    ASSERT_EQ(joined.peaked.peaks().size(), added.peaked.peaks().size());
+    for (std::size_t k = 0; k < added.values.size(); ++k) {
+        EXPECT_EQ(joined.values[k].offset, added.values[k].offset) << k;
+        const Source a = joined[k], b = added[k];
+        EXPECT_EQ(a.l0, b.l0) << k;
+        EXPECT_EQ(a.l1, b.l1) << k;
+        EXPECT_EQ(a.peak0, b.peak0) << k;
+        EXPECT_EQ(a.peak1, b.peak1) << k;
+    }
+}
+
+}  // namespace
+
+TEST(VoxelValues, BlocksAppendedTogetherReadAsTheirValuesAddedOneByOne) {
+    // Blocks of several sizes, an empty one among them, enough for the copies to run on both threads; appended
+    // after values already held, as the grids' second block is.
+    const std::vector<std::size_t> sizes{5, 0, 130, 1, 64, 200, 7};
+    VoxelValues joined, added;
+    for (std::size_t v = 0; v < 4; ++v) joined.add(openvdb::Index(v), sourceOf(99, v)), added.add(openvdb::Index(v), sourceOf(99, v));
+    std::vector<VoxelValues> blocks(sizes.size());
+    for (std::size_t b = 0; b < sizes.size(); ++b)
+        for (std::size_t v = 0; v < sizes[b]; ++v) {
+            blocks[b].add(openvdb::Index(v % 512), sourceOf(b, v));
+            added.add(openvdb::Index(v % 512), sourceOf(b, v));
+        }
+    const std::vector<std::size_t> start = joined.appendAll(std::move(blocks));
+    ASSERT_EQ(start.size(), sizes.size() + 1);
+    std::size_t expected = 4;
+    for (std::size_t b = 0; b < sizes.size(); ++b) {
+        EXPECT_EQ(start[b], expected) << b;
+        expected += sizes[b];
+    }
+    EXPECT_EQ(start.back(), expected);
+    expectSame(joined, added);
+}
+
+}  // namespace firn::bake
