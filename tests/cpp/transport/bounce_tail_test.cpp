@@ -14,7 +14,7 @@ struct TwoPatches {
         std::vector<std::int32_t>{0, 1, -1});
     SnowTopology topo;
     TwoPatches() {
-        topo.coord.resize(3);
+        topo.coord.assign(3, openvdb::Coord(0));  // the three in one bounce region
         topo.surfaceSlot = slot;
         topo.patches = SurfaceValues<SurfacePatch>(slot, 2);
         topo.patches.surface(0).area = topo.patches.surface(1).area = 1.0;
