@@ -108,7 +108,7 @@ ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const Incid
     // The topology's voxels and links, not copies: the topology outlives the solver (aliasing pointers owning
     // nothing).
     sys.A.coord = std::shared_ptr<const Stencil<float>::Voxels>(std::shared_ptr<void>(), &topo.coord);
-    sys.A.neighbour = std::shared_ptr<const Stencil<float>::Neighbours>(std::shared_ptr<void>(), &topo.link);
+    sys.A.neighbour = std::shared_ptr<const VoxelLinks>(std::shared_ptr<void>(), &topo.link);
     sys.A.conductance.resize(n), sys.A.diag.resize(n), sys.remainder.resize(n);
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto &range) {

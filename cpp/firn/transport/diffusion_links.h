@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "firn/transport/voxel_links.h"
 #include "firn/util/unwritten_vector.h"
 
 namespace firn {
@@ -38,12 +39,11 @@ inline Link interiorLink(double beta, double R) {
 // is the same from either end (its resistance, 3 sigma_tr over the h between their nodes, sums their sigma_tr in
 // either order), so the run's links along +x, +y and +z are computed first and its links along -x, -y and -z read
 // them where the neighbour lies in the run (the assembly's divisions were most of its time). The values are
-// interiorLink's, bit for bit. `link`: per unknown its neighbours -x, +x, -y, +y, -z, +z (negative: none,
-// SnowTopology::link); `density` kg/m^3; sigma_tr = sigmaTrPerDensity * density (1/m); h the voxel (m).
+// interiorLink's, bit for bit. `link`: per unknown its neighbours (voxel_links.h); `density` kg/m^3;
+// sigma_tr = sigmaTrPerDensity * density (1/m); h the voxel (m).
 class SharedLinks {
   public:
-    using Neighbours = UnwrittenVector<std::array<std::int32_t, 6>>;
-    SharedLinks(const Neighbours &link, const UnwrittenVector<float> &density, double sigmaTrPerDensity, double beta,
+    SharedLinks(const VoxelLinks &link, const UnwrittenVector<float> &density, double sigmaTrPerDensity, double beta,
                 double h, std::size_t begin, std::size_t end)
         : link_(link), density_(density), sigmaTrPerDensity_(sigmaTrPerDensity), beta_(beta), h_(h), begin_(begin),
           end_(end), upper_(3 * (end - begin)) {
@@ -66,7 +66,7 @@ class SharedLinks {
     Link computed(std::size_t i, std::size_t j) const {
         return interiorLink(beta_, 1.5 * h_ * (sigmaTrPerDensity_ * density_[i] + sigmaTrPerDensity_ * density_[j]));
     }
-    const Neighbours &link_;
+    const VoxelLinks &link_;
     const UnwrittenVector<float> &density_;
     double sigmaTrPerDensity_, beta_, h_;
     std::size_t begin_, end_;

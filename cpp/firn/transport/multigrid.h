@@ -8,6 +8,7 @@
 
 #include <openvdb/openvdb.h>
 
+#include "firn/transport/voxel_links.h"
 #include "firn/util/progress.h"
 #include "firn/util/unwritten_vector.h"
 
@@ -18,11 +19,10 @@ namespace firn {
 // with row i reading  diag_i x_i - sum_k conductance_ik x_neighbour(i,k)  (conductance >= 0, diag >= sum).
 template <typename T>
 struct Stencil {
-    // Per row, its neighbours -x, +x, -y, +y, -z, +z: a row, or negative for none (SnowTopology::link's layout,
-    // so that conjugate gradients read the topology's links rather than a copy of them: 24 bytes per row; the
-    // multigrid's finest level holds its rows regrouped by colour, with a table of its own).
-    // Sized unwritten: whoever sizes a table writes every row, in parallel.
-    using Neighbours = UnwrittenVector<std::array<std::int32_t, 6>>;
+    // Per row, its neighbours (voxel_links.h): the topology's own table, so that conjugate gradients read its links
+    // rather than a copy of them (24 bytes per row; the multigrid's finest level holds its rows regrouped by colour,
+    // with a table of its own).
+    using Neighbours = VoxelLinks;
     using Voxels = UnwrittenVector<openvdb::Coord>;
     static constexpr std::int32_t kNone = -1;
     // Voxel per row (axis neighbours differ by 1); shared, so that the bake's finest level reads the topology's

@@ -14,6 +14,7 @@
 
 #include "firn/transport/medium.h"
 #include "firn/transport/scene.h"
+#include "firn/transport/voxel_links.h"
 #include "firn/util/progress.h"
 #include "firn/util/unwritten_vector.h"
 
@@ -115,7 +116,7 @@ struct SnowTopology {
     // Sized unwritten (UnwrittenVector): buildSnowTopology's leaf loop writes every unknown's, in parallel.
     UnwrittenVector<openvdb::Coord> coord;
     UnwrittenVector<float> density;                     // kg/m^3
-    UnwrittenVector<std::array<std::int32_t, 6>> link;  // >= 0: neighbour unknown; < 0: face -1 - link
+    VoxelLinks link;                                    // >= 0: neighbour unknown; < 0: face -1 - link
     std::vector<BoundaryFace> faces;
     std::shared_ptr<const std::vector<std::int32_t>> surfaceSlot;  // per unknown: index among surface voxels, or -1
     SurfaceValues<SurfacePatch> patches;  // per unknown (area 0 inside the snow)

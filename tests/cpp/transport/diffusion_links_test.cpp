@@ -14,7 +14,7 @@ namespace {
 // A block of nx x ny x nz voxels with every third voxel of a diagonal pattern missing (holes, so links end at
 // faces), unknowns in x-major order as the topology's, densities drawn at random (as the car's: all distinct).
 struct Block {
-    SharedLinks::Neighbours link;
+    VoxelLinks link;
     UnwrittenVector<float> density;
 };
 Block holedBlock(int nx, int ny, int nz, std::uint32_t seed) {
