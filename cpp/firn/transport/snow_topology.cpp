@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/transport/link_triangles.h"
+#include "firn/util/threads.h"
 #include "firn/util/work_check.h"
 
 namespace firn {
@@ -467,9 +468,11 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
         }
     });
     computeSurfacePatches(medium, topo, progress);
-    computeNeighbourhoods(topo, progress);
-    computeCurvatures(topo, progress);
-    computeShell(medium, topo, shellVoxels, progress);
+    // The shell's Dijkstra runs on one thread: the neighbourhoods and curvatures (parallel loops) run beside it. They
+    // write apart (the shell's owners and weights; the neighbourhood lists and the patches' curvatures) and read what
+    // the patches and links already hold.
+    runBeside([&] { computeNeighbourhoods(topo, progress), computeCurvatures(topo, progress); },
+              [&] { computeShell(medium, topo, shellVoxels, progress); });
     progress.report(1.0);
     return topo;
 }
