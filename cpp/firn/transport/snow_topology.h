@@ -117,7 +117,7 @@ struct SnowTopology {
     UnwrittenVector<openvdb::Coord> coord;
     UnwrittenVector<float> density;                     // kg/m^3
     VoxelLinks link;                                    // >= 0: neighbour unknown; < 0: face -1 - link
-    std::vector<BoundaryFace> faces;
+    UnwrittenVector<BoundaryFace> faces;                // the leaf loop's faces, copied in by a parallel loop
     std::shared_ptr<const std::vector<std::int32_t>> surfaceSlot;  // per unknown: index among surface voxels, or -1
     SurfaceValues<SurfacePatch> patches;  // per unknown (area 0 inside the snow)
     // Surface voxels: the surface voxels of their 3^3 block, themselves included (CSR over unknowns).
