@@ -46,12 +46,12 @@ struct VoxelValues {
     // where the last one's end.
     std::vector<std::size_t> appendAll(std::vector<VoxelValues> &&blocks) {
         std::vector<std::size_t> start{values.size()};
-        for (VoxelValues &block : blocks) {
-            for (const PeakedLobes::Peak &peak : block.peaked.peaks())
-                peaked.push({std::uint32_t(start.back() + peak.key), peak.peak0, peak.peak1});
-            block.peaked = PeakedLobes();
+        std::vector<const PeakedLobes::Peaks *> peaks;  // block b's keys shifted by start[b]
+        for (const VoxelValues &block : blocks) {
+            peaks.push_back(&block.peaked.peaks());
             start.push_back(start.back() + block.values.size());
         }
+        peaked.appendAll(peaks, start);
         values.resize(start.back());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16), [&](const auto &range) {
             for (std::size_t b = range.begin(); b != range.end(); ++b) {

@@ -160,7 +160,7 @@ SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const 
     constexpr std::size_t kBlock = 1024;
     SourceValues out;
     out.broad.resize(topo.size());
-    std::vector<std::vector<PeakedLobes::Peak>> peaked((topo.size() + kBlock - 1) / kBlock);
+    std::vector<PeakedLobes::Peaks> peaked((topo.size() + kBlock - 1) / kBlock);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, peaked.size(), 1), [&](const auto &blocks) {
         TracedIndex tracedIndex(traced);
         std::vector<Source> values;
@@ -179,8 +179,9 @@ SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const 
             }
         }
     });
-    for (const auto &block : peaked)
-        for (const PeakedLobes::Peak &peak : block) out.peaked.push(peak);
+    std::vector<const PeakedLobes::Peaks *> blocks;
+    for (const PeakedLobes::Peaks &block : peaked) blocks.push_back(&block);
+    out.peaked.appendAll(blocks, std::vector<std::size_t>(blocks.size(), 0));
     return out;
 }
 

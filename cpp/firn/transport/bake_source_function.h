@@ -31,7 +31,8 @@ class PeakedLobes {
         std::uint32_t key;
         glm::vec3 peak0, peak1;
     };
-    const std::vector<Peak> &peaks() const { return peaks_; }  // in key order
+    using Peaks = UnwrittenVector<Peak>;
+    const Peaks &peaks() const { return peaks_; }  // in key order
     static bool holds(const Source &S) { return S.peak0 != glm::vec3(0.0f) || S.peak1 != glm::vec3(0.0f); }
     void add(std::size_t key, const Source &S) {  // keys in increasing order
         if (holds(S)) push({std::uint32_t(key), S.peak0, S.peak1});
@@ -42,7 +43,24 @@ class PeakedLobes {
         held_[word] |= std::uint64_t(1) << (peak.key % 64);
         peaks_.push_back(peak);
     }
-    std::vector<Peak>::const_iterator from(std::size_t key) const {  // the first peak of key >= key
+    // The blocks' peaks after these, block b's keys shifted by keyShift[b] (all keys in increasing order): as pushed
+    // one by one, with the peaks copied and the bitmap's words worked out in parallel (pushed one by one, the car's
+    // 640,000 were a single-threaded step of its source function and its grids; docs/benchmarks.md, lead-81).
+    void appendAll(const std::vector<const Peaks *> &blocks, const std::vector<std::size_t> &keyShift) {
+        std::vector<std::size_t> at{peaks_.size()};
+        for (const Peaks *block : blocks) at.push_back(at.back() + block->size());
+        if (at.back() == at.front()) return;
+        peaks_.resize(at.back());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16), [&](const auto &range) {
+            for (std::size_t b = range.begin(); b != range.end(); ++b)
+                std::transform(blocks[b]->begin(), blocks[b]->end(), peaks_.begin() + at[b], [&](Peak peak) {
+                    peak.key = std::uint32_t(peak.key + keyShift[b]);
+                    return peak;
+                });
+        });
+        indexWords(peaks_[at.front()].key / 64);
+    }
+    Peaks::const_iterator from(std::size_t key) const {  // the first peak of key >= key
         return std::lower_bound(peaks_.begin(), peaks_.end(), key,
                                 [](const Peak &p, std::size_t k) { return p.key < k; });
     }
@@ -61,7 +79,21 @@ class PeakedLobes {
     }
 
   private:
-    std::vector<Peak> peaks_;            // in key order, added by push() alone (the bitmap follows it)
+    // held_ and before_ from word `first` on (it may hold earlier peaks too), read off the peaks: as push() leaves them.
+    void indexWords(std::size_t first) {
+        const std::size_t words = peaks_.back().key / 64 + 1;
+        held_.resize(words), before_.resize(words);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(first, words, 4096), [&](const auto &range) {
+            auto peak = from(64 * range.begin());
+            for (std::size_t w = range.begin(); w != range.end(); ++w) {
+                before_[w] = std::uint32_t(peak - peaks_.begin());
+                std::uint64_t bits = 0;
+                for (; peak != peaks_.end() && peak->key < 64 * (w + 1); ++peak) bits |= std::uint64_t(1) << (peak->key % 64);
+                held_[w] = bits;
+            }
+        });
+    }
+    Peaks peaks_;                        // in key order, added by push() and appendAll() (the bitmap follows it)
     std::vector<std::uint64_t> held_;    // bit key % 64 of word key / 64: whether key holds a peak
     std::vector<std::uint32_t> before_;  // per word: the peaks of smaller keys
 };

@@ -59,3 +59,46 @@ TEST(VoxelValues, BlocksAppendedTogetherReadAsTheirValuesAddedOneByOne) {
 }
 
 }  // namespace firn::bake
+
+namespace firn::bake {
+
+// The source function's and the grids' peaked lobes are found per block in parallel and joined
+// (PeakedLobes::appendAll): joined, every key must read the peak it would have pushed one by one, gaps of many bitmap
+// words between keys, a block starting inside the last word already held and empty blocks included.
+TEST(PeakedLobes, BlocksAppendedTogetherReadAsPeaksPushedOneByOne) {
+    const auto peakAt = [](std::size_t key) {
+        return PeakedLobes::Peak{std::uint32_t(key), glm::vec3(float(key)), glm::vec3(1.0f, float(key % 7), 2.0f)};
+    };
+    PeakedLobes joined, pushed;
+    for (std::size_t key : {3, 40}) joined.push(peakAt(key)), pushed.push(peakAt(key));
+    // Block b's keys relative to its shift; the first block's first key (50) shares word 0 with key 40.
+    const std::vector<std::vector<std::size_t>> keys{{0, 1, 77}, {}, {5, 4000, 300000}, {0}, {63, 64, 65, 900000}};
+    const std::vector<std::size_t> shift{50, 400000, 400000, 800000, 800001};
+    std::vector<PeakedLobes::Peaks> blocks(keys.size());
+    std::vector<const PeakedLobes::Peaks *> pointers;
+    for (std::size_t b = 0; b < keys.size(); ++b) {
+        for (const std::size_t key : keys[b]) {
+            PeakedLobes::Peak relative = peakAt(shift[b] + key);
+            relative.key = std::uint32_t(key);
+            blocks[b].push_back(relative);
+            pushed.push(peakAt(shift[b] + key));
+        }
+        pointers.push_back(&blocks[b]);
+    }
+    joined.appendAll(pointers, shift);
+    ASSERT_EQ(joined.peaks().size(), pushed.peaks().size());
+    for (std::size_t k = 0; k < pushed.peaks().size(); ++k) EXPECT_EQ(joined.peaks()[k].key, pushed.peaks()[k].key) << k;
+    const std::size_t last = pushed.peaks().back().key;
+    Source broad;
+    broad.l0 = glm::vec3(0.5f);
+    std::size_t held = 0;
+    for (std::size_t key = 0; key <= last + 130; ++key) {
+        const Source a = joined.with(broad, key), b = pushed.with(broad, key);
+        ASSERT_EQ(a.peak0, b.peak0) << key;
+        ASSERT_EQ(a.peak1, b.peak1) << key;
+        held += PeakedLobes::holds(b);
+    }
+    EXPECT_EQ(held, pushed.peaks().size());  // every peak was read at its key
+}
+
+}  // namespace firn::bake
