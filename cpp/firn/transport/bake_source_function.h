@@ -79,7 +79,8 @@ class PeakedLobes {
     }
 
   private:
-    // held_ and before_ from word `first` on (it may hold earlier peaks too), read off the peaks: as push() leaves them.
+    // held_ and before_ from word `first` on (it may hold earlier peaks too), read off the peaks: as push() leaves
+    // them.
     void indexWords(std::size_t first) {
         const std::size_t words = peaks_.back().key / 64 + 1;
         held_.resize(words), before_.resize(words);
@@ -88,7 +89,8 @@ class PeakedLobes {
             for (std::size_t w = range.begin(); w != range.end(); ++w) {
                 before_[w] = std::uint32_t(peak - peaks_.begin());
                 std::uint64_t bits = 0;
-                for (; peak != peaks_.end() && peak->key < 64 * (w + 1); ++peak) bits |= std::uint64_t(1) << (peak->key % 64);
+                for (; peak != peaks_.end() && peak->key < 64 * (w + 1); ++peak)
+                    bits |= std::uint64_t(1) << (peak->key % 64);
                 held_[w] = bits;
             }
         });

@@ -58,10 +58,6 @@ TEST(VoxelValues, BlocksAppendedTogetherReadAsTheirValuesAddedOneByOne) {
     expectSame(joined, added);
 }
 
-}  // namespace firn::bake
-
-namespace firn::bake {
-
 // The source function's and the grids' peaked lobes are found per block in parallel and joined
 // (PeakedLobes::appendAll): joined, every key must read the peak it would have pushed one by one, gaps of many bitmap
 // words between keys, a block starting inside the last word already held and empty blocks included.
@@ -87,7 +83,8 @@ TEST(PeakedLobes, BlocksAppendedTogetherReadAsPeaksPushedOneByOne) {
     }
     joined.appendAll(pointers, shift);
     ASSERT_EQ(joined.peaks().size(), pushed.peaks().size());
-    for (std::size_t k = 0; k < pushed.peaks().size(); ++k) EXPECT_EQ(joined.peaks()[k].key, pushed.peaks()[k].key) << k;
+    for (std::size_t k = 0; k < pushed.peaks().size(); ++k)
+        EXPECT_EQ(joined.peaks()[k].key, pushed.peaks()[k].key) << k;
     const std::size_t last = pushed.peaks().back().key;
     Source broad;
     broad.l0 = glm::vec3(0.5f);
