@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <memory>
+#include <new>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -10,12 +11,15 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/util/huge_pages.h"
+
 namespace firn {
 
 // An allocator whose vectors grow (resize) without writing their new elements: for per-unknown arrays that a
 // parallel loop then writes in full. Each page is first touched (faulted in and cleared by the kernel) by the thread
 // that writes it, not zero-filled on the calling thread beforehand; copies and assign(n, value) write as usual.
 // (docs/benchmarks.md, car-prof: such fills made 14-36 % of the solve stages' processor time single-threaded.)
+// Large blocks are huge-paged (huge_pages.h).
 template <class T>
 struct UnwrittenAllocator : std::allocator<T> {
     template <class U>
@@ -25,6 +29,16 @@ struct UnwrittenAllocator : std::allocator<T> {
     UnwrittenAllocator() = default;
     template <class U>
     UnwrittenAllocator(const UnwrittenAllocator<U> &) noexcept {}
+
+    T *allocate(std::size_t n) {
+        if (n < kHugePagedBytes / sizeof(T)) return std::allocator<T>::allocate(n);
+        if (n > std::size_t(-1) / sizeof(T)) throw std::bad_array_new_length();
+        return static_cast<T *>(allocateHugePaged(n * sizeof(T)));
+    }
+    void deallocate(T *p, std::size_t n) noexcept {
+        if (n < kHugePagedBytes / sizeof(T)) return std::allocator<T>::deallocate(p, n);
+        freeHugePaged(p, n * sizeof(T));
+    }
 
     template <class U>
     void construct(U *) noexcept {
