@@ -172,10 +172,10 @@ constexpr int kSplitChannel = 1;
 // differ little), solved in the next channel's phi before that channel starts: no array more at the solves' plateau,
 // the bake's peak memory. Returns the iterations.
 int solveBeamsApart(const SnowTopology &topo, const MultigridSolver &solver, MultigridSolver::Workspace &workspace,
-                    const std::vector<double> &phi, double sources, std::vector<double> &beams, SurfaceTerms &surface,
+                    const UnwrittenVector<double> &phi, double sources, UnwrittenVector<double> &beams, SurfaceTerms &surface,
                     const SubProgress &progress) {
-    std::vector<double> b = std::move(workspace.spare);  // the spent solve's right-hand side
-    b = beams;
+    UnwrittenVector<double> b = std::move(workspace.spare);  // the spent solve's right-hand side
+    parallelCopy(beams, b);
     double beamSources = 0.0;  // W
     for (const double v : b) beamSources += v;
     int iterations = 0;
@@ -216,8 +216,8 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
     const bool reference = settings.quality == BakeQuality::Reference;
     const double solved = reference ? kSolvedProgressReference : kSolvedProgress;
     const SubProgress cancel(&p, 0.0, 0.0);  // checked for cancellation by the steps that report no progress
-    std::array<std::vector<double>, 3> phi;  // each solve starts from the previous pass's solution
-    for (auto &channel : phi) channel.assign(topo.size(), 0.0);
+    std::array<UnwrittenVector<double>, 3> phi;  // each solve starts from the previous pass's solution
+    for (auto &channel : phi) parallelAssign(channel, topo.size(), 0.0);
     SnowIrradiance fromSnow;  // gathered from other snow onto surface patches (after the first pass)
     SurfaceValues<glm::vec3> before, older;  // the two gathers before it (bounceTail only)
     SourceValues source;
@@ -276,7 +276,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                 if (beamsApart)
                     for (const double v : system.b) sources += v;
                 // Albedos differ little between channels.
-                if (c > 0 && (pass == 0 || (splitPass && c == kSplitChannel + 1))) phi[c] = phi[c - 1];
+                if (c > 0 && (pass == 0 || (splitPass && c == kSplitChannel + 1))) parallelCopy(phi[c - 1], phi[c]);
                 if (topo.size() > 0) {
                     // The channel before's levels taken over: the rows, blocks and colours are the same.
                     MultigridSolver solver(std::move(system.A), std::move(system.remainder), &workspace);

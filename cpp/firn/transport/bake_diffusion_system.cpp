@@ -97,7 +97,7 @@ double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, doubl
 
 ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
                        const SurfaceValues<float> &skinRings, int c, const SubProgress &progress,
-                       ChannelStorage storage, std::vector<double> *beamSources) {
+                       ChannelStorage storage, UnwrittenVector<double> *beamSources) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
     const Channel ch{optics.extinctionPerDensity, optics.albedo[c], optics.g};

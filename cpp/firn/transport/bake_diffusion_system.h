@@ -35,7 +35,7 @@ struct Channel {
 struct ChannelStorage {
     Stencil<float> A;
     UnwrittenVector<float> remainder;
-    std::vector<double> b;
+    UnwrittenVector<double> b;
 };
 
 // What crosses a channel's air faces, per surface voxel: what the light leaving the surface (surfaceLight) reads of
@@ -55,7 +55,7 @@ struct SurfaceTerms {
 struct ChannelSystem {
     Stencil<float> A;              // what the solver keeps of the operator (MultigridSolver)
     UnwrittenVector<float> remainder;  // diag minus the conductances, summed in double (assemble writes every row)
-    std::vector<double> b;  // W: diffuse sources at the voxel nodes
+    UnwrittenVector<double> b;  // W: diffuse sources at the voxel nodes
     SurfaceTerms surface;   // surface voxels only (what crosses air faces)
     // Per unit of diffuse irradiance on the surface patch (W/m^2): the node's source and the light
     // returned at once (m^2), so that light from other snow adds to the sources as sky light does.
@@ -94,6 +94,6 @@ double schemeBeamAlbedo(const Channel &ch, double d, double L, double mu0, doubl
 // the rest is the sky's): the solve is linear, so its solution apart is the fluence the beams drive.
 ChannelSystem assemble(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
                        const SurfaceValues<float> &skinRings, int c, const SubProgress &progress,
-                       ChannelStorage storage, std::vector<double> *beamSources = nullptr);
+                       ChannelStorage storage, UnwrittenVector<double> *beamSources = nullptr);
 
 }  // namespace firn::bake

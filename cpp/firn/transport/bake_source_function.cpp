@@ -24,7 +24,7 @@ namespace {
 // fluence: S = omega / (4 pi) (phi + 3 g F . w), F = -D grad phi, plus the beams scattered once (the peaked
 // lobe). After the solves (during them it would take 48 bytes per unknown).
 void insideSource(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                  const std::array<std::vector<double>, 3> &phi, const tbb::blocked_range<std::size_t> &range,
+                  const std::array<UnwrittenVector<double>, 3> &phi, const tbb::blocked_range<std::size_t> &range,
                   Source *out) {
     const Medium &medium = *scene.medium;
     const VolumeOptics &optics = medium.optics();
@@ -155,7 +155,7 @@ void composeSource(const SnowTopology &topo, const SurfaceValues<Source> &surfac
 // where a surface's values are carried beyond the snow: a thin object's surface voxels are traced, and its rim
 // shows their light.
 SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                            const std::array<std::vector<double>, 3> &phi, const SurfaceValues<Source> &surface,
+                            const std::array<UnwrittenVector<double>, 3> &phi, const SurfaceValues<Source> &surface,
                             const MonteCarloVoxels &traced, const SubProgress &progress) {
     constexpr std::size_t kBlock = 1024;
     SourceValues out;

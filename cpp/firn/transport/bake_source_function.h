@@ -132,7 +132,7 @@ PeakedLobes rampPeaks(const Scene &scene, const SnowTopology &topo, const Surfac
 
 // The source function of every unknown from the channels' fluence phi, the surface's radiance and the traced voxels.
 SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const IncidentLight &light,
-                            const std::array<std::vector<double>, 3> &phi, const SurfaceValues<Source> &surface,
+                            const std::array<UnwrittenVector<double>, 3> &phi, const SurfaceValues<Source> &surface,
                             const MonteCarloVoxels &traced, const SubProgress &progress);
 
 // REFERENCE quality: the surface voxels' radiance path traced (`samples` paths a direction) into `out`.

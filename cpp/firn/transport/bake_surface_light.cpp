@@ -25,7 +25,7 @@ constexpr double kFlatCosine = 0.999;
 
 // The three channels' fluence gradients along surface voxel i's patch (per m): least squares over the surface voxels
 // of its 3^3 block (weighted by the cosine between their normals and its own), in its tangent plane.
-std::array<glm::dvec3, 3> surfaceGradients(const SnowTopology &topo, const std::array<std::vector<double>, 3> &phi,
+std::array<glm::dvec3, 3> surfaceGradients(const SnowTopology &topo, const std::array<UnwrittenVector<double>, 3> &phi,
                                            std::size_t i, double h) {
     const glm::dvec3 n = topo.patches[i].normal;
     const glm::dvec3 u = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
@@ -176,7 +176,7 @@ glm::dvec3 travelAlong(const glm::dvec3 &d, const glm::dvec3 &n) {
 // The three channels' light leaving each surface voxel, from their solves: per voxel the channels in turn, the
 // geometry and the neighbours read once for the three.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
-                  const std::array<SurfaceTerms, 3> &terms, const std::array<std::vector<double>, 3> &phi,
+                  const std::array<SurfaceTerms, 3> &terms, const std::array<UnwrittenVector<double>, 3> &phi,
                   bool flatFaces, SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces,
                   const SubProgress &progress) {
     const Medium &medium = *scene.medium;

@@ -157,7 +157,7 @@ inline SourceLobe withCrossing(const SourceLobe &lobe, const SurfaceLight &light
 // and where `flatFaces` the sharp edge voxels' flat faces' own lobes (`edgeFaces`; else none). Stops with
 // firn::Cancelled when `progress` is cancelled.
 void surfaceLight(const Scene &scene, const SnowTopology &topo, const IncidentLight &light, const SnowLight &snow,
-                  const std::array<SurfaceTerms, 3> &terms, const std::array<std::vector<double>, 3> &phi,
+                  const std::array<SurfaceTerms, 3> &terms, const std::array<UnwrittenVector<double>, 3> &phi,
                   bool flatFaces, SurfaceValues<SurfaceLight> &out, EdgeFaceLobes &edgeFaces,
                   const SubProgress &progress);
 

@@ -342,7 +342,7 @@ double dot(const VectorA &a, const VectorB &b) {
         return part;
     });
 }
-double infNorm(const std::vector<double> &a) {
+double infNorm(const UnwrittenVector<double> &a) {
     return tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, a.size()), 0.0,
         [&](const auto &range, double most) {
@@ -354,7 +354,7 @@ double infNorm(const std::vector<double> &a) {
 // z = one V-cycle applied to r, scaled into float's range (the bake's sources span many decades between scenes) by
 // r's largest |r_i|.
 template <typename Vector>
-void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector<double> &r, double largest,
+void precondition(const MultigridSolver::Hierarchy &hierarchy, const UnwrittenVector<double> &r, double largest,
                   Vector &z) {
     const auto &top = hierarchy.levels.front();
     const UnwrittenVector<std::uint32_t> &row = hierarchy.colourRow;
@@ -366,14 +366,14 @@ void precondition(const MultigridSolver::Hierarchy &hierarchy, const std::vector
 
 // y = a x + y.
 template <typename Vector>
-void axpy(double a, const Vector &x, std::vector<double> &y) {
+void axpy(double a, const Vector &x, UnwrittenVector<double> &y) {
     parallelRows(y.size(), [&](std::size_t i) { y[i] = a * x[i] + y[i]; });
 }
 
 // The iteration's step in one pass over the vectors: x += alpha p, r -= alpha q; returns <r, r> (as dot) and sets
 // `largest` to the largest |r_i| of the new r.
 template <typename Vector>
-double step(double alpha, const Vector &p, const Vector &q, std::vector<double> &x, std::vector<double> &r,
+double step(double alpha, const Vector &p, const Vector &q, UnwrittenVector<double> &x, UnwrittenVector<double> &r,
             double &largest) {
     std::array<double, kSegments> most{};  // per segment of segmentedSum
     const double sum = segmentedSum(r.size(), [&](std::size_t s, std::size_t begin, std::size_t end) {
@@ -472,7 +472,7 @@ std::pair<Stencil<float>, UnwrittenVector<float>> MultigridSolver::release(Works
     return out;
 }
 
-MultigridSolver::Result MultigridSolver::solve(std::vector<double> b, std::vector<double> &x,
+MultigridSolver::Result MultigridSolver::solve(UnwrittenVector<double> b, UnwrittenVector<double> &x,
                                                double relativeTolerance, int maxIterations,
                                                const SubProgress &progress, Workspace *workspace) const {
     Workspace local;
@@ -482,7 +482,7 @@ MultigridSolver::Result MultigridSolver::solve(std::vector<double> b, std::vecto
     return result;
 }
 
-MultigridSolver::Result MultigridSolver::iterate(std::vector<double> &b, std::vector<double> &x,
+MultigridSolver::Result MultigridSolver::iterate(UnwrittenVector<double> &b, UnwrittenVector<double> &x,
                                                  double relativeTolerance, int maxIterations,
                                                  const SubProgress &progress, Workspace &w) const {
     const std::size_t n = b.size();
@@ -497,7 +497,7 @@ MultigridSolver::Result MultigridSolver::iterate(std::vector<double> &b, std::ve
     const double tolerance = std::max(relativeTolerance, kFinestTolerance);
     const double largestB = infNorm(b), normB = largestB == 0.0 ? 1.0 : largestB;
     w.p.resize(n), w.z.resize(n);
-    std::vector<double> &r = b;
+    UnwrittenVector<double> &r = b;
     UnwrittenVector<double> &p = w.p, &z = w.z;  // z: M^-1 r, then A p
     A.multiply(x.data(), z.data());
     axpy(-1.0, z, r);  // r = b - A x

@@ -65,7 +65,7 @@ class MultigridSolver {
     struct Hierarchy;  // levels, defined in multigrid.cpp (so held by shared_ptr: complete where it is deleted)
     struct Workspace {
         UnwrittenVector<double> p, z;  // written before they are read
-        std::vector<double> spare;          // b's storage after a solve (holding its last residual)
+        UnwrittenVector<double> spare;      // b's storage after a solve (holding its last residual)
         std::shared_ptr<Hierarchy> levels;  // a spent solver's levels, or none
     };
 
@@ -91,7 +91,7 @@ class MultigridSolver {
     // x holds the initial guess on entry and is iterated in place; b is taken (pass it with std::move where it
     // is not needed after) and holds the residual meanwhile. Throws Cancelled when progress is cancelled (x then
     // holds the last iterate).
-    Result solve(std::vector<double> b, std::vector<double> &x, double relativeTolerance, int maxIterations,
+    Result solve(UnwrittenVector<double> b, UnwrittenVector<double> &x, double relativeTolerance, int maxIterations,
                  const SubProgress &progress, Workspace *workspace = nullptr) const;
 
     // The finest level's operator and remainder handed back, the solver spent: their storage can hold the next
@@ -102,7 +102,7 @@ class MultigridSolver {
     int levelCount() const;
 
   private:
-    Result iterate(std::vector<double> &b, std::vector<double> &x, double relativeTolerance, int maxIterations,
+    Result iterate(UnwrittenVector<double> &b, UnwrittenVector<double> &x, double relativeTolerance, int maxIterations,
                    const SubProgress &progress, Workspace &workspace) const;
 
     std::shared_ptr<Hierarchy> hierarchy_;

@@ -74,4 +74,14 @@ void parallelAssign(UnwrittenVector<T> &v, std::size_t n, const T &value) {
     });
 }
 
+// `to` made a copy of `from`, written in parallel (what `to = from` does on the calling thread alone).
+template <class T>
+void parallelCopy(const UnwrittenVector<T> &from, UnwrittenVector<T> &to) {
+    to.resize(from.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, from.size(), 16384),
+                      [&](const tbb::blocked_range<std::size_t> &r) {
+                          std::copy(from.begin() + r.begin(), from.begin() + r.end(), to.begin() + r.begin());
+                      });
+}
+
 }  // namespace firn

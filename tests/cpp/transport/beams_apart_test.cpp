@@ -34,17 +34,17 @@ Scene litBox(bool sun, bool sky) {
 // The green channel's system of `scene`, with its beams' part of the sources in `beams`.
 struct Apart {
     bake::ChannelSystem system;
-    std::vector<double> beams;
+    UnwrittenVector<double> beams;
 };
 Apart greenSystem(const Scene &scene, const SnowTopology &topo) {
     const SubProgress none(nullptr, 0.0, 1.0);
     const IncidentLight light = computeIncidentLight(scene, topo, {16, 4, 7, false}, none);
-    std::vector<double> beams(topo.size(), -1.0);
+    UnwrittenVector<double> beams(topo.size(), -1.0);
     bake::ChannelSystem system = bake::assemble(scene, topo, light, bake::skinRingGrowths(scene, topo, none), 1, none, bake::ChannelStorage{}, &beams);
     return {std::move(system), std::move(beams)};
 }
 
-double largest(const std::vector<double> &v) {
+double largest(const UnwrittenVector<double> &v) {
     double m = 0.0;
     for (const double x : v) m = std::max(m, std::abs(x));
     return m;
@@ -79,10 +79,10 @@ TEST(BeamsApart, TheTwoSolutionsAddUpToTheSingleSolve) {
     Apart apart = greenSystem(both, topo);
     bake::ChannelSystem &system = apart.system;
     const SubProgress none(nullptr, 0.0, 1.0);
-    std::vector<double> beams = apart.beams, sky(system.b);
+    UnwrittenVector<double> beams = apart.beams, sky(system.b);
     for (std::size_t i = 0; i < sky.size(); ++i) sky[i] -= beams[i];
     const MultigridSolver solver(std::move(system.A), std::move(system.remainder));
-    std::vector<double> phi(topo.size(), 0.0), phiBeams(phi), phiSky(phi);
+    UnwrittenVector<double> phi(topo.size(), 0.0), phiBeams(phi), phiSky(phi);
     solver.solve(system.b, phi, 1e-10, 500, none);
     solver.solve(beams, phiBeams, 1e-10, 500, none);
     solver.solve(sky, phiSky, 1e-10, 500, none);

@@ -51,7 +51,7 @@ TEST(Multigrid, SolvesToToleranceInFewIterationsAtAnySize) {
     for (int r : {8, 16, 24}) {
         StencilOperator A = ballProblem(r, 1e-3);
         const StencilOperator copy = A;
-        std::vector<double> b(A.size()), x(A.size(), 0.0), Ax(A.size());
+        UnwrittenVector<double> b(A.size()), x(A.size(), 0.0), Ax(A.size());
         for (std::size_t i = 0; i < b.size(); ++i) b[i] = (*A.coord)[i].z() > r / 2 ? 1.0 : 0.0;
         const MultigridSolver solver(std::move(A));
         const auto result = solver.solve(b, x, 1e-7, 100, SubProgress(nullptr, 0, 1));
@@ -90,7 +90,7 @@ TEST(Multigrid, BlocksThatTouchWithoutLinksStayApart) {
         }
     A.coord = coord, A.neighbour = std::move(neighbour);
     const StencilOperator copy = A;
-    std::vector<double> b(n), x(n, 0.0), Ax(n);
+    UnwrittenVector<double> b(n), x(n, 0.0), Ax(n);
     for (std::size_t i = 0; i < n; ++i) b[i] = (*coord)[i].z() == 0 ? 1.0 : 0.0;
     const MultigridSolver solver(std::move(A));
     ASSERT_GE(solver.levelCount(), 2);
@@ -110,7 +110,7 @@ TEST(Multigrid, BlocksThatTouchWithoutLinksStayApart) {
 struct TwoSystems {
     StencilOperator first = ballProblem(12, 1e-2), second = onVoxelsOf(first, ballProblem(12, 1e-4));
     std::size_t n = second.size();
-    std::vector<double> b = rightHandSide(second), fresh = std::vector<double>(n, 0.0);
+    UnwrittenVector<double> b = rightHandSide(second), fresh = UnwrittenVector<double>(n, 0.0);
     MultigridSolver freshSolver{second};
     MultigridSolver::Result freshResult = freshSolver.solve(b, fresh, 1e-9, 100, SubProgress(nullptr, 0, 1));
 
@@ -119,8 +119,8 @@ struct TwoSystems {
         A.coord = voxels.coord, A.neighbour = voxels.neighbour;
         return A;
     }
-    static std::vector<double> rightHandSide(const StencilOperator &A) {
-        std::vector<double> b(A.size());
+    static UnwrittenVector<double> rightHandSide(const StencilOperator &A) {
+        UnwrittenVector<double> b(A.size());
         for (std::size_t i = 0; i < A.size(); ++i) b[i] = (*A.coord)[i].z() > 4 ? 1.0 : 0.0;
         return b;
     }
@@ -128,7 +128,7 @@ struct TwoSystems {
     // written over its operator's storage, as the bake's assembly does.
     std::pair<Stencil<float>, UnwrittenVector<float>> secondInFirstsStorage(MultigridSolver::Workspace &workspace,
                                                                          bool keepLevels) const {
-        std::vector<double> x(n, 0.0);
+        UnwrittenVector<double> x(n, 0.0);
         MultigridSolver solver(first);
         solver.solve(b, x, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
         auto [A, remainder] = std::move(solver).release(keepLevels ? &workspace : nullptr);
@@ -159,9 +159,9 @@ TEST(Multigrid, SolvesInAnEarlierSolvesVectorsAsInFreshOnes) {
     ASSERT_EQ(remainder.size(), systems.n);
     ASSERT_EQ(workspace.spare.size(), systems.n);
     EXPECT_EQ(workspace.levels, nullptr);
-    std::vector<double> reusedB = std::move(workspace.spare);
+    UnwrittenVector<double> reusedB = std::move(workspace.spare);
     std::copy(systems.b.begin(), systems.b.end(), reusedB.begin());
-    std::vector<double> reused(systems.n, 0.0);
+    UnwrittenVector<double> reused(systems.n, 0.0);
     const auto reusedResult = MultigridSolver(std::move(A), std::move(remainder))
                                   .solve(std::move(reusedB), reused, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
     EXPECT_EQ(reusedResult.iterations, systems.freshResult.iterations);
@@ -181,7 +181,7 @@ TEST(Multigrid, TakesOverASpentSolversLevelsAsAFreshBuild) {
     const MultigridSolver taken = systems.secondAfterFirst(workspace, false);
     EXPECT_EQ(workspace.levels, nullptr);  // taken over, not copied
     EXPECT_EQ(taken.levelCount(), systems.freshSolver.levelCount());
-    std::vector<double> reused(systems.n, 0.0);
+    UnwrittenVector<double> reused(systems.n, 0.0);
     const auto takenResult = taken.solve(systems.b, reused, 1e-9, 100, SubProgress(nullptr, 0, 1), &workspace);
     EXPECT_GT(takenResult.iterations, 1);
     EXPECT_EQ(takenResult.iterations, systems.freshResult.iterations);
@@ -190,7 +190,7 @@ TEST(Multigrid, TakesOverASpentSolversLevelsAsAFreshBuild) {
 
 TEST(Multigrid, HonoursCancellation) {
     StencilOperator A = ballProblem(10, 1e-6);
-    std::vector<double> b(A.size(), 1.0), x(A.size(), 0.0);
+    UnwrittenVector<double> b(A.size(), 1.0), x(A.size(), 0.0);
     const MultigridSolver solver(std::move(A));
     Progress progress;
     progress.cancel();
