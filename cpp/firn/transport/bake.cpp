@@ -172,8 +172,8 @@ constexpr int kSplitChannel = 1;
 // differ little), solved in the next channel's phi before that channel starts: no array more at the solves' plateau,
 // the bake's peak memory. Returns the iterations.
 int solveBeamsApart(const SnowTopology &topo, const MultigridSolver &solver, MultigridSolver::Workspace &workspace,
-                    const UnwrittenVector<double> &phi, double sources, UnwrittenVector<double> &beams, SurfaceTerms &surface,
-                    const SubProgress &progress) {
+                    const UnwrittenVector<double> &phi, double sources, UnwrittenVector<double> &beams,
+                    SurfaceTerms &surface, const SubProgress &progress) {
     UnwrittenVector<double> b = std::move(workspace.spare);  // the spent solve's right-hand side
     parallelCopy(beams, b);
     double beamSources = 0.0;  // W

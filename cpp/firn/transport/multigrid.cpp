@@ -333,9 +333,8 @@ double segmentedSum(std::size_t n, const Segment &segment) {
     for (double part : partial) sum += part;
     return sum;
 }
-// (Vectors: the caller's std::vector<double> or a workspace's UnwrittenVector<double>.)
-template <typename VectorA, typename VectorB>
-double dot(const VectorA &a, const VectorB &b) {
+// (Vectors: the caller's b and x, the workspace's p and z.)
+double dot(const UnwrittenVector<double> &a, const UnwrittenVector<double> &b) {
     return segmentedSum(a.size(), [&](std::size_t, std::size_t begin, std::size_t end) {
         double part = 0.0;
         for (std::size_t i = begin; i < end; ++i) part += a[i] * b[i];
@@ -353,9 +352,8 @@ double infNorm(const UnwrittenVector<double> &a) {
 }
 // z = one V-cycle applied to r, scaled into float's range (the bake's sources span many decades between scenes) by
 // r's largest |r_i|.
-template <typename Vector>
 void precondition(const MultigridSolver::Hierarchy &hierarchy, const UnwrittenVector<double> &r, double largest,
-                  Vector &z) {
+                  UnwrittenVector<double> &z) {
     const auto &top = hierarchy.levels.front();
     const UnwrittenVector<std::uint32_t> &row = hierarchy.colourRow;
     const double scale = std::max(largest, 1e-300);
@@ -365,16 +363,14 @@ void precondition(const MultigridSolver::Hierarchy &hierarchy, const UnwrittenVe
 }
 
 // y = a x + y.
-template <typename Vector>
-void axpy(double a, const Vector &x, UnwrittenVector<double> &y) {
+void axpy(double a, const UnwrittenVector<double> &x, UnwrittenVector<double> &y) {
     parallelRows(y.size(), [&](std::size_t i) { y[i] = a * x[i] + y[i]; });
 }
 
 // The iteration's step in one pass over the vectors: x += alpha p, r -= alpha q; returns <r, r> (as dot) and sets
 // `largest` to the largest |r_i| of the new r.
-template <typename Vector>
-double step(double alpha, const Vector &p, const Vector &q, UnwrittenVector<double> &x, UnwrittenVector<double> &r,
-            double &largest) {
+double step(double alpha, const UnwrittenVector<double> &p, const UnwrittenVector<double> &q,
+            UnwrittenVector<double> &x, UnwrittenVector<double> &r, double &largest) {
     std::array<double, kSegments> most{};  // per segment of segmentedSum
     const double sum = segmentedSum(r.size(), [&](std::size_t s, std::size_t begin, std::size_t end) {
         double part = 0.0, top = 0.0;
