@@ -11,17 +11,19 @@ namespace {
 
 constexpr std::size_t kHugePage = std::size_t(2) << 20;
 
+// Up to the next 2 MiB boundary (a length, or an address).
 std::size_t roundedUp(std::size_t bytes) { return (bytes + kHugePage - 1) / kHugePage * kHugePage; }
 
 }  // namespace
 
 void *allocateHugePaged(std::size_t bytes) {
+    if (bytes > std::size_t(-1) / 2) throw std::bad_alloc();  // its rounding up would wrap around
     // A huge page more than the block mapped, then the slack before the first boundary and after the block unmapped.
     const std::size_t length = roundedUp(bytes), mapped = length + kHugePage;
     void *map = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (map == MAP_FAILED) throw std::bad_alloc();
     const auto start = reinterpret_cast<std::uintptr_t>(map);
-    const std::uintptr_t aligned = (start + kHugePage - 1) / kHugePage * kHugePage;
+    const std::uintptr_t aligned = roundedUp(start);
     if (aligned > start) munmap(map, aligned - start);
     if (const std::size_t tail = start + mapped - (aligned + length); tail > 0)
         munmap(reinterpret_cast<void *>(aligned + length), tail);

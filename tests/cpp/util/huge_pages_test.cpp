@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
+#include <new>
 #include <numeric>
 #include <vector>
 
@@ -45,6 +46,11 @@ TEST(HugePaged, BlocksStartOnBoundariesZeroedAndAreUnmappedWhenFreed) {
             EXPECT_EQ(errno, ENOMEM) << bytes << " " << offset;
         }
     }
+}
+
+TEST(HugePaged, ASizeNoMappingCanHoldThrowsBadAlloc) {
+    // Rounded up to whole huge pages without the check, it wrapped around to a small mapping.
+    EXPECT_THROW(allocateHugePaged(std::size_t(-1) - 100), std::bad_alloc);
 }
 
 TEST(HugePaged, UnwrittenVectorsKeepTheirValuesAcrossTheThreshold) {
