@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include "firn/transport/voxel_blocks.h"
 #include "firn/util/cholesky.h"
 #include "firn/util/error.h"
 
@@ -20,8 +21,6 @@ namespace {
 constexpr std::size_t kDenseLimit = 512;  // rows solved directly at the bottom of the hierarchy
 constexpr int kSweeps = 2;                // red-black Gauss-Seidel sweeps before and after the coarse solve
 constexpr std::size_t kChunk = 8192;      // rows grouped by colour within each run of this many (Level)
-
-int floorHalf(int v) { return v >= 0 ? v / 2 : -((-v + 1) / 2); }
 
 template <typename Body>
 void parallelRows(std::size_t n, const Body &body) {
@@ -183,36 +182,14 @@ void regroup(Level &level, const UnwrittenVector<std::uint32_t> &row, Level *fin
 // The next level's rows: 2x2x2 blocks of this one's voxels (fine.members, coarse's voxels; `block`: each fine row's
 // block, its row there); returns false when that would barely shrink it.
 bool aggregate(Level &fine, Level &coarse, UnwrittenVector<std::uint32_t> &block) {
-    const Stencil<float> &A = fine.A;
-    const std::size_t n = A.size();
-    openvdb::Int32Tree index(-1);
-    openvdb::tree::ValueAccessor<openvdb::Int32Tree> access(index);
-    block.resize(n);
-    auto coord = std::make_shared<Stencil<float>::Voxels>();
-    for (std::size_t i = 0; i < n; ++i) {
-        const openvdb::Coord &c = (*A.coord)[i];
-        const openvdb::Coord cc(floorHalf(c.x()), floorHalf(c.y()), floorHalf(c.z()));
-        int id = access.getValue(cc);
-        if (id < 0) {
-            id = int(coord->size());
-            access.setValue(cc, id);
-            coord->push_back(cc);
-        }
-        block[i] = std::uint32_t(id);
-    }
-    const std::size_t nc = coord->size();
-    coarse.A.coord = std::move(coord);
-    if (nc > n * 3 / 4) return false;
-
-    // Members of each block, in fine order (CSR).
-    fine.membersStart.assign(nc + 1, 0);
-    for (std::uint32_t a : block) ++fine.membersStart[a + 1];
-    for (std::size_t I = 0; I < nc; ++I) fine.membersStart[I + 1] += fine.membersStart[I];
-    fine.members.resize(n);
+    VoxelBlocks blocks = voxelBlocks(*fine.A.coord);
+    const std::size_t nc = blocks.coord.size();
+    coarse.A.coord = std::make_shared<Stencil<float>::Voxels>(std::move(blocks.coord));
+    if (nc > fine.A.size() * 3 / 4) return false;
+    block = std::move(blocks.ofRow);
+    fine.membersStart = std::move(blocks.membersStart), fine.members = std::move(blocks.members);
     fine.blockRow.resize(nc);
     std::iota(fine.blockRow.begin(), fine.blockRow.end(), 0u);
-    std::vector<std::uint32_t> fill(fine.membersStart.begin(), fine.membersStart.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) fine.members[fill[block[i]]++] = std::uint32_t(i);
     return true;
 }
 
