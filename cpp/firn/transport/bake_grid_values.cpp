@@ -817,7 +817,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     openvdb::tools::dilateActiveValues(*out.topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                        openvdb::tools::IGNORE_TILES);
     openvdb::tree::LeafManager<const openvdb::BoolTree> leaves(*out.topology);
-    using Pairs = std::vector<VoxelValues>;
+    using Pairs = std::vector<VoxelValueBlock>;
 
     // Average of the 26 neighbours accepted by `take`, read by `value`; false if none.
     auto average = [](const openvdb::Coord &c, const auto &take, const auto &value, Source &S) {

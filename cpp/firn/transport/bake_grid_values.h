@@ -31,24 +31,32 @@ struct VoxelValue {
     BroadLobe lobe;
 };
 
+// One block's source functions at voxels, in order, built by one thread before the blocks are joined
+// (VoxelValues::appendAll): its peaked lobes keyed by their place in it.
+struct VoxelValueBlock {
+    UnwrittenVector<VoxelValue> values;
+    PeakedLobes::Peaks peaks;
+
+    void add(openvdb::Index offset, const Source &S) {
+        PeakedLobes::append(peaks, values.size(), S);
+        values.push_back({offset, S});
+    }
+};
+
 // Source functions at voxels, in order: broad lobes, with the peaked lobes by place (PeakedLobes).
 struct VoxelValues {
     UnwrittenVector<VoxelValue> values;
     PeakedLobes peaked;
 
-    void add(openvdb::Index offset, const Source &S) {
-        peaked.add(values.size(), S);
-        values.push_back({offset, S});
-    }
     // The blocks' values after these, block by block (consumed; the values copied in parallel, each page first
     // touched by the thread that copies into it: appended one by one they were the gathering's and the grids' largest
     // single-threaded step on the car, docs/benchmarks.md lead-80); returns where each block's values begin, and
     // where the last one's end.
-    std::vector<std::size_t> appendAll(std::vector<VoxelValues> &&blocks) {
+    std::vector<std::size_t> appendAll(std::vector<VoxelValueBlock> &&blocks) {
         std::vector<std::size_t> start{values.size()};
         std::vector<const PeakedLobes::Peaks *> peaks;  // block b's keys shifted by start[b]
-        for (const VoxelValues &block : blocks) {
-            peaks.push_back(&block.peaked.peaks());
+        for (const VoxelValueBlock &block : blocks) {
+            peaks.push_back(&block.peaks);
             start.push_back(start.back() + block.values.size());
         }
         peaked.appendAll(peaks, start);
@@ -56,7 +64,7 @@ struct VoxelValues {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16), [&](const auto &range) {
             for (std::size_t b = range.begin(); b != range.end(); ++b) {
                 std::copy(blocks[b].values.begin(), blocks[b].values.end(), values.begin() + start[b]);
-                blocks[b] = VoxelValues();  // (= {} would keep its capacity)
+                blocks[b] = VoxelValueBlock();  // (= {} would keep its capacity)
             }
         });
         return start;
@@ -72,7 +80,7 @@ struct LeafValues : VoxelValues {
     // One block: perLeaf's values leaf by leaf (consumed), with room for `more` values after them, so that a
     // second block appended within it does not move the first (the old array and the new together were the car's
     // gathering peak). Room never written holds no memory (the pages of a large array are the system's until used).
-    LeafValues(std::vector<VoxelValues> &&perLeaf, std::size_t more) {
+    LeafValues(std::vector<VoxelValueBlock> &&perLeaf, std::size_t more) {
         std::size_t total = 0;
         for (const auto &leaf : perLeaf) total += leaf.values.size();
         values.reserve(total + more);
@@ -81,7 +89,7 @@ struct LeafValues : VoxelValues {
     }
     // first's block taken over as it is (a copy of it was the gathering's and the grids' memory peak), then
     // `then`'s values leaf by leaf (consumed).
-    LeafValues(LeafValues &&first, std::vector<VoxelValues> &&then)
+    LeafValues(LeafValues &&first, std::vector<VoxelValueBlock> &&then)
         : VoxelValues(std::move(first)), start(std::move(first.start)) {
         std::size_t total = values.size();
         for (const auto &leaf : then) total += leaf.values.size();

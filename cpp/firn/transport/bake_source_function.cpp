@@ -120,10 +120,12 @@ SurfaceValues<float> skyShares(const SnowTopology &topo, const SurfaceValues<Sur
 PeakedLobes rampPeaks(const Scene &scene, const SnowTopology &topo, const SurfaceValues<SurfaceLight> &solved) {
     PeakedLobes out;
     if (scene.lamps.empty()) return out;
+    PeakedLobes::Peaks peaks;
     for (std::size_t i = 0; i < topo.size(); ++i)
         if (topo.patches[i].isSurface())
             if (const SurfaceLight &s = solved[i]; s.rampPeak0 != glm::vec3(0.0f) || s.rampPeak1 != glm::vec3(0.0f))
-                out.push({std::uint32_t(i), s.rampPeak0, s.rampPeak1});
+                peaks.push_back({std::uint32_t(i), s.rampPeak0, s.rampPeak1});
+    out.appendAll({&peaks}, {0});
     return out;
 }
 
@@ -175,7 +177,7 @@ SourceValues sourceFunction(const Scene &scene, const SnowTopology &topo, const 
                 Source &S = values[i - range.begin()];
                 if (const std::int32_t t = tracedIndex.getValue(topo.coord[i]); t >= 0) S = traced.source[t];
                 out.broad[i] = S;
-                if (PeakedLobes::holds(S)) peaked[b].push_back({std::uint32_t(i), S.peak0, S.peak1});
+                PeakedLobes::append(peaked[b], i, S);
             }
         }
     });

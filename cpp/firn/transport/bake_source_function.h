@@ -34,18 +34,13 @@ class PeakedLobes {
     using Peaks = UnwrittenVector<Peak>;
     const Peaks &peaks() const { return peaks_; }  // in key order
     static bool holds(const Source &S) { return S.peak0 != glm::vec3(0.0f) || S.peak1 != glm::vec3(0.0f); }
-    void add(std::size_t key, const Source &S) {  // keys in increasing order
-        if (holds(S)) push({std::uint32_t(key), S.peak0, S.peak1});
+    // S's peak at `key` added to a block's list (keys in increasing order), where it holds one.
+    static void append(Peaks &list, std::size_t key, const Source &S) {
+        if (holds(S)) list.push_back({std::uint32_t(key), S.peak0, S.peak1});
     }
-    void push(const Peak &peak) {  // keys in increasing order
-        const std::size_t word = peak.key / 64;
-        if (word >= held_.size()) before_.resize(word + 1, std::uint32_t(peaks_.size())), held_.resize(word + 1, 0);
-        held_[word] |= std::uint64_t(1) << (peak.key % 64);
-        peaks_.push_back(peak);
-    }
-    // The blocks' peaks after these, block b's keys shifted by keyShift[b] (all keys in increasing order): as pushed
-    // one by one, with the peaks copied and the bitmap's words worked out in parallel (pushed one by one, the car's
-    // 640,000 were a single-threaded step of its source function and its grids; docs/benchmarks.md, lead-81).
+    // The blocks' peaks after these, block b's keys shifted by keyShift[b] (all keys in increasing order), with the
+    // peaks copied and the bitmap's words worked out in parallel: the only way peaks come in (pushed one by one, the
+    // car's 640,000 were a single-threaded step of its source function and its grids; docs/benchmarks.md, lead-81).
     void appendAll(const std::vector<const Peaks *> &blocks, const std::vector<std::size_t> &keyShift) {
         std::vector<std::size_t> at{peaks_.size()};
         for (const Peaks *block : blocks) at.push_back(at.back() + block->size());
@@ -79,8 +74,7 @@ class PeakedLobes {
     }
 
   private:
-    // held_ and before_ from word `first` on (it may hold earlier peaks too), read off the peaks: as push() leaves
-    // them.
+    // held_ and before_ from word `first` on (it may hold earlier peaks too), read off the peaks.
     void indexWords(std::size_t first) {
         const std::size_t words = peaks_.back().key / 64 + 1;
         held_.resize(words), before_.resize(words);
@@ -95,7 +89,7 @@ class PeakedLobes {
             }
         });
     }
-    Peaks peaks_;                        // in key order, added by push() and appendAll() (the bitmap follows it)
+    Peaks peaks_;                        // in key order, added by appendAll() (the bitmap follows it)
     std::vector<std::uint64_t> held_;    // bit key % 64 of word key / 64: whether key holds a peak
     std::vector<std::uint32_t> before_;  // per word: the peaks of smaller keys
 };

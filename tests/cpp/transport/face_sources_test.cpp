@@ -99,11 +99,13 @@ bake::SourceValues tracedUnknowns(const SnowTopology &topo, const std::vector<op
                                   const bake::MonteCarloVoxels &traced) {
     bake::SourceValues source;
     source.broad.assign(topo.size(), BroadLobe{});
+    bake::PeakedLobes::Peaks peaks;
     for (std::size_t v = 0; v < voxels.size(); ++v)
         if (const std::int32_t i = topo.index->getValue(voxels[v]); i >= 0) {
             source.broad[std::size_t(i)] = traced.source[v];
-            source.peaked.add(std::size_t(i), traced.source[v]);
+            bake::PeakedLobes::append(peaks, std::size_t(i), traced.source[v]);
         }
+    source.peaked.appendAll({&peaks}, {0});
     return source;
 }
 
