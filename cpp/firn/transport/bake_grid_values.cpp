@@ -817,7 +817,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     openvdb::tools::dilateActiveValues(*out.topology, 3, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                        openvdb::tools::IGNORE_TILES);
     openvdb::tree::LeafManager<const openvdb::BoolTree> leaves(*out.topology);
-    using Pairs = std::vector<VoxelValueBlock>;
+    using Blocks = std::vector<VoxelValueBlock>;
 
     // Average of the 26 neighbours accepted by `take`, read by `value`; false if none.
     auto average = [](const openvdb::Coord &c, const auto &take, const auto &value, Source &S) {
@@ -869,7 +869,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     // First: traced voxels, the air across a traced voxel's face (faceCarried: a lump's fringe's outer face too, two
     // voxels from the surface unknowns: spray_dense over 16 seeds 16.27 -> 16.20 % per block, 15 lower; docs/
     // benchmarks.md, lump-contrast), and the voxels next to surface voxels (unknowns hold their own source).
-    Pairs perLeaf(leaves.leafCount());
+    Blocks perLeaf(leaves.leafCount());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         TracedIndex tracedIndex(traced);
@@ -924,7 +924,7 @@ GridValues gridValues(const Scene &scene, const SnowTopology &topo, const Source
     out.at = std::make_shared<openvdb::Int32Tree>(-1);
     placeValues(carried, leaves, *out.at);
     // Then: one voxel further out, and thin snow on its own.
-    perLeaf = Pairs(leaves.leafCount());
+    perLeaf = Blocks(leaves.leafCount());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.leafCount(), 4), [&](const auto &range) {
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
         openvdb::tree::ValueAccessor<const openvdb::Int32Tree> carriedSlot(*out.at);
