@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <utility>
@@ -262,6 +263,32 @@ TEST(Bake, SolvesThePassesBeforeTheLastLooser) {
     }
     const auto &first = stats.relativeResidual.front();
     EXPECT_GT(*std::max_element(first.begin(), first.end()), 1e-4);  // looser than the last
+}
+
+// FINAL's last solve stops at its quality's tolerance (1e-4), not at convergence: what that leaves in the grids must
+// lie far under what the bake's own sampling leaves (another seed). The slab on a white ground (two passes), its
+// broad lobe's l0 against the same bake solved to 1e-10, and against another seed, as sum |a - b| / sum |a|.
+TEST(Bake, FinalSolveErrorLiesFarUnderTheBakesNoise) {
+    const Scene scene = slabOnGround(0.97);
+    const auto l0 = [&](std::uint64_t seed, double tolerance) {
+        BakeSettings settings{BakeQuality::Final, seed};
+        settings.tolerance = tolerance;
+        return bakeScattering(scene, settings).source[0];
+    };
+    const auto difference = [](const openvdb::Vec3fGrid &a, const openvdb::Vec3fGrid &b) {
+        openvdb::tree::ValueAccessor<const openvdb::Vec3fTree> other(b.tree());
+        double apart = 0.0, total = 0.0;
+        for (auto it = a.cbeginValueOn(); it; ++it)
+            for (int c = 0; c < 3; ++c) {
+                apart += std::abs(double((*it)[c]) - double(other.getValue(it.getCoord())[c]));
+                total += std::abs(double((*it)[c]));
+            }
+        return apart / total;
+    };
+    const auto atFinal = l0(0, 0.0), converged = l0(0, 1e-10), otherSeed = l0(1, 0.0);
+    const double solve = difference(*converged, *atFinal), noise = difference(*atFinal, *otherSeed);
+    EXPECT_GT(noise, 0.0);
+    EXPECT_LT(solve, 0.01 * noise) << "solve " << solve << ", noise " << noise;
 }
 
 TEST(Bake, ReportsProgressAndStopsWhenCancelled) {
