@@ -250,7 +250,7 @@ TEST(Bake, OnlyABrightGroundSendsEnoughBackForTheGatheringPasses) {
 }
 
 // Passes before the last only feed the gathering (a few per cent of the last pass's sources), so their solves stop
-// at bake.cpp's kGatheredPassTolerance (1e-2) and the last at the quality's (Draft: 1e-4): the slab on a white
+// at bake.cpp's kGatheredPassTolerance (1e-1) and the last at the quality's (Draft: 1e-4): the slab on a white
 // ground, which takes the gathering passes.
 TEST(Bake, SolvesThePassesBeforeTheLastLooser) {
     BakeStats stats;
@@ -258,7 +258,7 @@ TEST(Bake, SolvesThePassesBeforeTheLastLooser) {
     ASSERT_GT(stats.passes, 1);
     ASSERT_EQ(stats.relativeResidual.size(), std::size_t(stats.passes));
     for (int c = 0; c < 3; ++c) {
-        EXPECT_LE(stats.relativeResidual.front()[c], 1e-2);
+        EXPECT_LE(stats.relativeResidual.front()[c], 1e-1);
         EXPECT_LE(stats.relativeResidual.back()[c], 1e-4);
     }
     const auto &first = stats.relativeResidual.front();
