@@ -265,7 +265,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
             const bool splitPass = pass + 1 == passes && !reference && !light.beams.empty() && topo.size() > 0;
             const double feeding = bounceTail ? kExtrapolatedPassTolerance : kGatheredPassTolerance;
             const double tolerance = pass + 1 < passes ? std::max(preset.tolerance, feeding) : preset.tolerance;
-            stats.relativeResidual.emplace_back();
+            stats.iterations.emplace_back(), stats.relativeResidual.emplace_back();
             for (int c = 0; c < 3; ++c) {
                 const SubProgress sub(&p, gathered + (end - gathered) * c / 3.0,
                                       gathered + (end - gathered) * (c + 1) / 3.0);
@@ -289,7 +289,7 @@ SourceValues solveSources(const Scene &scene, const SnowTopology &topo, const In
                     releaseFreedMemory();  // what building the hierarchy freed, before CG's vectors
                     const MultigridSolver::Result result =
                         solver.solve(std::move(system.b), phi[c], tolerance, 500, sub, &workspace);
-                    stats.iterations[c] += result.iterations;
+                    stats.iterations.back()[c] = result.iterations;
                     stats.relativeResidual.back()[c] = result.relativeResidual;
                     if (beamsApart)
                         stats.beamIterations +=

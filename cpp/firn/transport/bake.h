@@ -50,7 +50,7 @@ struct BakeStats {
     std::size_t lightTracingBytes = 0;         // the sums they add to (LightTracingPlan::sumsBytes)
     int passes = 0;                            // diffusion solves per channel (1 + snow-to-snow bounces)
     int sourceScale = 1;                       // the source grids' voxel size in density voxels
-    std::array<int, 3> iterations{};          // per colour channel, all passes
+    std::vector<std::array<int, 3>> iterations;  // CG iterations per pass, per colour channel
     int beamIterations = 0;                    // the beams' own solve, one channel (bake.cpp, solveBeamsApart)
     std::vector<std::array<double, 3>> relativeResidual;  // per pass, per colour channel
     // Per phase: voxels and faces, sun and sky tracing, Monte Carlo in thin snow, diffusion solves, gathering

@@ -257,6 +257,7 @@ TEST(Bake, SolvesThePassesBeforeTheLastLooser) {
     bakeScattering(slabOnGround(0.97), BakeSettings{BakeQuality::Draft}, nullptr, &stats);
     ASSERT_GT(stats.passes, 1);
     ASSERT_EQ(stats.relativeResidual.size(), std::size_t(stats.passes));
+    ASSERT_EQ(stats.iterations.size(), std::size_t(stats.passes));
     for (int c = 0; c < 3; ++c) {
         EXPECT_LE(stats.relativeResidual.front()[c], 1e-1);
         EXPECT_LE(stats.relativeResidual.back()[c], 1e-4);
