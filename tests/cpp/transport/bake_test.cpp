@@ -268,7 +268,8 @@ TEST(Bake, SolvesThePassesBeforeTheLastLooser) {
 
 // FINAL's last solve stops at its quality's tolerance (1e-4), not at convergence: what that leaves in the grids must
 // lie far under what the bake's own sampling leaves (another seed). The slab on a white ground (two passes), its
-// broad lobe's l0 against the same bake solved to 1e-10, and against another seed, as sum |a - b| / sum |a|.
+// broad lobe's l0 against the same bake with its last solve taken to 1e-10, and against another seed, as
+// sum |a - b| / sum |a|.
 TEST(Bake, FinalSolveErrorLiesFarUnderTheBakesNoise) {
     const Scene scene = slabOnGround(0.97);
     const auto l0 = [&](std::uint64_t seed, double tolerance) {
