@@ -125,7 +125,7 @@ PeakedLobes rampPeaks(const Scene &scene, const SnowTopology &topo, const Surfac
         if (topo.patches[i].isSurface())
             if (const SurfaceLight &s = solved[i]; s.rampPeak0 != glm::vec3(0.0f) || s.rampPeak1 != glm::vec3(0.0f))
                 peaks.push_back({std::uint32_t(i), s.rampPeak0, s.rampPeak1});
-    out.appendAll({&peaks}, {0});
+    out.appendAll(peaks);
     return out;
 }
 

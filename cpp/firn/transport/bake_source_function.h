@@ -55,6 +55,8 @@ class PeakedLobes {
         });
         indexWords(peaks_[at.front()].key / 64);
     }
+    // One list's peaks after these, its keys as they are.
+    void appendAll(const Peaks &list) { appendAll({&list}, {0}); }
     Peaks::const_iterator from(std::size_t key) const {  // the first peak of key >= key
         return std::lower_bound(peaks_.begin(), peaks_.end(), key,
                                 [](const Peak &p, std::size_t k) { return p.key < k; });

@@ -105,7 +105,7 @@ bake::SourceValues tracedUnknowns(const SnowTopology &topo, const std::vector<op
             source.broad[std::size_t(i)] = traced.source[v];
             bake::PeakedLobes::append(peaks, std::size_t(i), traced.source[v]);
         }
-    source.peaked.appendAll({&peaks}, {0});
+    source.peaked.appendAll(peaks);
     return source;
 }
 

@@ -68,7 +68,7 @@ TEST(VoxelValues, BlocksAppendedTogetherReadAsTheirValuesInOrder) {
 }
 
 // The source function's and the grids' peaked lobes are found per block in parallel and joined
-// (PeakedLobes::appendAll): joined, every key must read the peak it would have pushed one by one, gaps of many bitmap
+// (PeakedLobes::appendAll): joined, every key must read the peak given for it, gaps of many bitmap
 // words between keys, a block starting inside the last word already held and empty blocks included.
 TEST(PeakedLobes, BlocksAppendedTogetherReadEachPeakAtItsKey) {
     // The definition: a map from key to peak. Appended in two calls (the second's first block starting inside the
@@ -79,7 +79,7 @@ TEST(PeakedLobes, BlocksAppendedTogetherReadEachPeakAtItsKey) {
     std::map<std::size_t, PeakedLobes::Peak> definition;
     PeakedLobes joined;
     const PeakedLobes::Peaks before{peakAt(3), peakAt(40)};
-    joined.appendAll({&before}, {0});
+    joined.appendAll(before);
     for (const PeakedLobes::Peak &peak : before) definition[peak.key] = peak;
     // Block b's keys relative to its shift; the first block's first key (50) shares word 0 with key 40.
     const std::vector<std::vector<std::size_t>> keys{{0, 1, 77}, {}, {5, 4000, 300000}, {0}, {63, 64, 65, 900000}};
