@@ -8,13 +8,17 @@ first scattering: 0 is single scattering, the exact one's check), summed over th
 (the ball's normal at the ray's optical depth 1 point: lit limb, terminator, dark limb, dark face; rim or core).
 
     PYTHONPATH=build/python:bench python3 bench/backlit_light_split.py [--case ball_issue] [--view 180,0]
-        [--samples 4096] [--orders 0,1,2,4] [--sharp]
+        [--samples 4096] [--orders 0,1,2,4] [--sharp] [--maps] [--sun-azimuth 0]
 
 --sharp: the case's density thresholded at half its largest value (a staircase ball, no antialiased skin), both for
 the bake and the Monte Carlo: how much of the view's deficit the soft skin holds.
+--maps: per pixel, baked / Monte Carlo - 1 for the sun (with and without its peaked lobes) and the sky, as
+bake_suite.py --maps lays the view out. --sun-azimuth: the case's sun turned about the vertical by that many degrees
+(from +x towards +y), so the terminator moves off the ball's +y pole (docs/benchmarks.md, lead-87).
 """
 
 import argparse
+import math
 import os
 import tempfile
 
@@ -26,6 +30,25 @@ from against_sun import limb_bands
 from backlit_probe import single_scattering, write_without_peaks
 
 
+def turned(suns, degrees):
+    """`suns` turned about the vertical (z) by `degrees`, from +x towards +y."""
+    a = math.radians(degrees)
+    out = []
+    for sun in suns:
+        x, y, z = sun.direction
+        out.append(firncore.SunLight((x * math.cos(a) - y * math.sin(a), x * math.sin(a) + y * math.cos(a), z),
+                                     tuple(sun.irradiance), sun.angular_diameter))
+    return out
+
+
+def print_maps(case, seen, errors):
+    """Each light's per-pixel relative error, laid out as bake_suite.py --maps does (nan: the pixel is left out)."""
+    with np.printoptions(precision=2, suppress=True, linewidth=150):
+        for name, error in errors.items():
+            print(f"  baked / Monte Carlo - 1, {name}:")
+            print(np.where(seen, error, np.nan).reshape(case.pixels, case.pixels)[::-1])  # top row up
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--case", default="ball_issue")
@@ -33,6 +56,8 @@ def main():
     parser.add_argument("--samples", type=int, default=4096, help="Monte Carlo paths per pixel")
     parser.add_argument("--orders", default="", help="bounces after the first scattering, e.g. 0,1,2,4")
     parser.add_argument("--sharp", action="store_true", help="the density thresholded at half its largest value")
+    parser.add_argument("--maps", action="store_true", help="per pixel baked / Monte Carlo - 1, sun and sky")
+    parser.add_argument("--sun-azimuth", type=float, default=0.0, help="the sun turned about the vertical (deg)")
     args = parser.parse_args()
     bounces = [int(b) for b in args.orders.split(",") if b]
     case = bake_suite.case(args.case)
@@ -41,7 +66,7 @@ def main():
         case.density = np.where(case.density >= 0.5 * case.density.max(), case.density.max(), 0.0)
     origins, directions, tau = bake_suite.views(case)
     seen = tau >= 1.0
-    light = {"sun": dict(suns=case.suns()), "sky": dict(sky=case.skies())}
+    light = {"sun": dict(suns=turned(case.suns(), args.sun_azimuth)), "sky": dict(sky=case.skies())}
     baked, mc = {}, {}
     with tempfile.TemporaryDirectory() as folder:
         for name, kw in light.items():
@@ -72,6 +97,11 @@ def main():
               f"{sky:.4f} | {sun_b:.4f} ({sun_b - broad[m].sum():.4f})  {sky_b:.4f} | "
               f"{sun_b / sun - 1:+6.1%} {sky_b / sky - 1:+6.1%} {(sun_b + sky_b) / (sun + sky) - 1:+6.1%} | "
               f"{sun - sun_b:+.4f} {sky - sky_b:+.4f}")
+    if args.maps:
+        with np.errstate(divide="ignore", invalid="ignore"):  # pixels the sun does not reach
+            print_maps(case, seen, {"sun": baked["sun"] / mc["sun"] - 1,
+                                    "sun without its peaked lobes": broad / mc["sun"] - 1,
+                                    "sky": baked["sky"] / mc["sky"] - 1})
     if bounces:
         print("  the Monte Carlo's sun by order: the share of all orders in orders 1..n (n = bounces + 1), then the "
               "baked sun's share")
