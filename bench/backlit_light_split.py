@@ -14,7 +14,8 @@ first scattering: 0 is single scattering, the exact one's check), summed over th
 the bake and the Monte Carlo: how much of the view's deficit the soft skin holds.
 --maps: per pixel, baked / Monte Carlo - 1 for the sun (with and without its peaked lobes) and the sky, as
 bake_suite.py --maps lays the view out. --sun-azimuth: the case's sun turned about the vertical by that many degrees
-(from +x towards +y), so the terminator moves off the ball's +y pole (docs/benchmarks.md, lead-87).
+(from +x towards +y), so the terminator moves off the ball's +y pole (docs/benchmarks.md, lead-87); the sun's exact
+single scattering ("once", nan) and the limb bands, which are the case's own sun's, are then left out.
 """
 
 import argparse
@@ -82,10 +83,12 @@ def main():
                 upto = {b: firncore.render_scattering_where_thin(path, case.optics, origins, directions, samples=args.samples,
                                                                  seed=11, thin_depth=1e30, bounces=b, **kw)[0][:, 1]
                         for b in bounces}
-    once = case.sun * np.array([single_scattering(case, o, d) if s else 0.0
-                                for o, d, s in zip(origins, directions, seen)])
+    # The exact single scattering and the limb bands are the case's own sun's: not shown for a turned one.
+    turned_sun = args.sun_azimuth != 0.0
+    once = np.full(len(seen), np.nan) if turned_sun else case.sun * np.array(
+        [single_scattering(case, o, d) if s else 0.0 for o, d, s in zip(origins, directions, seen)])
     regions = [("all", "", seen), ("rim (tau < 30)", "", seen & (tau < 30)), ("core", "", seen & (tau >= 30))]
-    split = limb_bands(case, origins, directions, tau)
+    split = None if turned_sun else limb_bands(case, origins, directions, tau)
     if split is not None:
         regions += [(what, label, k) for what, label, k, _, _ in split[2] if k.sum()]
     print(f"{case.name}, view {args.view}, green, W/m^2/sr summed over the pixels; {args.samples} paths per pixel")
