@@ -44,10 +44,9 @@ def turned(suns, degrees):
 
 def print_maps(case, seen, errors):
     """Each light's per-pixel relative error, laid out as bake_suite.py --maps does (nan: the pixel is left out)."""
-    with np.printoptions(precision=2, suppress=True, linewidth=150):
-        for name, error in errors.items():
-            print(f"  baked / Monte Carlo - 1, {name}:")
-            print(np.where(seen, error, np.nan).reshape(case.pixels, case.pixels)[::-1])  # top row up
+    for name, error in errors.items():
+        print(f"  baked / Monte Carlo - 1, {name}:")
+        print(bake_suite.view_map(case, np.where(seen, error, np.nan)))
 
 
 def main():

@@ -75,6 +75,11 @@ class Case:
         return h.hexdigest()[:16]
 
 
+def view_map(case, values):
+    """One view's per-block values as text, laid out as the camera sees them (top row up), rounded to 0.01."""
+    return np.array2string(np.round(values.reshape(case.pixels, case.pixels)[::-1], 2), max_line_width=200)
+
+
 def grid(n):
     return np.meshgrid(*[np.arange(m, dtype=float) for m in n], indexing="ij")
 
@@ -482,8 +487,7 @@ def main():
                 per = case.pixels * case.pixels
                 for v, view in enumerate(case.views):
                     print(f"    view {view}:")
-                    print(np.array2string(np.round(rel[v * per:(v + 1) * per, 1].reshape(case.pixels, case.pixels)[::-1], 2),
-                                          max_line_width=200))
+                    print(view_map(case, rel[v * per:(v + 1) * per, 1]))
     print()
     if mixed_rows:
         print(f"mixed form, the headline ({args.mixed} paths per block; render s: its wall seconds):")
