@@ -435,7 +435,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 const SubProgress progress = beside.step(1);
                 TracedSnow snow = thinVoxels(*scene.medium, topo);
                 // The renderer scatters in the thin snow traced here (docs/vdb-contract.md, firn_scatter).
-                shares = scatterShares(*scene.medium, snow.voxels(), BakedGrids::kScatterOpticalDepth);
+                shares = scatterShares(*scene.medium, scatteredVoxels(*scene.medium, snow),
+                                       BakedGrids::kScatterOpticalDepth);
                 thin = std::move(snow.thin);
                 // Light tracing in place of the diffusion where gathering per voxel is over the budget, and its other
                 // two uses (transport-thin pieces whole, forward snow at the gathering's cost), with occluders as

@@ -25,4 +25,8 @@ struct TracedSnow {
 // The thin voxels and transport-thin pieces of the medium's snow (bake_thin_snow.cpp: what each is, measured).
 TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo);
 
+// The traced voxels the renderer scatters itself (firn_scatter, docs/vdb-contract.md): snow.voxels(), less the thin
+// voxels beside snow the diffusion keeps where the snow absorbs (bake_thin_snow.cpp, kFringeScatterAbsorption).
+std::vector<openvdb::Coord> scatteredVoxels(const Medium &medium, const TracedSnow &snow);
+
 }  // namespace firn::bake

@@ -164,7 +164,7 @@ openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool
         return scatterShares(medium, snow, thinDepth);
     }
     const SnowTopology topo = buildSnowTopology(medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    return scatterShares(medium, bake::thinVoxels(medium, topo).voxels(), thinDepth);
+    return scatterShares(medium, bake::scatteredVoxels(medium, bake::thinVoxels(medium, topo)), thinDepth);
 }
 
 openvdb::FloatTree::Ptr coarsenedShares(const openvdb::FloatTree &shares, const openvdb::FloatTree &density,
