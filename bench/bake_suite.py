@@ -80,6 +80,14 @@ def view_map(case, values):
     return np.array2string(np.round(values.reshape(case.pixels, case.pixels)[::-1], 2), max_line_width=200)
 
 
+def print_view_maps(case, values):
+    """Every view's per-block values (all views' blocks in order), each laid out by view_map under its name."""
+    per = case.pixels * case.pixels
+    for v, view in enumerate(case.views):
+        print(f"    view {view}:")
+        print(view_map(case, values[v * per:(v + 1) * per]))
+
+
 def grid(n):
     return np.meshgrid(*[np.arange(m, dtype=float) for m in n], indexing="ij")
 
@@ -339,6 +347,17 @@ def scored(case, render, mean, seen):
             "relative": relative, "view_bias": view_bias}
 
 
+def mixed_render(case, path, origins, directions, samples, seed, baked):
+    """(render, its standard error) of the baked file at `path` as Cycles renders the material that scatters the bake's
+    thin traced snow itself (firn_scatter; render_scattering_where_thin, rule B, unlimited bounces); where the renderer
+    scatters nowhere, `baked` (the baked form's render) itself, without noise."""
+    if not len(firncore.scatter_voxels(path, case.optics, occluders=case.occluders)):
+        return baked, np.zeros_like(baked)
+    return firncore.render_scattering_where_thin(path, case.optics, origins, directions, suns=case.suns(),
+                                                 sky=case.skies(), occluders=case.occluders, samples=samples,
+                                                 seed=seed, traced_only=True)
+
+
 def run_case(case, folder, cache, quality="FINAL", seed=0, sky_samples=0, mixed=0):
     """One bake's row; with `mixed` paths per block also its "mixed" row: the bake rendered as Cycles renders the
     baked material that scatters the bake's thin traced snow itself (firn_scatter; render_scattering_where_thin,
@@ -359,12 +378,7 @@ def run_case(case, folder, cache, quality="FINAL", seed=0, sky_samples=0, mixed=
     }
     if mixed:
         start = time.perf_counter()
-        if len(firncore.scatter_voxels(path, case.optics, occluders=case.occluders)):
-            render, render_error = firncore.render_scattering_where_thin(
-                path, case.optics, origins, directions, suns=case.suns(), sky=case.skies(), occluders=case.occluders,
-                samples=mixed, seed=1000 + seed, traced_only=True)
-        else:  # the renderer scatters nowhere: the mixed render is the baked one, without noise
-            render, render_error = baked, np.zeros_like(baked)
+        render, render_error = mixed_render(case, path, origins, directions, mixed, 1000 + seed, baked)
         out["mixed"] = {**out, "case": case.name + " (mixed)", **scored(case, render, mean, seen),
                         "render_noise": float(np.median(render_error[seen] / np.maximum(render[seen], 1e-30))),
                         "render_s": time.perf_counter() - start}
@@ -484,10 +498,7 @@ def main():
                 _, _, tau = views(case)
                 rel = np.full((len(tau), 3), np.nan)
                 rel[tau >= 1.0] = r["relative"]
-                per = case.pixels * case.pixels
-                for v, view in enumerate(case.views):
-                    print(f"    view {view}:")
-                    print(view_map(case, rel[v * per:(v + 1) * per, 1]))
+                print_view_maps(case, rel[:, 1])
     print()
     if mixed_rows:
         print(f"mixed form, the headline ({args.mixed} paths per block; render s: its wall seconds):")

@@ -36,16 +36,13 @@ def refined(density, factor):
 def renders(case, path, origins, directions, mixed, brute_force):
     """The refined bake's renders along the case's rays, by form."""
     out = {"baked": firncore.render_baked(path, case.optics, origins, directions, occluders=case.occluders)}
-    lights = dict(suns=case.suns(), sky=case.skies(), occluders=case.occluders)
     if mixed:
-        thin = len(firncore.scatter_voxels(path, case.optics, occluders=case.occluders))
-        out["mixed"] = firncore.render_scattering_where_thin(
-            path, case.optics, origins, directions, samples=mixed, seed=1000, traced_only=True, **lights)[0] \
-            if thin else out["baked"]
+        out["mixed"] = bake_suite.mixed_render(case, path, origins, directions, mixed, 1000, out["baked"])[0]
     if brute_force:
         out[f"brute force, {brute_force} bounces"] = firncore.render_scattering_where_thin(
             path, case.optics, origins, directions, samples=mixed or 4096, seed=2000, thin_depth=float("inf"),
-            bounces=brute_force, traced_only=False, **lights)[0]
+            bounces=brute_force, traced_only=False, suns=case.suns(), sky=case.skies(),
+            occluders=case.occluders)[0]
     return out
 
 
@@ -61,17 +58,13 @@ def run(case, factor, folder, cache, mixed, brute_force, maps):
     tau_voxel = case.sigma_t * case.voxel / factor
     print(f"{case.name} on voxels {factor}x finer (sigma_t h {tau_voxel:.2f} at the case's density, "
           f"{stats['traced_voxels']} traced voxels):", flush=True)
-    per = case.pixels ** 2
     for form, render in renders(case, fine, origins, directions, mixed, brute_force).items():
         s = bake_suite.scored(case, render, mean, seen)
         print(f"  {form}: mean {100 * s['mean']:.2f} %, worst {100 * s['worst_signed']:+.0f} %, bias "
               f"{100 * s['bias']:+.2f} %; per view: " +
               ", ".join(f"{v} {100 * b:+.1f} %" for v, b in zip(case.views, s["view_bias"])), flush=True)
         if maps:
-            relative = np.where(seen, render[:, 1] / np.maximum(mean[:, 1], 1e-30) - 1.0, np.nan)
-            for v, view in enumerate(case.views):
-                print(f"    view {view}:")
-                print(bake_suite.view_map(case, relative[v * per:(v + 1) * per]))
+            bake_suite.print_view_maps(case, np.where(seen, render[:, 1] / np.maximum(mean[:, 1], 1e-30) - 1.0, np.nan))
 
 
 def main():

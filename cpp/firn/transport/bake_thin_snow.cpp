@@ -8,6 +8,11 @@ namespace firn::bake {
 
 namespace {
 
+// The single-scattering albedo of the least absorbing channel.
+double leastAbsorbedAlbedo(const VolumeOptics &optics) {
+    return std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z});
+}
+
 // The faces of unknown i on the axes along which it has air (no snow, no occluder) on both faces: bit f for face f
 // (-x, +x, -y, +y, -z, +z).
 unsigned twoSidedFaces(const SnowTopology &topo, std::size_t i) {
@@ -207,8 +212,7 @@ constexpr double kFringeScatterAbsorption = 0.03;
 
 std::vector<openvdb::Coord> scatteredVoxels(const Medium &medium, const TracedSnow &snow) {
     std::vector<openvdb::Coord> out = snow.voxels();
-    const VolumeOptics &optics = medium.optics();
-    if (1.0 - std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z}) < kFringeScatterAbsorption) return out;
+    if (1.0 - leastAbsorbedAlbedo(medium.optics()) < kFringeScatterAbsorption) return out;
     openvdb::BoolTree traced(false);
     for (const openvdb::Coord &c : out) traced.setValueOn(c);
     openvdb::tree::ValueAccessor<const openvdb::BoolTree> isTraced(traced);
@@ -231,7 +235,7 @@ std::vector<openvdb::Coord> scatteredVoxels(const Medium &medium, const TracedSn
 TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
     const VolumeOptics &optics = medium.optics();
     const double h = medium.voxelSize(), k = optics.extinctionPerDensity;
-    const double leastReduced = 1.0 - std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z}) * optics.g;
+    const double leastReduced = 1.0 - leastAbsorbedAlbedo(optics) * optics.g;
     const float thinBelow = float(kTracedOpticalDepth / (k * h)),
                 thickFrom = float(kThickReducedDepth / (leastReduced * k * h));
     const double mostAbsorbed = 1.0 - std::min({optics.albedo.x, optics.albedo.y, optics.albedo.z});
