@@ -202,6 +202,11 @@ def cases():
              (0.999,) * 3, 0.9, views=ROUND, samples=65536))
     add(Case("ball_sky", "ball r 5 cm under sky only, tau 5, omega 0.99, g 0.7", ball(0.05, 0.01) * 100, 0.01, 500.0,
              100.0, (0.99,) * 3, 0.7, sun=0.0, sky=1.0, views=[(0, 0), (0, 60), (0, -60)], samples=16384))
+    # The brief's corners the cases above leave: isotropic scattering (g 0), and voxels 60 optical depths thick.
+    add(Case("ball_iso", "ball r 5 cm, tau 6 per voxel, omega 0.999, g 0 (isotropic)", ball(0.05, 0.01) * 100, 0.01,
+             600.0, 100.0, (0.999,) * 3, 0.0, views=ROUND, samples=16384))
+    add(Case("ball_deep", "ball r 5 cm, tau 60 per voxel, omega 0.9999, g 0.85", ball(0.05, 0.01) * 300, 0.01,
+             6000.0, 300.0, (0.9999,) * 3, 0.85, views=ROUND, samples=16384))
     add(Case("slab_thin", "slab 3 cm (3 voxels, tau 2 each), omega 0.99, g 0.6", slab(24, 3) * 100, 0.01, 200.0, 100.0,
              (0.99,) * 3, 0.6, views=[(0, 60), (90, 75), (0, -60), (180, -75)], samples=16384))
     add(Case("slab_thin_forward", "slab 3 cm (3 voxels, tau 1 each), omega 0.9999, g 0.87", slab(24, 3) * 100, 0.01,

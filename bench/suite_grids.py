@@ -1,4 +1,4 @@
-"""The 17 suite cases' baked grids kept in a folder (bench/bake_suite.py's inputs, no reference and no render), with
+"""The suite cases' baked grids kept in a folder (bench/bake_suite.py's inputs, no reference and no render), with
 `--car` the car's too (bench/car_scene.py's inputs, FINAL), and two such folders compared case by case with
 bench/grids_identical.py: a change meant to keep behaviour checked on every case at once.
 
