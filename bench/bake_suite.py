@@ -80,8 +80,13 @@ def view_map(case, values):
     return np.array2string(np.round(values.reshape(case.pixels, case.pixels)[::-1], 2), max_line_width=200)
 
 
-def print_view_maps(case, values):
-    """Every view's per-block values (all views' blocks in order), each laid out by view_map under its name."""
+def print_view_maps(case, values, seen=None):
+    """Every view's per-block values (all views' blocks in order), each laid out by view_map under its name; given
+    `seen` (a mask over all blocks), `values` holds the seen blocks' alone, as scored's "relative" does (others: nan)."""
+    if seen is not None:
+        full = np.full(len(seen), np.nan)
+        full[seen] = values
+        values = full
     per = case.pixels * case.pixels
     for v, view in enumerate(case.views):
         print(f"    view {view}:")
@@ -501,9 +506,7 @@ def main():
                   ", ".join(f"{v} {100 * b:+.0f} %" for v, b in zip(case.views, r["view_bias"])), flush=True)
             if args.maps:
                 _, _, tau = views(case)
-                rel = np.full((len(tau), 3), np.nan)
-                rel[tau >= 1.0] = r["relative"]
-                print_view_maps(case, rel[:, 1])
+                print_view_maps(case, r["relative"][:, 1], tau >= 1.0)
     print()
     if mixed_rows:
         print(f"mixed form, the headline ({args.mixed} paths per block; render s: its wall seconds):")

@@ -64,7 +64,7 @@ def run(case, factor, folder, cache, mixed, brute_force, maps):
               f"{100 * s['bias']:+.2f} %; per view: " +
               ", ".join(f"{v} {100 * b:+.1f} %" for v, b in zip(case.views, s["view_bias"])), flush=True)
         if maps:
-            bake_suite.print_view_maps(case, np.where(seen, render[:, 1] / np.maximum(mean[:, 1], 1e-30) - 1.0, np.nan))
+            bake_suite.print_view_maps(case, s["relative"][:, 1], seen)
 
 
 def main():
