@@ -9,11 +9,16 @@ assuming the truth's symmetry about the sun's direction, 2 pi int f(theta) sin(t
 the bake's also over a Fibonacci sphere of views (no symmetry assumed). The peaked lobes' part (grids
 firn_source_peak*) apart. --samples > 0 adds the Monte Carlo per theta towards the horizon (the same rays). --sky:
 the uniform sky alone instead, each view's power over L_sky sum(1 - T) dA (exactly 1 at omega 1, every view).
+--omega, --g, --sigma-t (1/m at the case's density) and --radius (m, on the case's voxels) change the case's snow or
+ball: at --omega 0.9999999 what leaves must equal what enters, so the bake alone measures its energy balance, at any
+size and snow (docs/benchmarks.md, lead-90).
 
     PYTHONPATH=build/python python3 bench/ball_energy_balance.py [--case ball_clean] [--pixels 24] [--samples 0] [--sky]
+        [--omega W] [--g G] [--sigma-t S] [--radius R]
 """
 
 import argparse
+import dataclasses
 import math
 import os
 import tempfile
@@ -75,6 +80,13 @@ def over_sphere(thetas, power):
     return 2.0 * math.pi * float((power * np.sin(t)).sum() * (t[1] - t[0]))
 
 
+def changed(case, args):
+    """The case with the snow and ball the arguments give (None: the case's own)."""
+    changes = {"omega": (args.omega,) * 3 if args.omega is not None else None, "g": args.g, "sigma_t": args.sigma_t,
+               "density": bs.ball(args.radius, case.voxel) * case.density.max() if args.radius else None}
+    return dataclasses.replace(case, **{k: v for k, v in changes.items() if v is not None})
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--case", default="ball_clean")
@@ -84,8 +96,12 @@ def main():
     parser.add_argument("--step", type=float, default=5.0, help="deg between the views in the sun's plane")
     parser.add_argument("--sky", action="store_true", help="the uniform sky alone instead of the sun")
     parser.add_argument("--seed", type=int, default=0, help="the bake's")
+    parser.add_argument("--omega", type=float, help="the snow's single-scattering albedo, all channels")
+    parser.add_argument("--g", type=float, help="the snow's Henyey-Greenstein g")
+    parser.add_argument("--sigma-t", type=float, help="1/m at the case's density")
+    parser.add_argument("--radius", type=float, help="m: a ball of this radius on the case's voxels and density")
     args = parser.parse_args()
-    case = bs.case(args.case)
+    case = changed(bs.case(args.case), args)
     light = {"sky": firncore.Sky((case.sky,) * 3)} if args.sky else {"suns": case.suns()}
     thetas = np.arange(args.step / 2, 180.0, args.step)
     with tempfile.TemporaryDirectory() as folder:
@@ -120,7 +136,9 @@ def main():
 
 def report_sun(case, args, thetas, views, fibonacci_power):
     entering = case.sun * intercepted(case, sun_towards(), 2 * args.pixels)  # W
-    print(f"{case.name}, sun alone ({case.sun} W/m^2, 30 deg up), bake seed {args.seed}, {args.pixels}^2 px per view"
+    print(f"{case.name} (sigma_t {case.sigma_t:g} 1/m, omega {case.omega[0]:g}, g {case.g:g}, {case.density.shape[0]} "
+          f"voxels of {case.voxel:g} m across), sun alone ({case.sun} W/m^2, 30 deg up), bake seed {args.seed}, "
+          f"{args.pixels}^2 px per view"
           + (f", Monte Carlo {args.samples} paths per ray" if args.samples else ""))
     print(f"  entering: {entering * 1e3:.4f} mW (cross-section {entering / case.sun * 1e4:.3f} cm^2)")
     whole, peak = 4 * math.pi * fibonacci_power.mean(0) / entering
