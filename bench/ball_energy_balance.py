@@ -83,7 +83,7 @@ def over_sphere(thetas, power):
 def changed(case, args):
     """The case with the snow and ball the arguments give (None: the case's own)."""
     changes = {"omega": (args.omega,) * 3 if args.omega is not None else None, "g": args.g, "sigma_t": args.sigma_t,
-               "density": bs.ball(args.radius, case.voxel) * case.density.max() if args.radius else None}
+               "density": bs.ball(args.radius, case.voxel) * case.density.max() if args.radius is not None else None}
     return dataclasses.replace(case, **{k: v for k, v in changes.items() if v is not None})
 
 
@@ -101,6 +101,11 @@ def main():
     parser.add_argument("--sigma-t", type=float, help="1/m at the case's density")
     parser.add_argument("--radius", type=float, help="m: a ball of this radius on the case's voxels and density")
     args = parser.parse_args()
+    ranges = (("--omega", args.omega, lambda w: 0.0 < w <= 1.0), ("--g", args.g, lambda g: -1.0 < g < 1.0),
+              ("--sigma-t", args.sigma_t, lambda s: s > 0.0), ("--radius", args.radius, lambda r: r > 0.0))
+    for name, value, valid in ranges:
+        if value is not None and not valid(value):
+            parser.error(f"{name} {value}: out of range (omega in (0, 1], g in (-1, 1), sigma_t and radius > 0)")
     case = changed(bs.case(args.case), args)
     light = {"sky": firncore.Sky((case.sky,) * 3)} if args.sky else {"suns": case.suns()}
     thetas = np.arange(args.step / 2, 180.0, args.step)
@@ -136,8 +141,9 @@ def main():
 
 def report_sun(case, args, thetas, views, fibonacci_power):
     entering = case.sun * intercepted(case, sun_towards(), 2 * args.pixels)  # W
-    print(f"{case.name} (sigma_t {case.sigma_t:g} 1/m, omega {case.omega[0]:g}, g {case.g:g}, {case.density.shape[0]} "
-          f"voxels of {case.voxel:g} m across), sun alone ({case.sun} W/m^2, 30 deg up), bake seed {args.seed}, "
+    print(f"{case.name} (sigma_t {case.sigma_t:g} 1/m, omega {case.omega[0]:.8g}, g {case.g:g}, grid "
+          f"{case.density.shape[0]} voxels of {case.voxel:g} m wide), sun alone ({case.sun} W/m^2, 30 deg up), "
+          f"bake seed {args.seed}, "
           f"{args.pixels}^2 px per view"
           + (f", Monte Carlo {args.samples} paths per ray" if args.samples else ""))
     print(f"  entering: {entering * 1e3:.4f} mW (cross-section {entering / case.sun * 1e4:.3f} cm^2)")
