@@ -87,6 +87,20 @@ def changed(case, args):
     return dataclasses.replace(case, **{k: v for k, v in changes.items() if v is not None})
 
 
+def sun_balance(case, pixels=16, views=100, seed=0):
+    """The bake's power leaving per W of sun entering the ball (FINAL, `seed`), over `views` Fibonacci views of
+    `pixels`^2 px: 1 where the snow absorbs nothing."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = os.path.join(folder, "snow.vdb")
+        bs.write_density(path, case.density, case.voxel)
+        firncore.bake(path, case.optics, quality="FINAL", seed=seed, suns=case.suns())
+        leaving = 0.0  # W/sr summed over the views
+        for back in fibonacci(views):
+            origins, directions, area = view_rays(case, back, pixels)
+            leaving += firncore.render_baked(path, case.optics, origins, directions)[:, 1].sum() * area
+    return 4.0 * math.pi * leaving / views / (case.sun * intercepted(case, sun_towards(), 2 * pixels))
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--case", default="ball_clean")

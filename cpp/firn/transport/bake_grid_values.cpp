@@ -529,14 +529,15 @@ class LimbSkins {
 // voxels).
 bool onConvexSurface(const SnowTopology &topo, const openvdb::Coord &carrier,
                      openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, LimbSkins &skins) {
-    return skins.curvature(topo, carrier, index) * kSkyRampRadius > 1.0;
+    return smallBall(skins.curvature(topo, carrier, index));
 }
 
 // The suns' light a convex surface carries out into its ramp, shown over the larger sphere a ramp voxel d voxels out
 // lies on: radiance per m^2 of the sphere of radius R shown over one of R + d divides by (1 + kappa d)^2 (the balls'
 // lit cap rendered at 1.19 times the truth while the patches let out the truth's; docs/benchmarks.md, cap-shape,
 // cap-spread). The whole divergence: the sun the skin intercepts beyond R, which the undivided light stood for, is
-// its own source now (skinRingGrowth, given to the patches in assemble). The sky's carried light is not spread: an
+// its own source now (skinRingGrowth, given to the patches in assemble); a small ball's, which takes no ring,
+// divides by (1 + kappa d)^(1/2) (carriedSunSpread). The sky's carried light is not spread: an
 // even sky on the sphere of R + d brings that much more, the skin's own ring (ball_sky is right as it is), so the
 // beams' part alone (SourceValues::skyShare, the solves' split; the peaked lobe is the beams' whole). d from the
 // carrier's own surface (surfaceOffset: the density's half level, where the patches' sphere lies; from the node or
@@ -552,7 +553,7 @@ void spreadCarriedSun(const Medium &medium, const SnowTopology &topo, const Sour
     const std::int32_t j = index.getValue(carrier);
     const double d = glm::dot(out, facing) - skins.surfaceOffset(topo, carrier, j, index, density, medium);  // voxels
     if (d <= 0.0) return;
-    const float spread = float(1.0 / ((1.0 + kappa * d) * (1.0 + kappa * d)));
+    const float spread = float(carriedSunSpread(kappa, d));
     const float sky = source.skyShare[std::size_t(index.getValue(carrier))], keep = sky + (1.0f - sky) * spread;
     S.l0 *= keep, S.l1 *= keep;
     S.peak0 *= spread, S.peak1 *= spread, rampPart.peak0 *= spread, rampPart.peak1 *= spread;

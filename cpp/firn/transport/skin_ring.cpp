@@ -23,12 +23,16 @@ constexpr double kPatchSurfaceOffset = 0.5;
 
 bool spreadsAsSphere(const SnowTopology &topo, const openvdb::Coord &carrier,
                      openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, double kappaPerVoxel) {
-    if (!(kappaPerVoxel > 0.0) || kappaPerVoxel * kSkyRampRadius > 1.0) return false;
+    if (!(kappaPerVoxel > 0.0)) return false;
     for (int k = 0; k < 27; ++k) {
         const std::int32_t j = index.getValue(carrier + blockOffset(k));
         if (j >= 0 && topo.patches[std::size_t(j)].sharp) return false;
     }
     return index.getValue(carrier) >= 0;
+}
+
+double carriedSunSpread(double kappaPerVoxel, double d) {
+    return std::pow(1.0 + kappaPerVoxel * d, smallBall(kappaPerVoxel) ? -0.5 : -2.0);
 }
 
 double surfaceOffset(const Medium &medium, const openvdb::Coord &node, const glm::dvec3 &n,
@@ -111,7 +115,7 @@ SurfaceValues<float> skinRingGrowths(const Scene &scene, const SnowTopology &top
                 const double mu0 = glm::dot(patch.normal, towardsBeam(scene, s, surface));
                 grazed = mu0 > 0.0 && mu0 * mu0 < 1.0 - 1.0 / widest;
             }
-            if (grazed && spreadsAsSphere(topo, topo.coord[i], index, kappa))
+            if (grazed && !smallBall(kappa) && spreadsAsSphere(topo, topo.coord[i], index, kappa))
                 growth.surface(i) = float(skinRingGrowth(medium, topo, i, kappa, kPatchSurfaceOffset, density));
         }
     });

@@ -17,14 +17,23 @@ namespace firn::bake {
 // voxels misses 1 % of its sky, of 5 voxels 7 %: docs/benchmarks.md, backlit-balls 2; the 5-voxel balls read kappa
 // 0.20-0.25).
 constexpr double kSkyRampRadius = 5.5;  // voxels
+inline bool smallBall(double kappaPerVoxel) { return kappaPerVoxel * kSkyRampRadius > 1.0; }
 
 // Whether the light the surface at surface voxel `carrier` (curvature kappa per voxel there, surfaceCurvature) lets
 // out spreads as from a sphere of radius 1 / kappa: a smooth convex surface, not at or beside a sharp voxel (a box's
-// or slab's edge reads a curvature that is no sphere's, and flat faces' light does not spread), and not a small ball,
-// whose ramp's own single scattering (beamsInRamp) already holds the sun its skin intercepts and whose patch light,
-// shown over the density's larger ball, stands for the rest of that skin (docs/benchmarks.md, cap-spread 3).
+// or slab's edge reads a curvature that is no sphere's, and flat faces' light does not spread).
 bool spreadsAsSphere(const SnowTopology &topo, const openvdb::Coord &carrier,
                      openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index, double kappaPerVoxel);
+
+// What the suns' radiance a smooth convex surface (spreadsAsSphere) carries out into its ramp keeps d voxels beyond
+// the patches' sphere (radius 1 / kappa): the patches' exitance per m^2 of their sphere shown over one of R + d,
+// 1 / (1 + kappa d)^2, where the sun the skin intercepts beyond the patches is given to them (skinRingIrradiance). A
+// small ball takes no ring: its ramp's own single scattering (beamsInRamp) holds the sun its skin intercepts, and
+// the rest of that skin is its carried light shown over the density's larger ball, which divides as 1 / (1 + kappa
+// d)^(1/2). Undivided, a small ball let out 1.06-1.09 W per W of sun entering where it absorbs nothing (omega 1 -
+// 1e-7, g 0 to 0.85, 6 to 60 optical depths per voxel), divided as the larger balls' without their ring 0.83-0.90;
+// the exponent 1/2 lets out 1.00-1.03 (bench/ball_energy_balance.py; docs/benchmarks.md, lead-91).
+double carriedSunSpread(double kappaPerVoxel, double d);
 
 // Voxels along a surface voxel's patch normal n from its node (voxel `node`) out to the snow's surface, where the density (trilinear)
 // falls to half the snow's beneath it (the larger of the node's and a voxel further in): the patches' sphere, on
@@ -44,7 +53,8 @@ double surfaceOffset(const Medium &medium, const openvdb::Coord &node, const glm
 double skinRingGrowth(const Medium &medium, const SnowTopology &topo, std::size_t i, double kappaPerVoxel,
                       double offset, Medium::Accessor &density);
 
-// Per surface voxel, its skinRingGrowth where its light spreads as a sphere's (spreadsAsSphere) and a sun meets its
+// Per surface voxel, its skinRingGrowth where its light spreads as a sphere's (spreadsAsSphere), not a small ball's
+// (carriedSunSpread), and a sun meets its
 // patch within the band the widest ring (3 voxels) could reach, 1 elsewhere: read once per patch for every channel
 // and pass's assembly (read per assembly, the car's solve phase took +37 %: docs/benchmarks.md, cap-ring). The ring
 // is the skin beyond patchSurface, where the patches' beams are read (the sun they miss), not beyond the half level
