@@ -365,11 +365,15 @@ def test_lamps_scatter_their_light_in_the_ramp_beside_grazing_patches(folder):
     # their terminator, the point lamp on its lit side only (0 <= mu0): -5.2 %, -6.9 %, -7.4 %. The upper bound 0.4 on
     # the point lamp's view against it catches the ramp given past its terminator too (+82 % against 16384-path
     # references; this view reads +27.7 % here, main +19.5 %) (docs/benchmarks.md, lamp-shell, lamp-ramp).
+    # Since a small ball's carried light divides (skin_ring.h, carriedSunSpread; stop 91) this absorbing ball reads
+    # about 3 points darker under every light (16384-path references, bench/lamp_terminator.py: the sun -4.6 ->
+    # -7.3 %, the point lamp -7.6 -> -10.4 %, the area lamp -5.7 -> -8.5 %; here the point lamp -10.2 %): the point
+    # lamp's bias no longer tells a lost ramp light, its view against it and the area lamp's still do.
     area = lamp_row(folder, "area")
     point = lamp_row(folder, "point")
     against = 2  # view (180, 0)
     assert -0.08 < area["bias"] < 0.05 and area["views"][against] > -0.18, (area["bias"], area["views"])
-    assert -0.09 < point["bias"] < 0.05 and point["views"][against] < 0.4, (point["bias"], point["views"])
+    assert -0.12 < point["bias"] < 0.05 and point["views"][against] < 0.4, (point["bias"], point["views"])
 
 
 def test_area_lamp_pieces_ramp_light_stands_for_their_own_return_alone_seen_from_above(folder):
