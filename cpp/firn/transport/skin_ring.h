@@ -30,9 +30,10 @@ bool spreadsAsSphere(const SnowTopology &topo, const openvdb::Coord &carrier,
 // 1 / (1 + kappa d)^2, where the sun the skin intercepts beyond the patches is given to them (skinRingIrradiance). A
 // small ball takes no ring: its ramp's own single scattering (beamsInRamp) holds the sun its skin intercepts, and
 // the rest of that skin is its carried light shown over the density's larger ball, which divides as 1 / (1 + kappa
-// d)^(1/2). Undivided, a small ball let out 1.06-1.09 W per W of sun entering where it absorbs nothing (omega 1 -
-// 1e-7, g 0 to 0.85, 6 to 60 optical depths per voxel), divided as the larger balls' without their ring 0.83-0.90;
-// the exponent 1/2 lets out 1.00-1.03 (bench/ball_energy_balance.py; docs/benchmarks.md, lead-91).
+// d)^(1/2), an exponent chosen by the energy balance where the snow absorbs nothing (omega 1 - 1e-7; the 5 cm ball on
+// 1 cm voxels at g 0 to 0.85, 6 to 60 optical depths per voxel): undivided it let out 1.05-1.11 W per W of sun
+// entering, divided as the larger balls' without their ring 0.83-0.90, with the exponent 1/2 0.98-1.07
+// (bench/ball_energy_balance.py; docs/benchmarks.md, lead-91).
 double carriedSunSpread(double kappaPerVoxel, double d);
 
 // Voxels along a surface voxel's patch normal n from its node (voxel `node`) out to the snow's surface, where the density (trilinear)
