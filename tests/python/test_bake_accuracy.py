@@ -3,7 +3,8 @@ bench/bake_suite.py (docs/bake.md, Accuracy on small and thin shapes).
 
 Oracles: `firncore.monte_carlo_radiance` (all orders, exact Henyey-Greenstein phase function, none of the bake's
 approximations; seeded, so its noise is fixed), and for a non-absorbing medium under a uniform sky the exact
-isotropic field (every point sees the sky's radiance L from every direction, so the source function is L)."""
+isotropic field (every point sees the sky's radiance L from every direction, so the source function is L), and
+energy conservation (where the snow absorbs nothing, every watt of sun entering a ball leaves it)."""
 
 import dataclasses
 import functools
