@@ -58,6 +58,11 @@ def intercepted(case, back, pixels):
     return area * (1.0 - np.exp(-optical_depths(case, origins, directions))).sum()
 
 
+def sun_entering(case, pixels):
+    """The sun's power entering the ball (W): E times its cross-section seen from the sun, on a view of 2 * pixels^2."""
+    return case.sun * intercepted(case, sun_towards(), 2 * pixels)
+
+
 def towards_camera(theta):
     """The camera's direction at angle theta (deg) from the sun, in the sun's plane (negative: towards the horizon)."""
     s = sun_towards()
@@ -98,7 +103,7 @@ def sun_balance(case, pixels=16, views=100, seed=0):
         for back in fibonacci(views):
             origins, directions, area = view_rays(case, back, pixels)
             leaving += firncore.render_baked(path, case.optics, origins, directions)[:, 1].sum() * area
-    return 4.0 * math.pi * leaving / views / (case.sun * intercepted(case, sun_towards(), 2 * pixels))
+    return 4.0 * math.pi * leaving / views / sun_entering(case, pixels)
 
 
 def main():
@@ -154,7 +159,7 @@ def main():
 
 
 def report_sun(case, args, thetas, views, fibonacci_power):
-    entering = case.sun * intercepted(case, sun_towards(), 2 * args.pixels)  # W
+    entering = sun_entering(case, args.pixels)  # W
     print(f"{case.name} (sigma_t {case.sigma_t:g} 1/m, omega {case.omega[0]:.8g}, g {case.g:g}, grid "
           f"{case.density.shape[0]} voxels of {case.voxel:g} m wide), sun alone ({case.sun} W/m^2, 30 deg up), "
           f"bake seed {args.seed}, "

@@ -22,9 +22,9 @@ import firncore
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "bench"))
 import bake_flat_slab  # noqa: E402
-import ball_energy_balance  # noqa: E402
 import bake_suite  # noqa: E402
 import bake_terminator  # noqa: E402
+import ball_energy_balance  # noqa: E402
 import lamp_slab_pieces  # noqa: E402
 import lamp_terminator  # noqa: E402
 import plateau_sun_profile  # noqa: E402

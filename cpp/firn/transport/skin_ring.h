@@ -55,12 +55,11 @@ double skinRingGrowth(const Medium &medium, const SnowTopology &topo, std::size_
                       double offset, Medium::Accessor &density);
 
 // Per surface voxel, its skinRingGrowth where its light spreads as a sphere's (spreadsAsSphere), not a small ball's
-// (carriedSunSpread), and a sun meets its
-// patch within the band the widest ring (3 voxels) could reach, 1 elsewhere: read once per patch for every channel
-// and pass's assembly (read per assembly, the car's solve phase took +37 %: docs/benchmarks.md, cap-ring). The ring
-// is the skin beyond patchSurface, where the patches' beams are read (the sun they miss), not beyond the half level
-// the carried light's divergence starts from (surfaceOffset): from there the balls' bias rose 6 points, the ring's
-// light the sun the patches already take (docs/benchmarks.md, cap-sphere).
+// (carriedSunSpread), and a sun meets its patch within the band the widest ring (3 voxels) could reach, 1 elsewhere:
+// read once per patch for every channel and pass's assembly (read per assembly, the car's solve phase took +37 %:
+// docs/benchmarks.md, cap-ring). The ring is the skin beyond patchSurface, where the patches' beams are read (the sun
+// they miss), not beyond the half level the carried light's divergence starts from (surfaceOffset): from there the
+// balls' bias rose 6 points, the ring's light the sun the patches already take (docs/benchmarks.md, cap-sphere).
 SurfaceValues<float> skinRingGrowths(const Scene &scene, const SnowTopology &topo, const SubProgress &progress);
 
 // W/m^2 of patch area a smooth convex patch lit at cosine mu0 scatters at its node, of the sun (irradiance E normal
