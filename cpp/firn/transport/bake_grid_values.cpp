@@ -596,13 +596,26 @@ class RampOfThickConvexSnow {
     bool asked_ = false, thickConvex_ = false;  // two flags, not std::optional<bool>: GCC 12 warns it unset
 };
 
+// How beam b crosses the snow on its way to a ramp voxel it scatters in (beamsInRamp). A sun's and an area lamp's
+// pieces' ways line up past the terminator, where the ramp's outer part lies on a long chord before c: there the
+// light scattered into the phase function's forward peak keeps the beam's way and scatters again in c, the
+// delta-scaled beam (Crossing::Forward). Uncollided, the 5 cm ball of omega 0.9 and g 0.85 at 20 optical depths per
+// voxel let out 0.88 of the Monte Carlo's power, 0.71-0.74 of it 120-180 degrees from the sun (0.92, and 0.77-0.90,
+// delta-scaled; docs/benchmarks.md, lead-92). A point or spot lamp's ways fan out from one point and its ramp light is
+// taken on its lit side alone (beamLightsRamp): delta-scaled, ball_grey's blocks past its terminator seen against it
+// read +41 % (+37 % uncollided, too bright already: lamp-shell), so it stays uncollided.
+Crossing rampBeamCrossing(const Scene &scene, std::size_t b) {
+    return b < scene.suns.size() || scene.lamps[b - scene.suns.size()].isArea() ? Crossing::Forward
+                                                                                 : Crossing::Uncollided;
+}
+
 // The beams' light (suns, lamps, area lamps' pieces: beamLightsRamp) scattered once in ramp voxel c (outside the
 // unknowns, carrying its surface's radiance) in front of surfaces that take them at grazing incidence or not at all
 // (kGrazingSunCosine): the peaked lobe of k = g about each beam's travel, of mean omega E T / 4 pi, T the snow's
-// uncollided transmittance averaged over c's trilinear hat weighted by the density (what the renderer's emission
-// weighs; 4^3 points), the occluders' shadow taken at c's centre, where it holds more than c's own peak and no sun the
-// surfaces take (mu0 >= kGrazingSunCosine) lights c. Where the surfaces take a lamp or an area lamp's piece, c's
-// carried peak holds that beam's return too, which the others' ramp light does not stand for: only the others'
+// transmittance (rampBeamCrossing) averaged over c's trilinear hat weighted by the density (what the renderer's
+// emission weighs; 4^3 points), the occluders' shadow taken at c's centre, where it holds more than c's own peak and
+// no sun the surfaces take (mu0 >= kGrazingSunCosine) lights c. Where the surfaces take a lamp or an area lamp's piece,
+// c's carried peak holds that beam's return too, which the others' ramp light does not stand for: only the others'
 // return (rampPart: the carriers' SurfaceLight::rampPeak0, weighted as the carried peak) is set against their ramp
 // light, the taken beams' kept. Replacing the whole peak lost the taken pieces' return (area-pieces); adding the
 // ramp light to it counted the others' return twice (the 84 % of the carried peak under a low 60 cm square lamp
@@ -639,6 +652,7 @@ void beamsInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &
     while (beams < beamCount(scene) && !litInRamp(beams)) ++beams;
     if (beams == beamCount(scene)) return;
     const VolumeOptics &optics = scene.medium->optics();
+    const double forwardPower = 1.0 - optics.albedo.y * optics.g * optics.g;  // Crossing::Forward from the uncollided T
     Source single;
     bool lampTaken = false;  // a lamp or piece the surfaces take: its return is in c's carried peak
     for (std::size_t b = 0; b < beamCount(scene); ++b) {
@@ -654,12 +668,12 @@ void beamsInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &
             continue;
         }
         const glm::dvec3 lit =  // W/m^2: the beam's mean over c's hat
-            sun ? hatSunTransmittance(c, b, scene.suns[b].direction, 1.0, marcher, sunAt) *
+            sun ? hatSunTransmittance(c, b, scene.suns[b].direction, forwardPower, marcher, sunAt) *
                       glm::dvec3(scene.suns[b].irradiance)
                 : hatAverage<glm::dvec3>(c, marcher, [&](const openvdb::Coord &q) {
                       const glm::dvec3 point = scene.medium->indexToWorld(glm::dvec3(q.x(), q.y(), q.z()) / 4.0);
                       return glm::dvec3(beamAt(scene, b, point, lampSamples, seed, stream, marcher, &centre,
-                                               Crossing::Uncollided).irradiance);
+                                               rampBeamCrossing(scene, b)).irradiance);
                   });
         single.addPeak(lit * glm::dvec3(optics.albedo) * kInvFourPi, crossingAnisotropy(optics.g),
                        -towardsBeam(scene, b, centre));

@@ -32,8 +32,15 @@ glm::dvec3 transmittance(const glm::dvec3 &extinction, double column) {
     return column > 0.0 ? glm::exp(-extinction * column) : glm::dvec3(1.0);
 }
 
+// The delta-scaled extinction per unit density, per channel: k (1 - omega g^2) (m^2/kg; Crossing::Forward).
+glm::dvec3 deltaScaledExtinctionPerDensity(const VolumeOptics &optics) {
+    return optics.extinctionPerDensity * (glm::dvec3(1.0) - optics.albedo * (optics.g * optics.g));
+}
+
 glm::dvec3 extinction(const VolumeOptics &optics, Crossing crossing) {
-    return crossing == Crossing::Beam ? reducedExtinctionPerDensity(optics) : glm::dvec3(optics.extinctionPerDensity);
+    if (crossing == Crossing::Beam) return reducedExtinctionPerDensity(optics);
+    if (crossing == Crossing::Forward) return deltaScaledExtinctionPerDensity(optics);
+    return glm::dvec3(optics.extinctionPerDensity);
 }
 
 double largest(const glm::dvec3 &v) { return std::max({v.x, v.y, v.z}); }

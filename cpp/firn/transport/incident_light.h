@@ -154,8 +154,10 @@ glm::dvec3 reducedExtinctionPerDensity(const VolumeOptics &optics);
 // travels on, sigma_tr); on its way to a surface from outside, uncollided (sigma_t: what other snow
 // scatters towards the surface arrives as that snow's own radiance, gathered separately); a beam on its way
 // to a surface patch, uncollided plus the share of each crossed piece's forward-scattered light that still
-// reaches the patch (forwardShare: all of it right behind the piece, a fraction further off).
-enum class Crossing { Beam, Uncollided, Spreading };
+// reaches the patch (forwardShare: all of it right behind the piece, a fraction further off); through a density
+// ramp to the light it scatters once there, the delta-scaled beam (Forward: the share g^2 of what scatters keeps the
+// beam's way, sigma_t (1 - omega g^2), as forwardPeakThrough's).
+enum class Crossing { Beam, Uncollided, Spreading, Forward };
 
 // Of the light a piece of snow of radius r (m, across the beam) and optical depth tau (along it) scatters
 // forwards, the share reaching a point d (m) behind it on its axis: 1 - 1 / sqrt(1 + (r / (d theta))^2). Near

@@ -32,7 +32,7 @@ bool spreadsAsSphere(const SnowTopology &topo, const openvdb::Coord &carrier,
 }
 
 double carriedSunSpread(double kappaPerVoxel, double d) {
-    return std::pow(1.0 + kappaPerVoxel * d, smallBall(kappaPerVoxel) ? -0.5 : -2.0);
+    return std::pow(1.0 + kappaPerVoxel * d, smallBall(kappaPerVoxel) ? -kSmallBallSpread : -2.0);
 }
 
 double surfaceOffset(const Medium &medium, const openvdb::Coord &node, const glm::dvec3 &n,

@@ -30,10 +30,12 @@ bool spreadsAsSphere(const SnowTopology &topo, const openvdb::Coord &carrier,
 // 1 / (1 + kappa d)^2, where the sun the skin intercepts beyond the patches is given to them (skinRingIrradiance). A
 // small ball takes no ring: its ramp's own single scattering (beamsInRamp) holds the sun its skin intercepts, and
 // the rest of that skin is its carried light shown over the density's larger ball, which divides as 1 / (1 + kappa
-// d)^(1/2), an exponent chosen by the energy balance where the snow absorbs nothing (omega 1 - 1e-7; the 5 cm ball on
-// 1 cm voxels at g 0 to 0.85, 6 to 60 optical depths per voxel): undivided it let out 1.05-1.11 W per W of sun
-// entering, divided as the larger balls' without their ring 0.83-0.90, with the exponent 1/2 0.98-1.07
-// (bench/ball_energy_balance.py; docs/benchmarks.md, lead-91).
+// d)^kSmallBallSpread, an exponent chosen by the energy balance where the snow absorbs nothing (omega 1 - 1e-7; the
+// 5 cm ball on 1 cm voxels at g 0 to 0.85, 6 to 60 optical depths per voxel): undivided it let out 1.05-1.11 W per W
+// of sun entering, divided as the larger balls' without their ring 0.83-0.90; with the exponent 1/2 0.98-1.07
+// (lead-91), since the ramp's single scattering takes the delta-scaled beam (lead-92) 1.01-1.06, with 3/4 0.98-1.04
+// (bench/ball_energy_balance.py; docs/benchmarks.md).
+constexpr double kSmallBallSpread = 0.75;
 double carriedSunSpread(double kappaPerVoxel, double d);
 
 // Voxels along a surface voxel's patch normal n from its node (voxel `node`) out to the snow's surface, where the density (trilinear)
