@@ -301,7 +301,9 @@ def test_sun_returned_at_once_stays_on_the_lit_side_of_a_staircase_terminator(fo
     # kAtOnceReach). The sun alone at x -1 to -0.25 cm from the centre, 0.5 and 1.5 cm up
     # (bench/plateau_sun_profile.py), summed, baked over the core's Monte Carlo (4096 paths, seed 37; the sum's standard
     # error 3.7 %, though three seeds spread 1 %): main b8f757d 1.165, this 1.091 (seeds 11 and 5: 1.149, 1.154 ->
-    # 1.075, 1.080; docs/benchmarks.md, plateau-sun).
+    # 1.075, 1.080; docs/benchmarks.md, plateau-sun). Since the ramp's single scattering takes the delta-scaled sun
+    # where the surface takes it at grazing (lead-92) 1.119: the row 1.5 cm up, too dark, 0.77-0.89 -> 0.80-0.92 of the
+    # truth; the row 0.5 cm up, past the terminator, where the at-once light leaked, the same to three digits.
     c = case("ball_issue")
     path = os.path.join(folder, "plateau.vdb")
     bake_suite.write_density(path, c.density, c.voxel)
@@ -313,7 +315,7 @@ def test_sun_returned_at_once_stays_on_the_lit_side_of_a_staircase_terminator(fo
                                                  seed=37)
     firncore.bake(path, c.optics, quality="FINAL", suns=c.suns(), sky=None)
     baked = firncore.render_baked(path, c.optics, origins, directions)
-    assert baked[:, 1].sum() / reference[:, 1].sum() < 1.12, baked[:, 1] / reference[:, 1]
+    assert baked[:, 1].sum() / reference[:, 1].sum() < 1.14, baked[:, 1] / reference[:, 1]
 
 
 def test_sun_grazing_the_ramp_past_the_terminator_feeds_the_outer_node(folder):
