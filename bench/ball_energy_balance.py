@@ -11,10 +11,12 @@ firn_source_peak*) apart. --samples > 0 adds the Monte Carlo per theta towards t
 the uniform sky alone instead, each view's power over L_sky sum(1 - T) dA (exactly 1 at omega 1, every view).
 --omega, --g, --sigma-t (1/m at the case's density) and --radius (m, on the case's voxels) change the case's snow or
 ball: at --omega 0.9999999 what leaves must equal what enters, so the bake alone measures its energy balance, at any
-size and snow (docs/benchmarks.md, lead-90).
+size and snow (docs/benchmarks.md, lead-90). Where the snow absorbs, --mc-views N sets the bake's power over the
+Fibonacci views against the core's Monte Carlo on the same rays (N paths per ray), by 30 degrees from the sun
+(docs/benchmarks.md, lead-92).
 
     PYTHONPATH=build/python python3 bench/ball_energy_balance.py [--case ball_clean] [--pixels 24] [--samples 0] [--sky]
-        [--omega W] [--g G] [--sigma-t S] [--radius R]
+        [--omega W] [--g G] [--sigma-t S] [--radius R] [--mc-views N]
 """
 
 import argparse
@@ -119,6 +121,9 @@ def main():
     parser.add_argument("--g", type=float, help="the snow's Henyey-Greenstein g")
     parser.add_argument("--sigma-t", type=float, help="1/m at the case's density")
     parser.add_argument("--radius", type=float, help="m: a ball of this radius on the case's voxels and density")
+    parser.add_argument("--mc-views", type=int, default=0,
+                        help="Monte Carlo paths per ray over the Fibonacci views too (0: none): the sun's power "
+                             "leaving against the truth's where the snow absorbs, by angle to the sun")
     args = parser.parse_args()
     ranges = (("--omega", args.omega, lambda w: 0.0 < w <= 1.0), ("--g", args.g, lambda g: -1.0 < g < 1.0),
               ("--sigma-t", args.sigma_t, lambda s: s > 0.0), ("--radius", args.radius, lambda r: r > 0.0))
@@ -152,10 +157,36 @@ def main():
         views = {side: np.array([power(towards_camera(side * t), args.samples > 0 and side < 0) for t in thetas])
                  for side in (-1, +1)}
         fibonacci_power = np.array([power(b, False)[:2] for b in fibonacci(args.views)]) if not args.sky else None
+        traced = fibonacci_traced(case, path, light, args) if args.mc_views and not args.sky else None
     if args.sky:
         report_sky(case, args, thetas, views)
     else:
         report_sun(case, args, thetas, views, fibonacci_power)
+        if traced is not None:
+            report_traced(case, args, fibonacci_power[:, 0], traced)
+
+
+def fibonacci_traced(case, path, light, args):
+    """The core's Monte Carlo power (W/sr) towards each Fibonacci view, on the bake's own rays (one call, one seed)."""
+    rays = [view_rays(case, back, args.pixels) for back in fibonacci(args.views)]
+    mean, _ = firncore.monte_carlo_radiance(path, case.optics, np.concatenate([o for o, _, _ in rays]),
+                                            np.concatenate([d for _, d, _ in rays]), samples=args.mc_views, seed=11,
+                                            **light)
+    return mean[:, 1].reshape(args.views, -1).sum(1) * rays[0][2]
+
+
+def report_traced(case, args, baked, traced):
+    """The power leaving, baked against the Monte Carlo, over the Fibonacci views and by 30 degrees from the sun."""
+    entering = sun_entering(case, args.pixels)
+    whole = 4.0 * math.pi / entering
+    print(f"  leaving over the {args.views} Fibonacci views, per W entering: baked {whole * baked.mean():.4f}, "
+          f"Monte Carlo ({args.mc_views} paths per ray) {whole * traced.mean():.4f}: baked / MC "
+          f"{baked.sum() / traced.sum():.4f}")
+    angle = np.degrees(np.arccos(np.clip(fibonacci(args.views) @ np.asarray(sun_towards()), -1.0, 1.0)))
+    for low in range(0, 180, 30):
+        k = (angle >= low) & (angle < low + 30)
+        print(f"    {low:3d}-{low + 30:3d} deg from the sun: {k.sum():3d} views, baked / MC "
+              f"{baked[k].sum() / traced[k].sum():.3f}, share of the MC's power {traced[k].sum() / traced.sum():.3f}")
 
 
 def report_sun(case, args, thetas, views, fibonacci_power):

@@ -371,11 +371,14 @@ def test_lamps_scatter_their_light_in_the_ramp_beside_grazing_patches(folder):
     # Since a small ball's carried light divides (skin_ring.h, carriedSunSpread; stop 91) this absorbing ball reads
     # about 3 points darker under every light (16384-path references, bench/lamp_terminator.py: the sun -4.6 ->
     # -7.3 %, the point lamp -7.6 -> -10.4 %, the area lamp -5.7 -> -8.5 %; here the point lamp -10.2 %): the point
-    # lamp's bias no longer tells a lost ramp light, its view against it and the area lamp's still do.
+    # lamp's bias no longer tells a lost ramp light, its view against it and the area lamp's still do. Since its carried
+    # light divides by (1 + kappa d)^3/4 (stop 92) the point lamp reads -11.8 % (16384 paths; -11.5 % here), the area
+    # lamp -8.5 % as before (-8.05 % here): the area lamp's bound -8 -> -10 %, which its lost ramp light (-11.7 %)
+    # still fails (docs/benchmarks.md, lead-92).
     area = lamp_row(folder, "area")
     point = lamp_row(folder, "point")
     against = 2  # view (180, 0)
-    assert -0.08 < area["bias"] < 0.05 and area["views"][against] > -0.18, (area["bias"], area["views"])
+    assert -0.10 < area["bias"] < 0.05 and area["views"][against] > -0.18, (area["bias"], area["views"])
     assert -0.12 < point["bias"] < 0.05 and point["views"][against] < 0.4, (point["bias"], point["views"])
 
 
