@@ -101,10 +101,7 @@ def sun_balance(case, pixels=16, views=100, seed=0):
         path = os.path.join(folder, "snow.vdb")
         bs.write_density(path, case.density, case.voxel)
         firncore.bake(path, case.optics, quality="FINAL", seed=seed, suns=case.suns())
-        leaving = 0.0  # W/sr summed over the views
-        for back in fibonacci(views):
-            origins, directions, area = view_rays(case, back, pixels)
-            leaving += firncore.render_baked(path, case.optics, origins, directions)[:, 1].sum() * area
+        leaving = baked_power(case, path, fibonacci(views), pixels).sum()  # W/sr summed over the views
     return 4.0 * math.pi * leaving / views / sun_entering(case, pixels)
 
 
@@ -157,7 +154,8 @@ def main():
         views = {side: np.array([power(towards_camera(side * t), args.samples > 0 and side < 0) for t in thetas])
                  for side in (-1, +1)}
         fibonacci_power = np.array([power(b, False)[:2] for b in fibonacci(args.views)]) if not args.sky else None
-        traced = fibonacci_traced(case, path, light, args) if args.mc_views and not args.sky else None
+        traced = (traced_power(case, path, light, fibonacci(args.views), args.pixels, args.mc_views)
+                  if args.mc_views and not args.sky else None)
     if args.sky:
         report_sky(case, args, thetas, views)
     else:
@@ -166,13 +164,22 @@ def main():
             report_traced(case, args, fibonacci_power[:, 0], traced)
 
 
-def fibonacci_traced(case, path, light, args):
-    """The core's Monte Carlo power (W/sr) towards each Fibonacci view, on the bake's own rays (one call, one seed)."""
-    rays = [view_rays(case, back, args.pixels) for back in fibonacci(args.views)]
+def traced_power(case, path, light, backs, pixels, samples):
+    """The core's Monte Carlo power (W/sr) towards each view `backs` (rows), on the bake's own rays (one call, one
+    seed), `samples` paths per ray."""
+    rays = [view_rays(case, back, pixels) for back in backs]
     mean, _ = firncore.monte_carlo_radiance(path, case.optics, np.concatenate([o for o, _, _ in rays]),
-                                            np.concatenate([d for _, d, _ in rays]), samples=args.mc_views, seed=11,
-                                            **light)
-    return mean[:, 1].reshape(args.views, -1).sum(1) * rays[0][2]
+                                            np.concatenate([d for _, d, _ in rays]), samples=samples, seed=11, **light)
+    return mean[:, 1].reshape(len(rays), -1).sum(1) * rays[0][2]
+
+
+def baked_power(case, path, backs, pixels):
+    """The baked power (W/sr) towards each view `backs` (rows)."""
+    power = []
+    for back in backs:
+        origins, directions, area = view_rays(case, back, pixels)
+        power.append(firncore.render_baked(path, case.optics, origins, directions)[:, 1].sum() * area)
+    return np.array(power)
 
 
 def report_traced(case, args, baked, traced):

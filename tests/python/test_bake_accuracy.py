@@ -146,6 +146,24 @@ def test_small_ball_that_absorbs_nothing_lets_out_the_sun_that_enters_it(g, sigm
     assert ball_energy_balance.sun_balance(c) == pytest.approx(1.0, abs=0.05)
 
 
+def test_absorbing_ball_lets_out_its_limbs_forward_light(folder):
+    # The 5 cm ball at omega 0.9, g 0.85, 20 optical depths per voxel, under the sun: of the 100 views spread evenly
+    # over the sphere, the 6 within 30 degrees of the sun's travel (150-180 degrees from the sun, 22 % of the power
+    # leaving) see its limb's forward light. The power towards them, baked over the core's Monte Carlo on the same
+    # rays (64 paths per ray, seed 11; bench/ball_energy_balance.py --mc-views): with the ramp's single scattering of
+    # the grazing sun uncollided (rampBeamCrossing returning Crossing::Uncollided, temporarily) 0.712, delta-scaled
+    # (beamsInRamp, rampBeamCrossing) 0.837 (docs/benchmarks.md, lead-92).
+    c = dataclasses.replace(case("ball_issue"), omega=(0.9,) * 3, sigma_t=2000.0)
+    path = os.path.join(folder, "absorbing.vdb")
+    bake_suite.write_density(path, c.density, c.voxel)
+    firncore.bake(path, c.optics, quality="FINAL", seed=0, suns=c.suns())
+    backs = ball_energy_balance.fibonacci(100)
+    backs = backs[backs @ np.asarray(ball_energy_balance.sun_towards()) < -math.sqrt(3.0) / 2.0]
+    baked = ball_energy_balance.baked_power(c, path, backs, 16)
+    traced = ball_energy_balance.traced_power(c, path, {"suns": c.suns()}, backs, 16, 64)
+    assert len(backs) == 6 and baked.sum() / traced.sum() > 0.77, baked / traced
+
+
 def test_thin_ball_holds_single_and_multiple_scattering_in_two_lobes(folder):
     # A thin ball (voxels of optical depth 1, all traced; omega 0.999, g 0.5) from the sun's side, across and
     # against the sun. Its source is half the sun's single scattering, HG(0.5) about the sun's travel, and half

@@ -347,6 +347,10 @@ double rampCrossing(const Medium &medium, const glm::dvec3 &from, const glm::dve
 // ball_grey's rims keep +49 % (docs/benchmarks.md, grey-rims-53).
 constexpr double kShadowedCarrierCosine = -0.25;
 
+// The share of a beam's extinction that its forward peak keeps on the beam's way, omega g^2 (the delta scaling,
+// grey: the middle channel), which forwardPeakThrough and beamsInRamp take off the uncollided extinction.
+double forwardKeptShare(const VolumeOptics &optics) { return optics.albedo.y * optics.g * optics.g; }
+
 // The returned grazing sun carried through the density ramp: voxel c (outside the unknowns, carrying its surface's
 // radiance) in front of smooth surface voxels within two voxels whose peaked lobe (the sun returned sharply
 // forwards, Method 5) travels towards it takes their peaked lobes where these are over twice its own (elsewhere
@@ -398,7 +402,7 @@ void forwardPeakThrough(const Scene &scene, const SnowTopology &topo, const open
     const VolumeOptics &optics = medium.optics();
     // delta-Eddington: the share f = omega g^2 of the scattered light stays in the forward beam (extinction
     // sigma_t (1 - f)).
-    const double forwardKept = optics.albedo.y * optics.g * optics.g;
+    const double forwardKept = forwardKeptShare(optics);
     const glm::dvec3 centre = medium.voxelCentre(c);
     glm::dvec3 p0(0.0), p1(0.0);
     double total = 0.0;
@@ -653,7 +657,7 @@ void beamsInRamp(const Scene &scene, const openvdb::Coord &c, const glm::dvec3 &
     while (beams < beamCount(scene) && !litInRamp(beams)) ++beams;
     if (beams == beamCount(scene)) return;
     const VolumeOptics &optics = scene.medium->optics();
-    const double forwardPower = 1.0 - optics.albedo.y * optics.g * optics.g;  // Crossing::Forward from the uncollided T
+    const double forwardPower = 1.0 - forwardKeptShare(optics);  // Crossing::Forward from the uncollided T
     Source single;
     bool lampTaken = false;  // a lamp or piece the surfaces take: its return is in c's carried peak
     for (std::size_t b = 0; b < beamCount(scene); ++b) {

@@ -33,7 +33,8 @@ bool spreadsAsSphere(const SnowTopology &topo, const openvdb::Coord &carrier,
 // d)^kSmallBallSpread, an exponent chosen by the energy balance where the snow absorbs nothing (omega 1 - 1e-7; the
 // 5 cm ball on 1 cm voxels at g 0 to 0.85, 6 to 60 optical depths per voxel): undivided it let out 1.05-1.11 W per W
 // of sun entering, divided as the larger balls' without their ring 0.83-0.90; with the exponent 1/2 0.98-1.07
-// (lead-91), since the ramp's single scattering takes the delta-scaled beam (lead-92) 1.01-1.06, with 3/4 0.98-1.04
+// (lead-91). Since the ramp's grazing sun is delta-scaled (beamsInRamp, lead-92) the exponent 1/2 reads 1.01-1.05 on
+// the three snows of the energy test and 3/4 0.98-1.02 (0.91-1.07 over lead-90's table)
 // (bench/ball_energy_balance.py; docs/benchmarks.md).
 constexpr double kSmallBallSpread = 0.75;
 double carriedSunSpread(double kappaPerVoxel, double d);
