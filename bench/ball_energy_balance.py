@@ -123,10 +123,14 @@ def main():
                              "leaving against the truth's where the snow absorbs, by angle to the sun")
     args = parser.parse_args()
     ranges = (("--omega", args.omega, lambda w: 0.0 < w <= 1.0), ("--g", args.g, lambda g: -1.0 < g < 1.0),
-              ("--sigma-t", args.sigma_t, lambda s: s > 0.0), ("--radius", args.radius, lambda r: r > 0.0))
-    for name, value, valid in ranges:
+              ("--sigma-t", args.sigma_t, lambda s: s > 0.0), ("--radius", args.radius, lambda r: r > 0.0),
+              ("--mc-views", args.mc_views, lambda n: n >= 0), ("--samples", args.samples, lambda n: n >= 0),
+              ("--views", args.views, lambda n: n > 0), ("--pixels", args.pixels, lambda n: n > 0),
+              ("--step", args.step, lambda d: 0.0 < d <= 180.0))
+    for name, value, valid in ranges:  # before the bake, not after it in the core
         if value is not None and not valid(value):
-            parser.error(f"{name} {value}: out of range (omega in (0, 1], g in (-1, 1), sigma_t and radius > 0)")
+            parser.error(f"{name} {value}: out of range (omega in (0, 1], g in (-1, 1), sigma_t and radius > 0, "
+                         "views and pixels > 0, samples and mc-views >= 0, step in (0, 180])")
     case = changed(bs.case(args.case), args)
     light = {"sky": firncore.Sky((case.sky,) * 3)} if args.sky else {"suns": case.suns()}
     thetas = np.arange(args.step / 2, 180.0, args.step)

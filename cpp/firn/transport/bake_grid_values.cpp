@@ -541,7 +541,7 @@ bool onConvexSurface(const SnowTopology &topo, const openvdb::Coord &carrier,
 // lit cap rendered at 1.19 times the truth while the patches let out the truth's; docs/benchmarks.md, cap-shape,
 // cap-spread). The whole divergence: the sun the skin intercepts beyond R, which the undivided light stood for, is
 // its own source now (skinRingGrowth, given to the patches in assemble); a small ball's, which takes no ring,
-// divides by (1 + kappa d)^(1/2) (carriedSunSpread). The sky's carried light is not spread: an
+// divides by (1 + kappa d)^kSmallBallSpread (carriedSunSpread). The sky's carried light is not spread: an
 // even sky on the sphere of R + d brings that much more, the skin's own ring (ball_sky is right as it is), so the
 // beams' part alone (SourceValues::skyShare, the solves' split; the peaked lobe is the beams' whole). d from the
 // carrier's own surface (surfaceOffset: the density's half level, where the patches' sphere lies; from the node or
