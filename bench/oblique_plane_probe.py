@@ -3,8 +3,11 @@
 A 48^3-voxel block of a bench/bake_suite.py case's snow cut by a plane of unit normal --normal (grid axes) through a
 point --offset voxels off the block's middle, antialiased as bake_suite.ball is (fill 0.5 - distance / h); the
 suite's sun (30 deg up from azimuth 0) alone; 2 x 2 rays along --ray (towards the camera; default the (0, 0) view's)
-ending half a voxel under the plane, started 1.2 cm above it. The core's Monte Carlo against the baked render,
-channel G. With a ball block's depth-one normal it is that block without the curvature.
+aimed half a voxel under the plane, started ABOVE voxels over it (along its normal), past the trilinear density's
+reach (1.5 voxels over the plane): started 1.2 cm along the ray from their aim, as before lead-93, they began inside
+that reach at some phases and read the flat top of ball_grey's snow at phase 0.25 1.18 where it is 1.04. The core's
+Monte Carlo against the baked render, channel G. With a ball block's depth-one normal it is that block without the
+curvature.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/oblique_plane_probe.py --optics ball_grey --normal 0.396,-0.909,-0.13
 """
@@ -22,7 +25,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bake_suite  # noqa: E402
 
 SIDE = 48  # voxels
-HEIGHT = 0.012  # m above the plane
+ABOVE = 2.0  # voxels over the plane (along its normal) where the rays start: past the density's reach
 
 
 def oblique_density(case, normal, offset):
@@ -50,13 +53,15 @@ def main():
     normal /= np.linalg.norm(normal)
     w = np.array([float(x) for x in args.ray.split(",")])
     w /= np.linalg.norm(w)
+    if w @ normal <= 0.05:
+        parser.error(f"--ray {args.ray} meets the plane from behind or at grazing (ray . normal {w @ normal:.2f} <= 0.05)")
     sun = np.array([math.cos(bake_suite.SUN_ELEVATION), 0.0, math.sin(bake_suite.SUN_ELEVATION)])
     density, point = oblique_density(case, normal, args.offset)
     across = np.cross(normal, [0.0, 0.0, 1.0] if abs(normal[2]) < 0.9 else [1.0, 0.0, 0.0])
     across /= np.linalg.norm(across)
     along = np.cross(normal, across)
     end = point - 0.5 * h * normal
-    starts = np.array([end + (x * across + y * along) * h + HEIGHT / (w @ normal) * w
+    starts = np.array([end + (x * across + y * along) * h + (ABOVE + 0.5) * h / (w @ normal) * w
                        for x in (-0.75, 0.75) for y in (-0.75, 0.75)])
     ways = np.tile(-w, (len(starts), 1))
     suns = [firncore.SunLight(tuple(sun), (1.0,) * 3, 0.0093)]

@@ -62,8 +62,9 @@ constexpr int kTerraceVoxels = 16;
 // face is covered and the face goes on one voxel higher, or two where a thin voxel rides the step's edge). A plane
 // tilted 5-20 degrees to the grid is such a staircase, its terraces flat past a voxel for 3 or more voxels along the
 // slope and endlessly across it: onFlatWall took them for walls and gave their voxels the axis's normal, the full tilt
-// off the plane (bench/oblique_plane_probe.py, 15 degrees: bake / Monte Carlo 1.23 -> 1.28; docs/benchmarks.md,
-// wall-normal). A layer's cut side runs up to its convex top edge and down to the ground or its own foot, no step.
+// off the plane (bench/oblique_plane_probe.py, 15 degrees, ball_grey's snow at phases 0, 0.23, 0.5: bake / Monte
+// Carlo 1.06, 1.10, 1.03 -> 1.14, 1.13, 1.13; docs/benchmarks.md, wall-normal, lead-93). A layer's cut side runs up
+// to its convex top edge and down to the ground or its own foot, no step.
 bool onTerrace(const SnowTopology &topo, std::size_t i, int f) {
     const auto snow = [&](std::int32_t link) { return !SnowTopology::isFace(link); };
     // The last voxel of face f's flat run from i along face direction d, or nothing past kTerraceVoxels.

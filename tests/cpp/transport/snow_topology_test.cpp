@@ -243,10 +243,10 @@ TEST(SnowTopology, AWallsTopVoxelUnderAHalfFilledTopKeepsTheWallsNormal) {
 // A plane tilted 5-20 degrees to the grid (along x, y and the diagonal; four phases) is a voxel staircase whose
 // terraces, flat 3 or more voxels along the slope and endlessly across it, passed onFlatWall's test for a layer's
 // cut side: plate-valleys gave their voxels the terrace's axis normal, the full tilt off the plane (bench/
-// oblique_plane_probe.py at 15 degrees: bake / Monte Carlo 1.23 -> 1.28). onTerrace keeps them on the gradient,
-// which leans 4.1, 7.7, 8.7 and 7.2 degrees off the plane at worst (means 1.7-3.6; the 3^3 gradient's own staircase
-// error, as before the rule, to the digit). The plane's normal is the oracle; the bound (0.9 of the tilt) fails on any
-// patch left with a grid axis for its normal.
+// oblique_plane_probe.py at 15 degrees: bake / Monte Carlo 1.03-1.10 -> 1.13-1.14 over three phases). onTerrace
+// keeps them on the gradient, which leans 4.1, 7.7, 8.7 and 7.2 degrees off the plane at worst (means 1.7-3.6; the
+// 3^3 gradient's own staircase error, as before the rule, to the digit). The plane's normal is the oracle; the bound
+// (0.9 of the tilt) fails on any patch left with a grid axis for its normal.
 TEST(SnowTopology, NormalsOfAPlaneTiltedToTheGridKeepToItsGradientOnItsTerraces) {
     for (double degrees : {5.0, 10.0, 15.0, 20.0})
         for (double azimuth : {0.0, 90.0, 45.0})
