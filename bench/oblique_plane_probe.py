@@ -2,12 +2,13 @@
 
 A 48^3-voxel block of a bench/bake_suite.py case's snow cut by a plane of unit normal --normal (grid axes) through a
 point --offset voxels off the block's middle, antialiased as bake_suite.ball is (fill 0.5 - distance / h); the
-suite's sun (30 deg up from azimuth 0) alone; 2 x 2 rays along --ray (towards the camera; default the (0, 0) view's)
-aimed half a voxel under the plane, started ABOVE voxels over it (along its normal), past the trilinear density's
-reach (1.5 voxels over the plane): started 1.2 cm along the ray from their aim, as before lead-93, they began inside
-that reach at some phases and read the flat top of ball_grey's snow at phase 0.25 1.18 where it is 1.04. The core's
-Monte Carlo against the baked render, channel G. With a ball block's depth-one normal it is that block without the
-curvature.
+suite's sun (30 deg up from azimuth 0) alone; --rays x --rays rays along --ray (towards the camera; default the (0, 0)
+view's) aimed half a voxel under the plane on a square of --width voxels (default 2 x 2 over 3: +-0.75 voxel; a
+staircase's texture averages over whole steps, 1 / tan(tilt) voxels), started ABOVE voxels over it (along its normal),
+past the trilinear density's reach (1.5 voxels over the plane): started 1.2 cm along the ray from their aim, as before
+lead-93, they began inside that reach at some phases and read the flat top of ball_grey's snow at phase 0.25 1.18
+where from above it reads 1.04-1.07. The core's Monte Carlo against the baked render, channel G (the rays' sums). With
+a ball block's depth-one normal it is that block without the curvature.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/oblique_plane_probe.py --optics ball_grey --normal 0.396,-0.909,-0.13
 """
@@ -46,7 +47,12 @@ def main():
     parser.add_argument("--offset", type=float, default=0.23, help="voxels: the plane's phase in the grid")
     parser.add_argument("--ray", default="1,0,0", help="towards the camera (grid axes)")
     parser.add_argument("--samples", type=int, default=8192)
+    parser.add_argument("--rays", type=int, default=2, help="per side of the square bundle the rays end on")
+    parser.add_argument("--width", type=float, default=3.0,
+                        help="voxels: the bundle's side (a staircase's texture averages over whole steps)")
     args = parser.parse_args()
+    if args.rays < 1 or args.width < 0.0 or args.samples < 1:
+        parser.error("--rays and --samples at least 1, --width not negative")
     case = bake_suite.case(args.optics)
     h = case.voxel
     normal = np.array([float(x) for x in args.normal.split(",")])
@@ -61,8 +67,9 @@ def main():
     across /= np.linalg.norm(across)
     along = np.cross(normal, across)
     end = point - 0.5 * h * normal
+    spots = ((np.arange(args.rays) + 0.5) / args.rays - 0.5) * args.width  # voxels across the bundle
     starts = np.array([end + (x * across + y * along) * h + (ABOVE + 0.5) * h / (w @ normal) * w
-                       for x in (-0.75, 0.75) for y in (-0.75, 0.75)])
+                       for x in spots for y in spots])
     ways = np.tile(-w, (len(starts), 1))
     suns = [firncore.SunLight(tuple(sun), (1.0,) * 3, 0.0093)]
     with tempfile.TemporaryDirectory() as folder:
