@@ -69,7 +69,12 @@ constexpr int kSmallPieceVoxels = 343;  // 7^3
 constexpr double kMaxTracedSmallPieceReducedVolume = 4096.0;
 constexpr double kMaxTracedPieceReducedVolume = 64.0, kMaxTracedPieceDepth = 2.5, kTracedLayerOpticalDepth = 2.25,
                  kTracedLayerAbsorptionDepth = 0.1;
-// What a piece of connected snow is (26-neighbours of non-zero density), as marked in thinVoxels' `done`.
+// A voxel under this optical depth (sigma_t h) is air to the tracing: it changes no light by more than that share. A
+// layer of next to no density (float rounding of an antialiased fill, 2.3e-15 of the snow's) over snow that is not
+// thick per voxel was traced as thin snow, and the renderer scattered in it: a flat top's mixed render +27 %
+// (docs/benchmarks.md, lead-93 6.).
+constexpr double kNegligibleOpticalDepth = 1e-6;
+// What a piece of connected snow is (26-neighbours of more than negligible density), as marked in thinVoxels' `done`.
 // kTracedLayer: a transport-thin piece past both sizes, traced whole for having no inside (a layer).
 enum PieceKind : std::int32_t {
     kUnvisited = 0,
@@ -134,12 +139,12 @@ bool twoSided(const SnowTopology &topo, openvdb::tree::ValueAccessor<const openv
 }
 
 // The kind of the piece around `seed` (sigma_tr h = reducedPerDensity * density); marks what it visits in `done`.
-// Voxels of density `layerBelow` or more make no traced layer. A fill that meets a large piece's voxel stops, and so
-// does one past both sizes that is no traced layer: each voxel is visited a bounded number of times, however large
-// the snow.
+// Voxels of density `layerBelow` or more make no traced layer; those of `air` or less are none of it. A fill that
+// meets a large piece's voxel stops, and so does one past both sizes that is no traced layer: each voxel is visited a
+// bounded number of times, however large the snow.
 PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<openvdb::Int32Tree> &done,
-                      const openvdb::Coord &seed, double reducedPerDensity, float layerBelow, const SnowTopology &topo,
-                      openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
+                      const openvdb::Coord &seed, double reducedPerDensity, float layerBelow, float air,
+                      const SnowTopology &topo, openvdb::tree::ValueAccessor<const openvdb::Int32Tree> &index) {
     const auto reducedVolume = [&](const openvdb::Coord &c) {
         return std::pow(reducedPerDensity * density.getValue(c), 3.0);
     };
@@ -159,7 +164,7 @@ PieceKind pieceAround(Medium::Accessor &density, openvdb::tree::ValueAccessor<op
         stack.pop_back();
         for (int i = 0; i < 27 && !large; ++i) {
             const openvdb::Coord n = c + blockOffset(i);
-            if (i == 13 || !(density.getValue(n) > 0.0f)) continue;
+            if (i == 13 || !(density.getValue(n) > air)) continue;
             const std::int32_t mark = done.getValue(n);
             if (mark == kLargePiece) large = true;
             else if (mark == kUnvisited) {
@@ -241,6 +246,7 @@ TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
     const double mostAbsorbed = 1.0 - std::min({optics.albedo.x, optics.albedo.y, optics.albedo.z});
     const float layerBelow =
         float(std::min(kTracedLayerOpticalDepth, kTracedLayerAbsorptionDepth / mostAbsorbed) / (k * h));
+    const float air = float(kNegligibleOpticalDepth / (k * h));  // kg/m^3: at or under it, no snow to trace
     TracedSnow out;
     Medium::Accessor density = medium.accessor();
     openvdb::Int32Tree pieces(kUnvisited);
@@ -248,10 +254,10 @@ TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> index(*topo.index);
     std::vector<bool> wholeInLayer;  // per voxel of out.wholePieces
     for (auto it = medium.density().cbeginValueOn(); it; ++it) {
-        if (!(*it > 0.0f)) continue;
+        if (!(*it > air)) continue;
         std::int32_t mark = done.getValue(it.getCoord());
         if (mark == kUnvisited)
-            mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h, layerBelow, topo, index);
+            mark = pieceAround(density, done, it.getCoord(), leastReduced * k * h, layerBelow, air, topo, index);
         if (mark == kSmallPiece) {
             out.thin.push_back(it.getCoord());
             continue;
