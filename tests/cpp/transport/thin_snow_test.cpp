@@ -23,6 +23,17 @@ void addBox(Scene &scene, const openvdb::CoordBBox &box, float density) {
     scene.medium = std::make_shared<Medium>(grid, scene.medium->optics());
 }
 
+// What `scene`'s snow traces (thinVoxels), asserted to be `lump`'s 2 x 2 x 2 voxels alone, thin (none traced whole).
+bake::TracedSnow tracedLumpAlone(const Scene &scene, const openvdb::CoordBBox &lump) {
+    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
+    bake::TracedSnow snow = bake::thinVoxels(*scene.medium, topo);
+    EXPECT_TRUE(snow.wholePieces.empty());
+    EXPECT_EQ(snow.thin.size(), 8u);
+    EXPECT_TRUE(
+        std::all_of(snow.thin.begin(), snow.thin.end(), [&](const openvdb::Coord &c) { return lump.isInside(c); }));
+    return snow;
+}
+
 }  // namespace
 
 // The suite's slab_thin (24 x 24 x 3 voxels of sigma_t h 2, omega 0.99, g 0.6: a traced layer, its sigma_tr h 0.81
@@ -59,12 +70,7 @@ TEST(ThinSnow, ALumpIsTracedWhereADustingIsADenseLayer) {
     const float v[] = {-1, -1, z, 1, -1, z, 1, 1, z, -1, 1, z};
     const unsigned t[] = {0, 1, 2, 0, 2, 3};
     scene.occluders = std::make_shared<Occluders>(makeTriangleMesh(v, 4, t, 2), std::vector<Rgb>(2, Rgb(0.5)));
-    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    const bake::TracedSnow snow = bake::thinVoxels(*scene.medium, topo);
-    EXPECT_TRUE(snow.wholePieces.empty());
-    ASSERT_EQ(snow.thin.size(), 8u);
-    EXPECT_TRUE(
-        std::all_of(snow.thin.begin(), snow.thin.end(), [&](const openvdb::Coord &c) { return lump.isInside(c); }));
+    tracedLumpAlone(scene, lump);
 }
 
 // A block of 10 x 10 x 6 voxels of sigma_t h 3 under a fringe of 10 x 10 x 1 of sigma_t h 1 (g 0.6: its sigma_tr h
@@ -107,13 +113,7 @@ TEST(ThinSnow, NextToNoDensityIsNoSnowToTrace) {
     addBox(scene, openvdb::CoordBBox(openvdb::Coord(20, 20, 0), openvdb::Coord(21, 21, 1)), 1e-9f * perTau);
     const openvdb::CoordBBox lump(openvdb::Coord(30, 30, 0), openvdb::Coord(31, 31, 1));
     addBox(scene, lump, perTau);
-    const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    const bake::TracedSnow snow = bake::thinVoxels(*scene.medium, topo);
-    EXPECT_TRUE(snow.wholePieces.empty());
-    ASSERT_EQ(snow.thin.size(), 8u);
-    EXPECT_TRUE(
-        std::all_of(snow.thin.begin(), snow.thin.end(), [&](const openvdb::Coord &c) { return lump.isInside(c); }));
-    EXPECT_EQ(bake::scatteredVoxels(*scene.medium, snow).size(), 8u);
+    EXPECT_EQ(bake::scatteredVoxels(*scene.medium, tracedLumpAlone(scene, lump)).size(), 8u);
 }
 
 }  // namespace firn
