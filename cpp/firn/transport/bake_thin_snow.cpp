@@ -74,6 +74,11 @@ constexpr double kMaxTracedPieceReducedVolume = 64.0, kMaxTracedPieceDepth = 2.5
 // thick per voxel was traced as thin snow, and the renderer scattered in it: a flat top's mixed render +27 %
 // (docs/benchmarks.md, lead-93 6.).
 constexpr double kNegligibleOpticalDepth = 1e-6;
+// kg/m^3: the density of kNegligibleOpticalDepth per voxel; at or under it a voxel holds no snow to trace, nor diffused
+// snow beside a traced voxel (scatteredVoxels).
+float negligibleDensity(const Medium &medium) {
+    return float(kNegligibleOpticalDepth / (medium.optics().extinctionPerDensity * medium.voxelSize()));
+}
 // What a piece of connected snow is (26-neighbours of more than negligible density), as marked in thinVoxels' `done`.
 // kTracedLayer: a transport-thin piece past both sizes, traced whole for having no inside (a layer).
 enum PieceKind : std::int32_t {
@@ -222,12 +227,13 @@ std::vector<openvdb::Coord> scatteredVoxels(const Medium &medium, const TracedSn
     for (const openvdb::Coord &c : out) traced.setValueOn(c);
     openvdb::tree::ValueAccessor<const openvdb::BoolTree> isTraced(traced);
     Medium::Accessor density = medium.accessor();
+    const float air = negligibleDensity(medium);
     const auto besideDiffused = [&](const openvdb::Coord &c) {
         for (int dx = -1; dx <= 1; ++dx)
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dz = -1; dz <= 1; ++dz)
                     if (const openvdb::Coord n = c.offsetBy(dx, dy, dz);
-                        density.getValue(n) > 0.0f && !isTraced.isValueOn(n))
+                        density.getValue(n) > air && !isTraced.isValueOn(n))
                         return true;
         return false;
     };
@@ -246,7 +252,7 @@ TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
     const double mostAbsorbed = 1.0 - std::min({optics.albedo.x, optics.albedo.y, optics.albedo.z});
     const float layerBelow =
         float(std::min(kTracedLayerOpticalDepth, kTracedLayerAbsorptionDepth / mostAbsorbed) / (k * h));
-    const float air = float(kNegligibleOpticalDepth / (k * h));  // kg/m^3: at or under it, no snow to trace
+    const float air = negligibleDensity(medium);
     TracedSnow out;
     Medium::Accessor density = medium.accessor();
     openvdb::Int32Tree pieces(kUnvisited);

@@ -23,6 +23,17 @@ void addBox(Scene &scene, const openvdb::CoordBBox &box, float density) {
     scene.medium = std::make_shared<Medium>(grid, scene.medium->optics());
 }
 
+// The density of sigma_t h 1 under `optics` on the box scene's voxels (kg/m^3).
+float densityOfOneOpticalDepth(const VolumeOptics &optics) {
+    return float(1.0 / (optics.extinctionPerDensity * test::kBoxVoxel));
+}
+
+// A block of 10 x 10 x 6 voxels of sigma_t h 3 under the sun 30 degrees up.
+Scene blockScene(const VolumeOptics &optics) {
+    return test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(9, 9, 5)),
+                          3.0f * densityOfOneOpticalDepth(optics), optics, glm::dvec3(0.866, 0.0, 0.5));
+}
+
 // What `scene`'s snow traces (thinVoxels), asserted to be `lump`'s 2 x 2 x 2 voxels alone, thin (none traced whole).
 bake::TracedSnow tracedLumpAlone(const Scene &scene, const openvdb::CoordBBox &lump) {
     const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
@@ -106,12 +117,24 @@ TEST(ThinSnow, TheRendererLeavesADiffusedBodysTracedFringeAloneWhereTheSnowAbsor
 // neither is snow to trace, while the lump of sigma_t h 1 beside it still is.
 TEST(ThinSnow, NextToNoDensityIsNoSnowToTrace) {
     const VolumeOptics optics{10.0, Rgb(0.999), 0.6};
-    const float perTau = float(1.0 / (optics.extinctionPerDensity * test::kBoxVoxel));  // density of sigma_t h 1
-    Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(9, 9, 5)), 3.0f * perTau,
-                                 optics, glm::dvec3(0.866, 0.0, 0.5));
+    const float perTau = densityOfOneOpticalDepth(optics);
+    Scene scene = blockScene(optics);
     addBox(scene, openvdb::CoordBBox(openvdb::Coord(0, 0, 6), openvdb::Coord(9, 9, 6)), 1e-9f * perTau);
     addBox(scene, openvdb::CoordBBox(openvdb::Coord(20, 20, 0), openvdb::Coord(21, 21, 1)), 1e-9f * perTau);
     const openvdb::CoordBBox lump(openvdb::Coord(30, 30, 0), openvdb::Coord(31, 31, 1));
+    addBox(scene, lump, perTau);
+    EXPECT_EQ(bake::scatteredVoxels(*scene.medium, tracedLumpAlone(scene, lump)).size(), 8u);
+}
+
+// A lump of 2 x 2 x 2 voxels of sigma_t h 1 in absorbing snow (omega 0.9, where the renderer leaves a diffused body's
+// traced fringe alone) wrapped in a voxel of sigma_t h 1e-9 all round: that wrap is no diffused snow beside it, so the
+// renderer still scatters the lump (the wrap counted as snow, it left it to its traced values).
+TEST(ThinSnow, NextToNoDensityIsNoDiffusedSnowBesideATracedLump) {
+    const VolumeOptics optics{10.0, Rgb(0.9), 0.6};
+    const float perTau = densityOfOneOpticalDepth(optics);
+    Scene scene = blockScene(optics);
+    addBox(scene, openvdb::CoordBBox(openvdb::Coord(29, 29, 1), openvdb::Coord(32, 32, 4)), 1e-9f * perTau);
+    const openvdb::CoordBBox lump(openvdb::Coord(30, 30, 2), openvdb::Coord(31, 31, 3));
     addBox(scene, lump, perTau);
     EXPECT_EQ(bake::scatteredVoxels(*scene.medium, tracedLumpAlone(scene, lump)).size(), 8u);
 }
