@@ -50,9 +50,12 @@ def main():
     parser.add_argument("--rays", type=int, default=2, help="per side of the square bundle the rays end on")
     parser.add_argument("--width", type=float, default=3.0,
                         help="voxels: the bundle's side (a staircase's texture averages over whole steps)")
+    parser.add_argument("--mixed", type=int, default=0,
+                        help="paths per ray for the mixed form too (the renderer scattering in the bake's thin traced "
+                             "snow, as bake_suite.py's mixed rows; 0: the baked form alone)")
     args = parser.parse_args()
-    if args.rays < 1 or args.width < 0.0 or args.samples < 1:
-        parser.error("--rays and --samples at least 1, --width not negative")
+    if args.rays < 1 or args.width < 0.0 or args.samples < 1 or args.mixed < 0:
+        parser.error("--rays and --samples at least 1, --width and --mixed not negative")
     case = bake_suite.case(args.optics)
     h = case.voxel
     normal = np.array([float(x) for x in args.normal.split(",")])
@@ -79,10 +82,18 @@ def main():
                                                     samples=args.samples, seed=11)
         firncore.bake(path, case.optics, suns=suns, quality="FINAL", seed=0)
         baked = firncore.render_baked(path, case.optics, starts, ways)[:, 1]
+        if args.mixed:
+            scattered = len(firncore.scatter_voxels(path, case.optics))
+            mixed, mixed_error = firncore.render_scattering_where_thin(path, case.optics, starts, ways, suns=suns,
+                                                                       samples=args.mixed, seed=3, traced_only=True)
     m, b = mean[:, 1].mean(), baked.mean()
     e = math.sqrt((error[:, 1] ** 2).sum()) / len(starts)
     print(f"{args.optics} plane normal {np.round(normal, 3)} offset {args.offset:g}: mu0 {normal @ sun:.2f} "
-          f"mu {normal @ w:.2f}: Monte Carlo {m:.4f} (+- {e:.4f}) bake {b:.4f} bake / Monte Carlo {b / m:.2f}")
+          f"mu {normal @ w:.2f}: Monte Carlo {m:.4f} (+- {e:.4f}) bake {b:.4f} bake / Monte Carlo {b / m:.3f}")
+    if args.mixed:
+        x = mixed[:, 1].mean()
+        print(f"  mixed {x:.4f} (+- {math.sqrt((mixed_error[:, 1] ** 2).sum()) / len(starts):.4f}) mixed / Monte Carlo "
+              f"{x / m:.3f}; the renderer scatters in {scattered} voxels")
 
 
 if __name__ == "__main__":
