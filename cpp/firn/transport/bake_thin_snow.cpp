@@ -62,7 +62,7 @@ unsigned twoSidedFaces(const SnowTopology &topo, std::size_t i) {
 // voxel's mean source is not what a camera sees of its first optical depth); sigma_t h 2.5 mixed (g 0.6: 6.8 -> 8.1
 // %, g 0.7: 8.5 -> 7.2 %), 3 and more worse (g 0.6: 6.3 -> 10.4 %; real snow, 10 at g 0.85: 9.0 -> 16.4 %). Along
 // the axes, a tilted layer reads up to sqrt(3) deeper and stays with the diffusion sooner.
-constexpr double kTracedOpticalDepth = 1.5;
+constexpr double kTracedOpticalDepth = 1.5, kThickReducedDepth = 2.0;
 constexpr int kSmallPieceVoxels = 343;  // 7^3
 // A small piece larger than this in (sigma_tr h)^3 summed has an inside after all (spray_dense's largest lump 672,
 // a 10 x 10 x 3 layer of sigma_t h 15 27,500: traced -20 %; no case between them measured).
@@ -247,7 +247,8 @@ TracedSnow thinVoxels(const Medium &medium, const SnowTopology &topo) {
     const VolumeOptics &optics = medium.optics();
     const double h = medium.voxelSize(), k = optics.extinctionPerDensity;
     const double leastReduced = 1.0 - leastAbsorbedAlbedo(optics) * optics.g;
-    const float thinBelow = float(kTracedOpticalDepth / (k * h)), thickFrom = transportThickDensity(medium);
+    const float thinBelow = float(kTracedOpticalDepth / (k * h)),
+                thickFrom = float(kThickReducedDepth / (leastReduced * k * h));
     const double mostAbsorbed = 1.0 - std::min({optics.albedo.x, optics.albedo.y, optics.albedo.z});
     const float layerBelow =
         float(std::min(kTracedLayerOpticalDepth, kTracedLayerAbsorptionDepth / mostAbsorbed) / (k * h));

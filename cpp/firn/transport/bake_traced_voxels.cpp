@@ -380,11 +380,11 @@ namespace {
 // The faces of traced voxel `voxel` open to air (bit f for face f: -x, +x, -y, +y, -z, +z): an unknown's (`i`, its
 // index in `topo`) from the topology, but not one toward a traced voxel (a lump's fringe: that neighbour takes its own
 // value, so no air carries the face; spray_dense spent 278 of its unknowns' 507 faces so); a fringe voxel's (under 5
-// optical depths on a thicker, transport-thick one, kFringeOpticalDepth: part of the density ramp, not an unknown,
-// yet traced, and thicker than kMaxDirectionFitTau) where its neighbour holds no snow and no occluder lies between the
-// two centres, as the topology's isAirFace. The air across each of its faces carries that face's source
-// (faceCarried), the outer face's (away from the thick voxel) too, two voxels from the surface unknowns. No fringe's
-// lit bits are read (litFacesToward: unknowns).
+// optical depths on a thicker one, kFringeOpticalDepth: part of the density ramp, not an unknown, yet traced, and
+// thicker than kMaxDirectionFitTau) where its neighbour holds no snow and no occluder lies between the two centres, as
+// the topology's isAirFace. The air across each of its faces carries that face's source (faceCarried), the outer
+// face's (away from the thick voxel) too, two voxels from the surface unknowns. No fringe's lit bits are read
+// (litFacesToward: unknowns).
 unsigned airFaces(const Medium &medium, const Occluders &occluders, const SnowTopology &topo,
                   Medium::Accessor &density, TracedIndex &tracedIndex, const openvdb::Coord &voxel, std::int32_t i) {
     unsigned open = 0;

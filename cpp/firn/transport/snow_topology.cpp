@@ -365,12 +365,6 @@ std::optional<RayCaster::Hit> occluderOnLink(const Medium &medium, const Occlude
                                         0.0f, float(h));
 }
 
-float transportThickDensity(const Medium &medium) {
-    const VolumeOptics &optics = medium.optics();
-    const double leastReduced = 1.0 - std::max({optics.albedo.x, optics.albedo.y, optics.albedo.z}) * optics.g;
-    return float(kThickReducedDepth / (leastReduced * optics.extinctionPerDensity * medium.voxelSize()));
-}
-
 SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders, const SubProgress &progress,
                                int shellVoxels) {
     const double h = medium.voxelSize();
@@ -383,10 +377,8 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
         for (auto it = leaf.beginValueOn(); it; ++it)
             if (!densityLeaf || densityLeaf->getValue(it.pos()) < minDensity) it.setValueOff();
     });
-    // Peel surface fringes: thin voxels with air on one side and a thick voxel on the other (optically and
-    // transport-thick: kFringeOpticalDepth).
-    const float fringeDensity = float(kFringeOpticalDepth / (medium.optics().extinctionPerDensity * h)),
-                thickDensity = std::max(fringeDensity, transportThickDensity(medium));
+    // Peel surface fringes: thin voxels with air on one side and a thick voxel on the other.
+    const float fringeDensity = float(kFringeOpticalDepth / (medium.optics().extinctionPerDensity * h));
     openvdb::BoolTree mask(dense);
     openvdb::tree::LeafManager<openvdb::BoolTree>(mask).foreach([&](openvdb::BoolTree::LeafNodeType &leaf, std::size_t) {
         openvdb::tree::ValueAccessor<const openvdb::BoolTree> isDense(dense);
@@ -395,7 +387,7 @@ SnowTopology buildSnowTopology(const Medium &medium, const Occluders &occluders,
             const openvdb::Coord c = it.getCoord();
             if (density.getValue(c) >= fringeDensity) continue;
             for (int f = 0; f < 6; ++f)
-                if (!isDense.isValueOn(c + faceStep(f)) && density.getValue(c - faceStep(f)) >= thickDensity) {
+                if (!isDense.isValueOn(c + faceStep(f)) && density.getValue(c - faceStep(f)) >= fringeDensity) {
                     it.setValueOff();
                     break;
                 }

@@ -155,17 +155,8 @@ inline bool occluderAcross(const Medium &medium, const Occluders &occluders, con
 constexpr double kMinVoxelOpticalDepth = 0.1;
 // A voxel thinner than this lying on a thicker one, under open air, is the fringe of a surface (a partly
 // filled voxel of an antialiased surface): it belongs to the density ramp in front of the thick voxel,
-// not to the unknowns, so the thick voxel carries the surface's radiance. Only where that voxel is also
-// transport-thick (transportThickDensity): a fringe on thinner snow is traced as thin snow (bake_thin_snow.h) and the
-// renderer scatters in it, which scattered the light the voxel behind carried a second time (a flat top of
-// omega 0.98, g 0.85, sigma_t h 10 under a partial layer read +35 to +40 % in the mixed form; docs/benchmarks.md,
-// lead-94), so there the fringe is an unknown of its own.
+// not to the unknowns, so the thick voxel carries the surface's radiance.
 constexpr double kFringeOpticalDepth = 5.0;
-// Snow is transport-thick per voxel from this reduced optical depth, sigma_tr h = (1 - omega g) sigma_t h in its
-// least absorbing channel: its surface model holds the light of the thinner voxels in front of it.
-constexpr double kThickReducedDepth = 2.0;
-// kg/m^3: the density from which a voxel of the medium is transport-thick (kThickReducedDepth).
-float transportThickDensity(const Medium &medium);
 
 // shellVoxels: how many voxels deep, at least, the surface's radiance is carried into the snow. Source grids
 // `shellVoxels` times coarser than the density average a surface voxel with those under it (baked_grids.h):
