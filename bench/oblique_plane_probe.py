@@ -8,7 +8,9 @@ staircase's texture averages over whole steps, 1 / tan(tilt) voxels), started AB
 past the trilinear density's reach (1.5 voxels over the plane): started 1.2 cm along the ray from their aim, as before
 lead-93, they began inside that reach at some phases and read the flat top of ball_grey's snow at phase 0.25 1.18
 where from above it reads 1.04-1.07. The core's Monte Carlo against the baked render, channel G (the rays' sums). With
-a ball block's depth-one normal it is that block without the curvature.
+a ball block's depth-one normal it is that block without the curvature. --mixed N: the mixed form too (N paths a ray), as
+bake_suite.py's mixed rows render it; a thin partial layer over the plane showed it too bright (docs/benchmarks.md,
+lead-94).
 
     PYTHONPATH=build/python /usr/bin/python3 bench/oblique_plane_probe.py --optics ball_grey --normal 0.396,-0.909,-0.13
 """
