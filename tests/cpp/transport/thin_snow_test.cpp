@@ -52,7 +52,7 @@ bake::TracedSnow tracedLumpAlone(const Scene &scene, const openvdb::CoordBBox &l
 // (a small piece: thin).
 TEST(ThinSnow, ATracedLayersFlagsLineUpWithThinThenWholePieces) {
     const VolumeOptics optics{10.0, Rgb(0.99), 0.6};
-    const float perTau = float(1.0 / (optics.extinctionPerDensity * test::kBoxVoxel));  // density of sigma_t h 1
+    const float perTau = densityOfOneOpticalDepth(optics);
     Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(23, 23, 2)), 2.0f * perTau,
                                  optics, glm::dvec3(0.866, 0.0, 0.5));
     addBox(scene, openvdb::CoordBBox(openvdb::Coord(40, 40, 10), openvdb::Coord(41, 41, 11)), perTau);
@@ -72,7 +72,7 @@ TEST(ThinSnow, ATracedLayersFlagsLineUpWithThinThenWholePieces) {
 // "layer" before: spray_dense's lumps read +103 % diffused, docs/benchmarks.md spray-budget).
 TEST(ThinSnow, ALumpIsTracedWhereADustingIsADenseLayer) {
     const VolumeOptics optics{10.0, Rgb(0.999), 0.7};
-    const float perTau = float(1.0 / (optics.extinctionPerDensity * test::kBoxVoxel));  // density of sigma_t h 1
+    const float perTau = densityOfOneOpticalDepth(optics);
     Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(5, 5, 0)), 15.0f * perTau,
                                  optics, glm::dvec3(0.866, 0.0, 0.5));
     const openvdb::CoordBBox lump(openvdb::Coord(20, 20, 0), openvdb::Coord(21, 21, 1));
@@ -94,9 +94,8 @@ TEST(ThinSnow, TheRendererLeavesADiffusedBodysTracedFringeAloneWhereTheSnowAbsor
         lump(openvdb::Coord(30, 30, 0), openvdb::Coord(31, 31, 1));
     for (const double omega : {0.9, 0.999}) {
         const VolumeOptics optics{10.0, Rgb(omega), 0.6};
-        const float perTau = float(1.0 / (optics.extinctionPerDensity * test::kBoxVoxel));  // density of sigma_t h 1
-        Scene scene = test::boxScene(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), openvdb::Coord(9, 9, 5)),
-                                     3.0f * perTau, optics, glm::dvec3(0.866, 0.0, 0.5));
+        const float perTau = densityOfOneOpticalDepth(optics);
+        Scene scene = blockScene(optics);
         addBox(scene, fringe, perTau);
         addBox(scene, lump, perTau);
         const SnowTopology topo = buildSnowTopology(*scene.medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
