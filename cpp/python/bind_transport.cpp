@@ -508,8 +508,8 @@ the emission-absorption integral of the contract's material, up to the first occ
         },
         py::arg("vdb_path"), py::arg("optics"), py::arg("occluders") = py::list(), py::arg("thin_depth") = 2.0,
         py::arg("traced_only") = true, R"doc(
-The density's voxels (N, 3 index coordinates) where render_scattering_where_thin lets the renderer scatter (share
-1): with the defaults, those of the bake's SCATTER_GRID_NAME grid, which holds them coarsened to SCATTER_SCALE
+The density's voxels (N, 3 index coordinates) whose density render_scattering_where_thin lets the renderer
+scatter: with the defaults, those whose density the bake's SCATTER_GRID_NAME grid holds, coarsened to SCATTER_SCALE
 times the voxel (docs/vdb-contract.md); a bench helper.)doc");
 
     m.def(
@@ -537,10 +537,11 @@ times the voxel (docs/vdb-contract.md); a bench helper.)doc");
         py::arg("bounces") = 1 << 30, py::arg("traced_only") = false,
         py::arg("scatter_scale") = firn::BakedGrids::kScatterScale, R"doc(
 A baked file rendered as a renderer that scatters in the thin snow would (benchmarks.md, thin-ring): path traced
-in the voxels of optical depth sigma_t h under `thin_depth` (and the air beside them), the baked emission
-elsewhere; `bounces`: the renderer's volume bounces (0: the lights' single scattering only); `traced_only`: only in
-the voxels the bake traces (not the fringes of diffused snow); `scatter_scale`: the shares read trilinearly from
-voxels that many times the density's, as the bake writes SCATTER_GRID_NAME (SCATTER_SCALE; 1: the density's own).
+in the voxels of optical depth sigma_t h under `thin_depth` (the density it scatters, as the bake writes
+SCATTER_GRID_NAME), the baked emission elsewhere; `bounces`: the renderer's volume bounces (0: the lights' single
+scattering only); `traced_only`: only in the voxels the bake traces (not the fringes of diffused snow);
+`scatter_scale`: the scattered density read trilinearly from voxels that many times the density's (SCATTER_SCALE;
+1: the density's own).
 Returns (mean, standard error), each (N, 3) W/m^2/sr, as monte_carlo_radiance.)doc");
 
     m.def(

@@ -1,7 +1,7 @@
 """Thin snow scattered by Cycles itself (material form BAKED_SCATTER, docs/vdb-contract.md "Thin snow"): where the
-`firn_scatter` grid is 0 the material is the baked one, where it is 1 Cycles path-traces the snow, which must then
-agree with the core's independent Monte Carlo (firncore.monte_carlo_radiance) of the same snow and light. The grids
-are written here, so these tests need no core bake."""
+`firn_scatter` grid is 0 the material is the baked one, where it holds the density Cycles path-traces the snow,
+which must then agree with the core's independent Monte Carlo (firncore.monte_carlo_radiance) of the same snow and
+light. The grids are written here, so these tests need no core bake."""
 
 import itertools
 
@@ -24,9 +24,10 @@ LO, HI = (-12, -12, -1), (11, 11, 0)  # the slab's voxels (24 x 24 x 2)
 
 
 def thin_slab(directory, share, k, rho, optics, source=S):
-    """A slab with constant baked grids and a firn_scatter grid of `share` as a bake writes it over the slab and
-    the air voxels touching it (docs/vdb-contract.md): on voxels SCATTER_SCALE times the density's, those whose
-    hat touches one of them, each shifted by half its own voxel; taken up by the add-on's post-bake step. The file
+    """A slab with constant baked grids and a firn_scatter grid of `share` times its density as a bake writes it
+    where the slab scatters (docs/vdb-contract.md): on voxels SCATTER_SCALE times the density's, those within
+    SCATTER_SCALE density voxels of one of the slab's, each shifted by half its own voxel; taken up by the add-on's
+    post-bake step. The file
     says it is in Cycles' convention (firn_half_voxel_shift), so the core reads the same snow as Cycles draws."""
     import pyopenvdb
 
@@ -38,10 +39,10 @@ def thin_slab(directory, share, k, rho, optics, source=S):
     scatter = pyopenvdb.FloatGrid()
     scatter.name, scatter.transform = materials.SCATTER_GRID, coarse
     accessor = scatter.getAccessor()
-    # The coarse J with |v - scale J| < scale for one of the voxels v = lo - 1 … hi + 1 along each axis.
-    hats = [range(-((scale - lo) // scale), (hi + scale) // scale + 1) for lo, hi in zip(LO, HI)]
+    # The coarse J with |v - scale J| <= scale for one of the slab's voxels v = lo … hi along each axis.
+    hats = [range(-(-lo // scale) - 1, hi // scale + 2) for lo, hi in zip(LO, HI)]
     for J in itertools.product(*hats):
-        accessor.setValueOn(J, share)
+        accessor.setValueOn(J, share * rho)
     pyopenvdb.write(path, grids=grids + [scatter], metadata={"firn_half_voxel_shift": True})
     obj = volume_object(path, "Snow")
     bpy.context.view_layer.update()

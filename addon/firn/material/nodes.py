@@ -18,7 +18,7 @@ made with: k is the baked one (obj.firn.bake_extinction_per_density) until the n
 
 Baked with thin snow scattered (BAKED_SCATTER, when the bake wrote a `firn_scatter` grid and Scatter Thin Snow is
 on; docs/vdb-contract.md "Thin snow"): the baked form fed sigma_t (1 - share) plus the Principled Volume of sigma_t
-share with the bake's omega and g, share the grid's value. Cycles path-traces the light where the bake finds the
+share with the bake's omega and g, share = min(1, the grid's scattered density / the density). Cycles path-traces the light where the bake finds the
 snow optically thin (docs/benchmarks.md, thin-ring and thin-cycles): more accurate there, noisier, and it needs
 volume bounces (bake/operators.py scatter_render_settings).
 
@@ -50,7 +50,7 @@ _BAKED_SCATTER_NODES = _BAKED_NODES + ("Firn Scatter", "Firn Volume", "Firn Mixe
 _BRANCHES = ("", " Grains")  # the node names' suffixes: without and with sub-balls
 _SINGLE_NODES = ("Firn Density", "Firn Extinction", "Firn Volume", "Firn Absorption", "Firn Single", "Firn Output")
 BAKED_GRIDS = firncore.BAKED_GRID_NAMES  # the core's names (docs/vdb-contract.md), not a copy of them
-SCATTER_GRID = firncore.SCATTER_GRID_NAME  # the share Cycles scatters, in a baked file where some voxel scatters
+SCATTER_GRID = firncore.SCATTER_GRID_NAME  # the density Cycles scatters, in a baked file where some voxel scatters
 
 
 def is_snow_material(material):
@@ -480,17 +480,20 @@ def _baked(nodes, links, sigma_t, suffix, source):
 
 
 def _baked_scatter(nodes, links, sigma_t, suffix, source):
-    """The thin snow scattered by Cycles itself (docs/vdb-contract.md, "Thin snow"): share = the firn_scatter grid,
-    the Principled Volume of sigma_t share (Color omega, Anisotropy g: the bake's, set by _write_values) plus the
-    baked light of sigma_t (1 - share). Where share is 0 (the grid absent too) it is the baked material."""
+    """The thin snow scattered by Cycles itself (docs/vdb-contract.md, "Thin snow"): share = min(1, the firn_scatter
+    grid's scattered density / the density; Cycles' Divide reads 0 over 0), the Principled Volume of sigma_t share
+    (Color omega, Anisotropy g: the bake's, set by _write_values) plus the baked light of sigma_t (1 - share). Where
+    the grid is 0 (absent too) it is the baked material."""
     y = -2400 if suffix else -300
-    share = _new_node(nodes, "ShaderNodeAttribute", f"Firn Scatter{suffix}", SCATTER_GRID, (-600, y))
-    share.attribute_type, share.attribute_name = "GEOMETRY", SCATTER_GRID
-    scattered = _math(nodes, links, f"Firn Scattered{suffix}", "MULTIPLY", sigma_t, share.outputs["Fac"],
-                      (-350, y))
+    scatter = _new_node(nodes, "ShaderNodeAttribute", f"Firn Scatter{suffix}", SCATTER_GRID, (-1000, y))
+    scatter.attribute_type, scatter.attribute_name = "GEOMETRY", SCATTER_GRID
+    per_density = _math(nodes, links, f"Firn Scatter Per Density{suffix}", "DIVIDE", scatter.outputs["Fac"],
+                        nodes["Firn Density"].outputs["Fac"], (-800, y))
+    share = _math(nodes, links, f"Firn Share{suffix}", "MINIMUM", per_density, 1.0, (-600, y))
+    scattered = _math(nodes, links, f"Firn Scattered{suffix}", "MULTIPLY", sigma_t, share, (-350, y))
     kept = _math(nodes, links, f"Firn Kept{suffix}", "MULTIPLY", sigma_t,
-                 _math(nodes, links, f"Firn Not Scattered{suffix}", "SUBTRACT", 1.0, share.outputs["Fac"],
-                       (-600, y - 200)), (-350, y - 200))
+                 _math(nodes, links, f"Firn Not Scattered{suffix}", "SUBTRACT", 1.0, share, (-600, y - 200)),
+                 (-350, y - 200))
     mixed = _new_node(nodes, "ShaderNodeAddShader", f"Firn Mixed{suffix}", "scattered + baked", (300, y))
     links.new(_principled(nodes, links, scattered, suffix), mixed.inputs[0])
     links.new(_baked(nodes, links, kept, suffix, source), mixed.inputs[1])

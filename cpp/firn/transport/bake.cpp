@@ -510,7 +510,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     local.sourceScale = sourceScale;
     local.scatterVoxels = shares->activeVoxelCount();
     if (local.scatterVoxels > 0)
-        grids.scatter = scatterGrid(coarsenedShares(*shares, scene.medium->density().tree(), BakedGrids::kScatterScale),
+        grids.scatter = scatterGrid(scatteredDensity(*shares, scene.medium->density().tree(), BakedGrids::kScatterScale),
                                     scene.medium->density(), scene.medium->optics().extinctionPerDensity, settings);
     // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
     // (Cycles would render black or white voxels). Not InvalidArgument: the fuzz driver must see it as a bug.

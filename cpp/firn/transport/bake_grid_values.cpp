@@ -1041,13 +1041,13 @@ openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scal
 }
 
 // No ring of zeros: Cycles reads a float grid's edge exactly (cycles-volumes.md), tapering to the zero beyond.
-openvdb::FloatGrid::Ptr scatterGrid(openvdb::FloatTree::Ptr shares, const openvdb::FloatGrid &density,
+openvdb::FloatGrid::Ptr scatterGrid(openvdb::FloatTree::Ptr scattered, const openvdb::FloatGrid &density,
                                     double extinctionPerDensity, const BakeSettings &settings) {
-    auto grid = openvdb::FloatGrid::create(std::move(shares));
+    auto grid = openvdb::FloatGrid::create(std::move(scattered));
     grid->setTransform(density.transform().copy());
     grid->transform().preScale(double(BakedGrids::kScatterScale));
     grid->setName(BakedGrids::kScatterName);
-    grid->insertMeta("firn_units", openvdb::StringMetadata("1 (share of the extinction the renderer scatters)"));
+    grid->insertMeta("firn_units", openvdb::StringMetadata("kg/m^3 (the density the renderer scatters)"));
     grid->insertMeta("firn_scatter_optical_depth", openvdb::DoubleMetadata(BakedGrids::kScatterOpticalDepth));
     insertBakeMetadata(*grid, extinctionPerDensity, settings);
     return grid;

@@ -141,9 +141,9 @@ inline openvdb::Vec3f sourceComponent(const Source &S, int k) {
 openvdb::Vec3fGrid::Ptr sourceGrid(openvdb::Vec3fTree::Ptr tree, int k, int scale, const openvdb::FloatGrid &density,
                                    double extinctionPerDensity, const BakeSettings &settings);
 
-// BakedGrids::scatter from its tree of shares (coarsenedShares), on voxels BakedGrids::kScatterScale times the
-// density's, with the bake's metadata.
-openvdb::FloatGrid::Ptr scatterGrid(openvdb::FloatTree::Ptr shares, const openvdb::FloatGrid &density,
+// BakedGrids::scatter from its tree of scattered density (scatteredDensity), on voxels BakedGrids::kScatterScale
+// times the density's, with the bake's metadata.
+openvdb::FloatGrid::Ptr scatterGrid(openvdb::FloatTree::Ptr scattered, const openvdb::FloatGrid &density,
                                     double extinctionPerDensity, const BakeSettings &settings);
 
 // BakedGrids' values at a point of the density's index space before the grids are written: read from the

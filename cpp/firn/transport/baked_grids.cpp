@@ -146,13 +146,9 @@ openvdb::FloatTree::Ptr scatterShares(const Medium &medium, const std::vector<op
     auto shares = std::make_shared<openvdb::FloatTree>(0.0f);
     openvdb::tree::ValueAccessor<openvdb::FloatTree> share(*shares);
     openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(medium.density().tree());
-    for (const openvdb::Coord &c : candidates) {
-        const float value = rho.getValue(c);
-        if (!(value > 0.0f && depthPerDensity * value < thinDepth)) continue;
-        share.setValue(c, 1.0f);
-        for (int k = 0; k < 27; ++k)
-            if (const openvdb::Coord n = c + blockOffset(k); !(rho.getValue(n) > 0.0f)) share.setValue(n, 1.0f);
-    }
+    for (const openvdb::Coord &c : candidates)
+        if (const float value = rho.getValue(c); value > 0.0f && depthPerDensity * value < thinDepth)
+            share.setValue(c, 1.0f);
     return shares;
 }
 
@@ -167,29 +163,31 @@ openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool
     return scatterShares(medium, bake::scatteredVoxels(medium, bake::thinVoxels(medium, topo)), thinDepth);
 }
 
-openvdb::FloatTree::Ptr coarsenedShares(const openvdb::FloatTree &shares, const openvdb::FloatTree &density,
-                                        int factor) {
-    if (factor < 1) throw InvalidArgument("scatter shares: coarsening factor must be at least 1");
+openvdb::FloatTree::Ptr scatteredDensity(const openvdb::FloatTree &shares, const openvdb::FloatTree &density,
+                                         int factor) {
+    if (factor < 1) throw InvalidArgument("scattered density: coarsening factor must be at least 1");
     auto coarse = std::make_shared<openvdb::FloatTree>(0.0f);
     openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*coarse);
-    openvdb::tree::ValueAccessor<const openvdb::FloatTree> share(shares), rho(density);
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(density);
     for (auto it = shares.cbeginValueOn(); it; ++it) {
-        if (!it.isVoxelValue()) throw InvalidArgument("scatter shares: tiles are not supported");
-        if (!(*it > 0.0f)) continue;
+        if (!it.isVoxelValue()) throw InvalidArgument("scattered density: tiles of shares are not supported");
         const openvdb::Coord c = it.getCoord();
-        // The coarse voxels whose hat touches c: J = c / factor on an axis where it divides, else both neighbours.
-        const openvdb::Coord lo(floorDiv(c.x(), factor), floorDiv(c.y(), factor), floorDiv(c.z(), factor));
-        const openvdb::Coord hi(lo.x() + (c.x() != lo.x() * factor), lo.y() + (c.y() != lo.y() * factor),
-                                lo.z() + (c.z() != lo.z() * factor));
+        const float scattered = *it * rho.getValue(c);  // kg/m^3
+        if (!(scattered > 0.0f)) continue;
+        // The coarse voxels J with |c - factor J| <= factor along each axis: ceil(c / factor) - 1 to floor + 1.
+        const openvdb::Coord lo(floorDiv(c.x() + factor - 1, factor) - 1, floorDiv(c.y() + factor - 1, factor) - 1,
+                                floorDiv(c.z() + factor - 1, factor) - 1);
+        const openvdb::Coord hi(floorDiv(c.x(), factor) + 1, floorDiv(c.y(), factor) + 1, floorDiv(c.z(), factor) + 1);
         for (int x = lo.x(); x <= hi.x(); ++x)
             for (int y = lo.y(); y <= hi.y(); ++y)
-                for (int z = lo.z(); z <= hi.z(); ++z) {
-                    const openvdb::Coord J(x, y, z), at(factor * x, factor * y, factor * z);
-                    const float value = rho.getValue(at) > 0.0f ? share.getValue(at) : *it;
-                    if (value > 0.0f && !(out.getValue(J) >= value)) out.setValue(J, value);
-                }
+                for (int z = lo.z(); z <= hi.z(); ++z)
+                    if (const openvdb::Coord J(x, y, z); !(out.getValue(J) >= scattered)) out.setValue(J, scattered);
     }
     return coarse;
+}
+
+double scatteredShare(double density, double scatteredDensity) {
+    return density > 0.0 ? std::min(density, scatteredDensity) / density : 0.0;
 }
 
 std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReference &reference, const BakedGrids &baked,
@@ -198,14 +196,17 @@ std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReferenc
                                                         int shareScale) {
     const Scene &scene = reference.scene();
     const Medium &medium = *scene.medium;
-    const openvdb::FloatTree::Ptr shares =
-        coarsenedShares(*scatterShares(scene, thinDepth, tracedOnly), medium.density().tree(), shareScale);
+    const openvdb::FloatTree::Ptr scattered =
+        scatteredDensity(*scatterShares(scene, thinDepth, tracedOnly), medium.density().tree(), shareScale);
     return estimateMixed(reference, rays, samples, seed, [&] {
-        auto share = std::make_shared<openvdb::tree::ValueAccessor<const openvdb::FloatTree>>(*shares);
+        using FloatAccessor = openvdb::tree::ValueAccessor<const openvdb::FloatTree>;
+        auto scatteredAt = std::make_shared<FloatAccessor>(*scattered);
+        auto rho = std::make_shared<FloatAccessor>(medium.density().tree());
         auto sampler = std::make_shared<SourceGridsSampler>(medium, baked);
         auto marcher = std::make_shared<Medium::ColumnMarcher>(medium);
-        auto shareAt = [share, shareScale](const openvdb::Vec3d &ijk) {
-            return double(openvdb::tools::BoxSampler::sample(*share, ijk / double(shareScale)));
+        auto shareAt = [scatteredAt, rho, shareScale](const openvdb::Vec3d &ijk) {
+            return scatteredShare(openvdb::tools::BoxSampler::sample(*rho, ijk),
+                                  openvdb::tools::BoxSampler::sample(*scatteredAt, ijk / double(shareScale)));
         };
         MixedRender mixed;
         mixed.bounces = bounces;

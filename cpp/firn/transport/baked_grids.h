@@ -30,9 +30,9 @@ struct BakedGrids {
     static constexpr std::size_t kCount = kNames.size();
     using Values = std::array<openvdb::Vec3f, kCount>;  // the grids' values at a point, in kNames' order
     std::array<openvdb::Vec3fGrid::Ptr, kCount> source;  // in kNames' order
-    // The share of the snow's extinction the renderer scatters itself rather than drawing S (scatterShares), on
-    // kScatterScale times the density's voxels (coarsenedShares); null where it scatters nowhere (no grid is
-    // written: Cycles' memory holds it densely over its box, an eighth of it at the density's voxels' box).
+    // The density the renderer scatters itself rather than drawing S (kg/m^3: scatteredDensity), on kScatterScale
+    // times the density's voxels; null where it scatters nowhere (no grid is written: Cycles' memory holds it
+    // densely over its box, an eighth of it at the density's voxels' box).
     static constexpr const char *kScatterName = "firn_scatter";
     static constexpr double kScatterOpticalDepth = 2.0;  // sigma_t h under which traced snow scatters (thin-ring)
     static constexpr int kScatterScale = 2;              // density voxels per firn_scatter voxel along an axis
@@ -122,30 +122,33 @@ class BakedRadiance {
 // attenuated by exp(-tau)).
 Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray);
 
-// The renderer's scatter share per voxel (benchmarks.md, thin-ring's rule B; the firn_scatter grid): 1 in the snow
-// voxels of `candidates` of sigma_t h under `thinDepth` and in the air voxels touching them, 0 (the background,
-// inactive) elsewhere. The bake's candidates are the voxels it traces (bake::TracedSnow::voxels): there the
-// renderer's own scattering beats the baked lobes, while a diffused surface's fringe would scatter again the light
-// the surface model already put behind it.
+// The voxels where the renderer scatters (benchmarks.md, thin-ring's rule B; the firn_scatter grid): share 1 in the
+// snow voxels of `candidates` of sigma_t h under `thinDepth`, 0 (the background, inactive) elsewhere. The bake's
+// candidates are the voxels it traces (bake::TracedSnow::voxels): there the renderer's own scattering beats the baked
+// lobes, while a diffused surface's fringe would scatter again the light the surface model already put behind it.
 openvdb::FloatTree::Ptr scatterShares(const Medium &medium, const std::vector<openvdb::Coord> &candidates,
                                       double thinDepth);
 // The same for a scene not baked here (the benches): the candidates are the voxels its bake would trace, or every
 // snow voxel unless `tracedOnly`.
 openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool tracedOnly);
-// The shares on voxels `factor` times the density's (the firn_scatter grid's, BakedGrids::kScatterScale): coarse
-// voxel J lies where density voxel factor J does; where that voxel holds snow, J takes its share, so snow beside
-// thin snow that does not scatter (a diffused surface's fringe) reads at most 1/2, and only within a voxel; where
-// it is air, J takes the largest share of the density voxels its trilinear hat touches (|c - factor J| < factor
-// along each axis), so the share covers the air ring and the thin voxels' density ramps into it. Measured against the
-// shares on the density's own voxels (docs/benchmarks.md, scatter-coarse): the largest share throughout moved
-// ball_forward's views by -3.6 to +6.1 %, this rule by -1.5 to -0.1 % (the noise: 1 %).
-openvdb::FloatTree::Ptr coarsenedShares(const openvdb::FloatTree &shares, const openvdb::FloatTree &density,
-                                        int factor);
+// The firn_scatter grid's values: the density the renderer scatters itself (kg/m^3), on voxels `factor` times the
+// density's (BakedGrids::kScatterScale). Coarse voxel J lies where density voxel factor J does and holds the largest
+// share x density of the density voxels within `factor` of it along each axis (|c - factor J| <= factor): every
+// density voxel of a coarse cell lies in the hats of all its corners, so the trilinear read is at least the
+// density throughout snow that scatters whole, and beside snow that does not (a diffused surface behind its thin
+// fringe) no more than the scattered voxels' own density. The renderer scatters scatteredShare of the extinction.
+openvdb::FloatTree::Ptr scatteredDensity(const openvdb::FloatTree &shares, const openvdb::FloatTree &density,
+                                         int factor);
+// The share of the extinction the renderer scatters at a point of trilinear `density` where firn_scatter reads
+// `scatteredDensity` (both kg/m^3): min(density, scattered) / density, 0 in air. A share read trilinearly instead
+// (before lead-95) scattered half a share of the carrier behind a diffused surface's fringe: the renderer scattered
+// light the carrier already sends, a flat top under a partly filled voxel of omega 0.98 +39 % (now +13 %).
+double scatteredShare(double density, double scatteredDensity);
 
 // The render of MixedRender (monte_carlo.h): the renderer scatters, all orders, in the snow of optical depth per
 // voxel sigma_t h under `thinDepth` and in the air voxels beside it, and draws the baked emission elsewhere (the
-// voxels between trilinear), the shares read trilinearly from voxels `shareScale` times the density's
-// (coarsenedShares; the bake's firn_scatter: BakedGrids::kScatterScale). `samples` paths per ray; (mean, standard
+// voxels between: scatteredShare), the scattered density read trilinearly from voxels `shareScale` times the
+// density's (scatteredDensity; the bake's firn_scatter: BakedGrids::kScatterScale). `samples` paths per ray; (mean, standard
 // error) per ray as MonteCarloReference's.
 std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReference &reference, const BakedGrids &baked,
                                                         const std::vector<Ray> &rays, int samples, std::uint64_t seed,
