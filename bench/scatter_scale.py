@@ -1,9 +1,9 @@
 """The firn_scatter grid's voxel size against what it renders (docs/benchmarks.md, scatter-coarse): each of the
 suite's cases baked (FINAL, seed 0), then rendered as Cycles renders the mixed material (render_scattering_where_thin
-with the bake's rule B: traced voxels of sigma_t h < 2 and the air touching them) with the shares read from the
+with the bake's rule B: the density of the traced voxels of sigma_t h < 2) with the scattered density read from the
 density's own voxels (scale 1) and from voxels `--scales` times as large (the bake's: firncore.SCATTER_SCALE), the
 same seed each time, and the noise: scale 1 again with another seed. Per scale against scale 1, over the blocks the
-suite scores (optical depth >= 1): the mean |relative difference| and the bias, all and per view; and the share's
+suite scores (optical depth >= 1): the mean |relative difference| and the bias, all and per view; and the grid's
 box as Cycles would hold it (4 bytes a voxel) at each scale. Needs no cached reference.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/scatter_scale.py [--cases a,b] [--samples 1024] [--scales 2]
@@ -22,9 +22,10 @@ import firncore  # noqa: E402
 
 
 def share_box(voxels, scale):
-    """The voxels of the share's bounding box at `scale` (the coarse voxels whose hat touches a voxel of share 1)."""
-    low = -((scale - 1 - voxels.min(axis=0)) // scale)
-    high = (voxels.max(axis=0) + scale - 1) // scale
+    """The voxels of the grid's bounding box at `scale` (the coarse voxels J within `scale` voxels of a scattered
+    voxel v: |v - scale J| <= scale, as core scatteredDensity writes them)."""
+    low = -(-voxels.min(axis=0) // scale) - 1
+    high = voxels.max(axis=0) // scale + 1
     return int(np.prod(high - low + 1))
 
 
