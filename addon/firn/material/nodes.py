@@ -18,9 +18,9 @@ made with: k is the baked one (obj.firn.bake_extinction_per_density) until the n
 
 Baked with thin snow scattered (BAKED_SCATTER, when the bake wrote a `firn_scatter` grid and Scatter Thin Snow is
 on; docs/vdb-contract.md "Thin snow"): the baked form fed sigma_t (1 - share) plus the Principled Volume of sigma_t
-share with the bake's omega and g, share = min(1, the grid's scattered density / the density). Cycles path-traces the light where the bake finds the
-snow optically thin (docs/benchmarks.md, thin-ring and thin-cycles): more accurate there, noisier, and it needs
-volume bounces (bake/operators.py scatter_render_settings).
+share with the bake's omega and g, share = min(1, the grid's scattered density / the density). Cycles path-traces
+the light where the bake finds the snow optically thin (docs/benchmarks.md, thin-ring and thin-cycles): more
+accurate there, noisier, and it needs volume bounces (bake/operators.py scatter_render_settings).
 
 Single scattering (render mode SINGLE, Nishita et al. 1997 Fig. 6 b): camera rays meet the Principled Volume
 (they scatter once and see the lamps and the world directly), every other ray (shadow rays, the ray after the

@@ -145,11 +145,11 @@ openvdb::FloatTree::Ptr scatteredDensity(const openvdb::FloatTree &shares, const
 // light the carrier already sends, a flat top under a partly filled voxel of omega 0.98 +39 % (now +13 %).
 double scatteredShare(double density, double scatteredDensity);
 
-// The render of MixedRender (monte_carlo.h): the renderer scatters, all orders, in the snow of optical depth per
-// voxel sigma_t h under `thinDepth` and in the air voxels beside it, and draws the baked emission elsewhere (the
-// voxels between: scatteredShare), the scattered density read trilinearly from voxels `shareScale` times the
-// density's (scatteredDensity; the bake's firn_scatter: BakedGrids::kScatterScale). `samples` paths per ray; (mean, standard
-// error) per ray as MonteCarloReference's.
+// The render of MixedRender (monte_carlo.h): the renderer scatters, all orders, the density of the snow of optical
+// depth per voxel sigma_t h under `thinDepth` and draws the baked emission of the rest (scatteredShare), the
+// scattered density read trilinearly from voxels `shareScale` times the density's (scatteredDensity; the bake's
+// firn_scatter: BakedGrids::kScatterScale). `samples` paths per ray; (mean, standard error) per ray as
+// MonteCarloReference's.
 std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReference &reference, const BakedGrids &baked,
                                                         const std::vector<Ray> &rays, int samples, std::uint64_t seed,
                                                         double thinDepth, int bounces, bool tracedOnly,
