@@ -1188,8 +1188,7 @@ def test_a_flat_top_under_a_partly_filled_voxel_is_not_scattered_twice(folder):
     spots = (np.arange(4) + 0.5) * 2.0 + 6.0  # voxels: a 4 x 4 bundle over the middle 8 x 8
     origins = np.array([(x, y, 11.0) for x in spots for y in spots]) * c.voxel
     directions = np.tile([0.0, 0.0, -1.0], (len(origins), 1))
-    suns = [firncore.SunLight((math.cos(bake_suite.SUN_ELEVATION), 0.0, math.sin(bake_suite.SUN_ELEVATION)),
-                              (1.0,) * 3, 0.0093)]
+    suns = c.suns()  # the sun alone, 30 deg up
     truth, truth_error = firncore.monte_carlo_radiance(path, c.optics, origins, directions, suns=suns, samples=2048,
                                                        seed=11)
     firncore.bake(path, c.optics, suns=suns, quality="FINAL", seed=0)

@@ -16,16 +16,14 @@ namespace {
 
 constexpr int kScale = BakedGrids::kScatterScale;
 
-// The scattered density (kg/m^3) the renderer reads at density index point p from the coarse grid.
-double scatteredAt(const openvdb::FloatTree &coarse, const openvdb::Vec3d &p) {
-    openvdb::tree::ValueAccessor<const openvdb::FloatTree> scattered(coarse);
-    return openvdb::tools::BoxSampler::sample(scattered, p / double(kScale));
+// A tree read trilinearly (as Cycles reads a grid) at index point p of a grid `scale` times finer.
+double trilinear(const openvdb::FloatTree &tree, const openvdb::Vec3d &p, int scale = 1) {
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> values(tree);
+    return openvdb::tools::BoxSampler::sample(values, p / double(scale));
 }
 
-double densityAt(const openvdb::FloatTree &density, const openvdb::Vec3d &p) {
-    openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(density);
-    return openvdb::tools::BoxSampler::sample(rho, p);
-}
+// The scattered density (kg/m^3) the renderer reads at density index point p from the coarse grid.
+double scatteredAt(const openvdb::FloatTree &coarse, const openvdb::Vec3d &p) { return trilinear(coarse, p, kScale); }
 
 // Share 1 on `thin`: the bake's rule (scatterShares).
 openvdb::FloatTree::Ptr sharesOf(const std::vector<openvdb::Coord> &thin) {
@@ -50,7 +48,7 @@ TEST(ScatterShares, ALumpInAirScattersAllItsDensityOverItsWholeRampAndNothingBey
             for (double y = -1.0; y <= 1.0; y += 0.25)
                 for (double z = -1.0; z <= 1.0; z += 0.25) {
                     const openvdb::Vec3d p = c.asVec3d() + openvdb::Vec3d(x, y, z);
-                    if (const double rho = densityAt(density, p); rho > 0.0) {
+                    if (const double rho = trilinear(density, p); rho > 0.0) {
                         EXPECT_DOUBLE_EQ(scatteredShare(rho, scatteredAt(*coarse, p)), 1.0) << c << " " << p;
                     }
                 }
@@ -81,7 +79,7 @@ TEST(ScatterShares, SnowBesideThinSnowScattersNoMoreThanTheThinSnowsDensity) {
         const openvdb::FloatTree::Ptr coarse = scatteredDensity(*sharesOf(thin), density, kScale);
         for (double x = last - 6.0; x <= last + 3.0; x += 0.125) {
             const openvdb::Vec3d p(x, 4.0, 5.0);
-            const double rho = densityAt(density, p), share = scatteredShare(rho, scatteredAt(*coarse, p));
+            const double rho = trilinear(density, p), share = scatteredShare(rho, scatteredAt(*coarse, p));
             if (x >= last + 1.0 && rho > 0.0) {
                 EXPECT_DOUBLE_EQ(share, 1.0) << last << " " << x;
             }
