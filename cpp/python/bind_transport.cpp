@@ -495,9 +495,8 @@ the emission-absorption integral of the contract's material, up to the first occ
                 const openvdb::GridPtrVec grids = firn::readGrids(path);
                 const firn::Scene scene = sceneFrom(grids, path, optics, {}, {}, std::nullopt, std::move(blockers));
                 std::vector<openvdb::Coord> on;
-                const openvdb::FloatTree::Ptr shares = firn::scatterShares(scene, thinDepth, tracedOnly);
-                for (auto it = shares->cbeginValueOn(); it; ++it)
-                    if (*it > 0.0f) on.push_back(it.getCoord());
+                const openvdb::BoolTree::Ptr mask = firn::scatterMask(scene, thinDepth, tracedOnly);
+                for (auto it = mask->cbeginValueOn(); it; ++it) on.push_back(it.getCoord());
                 return on;
             });
             py::array_t<std::int32_t> out({py::ssize_t(voxels.size()), py::ssize_t(3)});

@@ -421,7 +421,7 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     const SideBySideProgress beside(&p, 0.05, 0.4, {0.5, 0.5});
     IncidentLight light;
     std::vector<openvdb::Coord> thin;
-    openvdb::FloatTree::Ptr shares;  // where the renderer scatters (BakedGrids::scatter)
+    openvdb::BoolTree::Ptr scattered;  // where the renderer scatters (BakedGrids::scatter)
     MonteCarloVoxels traced;
     ThreadSeconds tracing;
     runBeside(
@@ -435,8 +435,8 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
                 const SubProgress progress = beside.step(1);
                 TracedSnow snow = thinVoxels(*scene.medium, topo);
                 // The renderer scatters in the thin snow traced here (docs/vdb-contract.md, firn_scatter).
-                shares = scatterShares(*scene.medium, scatteredVoxels(*scene.medium, snow),
-                                       BakedGrids::kScatterOpticalDepth);
+                scattered = scatterMask(*scene.medium, scatteredVoxels(*scene.medium, snow),
+                                        BakedGrids::kScatterOpticalDepth);
                 thin = std::move(snow.thin);
                 // Light tracing in place of the diffusion where gathering per voxel is over the budget, and its other
                 // two uses (transport-thin pieces whole, forward snow at the gathering's cost), with occluders as
@@ -508,10 +508,14 @@ BakedGrids bakeScattering(const Scene &scene, const BakeSettings &settings, Prog
     p.report(reference ? 0.95 : kSolvedProgress, "Writing the grids");
     BakedGrids grids = makeGrids(lit, topo, source, traced, preset, settings, sourceScale, SubProgress(&p, 1.0, 1.0));
     local.sourceScale = sourceScale;
-    local.scatterVoxels = shares->activeVoxelCount();
-    if (local.scatterVoxels > 0)
-        grids.scatter = scatterGrid(scatteredDensity(*shares, scene.medium->density().tree(), BakedGrids::kScatterScale),
-                                    scene.medium->density(), scene.medium->optics().extinctionPerDensity, settings);
+    local.scatterVoxels = scattered->activeVoxelCount();
+    if (local.scatterVoxels > 0) {
+        const openvdb::FloatGrid &density = scene.medium->density();
+        grids.scatter = scatterGrid(scatteredDensity(*scattered, density.tree(), BakedGrids::kScatterScale), density,
+                                    scene.medium->optics().extinctionPerDensity, settings);
+        grids.scattered = openvdb::BoolGrid::create(scattered);
+        grids.scattered->setTransform(density.transform().copy());
+    }
     // Inputs are validated; should a numerical bug still give NaN or inf, fail loudly rather than write it
     // (Cycles would render black or white voxels). Not InvalidArgument: the fuzz driver must see it as a bug.
     // OpenVDB's diagnosis: the leaves in parallel (the car's six grids, 6.9 M values: 0.05-0.06 s on one thread).

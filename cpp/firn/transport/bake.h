@@ -41,7 +41,7 @@ struct BakeStats {
     std::size_t unknowns = 0, airFaces = 0, occluderFaces = 0, surfaceVoxels = 0;
     std::size_t skyTracedVoxels = 0;           // surface voxels whose sky was traced (the others' from donors)
     std::size_t tracedVoxels = 0;              // optically thin voxels lit by Monte Carlo instead of the solve
-    std::size_t scatterVoxels = 0;             // density voxels where the renderer scatters (scatterShares 1)
+    std::size_t scatterVoxels = 0;             // density voxels where the renderer scatters (scatterMask)
     int tracedPaths = 0;                       // paths per voxel where traced from them (planGathering)
     std::size_t tracedFaces = 0;               // their faces gathered apart (addFaceSources), with
     int facePaths = 0;                         // these paths each (their lit faces' may take more)

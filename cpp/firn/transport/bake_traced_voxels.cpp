@@ -71,7 +71,7 @@ constexpr int kDrawnPathShare = 2;
 constexpr double kDrawnExtraSteps = 1e8;  // about 2.4 processor seconds on spray_dense's long paths
 
 // Whether the renderer draws the voxel's baked emission rather than scattering in it where the bake traces it
-// (scatterShares: sigma_t h under BakedGrids::kScatterOpticalDepth scatters).
+// (scatterMask: sigma_t h under BakedGrids::kScatterOpticalDepth scatters).
 bool drawnByRenderer(const Medium &medium, Medium::Accessor &density, const openvdb::Coord &voxel) {
     return !(voxelOpticalDepth(medium, density, voxel) < BakedGrids::kScatterOpticalDepth);
 }

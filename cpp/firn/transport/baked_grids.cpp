@@ -140,40 +140,40 @@ Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray) {
     return BakedRadiance(scene, baked).along(ray, tMax, 1.0 / 32.0);
 }
 
-openvdb::FloatTree::Ptr scatterShares(const Medium &medium, const std::vector<openvdb::Coord> &candidates,
-                                      double thinDepth) {
+openvdb::BoolTree::Ptr scatterMask(const Medium &medium, const std::vector<openvdb::Coord> &candidates,
+                                   double thinDepth) {
     const double depthPerDensity = medium.optics().extinctionPerDensity * medium.voxelSize();
-    auto shares = std::make_shared<openvdb::FloatTree>(0.0f);
-    openvdb::tree::ValueAccessor<openvdb::FloatTree> share(*shares);
+    auto mask = std::make_shared<openvdb::BoolTree>(false);
+    openvdb::tree::ValueAccessor<openvdb::BoolTree> on(*mask);
     openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(medium.density().tree());
     for (const openvdb::Coord &c : candidates)
         if (const float value = rho.getValue(c); value > 0.0f && depthPerDensity * value < thinDepth)
-            share.setValue(c, 1.0f);
-    return shares;
+            on.setValueOn(c, true);
+    return mask;
 }
 
-openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool tracedOnly) {
+openvdb::BoolTree::Ptr scatterMask(const Scene &scene, double thinDepth, bool tracedOnly) {
     const Medium &medium = *scene.medium;
     if (!tracedOnly) {
         std::vector<openvdb::Coord> snow;
         for (auto it = medium.density().cbeginValueOn(); it; ++it) snow.push_back(it.getCoord());
-        return scatterShares(medium, snow, thinDepth);
+        return scatterMask(medium, snow, thinDepth);
     }
     const SnowTopology topo = buildSnowTopology(medium, *scene.occluders, SubProgress(nullptr, 0.0, 1.0));
-    return scatterShares(medium, bake::scatteredVoxels(medium, bake::thinVoxels(medium, topo)), thinDepth);
+    return scatterMask(medium, bake::scatteredVoxels(medium, bake::thinVoxels(medium, topo)), thinDepth);
 }
 
-openvdb::FloatTree::Ptr scatteredDensity(const openvdb::FloatTree &shares, const openvdb::FloatTree &density,
+openvdb::FloatTree::Ptr scatteredDensity(const openvdb::BoolTree &scattered, const openvdb::FloatTree &density,
                                          int factor) {
     if (factor < 1) throw InvalidArgument("scattered density: coarsening factor must be at least 1");
     auto coarse = std::make_shared<openvdb::FloatTree>(0.0f);
     openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*coarse);
     openvdb::tree::ValueAccessor<const openvdb::FloatTree> rho(density);
-    for (auto it = shares.cbeginValueOn(); it; ++it) {
-        if (!it.isVoxelValue()) throw InvalidArgument("scattered density: tiles of shares are not supported");
+    for (auto it = scattered.cbeginValueOn(); it; ++it) {
+        if (!it.isVoxelValue()) throw InvalidArgument("scattered density: tiles of scattered voxels are not supported");
         const openvdb::Coord c = it.getCoord();
-        const float scattered = *it * rho.getValue(c);  // kg/m^3
-        if (!(scattered > 0.0f)) continue;
+        const float value = rho.getValue(c);  // kg/m^3
+        if (!(value > 0.0f)) continue;
         // The coarse voxels J with |c - factor J| <= factor along each axis: ceil(c / factor) - 1 to floor + 1.
         const openvdb::Coord lo(floorDiv(c.x() + factor - 1, factor) - 1, floorDiv(c.y() + factor - 1, factor) - 1,
                                 floorDiv(c.z() + factor - 1, factor) - 1);
@@ -181,7 +181,7 @@ openvdb::FloatTree::Ptr scatteredDensity(const openvdb::FloatTree &shares, const
         for (int x = lo.x(); x <= hi.x(); ++x)
             for (int y = lo.y(); y <= hi.y(); ++y)
                 for (int z = lo.z(); z <= hi.z(); ++z)
-                    if (const openvdb::Coord J(x, y, z); !(out.getValue(J) >= scattered)) out.setValue(J, scattered);
+                    if (const openvdb::Coord J(x, y, z); !(out.getValue(J) >= value)) out.setValue(J, value);
     }
     return coarse;
 }
@@ -197,7 +197,7 @@ std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReferenc
     const Scene &scene = reference.scene();
     const Medium &medium = *scene.medium;
     const openvdb::FloatTree::Ptr scattered =
-        scatteredDensity(*scatterShares(scene, thinDepth, tracedOnly), medium.density().tree(), shareScale);
+        scatteredDensity(*scatterMask(scene, thinDepth, tracedOnly), medium.density().tree(), shareScale);
     return estimateMixed(reference, rays, samples, seed, [&] {
         using FloatAccessor = openvdb::tree::ValueAccessor<const openvdb::FloatTree>;
         auto scatteredAt = std::make_shared<FloatAccessor>(*scattered);

@@ -37,6 +37,9 @@ struct BakedGrids {
     static constexpr double kScatterOpticalDepth = 2.0;  // sigma_t h under which traced snow scatters (thin-ring)
     static constexpr int kScatterScale = 2;              // density voxels per firn_scatter voxel along an axis
     openvdb::FloatGrid::Ptr scatter;
+    // The density's voxels where the renderer scatters (scatterMask), in the density's transform; null with
+    // `scatter`. Not written: a joint bake takes each object's own scattered density on them (bakedGridsOf).
+    openvdb::BoolGrid::Ptr scattered;
 
     openvdb::GridPtrVec grids() const;  // the six, then the scatter grid where there is one
     // Whether a file's grid of this name is a bake's (replaced by a new bake, removed by Clear Bake).
@@ -122,22 +125,22 @@ class BakedRadiance {
 // attenuated by exp(-tau)).
 Rgb renderBaked(const Scene &scene, const BakedGrids &baked, const Ray &ray);
 
-// The voxels where the renderer scatters (benchmarks.md, thin-ring's rule B; the firn_scatter grid): share 1 in the
-// snow voxels of `candidates` of sigma_t h under `thinDepth`, 0 (the background, inactive) elsewhere. The bake's
-// candidates are the voxels it traces (bake::TracedSnow::voxels): there the renderer's own scattering beats the baked
-// lobes, while a diffused surface's fringe would scatter again the light the surface model already put behind it.
-openvdb::FloatTree::Ptr scatterShares(const Medium &medium, const std::vector<openvdb::Coord> &candidates,
-                                      double thinDepth);
+// The voxels where the renderer scatters (benchmarks.md, thin-ring's rule B; the firn_scatter grid): on, the snow
+// voxels of `candidates` of sigma_t h under `thinDepth`. The bake's candidates are the voxels it traces
+// (bake::TracedSnow::voxels): there the renderer's own scattering beats the baked lobes, while a diffused surface's
+// fringe would scatter again the light the surface model already put behind it.
+openvdb::BoolTree::Ptr scatterMask(const Medium &medium, const std::vector<openvdb::Coord> &candidates,
+                                   double thinDepth);
 // The same for a scene not baked here (the benches): the candidates are the voxels its bake would trace, or every
 // snow voxel unless `tracedOnly`.
-openvdb::FloatTree::Ptr scatterShares(const Scene &scene, double thinDepth, bool tracedOnly);
+openvdb::BoolTree::Ptr scatterMask(const Scene &scene, double thinDepth, bool tracedOnly);
 // The firn_scatter grid's values: the density the renderer scatters itself (kg/m^3), on voxels `factor` times the
 // density's (BakedGrids::kScatterScale). Coarse voxel J lies where density voxel factor J does and holds the largest
-// share x density of the density voxels within `factor` of it along each axis (|c - factor J| <= factor): every
-// density voxel of a coarse cell lies in the hats of all its corners, so the trilinear read is at least the
-// density throughout snow that scatters whole, and beside snow that does not (a diffused surface behind its thin
-// fringe) no more than the scattered voxels' own density. The renderer scatters scatteredShare of the extinction.
-openvdb::FloatTree::Ptr scatteredDensity(const openvdb::FloatTree &shares, const openvdb::FloatTree &density,
+// density of the `scattered` voxels within `factor` of it along each axis (|c - factor J| <= factor): every density
+// voxel of a coarse cell lies in the hats of all its corners, so the trilinear read is at least the density
+// throughout snow that scatters whole, and beside snow that does not (a diffused surface behind its thin fringe) no
+// more than the scattered voxels' own density. The renderer scatters scatteredShare of the extinction.
+openvdb::FloatTree::Ptr scatteredDensity(const openvdb::BoolTree &scattered, const openvdb::FloatTree &density,
                                          int factor);
 // The share of the extinction the renderer scatters at a point of trilinear `density` where firn_scatter reads
 // `scatteredDensity` (both kg/m^3): min(density, scattered) / density, 0 in air. A share read trilinearly instead

@@ -10,21 +10,15 @@
 
 namespace firn {
 
-openvdb::FloatGrid::Ptr unionDensity(const std::vector<openvdb::FloatGrid::ConstPtr> &densities) {
-    if (densities.empty()) throw InvalidArgument("a joint bake needs at least one density grid");
-    openvdb::FloatGrid::Ptr sum = densities.front()->deepCopy();
-    for (std::size_t i = 1; i < densities.size(); ++i) {
-        openvdb::FloatGrid::Ptr other = sum->copyWithNewTree();
-        if (densities[i]->transform() == sum->transform())
-            other->setTree(densities[i]->tree().copy());
-        else
-            openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*densities[i], *other);
-        openvdb::tools::compSum(*sum, *other);
-    }
-    return sum;
-}
-
 namespace {
+
+// `density` resampled trilinearly onto the voxels of `target` (its transform), another object's voxels.
+openvdb::FloatGrid::Ptr resampledOnto(const openvdb::FloatGrid &density, const openvdb::GridBase &target) {
+    openvdb::FloatGrid::Ptr out = openvdb::FloatGrid::create(0.0f);
+    out->setTransform(target.transform().copy());
+    openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(density, *out);
+    return out;
+}
 
 // The object's active voxels grown (in its own voxels) to cover every point within `reach` m of one of them.
 openvdb::BoolTree::Ptr reachedVoxels(const openvdb::FloatGrid &density, double reach) {
@@ -36,8 +30,7 @@ openvdb::BoolTree::Ptr reachedVoxels(const openvdb::FloatGrid &density, double r
 
 // The voxels of a union's grid (in its own index space) whose centre falls in one of the reached voxels. Leaves
 // wholly outside the reached voxels' box are skipped: a spray's lumps keep a few of the snow's leaves.
-template <typename GridT>
-openvdb::BoolTree::Ptr keptVoxels(const GridT &source, const openvdb::FloatGrid &density,
+openvdb::BoolTree::Ptr keptVoxels(const openvdb::Vec3fGrid &source, const openvdb::FloatGrid &density,
                                   const openvdb::BoolTree &reached) {
     auto kept = openvdb::BoolTree::Ptr(new openvdb::BoolTree(false));
     openvdb::CoordBBox reachedBox;
@@ -55,9 +48,8 @@ openvdb::BoolTree::Ptr keptVoxels(const GridT &source, const openvdb::FloatGrid 
     return kept;
 }
 
-template <typename GridT>
-typename GridT::Ptr keptPart(const GridT &joint, const openvdb::BoolTree &kept) {
-    typename GridT::Ptr out = joint.copyWithNewTree();
+openvdb::Vec3fGrid::Ptr keptPart(const openvdb::Vec3fGrid &joint, const openvdb::BoolTree &kept) {
+    openvdb::Vec3fGrid::Ptr out = joint.copyWithNewTree();
     auto from = joint.getConstAccessor();
     auto to = out->getAccessor();
     for (auto it = kept.cbeginValueOn(); it; ++it) to.setValue(it.getCoord(), from.getValue(it.getCoord()));
@@ -65,6 +57,20 @@ typename GridT::Ptr keptPart(const GridT &joint, const openvdb::BoolTree &kept) 
 }
 
 }  // namespace
+
+openvdb::FloatGrid::Ptr unionDensity(const std::vector<openvdb::FloatGrid::ConstPtr> &densities) {
+    if (densities.empty()) throw InvalidArgument("a joint bake needs at least one density grid");
+    openvdb::FloatGrid::Ptr sum = densities.front()->deepCopy();
+    for (std::size_t i = 1; i < densities.size(); ++i) {
+        openvdb::FloatGrid::Ptr other = sum->copyWithNewTree();
+        if (densities[i]->transform() == sum->transform())
+            other->setTree(densities[i]->tree().copy());
+        else
+            other = resampledOnto(*densities[i], *sum);
+        openvdb::tools::compSum(*sum, *other);
+    }
+    return sum;
+}
 
 BakedGrids bakedGridsOf(const BakedGrids &joint, const openvdb::FloatGrid &density) {
     const double reach = density.voxelSize()[0] + joint.source[0]->voxelSize()[0];
@@ -76,8 +82,13 @@ BakedGrids bakedGridsOf(const BakedGrids &joint, const openvdb::FloatGrid &densi
         openvdb::tools::dilateActiveValues(out.source[k]->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                            openvdb::tools::EXPAND_TILES);  // the ring: its new voxels hold zeros
     }
-    if (joint.scatter) {  // kept where the object has its own snow or air beside it; none where that is nowhere
-        out.scatter = keptPart(*joint.scatter, *keptVoxels(*joint.scatter, density, *reached));
+    if (joint.scatter) {  // the object's own density over the union's scattered voxels; none where it has none
+        if (!joint.scattered) throw InvalidArgument("a joint bake's scatter grid needs its scattered voxels");
+        const bool same = density.transform() == joint.scattered->transform();
+        const openvdb::FloatGrid::Ptr resampled = same ? nullptr : resampledOnto(density, *joint.scattered);
+        const openvdb::FloatTree &own = same ? density.tree() : resampled->tree();
+        out.scatter = joint.scatter->copyWithNewTree();
+        out.scatter->setTree(scatteredDensity(joint.scattered->tree(), own, BakedGrids::kScatterScale));
         if (out.scatter->activeVoxelCount() == 0) out.scatter = nullptr;
     }
     return out;
