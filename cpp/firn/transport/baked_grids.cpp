@@ -201,28 +201,32 @@ std::vector<RadianceEstimate> renderScatteringWhereThin(const MonteCarloReferenc
     return estimateMixed(reference, rays, samples, seed, [&] {
         using FloatAccessor = openvdb::tree::ValueAccessor<const openvdb::FloatTree>;
         auto scatteredAt = std::make_shared<FloatAccessor>(*scattered);
-        auto rho = std::make_shared<FloatAccessor>(medium.density().tree());
+        auto rho = std::make_shared<Medium::DensitySampler>(medium);
         auto sampler = std::make_shared<SourceGridsSampler>(medium, baked);
         auto marcher = std::make_shared<Medium::ColumnMarcher>(medium);
-        auto shareAt = [scatteredAt, rho, shareScale](const openvdb::Vec3d &ijk) {
-            return scatteredShare(openvdb::tools::BoxSampler::sample(*rho, ijk),
-                                  openvdb::tools::BoxSampler::sample(*scatteredAt, ijk / double(shareScale)));
+        // The share at a point of density `density` (read there by the caller), kg/m^3.
+        auto shareAt = [scatteredAt, shareScale](const openvdb::Vec3d &ijk, double density) {
+            return scatteredShare(density, openvdb::tools::BoxSampler::sample(*scatteredAt, ijk / double(shareScale)));
+        };
+        auto indexOf = [&medium](const glm::dvec3 &p) {
+            const glm::dvec3 ijk = medium.worldToIndex(p);
+            return openvdb::Vec3d(ijk.x, ijk.y, ijk.z);
         };
         MixedRender mixed;
         mixed.bounces = bounces;
-        mixed.scatterShare = [&medium, shareAt](const glm::dvec3 &p) {
-            const glm::dvec3 ijk = medium.worldToIndex(p);
-            return shareAt(openvdb::Vec3d(ijk.x, ijk.y, ijk.z));
+        mixed.scatterShare = [indexOf, rho, shareAt](const glm::dvec3 &p) {
+            const openvdb::Vec3d ijk = indexOf(p);
+            return shareAt(ijk, rho->at(ijk));
         };
-        mixed.emittedAt = [&medium, sampler, shareAt](const glm::dvec3 &p, const glm::dvec3 &w) {
-            const glm::dvec3 g = medium.worldToIndex(p);
-            const openvdb::Vec3d ijk(g.x, g.y, g.z);
-            return (1.0 - shareAt(ijk)) * bakedSourceToward((*sampler)(ijk), w);
+        mixed.emittedAt = [indexOf, rho, sampler, shareAt](const glm::dvec3 &p, const glm::dvec3 &w) {
+            const openvdb::Vec3d ijk = indexOf(p);
+            return (1.0 - shareAt(ijk, rho->at(ijk))) * bakedSourceToward((*sampler)(ijk), w);
         };
         mixed.emittedAlong = [&scene, sampler, marcher, shareAt](const Ray &camera, double tMax) {
+            // The march has just read the density at ijk: its sampler holds that cell (no second tree walk).
             auto unshared = [&](const openvdb::Vec3d &ijk) {
                 BakedGrids::Values v = (*sampler)(ijk);
-                const float keep = float(1.0 - shareAt(ijk));
+                const float keep = float(1.0 - shareAt(ijk, marcher->densityAt(ijk)));
                 for (auto &value : v) value *= keep;  // the lobes are linear in their values
                 return v;
             };
