@@ -62,10 +62,9 @@ openvdb::FloatGrid::Ptr unionDensity(const std::vector<openvdb::FloatGrid::Const
     if (densities.empty()) throw InvalidArgument("a joint bake needs at least one density grid");
     openvdb::FloatGrid::Ptr sum = densities.front()->deepCopy();
     for (std::size_t i = 1; i < densities.size(); ++i) {
-        const openvdb::FloatGrid::Ptr other =
-            densities[i]->transform() == sum->transform()
-                ? openvdb::FloatGrid::create(std::make_shared<openvdb::FloatTree>(densities[i]->tree()))
-                : resampledOnto(*densities[i], *sum);
+        const openvdb::FloatGrid::Ptr other = densities[i]->transform() == sum->transform()
+                                                  ? densities[i]->deepCopy()
+                                                  : resampledOnto(*densities[i], *sum);
         openvdb::tools::compSum(*sum, *other);  // takes other's nodes
     }
     return sum;
