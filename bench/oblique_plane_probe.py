@@ -82,10 +82,10 @@ def main():
         bake_suite.write_density(path, density, h)
         mean, error = firncore.monte_carlo_radiance(path, case.optics, starts, ways, suns=suns,
                                                     samples=args.samples, seed=11)
-        firncore.bake(path, case.optics, suns=suns, quality="FINAL", seed=0)
+        stats = firncore.bake(path, case.optics, suns=suns, quality="FINAL", seed=0)
         baked = firncore.render_baked(path, case.optics, starts, ways)[:, 1]
         if args.mixed:
-            scattered = len(firncore.scatter_voxels(path, case.optics))
+            scattered = stats["scatter_voxels"]
             mixed, mixed_error = firncore.render_scattering_where_thin(path, case.optics, starts, ways, suns=suns,
                                                                        samples=args.mixed, seed=3, traced_only=True)
     m, b = mean[:, 1].mean(), baked.mean()
