@@ -1,11 +1,14 @@
 // Seeded random-input driver for the core's entry points that take user data (issue 11): the mesh, Add
 // Snow Layer and its rebuild from kept metaballs, VDB files (corrupted, truncated), the density grid into
-// the transport Medium and the bake, and the optics parameters. Every input must give a valid result or one
+// the transport Medium and the bake (with suns, and with lamps), the optics parameters, and the thrown-snow
+// simulation (emitters, objects, settings). Every input must give a valid result or one
 // of the clear exceptions (InvalidArgument, BudgetExceeded, IoError); anything else, a sanitizer report or
 // an iteration running past the watchdog fails the run. Same seed, same inputs: a failure replays with
-// `firn_fuzz --first SEED --count 1`.
+// `firn_fuzz --first SEED --count 1` (or `--only TARGET --first SEED --count 1`: a seed's input depends on the seed
+// alone, its target on the seed modulo the number of targets, which grows as targets are added).
 //
-//   firn_fuzz [--first N] [--count M] [--seconds S] [--dir D] [--memory-mb MB] [--skip TARGET]... [--verbose]
+//   firn_fuzz [--first N] [--count M] [--seconds S] [--dir D] [--memory-mb MB] [--skip TARGET]... [--only TARGET]
+//             [--verbose]
 //
 // Inputs stay tiny (few triangles, voxel budgets of thousands) so an iteration takes milliseconds.
 #include <algorithm>
@@ -26,11 +29,14 @@
 #include <sys/resource.h>
 
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/MeshToVolume.h>
 
 #include "firn/geometry/mesh.h"
+#include "firn/io/spray_files.h"
 #include "firn/io/vdb_io.h"
 #include "firn/optics/snow_optics.h"
 #include "firn/snow/snow_layer.h"
+#include "firn/spray/sequence.h"
 #include "firn/transport/bake.h"
 #include "firn/util/error.h"
 #include "firn/util/openvdb_library.h"
@@ -234,10 +240,38 @@ VolumeOptics randomOptics(Input &in) {
 
 SunLight randomSun(Input &in) {
     SunLight sun;
-    sun.direction = in.chance(0.9) ? glm::dvec3{in.range(-1, 1), in.range(-1, 1), in.range(0.1, 1)} : glm::dvec3{in.awkward(), 0.0, in.awkward()};
+    // The sun's direction is a unit vector from the add-on: a random one normalized, now and then nonsense.
+    sun.direction = in.chance(0.9) ? glm::normalize(glm::dvec3{in.range(-1, 1), in.range(-1, 1), in.range(0.1, 1)})
+                                   : glm::dvec3{in.awkward(), 0.0, in.awkward()};
     sun.irradiance = Rgb(float(in.setting(0.0, 5.0)));
     sun.angularDiameter = in.setting(0.0, 0.1);
     return sun;
+}
+
+// A lamp of any shape, now and then with a field no lamp has.
+Lamp randomLamp(Input &in) {
+    constexpr double kBad = 0.02;  // per field
+    Lamp lamp;
+    lamp.shape = Lamp::Shape(in.integer(0, 3));
+    lamp.position = {in.setting(-0.3, 0.3, kBad), in.setting(-0.3, 0.3, kBad), in.setting(-0.05, 1.0, kBad)};
+    const glm::dvec3 axis{in.range(-0.5, 0.5), in.range(-0.5, 0.5), -1.0};
+    lamp.axis = glm::normalize(axis);
+    lamp.tangent = glm::normalize(glm::cross(lamp.axis, glm::dvec3{0.0, 1.0, 0.0}));
+    if (in.chance(kBad)) lamp.axis = axis;  // not a unit vector
+    if (in.chance(kBad)) lamp.tangent = glm::dvec3{in.awkward(), in.awkward(), 0.0};
+    lamp.emission = Rgb(in.setting(0.0, 50.0, kBad), in.setting(0.0, 50.0, kBad), in.setting(0.0, 50.0, kBad));
+    lamp.radius = in.setting(0.0, 0.1, kBad);
+    lamp.spotAngle = in.setting(0.1, 3.14159, kBad);
+    lamp.spotBlend = in.setting(0.0, 1.0, kBad);
+    lamp.sizeX = in.setting(0.001, 1.0, kBad);
+    lamp.sizeY = in.setting(0.001, 1.0, kBad);
+    return lamp;
+}
+
+void requireFinite(const BakedGrids &baked) {
+    for (const auto &grid : baked.source)
+        for (auto it = grid->cbeginValueOn(); it; ++it)
+            if (!std::isfinite(it->x() + it->y() + it->z())) throw std::logic_error("non-finite baked source");
 }
 
 void fuzzBake(Input &in) {
@@ -260,10 +294,46 @@ void fuzzBake(Input &in) {
     settings.sunSamples = in.chance(0.9) ? in.integer(1, 2) : in.integer(-10, 100);
     settings.tolerance = in.chance(0.9) ? 1e-3 : in.awkward();
     settings.referenceSamples = in.integer(1, 4);
-    const BakedGrids baked = bakeScattering(scene, settings);
-    for (const auto &grid : baked.source)
-        for (auto it = grid->cbeginValueOn(); it; ++it)
-            if (!std::isfinite(it->x() + it->y() + it->z())) throw std::logic_error("non-finite baked source");
+    requireFinite(bakeScattering(scene, settings));
+}
+
+// A block of snow n x n x layers voxels (1 cm) of 100-600 kg/m^3, one voxel in 500 awkward: thick snow, whose bake is
+// quick (thin snow is traced, seconds a seed in the short run: the bake target has it).
+openvdb::FloatGrid::Ptr snowBlock(Input &in) {
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    const int n = in.integer(1, 6), layers = in.integer(1, 6);
+    auto acc = grid->getAccessor();
+    for (int x = 0; x < n; ++x)
+        for (int y = 0; y < n; ++y)
+            for (int z = 0; z < layers; ++z)
+                acc.setValue({x, y, -z}, float(in.chance(0.998) ? in.range(100.0, 600.0) : in.awkward()));
+    return grid;
+}
+
+// Lamps of every shape over the snow (and beside it, inside it, at awkward places), with or without occluders.
+void fuzzLamps(Input &in) {
+    constexpr double kBad = 0.02;
+    Scene scene;
+    const openvdb::FloatGrid::Ptr density = snowBlock(in);
+    const VolumeOptics optics{in.setting(0.5, 10.0, kBad), Rgb{in.setting(0.9, 1.0, kBad), in.setting(0.9, 1.0, kBad),
+                                                               in.setting(0.9, 1.0, kBad)},
+                              in.setting(0.0, 0.9, kBad)};
+    scene.medium = std::make_shared<Medium>(density, optics);
+    for (int i = in.integer(1, 3); i > 0; --i) scene.lamps.push_back(randomLamp(in));
+    if (in.chance(0.3)) scene.suns.push_back(randomSun(in));
+    scene.sky.radiance = Rgb(in.chance(0.5) ? 0.0 : in.setting(0.0, 1.0, kBad));
+    if (in.chance(0.3)) {
+        TriangleMesh mesh = build(groundWithClutter(in));
+        std::vector<Rgb> albedo(mesh.triangleCount(), Rgb(in.setting(0.0, 1.0, kBad)));
+        scene.occluders = std::make_shared<Occluders>(std::move(mesh), std::move(albedo));
+    }
+    BakeSettings settings;
+    settings.quality = BakeQuality::Draft;
+    settings.seed = in.integer(0, 100);
+    settings.sunSamples = in.chance(0.95) ? in.integer(1, 4) : in.integer(-10, 100);
+    requireFinite(bakeScattering(scene, settings));
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -314,6 +384,114 @@ void fuzzOptics(Input &in) {
 }
 
 // ---------------------------------------------------------------------------------------------------------
+// Thrown snow: emitters moving through a small slab, objects the lumps land on, the settings of the panel
+
+// A slab of snow [-s, s]^2 x [-d, 0] (m) on voxels of h (m), with a snow layer's grids: the level set, and the
+// density with its one-voxel ramp across the surface (tests/cpp/spray/slab_snow.h, the spray tests' slab).
+SnowGrids slabSnow(double s, double d, double h, float density) {
+    const auto transform = openvdb::math::Transform::createLinearTransform(h);
+    const openvdb::Vec3d lo(-s, -s, -d), hi(s, s, 0.0);
+    SnowGrids snow;
+    snow.surface = openvdb::tools::createLevelSetBox<openvdb::FloatGrid>(
+        openvdb::math::BBox<openvdb::Vec3s>(openvdb::Vec3s(lo), openvdb::Vec3s(hi)), *transform, 3.0f);
+    snow.surface->setName("surface");
+    snow.density = openvdb::FloatGrid::create(0.0f);
+    snow.density->setName("density");
+    snow.density->setTransform(transform->copy());
+    auto phi = snow.surface->getConstAccessor();
+    auto rho = snow.density->getAccessor();
+    const openvdb::Coord a = openvdb::Coord::floor(transform->worldToIndex(lo)) - openvdb::Coord(1);
+    const openvdb::Coord b = openvdb::Coord::floor(transform->worldToIndex(hi)) + openvdb::Coord(2);
+    for (auto it = openvdb::CoordBBox(a, b).begin(); it; ++it) {
+        const double covered = std::clamp(0.5 - double(phi.getValue(*it)) / h, 0.0, 1.0);
+        if (covered > 0.0) rho.setValue(*it, float(covered * density));
+    }
+    return snow;
+}
+
+EmitterRectangle randomRectangle(Input &in, const glm::dvec3 &centre) {
+    EmitterRectangle r;
+    r.centre = centre;
+    r.halfU = {in.setting(0.02, 0.3, 0.01), 0.0, 0.0};
+    r.halfV = {0.0, in.setting(0.01, 0.1, 0.01), in.chance(0.98) ? in.range(-0.05, 0.05) : in.awkward()};
+    return r;
+}
+
+// An emitter gliding at a random depth through the snow, or jumping about; now and then a corner nowhere.
+Emitter randomEmitter(Input &in, std::size_t frames) {
+    Emitter e;
+    const glm::dvec3 start{in.range(-0.3, 0.3), in.range(-0.3, 0.3), in.range(-0.08, 0.05)};
+    const glm::dvec3 step{in.setting(-0.2, 0.2, 0.01), in.setting(-0.2, 0.2, 0.01), in.setting(-0.02, 0.02, 0.01)};  // m/frame
+    for (std::size_t f = 0; f < frames; ++f) e.frames.push_back(randomRectangle(in, start + double(f) * step));
+    if (in.chance(0.05)) e.frames[std::size_t(in.integer(0, int(frames) - 1))].centre.x = in.awkward();
+    return e;
+}
+
+SpraySettings randomSpraySettings(Input &in) {
+    constexpr double kBad = 0.01;  // per setting: about one run in five has one no panel allows
+    SpraySettings s;
+    s.emission.rate = in.setting(100.0, 20000.0, kBad);
+    s.emission.spreadAngle = in.setting(0.0, 1.5, kBad);
+    s.emission.throwSpeed = in.setting(0.0, 2.0, kBad);
+    s.emission.cellSize = in.setting(0.01, 0.05, kBad);
+    s.lumps.radius = in.setting(0.004, 0.03, kBad);
+    s.lumps.radiusVariation = in.setting(0.0, 1.0, kBad);
+    s.lumps.density = in.setting(100.0, 500.0, kBad);
+    s.lumps.ballsPerLump = in.chance(0.9) ? in.integer(1, 8) : in.integer(-3, 100);
+    s.lumps.breakRate = in.setting(0.0, 5.0, kBad);
+    s.lumps.breakSpeed = in.setting(0.0, 2.0, kBad);
+    s.flight.down = in.chance(0.9) ? glm::dvec3{0.0, 0.0, -1.0} : glm::dvec3{in.awkward(), 0.0, in.awkward()};
+    s.flight.gravity = in.setting(0.0, 20.0, kBad);
+    s.flight.airDensity = in.setting(0.0, 2.0, kBad);
+    s.flight.dragCoefficient = in.setting(0.0, 1.0, kBad);
+    s.tracks.thickness = in.setting(0.0, 0.05, kBad);
+    s.tracks.compactionDepth = in.setting(0.0, 0.1, kBad);
+    s.tracks.maxDensity = in.setting(300.0, 917.0, kBad);
+    s.substeps = in.chance(0.9) ? in.integer(1, 8) : in.integer(-5, 5000);
+    s.deposit = in.chance(0.5);
+    s.cutTracks = in.chance(0.7);
+    s.voxelSize = in.chance(0.7) ? 0.0 : in.setting(0.005, 0.05, kBad);
+    s.maxParticles = in.chance(0.95) ? in.range(1.0, 2e4) : in.awkward();
+    s.maxVoxels = in.chance(0.95) ? in.range(1.0, 2e5) : in.awkward();
+    s.seed = std::uint64_t(in.integer(0, 1000));
+    return s;
+}
+
+void requireValid(const SprayParticles &particles) {
+    for (const SprayParticle &p : particles)
+        if (!std::isfinite(p.position.x + p.position.y + p.position.z + p.velocity.x + p.velocity.y + p.velocity.z) ||
+            !(p.radius > 0.0f) || p.ballCount == 0 || p.ballCount > kMaxBallsPerLump)
+            throw std::logic_error("a lump with a non-finite place or speed, or no balls");
+}
+
+// A whole sequence as the add-on hands it over (runSpraySequence: the snow's file in, each frame's files out), then
+// the same job again, which finds every frame complete and leaves the files as they were.
+void fuzzSpray(Input &in, const std::filesystem::path &dir) {
+    const double h = in.chance(0.9) ? in.range(0.01, 0.03) : 0.02;
+    const SnowGrids snow = slabSnow(in.range(0.2, 0.5), in.range(0.05, 0.2), h, float(in.range(100, 400)));
+    SprayJob job;
+    job.snowPath = (dir / "snow.vdb").string();
+    writeGrids(job.snowPath, {snow.density, snow.surface});
+    job.fps = in.chance(0.9) ? in.range(12.0, 60.0) : in.awkward();
+    const std::size_t frames = std::size_t(in.integer(2, 4));
+    for (int i = in.integer(1, 2); i > 0; --i) job.emitters.push_back(randomEmitter(in, frames));
+    if (in.chance(0.3)) job.objects = build(groundWithClutter(in));
+    job.firstFrame = in.integer(-5, 100);
+    job.settings = randomSpraySettings(in);
+    job.directory = (dir / "spray").string();
+    std::filesystem::remove_all(job.directory);
+    const SprayRun run = runSpraySequence(job, nullptr);
+    if (run.framesWritten.size() != frames) throw std::logic_error("a spray sequence left frames unwritten");
+    const SprayFramePaths last = sprayFramePaths(job.directory, job.firstFrame + int(frames) - 1);
+    requireValid(readSprayState(last.state).particles);
+    SnowGrids spray;
+    for (const openvdb::GridBase::Ptr &grid : readGrids(last.spray))
+        (grid->getName() == "density" ? spray.density : spray.surface) = openvdb::gridPtrCast<openvdb::FloatGrid>(grid);
+    requireValid(spray);
+    if (!runSpraySequence(job, nullptr).framesWritten.empty()) throw std::logic_error("a complete sequence ran again");
+}
+
+// ---------------------------------------------------------------------------------------------------------
 // The driver
 
 struct Target {
@@ -347,6 +525,7 @@ int run(int argc, char **argv) {
     double seconds = 0.0;
     bool verbose = false;
     std::vector<std::string> skipped;  // target names whose seeds are passed over
+    std::string only;                  // a target every seed runs, in place of the seed's own
     rlim_t memoryMb = 2048;  // 0: no limit (under ASan, use ASAN_OPTIONS=max_allocation_size_mb instead)
     std::filesystem::path dir = std::filesystem::temp_directory_path() / ("firn_fuzz_" + std::to_string(::getpid()));
     for (int i = 1; i < argc; ++i) {
@@ -361,6 +540,7 @@ int run(int argc, char **argv) {
         else if (arg == "--dir") dir = next();
         else if (arg == "--memory-mb") memoryMb = std::stoull(next());
         else if (arg == "--skip") skipped.push_back(next());
+        else if (arg == "--only") only = next();
         else if (arg == "--verbose") verbose = true;
         else throw InvalidArgument("unknown argument " + arg);
     }
@@ -379,13 +559,17 @@ int run(int argc, char **argv) {
         {"bake", fuzzBake},
         {"vdb_file", [&](Input &in) { fuzzVdbFile(in, dir); }},
         {"optics", fuzzOptics},
+        {"lamps", fuzzLamps},
+        {"spray", [&](Input &in) { fuzzSpray(in, dir); }},
     };
+    const auto named = std::find_if(targets.begin(), targets.end(), [&](const Target &t) { return t.name == only; });
+    if (!only.empty() && named == targets.end()) throw InvalidArgument("no target named " + only);
     std::thread(watchdog).detach();
     const std::int64_t begin = nowMs();
     std::uint64_t done = 0, refused = 0;
     for (std::uint64_t seed = first; seed < first + count; ++seed) {
         if (seconds > 0.0 && double(nowMs() - begin) > 1000.0 * seconds) break;
-        const Target &target = targets[seed % targets.size()];
+        const Target &target = only.empty() ? targets[seed % targets.size()] : *named;
         if (std::find(skipped.begin(), skipped.end(), target.name) != skipped.end()) continue;
         Input in(seed);
         gSeed = seed;

@@ -62,14 +62,18 @@ SprayParticles emitLumps(const EmitterRectangle &from, const EmitterRectangle &t
         const double speed = glm::length(to.pointAt(s, t) - p) / dt;  // m/s
         const double expected = e.rate * speed * dt * cellArea;
         Rng rng = sprayRng(seed, SprayStream::Emission, cellStream(emitterIndex, c), stepIndex);
-        cell.count = std::size_t(std::floor(expected + rng.uniform()));
+        // A count over the budget is cut to one over it before it becomes an integer: an emitter moved by 1e30 m in a
+        // frame asked for more than a size_t holds, and the wrapped sum left the lumps' array too short.
+        const double count = std::floor(expected + rng.uniform()), over = double(maxNew) + 1.0;
+        cell.count = count < over ? std::size_t(count) : std::size_t(over);
     });
+    // Summed until over the budget (each count is at most one over it, so the sum cannot wrap).
     std::vector<std::size_t> first(cells.size() + 1, 0);
-    for (std::size_t c = 0; c < cells.size(); ++c) first[c + 1] = first[c] + cells[c].count;
-    if (first.back() > maxNew)
-        throw BudgetExceeded("emitter " + std::to_string(emitterIndex) + " would throw " + std::to_string(first.back()) +
-                             " lumps in one sub-step, over the particle budget (" + std::to_string(maxNew) +
-                             " left): lower the emission rate or raise the budget");
+    for (std::size_t c = 0; c < cells.size(); ++c)
+        if ((first[c + 1] = first[c] + cells[c].count) > maxNew)
+            throw BudgetExceeded("emitter " + std::to_string(emitterIndex) + " would throw more than " +
+                                 std::to_string(maxNew) + " lumps in one sub-step, the particle budget left: lower " +
+                                 "the emission rate or raise the budget");
     SprayParticles out(first.back());
     const glm::dvec3 up = -down;
     const double cosSpread = std::cos(e.spreadAngle);

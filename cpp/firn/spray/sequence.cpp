@@ -1,5 +1,6 @@
 #include "firn/spray/sequence.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -11,6 +12,12 @@
 namespace firn {
 
 namespace {
+
+// The lumps of `ballsPerLump` balls that `ballsLeft` of the budget still holds (an infinite budget: 2^53, which no
+// sub-step reaches; a double beyond a size_t's range does not convert).
+std::size_t lumpsLeft(double ballsLeft, int ballsPerLump) {
+    return std::size_t(std::clamp(std::floor(ballsLeft / ballsPerLump), 0.0, 9007199254740992.0));
+}
 
 // The balls the lumps could split into: the particle budget's worst case.
 double ballCount(const SprayParticles &particles) {
@@ -68,7 +75,7 @@ SprayFrameStats simulateSprayFrame(SprayState &state, const SprayScene &scene, c
     for (int k = 0; k < s.substeps; ++k)
         for (std::size_t e = 0; e < scene.emitters.size(); ++e) {
             const Emitter &emitter = scene.emitters[e];
-            const std::size_t budget = std::size_t(std::max(0.0, (s.maxParticles - balls) / s.lumps.ballsPerLump));
+            const std::size_t budget = lumpsLeft(s.maxParticles - balls, s.lumps.ballsPerLump);
             SprayParticles lumps = emitLumps(emitterBetween(emitter, state.frame, double(k) / s.substeps),
                                              emitterBetween(emitter, state.frame, double(k + 1) / s.substeps), dt,
                                              *state.snow.surface, s.flight.down, s.emission, s.lumps, s.seed, e,

@@ -92,13 +92,13 @@ openvdb::FloatGrid::Ptr sweptVolume(const std::vector<EmitterRectangle> &positio
         for (const auto &f : faces) quads.emplace_back(base + f[0], base + f[1], base + f[2], base + f[3]);
     }
     if (quads.empty()) return nullptr;
-    // Its voxels are within the boxes' bounds where they meet the snow's, grown by the exterior band.
+    // Its voxels are within the boxes' bounds grown by the exterior band: the whole boxes, filled, also where they
+    // reach beyond the snow (an emitter far under the snow raises a box up to its top; counted within the snow's
+    // bounds alone, such a box passed the budget and took every byte the machine had).
     openvdb::BBoxd bounds;
     for (const Vec3s &p : points) bounds.expand(openvdb::Vec3d(p));
     const double band = exteriorVoxels * surface.voxelSize()[0];
-    openvdb::BBoxd reach(bounds.min() - openvdb::Vec3d(band), bounds.max() + openvdb::Vec3d(band));
-    reach.min() = openvdb::math::maxComponent(reach.min(), snowBox.min() - openvdb::Vec3d(band));
-    reach.max() = openvdb::math::minComponent(reach.max(), snowBox.max() + openvdb::Vec3d(band));
+    const openvdb::BBoxd reach(bounds.min() - openvdb::Vec3d(band), bounds.max() + openvdb::Vec3d(band));
     const double voxels = reach.volume() / std::pow(surface.voxelSize()[0], 3);
     if (voxels > maxVoxels)
         throw BudgetExceeded("an emitter's track over one frame would take about " + std::to_string(voxels) +

@@ -5,6 +5,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "firn/transport/lights.h"
 #include "firn/util/error.h"
 #include "firn/util/sampling.h"
 
@@ -105,11 +106,13 @@ std::vector<Lamp> lampPieces(const Lamp &lamp, const glm::ivec2 &across) {
 }
 
 void validate(const Lamp &lamp) {
-    const Rgb &e = lamp.emission;
-    if (!(std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z)) || e.x < 0.0 || e.y < 0.0 || e.z < 0.0)
-        throw InvalidArgument("lamp emission must be finite and non-negative (W/sr, or W/m^2/sr for area lamps)");
-    if (!std::isfinite(lamp.position.x + lamp.position.y + lamp.position.z))
-        throw InvalidArgument("lamp position must be finite");
+    if (!isLightValue(lamp.emission))
+        throw InvalidArgument("lamp emission must be from 0 to 1e12 (W/sr, or W/m^2/sr for area lamps)");
+    // A lamp 1e300 m away is finite, and the bake's walks towards it never ended (tests/fuzz, lamps seed 1370).
+    constexpr double kFarthest = 1e9;  // m
+    if (!(std::abs(lamp.position.x) <= kFarthest && std::abs(lamp.position.y) <= kFarthest &&
+          std::abs(lamp.position.z) <= kFarthest))
+        throw InvalidArgument("lamp position must be within 1e9 m of the origin on every axis");
     if (!isUnit(lamp.axis) || !isUnit(lamp.tangent) || std::abs(glm::dot(lamp.axis, lamp.tangent)) > 1e-6)
         throw InvalidArgument("lamp axis and tangent must be perpendicular unit vectors");
     if (!(lamp.radius >= 0.0) || !std::isfinite(lamp.radius))

@@ -11,10 +11,10 @@
 
 namespace firn {
 
-namespace {
-bool isFinite(const Rgb &c) { return std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z); }
-bool isNonNegative(const Rgb &c) { return c.x >= 0.0 && c.y >= 0.0 && c.z >= 0.0; }
-}  // namespace
+bool isLightValue(const Rgb &c) {
+    const auto inRange = [](double v) { return v >= 0.0 && v <= kMaxLightValue; };  // false for NaN
+    return inRange(c.x) && inRange(c.y) && inRange(c.z);
+}
 
 glm::dvec3 sampleSunDirection(const SunLight &sun, double u1, double u2) {
     if (sun.angularDiameter <= 0.0) return sun.direction;
@@ -28,8 +28,8 @@ EnvironmentMap::EnvironmentMap(int width, int height, std::vector<Rgb> pixels)
         throw InvalidArgument("sky map has " + std::to_string(pixels_.size()) + " pixels, expected " +
                               std::to_string(width) + " x " + std::to_string(height));
     for (const Rgb &p : pixels_)
-        if (!isFinite(p) || !isNonNegative(p))
-            throw InvalidArgument("sky map pixels must be finite and non-negative radiance (W/m^2/sr)");
+        if (!isLightValue(p))
+            throw InvalidArgument("sky map pixels must be radiances from 0 to 1e12 (W/m^2/sr)");
 }
 
 glm::dvec2 EnvironmentMap::uvFromDirection(const glm::dvec3 &d) {
@@ -66,15 +66,13 @@ void validate(const SunLight &sun) {
     const double length = glm::length(sun.direction);
     if (!std::isfinite(length) || std::abs(length - 1.0) > 1e-6)
         throw InvalidArgument("sun direction must be a unit vector");
-    if (!isFinite(sun.irradiance) || !isNonNegative(sun.irradiance))
-        throw InvalidArgument("sun irradiance must be finite and non-negative (W/m^2)");
+    if (!isLightValue(sun.irradiance)) throw InvalidArgument("sun irradiance must be from 0 to 1e12 (W/m^2)");
     if (!std::isfinite(sun.angularDiameter) || sun.angularDiameter < 0.0 || sun.angularDiameter > kPi / 2)
         throw InvalidArgument("sun angular diameter must be between 0 and pi/2 rad");
 }
 
 void validate(const Sky &sky) {
-    if (!isFinite(sky.radiance) || !isNonNegative(sky.radiance))
-        throw InvalidArgument("sky radiance must be finite and non-negative (W/m^2/sr)");
+    if (!isLightValue(sky.radiance)) throw InvalidArgument("sky radiance must be from 0 to 1e12 (W/m^2/sr)");
 }
 
 }  // namespace firn

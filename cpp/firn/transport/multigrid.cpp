@@ -491,6 +491,9 @@ MultigridSolver::Result MultigridSolver::iterate(UnwrittenVector<double> &b, Unw
         UnwrittenVector<double> &q = z;
         A.multiply(p.data(), q.data());
         const double alpha = rDotZ / dot(p, q);
+        // A breakdown: p^T A p underflowed to zero (a right-hand side of 1e-320, from a phase function's g of 5e-324),
+        // and x + inf * 0 would be NaN. x stays as it is, as close as those magnitudes allow.
+        if (!std::isfinite(alpha)) break;
         rDotZPrevious = rDotZ;
         const double l2 = std::sqrt(step(alpha, p, q, x, r, largest));
         leastL2 = std::min(l2, leastL2);

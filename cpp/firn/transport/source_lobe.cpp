@@ -112,8 +112,9 @@ const std::array<FittedLobe, kTableT * kTableAlpha> &lobeTable() {
 }  // namespace
 
 SourceLobe exitLobe(double e0, const glm::dvec3 &e1, const glm::dvec3 &normal) {
-    if (e0 <= 0.0) return {};
     const double length = glm::length(e1);
+    // Not a lobe: nothing leaves, or a value that is not a number would index the table anywhere.
+    if (!(e0 > 0.0) || !std::isfinite(e0 + length)) return {};
     const glm::dvec3 m = length > 0.0 ? e1 / length : normal;
     const double t = length / (e0 + length) * (kTableT - 1);
     const double alpha = std::acos(std::clamp(glm::dot(m, normal), -1.0, 1.0)) / kPi * (kTableAlpha - 1);

@@ -1,6 +1,7 @@
 // Emission and whole frames: how many lumps an emitter throws and how, determinism whatever the thread count, and
 // the state carried from frame to frame.
 #include <cmath>
+#include <limits>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -129,6 +130,28 @@ TEST(SpraySequence, LumpsFlyOutOfTheGrooveAndLandOnTheSnow) {
     float highest = 0.0f;
     for (auto it = spray.density->cbeginValueOn(); it; ++it) highest = std::max(highest, *it);
     EXPECT_LE(highest, float(s.lumps.density) * 1.0001f);
+}
+
+// An emitter that jumps 1e30 m within a sub-step would throw more lumps than a size_t holds: refused as over the
+// budget, before its lumps' array is sized (the count wrapped around, the array was too short and the lumps were
+// written past its end: tests/fuzz, spray).
+TEST(Emission, AnEmitterJumpingFarIsRefusedOverTheBudget) {
+    const SnowGrids snow = test::slabSnow({-1.0, -0.5, -0.5}, {1.0, 0.5, 0.0}, 0.02, 300.0f);
+    std::uint64_t nextId = 0;
+    EXPECT_THROW(emitLumps(ski(0.0, -0.2), ski(1e30, -0.2), 0.01, *snow.surface, {0, 0, -1}, EmissionSettings{},
+                           LumpSettings{}, 5, 0, 0, nextId, 1000000),
+                 BudgetExceeded);
+    EXPECT_EQ(nextId, 0u);
+}
+
+// No limit on the lumps (an infinite budget) throws what the default budget does: the budget left converts to a
+// count within range (a double of inf did not).
+TEST(SpraySequence, AnInfiniteParticleBudgetThrowsAsAFiniteOne) {
+    SpraySettings finite, infinite;
+    infinite.maxParticles = std::numeric_limits<double>::infinity();
+    const SprayState a = simulate(3, finite), b = simulate(3, infinite);
+    ASSERT_GT(a.particles.size(), 0u);
+    expectSameParticles(a.particles, b.particles);
 }
 
 TEST(SpraySequence, BadInputIsRefused) {

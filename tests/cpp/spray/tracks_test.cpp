@@ -79,6 +79,16 @@ TEST(Tracks, ATrackOverTheVoxelBudgetIsRefusedBeforeAllocating) {
     EXPECT_THROW(carveTrack(snow, slide(), {0.0, 0.0, -1.0}, TrackSettings{}, 1000.0), BudgetExceeded);
 }
 
+// Each position's box reaches up to the snow's top: an emitter 10 km under a 30 cm slab raises boxes 10 km tall,
+// almost all of them outside the snow. OpenVDB fills the whole boxes, so the budget counts them whole: counted
+// within the snow's bounds alone they passed it and took every byte of memory (tests/fuzz, spray).
+TEST(Tracks, ATrackFarUnderTheSnowCountsItsWholeBoxesAgainstTheBudget) {
+    SnowGrids snow = test::slabSnow({-0.5, -0.3, -0.3}, {0.5, 0.3, 0.0}, kH, 300.0f);
+    std::vector<EmitterRectangle> deep = slide();
+    for (EmitterRectangle &r : deep) r.centre.z = -1e4;
+    EXPECT_THROW(carveTrack(snow, deep, {0.0, 0.0, -1.0}, TrackSettings{}, 50e6), BudgetExceeded);
+}
+
 TEST(Tracks, BadSettingsAreRefused) {
     TrackSettings s;
     s.thickness = 0.0;

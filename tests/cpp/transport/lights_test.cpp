@@ -1,10 +1,12 @@
 #include "firn/transport/lights.h"
 
 #include <cmath>
+#include <limits>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "firn/transport/lamps.h"
 #include "firn/util/error.h"
 #include "firn/util/sampling.h"
 
@@ -41,6 +43,30 @@ TEST(EnvironmentMap, RejectsBadPixels) {
     EXPECT_THROW(EnvironmentMap(2, 2, std::vector<Rgb>(3, Rgb(1.0))), InvalidArgument);
     EXPECT_THROW(EnvironmentMap(1, 1, {Rgb(-1.0)}), InvalidArgument);
     EXPECT_THROW(EnvironmentMap(0, 1, {}), InvalidArgument);
+}
+
+// Finite is not enough: a lamp of 1e300 W/sr (or DBL_MAX) passed as finite and the bake's sums of it overflowed into
+// NaN light, which indexed a table anywhere (tests/fuzz, lamps). Every light is bounded by kMaxLightValue, and a
+// lamp's place by 1e9 m.
+TEST(Lights, ValuesOverTheBoundAreRefused) {
+    const double over = 1e13, most = kMaxLightValue, huge = std::numeric_limits<double>::max();
+    EXPECT_NO_THROW(validate(SunLight{{0, 0, 1}, Rgb(most), 0.0}));
+    EXPECT_THROW(validate(SunLight{{0, 0, 1}, Rgb(1.0, over, 1.0), 0.0}), InvalidArgument);
+    EXPECT_NO_THROW(validate(Sky{Rgb(most), nullptr}));
+    EXPECT_THROW(validate(Sky{Rgb(huge), nullptr}), InvalidArgument);
+    EXPECT_THROW(EnvironmentMap(1, 1, {Rgb(0.0, 0.0, over)}), InvalidArgument);
+    Lamp lamp;
+    lamp.emission = Rgb(most);
+    EXPECT_NO_THROW(validate(lamp));
+    lamp.emission = Rgb(26.0, huge, 44.0);  // lamps seed 132
+    EXPECT_THROW(validate(lamp), InvalidArgument);
+    lamp.emission = Rgb(1.0, 1.0, std::numeric_limits<double>::quiet_NaN());
+    EXPECT_THROW(validate(lamp), InvalidArgument);
+    lamp.emission = Rgb(1.0);
+    lamp.position = {0.0, 0.0, 1e9};
+    EXPECT_NO_THROW(validate(lamp));
+    lamp.position = {0.0, 0.0, 1e300};  // finite, and the bake's walks towards it never ended (lamps seed 1370)
+    EXPECT_THROW(validate(lamp), InvalidArgument);
 }
 
 TEST(Sky, MapIsScaledByRadiance) {

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
+#include <utility>
 
 #include <glm/geometric.hpp>
 #include <glm/vec4.hpp>
@@ -36,6 +38,17 @@ TEST(SourceLobe, KeepsTheLinearFormsMoments) {
     const glm::dvec4 m = integrate([&](const glm::dvec3 &w) { return lobeRadiance(l0, l1, w); }, -1.0);
     EXPECT_NEAR(m.x / (4.0 * kPi), l0, 1e-3 * l0);
     for (int a = 0; a < 3; ++a) EXPECT_NEAR(m[1 + a], 4.0 * kPi / 3.0 * l1[a], 2e-3 * glm::length(l1));
+}
+
+// Not a number is no lobe: a NaN exitance (or first moment) indexed the fitted table anywhere (tests/fuzz, lamps).
+TEST(SourceLobe, ANonFiniteExitIsNoLobe) {
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    for (const auto &[e0, e1] : {std::pair{nan, glm::dvec3(0.1, 0.0, 0.2)}, std::pair{1.0, glm::dvec3(nan, 0.0, 0.2)},
+                                  std::pair{inf, glm::dvec3(0.1, 0.0, 0.2)}, std::pair{1.0, glm::dvec3(0.0, 0.0, inf)}}) {
+        const SourceLobe lobe = exitLobe(e0, e1, {0.0, 0.0, 1.0});
+        EXPECT_EQ(lobe.l0, 0.0);
+        EXPECT_EQ(lobe.l1, glm::dvec3(0.0));
+    }
 }
 
 TEST(SourceLobe, IsSingleScatteringOfABeam) {
