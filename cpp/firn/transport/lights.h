@@ -54,7 +54,6 @@ struct Sky {
     bool isBlack() const;
 };
 
-// Throw InvalidArgument with a message naming the bad field.
 // The largest value a light takes in any channel (W/m^2, W/sr or W/m^2/sr): far above the sun's radiance (2e7 W/m^2/sr)
 // and any lamp's, and far enough under DBL_MAX that the bake's sums and squares of it stay finite (a lamp of 1e300
 // W/sr passed as finite, and made the bake's surface light NaN).
@@ -62,6 +61,7 @@ constexpr double kMaxLightValue = 1e12;
 // Whether every channel is finite, non-negative and at most kMaxLightValue.
 bool isLightValue(const Rgb &c);
 
+// Throw InvalidArgument with a message naming the bad field.
 void validate(const SunLight &sun);
 void validate(const Sky &sky);
 
