@@ -29,7 +29,6 @@
 #include <sys/resource.h>
 
 #include <openvdb/openvdb.h>
-#include <openvdb/tools/MeshToVolume.h>
 
 #include "firn/geometry/mesh.h"
 #include "firn/io/spray_files.h"
@@ -42,6 +41,7 @@
 #include "firn/util/openvdb_library.h"
 #include "firn/util/random.h"
 #include "firn/util/threads.h"
+#include "../cpp/spray/slab_snow.h"
 
 namespace firn::fuzz {
 
@@ -386,27 +386,9 @@ void fuzzOptics(Input &in) {
 // ---------------------------------------------------------------------------------------------------------
 // Thrown snow: emitters moving through a small slab, objects the lumps land on, the settings of the panel
 
-// A slab of snow [-s, s]^2 x [-d, 0] (m) on voxels of h (m), with a snow layer's grids: the level set, and the
-// density with its one-voxel ramp across the surface (tests/cpp/spray/slab_snow.h, the spray tests' slab).
-SnowGrids slabSnow(double s, double d, double h, float density) {
-    const auto transform = openvdb::math::Transform::createLinearTransform(h);
-    const openvdb::Vec3d lo(-s, -s, -d), hi(s, s, 0.0);
-    SnowGrids snow;
-    snow.surface = openvdb::tools::createLevelSetBox<openvdb::FloatGrid>(
-        openvdb::math::BBox<openvdb::Vec3s>(openvdb::Vec3s(lo), openvdb::Vec3s(hi)), *transform, 3.0f);
-    snow.surface->setName("surface");
-    snow.density = openvdb::FloatGrid::create(0.0f);
-    snow.density->setName("density");
-    snow.density->setTransform(transform->copy());
-    auto phi = snow.surface->getConstAccessor();
-    auto rho = snow.density->getAccessor();
-    const openvdb::Coord a = openvdb::Coord::floor(transform->worldToIndex(lo)) - openvdb::Coord(1);
-    const openvdb::Coord b = openvdb::Coord::floor(transform->worldToIndex(hi)) + openvdb::Coord(2);
-    for (auto it = openvdb::CoordBBox(a, b).begin(); it; ++it) {
-        const double covered = std::clamp(0.5 - double(phi.getValue(*it)) / h, 0.0, 1.0);
-        if (covered > 0.0) rho.setValue(*it, float(covered * density));
-    }
-    return snow;
+// A slab of snow [-s, s]^2 x [-d, 0] (m) on voxels of h (m), with a snow layer's grids (the spray tests' slab).
+SnowGrids slab(double s, double d, double h, float density) {
+    return test::slabSnow(openvdb::Vec3d(-s, -s, -d), openvdb::Vec3d(s, s, 0.0), h, density);
 }
 
 EmitterRectangle randomRectangle(Input &in, const glm::dvec3 &centre) {
@@ -468,7 +450,7 @@ void requireValid(const SprayParticles &particles) {
 // the same job again, which finds every frame complete and leaves the files as they were.
 void fuzzSpray(Input &in, const std::filesystem::path &dir) {
     const double h = in.chance(0.9) ? in.range(0.01, 0.03) : 0.02;
-    const SnowGrids snow = slabSnow(in.range(0.2, 0.5), in.range(0.05, 0.2), h, float(in.range(100, 400)));
+    const SnowGrids snow = slab(in.range(0.2, 0.5), in.range(0.05, 0.2), h, float(in.range(100, 400)));
     SprayJob job;
     job.snowPath = (dir / "snow.vdb").string();
     writeGrids(job.snowPath, {snow.density, snow.surface});
