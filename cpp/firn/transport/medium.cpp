@@ -69,9 +69,6 @@ Medium::Medium(openvdb::FloatGrid::ConstPtr density, const VolumeOptics &optics)
     initializeOpenVdb();
     validate(optics_);
     if (optics_.extinctionPerDensity <= 0.0) throw InvalidArgument("extinction per density must be positive to bake");
-    // A phase function this close to isotropic is isotropic: at g 5e-324 a ratio over g overflowed somewhere in the
-    // bake and its light came out NaN (tests/fuzz, lamps seed 4801).
-    if (std::abs(optics_.g) < 1e-12) optics_.g = 0.0;
     if (!density_) throw InvalidArgument("no density grid");
     if (density_->background() != 0.0f) throw InvalidArgument("the density grid's background must be 0");
     h_ = axisAlignedVoxelSize(density_->transform());

@@ -104,9 +104,10 @@ Source tracedSourceByMoments(const SourceEstimate &S, double g) {
     const double a1 = glm::dot(first, m);  // a0 k along m
     if (g > 0.0 && a0 > 0.0 && a1 > 0.0) {
         // The arriving light's mean(l0) E[(t.m)^n], then the source's Legendre moments (g^n of the light's).
-        const double t1 = a1 / g, t2 = glm::dot(m, S.second * m);
+        // a3 = g^3 (5 t3 - 3 t1) / 2 with t1 = a1 / g, written without the ratio (it overflows for g near 0).
+        const double t2 = glm::dot(m, S.second * m);
         const double t3 = m.x * glm::dot(m, S.third[0] * m) + m.y * glm::dot(m, S.third[1] * m) + m.z * glm::dot(m, S.third[2] * m);
-        const double a2 = g * g * 0.5 * (3.0 * t2 - a0), a3 = g * g * g * 0.5 * (5.0 * t3 - 3.0 * t1);
+        const double a2 = g * g * 0.5 * (3.0 * t2 - a0), a3 = g * g * 0.5 * (5.0 * g * t3 - 3.0 * a1);
         if (const std::optional<LobePair> pair = lobePair(a0, a1, a2, a3)) {
             const double kp = std::min(pair->kPeak, kMaxLobeAnisotropy), kb = pair->kBroad;
             glm::dvec3 peak;
@@ -124,7 +125,7 @@ Source tracedSourceByMoments(const SourceEstimate &S, double g) {
     const glm::dvec3 peak = S.beamL0;
     const double peakMean = channelMean(peak);
     if (peakMean > 0.0 && g > 0.0)
-        out.addPeak(peak, glm::length(beamFirst) / (9.0 * g * peakMean) * crossingAnisotropy(g), m);
+        out.addPeak(peak, glm::length(beamFirst) / (9.0 * peakMean) * (crossingAnisotropy(g) / g), m);
     else
         out.peak0 = glm::vec3(peak);
     capBroad(out);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -91,6 +92,22 @@ TEST(FitByDirection, NoneWithoutLight) {
     DirectionWeights seen;
     seen.fill(1.0);
     EXPECT_FALSE(fitByDirection(SourceEstimate{}, directions, seen, glm::dvec3(0.0, 0.0, -1.0), 0.87, Source{}).has_value());
+}
+
+// g = 5e-324 (the fuzzer's lamps seed 4801): the moments' first term over g overflowed, the pair's third moment
+// became 0 x inf, and the beams' peak an anisotropy of inf; the bake's light came out NaN. A first moment that
+// is not g times the light's (Monte Carlo noise) still gives lobes of finite values.
+TEST(TracedSourceByMoments, AVanishingGGivesFiniteLobes) {
+    const glm::dvec3 m(0.0, 0.0, -1.0);
+    SourceEstimate S;
+    S.l0 = glm::dvec3(1.0), S.beamL0 = glm::dvec3(0.5);  // W/m^2/sr
+    for (int c = 0; c < 3; ++c) S.l1[c] = 3e-3 * m, S.beamL1[c] = 1e-3 * m;
+    S.second = glm::dmat3(1.0 / 3.0);
+    const Source out = tracedSourceByMoments(S, std::numeric_limits<double>::denorm_min());
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_TRUE(std::isfinite(out.l0[c]) && std::isfinite(out.peak0[c]) && std::isfinite(out.peak1[c]));
+        for (int a = 0; a < 3; ++a) EXPECT_TRUE(std::isfinite(out.l1[c][a]));
+    }
 }
 
 // A wide slab of 8 layers, optical depth 1 per voxel: a voxel of the top layer is seen from above through less
