@@ -1,5 +1,6 @@
 // Tracks: the groove an emitter cuts is its swept box, and the snow it held is compacted underneath.
 #include <gtest/gtest.h>
+#include <openvdb/tools/Composite.h>
 
 #include "firn/spray/tracks.h"
 #include "firn/util/error.h"
@@ -24,16 +25,9 @@ double totalMass(const SnowGrids &snow) {
     return sum * kH * kH * kH;  // kg
 }
 
-TEST(Tracks, TheGrooveIsTheSweptBoxAndItsSnowIsCompactedBelow) {
-    SnowGrids snow = test::slabSnow({-0.8, -0.3, -0.3}, {0.8, 0.3, 0.0}, kH, 300.0f);
-    const double massBefore = totalMass(snow);
-    TrackSettings s;
-    s.thickness = 0.02;
-    s.compactionDepth = 0.05;
-    const TrackStats stats = carveTrack(snow, slide(), {0.0, 0.0, -1.0}, s, 50e6);
-    ASSERT_GT(stats.carvedVoxels, 0u);
-    const openvdb::FloatGrid &phi = *snow.surface;
-    // Swept: x in [-0.5, 0.5], y in [-0.05, 0.05], from z = -0.05 - thickness = -0.07 up through the top.
+// The groove slide() cuts: x in [-0.5, 0.5], y in [-0.05, 0.05], from z = -0.05 - thickness = -0.07 up through
+// the top at z = 0 (voxel-exact, +-1 voxel).
+void expectSlideGroove(const openvdb::FloatGrid &phi) {
     // Depth: along the groove's axis the level set turns negative at its bottom.
     for (double x : {-0.4, 0.0, 0.4}) {
         double bottom = 0.05;
@@ -52,6 +46,17 @@ TEST(Tracks, TheGrooveIsTheSweptBoxAndItsSnowIsCompactedBelow) {
     EXPECT_NEAR(end, 0.5, kH);
     // Untouched beside it.
     EXPECT_LT(test::levelSetAt(phi, 0.0, 0.15, -0.035), 0.0);
+}
+
+TEST(Tracks, TheGrooveIsTheSweptBoxAndItsSnowIsCompactedBelow) {
+    SnowGrids snow = test::slabSnow({-0.8, -0.3, -0.3}, {0.8, 0.3, 0.0}, kH, 300.0f);
+    const double massBefore = totalMass(snow);
+    TrackSettings s;
+    s.thickness = 0.02;
+    s.compactionDepth = 0.05;
+    const TrackStats stats = carveTrack(snow, slide(), {0.0, 0.0, -1.0}, s, 50e6);
+    ASSERT_GT(stats.carvedVoxels, 0u);
+    expectSlideGroove(*snow.surface);
 
     // The removed mass: 300 kg/m^3 x (1.0 m x 0.1 m x 0.07 m), up to the voxel ramp; all of it compacted below.
     EXPECT_NEAR(stats.removedMass, 300.0 * 1.0 * 0.1 * 0.07, 0.1 * 300.0 * 1.0 * 0.1 * 0.07);
@@ -65,6 +70,20 @@ TEST(Tracks, TheGrooveIsTheSweptBoxAndItsSnowIsCompactedBelow) {
     EXPECT_GT(at(0.0, 0.0, -0.10), 400.0f);  // the layer below holds its snow: 300 + 2.1 kg / 0.005 m^3 = 720
     EXPECT_FLOAT_EQ(at(0.0, 0.0, -0.20), 300.0f);  // deeper, untouched
     EXPECT_FLOAT_EQ(at(0.0, 0.2, -0.10), 300.0f);  // beside, untouched
+}
+
+// A box rises above the snow over its own rectangle, not above the scene's highest snow: beside the slab stands a
+// block 2 m tall (a slope's upper part). Raised to that block's top, the boxes' bounds hold about 620,000 voxels;
+// raised above the slab, about 74,000. Under a budget of 200,000 the groove is cut, and it is the slab's groove.
+TEST(Tracks, EachBoxRisesAboveTheSnowOverItNotAboveTheHighestSnow) {
+    SnowGrids snow = test::slabSnow({-0.8, -0.3, -0.3}, {0.8, 0.3, 0.0}, kH, 300.0f);
+    const SnowGrids block = test::slabSnow({1.0, -0.3, -0.3}, {1.2, 0.3, 2.0}, kH, 300.0f);
+    openvdb::tools::csgUnion(*snow.surface, *block.surface->deepCopy());
+    TrackSettings s;
+    s.thickness = 0.02;
+    s.compactionDepth = 0.05;
+    ASSERT_NO_THROW(carveTrack(snow, slide(), {0.0, 0.0, -1.0}, s, 200e3));
+    expectSlideGroove(*snow.surface);
 }
 
 TEST(Tracks, AnEmitterAboveTheSnowLeavesItAlone) {
