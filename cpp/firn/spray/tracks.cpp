@@ -108,7 +108,7 @@ std::optional<SnowOver> snowOver(const std::vector<const SurfaceLeaf *> &leaves,
     // Dual basis of (halfU, halfV) in the rectangle's plane: s = d . a, t = d . b; a unit step moves s by |a|.
     const glm::dvec3 a = glm::cross(r.halfV, n) / glm::dot(r.halfU, glm::cross(r.halfV, n));
     const glm::dvec3 b = glm::cross(n, r.halfU) / glm::dot(r.halfV, glm::cross(n, r.halfU));
-    const double sMax = 1.0 + margin * glm::length(a), tMax = 1.0 + margin * glm::length(b), floor = -thickness - margin;
+    const double sMax = 1.0 + margin * glm::length(a), tMax = 1.0 + margin * glm::length(b), bottom = -thickness - margin;
     // In index space (the transform is linear: world = o + M ijk), a world dot product d . x is d_ijk . M^T x.
     const auto world = [&](const openvdb::Vec3d &ijk) {
         const openvdb::Vec3d w = surface.indexToWorld(ijk);
@@ -130,12 +130,12 @@ std::optional<SnowOver> snowOver(const std::vector<const SurfaceLeaf *> &leaves,
                                0.5 * (SurfaceLeaf::DIM - 1) - cI;
         if (std::abs(glm::dot(mid, aI)) > sMax + leafRadius * glm::length(aI) ||
             std::abs(glm::dot(mid, bI)) > tMax + leafRadius * glm::length(bI) ||
-            glm::dot(mid, nI) < floor - leafRadius * glm::length(nI))
+            glm::dot(mid, nI) < bottom - leafRadius * glm::length(nI))
             continue;  // no voxel of this leaf within reach
         for (auto v = leaf->cbeginValueOn(); v; ++v) {
             const glm::dvec3 ijk(v.getCoord().x(), v.getCoord().y(), v.getCoord().z()), d = ijk - cI;
             const double above = glm::dot(d, nI);
-            if (std::abs(glm::dot(d, aI)) > sMax || std::abs(glm::dot(d, bI)) > tMax || above < floor) continue;
+            if (std::abs(glm::dot(d, aI)) > sMax || std::abs(glm::dot(d, bI)) > tMax || above < bottom) continue;
             if (!over) over = SnowOver{};
             over->aboveRectangle = std::max(over->aboveRectangle, above);
             over->top = std::max(over->top, glm::dot(o, up) + glm::dot(ijk, upI));
@@ -159,6 +159,7 @@ openvdb::FloatGrid::Ptr sweptVolume(const std::vector<EmitterRectangle> &positio
     tbb::parallel_for(std::size_t(0), rectangles.size(), [&](std::size_t i) {
         const EmitterRectangle &r = rectangles[i];
         const glm::dvec3 n = upwardNormal(r, up);
+        if (!std::isfinite(glm::dot(n, n))) return;  // no area (turned half round between positions): sweeps nothing
         openvdb::BBoxd column = boundsOf(boxCorners(r, n, thickness, verticalRaise(r, n, up, top)));
         if (!column.hasOverlap(snowBox)) return;  // the emitter is away from the snow
         column.expand(margin);

@@ -1,4 +1,6 @@
 // Tracks: the groove an emitter cuts is its swept box, and the snow it held is compacted underneath.
+#include <cmath>
+
 #include <gtest/gtest.h>
 #include <openvdb/tools/Composite.h>
 
@@ -84,6 +86,21 @@ TEST(Tracks, EachBoxRisesAboveTheSnowOverItNotAboveTheHighestSnow) {
     s.compactionDepth = 0.05;
     ASSERT_NO_THROW(carveTrack(snow, slide(), {0.0, 0.0, -1.0}, s, 200e3));
     expectSlideGroove(*snow.surface);
+}
+
+// An emitter turned half round about its normal from one position to the next: the positions added between them
+// pass through a rectangle of no area (the corners interpolated straight), which has no normal. It sweeps nothing;
+// the groove is the two ends' boxes and what lies between them, the level set finite.
+TEST(Tracks, AnEmitterTurnedHalfRoundBetweenPositionsCutsAFiniteGroove) {
+    SnowGrids snow = test::slabSnow({-0.8, -0.3, -0.3}, {0.8, 0.3, 0.0}, kH, 300.0f);
+    const std::vector<EmitterRectangle> turned{{{-0.3, 0.0, -0.05}, {0.2, 0.0, 0.0}, {0.0, 0.05, 0.0}},
+                                               {{0.3, 0.0, -0.05}, {-0.2, 0.0, 0.0}, {0.0, -0.05, 0.0}}};
+    const TrackStats stats = carveTrack(snow, turned, {0.0, 0.0, -1.0}, TrackSettings{}, 50e6);
+    EXPECT_GT(stats.carvedVoxels, 0u);
+    EXPECT_TRUE(std::isfinite(stats.removedMass));
+    for (auto it = snow.surface->cbeginValueOn(); it; ++it) ASSERT_TRUE(std::isfinite(*it)) << it.getCoord();
+    EXPECT_GT(test::levelSetAt(*snow.surface, -0.3, 0.0, -0.035), 0.0);  // both ends cut
+    EXPECT_GT(test::levelSetAt(*snow.surface, 0.3, 0.0, -0.035), 0.0);
 }
 
 TEST(Tracks, AnEmitterAboveTheSnowLeavesItAlone) {
