@@ -8,6 +8,7 @@
 #include <openvdb/tools/Interpolation.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/spray/snow_level_set.h"
 #include "firn/util/error.h"
 #include "firn/util/sampling.h"
 
@@ -51,14 +52,14 @@ SprayParticles emitLumps(const EmitterRectangle &from, const EmitterRectangle &t
     const int nv = cellsAlong(2.0 * glm::length(from.halfV), e.cellSize);
     const double cellArea = from.area() / (double(nu) * nv);  // m^2
     std::vector<Cell> cells(std::size_t(nu) * nv);
+    const openvdb::tools::GridSampler<openvdb::FloatTree, openvdb::tools::BoxSampler> phi(surface.tree(), surface.transform());
     tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t c) {
         const int iu = int(c % nu), iv = int(c / nu);
         Cell &cell = cells[c];
         cell = {-1.0 + 2.0 * iu / nu, -1.0 + 2.0 * (iu + 1) / nu, -1.0 + 2.0 * iv / nv, -1.0 + 2.0 * (iv + 1) / nv, 0};
         const double s = 0.5 * (cell.s0 + cell.s1), t = 0.5 * (cell.t0 + cell.t1);
         const glm::dvec3 p = from.pointAt(s, t);
-        if (openvdb::tools::BoxSampler::sample(surface.tree(), surface.worldToIndex(openvdb::Vec3d(p.x, p.y, p.z))) >= 0.0)
-            return;
+        if (snowLevelSetAt(phi, p) >= 0.0) return;
         const double speed = glm::length(to.pointAt(s, t) - p) / dt;  // m/s
         const double expected = e.rate * speed * dt * cellArea;
         Rng rng = sprayRng(seed, SprayStream::Emission, cellStream(emitterIndex, c), stepIndex);

@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/spray/snow_level_set.h"
 #include "firn/util/error.h"
 
 namespace firn {
@@ -36,8 +37,7 @@ void dragFlow(glm::dvec3 &x, glm::dvec3 &v, double t, double k) {
 // one inside, if the chord enters it. a is outside.
 std::optional<double> snowEntry(const SurfaceSampler &phi, const glm::dvec3 &a, const glm::dvec3 &b, double h) {
     const auto at = [&](double t) {
-        const glm::dvec3 p = a + t * (b - a);
-        return phi.wsSample(openvdb::Vec3d(p.x, p.y, p.z));
+        return snowLevelSetAt(phi, a + t * (b - a));
     };
     const int n = std::clamp(int(std::ceil(glm::length(b - a) / h)), 1, kMaxSnowSamples);
     double outside = 0.0;
@@ -134,7 +134,7 @@ void advanceParticles(SprayParticles &particles, const FlightStep &step, const S
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
             SprayParticle &p = particles[i];
             if (p.state == ParticleState::OnSnow && phi &&
-                phi->wsSample(openvdb::Vec3d(p.position.x, p.position.y, p.position.z)) > kUnsupported * h)
+                snowLevelSetAt(*phi, p.position) > kUnsupported * h)
                 p.state = ParticleState::Flying;
             if (p.state != ParticleState::Flying) continue;
             fly(p, step.dt, g, dragPerSpeedSquared(p.radius, lumps.density, flight), c, phi);

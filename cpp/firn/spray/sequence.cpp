@@ -6,6 +6,7 @@
 
 #include <openvdb/tools/Interpolation.h>
 
+#include "firn/spray/snow_level_set.h"
 #include "firn/spray/spray_density.h"
 #include "firn/util/error.h"
 
@@ -27,7 +28,7 @@ double ballCount(const SprayParticles &particles) {
 }
 
 bool outsideSnow(const openvdb::FloatGrid &surface, const glm::dvec3 &p) {
-    return openvdb::tools::BoxSampler::sample(surface.tree(), surface.worldToIndex(openvdb::Vec3d(p.x, p.y, p.z))) >= 0.0;
+    return snowLevelSetAt(openvdb::tools::GridSampler<openvdb::FloatTree, openvdb::tools::BoxSampler>(surface), p) >= 0.0;
 }
 
 }  // namespace

@@ -115,13 +115,14 @@ void validate(const Lamp &lamp) {
         throw InvalidArgument("lamp position must be within 1e9 m of the origin on every axis");
     if (!isUnit(lamp.axis) || !isUnit(lamp.tangent) || std::abs(glm::dot(lamp.axis, lamp.tangent)) > 1e-6)
         throw InvalidArgument("lamp axis and tangent must be perpendicular unit vectors");
-    if (!(lamp.radius >= 0.0) || !std::isfinite(lamp.radius))
-        throw InvalidArgument("lamp radius must be finite and non-negative (m)");
+    // Sizes too: an area lamp's pieces stand half its size from its centre (1e300 m: a NaN depth, lamps seed 29).
+    if (!(lamp.radius >= 0.0 && lamp.radius <= kFarthest))
+        throw InvalidArgument("lamp radius must be from 0 to 1e9 m");
     if (lamp.shape == Lamp::Shape::Spot &&
         (!(lamp.spotAngle > 0.0 && lamp.spotAngle <= kPi) || !(lamp.spotBlend >= 0.0 && lamp.spotBlend <= 1.0)))
         throw InvalidArgument("spot lamp: angle in (0, pi] rad and blend in [0, 1]");
-    if (lamp.isArea() && !(lamp.sizeX > 0.0 && lamp.sizeY > 0.0 && std::isfinite(lamp.sizeX * lamp.sizeY)))
-        throw InvalidArgument("area lamp sizes must be finite and positive (m)");
+    if (lamp.isArea() && !(lamp.sizeX > 0.0 && lamp.sizeY > 0.0 && lamp.sizeX <= kFarthest && lamp.sizeY <= kFarthest))
+        throw InvalidArgument("area lamp sizes must be positive and at most 1e9 m");
 }
 
 }  // namespace firn

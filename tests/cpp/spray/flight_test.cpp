@@ -1,11 +1,13 @@
 // Lumps in flight: the exact ballistic step, the terminal speed under quadratic drag, landing on snow and objects,
 // splitting.
 #include <cmath>
+#include <limits>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include "firn/spray/flight.h"
+#include "firn/spray/snow_level_set.h"
 #include "firn/spray/tracks.h"
 #include "firn/util/error.h"
 #include "firn/util/sampling.h"
@@ -141,6 +143,20 @@ TEST(Flight, ASplitConservesMomentumAndBalls) {
     single.ballsPerLump = 1;
     SprayParticle c = makeLump({0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 2, single, rng);
     EXPECT_THROW(splitLump(c, 3, single, rng), InvalidArgument);
+}
+
+// Past 2^30 voxels from the grid's origin OpenVDB's sampler floors a point into an int it overflows (undefined: an
+// emitter moved 1e30 m, tests/fuzz spray seed 42 under UBSan): the spray reads such points, and non-finite ones,
+// as outside the snow, and the snow itself as before.
+TEST(SnowLevelSet, PastTheIndexRangeAPointIsOutsideTheSnow) {
+    const SnowGrids snow = test::slabSnow({-0.5, -0.3, -0.3}, {0.5, 0.3, 0.0}, 0.01, 300.0f);
+    const openvdb::tools::GridSampler<openvdb::FloatTree, openvdb::tools::BoxSampler> phi(*snow.surface);
+    EXPECT_NEAR(snowLevelSetAt(phi, {0.0, 0.0, -0.02}), -0.02, 1e-3);  // m, inside
+    EXPECT_NEAR(snowLevelSetAt(phi, {0.0, 0.0, 0.01}), 0.01, 1e-3);    // in the band above
+    const double inf = std::numeric_limits<double>::infinity();
+    EXPECT_EQ(snowLevelSetAt(phi, {1e31, 0.0, 0.0}), inf);
+    EXPECT_EQ(snowLevelSetAt(phi, {0.0, -1e31, -0.02}), inf);
+    EXPECT_EQ(snowLevelSetAt(phi, {0.0, 0.0, std::numeric_limits<double>::quiet_NaN()}), inf);
 }
 
 TEST(Flight, BadSettingsAreRefused) {

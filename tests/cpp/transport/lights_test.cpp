@@ -67,6 +67,17 @@ TEST(Lights, ValuesOverTheBoundAreRefused) {
     EXPECT_NO_THROW(validate(lamp));
     lamp.position = {0.0, 0.0, 1e300};  // finite, and the bake's walks towards it never ended (lamps seed 1370)
     EXPECT_THROW(validate(lamp), InvalidArgument);
+    // An area lamp 1e300 m wide: its pieces stood 1e298 m from its centre, and their depths along the beam were
+    // inf - inf (lamps seed 29, UBSan). Its size, and any lamp's radius, are bounded as its place is.
+    lamp.position = {0.0, 0.0, 1.0};
+    lamp.shape = Lamp::Shape::Rectangle;
+    lamp.sizeX = lamp.sizeY = 1e9;
+    EXPECT_NO_THROW(validate(lamp));
+    lamp.sizeX = 1e300;
+    EXPECT_THROW(validate(lamp), InvalidArgument);
+    lamp.shape = Lamp::Shape::Point;
+    lamp.radius = 1e300;
+    EXPECT_THROW(validate(lamp), InvalidArgument);
 }
 
 TEST(Sky, MapIsScaledByRadiance) {
