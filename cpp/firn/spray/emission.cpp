@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/spray/snow_level_set.h"
+#include "firn/util/ceil_count.h"
 #include "firn/util/error.h"
 #include "firn/util/sampling.h"
 
@@ -28,9 +29,7 @@ std::uint64_t cellStream(std::uint64_t emitter, std::uint64_t cell) { return mix
 // Cells along a side `length` m long: a side a whole number of cells long, to 1e-4 cell, gets that many. One cell
 // more for a rounding would give every cell, and every lump after it, other random numbers: a 30 cm ski with
 // 2 cm cells is 15 cells, whatever the 1e-7 m Blender's float transforms leave on its sides.
-int cellsAlong(double length, double cellSize) {
-    return std::clamp(int(std::ceil(length / cellSize - 1e-4)), 1, kMaxCellsPerSide);
-}
+int cellsAlong(double length, double cellSize) { return ceilCount(length / cellSize - 1e-4, kMaxCellsPerSide); }
 
 }  // namespace
 

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "firn/spray/snow_level_set.h"
+#include "firn/util/ceil_count.h"
 #include "firn/util/error.h"
 
 namespace firn {
@@ -39,7 +40,7 @@ std::optional<double> snowEntry(const SurfaceSampler &phi, const glm::dvec3 &a, 
     const auto at = [&](double t) {
         return snowLevelSetAt(phi, a + t * (b - a));
     };
-    const int n = std::clamp(int(std::ceil(glm::length(b - a) / h)), 1, kMaxSnowSamples);
+    const int n = ceilCount(glm::length(b - a) / h, kMaxSnowSamples);
     double outside = 0.0;
     for (int i = 1; i <= n; ++i) {
         double inside = double(i) / n;

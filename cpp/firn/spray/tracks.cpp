@@ -14,6 +14,7 @@
 #include <openvdb/tools/Prune.h>
 #include <tbb/parallel_for.h>
 
+#include "firn/util/ceil_count.h"
 #include "firn/util/error.h"
 
 namespace firn {
@@ -49,9 +50,7 @@ std::vector<EmitterRectangle> densify(const std::vector<EmitterRectangle> &given
             double moved = 0.0;
             for (int k = 0; k < 4; ++k) moved = std::max(moved, glm::length(cb[k] - ca[k]));
             const double narrowest = std::min({2.0 * glm::length(a.halfU), 2.0 * glm::length(a.halfV), thickness});
-            // Clamped as a double: a rectangle moved 1e30 m in a step overflowed the int (spray seed 42, UBSan).
-            const double steps = std::ceil(moved / (0.5 * narrowest));
-            const int n = steps <= kMaxBoxesBetween ? std::max(int(steps), 1) : kMaxBoxesBetween;
+            const int n = ceilCount(moved / (0.5 * narrowest), kMaxBoxesBetween);
             const Emitter pair{{a, b}};
             for (int k = 1; k < n; ++k) out.push_back(emitterBetween(pair, 0, double(k) / n));
         }
