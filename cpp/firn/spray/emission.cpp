@@ -5,7 +5,6 @@
 #include <string>
 
 #include <glm/geometric.hpp>
-#include <openvdb/tools/Interpolation.h>
 #include <tbb/parallel_for.h>
 
 #include "firn/spray/snow_level_set.h"
@@ -51,7 +50,7 @@ SprayParticles emitLumps(const EmitterRectangle &from, const EmitterRectangle &t
     const int nv = cellsAlong(2.0 * glm::length(from.halfV), e.cellSize);
     const double cellArea = from.area() / (double(nu) * nv);  // m^2
     std::vector<Cell> cells(std::size_t(nu) * nv);
-    const openvdb::tools::GridSampler<openvdb::FloatTree, openvdb::tools::BoxSampler> phi(surface.tree(), surface.transform());
+    const SnowSampler phi(surface);
     tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t c) {
         const int iu = int(c % nu), iv = int(c / nu);
         Cell &cell = cells[c];

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <string>
 
-#include <openvdb/tools/Interpolation.h>
 
 #include "firn/spray/snow_level_set.h"
 #include "firn/spray/spray_density.h"
@@ -28,7 +27,7 @@ double ballCount(const SprayParticles &particles) {
 }
 
 bool outsideSnow(const openvdb::FloatGrid &surface, const glm::dvec3 &p) {
-    return snowLevelSetAt(openvdb::tools::GridSampler<openvdb::FloatTree, openvdb::tools::BoxSampler>(surface), p) >= 0.0;
+    return snowLevelSetAt(SnowSampler(surface), p) >= 0.0;
 }
 
 }  // namespace

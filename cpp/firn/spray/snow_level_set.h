@@ -7,6 +7,7 @@
 
 #include <glm/vec3.hpp>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
 
 namespace firn {
 
@@ -14,6 +15,9 @@ namespace firn {
 // and OpenVDB's samplers floor a point into an int that such coordinates overflow (undefined behaviour: an emitter
 // moved 1e30 m in a frame, tests/fuzz spray seed 42).
 constexpr double kMaxSnowIndex = 1073741824.0;
+
+// Trilinear over a level set's tree (its reads are thread-safe; an accessor-based GridSampler is quicker per thread).
+using SnowSampler = openvdb::tools::GridSampler<openvdb::FloatTree, openvdb::tools::BoxSampler>;
 
 // The level set (m) through `phi` (an OpenVDB GridSampler) at world point p; +infinity (outside the snow) past
 // kMaxSnowIndex or at a point that is not finite.

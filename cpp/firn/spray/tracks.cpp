@@ -109,7 +109,8 @@ std::optional<SnowOver> snowOver(const std::vector<const SurfaceLeaf *> &leaves,
     // Dual basis of (halfU, halfV) in the rectangle's plane: s = d . a, t = d . b; a unit step moves s by |a|.
     const glm::dvec3 a = glm::cross(r.halfV, n) / glm::dot(r.halfU, glm::cross(r.halfV, n));
     const glm::dvec3 b = glm::cross(n, r.halfU) / glm::dot(r.halfV, glm::cross(n, r.halfU));
-    const double sMax = 1.0 + margin * glm::length(a), tMax = 1.0 + margin * glm::length(b), bottom = -thickness - margin;
+    const double sMax = 1.0 + margin * glm::length(a), tMax = 1.0 + margin * glm::length(b);
+    const double bottom = -thickness - margin;
     // In index space (the transform is linear: world = o + M ijk), a world dot product d . x is d_ijk . M^T x.
     const auto world = [&](const openvdb::Vec3d &ijk) {
         const openvdb::Vec3d w = surface.indexToWorld(ijk);
@@ -167,7 +168,8 @@ openvdb::FloatGrid::Ptr sweptVolume(const std::vector<EmitterRectangle> &positio
         const std::optional<SnowOver> over = snowOver(leaves, surface, r, n, up, thickness, margin, column);
         if (!over) return;
         // A band over the snow within the swept field's reach of the box: the field there is the tall box's.
-        const double raise = std::min(std::max(0.0, over->aboveRectangle + band), verticalRaise(r, n, up, over->top + band));
+        const double raise =
+            std::min(std::max(0.0, over->aboveRectangle + band), verticalRaise(r, n, up, over->top + band));
         boxes[i] = boxCorners(r, n, thickness, raise);
     });
     std::vector<Vec3s> points;
@@ -182,8 +184,8 @@ openvdb::FloatGrid::Ptr sweptVolume(const std::vector<EmitterRectangle> &positio
     }
     if (quads.empty()) return nullptr;
     // Its voxels are within the boxes' bounds grown by the exterior band: the whole boxes, filled, also where they
-    // reach beyond the snow (an emitter far under the snow raises a box up to the snow over it; counted within the snow's
-    // bounds alone, such a box passed the budget and took every byte the machine had).
+    // reach beyond the snow (an emitter far under the snow raises a box up to the snow over it; counted within the
+    // snow's bounds alone, such a box passed the budget and took every byte the machine had).
     openvdb::BBoxd bounds;
     for (const Vec3s &p : points) bounds.expand(openvdb::Vec3d(p));
     const openvdb::BBoxd reach(bounds.min() - openvdb::Vec3d(margin), bounds.max() + openvdb::Vec3d(margin));

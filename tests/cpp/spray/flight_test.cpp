@@ -150,7 +150,7 @@ TEST(Flight, ASplitConservesMomentumAndBalls) {
 // as outside the snow, and the snow itself as before.
 TEST(SnowLevelSet, PastTheIndexRangeAPointIsOutsideTheSnow) {
     const SnowGrids snow = test::slabSnow({-0.5, -0.3, -0.3}, {0.5, 0.3, 0.0}, 0.01, 300.0f);
-    const openvdb::tools::GridSampler<openvdb::FloatTree, openvdb::tools::BoxSampler> phi(*snow.surface);
+    const SnowSampler phi(*snow.surface);
     EXPECT_NEAR(snowLevelSetAt(phi, {0.0, 0.0, -0.02}), -0.02, 1e-3);  // m, inside
     EXPECT_NEAR(snowLevelSetAt(phi, {0.0, 0.0, 0.01}), 0.01, 1e-3);    // in the band above
     const double inf = std::numeric_limits<double>::infinity();
