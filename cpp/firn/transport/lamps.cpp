@@ -6,6 +6,7 @@
 #include <glm/geometric.hpp>
 
 #include "firn/transport/lights.h"
+#include "firn/util/ceil_count.h"
 #include "firn/util/error.h"
 #include "firn/util/sampling.h"
 
@@ -78,9 +79,8 @@ LampSample sampleLamp(const Lamp &lamp, const glm::dvec3 &x, double u1, double u
 
 glm::ivec2 lampPiecesAcross(const Lamp &lamp, double distance) {
     if (!lamp.isArea()) return glm::ivec2(1);
-    const auto across = [&](double size) {  // clamped as a double: a tiny distance would overflow int
-        const double n = distance > 0.0 ? std::ceil(size / (2.0 * distance)) : double(kMaxLampPiecesAcross);
-        return int(std::clamp(n, 1.0, double(kMaxLampPiecesAcross)));
+    const auto across = [&](double size) {  // a distance of 0 (or NaN) takes the most pieces
+        return distance > 0.0 ? ceilCount(size / (2.0 * distance), kMaxLampPiecesAcross) : kMaxLampPiecesAcross;
     };
     return {across(lamp.sizeX), across(lamp.sizeY)};
 }
