@@ -94,39 +94,51 @@ openvdb::BBoxd boundsOf(const std::array<Vec3s, 8> &corners) {
 
 using SurfaceLeaf = openvdb::FloatTree::LeafNodeType;
 
+// The surface's leaves and its linear index frame (world = origin + M ijk, so a world dot product d . x is
+// d_ijk . M^T x), made once for all of a track's boxes.
+struct SurfaceIndex {
+    const openvdb::FloatGrid &surface;
+    std::vector<const SurfaceLeaf *> leaves;
+    glm::dvec3 origin;
+    glm::dmat3 Mt;  // M^T
+
+    explicit SurfaceIndex(const openvdb::FloatGrid &grid) : surface(grid) {
+        for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) leaves.push_back(leaf.getLeaf());
+        const auto world = [&](const openvdb::Vec3d &ijk) {
+            const openvdb::Vec3d w = grid.indexToWorld(ijk);
+            return glm::dvec3(w.x(), w.y(), w.z());
+        };
+        origin = world(openvdb::Vec3d(0.0));
+        glm::dmat3 M;
+        for (int k = 0; k < 3; ++k) M[k] = world(openvdb::Vec3d(k == 0, k == 1, k == 2)) - origin;
+        Mt = glm::transpose(M);
+    }
+};
+
 // The snow over a position: its highest point above the rectangle's plane (m along the upward normal) and along up.
 struct SnowOver {
     double aboveRectangle = -std::numeric_limits<double>::infinity(), top = -std::numeric_limits<double>::infinity();
 };
 
-// The surface's active voxels (`leaves`) within `margin` (m) of the prism a rectangle sweeps along its upward
+// The surface's active voxels within `margin` (m) of the prism a rectangle sweeps along its upward
 // normal n from `thickness` under it, inside `column` (world); none where it holds none. On a slope a box rises
 // above the snow over it, not above the slope's top: a ski 2 m down a 20 degree slope, raised to the top, cut
 // boxes 0.7 m tall, and the frame's track took 4x the time.
-std::optional<SnowOver> snowOver(const std::vector<const SurfaceLeaf *> &leaves, const openvdb::FloatGrid &surface,
-                                 const EmitterRectangle &r, const glm::dvec3 &n, const glm::dvec3 &up,
-                                 double thickness, double margin, const openvdb::BBoxd &column) {
+std::optional<SnowOver> snowOver(const SurfaceIndex &index, const EmitterRectangle &r, const glm::dvec3 &n,
+                                 const glm::dvec3 &up, double thickness, double margin, const openvdb::BBoxd &column) {
     // Dual basis of (halfU, halfV) in the rectangle's plane: s = d . a, t = d . b; a unit step moves s by |a|.
     const glm::dvec3 a = glm::cross(r.halfV, n) / glm::dot(r.halfU, glm::cross(r.halfV, n));
     const glm::dvec3 b = glm::cross(n, r.halfU) / glm::dot(r.halfV, glm::cross(n, r.halfU));
     const double sMax = 1.0 + margin * glm::length(a), tMax = 1.0 + margin * glm::length(b);
     const double bottom = -thickness - margin;
-    // In index space (the transform is linear: world = o + M ijk), a world dot product d . x is d_ijk . M^T x.
-    const auto world = [&](const openvdb::Vec3d &ijk) {
-        const openvdb::Vec3d w = surface.indexToWorld(ijk);
-        return glm::dvec3(w.x(), w.y(), w.z());
-    };
-    const glm::dvec3 o = world(openvdb::Vec3d(0.0));
-    glm::dmat3 M;
-    for (int k = 0; k < 3; ++k) M[k] = world(openvdb::Vec3d(k == 0, k == 1, k == 2)) - o;
-    const glm::dmat3 Mt = glm::transpose(M);
-    const glm::dvec3 aI = Mt * a, bI = Mt * b, nI = Mt * n, upI = Mt * up;
+    const openvdb::FloatGrid &surface = index.surface;
+    const glm::dvec3 aI = index.Mt * a, bI = index.Mt * b, nI = index.Mt * n, upI = index.Mt * up;
     const openvdb::Vec3d c = surface.worldToIndex(openvdb::Vec3d(r.centre.x, r.centre.y, r.centre.z));
     const glm::dvec3 cI(c.x(), c.y(), c.z());
     const double leafRadius = 0.5 * std::sqrt(3.0) * (SurfaceLeaf::DIM - 1);  // centre to corner voxel, index units
     const openvdb::CoordBBox within = surface.transform().worldToIndexNodeCentered(column);
     std::optional<SnowOver> over;
-    for (const SurfaceLeaf *leaf : leaves) {
+    for (const SurfaceLeaf *leaf : index.leaves) {
         if (!leaf->getNodeBoundingBox().hasOverlap(within)) continue;
         const glm::dvec3 mid = glm::dvec3(leaf->origin().x(), leaf->origin().y(), leaf->origin().z()) +
                                0.5 * (SurfaceLeaf::DIM - 1) - cI;
@@ -140,7 +152,7 @@ std::optional<SnowOver> snowOver(const std::vector<const SurfaceLeaf *> &leaves,
             if (std::abs(glm::dot(d, aI)) > sMax || std::abs(glm::dot(d, bI)) > tMax || above < bottom) continue;
             if (!over) over = SnowOver{};
             over->aboveRectangle = std::max(over->aboveRectangle, above);
-            over->top = std::max(over->top, glm::dot(o, up) + glm::dot(ijk, upI));
+            over->top = std::max(over->top, glm::dot(index.origin, up) + glm::dot(ijk, upI));
         }
     }
     return over;
@@ -153,8 +165,7 @@ openvdb::FloatGrid::Ptr sweptVolume(const std::vector<EmitterRectangle> &positio
     const double h = surface.voxelSize()[0], band = kBandVoxels * h, margin = exteriorVoxels * h;
     const double top = snowTop(surface, up) + band;
     const openvdb::BBoxd snowBox = surface.transform().indexToWorld(surface.evalActiveVoxelBoundingBox());
-    std::vector<const SurfaceLeaf *> leaves;
-    for (auto leaf = surface.tree().cbeginLeaf(); leaf; ++leaf) leaves.push_back(leaf.getLeaf());
+    const SurfaceIndex index(surface);
     // Each position's box, raised above the snow over it; none where no snow is within reach.
     const std::vector<EmitterRectangle> rectangles = densify(positions, thickness);
     std::vector<std::optional<std::array<Vec3s, 8>>> boxes(rectangles.size());
@@ -165,7 +176,7 @@ openvdb::FloatGrid::Ptr sweptVolume(const std::vector<EmitterRectangle> &positio
         openvdb::BBoxd column = boundsOf(boxCorners(r, n, thickness, verticalRaise(r, n, up, top)));
         if (!column.hasOverlap(snowBox)) return;  // the emitter is away from the snow
         column.expand(margin);
-        const std::optional<SnowOver> over = snowOver(leaves, surface, r, n, up, thickness, margin, column);
+        const std::optional<SnowOver> over = snowOver(index, r, n, up, thickness, margin, column);
         if (!over) return;
         // A band over the snow within the swept field's reach of the box: the field there is the tall box's.
         const double raise =
