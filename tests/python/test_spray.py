@@ -160,6 +160,9 @@ def test_bad_settings_and_files_raise_clear_errors(snow, tmp_path):
             firncore.SpraySettings(**bad).validate()
         with pytest.raises(ValueError):
             firncore.simulate_spray(snow, [ski(3)], str(tmp_path), settings=firncore.SpraySettings(**bad))
+    for budget in (0.0, 1e12, float("inf"), float("nan")):  # 1e30 took the fuzzer's 2 GB (spray seed 510591)
+        with pytest.raises(ValueError, match="voxel budget must be between 1 and 1e11"):
+            firncore.SpraySettings(max_voxels=budget).validate()
     with pytest.raises(ValueError, match="frames per second"):
         firncore.simulate_spray(snow, [ski(3)], str(tmp_path), fps=0.0)
     with pytest.raises(firncore.BudgetError):
