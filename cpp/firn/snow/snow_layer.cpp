@@ -45,8 +45,7 @@ void SnowLayerSettings::validate() const {
     require(exposureRays >= 1 && exposureRays <= 1024, "exposure rays", "between 1 and 1024", exposureRays);
     require(voxelSize >= 0.0 && voxelSize <= depth, "voxel size", "0 (automatic) or at most the depth",
             voxelSize);
-    // An infinite budget would let every budget check pass and an allocation fail (std::bad_alloc).
-    require(maxVoxels >= 1.0 && maxVoxels <= 1e11, "voxel budget", "between 1 and 1e11", maxVoxels);
+    require(maxVoxels >= 1.0 && maxVoxels <= kMaxVoxelBudget, "voxel budget", "between 1 and 1e11", maxVoxels);
     const float len = glm::length(direction);
     require(std::isfinite(len) && len > 1e-6f, "snowfall direction length", "non-zero", len);
     require(glm::dot(direction, glm::vec3(0, 0, -1)) / len > 0.0f, "snowfall direction", "pointing downwards (z < 0)",

@@ -19,6 +19,11 @@ struct SnowGrids {
     openvdb::FloatGrid::Ptr surface;  // level set: signed distance to the snow surface (m), negative inside
 };
 
+// The largest voxel budget any setting takes: past every machine's memory, a budget lets every check pass and an
+// allocation fail (std::bad_alloc; inside OpenVDB's mesh-to-volume its unwinding terminated: fuzz seeds 324445, and
+// spray 510591 with a budget of 1e30 and a track 2e7 m tall).
+constexpr double kMaxVoxelBudget = 1e11;
+
 struct RasterSettings {
     double voxelSize = 0.01;     // m
     double maxVoxels = 50e6;     // active voxels allowed before allocating

@@ -44,9 +44,7 @@ void SpraySettings::validate() const {
     check(voxelSize == 0.0 || (voxelSize >= 1e-4 && voxelSize < 100.0),
           "voxel size must be 0 (the snow's) or between 0.1 mm and 100 m");
     check(maxParticles >= 1.0, "the particle budget must be at least 1");
-    // A budget past any machine's memory lets every check pass and an allocation fail (std::bad_alloc inside OpenVDB's
-    // mesh-to-volume, whose unwinding then terminated: spray seed 510591, a budget of 1e30 and a track 2e7 m tall).
-    check(maxVoxels >= 1.0 && maxVoxels <= 1e11, "the voxel budget must be between 1 and 1e11 voxels");
+    check(maxVoxels >= 1.0 && maxVoxels <= kMaxVoxelBudget, "the voxel budget must be between 1 and 1e11 voxels");
 }
 
 void SprayScene::validate() const {

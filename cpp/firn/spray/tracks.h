@@ -27,11 +27,12 @@ struct TrackStats {
 // position, the box from `thickness` under the rectangle (along its normal facing up, away from `down`) up to
 // above the snow over it (and beside it, within the compaction layer's reach); consecutive boxes overlap
 // (positions are added between those given when the rectangle moves more than half the box's narrowest side).
-// The surface level set becomes the difference snow - swept (max(phi, -phi_swept), voxel by voxel); the density in the swept volume is removed (voxels on its surface keep
-// their uncovered part, the one-voxel ramp of the snow layer) and its mass spread evenly over the snow voxels
-// within compactionDepth below the track (where the nearest swept point is straight above), so mass is conserved
-// up to maxDensity. Returns what changed; carvedVoxels = 0 leaves the grids untouched. Throws BudgetExceeded, before
-// allocating, when the swept volume's grid could hold more than maxVoxels voxels.
+// The surface level set becomes the difference snow - swept (max(phi, -phi_swept), voxel by voxel); the density
+// in the swept volume is removed (voxels on its surface keep their uncovered part, the one-voxel ramp of the snow
+// layer) and its mass spread evenly over the snow voxels within compactionDepth below the track (where the nearest
+// swept point is straight above), so mass is conserved up to maxDensity. Returns what changed; carvedVoxels = 0
+// leaves the grids untouched. Throws BudgetExceeded, before allocating, when the swept volume's grid could hold more
+// than maxVoxels voxels.
 TrackStats carveTrack(SnowGrids &snow, const std::vector<EmitterRectangle> &positions, const glm::dvec3 &down,
                       const TrackSettings &settings, double maxVoxels);
 
