@@ -55,6 +55,19 @@ void insideSource(const Scene &scene, const SnowTopology &topo, const IncidentLi
     }
 }
 
+// Calls f(i) for every surface voxel i, in parallel, counting each as a voxel's work for progress and cancel.
+template <typename F>
+void forEachSurfaceVoxel(const SnowTopology &topo, const SubProgress &progress, const F &f) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
+        WorkCheck work(progress);
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (!topo.patches[i].isSurface()) continue;
+            work.add(WorkCheck::kVoxel);
+            f(i);
+        }
+    });
+}
+
 }  // namespace
 
 // Radiance leaving each surface voxel. The returned part is the voxel's own (over its patch's area); the
@@ -68,29 +81,24 @@ void insideSource(const Scene &scene, const SnowTopology &topo, const IncidentLi
 SurfaceValues<Source> surfaceRadiance(const VolumeOptics &optics, const SnowTopology &topo,
                                       const SurfaceValues<SurfaceLight> &solved, const SubProgress &progress) {
     SurfaceValues<Source> out(topo.surfaceSlot, topo.surfaceVoxels());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        WorkCheck work(progress);
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!topo.patches[i].isSurface()) continue;
-            work.add(WorkCheck::kVoxel);
-            const glm::dvec3 &n = topo.patches[i].normal;
-            const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(
-                topo, i, n, [&](std::size_t j) { return glm::dvec3(solved[j].leaving); });
-            const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
-            const double own = kPi * topo.patches[i].area;
-            const BroadLobe &returned = solved[i].returned;
-            for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
-                const SourceLobe lobe =
-                    topo.patches[i].sharp
-                        ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
-                        : exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
-                                   glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
-                const SourceLobe shown = withCrossing(lobe, solved[i], topo.patches[i].area, c, optics.g);
-                out.surface(i).l0[c] = float(shown.l0);
-                out.surface(i).l1[c] = glm::vec3(shown.l1);
-            }
-            out.surface(i).peak0 = solved[i].peak0, out.surface(i).peak1 = solved[i].peak1;
+    forEachSurfaceVoxel(topo, progress, [&](std::size_t i) {
+        const glm::dvec3 &n = topo.patches[i].normal;
+        const auto [leaving, area] = neighbourhoodOutflow<glm::dvec3>(
+            topo, i, n, [&](std::size_t j) { return glm::dvec3(solved[j].leaving); });
+        const glm::dvec3 exitance = leaving / area;  // W/m^2, area > 0: the voxel itself has weight 1
+        const double own = kPi * topo.patches[i].area;
+        const BroadLobe &returned = solved[i].returned;
+        for (int c = 0; c < 3; ++c) {  // the exit radiance e0 + e1 . w, stored as its fitted lobe
+            const SourceLobe lobe =
+                topo.patches[i].sharp
+                    ? SourceLobe{returned.l0[c], glm::dvec3(returned.l1[c])}  // fitted already
+                    : exitLobe(returned.l0[c] / own + exitance[c] * (3.0 / 7.0 / kPi),
+                               glm::dvec3(returned.l1[c]) / own + exitance[c] * 6.0 / 7.0 / kPi * n, n);
+            const SourceLobe shown = withCrossing(lobe, solved[i], topo.patches[i].area, c, optics.g);
+            out.surface(i).l0[c] = float(shown.l0);
+            out.surface(i).l1[c] = glm::vec3(shown.l1);
         }
+        out.surface(i).peak0 = solved[i].peak0, out.surface(i).peak1 = solved[i].peak1;
     });
     return out;
 }
@@ -99,20 +107,15 @@ SurfaceValues<float> skyShares(const SnowTopology &topo, const SurfaceValues<Sur
                                const SurfaceValues<Source> &radiance, bool apart, const SubProgress &progress) {
     if (!apart) return {};
     SurfaceValues<float> out(topo.surfaceSlot, topo.surfaceVoxels());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.size(), 1024), [&](const auto &range) {
-        WorkCheck work(progress);
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (!topo.patches[i].isSurface()) continue;
-            work.add(WorkCheck::kVoxel);
-            const glm::dvec3 &n = topo.patches[i].normal;
-            const double leaving = neighbourhoodOutflow<double>(
-                topo, i, n, [&](std::size_t j) { return double(solved[j].leaving.y); }).first;
-            const double sky = neighbourhoodOutflow<double>(
-                topo, i, n, [&](std::size_t j) { return double(solved[j].skyLeaving); }).first;
-            const double l0 = radiance[i].l0.y, crossing = solved[i].crossing.y / topo.patches[i].area;
-            const double broad = l0 > 0.0 ? std::clamp(1.0 - crossing / l0, 0.0, 1.0) : 1.0;
-            out.surface(i) = float(leaving > 0.0 ? std::clamp(sky / leaving, 0.0, 1.0) * broad : 1.0);
-        }
+    forEachSurfaceVoxel(topo, progress, [&](std::size_t i) {
+        const glm::dvec3 &n = topo.patches[i].normal;
+        const double leaving = neighbourhoodOutflow<double>(
+            topo, i, n, [&](std::size_t j) { return double(solved[j].leaving.y); }).first;
+        const double sky = neighbourhoodOutflow<double>(
+            topo, i, n, [&](std::size_t j) { return double(solved[j].skyLeaving); }).first;
+        const double l0 = radiance[i].l0.y, crossing = solved[i].crossing.y / topo.patches[i].area;
+        const double broad = l0 > 0.0 ? std::clamp(1.0 - crossing / l0, 0.0, 1.0) : 1.0;
+        out.surface(i) = float(leaving > 0.0 ? std::clamp(sky / leaving, 0.0, 1.0) * broad : 1.0);
     });
     return out;
 }
