@@ -39,6 +39,13 @@ def _lit_layer():
     return snow, sun
 
 
+def shutil_usage(free):
+    """shutil.disk_usage's answer for a disk with `free` bytes left."""
+    import collections
+
+    return collections.namedtuple("usage", "total used free")(free, 0, free)
+
+
 def _lit_files(lit):
     folder = os.path.dirname(bpy.path.abspath(lit.data.filepath))
     return [os.path.join(folder, f"lit_{frame:04d}.vdb") for frame in range(FRAMES[0], FRAMES[1] + 1)]
@@ -128,10 +135,19 @@ def test_clear_light_sequence_shows_the_snow_layer_again(clean_scene):
     assert os.path.exists(bpy.path.abspath(snow.data.filepath))
 
 
-def test_bad_input_is_reported(clean_scene):
+def test_bad_input_is_reported(clean_scene, monkeypatch):
     snow, _sun = _lit_layer()
     with pytest.raises(RuntimeError, match="must not come before"):
         bpy.ops.firn.bake_light_sequence(frame_start=5, frame_end=3)
+    # A disk without room for the frames' files: nothing is baked (no Lit Volume, no file).
+    from firn.bake import sequence
+
+    snow_bytes = os.path.getsize(bpy.path.abspath(snow.data.filepath))
+    monkeypatch.setattr(sequence.shutil, "disk_usage", lambda path: shutil_usage(free=snow_bytes))
+    with pytest.raises(RuntimeError, match="3 frames of light need about"):
+        bpy.ops.firn.bake_light_sequence(frame_start=FRAMES[0], frame_end=FRAMES[1])
+    assert not any(obj.firn.spray.role == "LIGHT" for obj in bpy.data.objects)
+    monkeypatch.undo()
     lit = _bake_frames()
     select_only(lit)
     with pytest.raises(RuntimeError, match="Bake Light Sequence bakes its light again"):

@@ -188,13 +188,15 @@ def _bake_layer_frame(job, quality, seed, progress):
                                             progress=progress, **core_light(job["inputs"])))
 
 
-def bake_frames(jobs, quality, seed, progress, layer=False):
+def bake_frames(jobs, quality, seed, progress, layer=False, on_frame=None):
     """Worker thread: bakes each job's lit files (a spray's snow and lumps, or with `layer` a snow layer's own
-    file), then writes its marker. A cancel or an error stops between frames: the frames done stay done (their
-    markers say so). Returns each frame's processor seconds."""
+    file), then writes its marker; on_frame(index) before each. A cancel or an error stops between frames: the
+    frames done stay done (their markers say so). Returns each frame's processor seconds."""
     bake_frame = _bake_layer_frame if layer else _bake_frame
     seconds = []
-    for job in jobs:
+    for index, job in enumerate(jobs):
+        if on_frame:
+            on_frame(index)
         if progress.cancelled:
             raise firncore.Cancelled("cancelled")
         seconds.append(cache.core_write(bake_frame, job, quality, seed, progress))
