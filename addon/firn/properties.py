@@ -149,6 +149,8 @@ SPRAY_ROLE_ITEMS = (
     ("NONE", "None", "Not made by Add Snow Spray"),
     ("SPRAY", "Spray", "The thrown snow: spray_####.vdb"),
     ("TRACKS", "Tracks", "The snow with the emitters' tracks: snow_####.vdb, shown instead of the snow it came from"),
+    ("LIGHT", "Lit", "A snow layer's light baked frame by frame (Bake Light Sequence): lit_####.vdb, shown instead "
+     "of the snow it came from"),
 )
 
 
@@ -232,8 +234,14 @@ def active_snow(context):
 
 
 def is_spray(obj):
-    """A Volume sequence made by Add Snow Spray: its thrown snow or its tracked snow."""
+    """A Volume sequence made from a snow layer: Add Snow Spray's thrown or tracked snow, or the layer lit frame by
+    frame (Bake Light Sequence)."""
     return obj is not None and obj.type == "VOLUME" and obj.firn.spray.role != "NONE"
+
+
+def is_lit_sequence(obj):
+    """A snow layer's light baked frame by frame (Bake Light Sequence, bake/sequence.py)."""
+    return is_spray(obj) and obj.firn.spray.role == "LIGHT"
 
 
 def active_snow_layer(context):

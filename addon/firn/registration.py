@@ -3,7 +3,7 @@
 import bpy
 
 from . import properties
-from .bake import operators as bake_operators, ui as bake_ui
+from .bake import operators as bake_operators, sequence as bake_sequence, ui as bake_ui
 from .common import cache, jobs, preferences
 from .grains import operators as grain_operators
 from .material import operators as material_operators, ui as material_ui
@@ -13,7 +13,7 @@ from .spray import operators as spray_operators, ui as spray_ui
 # In dependency order: property groups before the types that point to them; the sidebar (snow_layer_ui) before
 # the sub-panels of the other features.
 _modules = (preferences, properties, cache, jobs, snow_layer_operators, snow_brush, snow_layer_ui, material_operators,
-            material_ui, bake_operators, bake_ui, grain_operators, spray_operators, spray_ui)
+            material_ui, bake_operators, bake_ui, grain_operators, spray_operators, spray_ui, bake_sequence)
 
 
 def register():

@@ -19,7 +19,7 @@ from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin, running_jobs
 from ..material import nodes as materials, optics
-from ..properties import BAKE_QUALITY_ITEMS
+from ..properties import BAKE_QUALITY_ITEMS, is_lit_sequence
 from ..snow_layer import proxy
 from . import inputs as bake_inputs, state as bake_state
 
@@ -62,7 +62,14 @@ def core_bake(path, output, volume_optics, inputs, quality, seed, progress):
                   **core_light(inputs))
 
 
-def _check_volume(obj):
+def sequence_advice(obj):
+    """What bakes or clears the light of a Volume sequence instead of Bake Scattering and Clear Bake."""
+    if is_lit_sequence(obj):
+        return "Bake Light Sequence bakes its light again, Clear Light Sequence removes it (Firn Bake panel)"
+    return "bake its light frame by frame with Bake Sequence (Snow Spray panel); with Bake Light off it clears it"
+
+
+def check_volume(obj):
     """The absolute path of a Volume's file that Firn can bake, or UserError saying why not."""
     volume = obj.data
     if obj.library or volume.library:
@@ -70,8 +77,7 @@ def _check_volume(obj):
     if volume.packed_file is not None:
         raise UserError(f"'{obj.name}' has its volume packed into the .blend: unpack it to bake")
     if volume.is_sequence:
-        raise UserError(f"'{obj.name}' is a volume sequence: bake its light frame by frame with Bake Sequence "
-                        "(Snow Spray panel)")
+        raise UserError(f"'{obj.name}' is a volume sequence: {sequence_advice(obj)}")
     problem = cache.file_problem(volume)
     if problem is not None:
         raise UserError(f"'{obj.name}': {problem}. {REBUILD_ADVICE}")
@@ -273,7 +279,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
             raise UserError("This build of Firn's core cannot bake (firncore.bake is missing): update Firn")
         jobs, warnings = [], []
         for obj in bake_targets(context):
-            path = _check_volume(obj)
+            path = check_volume(obj)
             volume_optics = volume_optics_of(obj)
             signature = bake_inputs.signature(context, obj)
             signature["optics"] = bake_state.optics_digest(obj)
@@ -363,8 +369,7 @@ class FIRN_OT_clear_bake(bpy.types.Operator):
             if not obj.firn.bake_fingerprint:
                 continue
             if obj.data.is_sequence:
-                self.report({"ERROR"}, f"'{obj.name}' is lit frame by frame: Bake Sequence with Bake Light off "
-                                       "clears its light")
+                self.report({"ERROR"}, f"'{obj.name}' is lit frame by frame: {sequence_advice(obj)}")
                 continue
             try:
                 _remove_baked_grids(obj)

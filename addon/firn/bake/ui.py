@@ -4,6 +4,7 @@ import textwrap
 
 from ..common.jobs import running_jobs
 from ..common.panels import draw_file_problem, panel_pair
+from ..properties import is_lit_sequence, is_spray
 from . import state as bake_state
 from .operators import BAKE_LABEL
 
@@ -32,6 +33,29 @@ def _draw_state(layout, obj):
         col.label(text=line)
 
 
+def _draw_buttons(col, obj):
+    """Bake Scattering and Clear Bake; Bake Light Sequence (the scene's frames) on a snow layer, and on the Volume
+    playing its lit frames (their range) with Clear Light Sequence."""
+    settings = obj.firn
+    row = col.row(align=True)
+    row.scale_y = 1.4
+    if is_lit_sequence(obj):
+        record = settings.spray
+        col.label(text=f"Lit frame by frame: {record.source.name if record.source else '(deleted snow)'}, "
+                       f"frames {record.frame_start}-{record.frame_end}", icon="RENDER_ANIMATION")
+        bake = row.operator("firn.bake_light_sequence", icon="RENDER_ANIMATION")
+        bake.frame_start, bake.frame_end = record.frame_start, record.frame_end
+        row.operator("firn.clear_light_sequence", text="", icon="TRASH")
+    else:
+        bake = row.operator("firn.bake_scattering", icon="RENDER_STILL")
+        row.operator("firn.clear_bake", text="", icon="TRASH")
+    bake.quality, bake.seed = settings.bake_quality, settings.bake_seed
+    if not is_spray(obj) and settings.is_snow:
+        frames = col.operator("firn.bake_light_sequence", text="Bake Light Sequence (scene frames)",
+                              icon="RENDER_ANIMATION")
+        frames.quality, frames.seed = settings.bake_quality, settings.bake_seed
+
+
 def draw_bake(layout, obj):
     """The whole Bake UI for one volume object."""
     settings = obj.firn
@@ -40,15 +64,12 @@ def draw_bake(layout, obj):
     col.prop(settings, "bake_seed")
     col.prop(settings, "scatter_thin")
     jobs = [job for job in running_jobs() if job.label == BAKE_LABEL]
-    row = col.row(align=True)
     if jobs:
+        row = col.row(align=True)
         row.label(text=jobs[0].status or "Baking", icon="SORTTIME")
         row.operator("firn.cancel_jobs", icon="CANCEL")
     else:
-        row.scale_y = 1.4
-        bake = row.operator("firn.bake_scattering", icon="RENDER_STILL")
-        bake.quality, bake.seed = settings.bake_quality, settings.bake_seed
-        row.operator("firn.clear_bake", text="", icon="TRASH")
+        _draw_buttons(col, obj)
     _draw_state(col, obj)
     if settings.is_snow:
         draw_file_problem(col, obj.data)

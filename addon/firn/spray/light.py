@@ -53,7 +53,7 @@ def sequence_digest(directory, first, last):
 def is_lit(job):
     """Whether the job's lit files are there and were baked from exactly its parts."""
     return (all(os.path.exists(path) for path in job["outputs"] if path)
-            and files.read_marker(os.path.dirname(job["outputs"][1]), job["frame"]) == job["parts"])
+            and files.read_marker(job["directory"], job["frame"]) == job["parts"])
 
 
 def _write_marker(directory, frame, parts):
@@ -97,34 +97,62 @@ def _joint_optics(spray, snow):
     return volume_optics_of(snow)
 
 
-def gather(context, spray, tracks, frames, quality, seed):
-    """Main thread: one job per frame of `frames` (scene frame numbers) with the BakeInputs of that frame and the
-    parts its marker will record; the worker skips the frames already lit (is_lit, once the simulation has run).
-    The scene is returned to its frame. Raises UserError (bad lamp, scale, optics that differ)."""
+def gather_frames(context, medium, frames, job_of):
+    """Main thread: one job per frame of `frames` (scene frame numbers): job_of(frame, signature) (its files, the
+    parts its marker will record) with the BakeInputs of `medium` at that frame; the worker skips the frames already
+    lit (is_lit). The scene is returned to its frame. Raises UserError (bad lamp, scale)."""
     scene = context.scene
-    snow = medium_object(spray, tracks)
-    directory = os.path.dirname(cache.volume_path(spray.data))
-    snow_layer_file = cache.volume_path(spray.firn.spray.source.data)
-    optics = _joint_optics(spray, snow)
-    optics_digest = bake_state.optics_digest(snow)
     shared = _SharedOccluders()
     jobs = []
     current = scene.frame_current
     try:
         for frame in frames:
             scene.frame_set(frame)
-            paths = files.medium_paths(directory, frame, snow_layer_file, tracked=tracks is not None)
-            signature = bake_inputs.signature(context, snow)
-            parts = frame_parts(signature, optics_digest, quality, seed, *paths)
-            inputs = bake_inputs.gather(context, snow, occluders=lambda objects, depsgraph, space:
+            signature = bake_inputs.signature(context, medium)
+            inputs = bake_inputs.gather(context, medium, occluders=lambda objects, depsgraph, space:
                                         shared.gather(objects, signature["occluders"], depsgraph, space))
-            outputs = (files.frame_path(directory, frame, "lit") if tracks is not None else None,
-                       files.frame_path(directory, frame, "lit_spray"))
-            jobs.append({"frame": frame, "paths": paths, "outputs": outputs, "parts": parts, "optics": optics,
-                         "inputs": inputs, "name": f"{spray.name} frame {frame}"})
+            jobs.append(dict(job_of(frame, signature), frame=frame, inputs=inputs))
     finally:
         scene.frame_set(current)
     return jobs
+
+
+def gather(context, spray, tracks, frames, quality, seed):
+    """Main thread: a spray's frame jobs (gather_frames): its tracked snow and lumps, baked together (_bake_frame).
+    Raises UserError (bad lamp, scale, optics that differ)."""
+    snow = medium_object(spray, tracks)
+    directory = os.path.dirname(cache.volume_path(spray.data))
+    snow_layer_file = cache.volume_path(spray.firn.spray.source.data)
+    optics = _joint_optics(spray, snow)
+    optics_digest = bake_state.optics_digest(snow)
+
+    def job_of(frame, signature):
+        paths = files.medium_paths(directory, frame, snow_layer_file, tracked=tracks is not None)
+        outputs = (files.frame_path(directory, frame, "lit") if tracks is not None else None,
+                   files.frame_path(directory, frame, "lit_spray"))
+        return {"paths": paths, "outputs": outputs, "directory": directory, "optics": optics,
+                "parts": frame_parts(signature, optics_digest, quality, seed, *paths),
+                "name": f"{spray.name} frame {frame}"}
+
+    return gather_frames(context, snow, frames, job_of)
+
+
+def gather_layer(context, snow, optics_of, frames, directory, quality, seed):
+    """Main thread: a snow layer's frame jobs (gather_frames, bake/sequence.py): its own file baked with the optics
+    of `optics_of` at each frame into lit_####.vdb of `directory` (_bake_layer_frame). Its marker names no lumps
+    file (that path holds none). Raises UserError (bad lamp, scale, optics)."""
+    snow_file = cache.volume_path(snow.data)
+    optics = volume_optics_of(optics_of)
+    optics_digest = bake_state.optics_digest(optics_of)
+
+    def job_of(frame, signature):
+        paths = files.medium_paths(directory, frame, snow_file, tracked=False)
+        return {"paths": paths, "outputs": (files.frame_path(directory, frame, "lit"), None),
+                "directory": directory, "optics": optics,
+                "parts": frame_parts(signature, optics_digest, quality, seed, *paths),
+                "name": f"{snow.name} frame {frame}"}
+
+    return gather_frames(context, snow, frames, job_of)
 
 
 def _bake_frame(job, quality, seed, progress):
@@ -152,18 +180,27 @@ def _processor_seconds(stats):
     return sum(stats["cpu_seconds"].values())
 
 
-def bake_frames(jobs, quality, seed, progress, on_frame=None):
-    """Worker thread: bakes each job's snow and lumps into their lit files, then writes its marker. A cancel or
-    an error stops between frames: the frames done stay done (their markers say so). Returns each frame's
-    processor seconds."""
+def _bake_layer_frame(job, quality, seed, progress):
+    """A snow layer's frame (gather_layer): its file baked into the frame's lit file. Returns the processor
+    seconds."""
+    (snow, _lumps), (lit, _none) = job["paths"], job["outputs"]
+    return _processor_seconds(firncore.bake(snow, job["optics"], output_path=lit, quality=quality, seed=seed,
+                                            progress=progress, **core_light(job["inputs"])))
+
+
+def bake_frames(jobs, quality, seed, progress, layer=False, on_frame=None):
+    """Worker thread: bakes each job's lit files (a spray's snow and lumps, or with `layer` a snow layer's own
+    file), then writes its marker; on_frame(index) before each. A cancel or an error stops between frames: the
+    frames done stay done (their markers say so). Returns each frame's processor seconds."""
+    bake_frame = _bake_layer_frame if layer else _bake_frame
     seconds = []
     for index, job in enumerate(jobs):
         if on_frame:
             on_frame(index)
         if progress.cancelled:
             raise firncore.Cancelled("cancelled")
-        seconds.append(cache.core_write(_bake_frame, job, quality, seed, progress))
-        _write_marker(os.path.dirname(job["outputs"][1]), job["frame"], job["parts"])
+        seconds.append(cache.core_write(bake_frame, job, quality, seed, progress))
+        _write_marker(job["directory"], job["frame"], job["parts"])
     return seconds
 
 

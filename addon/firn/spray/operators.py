@@ -19,7 +19,8 @@ from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
 from ..common.modes import object_mode_poll
 from ..material import nodes as materials
-from ..properties import BAKE_QUALITY_ITEMS, CORE_SPRAY_SETTINGS, OPTICS_SETTINGS, SPRAY_PROPERTIES, active_snow_layer, is_spray
+from ..properties import (BAKE_QUALITY_ITEMS, CORE_SPRAY_SETTINGS, OPTICS_SETTINGS, SPRAY_PROPERTIES, active_snow_layer,
+                          is_lit_sequence, is_spray)
 from ..snow_layer import proxy
 from ..snow_layer.operators import free_object_name, new_snow_object
 from . import emitters as emitter_rectangles, files, light, snow_space
@@ -162,23 +163,31 @@ def sequence_objects(folder):
             and os.path.dirname(os.path.normpath(cache.volume_path(obj.data))) == os.path.normpath(folder)]
 
 
-def _new_sequence_object(context, name, role, snow, props, emitters, frames):
-    """A Volume of Firn snow for a spray sequence, with the optics of the snow it came from and the settings it
-    was made with (Bake Sequence makes it again from them). A child of the snow layer, drawn in its space: its files
-    are in the snow's file space (snow_space.py), it moves with the layer and stays put if the layer is deleted."""
+def new_sequence_object(context, name, role, snow, frames):
+    """A Volume of Firn snow for a sequence made from the snow layer `snow` (`role` SPRAY, TRACKS or LIGHT), with
+    its optics. A child of the snow layer, drawn in its space: its files are in the snow's file space
+    (snow_space.py), it moves with the layer and stays put if the layer is deleted."""
     obj = new_snow_object(context, name)
     placement.follow(obj, snow)
     for setting in OPTICS_SETTINGS + ("render_mode",):
-        setattr(obj.firn, setting, getattr(snow.firn, setting))
+        setattr(obj.firn, setting, getattr(snow.firn, setting))  # its own from now on: its Snow Material panel
     obj.firn.voxel_size = snow.firn.voxel_size
     obj.firn.display = "VOLUME"  # no viewport proxy: the volume itself shows
     record = obj.firn.spray
+    record.role, record.source = role, snow
+    record.frame_start, record.frame_end = frames
+    return obj
+
+
+def _new_spray_object(context, name, role, snow, props, emitters, frames):
+    """A spray's Volume (new_sequence_object) with the settings it was made with: Bake Sequence makes it again
+    from them."""
+    obj = new_sequence_object(context, name, role, snow, frames)
+    record = obj.firn.spray
     for setting in SPRAY_PROPERTIES:
         setattr(record, setting, getattr(props, setting))
-    record.role, record.source = role, snow
     for emitter in emitters:
         record.emitters.add().object = emitter
-    record.frame_start, record.frame_end = frames
     return obj
 
 
@@ -223,14 +232,14 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
         snow = bpy.data.objects[inputs["snow"]]
         emitters = [bpy.data.objects[name] for name in inputs["emitter_names"]]
         frames = inputs["first"], inputs["last"]
-        spray = _new_sequence_object(context, inputs["name"], "SPRAY", snow, self, emitters, frames)
+        spray = _new_spray_object(context, inputs["name"], "SPRAY", snow, self, emitters, frames)
         spray.firn.mean_density = self.lump_density
         spray.firn.spray.summary = summary(inputs, run)
         play_sequence(spray, inputs["stored"], "spray", *frames)
         materials.ensure_snow_material(spray)
         if run["snow_frames"]:
-            tracks = _new_sequence_object(context, free_object_name(f"{snow.name} Tracks"), "TRACKS", snow, self,
-                                          emitters, frames)
+            tracks = _new_spray_object(context, free_object_name(f"{snow.name} Tracks"), "TRACKS", snow, self,
+                                       emitters, frames)
             tracks.firn.mean_density = snow.firn.mean_density
             play_sequence(tracks, inputs["stored"], "snow", *frames)
             materials.ensure_snow_material(tracks)
@@ -402,6 +411,38 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
                 self.report({"WARNING"}, f"Changed for the thin snow of '{obj.name}': " + "; ".join(changed))
 
 
+def remove_sequence(folder):
+    """Deletes a sequence's folder and the Volumes that play it; the snow layer shows again where its tracked or lit
+    snow played in its place. Returns their names; UserError, with nothing removed, when the files cannot be."""
+    objects = sequence_objects(folder)
+    try:
+        files.remove_sequence(folder)
+    except OSError as error:
+        raise UserError(f"Cannot remove the files in {folder} ({error}); nothing was removed") from error
+    names = []
+    for obj in objects:
+        snow = obj.firn.spray.source
+        if obj.firn.spray.role in ("TRACKS", "LIGHT") and snow is not None:
+            show_snow(snow, True)
+        names.append(obj.name)
+        volume = obj.data
+        bpy.data.objects.remove(obj)
+        if volume.users == 0:
+            bpy.data.volumes.remove(volume)
+    return names
+
+
+def clear_sequence(operator, obj):
+    """Clear Snow Spray's and Clear Light Sequence's work: obj's sequence removed (remove_sequence) and reported."""
+    try:
+        names = remove_sequence(os.path.dirname(cache.volume_path(obj.data)))
+    except UserError as error:
+        operator.report({"ERROR"}, str(error))
+        return {"CANCELLED"}
+    operator.report({"INFO"}, f"Removed {', '.join(names)} and their files")
+    return {"FINISHED"}
+
+
 class FIRN_OT_clear_snow_spray(bpy.types.Operator):
     """Remove the active Snow Spray, its tracked snow and their files; the snow layer shows again"""
 
@@ -411,31 +452,13 @@ class FIRN_OT_clear_snow_spray(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if not is_spray(context.object):
+        if not is_spray(context.object) or is_lit_sequence(context.object):
             cls.poll_message_set("Select a Snow Spray (or its Tracks)")
             return False
         return True
 
     def execute(self, context):
-        folder = os.path.dirname(cache.volume_path(context.object.data))
-        objects = sequence_objects(folder)
-        try:
-            files.remove_sequence(folder)
-        except OSError as error:
-            self.report({"ERROR"}, f"Cannot remove the spray's files in {folder} ({error}); nothing was removed")
-            return {"CANCELLED"}
-        names = []
-        for obj in objects:
-            snow = obj.firn.spray.source
-            if obj.firn.spray.role == "TRACKS" and snow is not None:
-                show_snow(snow, True)
-            names.append(obj.name)
-            volume = obj.data
-            bpy.data.objects.remove(obj)
-            if volume.users == 0:
-                bpy.data.volumes.remove(volume)
-        self.report({"INFO"}, f"Removed {', '.join(names)} and their files")
-        return {"FINISHED"}
+        return clear_sequence(self, context.object)
 
 
 classes = (FIRN_OT_add_snow_spray, FIRN_OT_bake_sequence, FIRN_OT_clear_snow_spray)

@@ -3,7 +3,7 @@ what it was made from and what can be done with it. Panels only draw."""
 
 from ..common.jobs import running_jobs
 from ..common.panels import panel_pair
-from ..properties import SPRAY_PROPERTIES, active_snow_layer, is_spray
+from ..properties import SPRAY_PROPERTIES, active_snow_layer, is_lit_sequence, is_spray
 
 ADD_LABEL, BAKE_LABEL = "Add Snow Spray", "Bake Sequence"  # the jobs' labels, the panel shows their progress
 _HINTS = ("lump_radius", "track_thickness", "compaction_depth", "voxel_size")  # metres, shown in millimetres too
@@ -59,7 +59,8 @@ def draw_spray(layout, obj):
 
 
 def _poll(context):
-    return is_spray(context.object) or active_snow_layer(context) is not None
+    """A spray or a snow layer; a layer lit frame by frame has the Firn Bake panel's."""
+    return (is_spray(context.object) and not is_lit_sequence(context.object)) or active_snow_layer(context) is not None
 
 
 classes = panel_pair("snow_spray", "Snow Spray", _poll, draw_spray)

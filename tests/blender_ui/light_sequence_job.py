@@ -1,0 +1,61 @@
+"""Blender with a window (under xvfb-run): Bake Light Sequence started as a user would (INVOKE_DEFAULT) bakes in a
+worker thread with progress naming the frame, and Esc cancels it leaving the scene as it was (no Lit Volume, the
+snow layer shown). The frames already lit stay in the cache, with their markers: the same bake resumes from them.
+
+xvfb-run blender --factory-startup --enable-event-simulate --python light_sequence_job.py   (exit code 0 = pass)
+"""
+
+import os
+import sys
+
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import ui_test  # noqa: E402
+from ui_test import fail, plane_alone, run_cancel_test, start_modal  # noqa: E402
+
+FRAMES = 200  # a fraction of a second each: long enough to be cancelled half way on any machine
+
+
+def build_scene(state):
+    plane_alone(1.0)
+    if bpy.ops.firn.add_snow_layer(depth=0.05, spacing=0.04, voxel_size=0.02) != {"FINISHED"}:
+        fail("Add Snow Layer failed")
+    snow = bpy.context.object
+    bpy.ops.object.light_add(type="SUN")
+    sun = bpy.context.object
+    for frame, tilt in ((1, 0.1), (FRAMES, 1.2)):
+        sun.rotation_euler = (tilt, 0.0, 0.0)
+        sun.keyframe_insert("rotation_euler", frame=frame)
+    snow.select_set(True)
+    bpy.context.view_layer.objects.active = snow
+    state["objects"] = {obj.name for obj in bpy.data.objects}
+
+
+def start_job(state):
+    build_scene(state)
+    start_modal(state, lambda: bpy.ops.firn.bake_light_sequence("INVOKE_DEFAULT", frame_start=1, frame_end=FRAMES))
+
+
+def check_cancelled(state):
+    objects = {obj.name for obj in bpy.data.objects}
+    if objects != state["objects"]:
+        fail(f"Esc changed the scene's objects: {sorted(objects ^ state['objects'])}")
+    snow = bpy.data.objects["Snow"]
+    if snow.hide_render or snow.hide_viewport:
+        fail("a cancelled Bake Light Sequence hid the snow layer")
+
+
+def esc_once_frame_shown(state, hint):
+    """ui_test's running phase, once the status bar says which frame is baking (the status follows progress)."""
+    from firn.common.jobs import running_jobs
+
+    jobs = running_jobs()
+    if jobs and jobs[0].progress.fraction > 0.0 and not jobs[0].status.startswith("frame "):
+        return
+    esc_once_progressing(state, hint)
+
+
+esc_once_progressing = ui_test.esc_once_progressing
+ui_test.esc_once_progressing = esc_once_frame_shown
+run_cancel_test("Bake Light Sequence", start_job, "raise FRAMES", check_cancelled)
