@@ -12,7 +12,7 @@ import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import ui_test  # noqa: E402
-from ui_test import fail, plane_alone, run_cancel_test, start_modal  # noqa: E402
+from ui_test import check_scene_kept, fail, plane_alone, run_cancel_test, start_modal  # noqa: E402
 
 FRAMES = 200  # a fraction of a second each: long enough to be cancelled half way on any machine
 
@@ -38,12 +38,7 @@ def start_job(state):
 
 
 def check_cancelled(state):
-    objects = {obj.name for obj in bpy.data.objects}
-    if objects != state["objects"]:
-        fail(f"Esc changed the scene's objects: {sorted(objects ^ state['objects'])}")
-    snow = bpy.data.objects["Snow"]
-    if snow.hide_render or snow.hide_viewport:
-        fail("a cancelled Bake Light Sequence hid the snow layer")
+    check_scene_kept(state, "Bake Light Sequence")
 
 
 def esc_once_frame_shown(state, hint):

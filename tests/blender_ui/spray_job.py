@@ -11,7 +11,7 @@ import sys
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import fail, plane_alone, run_cancel_test, start_modal  # noqa: E402
+from ui_test import check_scene_kept, fail, plane_alone, run_cancel_test, start_modal  # noqa: E402
 
 FRAMES = 400  # seconds of simulation on any machine: long enough to be cancelled half way
 
@@ -39,12 +39,7 @@ def start_job(state):
 
 
 def check_cancelled(state):
-    objects = {obj.name for obj in bpy.data.objects}
-    if objects != state["objects"]:
-        fail(f"Esc changed the scene's objects: {sorted(objects ^ state['objects'])}")
-    snow = bpy.data.objects["Snow"]
-    if snow.hide_render or snow.hide_viewport:
-        fail("a cancelled Add Snow Spray hid the snow layer")
+    check_scene_kept(state, "Add Snow Spray")
 
 
 run_cancel_test("Add Snow Spray", start_job, "raise FRAMES", check_cancelled)

@@ -146,6 +146,17 @@ def start_modal(state, invoke):
     state["started"] = time.perf_counter()
 
 
+def check_scene_kept(state, name):
+    """A cancelled job that adds a Volume in the snow layer's place left the scene as it was: the objects of
+    state["objects"] (taken before it started) and the snow layer "Snow" shown."""
+    objects = {obj.name for obj in bpy.data.objects}
+    if objects != state["objects"]:
+        fail(f"Esc changed the scene's objects: {sorted(objects ^ state['objects'])}")
+    snow = bpy.data.objects["Snow"]
+    if snow.hide_render or snow.hide_viewport:
+        fail(f"a cancelled {name} hid the snow layer")
+
+
 def run_cancel_test(name, start_job, hint, check_cancelled):
     """A job cancelled with Esc as a user does: `start_job(state)` starts it (start_modal); once it shows progress
     Esc is pressed; once it has ended `check_cancelled(state)` checks what it left (fail() on a fault) and the
