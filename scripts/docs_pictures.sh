@@ -27,6 +27,10 @@ done
 # The skier's animation (36 frames at 160 px); its 24th frame is the docs' picture.
 run_blender -b --factory-startup --python "$FIRN_ROOT/blend_samples/skier.py" -- --output "$(dirname "$empty")/skier/" --no-save
 cp "$(dirname "$empty")/skier/0024.png" "$images/skier.png"
+# The headlights' drive (8 frames at 320 px, Bake Light Sequence); its first, middle and last frames side by side.
+run_blender -b --factory-startup --python "$FIRN_ROOT/blend_samples/headlights.py" -- \
+  --output "$(dirname "$empty")/headlights.png" --no-save
+cp "$(dirname "$empty")/headlights.png" "$images/headlights.png"
 # Grain snow from the core alone (no Blender): Chrisman's accumulation and the brute-force grain renderer.
 PYTHONPATH="$FIRN_BUILD/python" /usr/bin/python3 "$FIRN_ROOT/scripts/grains_picture.py" "$images/grains_red_ball.png" \
   --width 320 --samples 32 --grains 150000
