@@ -159,3 +159,22 @@ def test_bad_input_is_reported(clean_scene, monkeypatch):
     select_only(snow)
     bpy.context.view_layer.objects.active = None
     assert not bpy.ops.firn.bake_light_sequence.poll()
+
+
+def test_the_bake_panel_offers_a_light_sequence_on_a_layer_and_its_lit_volume(clean_scene):
+    from firn.bake import ui as bake_ui
+    from test_snow_material import RecordingLayout
+
+    def draw(obj):
+        log = {"props": [], "labels": [], "operators": [], "menus": []}
+        bake_ui.draw_bake(RecordingLayout(log), obj)
+        return log
+
+    snow, _sun = _lit_layer()
+    assert {"firn.bake_scattering", "firn.clear_bake", "firn.bake_light_sequence"} <= set(draw(snow)["operators"])
+    lit = _bake_frames()
+    log = draw(lit)
+    assert {"firn.bake_light_sequence", "firn.clear_light_sequence"} <= set(log["operators"])
+    assert "firn.bake_scattering" not in log["operators"]
+    assert f"Lit frame by frame: {snow.name}, frames {FRAMES[0]}-{FRAMES[1]}" in log["labels"]
+    assert not bpy.types.FIRN_PT_snow_spray.poll(type("Context", (), {"object": lit}))  # not a spray
