@@ -89,6 +89,32 @@ def test_each_frame_is_lit_as_bake_scattering_lights_it_at_that_frame(clean_scen
     assert bake_state.changes(lit) == (bake_state.OUTDATED, ["snow"])
 
 
+def test_an_animated_world_lights_each_frame_as_it_stands_then(clean_scene):
+    """A Nishita sky whose sun sets over the frames (no sun lamp): the core computes the sky at each frame, as Bake
+    Scattering does at that frame."""
+    snow, sun = _lit_layer()
+    bpy.data.objects.remove(sun)
+    world = bpy.data.worlds.new("Sunset")
+    world.use_nodes = True
+    sky = world.node_tree.nodes.new("ShaderNodeTexSky")
+    sky.sky_type, sky.sun_disc = "NISHITA", False
+    world.node_tree.links.new(sky.outputs["Color"], world.node_tree.nodes["Background"].inputs["Color"])
+    for frame, elevation in zip(FRAMES, ELEVATIONS):
+        sky.sun_elevation = elevation
+        sky.keyframe_insert("sun_elevation", frame=frame)
+    bpy.context.scene.world = world
+    lit = _bake_frames()
+    files = _lit_files(lit)
+    first, last = _drawn_above(files[0], lit), _drawn_above(files[-1], lit)
+    assert first > 1.2 * last > 0.0  # a high sun's sky is brighter than a low one's
+    for frame, path in ((FRAMES[0], files[0]), (FRAMES[1], files[-1])):
+        bpy.context.scene.frame_set(frame)
+        select_only(snow)
+        assert bpy.ops.firn.bake_scattering(quality="DRAFT", seed=0) == {"FINISHED"}
+        assert _drawn_above(bpy.path.abspath(snow.data.filepath), snow) == pytest.approx(_drawn_above(path, lit),
+                                                                                          rel=1e-6)
+
+
 def test_lit_frames_are_kept_resumed_and_baked_one_per_process_alike(clean_scene):
     _snow, sun = _lit_layer()
     lit = _bake_frames()
@@ -159,6 +185,24 @@ def test_bad_input_is_reported(clean_scene, monkeypatch):
     select_only(snow)
     bpy.context.view_layer.objects.active = None
     assert not bpy.ops.firn.bake_light_sequence.poll()
+
+
+def test_a_lit_layer_and_a_spray_s_tracks_never_play_together(clean_scene):
+    """Both would render in the layer's place: the second is refused, whichever comes first."""
+    snow, _sun = _lit_layer()
+    tracks = bpy.data.objects.new("Tracks", bpy.data.volumes.new("Tracks"))
+    bpy.context.collection.objects.link(tracks)
+    tracks.firn.spray.role, tracks.firn.spray.source = "TRACKS", snow
+    select_only(snow)
+    with pytest.raises(RuntimeError, match="tracks playing in its place"):
+        bpy.ops.firn.bake_light_sequence(frame_start=FRAMES[0], frame_end=FRAMES[1])
+    bpy.data.objects.remove(tracks)
+    _bake_frames()
+    bpy.ops.mesh.primitive_plane_add(size=0.1)
+    ski = bpy.context.object
+    select_only(snow, ski)
+    with pytest.raises(RuntimeError, match="is lit frame by frame"):
+        bpy.ops.firn.add_snow_spray(frame_start=FRAMES[0], frame_end=FRAMES[1])
 
 
 def test_the_bake_panel_offers_a_light_sequence_on_a_layer_and_its_lit_volume(clean_scene):

@@ -1,6 +1,7 @@
 """Blender with a window (under xvfb-run): Bake Light Sequence started as a user would (INVOKE_DEFAULT) bakes in a
 worker thread with progress naming the frame, and Esc cancels it leaving the scene as it was (no Lit Volume, the
-snow layer shown). The frames already lit stay in the cache, with their markers: the same bake resumes from them.
+snow layer shown). (The frames already lit stay in the cache with their markers, and a bake resumes from them:
+tests/blender/test_light_sequence.py.)
 
 xvfb-run blender --factory-startup --enable-event-simulate --python light_sequence_job.py   (exit code 0 = pass)
 """

@@ -23,9 +23,7 @@ from ..snow_layer.operators import free_object_name
 from ..spray import files, light
 from ..spray.operators import clear_sequence, new_sequence_object, play_sequence, show_snow
 from . import state as bake_state
-from .inputs import world_request
-from .operators import (BAKE_LABEL, baking, check_volume, keep_baked_optics, render_world, scatter_render_settings,
-                        volume_optics_of)
+from .operators import BAKE_LABEL, baking, check_volume, keep_baked_optics, scatter_render_settings
 
 
 def lit_sequence_of(snow):
@@ -56,6 +54,13 @@ def _check_disk(directory, snow_path, frames):
     if needed > free:
         raise UserError(f"{missing} frames of light need about {needed / 1e9:.1f} GB and {directory} has "
                         f"{free / 1e9:.1f} GB free: bake fewer frames (Start, End) or make room")
+
+
+def _check_no_tracks(snow):
+    """UserError when a Snow Spray's tracked snow plays in the layer's place: both would render."""
+    if any(obj.firn.spray.role == "TRACKS" and obj.firn.spray.source == snow for obj in bpy.data.objects):
+        raise UserError(f"'{snow.name}' has a Snow Spray's tracks playing in its place: Bake Sequence (Snow Spray "
+                        "panel) lights the tracked snow frame by frame")
 
 
 def _frames(operator, scene):
@@ -103,6 +108,7 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
         if snow is None:
             raise UserError("Make a Firn snow layer the active object: the snow to light frame by frame")
         snow_path = check_volume(snow)
+        _check_no_tracks(snow)
         first, last = _frames(self, context.scene)
         lit = lit_sequence_of(snow)
         if lit is not None:
@@ -115,13 +121,11 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
             shown = first, last
         cache.check_writable(os.path.join(directory, "lit.vdb"))
         _check_disk(directory, snow_path, range(first, last + 1))
-        lit_optics = lit or snow  # the Lit Volume's own optics once it exists (its Snow Material panel)
-        jobs = light.gather_layer(context, snow, lit_optics, range(first, last + 1), directory, self.quality,
+        # The Lit Volume's own optics once it exists (its Snow Material panel), the layer's before.
+        jobs = light.gather_layer(context, snow, lit or snow, range(first, last + 1), directory, self.quality,
                                   self.seed)
-        unlit = [job["inputs"].frame for job in jobs if job["inputs"].sky is None]
-        world = world_request(context.scene, unlit[:1]) if unlit else None  # one world for the whole range
-        return {"jobs": jobs, "world": world, "snow": snow.name, "name": name, "directory": directory,
-                "stored": stored, "frames": (first, last), "shown": shown, "optics": volume_optics_of(lit_optics),
+        return {"jobs": jobs, "worlds": light.world_requests(context.scene, jobs), "snow": snow.name, "name": name,
+                "directory": directory, "stored": stored, "frames": (first, last), "shown": shown,
                 "quality": self.quality, "seed": self.seed}
 
     def job_status(self, inputs, progress):
@@ -132,18 +136,12 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
 
     @staticmethod
     def compute(inputs, progress):
-        """Worker thread: the world (once, if a frame needs it), then every frame not yet lit from this scene."""
-        try:
-            todo = [job for job in inputs["jobs"] if not light.is_lit(job)]
-            if todo:
-                render_world({"world": inputs["world"], "jobs": inputs["jobs"]}, progress)
-                inputs["world"] = None
-            inputs["current"], inputs["todo"] = 0, [job["frame"] for job in todo]
-            return light.bake_frames(todo, inputs["quality"], inputs["seed"], progress, layer=True,
-                                     on_frame=lambda index: inputs.update(current=index))
-        finally:
-            if inputs["world"] is not None:  # not needed after all: every frame was lit already
-                inputs["world"].discard()
+        """Worker thread: the worlds the frames not yet lit from this scene need, then those frames."""
+        todo = [job for job in inputs["jobs"] if not light.is_lit(job)]
+        light.light_worlds(inputs["worlds"], todo, progress)
+        inputs["current"], inputs["todo"] = 0, [job["frame"] for job in todo]
+        return light.bake_frames(todo, inputs["quality"], inputs["seed"], progress,
+                                 on_frame=lambda index: inputs.update(current=index))
 
     def apply(self, context, inputs, seconds):
         snow = bpy.data.objects.get(inputs["snow"])
@@ -151,23 +149,17 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
             self.report({"WARNING"}, f"'{inputs['snow']}' was deleted during the bake: its lit frames are in "
                                      f"{inputs['directory']}")
             return
+        lit = _lit_volume(context, snow, inputs)
         first, last = inputs["shown"]
-        lit = lit_sequence_of(snow) or new_sequence_object(context, inputs["name"], "LIGHT", snow, (first, last))
-        lit.firn.spray.frame_start, lit.firn.spray.frame_end = first, last
-        lit.firn.mean_density = snow.firn.mean_density
         play_sequence(lit, inputs["stored"], "lit", first, last)
-        keep_baked_optics(lit.firn, inputs["optics"])
+        keep_baked_optics(lit.firn, inputs["jobs"][0]["optics"])
         cost = f"; {sum(seconds) / len(seconds):.1f} processor s a frame" if seconds else ""
         lit.firn.bake_summary = (f"{inputs['quality'].title()} light, frames {first}-{last} "
                                  f"({len(inputs['todo'])} baked now, the others already were{cost})")
         bake_state.store(lit, {"sequence": light.sequence_digest(inputs["directory"], first, last)})
         materials.ensure_snow_material(lit)
         show_snow(snow, False)
-        missing = [frame for frame in range(first, last + 1)
-                   if not os.path.exists(files.frame_path(inputs["directory"], frame, "lit"))]
-        if missing:
-            self.report({"WARNING"}, f"'{lit.name}': frames {missing[0]}-{missing[-1]} have no baked light yet "
-                                     "and show nothing until they are baked")
+        self._report_missing(lit, inputs["directory"], first, last)
         if materials.material_form(lit) == "BAKED_SCATTER":
             changed = scatter_render_settings(context.scene)
             if changed:
@@ -178,6 +170,26 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
         context.view_layer.objects.active = lit
         frames = inputs["frames"]
         self.report({"INFO"}, f"{lit.name}: frames {frames[0]}-{frames[1]} lit ({len(inputs['todo'])} baked now)")
+
+    def _report_missing(self, lit, directory, first, last):
+        """Blender plays a sequence whose files are missing as nothing at those frames: say which."""
+        missing = [frame for frame in range(first, last + 1)
+                   if not os.path.exists(files.frame_path(directory, frame, "lit"))]
+        if missing:
+            self.report({"WARNING"}, f"'{lit.name}': frames {missing[0]}-{missing[-1]} have no baked light yet "
+                                     "and show nothing until they are baked")
+
+
+def _lit_volume(context, snow, inputs):
+    """The layer's Lit Volume, made with the layer's optics and mean density the first time (its own from then
+    on), playing frames inputs["shown"]."""
+    first, last = inputs["shown"]
+    lit = lit_sequence_of(snow)
+    if lit is None:
+        lit = new_sequence_object(context, inputs["name"], "LIGHT", snow, (first, last))
+        lit.firn.mean_density = snow.firn.mean_density
+    lit.firn.spray.frame_start, lit.firn.spray.frame_end = first, last
+    return lit
 
 
 class FIRN_OT_clear_light_sequence(bpy.types.Operator):

@@ -5,8 +5,8 @@ JSON {component: digest}); the panel compares it with the live scene at every re
 (and lamps ignored), the world, the occluders ({object name: digest of its transform, evaluated shape, modifiers
 and albedo}, so a change names the object), the optics, and the snow itself (its file's size and modification
 time, and its transform). A sequence baked frame by frame (Bake Sequence, spray/light.py: a spray's lumps and
-its tracked snow, baked together) is compared through the marker of the frame it shows. Nothing here renders or
-reads grids.
+its tracked snow, baked together; Bake Light Sequence: a layer's own snow) is compared through the marker of the
+frame it shows. Nothing here renders or reads grids.
 """
 
 import json
@@ -122,7 +122,9 @@ def _frame_changes(obj, context):
     source = obj.firn.spray.source
     tracked = os.path.exists(spray_files.frame_path(directory, frame, "snow"))  # simulated: the files are there
     snow, spray = spray_files.medium_paths(directory, frame, cache.volume_path(source.data) if source else "", tracked)
-    now = dict(bake_inputs.signature(context, obj), optics=optics_digest(obj), snow=file_digest(snow),
+    # A layer lit frame by frame was baked in the layer's own frame (its Lit Volume follows it, to rounding).
+    medium = source if obj.firn.spray.role == "LIGHT" and source is not None else obj
+    now = dict(bake_inputs.signature(context, medium), optics=optics_digest(obj), snow=file_digest(snow),
                spray=file_digest(spray))
     now["settings"] = then.get("settings")  # quality and seed are the bake's choice, not the scene's
     return _compare(then, now)

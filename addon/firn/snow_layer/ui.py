@@ -49,7 +49,7 @@ class FIRN_PT_sidebar(bpy.types.Panel):
             layout.label(text="Select objects, then Add Snow Layer")
             return
         layout.label(text=snow.name, icon="VOLUME_DATA")
-        if not is_spray(snow):  # a spray's own panel (Firn Snow Spray) says what it is
+        if not is_spray(snow):  # a spray's own panel (Firn Snow Spray), a Lit Volume's Firn Bake, says what it is
             draw_snow_layer(layout, snow)
 
 

@@ -4,7 +4,8 @@ one medium (firncore.bake_joint: the spray's shadow on the snow, lumps resting i
 and the lumps over the snow's surface (an occluder of the snow's albedo: its light under them) into
 lit_spray_####.vdb, beside the sequence's files; the Tracks and Snow Spray objects play those once they are
 there. A spray without tracks (Cut Tracks off) has its lumps baked over the snow layer's own file; the snow layer
-keeps its own bake.
+keeps its own bake. Bake Light Sequence (bake/sequence.py) lights a snow layer's own file frame by frame the same
+way (gather_layer), into lit_####.vdb of its own folder.
 
 A lit frame's marker (lit_####.json) records what it was baked from: the scene at that frame (bake/inputs.py
 signature), the optics, quality and seed, and the snow and lumps files it read (size and time). A frame whose
@@ -12,14 +13,15 @@ marker matches is not baked again, so an interrupted bake resumes at the first f
 that each bake their own frames share one folder. The core and this module write every file atomically
 (temporary file, then rename), the marker after its VDBs.
 
-gather() runs on the main thread (it steps the scene through the frames); bake_frames() in the worker (no bpy).
+gather(), gather_layer() and world_requests() run on the main thread (they step the scene through the frames);
+light_worlds() and bake_frames() in the worker (no bpy).
 """
 
 import json
 import os
 
 from ..bake import inputs as bake_inputs, state as bake_state
-from ..bake.operators import core_light, volume_optics_of
+from ..bake.operators import core_light, render_world, volume_optics_of
 from ..common import cache
 from ..common.core import firncore
 from ..common.errors import UserError
@@ -132,7 +134,7 @@ def gather(context, spray, tracks, frames, quality, seed):
                    files.frame_path(directory, frame, "lit_spray"))
         return {"paths": paths, "outputs": outputs, "directory": directory, "optics": optics,
                 "parts": frame_parts(signature, optics_digest, quality, seed, *paths),
-                "name": f"{spray.name} frame {frame}"}
+                "name": f"{spray.name} frame {frame}", "bake": _bake_frame}
 
     return gather_frames(context, snow, frames, job_of)
 
@@ -150,9 +152,48 @@ def gather_layer(context, snow, optics_of, frames, directory, quality, seed):
         return {"paths": paths, "outputs": (files.frame_path(directory, frame, "lit"), None),
                 "directory": directory, "optics": optics,
                 "parts": frame_parts(signature, optics_digest, quality, seed, *paths),
-                "name": f"{snow.name} frame {frame}"}
+                "name": f"{snow.name} frame {frame}", "bake": _bake_layer_frame}
 
     return gather_frames(context, snow, frames, job_of)
+
+
+def world_requests(scene, jobs):
+    """Main thread: [(world, jobs)]: one world request (bake/inputs.py world_request) for each distinct world among
+    the jobs whose sky is still to compute or render, made at the first of its frames (an animated world, a
+    Nishita sun setting or a keyframed strength, gets one a frame). The scene is returned to its frame."""
+    groups = {}
+    for job in jobs:
+        if job["inputs"].sky is None:
+            groups.setdefault(job["parts"]["sky"], []).append(job)
+    requests = []
+    current = scene.frame_current
+    try:
+        for group in groups.values():
+            scene.frame_set(group[0]["frame"])
+            requests.append((bake_inputs.world_request(scene, [job["inputs"].frame for job in group]), group))
+    except BaseException:
+        discard_worlds(requests)
+        raise
+    finally:
+        scene.frame_set(current)
+    return requests
+
+
+def light_worlds(requests, todo, progress):
+    """Worker thread: renders or computes the world requests that jobs of `todo` need and completes those jobs'
+    light. Every request is discarded afterwards, whatever happens (what an unrendered one saved is removed)."""
+    try:
+        for world, group in requests:
+            needed = [job for job in group if any(job is other for other in todo)]
+            if needed:
+                render_world({"world": world, "jobs": needed}, progress)
+    finally:
+        discard_worlds(requests)
+
+
+def discard_worlds(requests):
+    for world, _group in requests:
+        world.discard()
 
 
 def _bake_frame(job, quality, seed, progress):
@@ -188,18 +229,17 @@ def _bake_layer_frame(job, quality, seed, progress):
                                             progress=progress, **core_light(job["inputs"])))
 
 
-def bake_frames(jobs, quality, seed, progress, layer=False, on_frame=None):
-    """Worker thread: bakes each job's lit files (a spray's snow and lumps, or with `layer` a snow layer's own
-    file), then writes its marker; on_frame(index) before each. A cancel or an error stops between frames: the
-    frames done stay done (their markers say so). Returns each frame's processor seconds."""
-    bake_frame = _bake_layer_frame if layer else _bake_frame
+def bake_frames(jobs, quality, seed, progress, on_frame=None):
+    """Worker thread: bakes each job's lit files (its "bake": a spray's snow and lumps, or a snow layer's own file),
+    then writes its marker; on_frame(index) before each. A cancel or an error stops between frames: the frames done
+    stay done (their markers say so). Returns each frame's processor seconds."""
     seconds = []
     for index, job in enumerate(jobs):
         if on_frame:
             on_frame(index)
         if progress.cancelled:
             raise firncore.Cancelled("cancelled")
-        seconds.append(cache.core_write(bake_frame, job, quality, seed, progress))
+        seconds.append(cache.core_write(job["bake"], job, quality, seed, progress))
         _write_marker(job["directory"], job["frame"], job["parts"])
     return seconds
 

@@ -12,7 +12,7 @@ import os
 import bpy
 
 from ..bake import operators as bake_operators, state as bake_state
-from ..bake.inputs import occluder_objects, world_request
+from ..bake.inputs import occluder_objects
 from ..common import cache, placement, scene_geometry
 from ..common.core import firncore
 from ..common.errors import UserError
@@ -220,6 +220,9 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
             raise UserError("Make a Firn snow layer the active object (select it last): the snow the selected "
                             "objects move through")
         emitters = _emitter_objects(context, snow)
+        if self.cut_tracks and any(is_lit_sequence(obj) and obj.firn.spray.source == snow for obj in bpy.data.objects):
+            raise UserError(f"'{snow.name}' is lit frame by frame (Bake Light Sequence): Clear Light Sequence first "
+                            "(Bake Sequence lights the tracked snow frame by frame), or turn Cut Tracks off")
         frames = frame_range(self, context.scene)
         name = free_object_name("Snow Spray")
         directory, stored = cache.spray_folder(name)
@@ -326,9 +329,8 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
             inputs = gather_inputs(context, record, snow, emitters, simulated, directory)
             tracks, frames = _light_jobs(self, context, spray, lit)
             jobs.append(dict(inputs, name=spray.name, tracks=tracks, lit=lit, frames=frames))
-        unlit = [frame["inputs"].frame for job in jobs for frame in job["frames"] if frame["inputs"].sky is None]
-        world = world_request(context.scene, unlit[:1]) if unlit else None  # one world for the whole range
-        return {"jobs": jobs, "current": 0, "world": world, "quality": self.quality, "seed": self.seed}
+        worlds = light.world_requests(context.scene, [frame for job in jobs for frame in job["frames"]])
+        return {"jobs": jobs, "current": 0, "worlds": worlds, "quality": self.quality, "seed": self.seed}
 
     def job_status(self, inputs, progress):
         jobs = inputs["jobs"]
@@ -338,33 +340,31 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
     @staticmethod
     def compute(inputs, progress):
         """Worker thread: every spray's simulation, then the light of the frames whose lit file is missing or was
-        made from other snow (the simulation may have rewritten it)."""
+        made from other snow (the simulation may have rewritten it), after the worlds they need."""
         try:
-            return FIRN_OT_bake_sequence._simulate_and_light(inputs, progress)
+            runs = []
+            for index, job in enumerate(inputs["jobs"]):
+                inputs["current"] = index
+                runs.append(simulate(job, progress))
+            todos = [FIRN_OT_bake_sequence._unlit(job) for job in inputs["jobs"]]
+            light.light_worlds(inputs["worlds"], [frame for todo in todos for frame in todo], progress)
+            for index, (job, todo) in enumerate(zip(inputs["jobs"], todos)):
+                inputs["current"] = index
+                job["processor_seconds"] = light.bake_frames(todo, inputs["quality"], inputs["seed"], progress)
+            return runs
         finally:
-            if inputs["world"] is not None:  # not needed after all: every frame was lit already
-                inputs["world"].discard()
+            light.discard_worlds(inputs["worlds"])  # a simulation failed or was cancelled: the worlds are not needed
 
     @staticmethod
-    def _simulate_and_light(inputs, progress):
-        runs = []
-        for index, job in enumerate(inputs["jobs"]):
-            inputs["current"] = index
-            runs.append(simulate(job, progress))
-        for index, job in enumerate(inputs["jobs"]):
-            inputs["current"] = index
-            todo = []
-            for frame in job["frames"]:
-                light.read_files(frame)  # as the simulation left them
-                if not light.is_lit(frame):
-                    todo.append(frame)
-            job["baked"] = [frame["frame"] for frame in todo]
-            if todo and inputs["world"] is not None:
-                bake_operators.render_world({"world": inputs["world"], "jobs": [
-                    frame for other in inputs["jobs"] for frame in other["frames"]]}, progress)
-                inputs["world"] = None
-            job["processor_seconds"] = light.bake_frames(todo, inputs["quality"], inputs["seed"], progress)
-        return runs
+    def _unlit(job):
+        """The job's frames whose lit files are missing or were baked from other files than the simulation left."""
+        todo = []
+        for frame in job["frames"]:
+            light.read_files(frame)  # as the simulation left them
+            if not light.is_lit(frame):
+                todo.append(frame)
+        job["baked"] = [frame["frame"] for frame in todo]
+        return todo
 
     def apply(self, context, inputs, runs):
         for job, run in zip(inputs["jobs"], runs):
