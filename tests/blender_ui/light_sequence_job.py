@@ -13,28 +13,22 @@ import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import ui_test  # noqa: E402
-from ui_test import check_scene_kept, fail, plane_alone, run_cancel_test, start_modal  # noqa: E402
+from ui_test import check_scene_kept, run_cancel_test, snow_and_mover, start_modal  # noqa: E402
 
 FRAMES = 200  # a fraction of a second each: long enough to be cancelled half way on any machine
 
 
-def build_scene(state):
-    plane_alone(1.0)
-    if bpy.ops.firn.add_snow_layer(depth=0.05, spacing=0.04, voxel_size=0.02) != {"FINISHED"}:
-        fail("Add Snow Layer failed")
-    snow = bpy.context.object
+def setting_sun():
+    """A sun that sinks from 84° to 21° over the frames."""
     bpy.ops.object.light_add(type="SUN")
     sun = bpy.context.object
     for frame, tilt in ((1, 0.1), (FRAMES, 1.2)):
         sun.rotation_euler = (tilt, 0.0, 0.0)
         sun.keyframe_insert("rotation_euler", frame=frame)
-    snow.select_set(True)
-    bpy.context.view_layer.objects.active = snow
-    state["objects"] = {obj.name for obj in bpy.data.objects}
 
 
 def start_job(state):
-    build_scene(state)
+    snow_and_mover(state, 1.0, setting_sun, depth=0.05, spacing=0.04, voxel_size=0.02)
     start_modal(state, lambda: bpy.ops.firn.bake_light_sequence("INVOKE_DEFAULT", frame_start=1, frame_end=FRAMES))
 
 

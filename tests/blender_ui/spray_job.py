@@ -11,29 +11,23 @@ import sys
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import check_scene_kept, fail, plane_alone, run_cancel_test, start_modal  # noqa: E402
+from ui_test import check_scene_kept, run_cancel_test, snow_and_mover, start_modal  # noqa: E402
 
 FRAMES = 400  # seconds of simulation on any machine: long enough to be cancelled half way
 
 
-def build_scene(state):
-    plane_alone(2.0)
-    if bpy.ops.firn.add_snow_layer(depth=0.1, spacing=0.05, voxel_size=0.01) != {"FINISHED"}:
-        fail("Add Snow Layer failed")
-    snow = bpy.context.object
+def ski():
+    """A ski's sole sliding 1.6 m through the snow over the frames."""
     bpy.ops.mesh.primitive_plane_add(size=1.0)
-    ski = bpy.context.object
-    ski.scale = (0.3, 0.06, 1.0)
+    sole = bpy.context.object
+    sole.scale = (0.3, 0.06, 1.0)
     for frame, x in ((1, -0.8), (FRAMES, 0.8)):
-        ski.location = (x, 0.0, 0.05)
-        ski.keyframe_insert("location", frame=frame)
-    snow.select_set(True)
-    bpy.context.view_layer.objects.active = snow
-    state["objects"] = {obj.name for obj in bpy.data.objects}
+        sole.location = (x, 0.0, 0.05)
+        sole.keyframe_insert("location", frame=frame)
 
 
 def start_job(state):
-    build_scene(state)
+    snow_and_mover(state, 2.0, ski, depth=0.1, spacing=0.05, voxel_size=0.01)
     start_modal(state, lambda: bpy.ops.firn.add_snow_spray("INVOKE_DEFAULT", frame_start=1, frame_end=FRAMES,
                                                            rate=200000.0))
 

@@ -146,6 +146,19 @@ def start_modal(state, invoke):
     state["started"] = time.perf_counter()
 
 
+def snow_and_mover(state, plane_size, add_mover, **snow_settings):
+    """A snow layer (Add Snow Layer with `snow_settings`) on a `plane_size` m plane, then add_mover() (an animated
+    object); the snow selected and active; state["objects"]: the scene's objects, before the job starts."""
+    plane_alone(plane_size)
+    if bpy.ops.firn.add_snow_layer(**snow_settings) != {"FINISHED"}:
+        fail("Add Snow Layer failed")
+    snow = bpy.context.object
+    add_mover()
+    snow.select_set(True)
+    bpy.context.view_layer.objects.active = snow
+    state["objects"] = {obj.name for obj in bpy.data.objects}
+
+
 def check_scene_kept(state, name):
     """A cancelled job that adds a Volume in the snow layer's place left the scene as it was: the objects of
     state["objects"] (taken before it started) and the snow layer "Snow" shown."""
