@@ -116,7 +116,7 @@ def test_an_animated_world_lights_each_frame_as_it_stands_then(clean_scene):
 
 
 def test_lit_frames_are_kept_resumed_and_baked_one_per_process_alike(clean_scene):
-    _snow, sun = _lit_layer()
+    snow, sun = _lit_layer()
     lit = _bake_frames()
     files = _lit_files(lit)
     drawn = [_drawn_above(path, lit) for path in files]
@@ -142,6 +142,12 @@ def test_lit_frames_are_kept_resumed_and_baked_one_per_process_alike(clean_scene
     sun.data.energy = 5.0
     assert bake_state.changes(lit) == (bake_state.OUTDATED, ["lamps"])
     sun.data.energy = 3.0
+    snow.location.x += 0.5  # the layer moved (its Lit Volume with it): its ground and shadows are elsewhere
+    bpy.context.view_layer.update()
+    assert bake_state.changes(lit) == (bake_state.OUTDATED, ["snow"])  # a sun: the same light, elsewhere
+    snow.location.x -= 0.5
+    bpy.context.view_layer.update()
+    assert bake_state.changes(lit) == (bake_state.BAKED, [])
     lit.firn.extinction_per_density *= 2.0  # the Lit Volume's own optics (its Snow Material panel)
     lit.firn.optics_mode = "CUSTOM"
     assert bake_state.changes(lit) == (bake_state.OUTDATED, ["optics"])

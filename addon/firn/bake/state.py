@@ -122,10 +122,10 @@ def _frame_changes(obj, context):
     source = obj.firn.spray.source
     tracked = os.path.exists(spray_files.frame_path(directory, frame, "snow"))  # simulated: the files are there
     snow, spray = spray_files.medium_paths(directory, frame, cache.volume_path(source.data) if source else "", tracked)
-    # A layer lit frame by frame was baked in the layer's own frame (its Lit Volume follows it, to rounding).
-    medium = source if obj.firn.spray.role == "LIGHT" and source is not None else obj
-    now = dict(bake_inputs.signature(context, medium), optics=optics_digest(obj), snow=file_digest(snow),
+    now = dict(bake_inputs.signature(context, obj), optics=optics_digest(obj), snow=file_digest(snow),
                spray=file_digest(spray))
+    if obj.firn.spray.role == "LIGHT" and source is not None:  # a layer lit frame by frame (spray/light.py)
+        now.update(bake_inputs.signature(context, source), snow=snow_digest(source))
     now["settings"] = then.get("settings")  # quality and seed are the bake's choice, not the scene's
     return _compare(then, now)
 

@@ -142,16 +142,19 @@ def gather(context, spray, tracks, frames, quality, seed):
 def gather_layer(context, snow, optics_of, frames, directory, quality, seed):
     """Main thread: a snow layer's frame jobs (gather_frames, bake/sequence.py): its own file baked with the optics
     of `optics_of` at each frame into lit_####.vdb of `directory` (_bake_layer_frame). Its marker names no lumps
-    file (that path holds none). Raises UserError (bad lamp, scale, optics)."""
+    file (that path holds none); its snow is the layer's file and transform (bake/state.py snow_digest). Raises
+    UserError (bad lamp, scale, optics)."""
     snow_file = cache.volume_path(snow.data)
     optics = volume_optics_of(optics_of)
     optics_digest = bake_state.optics_digest(optics_of)
 
     def job_of(frame, signature):
         paths = files.medium_paths(directory, frame, snow_file, tracked=False)
+        # The snow's part as Bake Scattering's: its file and its transform (moved, the objects and the sky around
+        # it are elsewhere).
+        parts = dict(frame_parts(signature, optics_digest, quality, seed, *paths), snow=bake_state.snow_digest(snow))
         return {"paths": paths, "outputs": (files.frame_path(directory, frame, "lit"), None),
-                "directory": directory, "optics": optics,
-                "parts": frame_parts(signature, optics_digest, quality, seed, *paths),
+                "directory": directory, "optics": optics, "parts": parts,
                 "name": f"{snow.name} frame {frame}", "bake": _bake_layer_frame}
 
     return gather_frames(context, snow, frames, job_of)
