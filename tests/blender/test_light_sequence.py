@@ -123,6 +123,12 @@ def test_lit_frames_are_kept_resumed_and_baked_one_per_process_alike(clean_scene
     stamps = [os.stat(path).st_mtime_ns for path in files]
     assert _bake_frames() == lit and "(0 baked now" in lit.firn.bake_summary
     assert [os.stat(path).st_mtime_ns for path in files] == stamps
+    # The Lit Volume is left out of the depsgraph while the scene steps through the frames (spray/light.py), and
+    # shown or hidden afterwards as the user had it.
+    assert not lit.hide_viewport
+    lit.hide_viewport = True
+    assert _bake_frames() == lit and lit.hide_viewport
+    lit.hide_viewport = False
     # Interrupted before the last frame: its file and marker were never written. The bake resumes there.
     os.remove(files[-1])
     os.remove(os.path.splitext(files[-1])[0] + ".json")

@@ -17,6 +17,7 @@ gather(), gather_layer() and world_requests() run on the main thread (they step 
 light_worlds() and bake_frames() in the worker (no bpy).
 """
 
+import contextlib
 import json
 import os
 
@@ -25,6 +26,7 @@ from ..bake.operators import core_light, render_world, volume_optics_of
 from ..common import cache
 from ..common.core import firncore
 from ..common.errors import UserError
+from ..properties import is_spray
 from . import files
 
 # The snow's surface as the lumps' occluder: flat parts merged (the lumps see it from a few centimetres). It is
@@ -99,24 +101,42 @@ def _joint_optics(spray, snow):
     return volume_optics_of(snow)
 
 
+@contextlib.contextmanager
+def _sequences_unloaded(scene):
+    """Firn's Volume sequences (sprays, tracks, lit layers) left out of the depsgraph while the scene steps through
+    frames: each would load its frame's file at every step (44 ms a frame for a Lit Volume of 40,000 voxels, 0.65
+    without; bench/light_sequence_bench.py), and no Volume lights or shades a bake."""
+    hidden = [obj for obj in scene.objects if is_spray(obj) and not obj.hide_viewport]
+    for obj in hidden:
+        obj.hide_viewport = True
+    try:
+        yield
+    finally:
+        for obj in hidden:
+            obj.hide_viewport = False
+
+
 def gather_frames(context, medium, frames, job_of):
     """Main thread: one job per frame of `frames` (scene frame numbers): job_of(frame, signature) (its files, the
     parts its marker will record) with the BakeInputs of `medium` at that frame; the worker skips the frames already
     lit (is_lit). The scene is returned to its frame. Raises UserError (bad lamp, scale)."""
     scene = context.scene
     shared = _SharedOccluders()
-    jobs = []
     current = scene.frame_current
     try:
-        for frame in frames:
-            scene.frame_set(frame)
-            signature = bake_inputs.signature(context, medium)
-            inputs = bake_inputs.gather(context, medium, occluders=lambda objects, depsgraph, space:
-                                        shared.gather(objects, signature["occluders"], depsgraph, space))
-            jobs.append(dict(job_of(frame, signature), frame=frame, inputs=inputs))
+        with _sequences_unloaded(scene):
+            return [_frame_job(context, medium, frame, job_of, shared) for frame in frames]
     finally:
         scene.frame_set(current)
-    return jobs
+
+
+def _frame_job(context, medium, frame, job_of, shared):
+    """One frame's job (gather_frames), the scene stepped to that frame."""
+    context.scene.frame_set(frame)
+    signature = bake_inputs.signature(context, medium)
+    inputs = bake_inputs.gather(context, medium, occluders=lambda objects, depsgraph, space:
+                                shared.gather(objects, signature["occluders"], depsgraph, space))
+    return dict(job_of(frame, signature), frame=frame, inputs=inputs)
 
 
 def gather(context, spray, tracks, frames, quality, seed):
@@ -171,9 +191,10 @@ def world_requests(scene, jobs):
     requests = []
     current = scene.frame_current
     try:
-        for group in groups.values():
-            scene.frame_set(group[0]["frame"])
-            requests.append((bake_inputs.world_request(scene, [job["inputs"].frame for job in group]), group))
+        with _sequences_unloaded(scene):
+            for group in groups.values():
+                scene.frame_set(group[0]["frame"])
+                requests.append((bake_inputs.world_request(scene, [job["inputs"].frame for job in group]), group))
     except BaseException:
         discard_worlds(requests)
         raise
