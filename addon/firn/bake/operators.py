@@ -56,9 +56,9 @@ def core_light(inputs):
 
 def core_bake(path, output, volume_optics, inputs, quality, seed, progress):
     """The one call into the core's bake (cpp/python/bind_transport.cpp): it reads `path` once, bakes its `density`
-    and writes its grids with the baked ones added to `output`, atomically. Raises firncore.ReadError when `path`
-    cannot be read, another OSError when `output` cannot be written."""
-    firncore.bake(path, volume_optics, output_path=output, quality=quality, seed=seed, progress=progress,
+    and writes its grids with the baked ones added to `output`, atomically; returns its stats. Raises
+    firncore.ReadError when `path` cannot be read, another OSError when `output` cannot be written."""
+    return firncore.bake(path, volume_optics, output_path=output, quality=quality, seed=seed, progress=progress,
                   **core_light(inputs))
 
 

@@ -22,7 +22,7 @@ import json
 import os
 
 from ..bake import inputs as bake_inputs, state as bake_state
-from ..bake.operators import core_light, render_world, volume_optics_of
+from ..bake.operators import core_bake, core_light, render_world, volume_optics_of
 from ..common import cache
 from ..common.core import firncore
 from ..common.errors import UserError
@@ -206,9 +206,10 @@ def world_requests(scene, jobs):
 def light_worlds(requests, todo, progress):
     """Worker thread: renders or computes the world requests that jobs of `todo` need and completes those jobs'
     light. Every request is discarded afterwards, whatever happens (what an unrendered one saved is removed)."""
+    wanted = {id(job) for job in todo}
     try:
         for world, group in requests:
-            needed = [job for job in group if any(job is other for other in todo)]
+            needed = [job for job in group if id(job) in wanted]
             if needed:
                 render_world({"world": world, "jobs": needed}, progress)
     finally:
@@ -249,8 +250,7 @@ def _bake_layer_frame(job, quality, seed, progress):
     """A snow layer's frame (gather_layer): its file baked into the frame's lit file. Returns the processor
     seconds."""
     (snow, _lumps), (lit, _none) = job["paths"], job["outputs"]
-    return _processor_seconds(firncore.bake(snow, job["optics"], output_path=lit, quality=quality, seed=seed,
-                                            progress=progress, **core_light(job["inputs"])))
+    return _processor_seconds(core_bake(snow, lit, job["optics"], job["inputs"], quality, seed, progress))
 
 
 def bake_frames(jobs, quality, seed, progress, on_frame=None):
