@@ -382,7 +382,7 @@ def _drawn_lumps(lit_file, spray, occluders=()):
 
 
 def test_bake_sequence_bakes_the_tracked_snow_and_the_lumps_at_every_frame(clean_scene):
-    _snow, spray, tracks = _lit_snow_scene()
+    snow, spray, tracks = _lit_snow_scene()
     assert bpy.ops.firn.bake_sequence(quality="DRAFT") == {"FINISHED"}
     folder = folder_of(spray)
     lit = [os.path.join(folder, f"lit_{frame:04d}.vdb") for frame in range(FRAMES[0], FRAMES[1] + 1)]
@@ -404,9 +404,18 @@ def test_bake_sequence_bakes_the_tracked_snow_and_the_lumps_at_every_frame(clean
     assert bake_state.changes(tracks) == (bake_state.BAKED, [])
     assert bake_state.changes(spray) == (bake_state.BAKED, [])
     sun = next(obj for obj in bpy.data.objects if obj.type == "LIGHT")
+    tilt = sun.rotation_euler.x
     sun.rotation_euler.x += 0.3
     assert bake_state.changes(tracks) == (bake_state.OUTDATED, ["lamps"])
-    sun.rotation_euler.x -= 0.3
+    sun.rotation_euler.x = tilt
+    assert bake_state.changes(tracks) == (bake_state.BAKED, [])
+    # The layer moved: its spray moves with it, out of the body's shadow baked where it stood.
+    x = snow.location.x
+    snow.location.x = x + 0.2
+    assert bake_state.changes(tracks) == (bake_state.OUTDATED, ["snow layer's place"])
+    assert bake_state.changes(spray) == (bake_state.OUTDATED, ["snow layer's place"])
+    snow.location.x = x
+    assert bake_state.changes(tracks) == (bake_state.BAKED, [])
     # The lumps are baked with the tracked snow (spray/light.py): the Snow Spray plays their lit files, baked.
     lumps = _lit_spray_files(folder)
     assert all(set(firncore.BAKED_GRID_NAMES) <= set(firncore.grid_names(path)) for path in lumps)

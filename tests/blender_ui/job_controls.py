@@ -14,9 +14,10 @@ import addon_utils
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import HUNG, fail, job_running, passed, run_timer, worker_alive  # noqa: E402
+from ui_test import HUNG, fail, job_running, listen_keys, passed, press, run_timer, worker_alive  # noqa: E402
 
-state = {"phase": "start", "ticks": 0, "since": 0.0, "heard": 0}
+state = {"phase": "start", "ticks": 0, "since": 0.0}
+heard = {"K": 0}
 
 
 def window():
@@ -26,22 +27,6 @@ def window():
 def view3d():
     area = next(a for a in window().screen.areas if a.type == "VIEW_3D")
     return area, next(r for r in area.regions if r.type == "WINDOW")
-
-
-class FIRN_OT_test_listen(bpy.types.Operator):
-    """Counts the K key presses that reach it; its handler sits behind the job's, which must pass them on"""
-
-    bl_idname = "firn.test_listen"
-    bl_label = "Listen"
-
-    def invoke(self, context, _event):
-        context.window_manager.modal_handler_add(self)
-        return {"RUNNING_MODAL"}
-
-    def modal(self, _context, event):
-        if event.type == "K" and event.value == "PRESS":
-            state["heard"] += 1
-        return {"PASS_THROUGH"}
 
 
 def register_waiting_job():
@@ -72,7 +57,6 @@ def register_waiting_job():
             fail(f"the job ended by itself: {result}")
 
     bpy.utils.register_class(FIRN_OT_test_wait)
-    bpy.utils.register_class(FIRN_OT_test_listen)
 
 
 def invoke(operator):
@@ -86,11 +70,6 @@ def invoke(operator):
 def start_job():
     invoke(bpy.ops.firn.test_wait)
     state["since"] = time.perf_counter()
-
-
-def press(key):
-    window().event_simulate(type=key, value="PRESS")
-    window().event_simulate(type=key, value="RELEASE")
 
 
 def status_bar_entries():
@@ -113,7 +92,7 @@ def step():
     if phase == "start":
         addon_utils.enable("firn", default_set=True)
         register_waiting_job()
-        invoke(bpy.ops.firn.test_listen)
+        listen_keys("K", heard)
         start_job()
         state["phase"], state["ticks"] = "typing", 0
     elif phase == "typing" and state["ticks"] == 3:
@@ -124,8 +103,8 @@ def step():
         press("K")
         state["phase"], state["ticks"] = "typed", 0
     elif phase == "typed" and state["ticks"] == 3:
-        if state["heard"] != 1:
-            fail(f"the listener heard {state['heard']} key presses while the job ran, expected 1")
+        if heard["K"] != 1:
+            fail(f"the listener heard {heard['K']} key presses while the job ran, expected 1")
         bpy.ops.firn.cancel_jobs()  # what the status bar's and the panel's Cancel buttons run
         state["phase"], state["since"] = "cancel button", time.perf_counter()
     elif phase == "cancel button" and not job_running():

@@ -40,6 +40,73 @@ def gate_worker(operator):
     operator.compute = staticmethod(gated)
 
 
+_released = threading.Event()  # set by release_worker
+
+
+def hold_worker(operator):
+    """Holds the worker of `operator` (a FirnJobMixin class) before it computes until the test calls
+    `release_worker()`: the test acts while the job surely runs, however fast or busy the machine."""
+    compute = operator.compute
+
+    def held(inputs, progress):
+        if not _released.wait(HUNG):
+            fail(f"{operator.bl_idname}: the test never released its worker")
+        _released.clear()
+        return compute(inputs, progress)
+
+    operator.compute = staticmethod(held)
+
+
+def release_worker():
+    _released.set()
+
+
+def strict_apply(operator):
+    """An exception while `operator` (a FirnJobMixin class) applies its result fails the test (Blender would print
+    it and drop the operator)."""
+    import traceback
+
+    apply = operator.apply
+
+    def checked(self, context, inputs, result):
+        try:
+            apply(self, context, inputs, result)
+        except Exception:
+            traceback.print_exc()
+            fail(f"{operator.bl_idname}: its result could not be applied")
+
+    operator.apply = checked
+
+
+def listen_keys(key, heard):
+    """Counts in heard[key] the presses of `key` that reach a modal handler added now: one added later (a job's)
+    must pass them on for it to hear them."""
+
+    class FIRN_OT_test_listen(bpy.types.Operator):
+        bl_idname = "firn.test_listen"
+        bl_label = "Listen"
+
+        def invoke(self, context, _event):
+            context.window_manager.modal_handler_add(self)
+            return {"RUNNING_MODAL"}
+
+        def modal(self, _context, event):
+            if event.type == key and event.value == "PRESS":
+                heard[key] = heard.get(key, 0) + 1
+            return {"PASS_THROUGH"}
+
+    bpy.utils.register_class(FIRN_OT_test_listen)
+    with bpy.context.temp_override(**window_context()):
+        bpy.ops.firn.test_listen("INVOKE_DEFAULT")
+
+
+def press(key):
+    """`key`, pressed and released as a user does, in the first window."""
+    window = bpy.context.window_manager.windows[0]
+    window.event_simulate(type=key, value="PRESS")
+    window.event_simulate(type=key, value="RELEASE")
+
+
 def ui_tick():
     """The test's timer ran: a worker waiting at the gate (gate_worker) goes on."""
     if worker_alive():
@@ -110,9 +177,7 @@ def plane_alone(size):
 
 def press_esc():
     """Esc, pressed and released as a user does, in the first window."""
-    window = bpy.context.window_manager.windows[0]
-    window.event_simulate(type="ESC", value="PRESS")
-    window.event_simulate(type="ESC", value="RELEASE")
+    press("ESC")
 
 
 def esc_once_progressing(state, hint):

@@ -17,7 +17,8 @@ import bpy
 from ..common import cache
 from ..common.core import firncore
 from ..common.errors import UserError
-from ..common.jobs import FirnJobMixin, running_jobs
+from ..common.jobs import FirnJobMixin
+from ..common.modes import no_job_poll
 from ..material import nodes as materials, optics
 from ..properties import BAKE_QUALITY_ITEMS, is_lit_sequence
 from ..snow_layer import proxy
@@ -36,10 +37,6 @@ def bake_targets(context):
     if context.active_object is not None and context.active_object not in objects:
         objects.append(context.active_object)
     return [obj for obj in objects if obj.type == "VOLUME"]
-
-
-def baking():
-    return any(job.label == BAKE_LABEL for job in running_jobs())
 
 
 def core_light(inputs):
@@ -266,8 +263,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
         if context.mode != "OBJECT":
             cls.poll_message_set("Switch to Object Mode")
             return False
-        if baking():
-            cls.poll_message_set("A bake is running: wait for it or cancel it")
+        if not no_job_poll(cls):
             return False
         if not bake_targets(context):
             cls.poll_message_set("Select snow, or Volume objects with a 'density' grid")

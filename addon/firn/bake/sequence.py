@@ -16,14 +16,14 @@ import bpy
 from ..common import cache
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
-from ..common.modes import object_mode_poll
+from ..common.modes import no_job_poll, object_mode_poll
 from ..material import nodes as materials
 from ..properties import BAKE_QUALITY_ITEMS, active_snow_layer, is_lit_sequence
 from ..snow_layer.operators import free_object_name
 from ..spray import files, light
 from ..spray.operators import clear_sequence, new_sequence_object, play_sequence, show_snow
 from . import state as bake_state
-from .operators import BAKE_LABEL, baking, check_volume, keep_baked_optics, scatter_render_settings
+from .operators import BAKE_LABEL, check_volume, keep_baked_optics, scatter_render_settings
 
 
 def lit_sequence_of(snow):
@@ -82,6 +82,7 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
     bl_label = "Bake Light Sequence"
     bl_options = {"REGISTER", "UNDO"}
     job_label = BAKE_LABEL
+    job_passes_events = True
 
     frame_start: bpy.props.IntProperty(name="Start", description="First frame (default: the scene's start)",
                                        default=1, min=0)
@@ -94,8 +95,7 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
     def poll(cls, context):
         if not object_mode_poll(cls, context):
             return False
-        if baking():
-            cls.poll_message_set("A bake is running: wait for it or cancel it")
+        if not no_job_poll(cls):
             return False
         obj = context.object
         if not is_lit_sequence(obj) and active_snow_layer(context) is None:
@@ -205,7 +205,7 @@ class FIRN_OT_clear_light_sequence(bpy.types.Operator):
         if not is_lit_sequence(context.object):
             cls.poll_message_set("Select the Lit Volume made by Bake Light Sequence")
             return False
-        return True
+        return no_job_poll(cls)
 
     def execute(self, context):
         return clear_sequence(self, context.object)

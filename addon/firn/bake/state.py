@@ -27,7 +27,8 @@ STATES = (
      "the bake", "ERROR", 2),
 )
 # What each component is called in the panel's "needs re-bake" line.
-LABELS = {"lights": "lamps", "sky": "world", "occluders": "objects", "optics": "optics", "snow": "snow"}
+LABELS = {"lights": "lamps", "sky": "world", "occluders": "objects", "optics": "optics", "snow": "snow",
+          "place": "snow layer's place"}
 MAX_NAMED_OBJECTS = 3  # changed occluders named one by one; more are counted
 
 
@@ -58,9 +59,18 @@ def snow_path(obj):
     return bpy.path.abspath(obj.data.filepath, library=obj.data.library)
 
 
+def _placement(obj):
+    return bake_inputs.rounded(v for row in obj.matrix_world for v in row)
+
+
 def snow_digest(obj):
-    matrix = bake_inputs.rounded(v for row in obj.matrix_world for v in row)
-    return bake_inputs.digest((file_stamp(snow_path(obj)), matrix))
+    return bake_inputs.digest((file_stamp(snow_path(obj)), _placement(obj)))
+
+
+def place_digest(layer):
+    """Where a snow layer stands: a spray's frames are baked where their layer stood (the objects around it shade
+    them, and they stand still when it moves)."""
+    return bake_inputs.digest(_placement(layer))
 
 
 def fingerprint(context, obj, scene_signature=None):
@@ -126,6 +136,8 @@ def _frame_changes(obj, context):
                spray=file_digest(spray))
     if obj.firn.spray.role == "LIGHT" and source is not None:  # a layer lit frame by frame (spray/light.py)
         now.update(bake_inputs.signature(context, source), snow=snow_digest(source))
+    elif source is not None:  # a spray's lumps or tracked snow
+        now["place"] = place_digest(source)
     now["settings"] = then.get("settings")  # quality and seed are the bake's choice, not the scene's
     return _compare(then, now)
 

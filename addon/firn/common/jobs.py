@@ -6,8 +6,10 @@ An operator using FirnJobMixin splits its work in three:
     compute(inputs, progress) -> out   worker thread: core calls only (they release the GIL), no bpy
     apply(context, inputs, out)        main thread: writes the results into Blender
 execute() runs the three in a row (scripts, redo, background mode); invoke() runs compute in a worker.
-While a job runs, the status bar shows its progress and a Cancel button (as does Esc). Long jobs set
-`job_passes_events` so the user keeps working meanwhile; short ones hold the input until they end.
+While a job runs, the status bar shows its progress and a Cancel button (as does Esc). Long jobs (Bake Scattering,
+Add Snow Spray, Bake Sequence, Bake Light Sequence) set `job_passes_events` so the user keeps working meanwhile:
+their polls refuse a second such job (modes.no_job_poll) and their apply() finds its objects again by name, any of
+which the user may have deleted. Short ones hold the input until they end.
 """
 
 import os

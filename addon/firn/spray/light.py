@@ -144,7 +144,8 @@ def gather(context, spray, tracks, frames, quality, seed):
     Raises UserError (bad lamp, scale, optics that differ)."""
     snow = medium_object(spray, tracks)
     directory = os.path.dirname(cache.volume_path(spray.data))
-    snow_layer_file = cache.volume_path(spray.firn.spray.source.data)
+    layer = spray.firn.spray.source
+    snow_layer_file = cache.volume_path(layer.data)
     optics = _joint_optics(spray, snow)
     optics_digest = bake_state.optics_digest(snow)
 
@@ -152,8 +153,9 @@ def gather(context, spray, tracks, frames, quality, seed):
         paths = files.medium_paths(directory, frame, snow_layer_file, tracked=tracks is not None)
         outputs = (files.frame_path(directory, frame, "lit") if tracks is not None else None,
                    files.frame_path(directory, frame, "lit_spray"))
-        return {"paths": paths, "outputs": outputs, "directory": directory, "optics": optics,
-                "parts": frame_parts(signature, optics_digest, quality, seed, *paths),
+        parts = dict(frame_parts(signature, optics_digest, quality, seed, *paths),
+                     place=bake_state.place_digest(layer))
+        return {"paths": paths, "outputs": outputs, "directory": directory, "optics": optics, "parts": parts,
                 "name": f"{spray.name} frame {frame}", "bake": _bake_frame}
 
     return gather_frames(context, snow, frames, job_of)

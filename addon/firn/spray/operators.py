@@ -17,7 +17,7 @@ from ..common import cache, placement, scene_geometry
 from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
-from ..common.modes import object_mode_poll
+from ..common.modes import no_job_poll, object_mode_poll
 from ..material import nodes as materials
 from ..properties import (BAKE_QUALITY_ITEMS, CORE_SPRAY_SETTINGS, OPTICS_SETTINGS, SPRAY_PROPERTIES, active_snow_layer,
                           is_lit_sequence, is_spray)
@@ -208,8 +208,11 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
     __annotations__ = dict(FRAME_PROPERTIES, **SPRAY_PROPERTIES)
     job_label = ADD_LABEL
+    job_passes_events = True
 
-    poll = classmethod(object_mode_poll)
+    @classmethod
+    def poll(cls, context):
+        return object_mode_poll(cls, context) and no_job_poll(cls)
 
     def draw(self, _context):
         draw_spray_settings(self.layout, self, (*FRAME_PROPERTIES, *SPRAY_PROPERTIES))
@@ -232,8 +235,15 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
     compute = staticmethod(simulate)
 
     def apply(self, context, inputs, run):
-        snow = bpy.data.objects[inputs["snow"]]
-        emitters = [bpy.data.objects[name] for name in inputs["emitter_names"]]
+        snow = bpy.data.objects.get(inputs["snow"])
+        if snow is None:  # the user kept working during the simulation
+            self.report({"WARNING"}, f"'{inputs['snow']}' was deleted during the simulation: no spray was added "
+                                     f"(its frames are in {inputs['directory']})")
+            return
+        emitters = [bpy.data.objects[name] for name in inputs["emitter_names"] if name in bpy.data.objects]
+        if len(emitters) < len(inputs["emitter_names"]):
+            self.report({"WARNING"}, "An emitter was deleted during the simulation: Bake Sequence cannot simulate "
+                                     "this spray again")
         frames = inputs["first"], inputs["last"]
         spray = _new_spray_object(context, inputs["name"], "SPRAY", snow, self, emitters, frames)
         spray.firn.mean_density = self.lump_density
@@ -304,13 +314,14 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
                                    min=0),
     )
     job_label = BAKE_LABEL
+    job_passes_events = True
 
     @classmethod
     def poll(cls, context):
         if not any(obj.firn.spray.role == "SPRAY" for obj in context.scene.objects):
             cls.poll_message_set("The scene has no Snow Spray: use Add Snow Spray first")
             return False
-        return True
+        return no_job_poll(cls)
 
     def prepare(self, context):
         jobs = []
@@ -368,8 +379,10 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
 
     def apply(self, context, inputs, runs):
         for job, run in zip(inputs["jobs"], runs):
-            spray = bpy.data.objects[job["name"]]
-            spray.firn.spray.summary = summary(job, run)
+            spray = bpy.data.objects.get(job["name"])  # the user may have deleted it during the bake
+            if spray is not None:
+                spray.firn.spray.summary = summary(job, run)
+                self.report({"INFO"}, f"{spray.name}: {spray.firn.spray.summary}")
             for obj in sequence_objects(job["directory"]):
                 obj.firn.spray.frame_start, obj.firn.spray.frame_end = job["first"], job["last"]
                 unlit, lit = ("spray", "lit_spray") if obj.firn.spray.role == "SPRAY" else ("snow", "lit")
@@ -380,7 +393,6 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
                 elif not self.light:  # Bake Light off: the lumps and the tracked snow render unlit
                     obj.firn.bake_fingerprint = obj.firn.bake_summary = ""
                     materials.ensure_snow_material(obj)
-            self.report({"INFO"}, f"{spray.name}: {spray.firn.spray.summary}")
 
     def _plays_light(self, obj, job, kind):
         """A spray or its tracked snow plays its lit files (`kind`) when every frame has one, or when only some
@@ -455,7 +467,7 @@ class FIRN_OT_clear_snow_spray(bpy.types.Operator):
         if not is_spray(context.object) or is_lit_sequence(context.object):
             cls.poll_message_set("Select a Snow Spray (or its Tracks)")
             return False
-        return True
+        return no_job_poll(cls)
 
     def execute(self, context):
         return clear_sequence(self, context.object)

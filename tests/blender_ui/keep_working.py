@@ -1,0 +1,139 @@
+"""Blender with a window (under xvfb-run): the user keeps working beside Firn's sequence jobs. While Add Snow Spray,
+Bake Sequence and Bake Light Sequence run, key presses pass on to the rest of Blender, the operators that would
+start a second job or remove the files being written refuse, and deleting an object the job came from ends it
+cleanly: Bake Sequence lights the Tracks of a spray whose Snow Spray object was deleted, Bake Light Sequence adds
+no Lit Volume for a deleted snow layer and leaves the frames it baked in the cache (its warning says where).
+
+xvfb-run blender --factory-startup --enable-event-simulate --python keep_working.py   (exit code 0 = pass)
+"""
+
+import os
+import sys
+import time
+
+import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ui_test import (  # noqa: E402
+    HUNG, fail, hold_worker, job_running, listen_keys, passed, press, release_worker, run_timer, snow_and_mover,
+    start_modal, strict_apply, window_context)
+
+FRAMES = 4
+state = {"phase": "start", "ticks": 0, "since": 0.0}
+KEY = "F13"  # bound to nothing: no menu opens to take the next presses
+heard = {KEY: 0}
+
+
+def ski_and_sun():
+    """A ski's sole sliding 0.8 m through the snow over the frames, under a sun."""
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    sole = bpy.context.object
+    sole.scale = (0.3, 0.06, 1.0)
+    for frame, x in ((1, -0.4), (FRAMES, 0.4)):
+        sole.location = (x, 0.0, 0.05)
+        sole.keyframe_insert("location", frame=frame)
+    bpy.ops.object.light_add(type="SUN", rotation=(0.6, 0.0, 0.0))
+
+
+def make_active(name):
+    for obj in bpy.context.selected_objects:
+        obj.select_set(False)
+    obj = bpy.data.objects[name]
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+
+
+def refuses(operator):
+    """`operator`'s poll, in the window's context, is False."""
+    with bpy.context.temp_override(**window_context()):
+        return not operator.poll()
+
+
+def hold_the_jobs():
+    from firn.bake.sequence import FIRN_OT_bake_light_sequence
+    from firn.spray.operators import FIRN_OT_add_snow_spray, FIRN_OT_bake_sequence
+
+    for operator in (FIRN_OT_add_snow_spray, FIRN_OT_bake_sequence, FIRN_OT_bake_light_sequence):
+        hold_worker(operator)
+        strict_apply(operator)
+
+
+def start(phase, invoke):
+    start_modal(state, invoke)
+    state["phase"], state["ticks"] = phase, 0
+
+
+def check_held(refused, meanwhile=lambda: None):
+    """The job's worker is still held: the key pressed meanwhile reached the listener behind the job and each
+    operator of `refused` refuses; then `meanwhile()` does what the user does, and the worker goes on."""
+    if heard[KEY] != state["heard"] + 1:
+        fail(f"{state['phase']}: the key press did not pass the job ({heard[KEY] - state['heard']} heard)")
+    for operator in refused:
+        if not refuses(operator):
+            fail(f"{state['phase']}: {operator.idname_py()} may start while a Firn job runs")
+    meanwhile()
+    release_worker()
+    state["since"] = time.perf_counter()
+
+
+def step():
+    state["ticks"] += 1
+    phase = state["phase"]
+    if phase == "start":
+        snow_and_mover(state, 1.0, ski_and_sun, depth=0.1, spacing=0.05, voxel_size=0.02)
+        hold_the_jobs()
+        listen_keys(KEY, heard)
+        make_active("Snow")
+        bpy.data.objects["Plane.001"].select_set(True)  # the ski
+        start("spray", lambda: bpy.ops.firn.add_snow_spray("INVOKE_DEFAULT", frame_start=1, frame_end=FRAMES))
+    elif phase in {"spray", "sequence", "light"} and state["ticks"] == 3:
+        if not job_running():
+            fail(f"{phase}: the job ended while its worker was held")
+        state["heard"] = heard[KEY]
+        press(KEY)
+    elif phase in {"spray", "sequence", "light"} and state["ticks"] == 6:
+        check_held(*PLAN[phase])
+        state["phase"] = phase + " ends"
+    elif phase == "spray ends" and not job_running():
+        if {"Snow Spray", "Snow Tracks"} - set(bpy.data.objects.keys()):
+            fail(f"Add Snow Spray made {sorted(bpy.data.objects.keys())}")
+        make_active("Snow Spray")
+        start("sequence", lambda: bpy.ops.firn.bake_sequence("INVOKE_DEFAULT", quality="DRAFT"))
+    elif phase == "sequence ends" and not job_running():
+        tracks = bpy.data.objects["Snow Tracks"]
+        if "lit_" not in os.path.basename(tracks.data.filepath) or tracks.firn.bake_state != "BAKED":
+            fail(f"the Tracks of a deleted Snow Spray play {tracks.data.filepath}, state {tracks.firn.bake_state}")
+        make_active("Snow Tracks")
+        with bpy.context.temp_override(**window_context()):
+            if bpy.ops.firn.clear_snow_spray() != {"FINISHED"}:
+                fail("Clear Snow Spray refused once the bake had ended")
+        make_active("Snow")
+        start("light", lambda: bpy.ops.firn.bake_light_sequence("INVOKE_DEFAULT", frame_start=1, frame_end=3,
+                                                                 quality="DRAFT"))
+    elif phase == "light ends" and not job_running():
+        if any(obj.firn.spray.role == "LIGHT" for obj in bpy.data.objects):
+            fail("Bake Light Sequence added a Lit Volume for a deleted snow layer")
+        from firn.common import cache
+
+        folder = cache.spray_folder("Snow Lit")[0]  # where the warning says the frames are
+        if sorted(name for name in os.listdir(folder) if name.endswith(".vdb")) != [
+                f"lit_{frame:04d}.vdb" for frame in (1, 2, 3)]:
+            fail(f"the lit frames of a deleted snow layer: {os.listdir(folder)}")
+        passed()
+        return False
+    elif phase.endswith(" ends") and time.perf_counter() - state["since"] > HUNG:
+        fail(f"{phase}: hung")
+
+
+def remove(name):
+    bpy.data.objects.remove(bpy.data.objects[name])
+
+
+PLAN = {  # per job: what refuses while it runs, and what the user does meanwhile
+    "spray": ([bpy.ops.firn.add_snow_spray, bpy.ops.firn.bake_light_sequence, bpy.ops.firn.bake_scattering],),
+    "sequence": ([bpy.ops.firn.clear_snow_spray, bpy.ops.firn.bake_sequence, bpy.ops.firn.bake_scattering],
+                 lambda: remove("Snow Spray")),
+    "light": ([bpy.ops.firn.bake_light_sequence, bpy.ops.firn.add_snow_spray, bpy.ops.firn.bake_sequence],
+              lambda: remove("Snow")),
+}
+run_timer(step)
