@@ -1,8 +1,9 @@
 """Blender with a window (under xvfb-run): the user keeps working beside Firn's sequence jobs. While Add Snow Spray,
 Bake Sequence and Bake Light Sequence run, key presses pass on to the rest of Blender, the operators that would
-start a second job or remove the files being written refuse, and deleting an object the job came from ends it
-cleanly: Bake Sequence lights the Tracks of a spray whose Snow Spray object was deleted, Bake Light Sequence adds
-no Lit Volume for a deleted snow layer and leaves the frames it baked in the cache (its warning says where).
+start a second job, rewrite the snow or remove the files being written refuse, Esc stops the animation playing
+beside a job (not the job), and deleting an object the job came from ends it cleanly: Bake Sequence lights the
+Tracks of a spray whose Snow Spray object was deleted, Bake Light Sequence adds no Lit Volume for a deleted snow
+layer and leaves the frames it baked in the cache (its warning says where).
 
 xvfb-run blender --factory-startup --enable-event-simulate --python keep_working.py   (exit code 0 = pass)
 """
@@ -63,17 +64,37 @@ def start(phase, invoke):
     state["phase"], state["ticks"] = phase, 0
 
 
-def check_held(refused, meanwhile=lambda: None):
+def check_held(refused, meanwhile=lambda: None, then=lambda: None):
     """The job's worker is still held: the key pressed meanwhile reached the listener behind the job and each
-    operator of `refused` refuses; then `meanwhile()` does what the user does, and the worker goes on."""
+    operator of `refused` refuses; then `meanwhile()` does what the user does."""
     if heard[KEY] != state["heard"] + 1:
         fail(f"{state['phase']}: the key press did not pass the job ({heard[KEY] - state['heard']} heard)")
     for operator in refused:
         if not refuses(operator):
             fail(f"{state['phase']}: {operator.idname_py()} may start while a Firn job runs")
     meanwhile()
+
+
+def release(refused, meanwhile=lambda: None, then=lambda: None):
+    """Once what the user did has been handled, `then()` checks it, and the worker goes on."""
+    if not job_running():
+        fail(f"{state['phase']}: the job ended while its worker was held")
+    then()
     release_worker()
     state["since"] = time.perf_counter()
+
+
+def play_stop_and_delete_snow():
+    """The user plays the animation, stops it with Esc, and deletes the snow layer."""
+    with bpy.context.temp_override(**window_context()):
+        bpy.ops.screen.animation_play()
+    press("ESC")
+    remove("Snow")
+
+
+def playback_stopped():
+    if bpy.context.screen.is_animation_playing:
+        fail("Esc did not stop the animation playing beside the job")
 
 
 def step():
@@ -93,6 +114,8 @@ def step():
         press(KEY)
     elif phase in {"spray", "sequence", "light"} and state["ticks"] == 6:
         check_held(*PLAN[phase])
+    elif phase in {"spray", "sequence", "light"} and state["ticks"] == 9:
+        release(*PLAN[phase])  # an Esc that stopped the playback left the job running
         state["phase"] = phase + " ends"
     elif phase == "spray ends" and not job_running():
         if {"Snow Spray", "Snow Tracks"} - set(bpy.data.objects.keys()):
@@ -133,7 +156,7 @@ PLAN = {  # per job: what refuses while it runs, and what the user does meanwhil
     "spray": ([bpy.ops.firn.add_snow_spray, bpy.ops.firn.bake_light_sequence, bpy.ops.firn.bake_scattering],),
     "sequence": ([bpy.ops.firn.clear_snow_spray, bpy.ops.firn.bake_sequence, bpy.ops.firn.bake_scattering],
                  lambda: remove("Snow Spray")),
-    "light": ([bpy.ops.firn.bake_light_sequence, bpy.ops.firn.add_snow_spray, bpy.ops.firn.bake_sequence],
-              lambda: remove("Snow")),
+    "light": ([bpy.ops.firn.bake_light_sequence, bpy.ops.firn.add_snow_spray, bpy.ops.firn.regenerate_snow],
+              play_stop_and_delete_snow, playback_stopped),
 }
 run_timer(step)

@@ -15,7 +15,7 @@ import bpy
 
 from ..common import cache
 from ..common.errors import UserError
-from ..common.jobs import FirnJobMixin
+from ..common.jobs import FirnJobMixin, scene_left, select_only
 from ..common.modes import no_job_poll, object_mode_poll
 from ..material import nodes as materials
 from ..properties import BAKE_QUALITY_ITEMS, active_snow_layer, is_lit_sequence
@@ -126,7 +126,7 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
                                   self.seed)
         return {"jobs": jobs, "worlds": light.world_requests(context.scene, jobs), "snow": snow.name, "name": name,
                 "directory": directory, "stored": stored, "frames": (first, last), "shown": shown,
-                "quality": self.quality, "seed": self.seed}
+                "quality": self.quality, "seed": self.seed, "scene": context.scene.name}
 
     def job_status(self, inputs, progress):
         todo = inputs.get("todo")
@@ -144,10 +144,12 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
                                  on_frame=lambda index: inputs.update(current=index))
 
     def apply(self, context, inputs, seconds):
-        snow = bpy.data.objects.get(inputs["snow"])
+        snow = bpy.data.objects.get(inputs["snow"])  # the user kept working during the bake
+        if scene_left(self, context, inputs["scene"], self.bl_label):
+            return
         if snow is None:
-            self.report({"WARNING"}, f"'{inputs['snow']}' was deleted during the bake: its lit frames are in "
-                                     f"{inputs['directory']}")
+            self.report({"WARNING"}, f"'{inputs['snow']}' was deleted or renamed during the bake: its lit frames are "
+                                     f"in {inputs['directory']}")
             return
         lit = _lit_volume(context, snow, inputs)
         first, last = inputs["shown"]
@@ -164,10 +166,7 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
             changed = scatter_render_settings(context.scene)
             if changed:
                 self.report({"WARNING"}, f"Changed for the thin snow of '{lit.name}': " + "; ".join(changed))
-        for obj in context.selected_objects:
-            obj.select_set(False)
-        lit.select_set(True)
-        context.view_layer.objects.active = lit
+        select_only(context, lit)
         frames = inputs["frames"]
         self.report({"INFO"}, f"{lit.name}: frames {frames[0]}-{frames[1]} lit ({len(inputs['todo'])} baked now)")
 

@@ -20,6 +20,7 @@ from bpy.app.handlers import persistent
 from . import preferences
 from .core import firncore
 from .errors import UserError
+from .jobs import running_jobs
 
 _SESSION_FOLDER = os.path.join(tempfile.gettempdir(), f"firn_cache_{os.getpid()}")
 DAMAGED_KEY = "firn_damaged_file"  # Volume custom property: the path of a file set aside as unreadable
@@ -149,7 +150,10 @@ def _snow_volumes():
 
 @persistent
 def _move_session_files_on_save(*_args):
-    """After the first save of a file, its snow moves from the session folder next to the .blend."""
+    """After the first save of a file, its snow moves from the session folder next to the .blend; while a Firn job
+    runs, at a later save (the job reads and writes files there: the user may save while it runs)."""
+    if running_jobs():
+        return
     for volume in _snow_volumes():
         source = os.path.normpath(bpy.path.abspath(volume.filepath))  # saving made it relative: '//../..'
         if not source.startswith(_SESSION_FOLDER):

@@ -113,10 +113,11 @@ class FirnJobMixin:
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        if event.type == "ESC" and event.value == "PRESS":
+        cancels = event.type == "ESC" and event.value == "PRESS" and not _playing(context)
+        if cancels:
             self._job.cancel()
         if event.type != "TIMER":
-            passes = self.job_passes_events and not (event.type == "ESC" and event.value == "PRESS")
+            passes = self.job_passes_events and not cancels
             return {"PASS_THROUGH"} if passes else {"RUNNING_MODAL"}
         job = self._job
         percent = int(100 * job.progress.fraction)
@@ -159,6 +160,31 @@ class FirnJobMixin:
     def _finish(self, context, inputs, result):
         self.apply(context, inputs, result)
         return {"FINISHED"}
+
+
+def _playing(context):
+    """The animation plays: Esc stops it (a user scrubbing and playing beside a long job), not the job."""
+    return context.screen is not None and context.screen.is_animation_playing
+
+
+def scene_left(operator, context, scene_name, label):
+    """True, with a warning, when the active scene is no longer the job's `scene_name`: the user switched scenes while
+    the job ran, and what it adds would land in the other scene (its files stay and a new run reuses them)."""
+    if context.scene.name == scene_name:
+        return False
+    operator.report({"WARNING"}, f"{label} ended while another scene was shown: nothing was added. Show '{scene_name}' "
+                                 "and run it again: what it already made is reused")
+    return True
+
+
+def select_only(context, obj):
+    """A job's new object becomes the selection, unless the user went on into another mode meanwhile."""
+    if context.mode != "OBJECT":
+        return
+    for other in context.selected_objects:
+        other.select_set(False)
+    obj.select_set(True)
+    context.view_layer.objects.active = obj
 
 
 def _redraw_panels(context):

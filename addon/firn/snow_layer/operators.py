@@ -11,7 +11,7 @@ import numpy as np
 from mathutils import Matrix, Vector
 
 from ..common import cache, placement, preferences, scene_geometry
-from ..common.modes import object_mode_poll
+from ..common.modes import no_job_poll, object_mode_poll
 from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
@@ -377,7 +377,7 @@ def snow_with_metaballs_poll(operator, context):
     if snow is None or snow.firn.metaballs is None:
         operator.poll_message_set("Select a snow object made by Add Snow Layer (that kept its metaballs)")
         return False
-    return True
+    return no_job_poll(operator)  # it rewrites the layer's file, which a running job may read
 
 
 class FIRN_OT_add_snow_layer(FirnJobMixin, bpy.types.Operator):
@@ -451,7 +451,7 @@ class FIRN_OT_regenerate_snow(FirnJobMixin, bpy.types.Operator):
         if active_snow_layer(context) is None:
             cls.poll_message_set("Select a snow object made by Add Snow Layer")
             return False
-        return True
+        return no_job_poll(cls)  # it rewrites the layer's file, which a running job may read
 
     def prepare(self, context):
         snow = active_snow_layer(context)

@@ -16,7 +16,7 @@ from ..bake.inputs import occluder_objects
 from ..common import cache, placement, scene_geometry
 from ..common.core import firncore
 from ..common.errors import UserError
-from ..common.jobs import FirnJobMixin
+from ..common.jobs import FirnJobMixin, scene_left, select_only
 from ..common.modes import no_job_poll, object_mode_poll
 from ..material import nodes as materials
 from ..properties import (BAKE_QUALITY_ITEMS, CORE_SPRAY_SETTINGS, OPTICS_SETTINGS, SPRAY_PROPERTIES, active_snow_layer,
@@ -187,7 +187,7 @@ def _new_spray_object(context, name, role, snow, props, emitters, frames):
     for setting in SPRAY_PROPERTIES:
         setattr(record, setting, getattr(props, setting))
     for emitter in emitters:
-        record.emitters.add().object = emitter
+        record.emitters.add().object = emitter  # None: an emitter deleted while the spray was simulated
     return obj
 
 
@@ -230,20 +230,23 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
         name = free_object_name("Snow Spray")
         directory, stored = cache.spray_folder(name)
         inputs = gather_inputs(context, self, snow, emitters, frames, directory)
-        return dict(inputs, name=name, stored=stored, snow=snow.name, emitter_names=[obj.name for obj in emitters])
+        return dict(inputs, name=name, stored=stored, snow=snow.name, emitter_names=[obj.name for obj in emitters],
+                    scene=context.scene.name)
 
     compute = staticmethod(simulate)
 
     def apply(self, context, inputs, run):
-        snow = bpy.data.objects.get(inputs["snow"])
-        if snow is None:  # the user kept working during the simulation
-            self.report({"WARNING"}, f"'{inputs['snow']}' was deleted during the simulation: no spray was added "
-                                     f"(its frames are in {inputs['directory']})")
+        snow = bpy.data.objects.get(inputs["snow"])  # the user kept working during the simulation
+        if scene_left(self, context, inputs["scene"], ADD_LABEL):
             return
-        emitters = [bpy.data.objects[name] for name in inputs["emitter_names"] if name in bpy.data.objects]
-        if len(emitters) < len(inputs["emitter_names"]):
-            self.report({"WARNING"}, "An emitter was deleted during the simulation: Bake Sequence cannot simulate "
-                                     "this spray again")
+        if snow is None:
+            self.report({"WARNING"}, f"'{inputs['snow']}' was deleted or renamed during the simulation: no spray was "
+                                     f"added (its frames are in {inputs['directory']})")
+            return
+        emitters = [bpy.data.objects.get(name) for name in inputs["emitter_names"]]
+        if None in emitters:  # kept as an empty slot: Bake Sequence then says it cannot simulate the spray again
+            self.report({"WARNING"}, "An emitter was deleted or renamed during the simulation: Bake Sequence cannot "
+                                     "simulate this spray again")
         frames = inputs["first"], inputs["last"]
         spray = _new_spray_object(context, inputs["name"], "SPRAY", snow, self, emitters, frames)
         spray.firn.mean_density = self.lump_density
@@ -257,10 +260,7 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
             play_sequence(tracks, inputs["stored"], "snow", *frames)
             materials.ensure_snow_material(tracks)
             show_snow(snow, False)
-        for obj in context.selected_objects:
-            obj.select_set(False)
-        spray.select_set(True)
-        context.view_layer.objects.active = spray
+        select_only(context, spray)
         self.report({"INFO"}, f"Snow Spray: {spray.firn.spray.summary}")
 
 
@@ -341,7 +341,8 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
             tracks, frames = _light_jobs(self, context, spray, lit)
             jobs.append(dict(inputs, name=spray.name, tracks=tracks, lit=lit, frames=frames))
         worlds = light.world_requests(context.scene, [frame for job in jobs for frame in job["frames"]])
-        return {"jobs": jobs, "current": 0, "worlds": worlds, "quality": self.quality, "seed": self.seed}
+        return {"jobs": jobs, "current": 0, "worlds": worlds, "quality": self.quality, "seed": self.seed,
+                "scene": context.scene.name}
 
     def job_status(self, inputs, progress):
         jobs = inputs["jobs"]
@@ -388,8 +389,8 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
                 unlit, lit = ("spray", "lit_spray") if obj.firn.spray.role == "SPRAY" else ("snow", "lit")
                 kind = lit if self._plays_light(obj, job, lit) else unlit
                 play_sequence(obj, os.path.dirname(obj.data.filepath), kind, job["first"], job["last"])
-                if kind == lit:
-                    self._adopt_light(context.scene, obj, job)
+                if kind == lit:  # the render settings of the scene baked, whichever the user shows now
+                    self._adopt_light(bpy.data.scenes.get(inputs["scene"], context.scene), obj, job)
                 elif not self.light:  # Bake Light off: the lumps and the tracked snow render unlit
                     obj.firn.bake_fingerprint = obj.firn.bake_summary = ""
                     materials.ensure_snow_material(obj)
@@ -397,7 +398,7 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
     def _plays_light(self, obj, job, kind):
         """A spray or its tracked snow plays its lit files (`kind`) when every frame has one, or when only some
         frames were asked for (a render-farm node): then the others are said to be missing."""
-        if not self.light or (kind == "lit" and job["tracks"] != obj.name):
+        if not self.light or (kind == "lit" and job["tracks"] is None):
             return False
         first, last = job["lit"]
         if light.all_lit(job["directory"], job["first"], job["last"], kind):
