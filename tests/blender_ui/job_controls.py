@@ -92,7 +92,7 @@ def step():
     if phase == "start":
         addon_utils.enable("firn", default_set=True)
         register_waiting_job()
-        listen_keys("K", heard)
+        listen_keys(heard)
         start_job()
         state["phase"], state["ticks"] = "typing", 0
     elif phase == "typing" and state["ticks"] == 3:

@@ -11,19 +11,14 @@ import sys
 import bpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ui_test import check_scene_kept, run_cancel_test, snow_and_mover, start_modal  # noqa: E402
+from ui_test import check_scene_kept, run_cancel_test, sliding_ski, snow_and_mover, start_modal  # noqa: E402
 
 FRAMES = 400  # seconds of simulation on any machine: long enough to be cancelled half way
 
 
 def ski():
     """A ski's sole sliding 1.6 m through the snow over the frames."""
-    bpy.ops.mesh.primitive_plane_add(size=1.0)
-    sole = bpy.context.object
-    sole.scale = (0.3, 0.06, 1.0)
-    for frame, x in ((1, -0.8), (FRAMES, 0.8)):
-        sole.location = (x, 0.0, 0.05)
-        sole.keyframe_insert("location", frame=frame)
+    sliding_ski(FRAMES, 0.8)
 
 
 def start_job(state):

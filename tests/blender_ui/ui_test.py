@@ -78,9 +78,9 @@ def strict_apply(operator):
     operator.apply = checked
 
 
-def listen_keys(key, heard):
-    """Counts in heard[key] the presses of `key` that reach a modal handler added now: one added later (a job's)
-    must pass them on for it to hear them."""
+def listen_keys(heard):
+    """Counts in heard[key] the presses of each key of `heard` that reach a modal handler added now: one added
+    later (a job's) must pass them on for it to hear them."""
 
     class FIRN_OT_test_listen(bpy.types.Operator):
         bl_idname = "firn.test_listen"
@@ -91,8 +91,8 @@ def listen_keys(key, heard):
             return {"RUNNING_MODAL"}
 
         def modal(self, _context, event):
-            if event.type == key and event.value == "PRESS":
-                heard[key] = heard.get(key, 0) + 1
+            if event.type in heard and event.value == "PRESS":
+                heard[event.type] += 1
             return {"PASS_THROUGH"}
 
     bpy.utils.register_class(FIRN_OT_test_listen)
@@ -222,6 +222,16 @@ def snow_and_mover(state, plane_size, add_mover, **snow_settings):
     snow.select_set(True)
     bpy.context.view_layer.objects.active = snow
     state["objects"] = {obj.name for obj in bpy.data.objects}
+
+
+def sliding_ski(frames, reach):
+    """A ski's sole (30 × 6 cm) sliding 5 cm deep from x = -reach to +reach m over frames 1…`frames`."""
+    bpy.ops.mesh.primitive_plane_add(size=1.0)
+    sole = bpy.context.object
+    sole.scale = (0.3, 0.06, 1.0)
+    for frame, x in ((1, -reach), (frames, reach)):
+        sole.location = (x, 0.0, 0.05)
+        sole.keyframe_insert("location", frame=frame)
 
 
 def check_scene_kept(state, name):
