@@ -151,9 +151,10 @@ class FirnJobMixin:
     def _end_modal(self, context):
         wm = context.window_manager
         wm.event_timer_remove(self._timer)
-        wm.progress_end()
-        context.workspace.status_text_set(None)
         _running.remove(self._job)
+        if not _running:  # a short job ended beside a long one: the long one's progress and status go on
+            wm.progress_end()
+            context.workspace.status_text_set(None)
         if self.job_passes_events:
             _redraw_panels(context)
 
