@@ -1,15 +1,17 @@
 """Blender with a window (under xvfb-run): the user keeps working beside Firn's sequence jobs. While Add Snow Spray,
-Bake Sequence and Bake Light Sequence run, key presses pass on to the rest of Blender, the operators that would
-start a second job, rewrite the snow or remove the files being written refuse, Esc stops the animation playing
-beside a job (Esc passes on to Blender, the job runs on), and deleting an object the job came from ends it cleanly: Bake Sequence lights the
-Tracks of a spray whose Snow Spray object was deleted, Bake Light Sequence adds no Lit Volume for a deleted snow
-layer and leaves the frames it baked in the cache (its warning says where).
+Bake Sequence and Bake Light Sequence run, key presses pass on to the rest of Blender; the operators that would
+start a second job, rewrite the snow or remove the files being written refuse; Esc pressed while the animation plays
+passes on to Blender and the job runs on; a new file saved meanwhile gets its snow files next to it once the job has
+ended, not before; and deleting an object the job came from ends it cleanly: Bake Sequence lights the Tracks of a
+spray whose Snow Spray object was deleted, Bake Light Sequence adds no Lit Volume for a deleted snow layer and leaves
+the frames it baked in the cache (its warning says where).
 
 xvfb-run blender --factory-startup --enable-event-simulate --python keep_working.py   (exit code 0 = pass)
 """
 
 import os
 import sys
+import tempfile
 import time
 
 import bpy
@@ -20,6 +22,7 @@ from ui_test import (  # noqa: E402
     sliding_ski, start_modal, strict_apply, window_context)
 
 FRAMES = 4
+FOLDER = os.path.join(tempfile.gettempdir(), f"firn_keep_working_{os.getpid()}")  # not the session's snow cache
 state = {"phase": "start", "ticks": 0, "since": 0.0}
 KEY = "F13"  # bound to nothing: no menu opens to take the next presses
 heard = {KEY: 0, "ESC": 0}
@@ -79,6 +82,22 @@ def release(then=lambda: None):
     state["since"] = time.perf_counter()
 
 
+def save_new_file():
+    """The user saves the new file while the job runs: its snow stays where the job reads and writes it."""
+    os.makedirs(FOLDER, exist_ok=True)
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(FOLDER, "keep_working.blend"))
+    if os.path.normpath(bpy.path.abspath(bpy.data.objects["Snow"].data.filepath)).startswith(FOLDER):
+        fail("the first save moved the snow files while a job used them")
+
+
+def check_moved_beside_the_file():
+    """Once the job has ended, the snow files of the file saved meanwhile are moved next to it, the job's too."""
+    for name in ("Snow", "Snow Spray", "Snow Tracks"):
+        volume = bpy.data.objects[name].data
+        if not (volume.filepath.startswith("//") and os.path.exists(bpy.path.abspath(volume.filepath))):
+            fail(f"'{name}' reads {volume.filepath} after the job, not a file next to the saved .blend")
+
+
 def play_esc_and_delete_snow():
     """The user plays the animation, presses Esc to stop it, and deletes the snow layer."""
     with bpy.context.temp_override(**window_context()):
@@ -124,6 +143,7 @@ def step():
     elif phase == "spray ends" and not job_running():
         if {"Snow Spray", "Snow Tracks"} - set(bpy.data.objects.keys()):
             fail(f"Add Snow Spray made {sorted(bpy.data.objects.keys())}")
+        check_moved_beside_the_file()
         make_active("Snow Spray")
         start("sequence", lambda: bpy.ops.firn.bake_sequence("INVOKE_DEFAULT", quality="DRAFT"))
     elif phase == "sequence ends" and not job_running():
@@ -157,7 +177,8 @@ def remove(name):
 
 
 PLAN = {  # per job: what refuses while it runs, what the user does meanwhile, and how that ended
-    "spray": ([bpy.ops.firn.add_snow_spray, bpy.ops.firn.bake_light_sequence, bpy.ops.firn.bake_scattering],),
+    "spray": ([bpy.ops.firn.add_snow_spray, bpy.ops.firn.bake_light_sequence, bpy.ops.firn.bake_scattering,
+               bpy.ops.firn.regenerate_snow], save_new_file),
     "sequence": ([bpy.ops.firn.clear_snow_spray, bpy.ops.firn.bake_sequence, bpy.ops.firn.bake_scattering],
                  lambda: remove("Snow Spray")),
     "light": ([bpy.ops.firn.bake_light_sequence, bpy.ops.firn.add_snow_spray, bpy.ops.firn.regenerate_snow],

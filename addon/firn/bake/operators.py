@@ -357,7 +357,7 @@ class FIRN_OT_clear_bake(bpy.types.Operator):
         if not any(obj.firn.bake_fingerprint for obj in bake_targets(context)):
             cls.poll_message_set("Select baked snow")
             return False
-        return True
+        return no_job_poll(cls)  # it rewrites the snow's file, which a running job may read
 
     def execute(self, context):
         cleared = []

@@ -20,7 +20,7 @@ from bpy.app.handlers import persistent
 from . import preferences
 from .core import firncore
 from .errors import UserError
-from .jobs import running_jobs
+from .jobs import idle_hooks, running_jobs
 
 _SESSION_FOLDER = os.path.join(tempfile.gettempdir(), f"firn_cache_{os.getpid()}")
 DAMAGED_KEY = "firn_damaged_file"  # Volume custom property: the path of a file set aside as unreadable
@@ -151,8 +151,8 @@ def _snow_volumes():
 @persistent
 def _move_session_files_on_save(*_args):
     """After the first save of a file, its snow moves from the session folder next to the .blend; while a Firn job
-    runs, at a later save (the job reads and writes files there: the user may save while it runs)."""
-    if running_jobs():
+    runs, once the last one has ended (it reads and writes files there: the user may save while it runs)."""
+    if running_jobs() or not bpy.data.filepath:
         return
     for volume in _snow_volumes():
         source = os.path.normpath(bpy.path.abspath(volume.filepath))  # saving made it relative: '//../..'
@@ -203,12 +203,14 @@ def _set_aside_damaged_files_on_load(*_args):
 
 def register_extras():
     bpy.app.handlers.save_post.append(_move_session_files_on_save)
+    idle_hooks.append(_move_session_files_on_save)
     bpy.app.handlers.load_post.append(_find_moved_files_on_load)
     bpy.app.handlers.load_post.append(_set_aside_damaged_files_on_load)
 
 
 def unregister_extras():
     bpy.app.handlers.save_post.remove(_move_session_files_on_save)
+    idle_hooks.remove(_move_session_files_on_save)
     bpy.app.handlers.load_post.remove(_find_moved_files_on_load)
     bpy.app.handlers.load_post.remove(_set_aside_damaged_files_on_load)
 

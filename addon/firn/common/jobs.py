@@ -23,6 +23,7 @@ from .errors import UserError
 _TIMER_INTERVAL = 0.1  # s
 _WORKER_NICENESS = 5  # the worker yields the processor to Blender's UI (and its drawing, in software GL)
 _running = []  # jobs started from the UI, until their operator ends
+idle_hooks = []  # called once the last running job has ended and applied its result (cache.py registers one)
 
 
 def running_jobs():
@@ -113,7 +114,7 @@ class FirnJobMixin:
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        cancels = event.type == "ESC" and event.value == "PRESS" and not _playing(context)
+        cancels = event.type == "ESC" and event.value == "PRESS" and not (self.job_passes_events and _playing(context))
         if cancels:
             self._job.cancel()
         if event.type != "TIMER":
@@ -129,6 +130,15 @@ class FirnJobMixin:
         if not job.done:
             return {"PASS_THROUGH"}
         self._end_modal(context)
+        try:
+            return self._conclude(context, job)
+        finally:
+            if not _running:
+                for hook in idle_hooks:
+                    hook()
+
+    def _conclude(self, context, job):
+        """The ended job's result applied, or its error or cancel reported."""
         if isinstance(job.error, firncore.Cancelled):
             self.report({"INFO"}, f"{self.job_label} cancelled: nothing changed")
             return {"CANCELLED"}
@@ -179,8 +189,9 @@ def scene_left(operator, context, scene_name, label):
 
 
 def select_only(context, obj):
-    """A job's new object becomes the selection, unless the user went on into another mode meanwhile."""
-    if context.mode != "OBJECT":
+    """A job's new object becomes the selection, unless the user went on into another mode meanwhile (or made a
+    collection outside the view layer active, where the object went)."""
+    if context.mode != "OBJECT" or obj.name not in context.view_layer.objects:
         return
     for other in context.selected_objects:
         other.select_set(False)

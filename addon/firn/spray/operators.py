@@ -245,8 +245,8 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
             return
         emitters = [bpy.data.objects.get(name) for name in inputs["emitter_names"]]
         if None in emitters:  # kept as an empty slot: Bake Sequence then says it cannot simulate the spray again
-            self.report({"WARNING"}, "An emitter was deleted or renamed during the simulation: Bake Sequence cannot "
-                                     "simulate this spray again")
+            self.report({"WARNING"}, "An emitter was deleted or renamed during the simulation: Bake Sequence refuses "
+                                     "while this spray lacks it (Clear it first)")
         frames = inputs["first"], inputs["last"]
         spray = _new_spray_object(context, inputs["name"], "SPRAY", snow, self, emitters, frames)
         spray.firn.mean_density = self.lump_density
