@@ -10,6 +10,7 @@ xvfb-run blender --factory-startup --enable-event-simulate --python keep_working
 """
 
 import os
+import shutil
 import sys
 import tempfile
 import time
@@ -166,6 +167,7 @@ def step():
         if sorted(name for name in os.listdir(folder) if name.endswith(".vdb")) != [
                 f"lit_{frame:04d}.vdb" for frame in (1, 2, 3)]:
             fail(f"the lit frames of a deleted snow layer: {os.listdir(folder)}")
+        shutil.rmtree(FOLDER)  # the saved file and its snow
         passed()
         return False
     elif phase.endswith(" ends") and time.perf_counter() - state["since"] > HUNG:

@@ -18,7 +18,7 @@ from ..common import cache
 from ..common.core import firncore
 from ..common.errors import UserError
 from ..common.jobs import FirnJobMixin
-from ..common.modes import no_job_poll
+from ..common.modes import no_job_poll, object_mode_poll
 from ..material import nodes as materials, optics
 from ..properties import BAKE_QUALITY_ITEMS, is_lit_sequence
 from ..snow_layer import proxy
@@ -260,10 +260,7 @@ class FIRN_OT_bake_scattering(FirnJobMixin, bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if context.mode != "OBJECT":
-            cls.poll_message_set("Switch to Object Mode")
-            return False
-        if not no_job_poll(cls):
+        if not (object_mode_poll(cls, context) and no_job_poll(cls)):
             return False
         if not bake_targets(context):
             cls.poll_message_set("Select snow, or Volume objects with a 'density' grid")

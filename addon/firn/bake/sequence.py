@@ -145,7 +145,7 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
 
     def apply(self, context, inputs, seconds):
         snow = bpy.data.objects.get(inputs["snow"])  # the user kept working during the bake
-        if scene_left(self, context, inputs["scene"], self.bl_label):
+        if scene_left(self, context, inputs["scene"]):
             return
         if snow is None:
             self.report({"WARNING"}, f"'{inputs['snow']}' was deleted or renamed during the bake: its lit frames are "

@@ -178,13 +178,13 @@ def _playing(context):
     return context.screen is not None and context.screen.is_animation_playing
 
 
-def scene_left(operator, context, scene_name, label):
+def scene_left(operator, context, scene_name):
     """True, with a warning, when the active scene is no longer the job's `scene_name`: the user switched scenes while
     the job ran, and what it adds would land in the other scene (its files stay and a new run reuses them)."""
     if context.scene.name == scene_name:
         return False
-    operator.report({"WARNING"}, f"{label} ended while another scene was shown: nothing was added. Show '{scene_name}' "
-                                 "and run it again: what it already made is reused")
+    operator.report({"WARNING"}, f"{operator.bl_label} ended while another scene was shown: nothing was added. "
+                                 f"Show '{scene_name}' and run it again: what it already made is reused")
     return True
 
 

@@ -237,7 +237,7 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
 
     def apply(self, context, inputs, run):
         snow = bpy.data.objects.get(inputs["snow"])  # the user kept working during the simulation
-        if scene_left(self, context, inputs["scene"], ADD_LABEL):
+        if scene_left(self, context, inputs["scene"]):
             return
         if snow is None:
             self.report({"WARNING"}, f"'{inputs['snow']}' was deleted or renamed during the simulation: no spray was "
@@ -379,6 +379,7 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
         return todo
 
     def apply(self, context, inputs, runs):
+        baked_scene = bpy.data.scenes.get(inputs["scene"], context.scene)  # whichever the user shows now
         for job, run in zip(inputs["jobs"], runs):
             spray = bpy.data.objects.get(job["name"])  # the user may have deleted it during the bake
             if spray is not None:
@@ -389,8 +390,8 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
                 unlit, lit = ("spray", "lit_spray") if obj.firn.spray.role == "SPRAY" else ("snow", "lit")
                 kind = lit if self._plays_light(obj, job, lit) else unlit
                 play_sequence(obj, os.path.dirname(obj.data.filepath), kind, job["first"], job["last"])
-                if kind == lit:  # the render settings of the scene baked, whichever the user shows now
-                    self._adopt_light(bpy.data.scenes.get(inputs["scene"], context.scene), obj, job)
+                if kind == lit:
+                    self._adopt_light(baked_scene, obj, job)
                 elif not self.light:  # Bake Light off: the lumps and the tracked snow render unlit
                     obj.firn.bake_fingerprint = obj.firn.bake_summary = ""
                     materials.ensure_snow_material(obj)
