@@ -2,6 +2,7 @@
 Volume sequence with a density grid per frame, and a tracked snow sequence in the layer's place; same seed, same
 files; bad input is reported; Clear removes it all. The physics is the core's (tests/python/test_spray.py)."""
 
+import json
 import os
 import re
 
@@ -12,7 +13,7 @@ from mathutils import Matrix, Vector
 
 from firn.common import cache
 from firn.common.core import firncore
-from scene_helpers import select_only
+from scene_helpers import save_in, saved_elsewhere_during, select_only
 
 FRAMES = (2, 6)  # not from 1: the sequence's frame numbers follow the scene's
 SNOW_DEPTH = 0.1  # m
@@ -50,7 +51,7 @@ def add_spray(snow, *emitters, **settings):
 
 
 def folder_of(obj):
-    return os.path.dirname(bpy.path.abspath(obj.data.filepath))
+    return os.path.normpath(os.path.dirname(bpy.path.abspath(obj.data.filepath)))  # '//../first/…' once moved
 
 
 def test_a_volume_sequence_with_a_density_grid_per_frame(clean_scene):
@@ -184,6 +185,30 @@ def test_a_spray_saved_before_it_followed_its_snow_layer_follows_it_at_the_next_
     np.testing.assert_allclose(lumps.max(0), expected.max(0), atol=VOXEL)
 
 
+def test_a_spray_made_while_the_file_is_saved_elsewhere_plays_the_frames_its_job_wrote(clean_scene, tmp_path,
+                                                                                       monkeypatch):
+    """The user saves the file into another folder (Save As) while Add Snow Spray runs: the spray and its tracks
+    play the files the job wrote, by a path relative to the .blend where it stands now (the path taken when the job
+    started named files beside the moved .blend that do not exist: review finding). Saved elsewhere again during
+    Bake Sequence, they still do."""
+    from firn.spray.operators import FIRN_OT_add_snow_spray, FIRN_OT_bake_sequence
+
+    snow = snow_on_plane()
+    emitter = ski()
+    save_in(tmp_path / "first")
+    written = cache.spray_folder("Snow Spray")[0]  # beside the first .blend
+    saved_elsewhere_during(monkeypatch, FIRN_OT_add_snow_spray, tmp_path / "second" / "scene.blend")
+    spray = add_spray(snow, emitter)
+    tracks = bpy.data.objects[f"{snow.name} Tracks"]
+    assert spray.name == "Snow Spray" and folder_of(spray) == written
+    saved_elsewhere_during(monkeypatch, FIRN_OT_bake_sequence, tmp_path / "third" / "scene.blend")
+    assert bpy.ops.firn.bake_sequence(light=False, frame_start=FRAMES[0], frame_end=FRAMES[1] + 1) == {"FINISHED"}
+    for obj in (spray, tracks):
+        assert obj.data.filepath.startswith("//") and folder_of(obj) == written
+        assert os.path.isfile(bpy.path.abspath(obj.data.filepath))
+    assert os.path.isfile(os.path.join(written, f"spray_{FRAMES[1] + 1:04d}.vdb"))  # the frame Bake Sequence added
+
+
 def test_a_spray_stays_where_it_is_drawn_when_its_snow_layer_is_deleted(clean_scene):
     """The spray and its tracks are drawn in the snow layer's space: the viewport's Delete (X) of a moved layer
     (Blender keeps the children and drops the parent's transform) left them at the origin (review finding); they
@@ -205,6 +230,23 @@ def test_a_spray_stays_where_it_is_drawn_when_its_snow_layer_is_deleted(clean_sc
         assert np.allclose(np.array(obj.matrix_world), np.array(before), atol=1e-5)
     with pytest.raises(RuntimeError, match="its snow layer or one of its emitters was deleted"):
         bpy.ops.firn.bake_sequence(light=False)
+
+
+def test_bake_sequence_leaves_out_a_spray_whose_emitter_was_deleted_and_bakes_the_others(clean_scene, capfd):
+    """Two sprays, one of whose skis was deleted: that one cannot be simulated again and is left out with a warning,
+    the other is baked (Bake Sequence refused the whole scene before: review finding). A spray alone that cannot be
+    simulated is refused (test above)."""
+    snow = snow_on_plane()
+    kept = add_spray(snow, ski(), cut_tracks=False)
+    lost_ski = ski(name="Lost Ski")
+    lost = add_spray(snow, lost_ski, cut_tracks=False)
+    bpy.data.objects.remove(lost_ski)
+    capfd.readouterr()
+    assert bpy.ops.firn.bake_sequence(light=False, frame_end=FRAMES[1] + 1) == {"FINISHED"}
+    added = f"spray_{FRAMES[1] + 1:04d}.vdb"
+    assert os.path.isfile(os.path.join(folder_of(kept), added))
+    assert not os.path.exists(os.path.join(folder_of(lost), added))
+    assert f"'{lost.name}': its snow layer or one of its emitters was deleted" in capfd.readouterr().out
 
 
 def test_a_scene_without_obstacles_throws_snow(clean_scene):
@@ -416,6 +458,13 @@ def test_bake_sequence_bakes_the_tracked_snow_and_the_lumps_at_every_frame(clean
     assert bake_state.changes(spray) == (bake_state.OUTDATED, ["snow layer's place"])
     snow.location.x = x
     assert bake_state.changes(tracks) == (bake_state.BAKED, [])
+    # A marker written before Firn recorded the layer's place cannot tell whether the layer moved: it says so.
+    marker = os.path.join(folder, f"lit_{FRAMES[0] + 1:04d}.json")
+    with open(marker, encoding="utf-8") as stream:
+        parts = json.load(stream)
+    with open(marker, "w", encoding="utf-8") as stream:
+        json.dump({key: value for key, value in parts.items() if key != "place"}, stream)
+    assert bake_state.changes(tracks) == (bake_state.OUTDATED, ["baked by an earlier Firn"])
     # The lumps are baked with the tracked snow (spray/light.py): the Snow Spray plays their lit files, baked.
     lumps = _lit_spray_files(folder)
     assert all(set(firncore.BAKED_GRID_NAMES) <= set(firncore.grid_names(path)) for path in lumps)

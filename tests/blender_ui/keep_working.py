@@ -2,9 +2,10 @@
 Bake Sequence and Bake Light Sequence run, key presses pass on to the rest of Blender; the operators that would
 start a second job, rewrite the snow or remove the files being written refuse; Esc pressed while the animation plays
 passes on to Blender and the job runs on; a new file saved meanwhile gets its snow files next to it once the job has
-ended, not before; and deleting an object the job came from ends it cleanly: Bake Sequence lights the Tracks of a
-spray whose Snow Spray object was deleted, Bake Light Sequence adds no Lit Volume for a deleted snow layer and leaves
-the frames it baked in the cache (its warning says where).
+ended, not before; a scene switched to meanwhile gets nothing, and the job's own scene gets it when the job runs
+again there (reusing what was baked); and deleting an object the job came from ends it cleanly: Bake Sequence lights
+the Tracks of a spray whose Snow Spray object was deleted, Bake Light Sequence adds no Lit Volume for a deleted snow
+layer and leaves the frames it baked in the cache (its warning says where).
 
 xvfb-run blender --factory-startup --enable-event-simulate --python keep_working.py   (exit code 0 = pass)
 """
@@ -99,6 +100,20 @@ def check_moved_beside_the_file():
             fail(f"'{name}' reads {volume.filepath} after the job, not a file next to the saved .blend")
 
 
+def switch_scene():
+    """The user shows a new scene while the job runs."""
+    state["scene"] = bpy.context.window_manager.windows[0].scene
+    bpy.context.window_manager.windows[0].scene = bpy.data.scenes.new("Other")
+
+
+def nothing_in_either_scene():
+    """The job ended while the other scene was shown: no Lit Volume anywhere; the user shows the job's scene again."""
+    if any(obj.firn.spray.role == "LIGHT" for obj in bpy.data.objects):
+        fail("Bake Light Sequence added a Lit Volume while another scene was shown")
+    bpy.context.window_manager.windows[0].scene = state["scene"]
+    bpy.data.scenes.remove(bpy.data.scenes["Other"])
+
+
 def play_esc_and_delete_snow():
     """The user plays the animation, presses Esc to stop it, and deletes the snow layer."""
     with bpy.context.temp_override(**window_context()):
@@ -131,14 +146,14 @@ def step():
         make_active("Snow")
         bpy.data.objects["Plane.001"].select_set(True)  # the ski
         start("spray", lambda: bpy.ops.firn.add_snow_spray("INVOKE_DEFAULT", frame_start=1, frame_end=FRAMES))
-    elif phase in {"spray", "sequence", "light"} and state["ticks"] == 3:
+    elif phase in PLAN and state["ticks"] == 3:
         if not job_running():
             fail(f"{phase}: the job ended while its worker was held")
         state["heard"] = heard[KEY]
         press(KEY)
-    elif phase in {"spray", "sequence", "light"} and state["ticks"] == 6:
+    elif phase in PLAN and state["ticks"] == 6:
         check_held(*PLAN[phase][:2])
-    elif phase in {"spray", "sequence", "light"} and state["ticks"] == 9:
+    elif phase in PLAN and state["ticks"] == 9:
         release(*PLAN[phase][2:])  # an Esc that stopped the playback left the job running
         state["phase"] = phase + " ends"
     elif phase == "spray ends" and not job_running():
@@ -156,8 +171,21 @@ def step():
             if bpy.ops.firn.clear_snow_spray() != {"FINISHED"}:
                 fail("Clear Snow Spray refused once the bake had ended")
         make_active("Snow")
-        start("light", lambda: bpy.ops.firn.bake_light_sequence("INVOKE_DEFAULT", frame_start=1, frame_end=3,
-                                                                 quality="DRAFT"))
+        start("switched", light_frames)
+    elif phase == "switched ends" and not job_running():
+        nothing_in_either_scene()
+        make_active("Snow")
+        start("lit", light_frames)
+    elif phase == "lit ends" and not job_running():
+        lit = [obj for obj in bpy.data.objects if obj.firn.spray.role == "LIGHT"]
+        if len(lit) != 1 or "(0 baked now" not in lit[0].firn.bake_summary:
+            fail(f"Bake Light Sequence in its own scene again: {[obj.firn.bake_summary for obj in lit]}")
+        make_active(lit[0].name)
+        with bpy.context.temp_override(**window_context()):
+            if bpy.ops.firn.clear_light_sequence() != {"FINISHED"}:
+                fail("Clear Light Sequence refused once the bake had ended")
+        make_active("Snow")
+        start("light", light_frames)  # three frames baked afresh: the layer is deleted during the bake
     elif phase == "light ends" and not job_running():
         if any(obj.firn.spray.role == "LIGHT" for obj in bpy.data.objects):
             fail("Bake Light Sequence added a Lit Volume for a deleted snow layer")
@@ -174,6 +202,10 @@ def step():
         fail(f"{phase}: hung")
 
 
+def light_frames():
+    return bpy.ops.firn.bake_light_sequence("INVOKE_DEFAULT", frame_start=1, frame_end=3, quality="DRAFT")
+
+
 def remove(name):
     bpy.data.objects.remove(bpy.data.objects[name])
 
@@ -183,6 +215,8 @@ PLAN = {  # per job: what refuses while it runs, what the user does meanwhile, a
                bpy.ops.firn.regenerate_snow], save_new_file),
     "sequence": ([bpy.ops.firn.clear_snow_spray, bpy.ops.firn.bake_sequence, bpy.ops.firn.bake_scattering],
                  lambda: remove("Snow Spray")),
+    "switched": ([bpy.ops.firn.bake_light_sequence], switch_scene),
+    "lit": ([], lambda: None),
     "light": ([bpy.ops.firn.bake_light_sequence, bpy.ops.firn.add_snow_spray, bpy.ops.firn.regenerate_snow],
               play_esc_and_delete_snow, esc_passed_on),
 }

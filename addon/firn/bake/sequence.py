@@ -112,12 +112,11 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
         first, last = _frames(self, context.scene)
         lit = lit_sequence_of(snow)
         if lit is not None:
-            name, stored = lit.name, os.path.dirname(lit.data.filepath)
-            directory = os.path.dirname(cache.volume_path(lit.data))
+            name, directory = lit.name, os.path.dirname(cache.volume_path(lit.data))
             shown = min(first, lit.firn.spray.frame_start), max(last, lit.firn.spray.frame_end)
         else:
             name = free_object_name(f"{snow.name} Lit")
-            directory, stored = cache.spray_folder(name)
+            directory = cache.spray_folder(name)[0]
             shown = first, last
         cache.check_writable(os.path.join(directory, "lit.vdb"))
         _check_disk(directory, snow_path, range(first, last + 1))
@@ -125,7 +124,7 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
         jobs = light.gather_layer(context, snow, lit or snow, range(first, last + 1), directory, self.quality,
                                   self.seed)
         return {"jobs": jobs, "worlds": light.world_requests(context.scene, jobs), "snow": snow.name, "name": name,
-                "directory": directory, "stored": stored, "frames": (first, last), "shown": shown,
+                "directory": directory, "frames": (first, last), "shown": shown,
                 "quality": self.quality, "seed": self.seed, "scene": context.scene.name}
 
     def job_status(self, inputs, progress):
@@ -153,7 +152,7 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
             return
         lit = _lit_volume(context, snow, inputs)
         first, last = inputs["shown"]
-        play_sequence(lit, inputs["stored"], "lit", first, last)
+        play_sequence(lit, inputs["directory"], "lit", first, last)
         keep_baked_optics(lit.firn, inputs["jobs"][0]["optics"])
         cost = f"; {sum(seconds) / len(seconds):.1f} processor s a frame" if seconds else ""
         lit.firn.bake_summary = (f"{inputs['quality'].title()} light, frames {first}-{last} "

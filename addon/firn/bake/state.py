@@ -29,6 +29,7 @@ STATES = (
 # What each component is called in the panel's "needs re-bake" line.
 LABELS = {"lights": "lamps", "sky": "world", "occluders": "objects", "optics": "optics", "snow": "snow",
           "place": "snow layer's place"}
+EARLIER = "baked by an earlier Firn"  # the bake recorded less than Firn records now: it cannot tell what changed
 MAX_NAMED_OBJECTS = 3  # changed occluders named one by one; more are counted
 
 
@@ -146,6 +147,9 @@ def _compare(then, now):
     changed = []
     for key in sorted(set(then) | set(now)):
         if key not in now or then.get(key) == now[key]:
+            continue
+        if then and key not in then:  # a fingerprint (not a damaged one) from before Firn recorded this
+            changed.extend([] if EARLIER in changed else [EARLIER])
             continue
         changed.extend(_changed_objects(then.get(key), now[key]) if key == "occluders"
                        else [LABELS.get(key, key)])

@@ -47,10 +47,22 @@ def folder():
 def _entry(name):
     """(absolute path, path to store in a Volume) of a file or folder `name` in the cache folder."""
     absolute = os.path.join(folder(), name)
+    return absolute, stored_path(absolute)
+
+
+def stored_path(absolute):
+    """The path to store in a Volume for the file or folder at `absolute`, as the file stands now: relative to the
+    saved .blend ('//', as Blender stores paths) unless a Cache Folder is set. Jobs take it when they end, not when
+    they start: the user may have saved the file elsewhere since (Save As), and a path relative to the old .blend
+    would name a file that is not there."""
     prefs = preferences.get()
-    if bpy.data.filepath and not (prefs and prefs.cache_folder):
-        return absolute, f"{_blend_cache_folder()}/{name}"
-    return absolute, absolute
+    if not bpy.data.filepath or (prefs and prefs.cache_folder):
+        return absolute
+    try:
+        relative = os.path.relpath(absolute, os.path.dirname(bpy.data.filepath))
+    except ValueError:  # another drive (Windows): no relative path leads there
+        return absolute
+    return "//" + relative.replace(os.sep, "/")  # as Blender stores relative paths, on every system
 
 
 def snow_file(object_name):

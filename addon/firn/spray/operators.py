@@ -129,11 +129,14 @@ def summary(inputs, run):
             f"{len(run['snow_frames'])} frames")
 
 
-def play_sequence(obj, stored_folder, kind, first, last):
-    """Points a Volume at a spray folder's `kind` ("spray" or "snow") files as a sequence: scene frame f plays
-    the file of frame f, held before the first and after the last."""
+def play_sequence(obj, folder, kind, first, last):
+    """Points a Volume at the `kind` ("spray", "snow", "lit", ...) files of a spray folder (absolute) as a
+    sequence: scene frame f plays the file of frame f, held before the first and after the last. The path is
+    stored as the .blend stands when the job ends (cache.stored_path), or absolute where the user made it so."""
     volume = obj.data
-    volume.filepath = f"{stored_folder}/{os.path.basename(files.frame_path('.', first, kind))}"
+    path = files.frame_path(folder, first, kind)
+    absolute = volume.filepath and not volume.filepath.startswith("//")  # Make Paths Absolute, a farm's setup
+    volume.filepath = path if absolute else cache.stored_path(path)
     volume.is_sequence = True
     volume.frame_start = first
     volume.frame_duration = last - first + 1
@@ -228,9 +231,9 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
                             "(Bake Sequence lights the tracked snow frame by frame), or turn Cut Tracks off")
         frames = frame_range(self, context.scene)
         name = free_object_name("Snow Spray")
-        directory, stored = cache.spray_folder(name)
+        directory = cache.spray_folder(name)[0]
         inputs = gather_inputs(context, self, snow, emitters, frames, directory)
-        return dict(inputs, name=name, stored=stored, snow=snow.name, emitter_names=[obj.name for obj in emitters],
+        return dict(inputs, name=name, snow=snow.name, emitter_names=[obj.name for obj in emitters],
                     scene=context.scene.name)
 
     compute = staticmethod(simulate)
@@ -245,19 +248,19 @@ class FIRN_OT_add_snow_spray(FirnJobMixin, bpy.types.Operator):
             return
         emitters = [bpy.data.objects.get(name) for name in inputs["emitter_names"]]
         if None in emitters:  # kept as an empty slot: Bake Sequence then says it cannot simulate the spray again
-            self.report({"WARNING"}, "An emitter was deleted or renamed during the simulation: Bake Sequence refuses "
-                                     "while this spray lacks it (Clear it first)")
+            self.report({"WARNING"}, "An emitter was deleted or renamed during the simulation: Bake Sequence leaves "
+                                     "this spray out while it lacks it (Clear it, then Add Snow Spray again)")
         frames = inputs["first"], inputs["last"]
         spray = _new_spray_object(context, inputs["name"], "SPRAY", snow, self, emitters, frames)
         spray.firn.mean_density = self.lump_density
         spray.firn.spray.summary = summary(inputs, run)
-        play_sequence(spray, inputs["stored"], "spray", *frames)
+        play_sequence(spray, inputs["directory"], "spray", *frames)
         materials.ensure_snow_material(spray)
         if run["snow_frames"]:
             tracks = _new_spray_object(context, free_object_name(f"{snow.name} Tracks"), "TRACKS", snow, self,
                                        emitters, frames)
             tracks.firn.mean_density = snow.firn.mean_density
-            play_sequence(tracks, inputs["stored"], "snow", *frames)
+            play_sequence(tracks, inputs["directory"], "snow", *frames)
             materials.ensure_snow_material(tracks)
             show_snow(snow, False)
         select_only(context, spray)
@@ -324,14 +327,15 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
         return no_job_poll(cls)
 
     def prepare(self, context):
-        jobs = []
+        jobs, broken = [], []
         for spray in [obj for obj in context.scene.objects if obj.firn.spray.role == "SPRAY"]:
             record = spray.firn.spray
             snow = record.source
             emitters = [item.object for item in record.emitters]
-            if snow is None or None in emitters:
-                raise UserError(f"'{spray.name}': its snow layer or one of its emitters was deleted: Clear it and "
-                                "Add Snow Spray again")
+            if snow is None or None in emitters:  # it cannot be simulated again; the others can
+                broken.append(f"'{spray.name}': its snow layer or one of its emitters was deleted: Clear it and Add "
+                              "Snow Spray again")
+                continue
             for obj in (spray, _tracks_of(spray)):  # also a spray saved before they followed their snow layer
                 if obj is not None:
                     placement.follow(obj, snow)  # where the layer stands now: they stay there if it is deleted
@@ -340,9 +344,11 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
             inputs = gather_inputs(context, record, snow, emitters, simulated, directory)
             tracks, frames = _light_jobs(self, context, spray, lit)
             jobs.append(dict(inputs, name=spray.name, tracks=tracks, lit=lit, frames=frames))
+        if broken and not jobs:
+            raise UserError("; ".join(broken))
         worlds = light.world_requests(context.scene, [frame for job in jobs for frame in job["frames"]])
         return {"jobs": jobs, "current": 0, "worlds": worlds, "quality": self.quality, "seed": self.seed,
-                "scene": context.scene.name}
+                "scene": context.scene.name, "left_out": broken}
 
     def job_status(self, inputs, progress):
         jobs = inputs["jobs"]
@@ -389,12 +395,14 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
                 obj.firn.spray.frame_start, obj.firn.spray.frame_end = job["first"], job["last"]
                 unlit, lit = ("spray", "lit_spray") if obj.firn.spray.role == "SPRAY" else ("snow", "lit")
                 kind = lit if self._plays_light(obj, job, lit) else unlit
-                play_sequence(obj, os.path.dirname(obj.data.filepath), kind, job["first"], job["last"])
+                play_sequence(obj, os.path.dirname(cache.volume_path(obj.data)), kind, job["first"], job["last"])
                 if kind == lit:
                     self._adopt_light(baked_scene, obj, job)
                 elif not self.light:  # Bake Light off: the lumps and the tracked snow render unlit
                     obj.firn.bake_fingerprint = obj.firn.bake_summary = ""
                     materials.ensure_snow_material(obj)
+        for message in inputs["left_out"]:  # last: the sprays' reports would hide it
+            self.report({"WARNING"}, f"{message} (left out of this bake)")
 
     def _plays_light(self, obj, job, kind):
         """A spray or its tracked snow plays its lit files (`kind`) when every frame has one, or when only some
