@@ -27,17 +27,25 @@ def gate_worker(operator):
     that worker is alive (the test's timer calls `ui_tick`). An operator that blocks the UI while its job computes
     (the job on the main thread, or invoke waiting for its worker) never lets it pass; a busy machine only delays
     it. So the test asserts that the UI runs during a job without depending on how fast the job is."""
-    compute = operator.compute
-
-    def gated(inputs, progress):
+    def gate():
         if threading.current_thread() is threading.main_thread():
             fail(f"{operator.bl_idname}: the job computed on the main thread")
         _ui_ran.clear()  # only a tick from now on, while this worker waits, lets it go on
         if not _ui_ran.wait(HUNG):
             fail(f"{operator.bl_idname}: UI froze: the timer never ran while the worker waited")
+
+    _wait_before_computing(operator, gate)
+
+
+def _wait_before_computing(operator, wait):
+    """The worker of `operator` (a FirnJobMixin class) calls wait() before it computes."""
+    compute = operator.compute
+
+    def waited(inputs, progress):
+        wait()
         return compute(inputs, progress)
 
-    operator.compute = staticmethod(gated)
+    operator.compute = staticmethod(waited)
 
 
 _released = threading.Event()  # set by release_worker
@@ -46,15 +54,12 @@ _released = threading.Event()  # set by release_worker
 def hold_worker(operator):
     """Holds the worker of `operator` (a FirnJobMixin class) before it computes until the test calls
     `release_worker()`: the test acts while the job surely runs, however fast or busy the machine."""
-    compute = operator.compute
-
-    def held(inputs, progress):
+    def hold():
         if not _released.wait(HUNG):
             fail(f"{operator.bl_idname}: the test never released its worker")
         _released.clear()
-        return compute(inputs, progress)
 
-    operator.compute = staticmethod(held)
+    _wait_before_computing(operator, hold)
 
 
 def release_worker():
