@@ -112,7 +112,7 @@ class FIRN_OT_bake_light_sequence(FirnJobMixin, bpy.types.Operator):
         first, last = _frames(self, context.scene)
         lit = lit_sequence_of(snow)
         if lit is not None:
-            name, directory = lit.name, os.path.dirname(cache.volume_path(lit.data))
+            name, directory = lit.name, cache.sequence_folder(lit.data)
             shown = min(first, lit.firn.spray.frame_start), max(last, lit.firn.spray.frame_end)
         else:
             name = free_object_name(f"{snow.name} Lit")

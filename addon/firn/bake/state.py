@@ -126,7 +126,7 @@ def _frame_changes(obj, context):
     volume, frame = obj.data, context.scene.frame_current
     if not volume.frame_start <= frame < volume.frame_start + volume.frame_duration:
         return BAKED, []  # the Volume shows no frame now
-    directory = os.path.dirname(cache.volume_path(volume))
+    directory = cache.sequence_folder(volume)
     then = spray_files.read_marker(directory, frame)
     if then is None:
         return OUTDATED, [f"frame {frame} not lit"]
@@ -149,7 +149,8 @@ def _compare(then, now):
         if key not in now or then.get(key) == now[key]:
             continue
         if then and key not in then:  # a fingerprint (not a damaged one) from before Firn recorded this
-            changed.extend([] if EARLIER in changed else [EARLIER])
+            if EARLIER not in changed:
+                changed.append(EARLIER)
             continue
         changed.extend(_changed_objects(then.get(key), now[key]) if key == "occluders"
                        else [LABELS.get(key, key)])

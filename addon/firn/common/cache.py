@@ -122,6 +122,11 @@ def volume_path(volume):
     return bpy.path.abspath(volume.filepath, library=volume.library)
 
 
+def sequence_folder(volume):
+    """The folder (absolute) of a Volume sequence's files: its spray folder (docs/spray.md)."""
+    return os.path.dirname(volume_path(volume))
+
+
 def file_problem(volume):
     """What is wrong with a snow Volume's file, in a few words, or None; cheap enough for panels."""
     if volume.get(DAMAGED_KEY):

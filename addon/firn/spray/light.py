@@ -143,7 +143,7 @@ def gather(context, spray, tracks, frames, quality, seed):
     """Main thread: a spray's frame jobs (gather_frames): its tracked snow and lumps, baked together (_bake_frame).
     Raises UserError (bad lamp, scale, optics that differ)."""
     snow = medium_object(spray, tracks)
-    directory = os.path.dirname(cache.volume_path(spray.data))
+    directory = cache.sequence_folder(spray.data)
     layer = spray.firn.spray.source
     snow_layer_file = cache.volume_path(layer.data)
     optics = _joint_optics(spray, snow)

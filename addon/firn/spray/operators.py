@@ -163,7 +163,7 @@ def show_snow(snow, shown):
 def sequence_objects(folder):
     """The spray Volumes (spray and tracks) that play files of the spray folder `folder` (absolute)."""
     return [obj for obj in bpy.data.objects if is_spray(obj)
-            and os.path.dirname(os.path.normpath(cache.volume_path(obj.data))) == os.path.normpath(folder)]
+            and os.path.normpath(cache.sequence_folder(obj.data)) == os.path.normpath(folder)]
 
 
 def new_sequence_object(context, name, role, snow, frames):
@@ -284,7 +284,7 @@ def baked_frames(operator, record):
 
 
 def _tracks_of(spray):
-    directory = os.path.dirname(cache.volume_path(spray.data))
+    directory = cache.sequence_folder(spray.data)
     return next((obj for obj in sequence_objects(directory) if obj.firn.spray.role == "TRACKS"), None)
 
 
@@ -340,7 +340,7 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
                 if obj is not None:
                     placement.follow(obj, snow)  # where the layer stands now: they stay there if it is deleted
             simulated, lit = baked_frames(self, record)
-            directory = os.path.dirname(cache.volume_path(spray.data))
+            directory = cache.sequence_folder(spray.data)
             inputs = gather_inputs(context, record, snow, emitters, simulated, directory)
             tracks, frames = _light_jobs(self, context, spray, lit)
             jobs.append(dict(inputs, name=spray.name, tracks=tracks, lit=lit, frames=frames))
@@ -395,7 +395,7 @@ class FIRN_OT_bake_sequence(FirnJobMixin, bpy.types.Operator):
                 obj.firn.spray.frame_start, obj.firn.spray.frame_end = job["first"], job["last"]
                 unlit, lit = ("spray", "lit_spray") if obj.firn.spray.role == "SPRAY" else ("snow", "lit")
                 kind = lit if self._plays_light(obj, job, lit) else unlit
-                play_sequence(obj, os.path.dirname(cache.volume_path(obj.data)), kind, job["first"], job["last"])
+                play_sequence(obj, cache.sequence_folder(obj.data), kind, job["first"], job["last"])
                 if kind == lit:
                     self._adopt_light(baked_scene, obj, job)
                 elif not self.light:  # Bake Light off: the lumps and the tracked snow render unlit
@@ -457,7 +457,7 @@ def remove_sequence(folder):
 def clear_sequence(operator, obj):
     """Clear Snow Spray's and Clear Light Sequence's work: obj's sequence removed (remove_sequence) and reported."""
     try:
-        names = remove_sequence(os.path.dirname(cache.volume_path(obj.data)))
+        names = remove_sequence(cache.sequence_folder(obj.data))
     except UserError as error:
         operator.report({"ERROR"}, str(error))
         return {"CANCELLED"}
